@@ -1,0 +1,14 @@
+// Subcommands of the exabricks tool; each lives in its own file and registers itself here.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+namespace exa::cli {
+
+void addInfo(CLI::App& app);
+void addSample(CLI::App& app);
+void addBuild(CLI::App& app);
+void addGenerate(CLI::App& app);
+void addConvert(CLI::App& app);
+
+} // namespace exa::cli

@@ -1,0 +1,63 @@
+// Input data: AMR leaf cells on the finest-level integer lattice, their named fields and the
+// world transform. This is "what was loaded"; bricks and regions are built from it.
+#pragma once
+
+#include "exabricks/core/math.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// Largest level accepted (cell width 2^28 finest units); coordinates must stay within
+/// [-kLatticeLimit, kLatticeLimit] so that every extent fits in 32 bits.
+constexpr int kMaxLevel = 28;
+constexpr int64_t kLatticeLimit = int64_t(1) << 29;
+
+/// One AMR cell: lower corner in finest-level lattice units and level (width 2^level, level 0
+/// finest). Same layout as a record of the native .cells file.
+struct Cell {
+  vec3i lower;
+  int32_t level = 0;
+  int32_t width() const { return int32_t(1) << level; }
+  box3i bounds() const { return {lower, lower + vec3i(width())}; }
+  friend bool operator==(const Cell& a, const Cell& b) = default;
+};
+static_assert(sizeof(Cell) == 16, "Cell must match the 16-byte native record");
+
+/// A named scalar field with one value per cell, in cell order.
+struct Field {
+  std::string name;
+  std::vector<float> values;
+};
+
+/// A set of leaf cells with fields and world placement.
+struct CellSet {
+  std::vector<Cell> cells;
+  std::vector<Field> fields;
+  WorldTransform world;
+
+  size_t size() const { return cells.size(); }
+  /// Index of the field with this name, or -1.
+  int fieldIndex(const std::string& name) const;
+  /// Lattice bounds of all cells (empty box when there are none).
+  box3l bounds() const;
+};
+
+/// Validates cells and fields independently of where they came from: levels in range, corners
+/// aligned to the cell width, coordinates within the lattice limit, one value per cell and
+/// field, no NaN or infinite values, at least one cell and one field. Overlaps are detected by
+/// the brick builder. `source` names the data in messages; failures throw exa::Error.
+void validateCells(const CellSet& cells, const std::string& source);
+
+/// Validates one cell; returns an empty string when it is fine, else the problem.
+std::string cellProblem(const Cell& cell);
+
+/// The cell checks of validateCells; messages read "SOURCE: record N: problem".
+void validateCellRecords(const std::vector<Cell>& cells, const std::string& source);
+
+/// The field checks of validateCells; messages read "SOURCE: record N: problem".
+void validateFieldValues(const Field& field, size_t cellCount, const std::string& source);
+
+} // namespace exa

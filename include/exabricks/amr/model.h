@@ -1,0 +1,62 @@
+// The built model: bricks, active brick regions and brick-ordered fields, plus the numbers that
+// `info` reports. Built from a CellSet or read from a model file.
+#pragma once
+
+#include "exabricks/amr/basis.h"
+#include "exabricks/amr/cells.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+struct BuildOptions {
+  BrickBuildOptions bricks;
+};
+
+struct BuildStats {
+  double brickSeconds = 0;
+  double regionSeconds = 0;
+  double rangeSeconds = 0;
+};
+
+struct Model {
+  WorldTransform world;
+  std::vector<Brick> bricks;
+  std::vector<std::string> fieldNames;
+  std::vector<std::vector<float>> fieldValues; ///< per field, brick-ordered values
+  RegionSet regions;
+  BuildStats stats;
+
+  uint64_t cellCount() const;
+  int fieldIndex(const std::string& name) const;
+  /// Index of `name`; when `name` is empty, of field "scalar" if present, else of the first
+  /// field. Throws when the field is unknown.
+  int requireField(const std::string& name) const;
+  FieldView view(int field) const;
+  /// Lattice box covered by cells (upper exclusive).
+  box3i cellBounds() const;
+};
+
+/// Numbers that describe a built model (what `info` prints).
+struct ModelSummary {
+  struct Level {
+    int level = 0;
+    uint64_t cells = 0, bricks = 0;
+  };
+  uint64_t cells = 0, bricks = 0, singleCellBricks = 0, regions = 0;
+  std::vector<Level> levels; ///< finest first, only levels that hold cells
+  double bricksPerRegionByCount = 0, bricksPerRegionByVolume = 0;
+  uint64_t maxBricksPerRegion = 0;
+  std::vector<range1f> fieldRanges;
+  uint64_t brickBytes = 0, valueBytes = 0, regionBytes = 0;
+};
+ModelSummary summarize(const Model& model);
+
+/// Builds bricks and regions from validated cells; moves the field values into brick order.
+Model buildModel(CellSet&& cells, const BuildOptions& options = {});
+
+/// Builds the regions (and value ranges) of a model whose bricks and fields are set.
+void buildRegionsOf(Model& model);
+
+} // namespace exa

@@ -1,0 +1,33 @@
+// Deterministic synthetic AMR datasets from named analytic scenes, at any size. The same scenes
+// feed the tests, the benchmarks and the embedded default dataset.
+#pragma once
+
+#include "exabricks/amr/cells.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+struct SceneOptions {
+  std::string name = "blobs";   ///< one of sceneNames()
+  uint64_t targetCells = 200000; ///< approximate number of cells to produce
+  uint64_t seed = 1;
+  int levels = 4;               ///< number of levels (finest 0 .. coarsest levels-1)
+};
+
+struct SceneInfo {
+  std::string name;
+  std::string description;
+};
+
+const std::vector<SceneInfo>& sceneList();
+
+/// Generates the scene; cells are ordered by base cell (z, y, x), then depth first.
+CellSet generateScene(const SceneOptions& options);
+
+/// The dataset commands use when given no input.
+CellSet defaultDataset();
+constexpr const char* kDefaultDatasetName = "<default: blobs scene, 200000 cells, seed 1>";
+
+} // namespace exa

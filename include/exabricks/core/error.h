@@ -1,0 +1,36 @@
+// One exception type for every user-facing failure. Messages name the file, the record and the
+// problem; only the command-line front end catches and prints them.
+#pragma once
+
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace exa {
+
+/// Concatenates any streamable arguments into one string.
+template <typename... Args> std::string strCat(Args&&... args) {
+  std::ostringstream out;
+  (out << ... << std::forward<Args>(args));
+  return out.str();
+}
+
+class Error : public std::runtime_error {
+public:
+  explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+/// Throws exa::Error with the concatenated arguments as message.
+template <typename... Args> [[noreturn]] void fail(Args&&... args) {
+  throw Error(strCat(std::forward<Args>(args)...));
+}
+
+} // namespace exa
+
+/// Internal invariant check that prints both operands; failing it is a bug, not bad input.
+#define EXA_CHECK(cond, ...)                                                                       \
+  do {                                                                                             \
+    if (!(cond))                                                                                   \
+      ::exa::fail("internal check failed: " #cond " at " __FILE__ ":", __LINE__, " ", ##__VA_ARGS__); \
+  } while (0)

@@ -1,0 +1,46 @@
+// Logging and progress on stderr. Library code reports through here so that commands can keep
+// stdout clean for their results (and for --json).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+namespace exa {
+
+enum class LogLevel { Quiet = 0, Warning = 1, Info = 2, Debug = 3 };
+
+void setLogLevel(LogLevel level);
+LogLevel logLevel();
+void logInfo(const std::string& message);
+void logWarning(const std::string& message);
+void logDebug(const std::string& message);
+
+/// Wall-clock stopwatch in seconds.
+class Timer {
+public:
+  Timer() : start_(std::chrono::steady_clock::now()) {}
+  double seconds() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  }
+  void reset() { start_ = std::chrono::steady_clock::now(); }
+
+private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+/// A progress line on stderr for long work. It shows only when stderr is a terminal and the
+/// log level is at least Info; updates are thread-safe and rate limited.
+class Progress {
+public:
+  Progress(std::string label, uint64_t total);
+  ~Progress();
+  void advance(uint64_t amount);
+  void finish();
+
+private:
+  struct Impl;
+  Impl* impl_;
+};
+
+} // namespace exa

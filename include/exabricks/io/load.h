@@ -1,0 +1,31 @@
+// Opens whatever the user names: a model file (known by its magic bytes), a native NAME.cells
+// dataset, a .grids fixture, or the embedded default dataset when no input is given.
+#pragma once
+
+#include "exabricks/amr/model.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+struct LoadOptions {
+  std::vector<std::string> fields; ///< fields to load (all when empty)
+  BuildOptions build;
+};
+
+enum class InputKind { Default, Model, Native, Grids };
+
+/// Determines the kind of input; throws with the path when it is not recognised.
+InputKind detectInput(const std::string& path);
+
+/// Reads raw cells (not for model files).
+CellSet loadCells(const std::string& path, const LoadOptions& options = {});
+
+/// Reads a model file, or reads cells and builds the model. Errors name the input.
+Model loadModel(const std::string& path, const LoadOptions& options = {});
+
+/// Names of the fields an input holds, without building anything.
+std::vector<std::string> listFields(const std::string& path);
+
+} // namespace exa

@@ -1,0 +1,39 @@
+// The native exchange format: NAME.cells (int32 x, y, z, level records, little-endian) with one
+// float32 value per cell in NAME.scalars (field "scalar") and NAME.FIELD.scalars; and the
+// ".grids" text fixture format (one box per line: x y z nx ny nz level value, or eight trilinear
+// corner values).
+#pragma once
+
+#include "exabricks/amr/cells.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// Reads NAME.cells and its fields. `fields` selects fields by name (all when empty). Validates
+/// everything but overlaps; errors name the file, the record and the problem.
+CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& fields = {});
+
+/// Names of the fields stored beside a .cells file.
+std::vector<std::string> listNativeFields(const std::string& cellsPath);
+
+/// Writes NAME.cells and one NAME[.FIELD].scalars per field (field "scalar" is NAME.scalars).
+/// Each file is written to a temporary name and renamed into place.
+void writeNative(const CellSet& cells, const std::string& cellsPath);
+
+/// Reads a .grids text fixture (field "scalar").
+CellSet readGrids(const std::string& path);
+
+/// Writes `size` bytes to `path` atomically: a temporary file in the same folder, then rename.
+void writeFileAtomic(const std::string& path, const void* data, size_t size);
+
+/// Reads a whole binary file; fails with the path when it cannot.
+std::vector<char> readFile(const std::string& path);
+/// Size of a regular file; fails with the path when it cannot be read.
+uint64_t fileSize(const std::string& path);
+/// Reads exactly `size` bytes from the start of a file.
+void readInto(const std::string& path, void* data, uint64_t size);
+
+} // namespace exa

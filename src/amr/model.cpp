@@ -1,0 +1,119 @@
+#include "exabricks/amr/model.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+
+namespace exa {
+
+uint64_t Model::cellCount() const {
+  uint64_t n = 0;
+  for (const Brick& b : bricks) n += b.cellCount();
+  return n;
+}
+
+int Model::fieldIndex(const std::string& name) const {
+  for (size_t i = 0; i < fieldNames.size(); ++i)
+    if (fieldNames[i] == name) return int(i);
+  return -1;
+}
+
+int Model::requireField(const std::string& name) const {
+  if (fieldNames.empty()) fail("the data has no fields");
+  if (name.empty()) return std::max(fieldIndex("scalar"), 0);
+  const int i = fieldIndex(name);
+  if (i < 0) {
+    std::string known;
+    for (const std::string& n : fieldNames) known += (known.empty() ? "" : ", ") + n;
+    fail("unknown field '", name, "' (fields: ", known, ")");
+  }
+  return i;
+}
+
+FieldView Model::view(int field) const {
+  FieldView v;
+  v.bricks = bricks.data();
+  v.values = fieldValues.at(size_t(field)).data();
+  v.regions = regions.regions.data();
+  v.brickIds = regions.brickIds.data();
+  v.nodes = regions.nodes.empty() ? nullptr : regions.nodes.data();
+  v.bounds = regions.bounds;
+  return v;
+}
+
+box3i Model::cellBounds() const {
+  box3i b;
+  for (const Brick& br : bricks) b.extend(br.bounds());
+  return b;
+}
+
+ModelSummary summarize(const Model& m) {
+  ModelSummary s;
+  s.bricks = m.bricks.size();
+  s.regions = m.regions.regions.size();
+  std::vector<ModelSummary::Level> levels(kMaxLevel + 1);
+  for (const Brick& b : m.bricks) {
+    levels[size_t(b.level)].cells += b.cellCount();
+    levels[size_t(b.level)].bricks += 1;
+    s.cells += b.cellCount();
+    s.singleCellBricks += b.cellCount() == 1;
+  }
+  for (int l = 0; l <= kMaxLevel; ++l)
+    if (levels[size_t(l)].cells > 0) {
+      levels[size_t(l)].level = l;
+      s.levels.push_back(levels[size_t(l)]);
+    }
+  double volume = 0, weighted = 0;
+  for (const Region& r : m.regions.regions) {
+    const vec3d size = vec3d(r.halfBounds.size()) * 0.5;
+    const double v = size.x * size.y * size.z;
+    volume += v;
+    weighted += v * r.brickCount;
+    s.maxBricksPerRegion = std::max<uint64_t>(s.maxBricksPerRegion, r.brickCount);
+  }
+  if (s.regions > 0) {
+    s.bricksPerRegionByCount = double(m.regions.brickIds.size()) / double(s.regions);
+    s.bricksPerRegionByVolume = weighted / volume;
+  }
+  for (const auto& values : m.fieldValues) {
+    range1f r;
+    for (float v : values) r.extend(v);
+    s.fieldRanges.push_back(r);
+  }
+  s.brickBytes = m.bricks.size() * sizeof(Brick);
+  for (const auto& values : m.fieldValues) s.valueBytes += values.size() * sizeof(float);
+  s.regionBytes = m.regions.memoryBytes();
+  return s;
+}
+
+void buildRegionsOf(Model& model) {
+  Timer timer;
+  model.regions = buildRegions(model.bricks);
+  model.stats.regionSeconds = timer.seconds();
+  timer.reset();
+  model.regions.valueRanges.clear();
+  for (const auto& values : model.fieldValues)
+    model.regions.valueRanges.push_back(computeValueRanges(model.regions, model.bricks, values));
+  model.stats.rangeSeconds = timer.seconds();
+}
+
+Model buildModel(CellSet&& cells, const BuildOptions& options) {
+  Model model;
+  model.world = cells.world;
+  Timer timer;
+  BrickBuild bricks = buildBricks(cells.cells, options.bricks);
+  std::vector<Cell>().swap(cells.cells);
+  model.bricks = std::move(bricks.bricks);
+  for (Field& f : cells.fields) {
+    model.fieldNames.push_back(f.name);
+    model.fieldValues.push_back(toBrickOrder(f.values, bricks.cellOfSlot));
+    std::vector<float>().swap(f.values);
+  }
+  model.stats.brickSeconds = timer.seconds();
+  logInfo(strCat("built ", model.bricks.size(), " bricks in ", model.stats.brickSeconds, " s"));
+  buildRegionsOf(model);
+  logInfo(strCat("built ", model.regions.regions.size(), " regions in ",
+                 model.stats.regionSeconds + model.stats.rangeSeconds, " s"));
+  return model;
+}
+
+} // namespace exa

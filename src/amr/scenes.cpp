@@ -1,0 +1,278 @@
+#include "exabricks/amr/scenes.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cmath>
+#include <functional>
+
+namespace exa {
+namespace {
+
+/// SplitMix64: small, seedable, identical on every platform.
+uint64_t mix64(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+double uniform(uint64_t& state) { return double((state = mix64(state)) >> 11) * 0x1.0p-53; }
+
+/// An analytic scene over the unit cube: field values and the level wanted at a point.
+struct Scene {
+  std::vector<std::string> fieldNames;
+  std::function<void(const vec3d& p, float* values)> evaluate;
+  /// Finest level wanted anywhere in the box [lo, hi] (unit-cube coordinates), 0 .. maxLevel.
+  std::function<int(const vec3d& lo, const vec3d& hi)> levelIn;
+  /// Whether space at p is a hole (no cells).
+  std::function<bool(const vec3d& p)> hole = [](const vec3d&) { return false; };
+  /// Whether a cell refines straight to the wanted level (level jumps of more than one).
+  bool jump = false;
+  /// Refinement is decided per block of this many cells of a level per axis, as in
+  /// block-structured AMR codes: a refined block becomes a patch of (2 block)^3 finer cells.
+  int block = 4;
+};
+
+Scene makeBlobs(uint64_t seed, int maxLevel) {
+  struct Blob {
+    vec3d centre;
+    double sigma, amplitude;
+  };
+  std::vector<Blob> blobs;
+  uint64_t s = mix64(seed ^ 0xb10b5ull);
+  for (int i = 0; i < 7; ++i) {
+    Blob b;
+    b.centre = vec3d(0.2 + 0.6 * uniform(s), 0.2 + 0.6 * uniform(s), 0.2 + 0.6 * uniform(s));
+    b.sigma = 0.05 + 0.1 * uniform(s);
+    b.amplitude = 0.4 + 0.6 * uniform(s);
+    blobs.push_back(b);
+  }
+  Scene scene;
+  scene.fieldNames = {"scalar", "radius"};
+  scene.evaluate = [blobs](const vec3d& p, float* v) {
+    double f = 0;
+    for (const Blob& b : blobs) {
+      const vec3d d = p - b.centre;
+      f += b.amplitude * std::exp(-dot(d, d) / (2 * b.sigma * b.sigma));
+    }
+    v[0] = float(f);
+    v[1] = float(length(p - vec3d(0.5)));
+  };
+  auto levelAt = [blobs, maxLevel](const vec3d& p) {
+    // Refine where the field varies: the gradient magnitude relative to a typical maximum.
+    vec3d g(0.0);
+    for (const Blob& b : blobs) {
+      const vec3d d = p - b.centre;
+      const double e = b.amplitude * std::exp(-dot(d, d) / (2 * b.sigma * b.sigma));
+      g += d * (-e / (b.sigma * b.sigma));
+    }
+    const double t = std::min(1.0, length(g) / 6.0);
+    return std::clamp(maxLevel - int(std::floor(t * (maxLevel + 1) * 1.3)), 0, maxLevel);
+  };
+  // The field is smooth at the scale of a block: corners and centre suffice.
+  scene.levelIn = [levelAt](const vec3d& lo, const vec3d& hi) {
+    int level = levelAt((lo + hi) * 0.5);
+    for (int c = 0; c < 8 && level > 0; ++c)
+      level = std::min(level, levelAt(vec3d(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z)));
+    return level;
+  };
+  return scene;
+}
+
+Scene makeShells(uint64_t seed, int maxLevel) {
+  uint64_t s = mix64(seed ^ 0x5e11ull);
+  const double radius = 0.28 + 0.06 * uniform(s);
+  const double frequency = 5.0 + 2.0 * uniform(s);
+  Scene scene;
+  scene.fieldNames = {"scalar", "radius"};
+  scene.evaluate = [=](const vec3d& p, float* v) {
+    const double r = length(p - vec3d(0.5));
+    v[0] = float(0.5 + 0.5 * std::cos(2 * M_PI * frequency * r) * std::exp(-3 * r) +
+                 0.2 * std::sin(6 * p.z));
+    v[1] = float(r);
+  };
+  scene.levelIn = [=](const vec3d& lo, const vec3d& hi) {
+    // Distance range from the centre over the box, against the shell band.
+    const vec3d c(0.5);
+    const vec3d nearest = max(lo, min(c, hi));
+    vec3d farthest;
+    for (int a = 0; a < 3; ++a) farthest[a] = std::abs(lo[a] - c[a]) > std::abs(hi[a] - c[a]) ? lo[a] : hi[a];
+    const double dmin = length(nearest - c), dmax = length(farthest - c);
+    auto touches = [&](double band) { return dmin < radius + band && dmax > radius - band; };
+    // The finest level next to the coarsest: level jumps of more than one.
+    if (touches(0.035)) return 0;
+    if (touches(0.06) && hi.z > 0.5) return std::min(1, maxLevel);
+    return maxLevel;
+  };
+  scene.hole = [](const vec3d& p) {
+    const double r = length(p - vec3d(0.5));
+    return r < 0.12 || r > 0.5 || (p.x > 0.6 && p.y > 0.6 && p.z < 0.4);
+  };
+  scene.jump = true;
+  scene.block = 1;
+  return scene;
+}
+
+Scene makeRamp(uint64_t seed, int maxLevel) {
+  Scene scene;
+  scene.fieldNames = {"scalar"};
+  scene.evaluate = [](const vec3d& p, float* v) { v[0] = float(p.x + 2 * p.y + 3 * p.z); };
+  // A random level per region of the unit cube, from a coarse hashed lattice.
+  // A random level per block of a 4^3 lattice over the unit cube, taken at the box centre.
+  scene.levelIn = [seed, maxLevel](const vec3d& lo, const vec3d& hi) {
+    const vec3d c = (lo + hi) * 0.5;
+    const vec3i q(int(std::floor(c.x * 4)), int(std::floor(c.y * 4)), int(std::floor(c.z * 4)));
+    const uint64_t h = mix64(seed ^ mix64(uint64_t(q.x) * 73856093ull ^ uint64_t(q.y) * 19349663ull ^
+                                          uint64_t(q.z) * 83492791ull));
+    return int(h % uint64_t(maxLevel + 1));
+  };
+  scene.jump = true;
+  scene.block = 1;
+  return scene;
+}
+
+Scene makeScene(const SceneOptions& o) {
+  const int maxLevel = o.levels - 1;
+  if (o.name == "blobs") return makeBlobs(o.seed, maxLevel);
+  if (o.name == "shells") return makeShells(o.seed, maxLevel);
+  if (o.name == "ramp") return makeRamp(o.seed, maxLevel);
+  std::string known;
+  for (const SceneInfo& s : sceneList()) known += (known.empty() ? "" : ", ") + s.name;
+  fail("unknown scene '", o.name, "' (scenes: ", known, ")");
+}
+
+struct Output {
+  std::vector<Cell> cells;
+  std::vector<std::vector<float>> values;
+};
+
+int floorDivInt(int a, int b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
+
+/// Emits the leaf cells of one base cell (or only counts them when `out` is null).
+uint64_t refine(const Scene& scene, const vec3i& lower, int level, double unit, Output* out) {
+  const int w = 1 << level;
+  int wanted = level;
+  if (level > 0) {
+    const int bw = scene.block * w;
+    const vec3i block(floorDivInt(lower.x, bw) * bw, floorDivInt(lower.y, bw) * bw,
+                      floorDivInt(lower.z, bw) * bw);
+    wanted = std::min(wanted, scene.levelIn(vec3d(block) * unit, (vec3d(block) + vec3d(bw)) * unit));
+  }
+  if (wanted < level) {
+    const int childLevel = scene.jump ? wanted : level - 1;
+    const int n = 1 << (level - childLevel), cw = 1 << childLevel;
+    uint64_t count = 0;
+    for (int z = 0; z < n; ++z)
+      for (int y = 0; y < n; ++y)
+        for (int x = 0; x < n; ++x)
+          count += refine(scene, lower + vec3i(x, y, z) * cw, childLevel, unit, out);
+    return count;
+  }
+  const vec3d centre = (vec3d(lower) + vec3d(0.5 * w)) * unit;
+  if (scene.hole(centre)) return 0;
+  if (out) {
+    out->cells.push_back(Cell{lower, level});
+    float v[8];
+    scene.evaluate(centre, v);
+    for (size_t f = 0; f < out->values.size(); ++f) out->values[f].push_back(v[f]);
+  }
+  return 1;
+}
+
+uint64_t countCells(const Scene& scene, int base, int maxLevel) {
+  const int w = 1 << maxLevel;
+  const double unit = 1.0 / (double(base) * w);
+  uint64_t n = 0;
+  for (int z = 0; z < base; ++z)
+    for (int y = 0; y < base; ++y)
+      for (int x = 0; x < base; ++x) n += refine(scene, vec3i(x, y, z) * w, maxLevel, unit, nullptr);
+  return n;
+}
+
+} // namespace
+
+const std::vector<SceneInfo>& sceneList() {
+  static const std::vector<SceneInfo> list = {
+      {"blobs", "sum of Gaussian blobs, refined where the field varies; fields scalar, radius"},
+      {"shells", "radial waves in a hollow ball with a cut-out; finest cells next to coarsest "
+                 "(level jumps of more than one) and holes; fields scalar, radius"},
+      {"ramp", "linear field x + 2y + 3z with random levels per block and level jumps"},
+  };
+  return list;
+}
+
+CellSet generateScene(const SceneOptions& o) {
+  if (o.levels < 1 || o.levels > 12) fail("levels must be between 1 and 12, got ", o.levels);
+  if (o.targetCells < 1 || o.targetCells > (uint64_t(1) << 32) - 1)
+    fail("cell count must be between 1 and 2^32-1, got ", o.targetCells);
+  Scene scene = makeScene(o);
+  int maxLevel = o.levels - 1;
+  // A request smaller than one refined base cell gets fewer levels.
+  while (maxLevel > 0 && double(countCells(scene, 1, maxLevel)) > 2.0 * double(o.targetCells)) {
+    --maxLevel;
+    scene = makeScene(SceneOptions{o.name, o.targetCells, o.seed, maxLevel + 1});
+    logInfo(strCat("scene ", o.name, ": using ", maxLevel + 1, " levels for ", o.targetCells, " cells"));
+  }
+  const int w = 1 << maxLevel;
+
+  // The level map is fixed in unit-cube coordinates, so once blocks are small against the
+  // features the count grows with the cube of the base resolution. Measure small bases
+  // directly and extrapolate from the largest one measured.
+  int base = 1;
+  uint64_t count = countCells(scene, 1, maxLevel);
+  double bestError = std::abs(std::log(double(std::max<uint64_t>(count, 1)) / double(o.targetCells)));
+  for (int b = 2; count < o.targetCells && count < 400000; b = b < 8 ? b + 1 : b * 5 / 4) {
+    count = countCells(scene, b, maxLevel);
+    const double error = std::abs(std::log(double(std::max<uint64_t>(count, 1)) / double(o.targetCells)));
+    if (error < bestError) {
+      bestError = error;
+      base = b;
+    }
+    if (count >= o.targetCells) break;
+    if (count >= 400000 || b >= 2048) {
+      base = int(std::lround(b * std::cbrt(double(o.targetCells) / double(count))));
+      break;
+    }
+  }
+  base = std::clamp(base, 1, 2048);
+  if (uint64_t(base) * w > uint64_t(kLatticeLimit)) fail("requested size is too large");
+
+  const double unit = 1.0 / (double(base) * w);
+  std::vector<Output> slabs(static_cast<size_t>(base));
+  Progress progress("generating " + o.name, uint64_t(base));
+  tbb::parallel_for(0, base, [&](int z) {
+    Output& out = slabs[size_t(z)];
+    out.values.resize(scene.fieldNames.size());
+    for (int y = 0; y < base; ++y)
+      for (int x = 0; x < base; ++x) refine(scene, vec3i(x, y, z) * w, maxLevel, unit, &out);
+    progress.advance(1);
+  });
+  progress.finish();
+
+  CellSet set;
+  size_t total = 0;
+  for (const Output& s : slabs) total += s.cells.size();
+  if (total == 0) fail("scene '", o.name, "' produced no cells at this size");
+  if (total >= (uint64_t(1) << 32) - 1) fail("scene produced too many cells: ", total);
+  set.cells.reserve(total);
+  set.fields.resize(scene.fieldNames.size());
+  for (size_t f = 0; f < scene.fieldNames.size(); ++f) {
+    set.fields[f].name = scene.fieldNames[f];
+    set.fields[f].values.reserve(total);
+  }
+  for (Output& s : slabs) {
+    set.cells.insert(set.cells.end(), s.cells.begin(), s.cells.end());
+    std::vector<Cell>().swap(s.cells);
+    for (size_t f = 0; f < s.values.size(); ++f) {
+      set.fields[f].values.insert(set.fields[f].values.end(), s.values[f].begin(), s.values[f].end());
+      std::vector<float>().swap(s.values[f]);
+    }
+  }
+  return set;
+}
+
+CellSet defaultDataset() { return generateScene(SceneOptions{}); }
+
+} // namespace exa

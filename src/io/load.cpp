@@ -1,0 +1,99 @@
+#include "exabricks/io/load.h"
+
+#include "exabricks/amr/scenes.h"
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+#include "exabricks/io/model_file.h"
+#include "exabricks/io/native.h"
+
+#include <filesystem>
+
+namespace exa {
+namespace {
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+void selectFields(CellSet& set, const std::vector<std::string>& wanted, const std::string& source) {
+  if (wanted.empty()) return;
+  std::vector<Field> chosen;
+  for (const std::string& name : wanted) {
+    const int i = set.fieldIndex(name);
+    if (i < 0) {
+      std::string known;
+      for (const Field& f : set.fields) known += (known.empty() ? "" : ", ") + f.name;
+      fail(source, ": unknown field '", name, "' (fields: ", known, ")");
+    }
+    chosen.push_back(set.fields[size_t(i)]);
+  }
+  set.fields = std::move(chosen);
+}
+} // namespace
+
+InputKind detectInput(const std::string& path) {
+  if (path.empty()) return InputKind::Default;
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) fail(path, ": no such file or directory");
+  if (!std::filesystem::is_directory(path, ec) && isModelFile(path)) return InputKind::Model;
+  if (endsWith(path, ".cells")) return InputKind::Native;
+  if (endsWith(path, ".grids")) return InputKind::Grids;
+  fail(path, ": unknown input format (expected an exabricks model file, NAME.cells or a .grids",
+       " fixture)");
+}
+
+CellSet loadCells(const std::string& path, const LoadOptions& options) {
+  CellSet set;
+  switch (detectInput(path)) {
+  case InputKind::Default:
+    set = defaultDataset();
+    break;
+  case InputKind::Native:
+    set = readNative(path, options.fields);
+    break;
+  case InputKind::Grids:
+    set = readGrids(path);
+    break;
+  case InputKind::Model:
+    fail(path, ": is a built model file; raw cells are needed here");
+  }
+  const std::string source = path.empty() ? kDefaultDatasetName : path;
+  selectFields(set, options.fields, source);
+  validateCells(set, source);
+  return set;
+}
+
+Model loadModel(const std::string& path, const LoadOptions& options) {
+  Timer timer;
+  if (detectInput(path) == InputKind::Model) {
+    Model m = readModel(path);
+    for (const std::string& name : options.fields)
+      if (m.fieldIndex(name) < 0) m.requireField(name);
+    logInfo(strCat("read model ", path, " in ", timer.seconds(), " s"));
+    return m;
+  }
+  CellSet cells = loadCells(path, options);
+  logInfo(strCat("read ", cells.size(), " cells in ", timer.seconds(), " s"));
+  try {
+    return buildModel(std::move(cells), options.build);
+  } catch (const Error& e) {
+    throw Error(strCat(path.empty() ? kDefaultDatasetName : path, ": ", e.what()));
+  }
+}
+
+std::vector<std::string> listFields(const std::string& path) {
+  switch (detectInput(path)) {
+  case InputKind::Native:
+    return listNativeFields(path);
+  case InputKind::Grids:
+    return {"scalar"};
+  case InputKind::Model:
+    return readModel(path).fieldNames;
+  case InputKind::Default:
+    break;
+  }
+  std::vector<std::string> names;
+  for (const Field& f : defaultDataset().fields) names.push_back(f.name);
+  return names;
+}
+
+} // namespace exa

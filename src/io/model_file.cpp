@@ -1,0 +1,263 @@
+#include "exabricks/io/model_file.h"
+
+#include "exabricks/core/error.h"
+
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <unistd.h>
+
+namespace exa {
+namespace {
+
+/// FNV-1a over little-endian 64-bit words (the tail is zero-padded), fed incrementally.
+class Checksum {
+public:
+  void update(const void* data, size_t size) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    while (size > 0 && pending_ > 0) {
+      addByte(*p++);
+      --size;
+    }
+    while (size >= 8) {
+      uint64_t word;
+      std::memcpy(&word, p, 8);
+      mix(word);
+      p += 8;
+      size -= 8;
+    }
+    while (size-- > 0) addByte(*p++);
+  }
+  uint64_t value() const {
+    uint64_t h = hash_;
+    if (pending_ > 0) h = (h ^ partial_) * kPrime;
+    return h;
+  }
+
+private:
+  static constexpr uint64_t kPrime = 0x100000001b3ull;
+  void mix(uint64_t w) { hash_ = (hash_ ^ w) * kPrime; }
+  void addByte(unsigned char b) {
+    partial_ |= uint64_t(b) << (8 * pending_);
+    if (++pending_ == 8) {
+      mix(partial_);
+      partial_ = 0;
+      pending_ = 0;
+    }
+  }
+  uint64_t hash_ = 0xcbf29ce484222325ull;
+  uint64_t partial_ = 0;
+  int pending_ = 0;
+};
+
+struct Header {
+  char magic[8];
+  uint32_t version;
+  uint32_t headerBytes;
+  uint64_t payloadBytes;
+  uint64_t checksum;
+  uint64_t reserved[2];
+};
+static_assert(sizeof(Header) == 48);
+
+class Writer {
+public:
+  Writer(const std::string& path, std::FILE* f) : path_(path), f_(f) {}
+  void raw(const void* data, size_t size) {
+    if (size == 0) return;
+    if (std::fwrite(data, 1, size, f_) != size) fail(path_, ": write failed (disk full?)");
+    sum_.update(data, size);
+    bytes_ += size;
+  }
+  template <typename T> void value(const T& v) { raw(&v, sizeof(T)); }
+  template <typename T> void array(const std::vector<T>& v) {
+    value(uint64_t(v.size()));
+    raw(v.data(), v.size() * sizeof(T));
+  }
+  uint64_t bytes() const { return bytes_; }
+  uint64_t checksum() const { return sum_.value(); }
+
+private:
+  const std::string& path_;
+  std::FILE* f_;
+  Checksum sum_;
+  uint64_t bytes_ = 0;
+};
+
+class Reader {
+public:
+  Reader(const std::string& path, std::FILE* f, uint64_t payloadBytes)
+      : path_(path), f_(f), left_(payloadBytes) {}
+  void raw(void* data, size_t size, const char* what) {
+    if (size > left_) fail(path_, ": corrupt model file: ", what, " runs past the end of the data");
+    if (size && std::fread(data, 1, size, f_) != size)
+      fail(path_, ": truncated model file while reading ", what);
+    sum_.update(data, size);
+    left_ -= size;
+  }
+  template <typename T> T value(const char* what) {
+    T v;
+    raw(&v, sizeof(T), what);
+    return v;
+  }
+  template <typename T> std::vector<T> array(const char* what) {
+    const uint64_t n = value<uint64_t>(what);
+    if (n > left_ / sizeof(T))
+      fail(path_, ": corrupt model file: ", what, " claims ", n, " entries, more than the file holds");
+    std::vector<T> v(n);
+    raw(v.data(), n * sizeof(T), what);
+    return v;
+  }
+  uint64_t left() const { return left_; }
+  uint64_t checksum() const { return sum_.value(); }
+
+private:
+  const std::string& path_;
+  std::FILE* f_;
+  Checksum sum_;
+  uint64_t left_;
+};
+
+struct FileCloser {
+  std::FILE* f;
+  ~FileCloser() {
+    if (f) std::fclose(f);
+  }
+};
+
+/// Index checks that keep a crafted file (with a valid checksum) from making samplers read
+/// out of bounds or loop.
+void checkConsistency(const Model& m, const std::string& path) {
+  auto bad = [&](auto&&... what) { fail(path, ": corrupt model file: ", what...); };
+  const uint64_t values = m.fieldValues.empty() ? 0 : m.fieldValues[0].size();
+  for (const auto& f : m.fieldValues)
+    if (f.size() != values) bad("fields have different value counts");
+  for (size_t i = 0; i < m.bricks.size(); ++i) {
+    const Brick& b = m.bricks[i];
+    if (b.level < 0 || b.level > kMaxLevel || b.size.x < 1 || b.size.y < 1 || b.size.z < 1 ||
+        b.size.x > 1 << 20 || b.size.y > 1 << 20 || b.size.z > 1 << 20 ||
+        uint64_t(b.valueOffset) + uint64_t(b.size.x) * b.size.y * b.size.z > values)
+      bad("brick ", i, " is invalid");
+  }
+  for (uint32_t id : m.regions.brickIds)
+    if (id >= m.bricks.size()) bad("region brick id ", id, " out of range");
+  for (size_t i = 0; i < m.regions.regions.size(); ++i) {
+    const Region& r = m.regions.regions[i];
+    if (uint64_t(r.brickBegin) + r.brickCount > m.regions.brickIds.size())
+      bad("region ", i, " lists bricks out of range");
+  }
+  const auto& nodes = m.regions.nodes;
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const RegionKdNode& n = nodes[i];
+    if (n.axis == kLeafAxis) {
+      if (n.index != kNoRegion && n.index >= m.regions.regions.size())
+        bad("k-d node ", i, " names region ", n.index, " out of range");
+    } else if (n.axis > 2 || n.index <= i || uint64_t(n.index) + 1 >= nodes.size()) {
+      bad("k-d node ", i, " is invalid");
+    }
+  }
+  if (nodes.empty() != m.regions.regions.empty()) bad("regions without a k-d tree");
+  if (m.regions.valueRanges.size() != m.fieldValues.size()) bad("missing value ranges");
+  for (const auto& r : m.regions.valueRanges)
+    if (r.size() != m.regions.regions.size()) bad("value ranges do not match the regions");
+}
+
+} // namespace
+
+bool isModelFile(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return false;
+  char magic[8] = {};
+  const bool ok = std::fread(magic, 1, 8, f) == 8 && std::memcmp(magic, kModelMagic, 8) == 0;
+  std::fclose(f);
+  return ok;
+}
+
+void writeModel(const Model& m, const std::string& path) {
+  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) fail(path, ": cannot write: ", std::strerror(errno));
+  try {
+    FileCloser closer{f};
+    Header h{};
+    std::memcpy(h.magic, kModelMagic, 8);
+    h.version = kModelVersion;
+    h.headerBytes = sizeof(Header);
+    if (std::fwrite(&h, sizeof h, 1, f) != 1) fail(path, ": write failed");
+    Writer w(path, f);
+    w.value(m.world);
+    w.array(m.bricks);
+    w.value(uint64_t(m.fieldNames.size()));
+    for (size_t i = 0; i < m.fieldNames.size(); ++i) {
+      w.value(uint64_t(m.fieldNames[i].size()));
+      w.raw(m.fieldNames[i].data(), m.fieldNames[i].size());
+      w.array(m.fieldValues[i]);
+    }
+    w.array(m.regions.regions);
+    w.array(m.regions.brickIds);
+    w.array(m.regions.nodes);
+    w.value(m.regions.bounds);
+    for (const auto& r : m.regions.valueRanges) w.array(r);
+    w.value(m.stats);
+    h.payloadBytes = w.bytes();
+    h.checksum = w.checksum();
+    if (std::fseek(f, 0, SEEK_SET) != 0 || std::fwrite(&h, sizeof h, 1, f) != 1)
+      fail(path, ": write failed");
+    closer.f = nullptr;
+    if (std::fclose(f) != 0) fail(path, ": write failed (disk full?)");
+  } catch (...) {
+    std::remove(tmp.c_str());
+    throw;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    fail(path, ": cannot rename temporary file into place: ", why);
+  }
+}
+
+Model readModel(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) fail(path, ": cannot open: ", std::strerror(errno));
+  FileCloser closer{f};
+  Header h{};
+  if (std::fread(&h, sizeof h, 1, f) != 1) fail(path, ": truncated model file (no header)");
+  if (std::memcmp(h.magic, kModelMagic, 8) != 0) fail(path, ": not an exabricks model file");
+  if (h.version != kModelVersion)
+    fail(path, ": model file version ", h.version, " is not supported (this build reads version ",
+         kModelVersion, "); rebuild it with 'exabricks build'");
+  if (h.headerBytes != sizeof(Header)) fail(path, ": corrupt model file header");
+  std::fseek(f, 0, SEEK_END);
+  const long total = std::ftell(f);
+  std::fseek(f, sizeof(Header), SEEK_SET);
+  if (total < 0 || uint64_t(total) - sizeof(Header) != h.payloadBytes)
+    fail(path, ": truncated or padded model file: header says ", h.payloadBytes,
+         " payload bytes, file holds ", total - long(sizeof(Header)));
+
+  Reader r(path, f, h.payloadBytes);
+  Model m;
+  m.world = r.value<WorldTransform>("world transform");
+  m.bricks = r.array<Brick>("bricks");
+  const uint64_t fields = r.value<uint64_t>("field count");
+  if (fields > 4096) fail(path, ": corrupt model file: ", fields, " fields");
+  for (uint64_t i = 0; i < fields; ++i) {
+    const uint64_t len = r.value<uint64_t>("field name");
+    if (len > 4096) fail(path, ": corrupt model file: field name of ", len, " bytes");
+    std::string name(len, '\0');
+    r.raw(name.data(), len, "field name");
+    m.fieldNames.push_back(name);
+    m.fieldValues.push_back(r.array<float>("field values"));
+  }
+  m.regions.regions = r.array<Region>("regions");
+  m.regions.brickIds = r.array<uint32_t>("region brick ids");
+  m.regions.nodes = r.array<RegionKdNode>("k-d tree");
+  m.regions.bounds = r.value<box3f>("bounds");
+  for (uint64_t i = 0; i < fields; ++i) m.regions.valueRanges.push_back(r.array<range1f>("value ranges"));
+  m.stats = r.value<BuildStats>("build times");
+  if (r.left() != 0) fail(path, ": corrupt model file: ", r.left(), " unexpected trailing bytes");
+  if (r.checksum() != h.checksum) fail(path, ": corrupt model file: checksum mismatch");
+  checkConsistency(m, path);
+  return m;
+}
+
+} // namespace exa

@@ -1,0 +1,220 @@
+#include "exabricks/io/native.h"
+
+#include "exabricks/core/error.h"
+
+#include <bit>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <unistd.h>
+
+static_assert(std::endian::native == std::endian::little,
+              "the native format is little-endian; big-endian hosts are not supported");
+
+namespace exa {
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string stemOf(const std::string& cellsPath) {
+  const std::string ext = ".cells";
+  if (cellsPath.size() <= ext.size() ||
+      cellsPath.compare(cellsPath.size() - ext.size(), ext.size(), ext) != 0)
+    fail(cellsPath, ": a native dataset is named by its NAME.cells path");
+  return cellsPath.substr(0, cellsPath.size() - ext.size());
+}
+
+std::string scalarsPath(const std::string& stem, const std::string& field) {
+  return field == "scalar" ? stem + ".scalars" : stem + "." + field + ".scalars";
+}
+
+} // namespace
+
+uint64_t fileSize(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) fail(path, ": is a directory, not a file");
+  const auto size = fs::file_size(path, ec);
+  if (ec) fail(path, ": cannot open: ", ec.message());
+  return size;
+}
+
+void readInto(const std::string& path, void* data, uint64_t size) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) fail(path, ": cannot open: ", std::strerror(errno));
+  const size_t n = std::fread(data, 1, size, f);
+  std::fclose(f);
+  if (n != size) fail(path, ": read error (file changed while reading?)");
+}
+
+std::vector<char> readFile(const std::string& path) {
+  std::vector<char> data(fileSize(path));
+  readInto(path, data.data(), data.size());
+  return data;
+}
+
+void writeFileAtomic(const std::string& path, const void* data, size_t size) {
+  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
+  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+  if (!f) fail(path, ": cannot write: ", std::strerror(errno));
+  const bool ok = std::fwrite(data, 1, size, f) == size;
+  const bool closed = std::fclose(f) == 0;
+  if (!ok || !closed) {
+    std::remove(tmp.c_str());
+    fail(path, ": write failed (disk full?)");
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    fail(path, ": cannot rename temporary file into place: ", why);
+  }
+}
+
+std::vector<std::string> listNativeFields(const std::string& cellsPath) {
+  const std::string stem = stemOf(cellsPath);
+  const fs::path stemPath(stem);
+  const fs::path dir = stemPath.has_parent_path() ? stemPath.parent_path() : fs::path(".");
+  const std::string base = stemPath.filename().string();
+  std::vector<std::string> fields;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() < base.size() + 8 || name.compare(0, base.size(), base) != 0) continue;
+    if (name.compare(name.size() - 8, 8, ".scalars") != 0) continue;
+    const std::string middle = name.substr(base.size(), name.size() - 8 - base.size());
+    if (middle.empty())
+      fields.push_back("scalar");
+    else if (middle[0] == '.' && middle.size() > 1 && middle.find('.', 1) == std::string::npos)
+      fields.push_back(middle.substr(1));
+  }
+  std::sort(fields.begin(), fields.end());
+  return fields;
+}
+
+CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& wanted) {
+  const std::string stem = stemOf(cellsPath);
+  CellSet set;
+  {
+    const uint64_t bytes = fileSize(cellsPath);
+    if (bytes == 0) fail(cellsPath, ": no cells (empty file)");
+    if (bytes % sizeof(Cell) != 0)
+      fail(cellsPath, ": truncated record ", bytes / sizeof(Cell), ": file size ", bytes,
+           " is not a multiple of the 16-byte cell record");
+    set.cells.resize(bytes / sizeof(Cell));
+    readInto(cellsPath, set.cells.data(), bytes);
+  }
+  validateCellRecords(set.cells, cellsPath);
+
+  std::vector<std::string> names = wanted;
+  if (names.empty()) names = listNativeFields(cellsPath);
+  if (names.empty())
+    fail(cellsPath, ": no field files (expected ", stem, ".scalars or ", stem,
+         ".FIELD.scalars)");
+  for (const std::string& name : names) {
+    const std::string path = scalarsPath(stem, name);
+    std::error_code ec;
+    if (!fs::exists(path, ec)) {
+      std::string known;
+      for (const std::string& f : listNativeFields(cellsPath)) known += (known.empty() ? "" : ", ") + f;
+      fail(cellsPath, ": unknown field '", name, "' (no file ", path, "; fields: ", known, ")");
+    }
+    const uint64_t bytes = fileSize(path);
+    if (bytes % sizeof(float) != 0)
+      fail(path, ": truncated record ", bytes / sizeof(float), ": file size ", bytes,
+           " is not a multiple of 4");
+    if (bytes / sizeof(float) != set.cells.size())
+      fail(path, ": size mismatch: ", bytes / sizeof(float), " values for ", set.cells.size(),
+           " cells in ", cellsPath);
+    Field field{name, std::vector<float>(set.cells.size())};
+    readInto(path, field.values.data(), bytes);
+    validateFieldValues(field, set.cells.size(), path);
+    set.fields.push_back(std::move(field));
+  }
+  return set;
+}
+
+void writeNative(const CellSet& set, const std::string& cellsPath) {
+  const std::string stem = stemOf(cellsPath);
+  if (set.fields.empty()) fail(cellsPath, ": nothing to write: no fields");
+  writeFileAtomic(cellsPath, set.cells.data(), set.cells.size() * sizeof(Cell));
+  for (const Field& f : set.fields) {
+    if (f.name.empty() || f.name.find_first_of("./\\") != std::string::npos)
+      fail(cellsPath, ": field name '", f.name, "' cannot be stored in a file name");
+    writeFileAtomic(scalarsPath(stem, f.name), f.values.data(), f.values.size() * sizeof(float));
+  }
+}
+
+CellSet readGrids(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail(path, ": cannot open: ", std::strerror(errno));
+  CellSet set;
+  Field field{"scalar", {}};
+  std::string line;
+  size_t lineNo = 0;
+  while (std::getline(in, line)) {
+    ++lineNo;
+    const size_t hash = line.find('#');
+    if (hash != std::string::npos) line.resize(hash);
+    std::istringstream ls(line);
+    std::vector<std::string> tokens;
+    for (std::string t; ls >> t;) tokens.push_back(t);
+    if (tokens.empty()) continue;
+    if (tokens.size() != 8 && tokens.size() != 15)
+      fail(path, ": line ", lineNo, ": expected 'x y z nx ny nz level value' or eight corner",
+           " values, got ", tokens.size(), " numbers");
+    int64_t ints[7];
+    for (int i = 0; i < 7; ++i) {
+      char* end = nullptr;
+      errno = 0;
+      const long long v = std::strtoll(tokens[i].c_str(), &end, 10);
+      if (*end != 0 || errno == ERANGE || v < INT32_MIN || v > INT32_MAX)
+        fail(path, ": line ", lineNo, ": '", tokens[i], "' is not a 32-bit integer");
+      ints[i] = v;
+    }
+    double v[8];
+    const int nv = int(tokens.size()) - 7;
+    for (int i = 0; i < nv; ++i) {
+      char* end = nullptr;
+      v[i] = std::strtod(tokens[7 + i].c_str(), &end);
+      if (*end != 0) fail(path, ": line ", lineNo, ": '", tokens[7 + i], "' is not a number");
+      if (!std::isfinite(v[i]) || std::fabs(v[i]) > 3.4e38)
+        fail(path, ": line ", lineNo, ": value ", tokens[7 + i], " is not a finite float");
+    }
+    const vec3l n(ints[3], ints[4], ints[5]);
+    if (n.x < 1 || n.y < 1 || n.z < 1)
+      fail(path, ": line ", lineNo, ": box size ", n.x, "x", n.y, "x", n.z, " must be positive");
+    const int64_t level = ints[6];
+    const Cell probe{vec3i(int32_t(ints[0]), int32_t(ints[1]), int32_t(ints[2])), int32_t(level)};
+    if (const std::string p = cellProblem(probe); !p.empty())
+      fail(path, ": line ", lineNo, ": ", p);
+    const int64_t w = int64_t(1) << level;
+    for (int a = 0; a < 3; ++a)
+      if (ints[a] + n[a] * w > kLatticeLimit)
+        fail(path, ": line ", lineNo, ": box reaches outside the supported lattice range");
+    if (double(n.x) * double(n.y) * double(n.z) + double(set.cells.size()) > 4e9)
+      fail(path, ": line ", lineNo, ": absurd box size ", n.x, "x", n.y, "x", n.z);
+    for (int64_t k = 0; k < n.z; ++k)
+      for (int64_t j = 0; j < n.y; ++j)
+        for (int64_t i = 0; i < n.x; ++i) {
+          set.cells.push_back(Cell{vec3i(int32_t(ints[0] + i * w), int32_t(ints[1] + j * w),
+                                         int32_t(ints[2] + k * w)),
+                                   int32_t(level)});
+          double value = v[0];
+          if (nv == 8) {
+            const double u = (i + 0.5) / n.x, s = (j + 0.5) / n.y, t = (k + 0.5) / n.z;
+            auto lerp = [](double a, double b, double f) { return a + (b - a) * f; };
+            value = lerp(lerp(lerp(v[0], v[1], u), lerp(v[2], v[3], u), s),
+                         lerp(lerp(v[4], v[5], u), lerp(v[6], v[7], u), s), t);
+          }
+          field.values.push_back(float(value));
+        }
+  }
+  if (set.cells.empty()) fail(path, ": no cells (empty input)");
+  set.fields.push_back(std::move(field));
+  return set;
+}
+
+} // namespace exa

@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# End-to-end checks of the exabricks command line: outputs, JSON, exit codes and error messages.
+set -u
+exe=${EXABRICKS:?set EXABRICKS to the exabricks binary}
+dir=${1:?usage: cli_test.sh TMPDIR}
+rm -rf "$dir" && mkdir -p "$dir" && cd "$dir" || exit 1
+failures=0
+check() { # description, then a command that must succeed
+  local what=$1; shift
+  if "$@"; then echo "ok   $what"; else echo "FAIL $what"; failures=$((failures + 1)); fi
+}
+fails_with() { # description, expected message part, command that must fail with it
+  local what=$1 part=$2; shift 2
+  local out rc
+  out=$("$@" 2>&1 >/dev/null); rc=$?
+  if [ $rc -ne 0 ] && grep -qF -- "$part" <<<"$out"; then echo "ok   $what"
+  else echo "FAIL $what (rc=$rc): $out"; failures=$((failures + 1)); fi
+}
+py=/usr/bin/python3; [ -x $py ] || py=python3
+
+check "info on the default dataset" "$exe" info
+check "info --json has the required keys" bash -c "'$exe' info --json | $py -c '
+import json,sys; j=json.load(sys.stdin)
+for k in (\"cells\",\"bricks\",\"regions\",\"bricks_per_region_by_count\",\"bricks_per_region_by_volume\",\"levels\"): assert k in j, k
+assert j[\"cells\"] == sum(l[\"cells\"] for l in j[\"levels\"])
+assert all(l[\"cell_width\"] == 2 ** l[\"level\"] for l in j[\"levels\"])'"
+check "generate writes a dataset" "$exe" generate -s shells -n 20000 --seed 3 -o s.cells
+check "generate is deterministic" bash -c "'$exe' generate -s shells -n 20000 --seed 3 -o t.cells && cmp s.cells t.cells && cmp s.scalars t.scalars && cmp s.radius.scalars t.radius.scalars"
+check "info --fields lists fields" bash -c "'$exe' info s.cells --fields | tr '\n' ' ' | grep -qx 'radius scalar '"
+check "build writes a model" "$exe" build s.cells -o s.model
+check "no temporary files left" bash -c "! ls | grep -q tmp"
+summary() { "$exe" info "$1" --json | $py -c 'import json,sys; j=json.load(sys.stdin); print(j["cells"], j["bricks"], j["regions"], j["levels"], j["fields"])'; }
+same_summary() { [ "$(summary s.cells)" = "$(summary s.model)" ]; }
+check "info on model equals info on cells" same_summary
+printf '10 10 10\n# comment\n\n1e9 0 0\n-5 -5 -5\n' > pts.txt
+check "sample prints one line per point" bash -c "[ \$('$exe' sample s.cells --points pts.txt | wc -l) -eq 3 ]"
+check "sample outside gives nan" bash -c "'$exe' sample s.cells --points pts.txt | sed -n 2p | grep -qx 'nan nan nan nan'"
+check "sample from stdin equals model" bash -c "diff <('$exe' sample s.cells < pts.txt) <('$exe' sample s.model -f scalar -p pts.txt)"
+check "sample of a second field" bash -c "'$exe' sample s.cells -f radius -p pts.txt | head -1 | grep -qv nan"
+check "convert round trip" bash -c "'$exe' convert s.cells -o c.cells && cmp s.cells c.cells && cmp s.scalars c.scalars"
+check "grids fixture" bash -c "printf '0 0 0 4 4 4 0 1 2 3 4 5 6 7 8\n' > g.grids && '$exe' info g.grids --json | grep -q '\"cells\": 64'"
+
+fails_with "unknown option" "--bogus" "$exe" info --bogus
+fails_with "unknown subcommand" "subcommand" "$exe" nope
+fails_with "missing input" "nothing.cells" "$exe" info nothing.cells
+fails_with "unknown field" "unknown field 'nope'" "$exe" sample s.cells -f nope -p pts.txt
+fails_with "bad point line" "line 2" bash -c "printf '1 2 3\n1 2\n' | '$exe' sample s.cells"
+cp s.cells bad.cells; printf 'xx' >> bad.cells; cp s.scalars bad.scalars
+fails_with "truncated cells file" "bad.cells: truncated record" "$exe" info bad.cells
+head -c 1000 s.model > cut.model
+fails_with "truncated model" "cut.model" "$exe" info cut.model
+fails_with "build into a missing folder" "no/such" "$exe" build s.cells -o no/such/m.model
+check "no half-written output" bash -c "[ ! -e no ]"
+fails_with "unknown scene" "unknown scene" "$exe" generate -s nope -o x.cells
+
+if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
+echo "all command-line checks passed"

@@ -1,0 +1,219 @@
+#include "datasets.h"
+#include "exabricks/core/error.h"
+#include "exabricks/io/load.h"
+#include "exabricks/io/model_file.h"
+#include "exabricks/io/native.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+using namespace exa;
+using namespace exa::test;
+namespace fs = std::filesystem;
+
+namespace {
+
+class IoTest : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir = fs::path(EXABRICKS_TEST_TMP) / ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+  }
+  std::string path(const std::string& name) const { return (dir / name).string(); }
+  void writeBytes(const std::string& name, const void* data, size_t size) const {
+    std::ofstream(path(name), std::ios::binary).write(static_cast<const char*>(data), std::streamsize(size));
+  }
+  void writeText(const std::string& name, const std::string& text) const {
+    std::ofstream(path(name)) << text;
+  }
+  /// Writes raw records and values as NAME.cells / NAME.scalars.
+  void writeRaw(const std::string& name, const std::vector<Cell>& cells, const std::vector<float>& values) {
+    writeBytes(name + ".cells", cells.data(), cells.size() * sizeof(Cell));
+    writeBytes(name + ".scalars", values.data(), values.size() * sizeof(float));
+  }
+  /// The message of the error that loading `input` (building it too) throws.
+  std::string loadError(const std::string& input) {
+    try {
+      loadModel(input);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "no error";
+  }
+  fs::path dir;
+};
+
+#define EXPECT_MESSAGE(msg, ...)                                                                   \
+  do {                                                                                             \
+    const std::string m_ = (msg);                                                                  \
+    for (const char* part : {__VA_ARGS__}) EXPECT_NE(m_.find(part), std::string::npos) << m_;      \
+  } while (0)
+
+} // namespace
+
+TEST_F(IoTest, NativeRoundTripWithSeveralFields) {
+  const CellSet s = generateScene({"blobs", 2000, 1, 3});
+  writeNative(s, path("a.cells"));
+  EXPECT_TRUE(fs::exists(path("a.scalars")));
+  EXPECT_TRUE(fs::exists(path("a.radius.scalars")));
+  EXPECT_EQ(listNativeFields(path("a.cells")), (std::vector<std::string>{"radius", "scalar"}));
+  const CellSet r = readNative(path("a.cells"));
+  EXPECT_EQ(r.cells, s.cells);
+  ASSERT_EQ(r.fields.size(), 2u);
+  EXPECT_EQ(r.fields[r.fieldIndex("scalar")].values, s.fields[0].values);
+  EXPECT_EQ(r.fields[r.fieldIndex("radius")].values, s.fields[1].values);
+  const CellSet only = readNative(path("a.cells"), {"radius"});
+  ASSERT_EQ(only.fields.size(), 1u);
+  EXPECT_EQ(only.fields[0].name, "radius");
+  for (const auto& entry : fs::directory_iterator(dir))
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "temporary file left";
+}
+
+TEST_F(IoTest, GridsFixtureConstantAndTrilinear) {
+  writeText("g.grids", "# a comment\n0 0 0 2 1 1 1 5.0\n\n4 0 0 2 2 2 0 0 1 0 1 0 1 0 1  # x ramp\n");
+  const CellSet s = readGrids(path("g.grids"));
+  ASSERT_EQ(s.cells.size(), 10u);
+  EXPECT_EQ(s.cells[1], (Cell{vec3i(2, 0, 0), 1}));
+  EXPECT_EQ(s.fields[0].values[0], 5.f);
+  EXPECT_EQ(s.cells[2], (Cell{vec3i(4, 0, 0), 0}));
+  EXPECT_FLOAT_EQ(s.fields[0].values[2], 0.25f);
+  EXPECT_FLOAT_EQ(s.fields[0].values[3], 0.75f);
+  EXPECT_MESSAGE(loadError(path("g.grids")), "no error");
+
+  writeText("bad.grids", "0 0 0 1 1 1 0\n");
+  EXPECT_MESSAGE(loadError(path("bad.grids")), "bad.grids", "line 1", "expected");
+  writeText("mis.grids", "1 0 0 1 1 1 1 2.0\n");
+  EXPECT_MESSAGE(loadError(path("mis.grids")), "mis.grids", "line 1", "not aligned");
+  writeText("nan.grids", "0 0 0 1 1 1 0 nan\n");
+  EXPECT_MESSAGE(loadError(path("nan.grids")), "nan.grids", "line 1", "finite");
+  writeText("empty.grids", "# nothing\n");
+  EXPECT_MESSAGE(loadError(path("empty.grids")), "empty.grids", "empty");
+  writeText("over.grids", "0 0 0 2 2 2 1 1.0\n1 1 1 1 1 1 0 2.0\n");
+  EXPECT_MESSAGE(loadError(path("over.grids")), "over.grids", "cells 0 ", "and 8 ", "overlap");
+}
+
+TEST_F(IoTest, EveryValidationErrorNamesFileRecordAndProblem) {
+  const std::vector<Cell> good = {{vec3i(0, 0, 0), 1}, {vec3i(2, 0, 0), 1}, {vec3i(4, 0, 0), 0}};
+  const std::vector<float> values = {1, 2, 3};
+
+  writeRaw("ok", good, values);
+  EXPECT_MESSAGE(loadError(path("ok.cells")), "no error");
+
+  writeRaw("size", good, {1, 2});
+  EXPECT_MESSAGE(loadError(path("size.cells")), "size.scalars", "size mismatch", "2 values for 3 cells");
+
+  writeRaw("trunc", good, values);
+  fs::resize_file(path("trunc.cells"), 3 * 16 - 5);
+  EXPECT_MESSAGE(loadError(path("trunc.cells")), "trunc.cells", "truncated record 2");
+  writeRaw("truncs", good, values);
+  fs::resize_file(path("truncs.scalars"), 10);
+  EXPECT_MESSAGE(loadError(path("truncs.cells")), "truncs.scalars", "truncated record 2");
+
+  writeRaw("misaligned", {{vec3i(0, 0, 0), 1}, {vec3i(3, 0, 0), 1}}, {1, 2});
+  EXPECT_MESSAGE(loadError(path("misaligned.cells")), "misaligned.cells", "record 1", "not aligned");
+
+  writeRaw("neg", {{vec3i(0, 0, 0), 0}, {vec3i(1, 0, 0), -1}}, {1, 2});
+  EXPECT_MESSAGE(loadError(path("neg.cells")), "neg.cells", "record 1", "negative level");
+
+  writeRaw("absurd", {{vec3i(0, 0, 0), 40}}, {1});
+  EXPECT_MESSAGE(loadError(path("absurd.cells")), "absurd.cells", "record 0", "absurd level 40");
+
+  writeRaw("far", {{vec3i(2000000000, 0, 0), 0}}, {1});
+  EXPECT_MESSAGE(loadError(path("far.cells")), "far.cells", "record 0", "outside");
+
+  writeRaw("overlap", {{vec3i(0, 0, 0), 2}, {vec3i(8, 0, 0), 0}, {vec3i(1, 2, 3), 0}}, values);
+  EXPECT_MESSAGE(loadError(path("overlap.cells")), "overlap.cells", "cells 0", "and 2", "overlap");
+
+  writeRaw("dup", {{vec3i(0, 0, 0), 0}, {vec3i(1, 0, 0), 0}, {vec3i(1, 0, 0), 0}}, values);
+  EXPECT_MESSAGE(loadError(path("dup.cells")), "dup.cells", "cells 1 and 2", "duplicates");
+
+  writeRaw("nan", good, {1, std::nanf(""), 3});
+  EXPECT_MESSAGE(loadError(path("nan.cells")), "nan.scalars", "record 1", "not finite");
+  writeRaw("inf", good, {1, 2, INFINITY});
+  EXPECT_MESSAGE(loadError(path("inf.cells")), "inf.scalars", "record 2", "not finite");
+
+  writeRaw("empty", {}, {});
+  EXPECT_MESSAGE(loadError(path("empty.cells")), "empty.cells", "empty");
+
+  writeBytes("nofield.cells", good.data(), good.size() * sizeof(Cell));
+  EXPECT_MESSAGE(loadError(path("nofield.cells")), "nofield.cells", "no field files");
+
+  EXPECT_MESSAGE(loadError(path("missing.cells")), "missing.cells", "no such file");
+  writeText("what.txt", "hello");
+  EXPECT_MESSAGE(loadError(path("what.txt")), "what.txt", "unknown input format");
+
+  LoadOptions o;
+  o.fields = {"nope"};
+  try {
+    loadModel(path("ok.cells"), o);
+    ADD_FAILURE() << "unknown field accepted";
+  } catch (const Error& e) {
+    EXPECT_MESSAGE(e.what(), "nope");
+  }
+}
+
+TEST_F(IoTest, ModelFileRoundTrip) {
+  CellSet s = generateScene({"shells", 3000, 1, 4});
+  const Model m = buildModel(std::move(s));
+  writeModel(m, path("m.exa"));
+  EXPECT_TRUE(isModelFile(path("m.exa")));
+  const Model r = loadModel(path("m.exa")); // detected by magic, not by extension
+  EXPECT_EQ(r.world, m.world);
+  EXPECT_EQ(r.fieldNames, m.fieldNames);
+  EXPECT_EQ(r.fieldValues, m.fieldValues);
+  ASSERT_EQ(r.bricks.size(), m.bricks.size());
+  EXPECT_EQ(std::memcmp(r.bricks.data(), m.bricks.data(), m.bricks.size() * sizeof(Brick)), 0);
+  EXPECT_EQ(r.regions.brickIds, m.regions.brickIds);
+  EXPECT_EQ(r.regions.valueRanges, m.regions.valueRanges);
+  ASSERT_EQ(r.regions.regions.size(), m.regions.regions.size());
+  EXPECT_EQ(std::memcmp(r.regions.regions.data(), m.regions.regions.data(),
+                        m.regions.regions.size() * sizeof(Region)), 0);
+  double a, b;
+  const vec3d p(40.3, 41.7, 12.2);
+  EXPECT_EQ(sampleField(m.view(0), p, a), sampleField(r.view(0), p, b));
+}
+
+TEST_F(IoTest, CorruptTruncatedAndForeignModelsAreRejected) {
+  CellSet s = generateScene({"blobs", 1000, 1, 3});
+  const Model m = buildModel(std::move(s));
+  writeModel(m, path("m.exa"));
+  std::vector<char> bytes = readFile(path("m.exa"));
+
+  std::vector<char> flipped = bytes;
+  flipped[bytes.size() / 2] ^= 0x10;
+  writeBytes("flipped.exa", flipped.data(), flipped.size());
+  EXPECT_MESSAGE(loadError(path("flipped.exa")), "flipped.exa", "corrupt");
+
+  writeBytes("short.exa", bytes.data(), bytes.size() - 100);
+  EXPECT_MESSAGE(loadError(path("short.exa")), "short.exa", "truncated");
+
+  writeBytes("header.exa", bytes.data(), 20);
+  EXPECT_MESSAGE(loadError(path("header.exa")), "header.exa", "truncated");
+
+  std::vector<char> version = bytes;
+  version[8] = 99;
+  writeBytes("version.exa", version.data(), version.size());
+  EXPECT_MESSAGE(loadError(path("version.exa")), "version.exa", "version 99");
+
+  // A huge count in the brick array header must not allocate or crash.
+  std::vector<char> huge = bytes;
+  const uint64_t count = uint64_t(1) << 60;
+  std::memcpy(huge.data() + 48 + sizeof(WorldTransform), &count, 8);
+  writeBytes("huge.exa", huge.data(), huge.size());
+  EXPECT_MESSAGE(loadError(path("huge.exa")), "huge.exa", "corrupt");
+
+  writeText("foreign.cells", "EXABRMDX and then some text that is not a model");
+  EXPECT_MESSAGE(loadError(path("foreign.cells")), "foreign.cells");
+}
+
+TEST_F(IoTest, FailedWritesLeaveNoFile) {
+  CellSet s = generateScene({"blobs", 500, 1, 2});
+  const Model m = buildModel(std::move(s));
+  EXPECT_THROW(writeModel(m, path("no/such/dir/m.exa")), Error);
+  EXPECT_FALSE(fs::exists(path("no")));
+}
