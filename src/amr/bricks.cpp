@@ -65,8 +65,17 @@ public:
     const int64_t centre = floorDiv(lo + hi, 2);
     const int64_t first = (floorDiv(lo, coarsest) + 1) * coarsest;
     const int64_t last = -floorDiv(-hi, coarsest) * coarsest - coarsest;
-    const int64_t nearest = floorDiv(centre + coarsest / 2, coarsest) * coarsest;
-    const int32_t split = int32_t(std::clamp(nearest, first, last));
+    int32_t split = int32_t(std::clamp(floorDiv(centre + coarsest / 2, coarsest) * coarsest, first, last));
+    // Among the planes in the middle half of the node, prefer the one aligned to the largest
+    // power of two: block-structured data then splits along its own block boundaries.
+    const int64_t quarter = (hi - lo) / 4;
+    for (int64_t align = int64_t(1) << 30; align > coarsest; align >>= 1) {
+      const int64_t p = floorDiv(centre + align / 2, align) * align;
+      if (p > lo + quarter && p < hi - quarter && p >= first && p <= last) {
+        split = int32_t(p);
+        break;
+      }
+    }
     Item* mid = std::partition(items_.data() + begin, items_.data() + end,
                                [&](const Item& it) { return it.lower[axis] < split; });
     const size_t m = size_t(mid - items_.data());

@@ -184,10 +184,14 @@ uint64_t refine(const Scene& scene, const vec3i& lower, int level, double unit, 
 uint64_t countCells(const Scene& scene, int base, int maxLevel) {
   const int w = 1 << maxLevel;
   const double unit = 1.0 / (double(base) * w);
-  uint64_t n = 0;
-  for (int z = 0; z < base; ++z)
+  std::vector<uint64_t> perSlab(size_t(base), 0);
+  tbb::parallel_for(0, base, [&](int z) {
     for (int y = 0; y < base; ++y)
-      for (int x = 0; x < base; ++x) n += refine(scene, vec3i(x, y, z) * w, maxLevel, unit, nullptr);
+      for (int x = 0; x < base; ++x)
+        perSlab[size_t(z)] += refine(scene, vec3i(x, y, z) * w, maxLevel, unit, nullptr);
+  });
+  uint64_t n = 0;
+  for (uint64_t c : perSlab) n += c;
   return n;
 }
 
@@ -232,7 +236,11 @@ CellSet generateScene(const SceneOptions& o) {
     }
     if (count >= o.targetCells) break;
     if (count >= 400000 || b >= 2048) {
-      base = int(std::lround(b * std::cbrt(double(o.targetCells) / double(count))));
+      // Extrapolate, count there (cheap: nothing is stored) and correct once.
+      int guess = std::clamp(int(std::lround(b * std::cbrt(double(o.targetCells) / double(count)))), 1, 2048);
+      const uint64_t guessCount = countCells(scene, guess, maxLevel);
+      const double ratio = double(o.targetCells) / double(std::max<uint64_t>(guessCount, 1));
+      base = int(std::lround(guess * std::cbrt(ratio)));
       break;
     }
   }
