@@ -40,6 +40,21 @@ check "sample of a second field" bash -c "'$exe' sample s.cells -f radius -p pts
 check "convert round trip" bash -c "'$exe' convert s.cells -o c.cells && cmp s.cells c.cells && cmp s.scalars c.scalars"
 check "grids fixture" bash -c "printf '0 0 0 4 4 4 0 1 2 3 4 5 6 7 8\n' > g.grids && '$exe' info g.grids --json | grep -q '\"cells\": 64'"
 
+check "render the default dataset" "$exe" render -o default.png --size 64x48
+check "render --json has statistics" bash -c "'$exe' render s.cells -o r.png --size 48x48 --stats --json | $py -c '
+import json,sys; j=json.load(sys.stdin)
+for k in (\"frame_seconds\",\"samples\",\"regions_visited\",\"samples_per_second\",\"visible_regions\",\"transfer_function_update_seconds\"): assert k in j, k
+assert j[\"samples\"] > 0'"
+check "render a model file with a debug view and a float image" "$exe" render s.model -o d.png --float d.pfm --size 32x32 --debug level
+check "scene file reproduces the image" bash -c "'$exe' render s.cells -o a.png --size 40x30 --colormap magma --azimuth 70 --spp 2 --write-scene scene.json && '$exe' render s.cells --scene scene.json -o b.png && cmp a.png b.png"
+check "scene file holds the options" grep -q magma scene.json
+printf '{"colormap": "plasma", "opacity": [[0, 0], [1, 0.5]]}' > tf.json
+check "render with a transfer function file" "$exe" render s.cells -o t.png --size 32x32 --tf tf.json
+fails_with "unknown colour map" "unknown colour map" "$exe" render s.cells -o x.png --colormap rainbow
+fails_with "bad image size" "--size" "$exe" render s.cells -o x.png --size 10xten
+fails_with "unknown scene key" "bogus" bash -c "echo '{\"bogus\": 1}' > bad.json && '$exe' render s.cells --scene bad.json -o x.png"
+fails_with "degenerate camera" "degenerate camera" "$exe" render s.cells -o x.png --position 1,1,1 --look-at 1,1,1
+check "failed renders leave no image" bash -c "[ ! -e x.png ]"
 fails_with "unknown option" "--bogus" "$exe" info --bogus
 fails_with "unknown subcommand" "subcommand" "$exe" nope
 fails_with "missing input" "nothing.cells" "$exe" info nothing.cells

@@ -10,5 +10,6 @@ void addSample(CLI::App& app);
 void addBuild(CLI::App& app);
 void addGenerate(CLI::App& app);
 void addConvert(CLI::App& app);
+void addRender(CLI::App& app);
 
 } // namespace exa::cli

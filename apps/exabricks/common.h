@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
+#include <functional>
 #include <string>
 
 namespace exa::cli {
@@ -21,6 +22,10 @@ struct InputOptions {
   LoadOptions loadOptions(bool onlySelectedField) const;
   std::string name() const;
 };
+
+/// Adds --scene FILE (read options from JSON) and --write-scene FILE to a subcommand of root;
+/// returns the function that writes the scene file when one was asked for.
+std::function<void()> addSceneFile(CLI::App& root, CLI::App& cmd);
 
 /// JSON for a range; null bounds for an empty range.
 nlohmann::json toJson(const range1f& r);

@@ -1,0 +1,149 @@
+// Region traversal: presents the visible active brick regions along a ray as a stream of
+// segments (t0, t1, region), front to back. Two interchangeable back ends: an Embree scene with
+// one user-geometry primitive per visible region (the CPU counterpart of the paper's RTX user
+// geometry, each step finding the next region after the previous exit), and a front-to-back
+// walk of the regions' k-d tree. Both clip each region's box with the same slab test, so they
+// give identical segments.
+#pragma once
+
+#include "exabricks/amr/model.h"
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace exa {
+
+/// A ray in lattice space; dir need not be normalised (t is in units of |dir|).
+struct Ray {
+  vec3f org;
+  vec3f dir;
+  float tmin = 0.f;
+  float tmax = std::numeric_limits<float>::infinity();
+};
+
+struct Segment {
+  float t0, t1;
+  uint32_t region;
+};
+
+/// Slab test of a ray against a closed box. An axis the ray does not move along counts as
+/// inside when lower <= org < upper (half-open, like the k-d tree's split rule), so a ray
+/// running exactly along a shared face belongs to one region only. Returns false when the ray
+/// misses the box.
+inline bool rayBoxInterval(const Ray& ray, const vec3f& invDir, const box3f& box, float& t0,
+                           float& t1) {
+  t0 = -std::numeric_limits<float>::infinity();
+  t1 = std::numeric_limits<float>::infinity();
+  for (int a = 0; a < 3; ++a) {
+    if (ray.dir[a] == 0.f) {
+      if (!(ray.org[a] >= box.lower[a] && ray.org[a] < box.upper[a])) return false;
+      continue;
+    }
+    const float ta = (box.lower[a] - ray.org[a]) * invDir[a];
+    const float tb = (box.upper[a] - ray.org[a]) * invDir[a];
+    t0 = std::max(t0, std::min(ta, tb));
+    t1 = std::min(t1, std::max(ta, tb));
+  }
+  return t0 <= t1;
+}
+
+inline vec3f safeInverse(const vec3f& d) {
+  return {d.x != 0.f ? 1.f / d.x : 0.f, d.y != 0.f ? 1.f / d.y : 0.f, d.z != 0.f ? 1.f / d.z : 0.f};
+}
+
+enum class TraversalKind { Embree, KdTree };
+
+class RegionTraversal {
+public:
+  RegionTraversal(const Model& model, TraversalKind kind);
+  ~RegionTraversal();
+  RegionTraversal(const RegionTraversal&) = delete;
+  RegionTraversal& operator=(const RegionTraversal&) = delete;
+
+  /// Sets which regions take part (one flag per region); returns the update time in seconds.
+  double setVisible(const std::vector<uint8_t>& visible);
+  size_t visibleCount() const { return visibleCount_; }
+  TraversalKind kind() const { return kind_; }
+
+  /// Calls `emit(const Segment&)` for every visible region the ray passes through, in order,
+  /// until it returns false. Segments tile the ray's path through the visible regions.
+  template <typename Emit> void traverse(const Ray& ray, Emit&& emit) const;
+
+private:
+  /// Next visible region whose exit lies beyond tnear, via Embree; false when there is none.
+  bool nextEmbree(const Ray& ray, float tnear, Segment& seg) const;
+
+  const Model& model_;
+  TraversalKind kind_;
+  std::vector<uint8_t> visible_;
+  size_t visibleCount_ = 0;
+  struct EmbreeScene;
+  std::unique_ptr<EmbreeScene> embree_;
+};
+
+template <typename Emit> void RegionTraversal::traverse(const Ray& ray, Emit&& emit) const {
+  if (kind_ == TraversalKind::Embree) {
+    float tnear = ray.tmin;
+    Segment seg;
+    while (tnear < ray.tmax && nextEmbree(ray, tnear, seg)) {
+      if (!emit(seg)) return;
+      tnear = seg.t1;
+    }
+    return;
+  }
+  // Front-to-back k-d tree walk with an explicit stack; each leaf's segment comes from its
+  // region's box, clipped to the previous exit exactly as the Embree path does.
+  const std::vector<RegionKdNode>& nodes = model_.regions.nodes;
+  if (nodes.empty()) return;
+  const vec3f inv = safeInverse(ray.dir);
+  float t0, t1;
+  if (!rayBoxInterval(ray, inv, model_.regions.bounds, t0, t1)) return;
+  t0 = std::max(t0, ray.tmin);
+  t1 = std::min(t1, ray.tmax);
+  if (!(t0 <= t1)) return;
+  struct Entry {
+    uint32_t node;
+    float t0, t1;
+  };
+  Entry stack[128];
+  int top = 0;
+  stack[top++] = {0, t0, t1};
+  float last = ray.tmin;
+  while (top > 0) {
+    Entry e = stack[--top];
+    while (nodes[e.node].axis != kLeafAxis) {
+      const RegionKdNode& n = nodes[e.node];
+      const int a = int(n.axis);
+      const float o = ray.org[a], d = ray.dir[a];
+      const bool lowerFirst = o < n.pos || (o == n.pos && d < 0.f);
+      const uint32_t nearChild = n.index + (lowerFirst ? 0u : 1u);
+      const uint32_t farChild = n.index + (lowerFirst ? 1u : 0u);
+      if (d == 0.f) {
+        e.node = nearChild;
+        continue;
+      }
+      const float ts = (n.pos - o) * inv[a];
+      if (ts >= e.t1 || ts <= 0.f) { // never crosses the plane ahead of the origin
+        e.node = nearChild;
+      } else if (ts <= e.t0) {
+        e.node = farChild;
+      } else {
+        if (top < 128) stack[top++] = {farChild, ts, e.t1};
+        e.node = nearChild;
+        e.t1 = ts;
+      }
+    }
+    const uint32_t r = nodes[e.node].index;
+    if (r == kNoRegion || !visible_[r]) continue;
+    float b0, b1;
+    if (!rayBoxInterval(ray, inv, model_.regions.regions[r].bounds(), b0, b1)) continue;
+    b0 = std::max(b0, last);
+    b1 = std::min(b1, ray.tmax);
+    if (!(b1 > b0)) continue;
+    if (!emit(Segment{b0, b1, r})) return;
+    last = b1;
+  }
+}
+
+} // namespace exa

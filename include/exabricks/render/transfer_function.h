@@ -1,0 +1,58 @@
+// Transfer functions: a colour map and a piecewise-linear opacity over a value range (linear or
+// logarithmic). Opacity is per finest cell width: the ray marcher corrects it for its step.
+#pragma once
+
+#include "exabricks/core/math.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+struct vec4f {
+  float x = 0, y = 0, z = 0, w = 0;
+};
+
+/// A colour map: control points at increasing positions in [0, 1] with linear-RGB colours,
+/// interpolated linearly between them.
+struct ColorMap {
+  std::string name;
+  std::vector<float> positions; ///< increasing, first 0, last 1
+  std::vector<vec3f> colors;    ///< linear RGB in [0, 1], one per position
+  vec3f at(float t) const;      ///< t is clamped to [0, 1]
+};
+
+/// Names of the built-in colour maps: viridis, plasma, inferno, magma, cool-to-warm, grayscale.
+const std::vector<std::string>& builtinColorMapNames();
+/// A built-in colour map by name; throws exa::Error listing the names when unknown.
+ColorMap builtinColorMap(const std::string& name);
+
+/// One opacity control point; x is the normalised value in [0, 1].
+struct OpacityPoint {
+  float x = 0;
+  float alpha = 0;
+};
+
+class TransferFunction {
+public:
+  ColorMap colorMap;
+  std::vector<OpacityPoint> opacity; ///< increasing x; empty means a linear ramp 0 -> 1
+  range1f valueRange;                ///< values mapped to [0, 1]; empty: not set yet
+  bool logScale = false;             ///< map log10(value) (values <= 0 map to 0)
+  float opacityScale = 1.f;          ///< multiplies every opacity
+
+  /// Value -> [0, 1] (clamped), linear or logarithmic over valueRange.
+  float normalize(float value) const;
+  /// Linear-RGB colour and opacity (per finest cell width) of a value.
+  vec4f lookup(float value) const;
+  /// Exact maximum opacity over all values in [r.lower, r.upper] (used for space skipping).
+  float maxOpacity(const range1f& r) const;
+};
+
+/// Reads a transfer function file: a ParaView colour-map preset (a JSON array or object with
+/// "RGBPoints" and optional "Points" for opacity, "ColorSpace", "Name") or an exabricks JSON
+/// object (see docs/transfer-functions.md). The value range in the file, if any, is kept in
+/// valueRange; errors name the file and the problem.
+TransferFunction readTransferFunction(const std::string& path);
+
+} // namespace exa

@@ -1,0 +1,43 @@
+#include "exabricks/render/camera.h"
+
+#include "exabricks/core/error.h"
+
+namespace exa {
+
+Camera Camera::frame(const box3d& box, double azimuthDeg, double elevationDeg, double fovyDeg,
+                     bool orthographic) {
+  const double deg = M_PI / 180.0;
+  const vec3d centre = (box.lower + box.upper) * 0.5;
+  const double radius = 0.5 * length(box.upper - box.lower);
+  const vec3d dir(std::cos(elevationDeg * deg) * std::cos(azimuthDeg * deg),
+                  std::cos(elevationDeg * deg) * std::sin(azimuthDeg * deg),
+                  std::sin(elevationDeg * deg));
+  Camera c;
+  c.fovy = fovyDeg;
+  c.orthographic = orthographic;
+  c.lookAt = centre;
+  // The bounding sphere fits the vertical field of view (the narrower one for wide images).
+  const double distance = radius / std::sin(0.5 * fovyDeg * deg);
+  c.position = centre + dir * (orthographic ? 3.0 * radius : distance);
+  c.orthoHeight = 2.0 * radius;
+  c.up = std::abs(dir.z) > 0.999 ? vec3d(0.0, 1.0, 0.0) : vec3d(0.0, 0.0, 1.0);
+  return c;
+}
+
+void Camera::ray(double u, double v, double aspect, vec3d& org, vec3d& dir) const {
+  const vec3d forward = normalize(lookAt - position);
+  const vec3d right = normalize(cross(forward, up));
+  const vec3d trueUp = cross(right, forward);
+  const double x = (2.0 * u - 1.0), y = (1.0 - 2.0 * v);
+  if (orthographic) {
+    const double h = 0.5 * orthoHeight;
+    org = position + right * (x * h * aspect) + trueUp * (y * h);
+    dir = forward;
+    return;
+  }
+  const double t = std::tan(0.5 * fovy * M_PI / 180.0);
+  org = position;
+  dir = normalize(forward + right * (x * t * aspect) + trueUp * (y * t));
+}
+
+} // namespace exa

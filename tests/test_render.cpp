@@ -1,0 +1,213 @@
+#include "datasets.h"
+#include "exabricks/render/renderer.h"
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <cmath>
+
+using namespace exa;
+using namespace exa::test;
+
+namespace {
+
+/// A 16^3 box of value 1 made of cells of the given levels along x (each level a slab).
+CellSet constantSlabs(const std::vector<int>& levels) {
+  CellSet s;
+  s.fields.push_back({"scalar", {}});
+  int x0 = 0;
+  for (int level : levels) {
+    const int w = 1 << level;
+    for (int z = 0; z < 16; z += w)
+      for (int y = 0; y < 16; y += w)
+        for (int x = 0; x < 16; x += w) {
+          s.cells.push_back({vec3i(x0 + x, y, z), level});
+          s.fields[0].values.push_back(1.f);
+        }
+    x0 += 16;
+  }
+  return s;
+}
+
+TransferFunction constantOpacity(float alpha) {
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("grayscale");
+  tf.opacity = {{0.f, alpha}, {1.f, alpha}};
+  tf.valueRange = range1f{0.f, 2.f};
+  return tf;
+}
+
+RenderOptions smallOptions(int size = 48) {
+  RenderOptions o;
+  o.width = o.height = size;
+  o.shading = Shading::None;
+  o.earlyTermination = false;
+  return o;
+}
+
+/// Looks along +x through the middle of the data.
+Camera alongX(const Model& m) {
+  const box3i b = m.cellBounds();
+  Camera c;
+  c.orthographic = true;
+  c.position = vec3d(b.lower.x - 50.0, 8.0, 8.0);
+  c.lookAt = vec3d(b.upper.x, 8.0, 8.0);
+  c.up = vec3d(0, 0, 1);
+  c.orthoHeight = 8.0;
+  return c;
+}
+
+double meanAbsDiff(const Image& a, const Image& b) {
+  double d = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i)
+    d += std::abs(a.pixels[i].x - b.pixels[i].x) + std::abs(a.pixels[i].y - b.pixels[i].y) +
+         std::abs(a.pixels[i].z - b.pixels[i].z) + std::abs(a.pixels[i].w - b.pixels[i].w);
+  return d / double(a.pixels.size());
+}
+
+bool identical(const Image& a, const Image& b) {
+  for (size_t i = 0; i < a.pixels.size(); ++i)
+    if (a.pixels[i].x != b.pixels[i].x || a.pixels[i].y != b.pixels[i].y || a.pixels[i].z != b.pixels[i].z ||
+        a.pixels[i].w != b.pixels[i].w)
+      return false;
+  return true;
+}
+
+} // namespace
+
+TEST(Render, HomogeneousSlabTransmittanceIsExponential) {
+  // Opacity is per finest cell width: sigma = -ln(1 - alpha) / finest width. The basis
+  // reconstruction carries the value to the edge of the supports, half a cell beyond the cells.
+  for (const std::vector<int>& levels : {std::vector<int>{0}, std::vector<int>{1, 0, 2}}) {
+    const Model m = buildModel(constantSlabs(levels));
+    const float alpha = 0.02f;
+    Renderer r(m, 0, smallOptions());
+    r.setTransferFunction(constantOpacity(alpha));
+    const Image img = r.render(alongX(m));
+    const int finestLevel = *std::min_element(levels.begin(), levels.end());
+    const int coarseFirst = levels.front(), coarseLast = levels.back();
+    const double length = 16.0 * double(levels.size()) + 0.5 * (1 << coarseFirst) + 0.5 * (1 << coarseLast);
+    const double sigma = -std::log(1.0 - alpha) / double(1 << finestLevel);
+    const double expected = 1.0 - std::exp(-sigma * length);
+    const vec4f centre = img.at(img.width / 2, img.height / 2);
+    EXPECT_NEAR(centre.w, expected, 0.01 * expected) << "levels " << levels.size();
+  }
+}
+
+TEST(Render, ConstantFieldAcrossLevelsHasNoSeams) {
+  const Model m = buildModel(constantSlabs({2, 0, 1, 3}));
+  Renderer r(m, 0, smallOptions(64));
+  r.setTransferFunction(constantOpacity(0.03f));
+  // Every ray along x crosses the same thickness: all pixels covering the interior agree.
+  Camera c = alongX(m);
+  c.orthoHeight = 12.0;
+  const Image img = r.render(c);
+  float lo = 1.f, hi = 0.f;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      lo = std::min(lo, img.at(x, y).w);
+      hi = std::max(hi, img.at(x, y).w);
+    }
+  EXPECT_GT(lo, 0.5f);
+  EXPECT_LT(hi - lo, 1e-4f);
+}
+
+TEST(Render, RaisingTheRateConverges) {
+  CellSet cells = generateScene({"shells", 20000, 1, 4});
+  const Model m = buildModel(std::move(cells));
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("viridis");
+  tf.opacity = {{0.f, 0.f}, {0.5f, 0.05f}, {0.6f, 0.6f}, {1.f, 0.1f}};
+  const box3i b = m.cellBounds();
+  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 30, 20, 40, false);
+  std::vector<Image> images;
+  for (float rate : {0.5f, 1.f, 2.f, 4.f, 8.f}) {
+    RenderOptions o = smallOptions(64);
+    o.rate = rate;
+    o.jitter = false;
+    o.shading = Shading::Analytic;
+    Renderer r(m, 0, o);
+    r.setTransferFunction(tf);
+    images.push_back(r.render(cam));
+  }
+  double previous = 1e30;
+  for (size_t i = 1; i < images.size(); ++i) {
+    const double d = meanAbsDiff(images[i - 1], images[i]);
+    EXPECT_LT(d, previous) << "doubling to rate index " << i;
+    previous = d;
+  }
+}
+
+TEST(Render, SpaceSkippingAndTraversalsGiveTheSameImage) {
+  CellSet cells = generateScene({"blobs", 20000, 3, 4});
+  const Model m = buildModel(std::move(cells));
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("plasma");
+  tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {0.9f, 0.3f}, {1.f, 0.8f}}; // hides 80 % of the range
+  const box3i b = m.cellBounds();
+  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 40, 30, 40, false);
+  RenderOptions base = smallOptions(64);
+  base.shading = Shading::Analytic;
+  Image reference;
+  size_t allRegions = 0, visibleRegions = 0;
+  for (int variant = 0; variant < 4; ++variant) {
+    RenderOptions o = base;
+    o.spaceSkipping = variant % 2 == 0;
+    o.traversal = variant < 2 ? TraversalKind::KdTree : TraversalKind::Embree;
+    Renderer r(m, 0, o);
+    r.setTransferFunction(tf);
+    RenderStats stats;
+    const Image img = r.render(cam, &stats);
+    if (variant == 0) {
+      reference = img;
+      visibleRegions = r.visibleRegions();
+    } else {
+      EXPECT_TRUE(identical(reference, img)) << "variant " << variant;
+    }
+    if (variant == 1) allRegions = r.visibleRegions();
+  }
+  EXPECT_LT(visibleRegions, allRegions) << "skipping removed no region";
+}
+
+TEST(Render, SameImageForAnyThreadCount) {
+  CellSet cells = generateScene({"blobs", 20000, 3, 4});
+  const Model m = buildModel(std::move(cells));
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("magma");
+  tf.opacity = {{0.f, 0.f}, {1.f, 0.2f}};
+  const box3i b = m.cellBounds();
+  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 10, 10, 40, false);
+  RenderOptions o = smallOptions(40);
+  o.samplesPerPixel = 3;
+  o.shading = Shading::Analytic;
+  Renderer r(m, 0, o);
+  r.setTransferFunction(tf);
+  Image one;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = r.render(cam);
+  }
+  EXPECT_TRUE(identical(one, r.render(cam)));
+}
+
+TEST(Render, GradientModesAgreeOnASmoothField) {
+  // Analytic and central-difference shading differ only by the gradient's accuracy.
+  CellSet cells = generateScene({"blobs", 20000, 3, 4});
+  const Model m = buildModel(std::move(cells));
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("viridis");
+  tf.opacity = {{0.f, 0.f}, {1.f, 0.3f}};
+  const box3i b = m.cellBounds();
+  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 10, 10, 40, false);
+  std::vector<Image> images;
+  for (Shading s : {Shading::Analytic, Shading::Central, Shading::ClampedCentral, Shading::None}) {
+    RenderOptions o = smallOptions(48);
+    o.shading = s;
+    Renderer r(m, 0, o);
+    r.setTransferFunction(tf);
+    images.push_back(r.render(cam));
+  }
+  const double central = meanAbsDiff(images[0], images[1]);
+  const double none = meanAbsDiff(images[0], images[3]);
+  EXPECT_LT(central, 0.5 * none) << "analytic shading should be far closer to central differences than to no shading";
+}
