@@ -1,20 +1,32 @@
+// Image files: sRGB transfer against its defining formula, PNG round trips through 8-bit
+// quantisation, exact PFM round trips and byte layout, and atomic writes.
 #include "exabricks/core/error.h"
 #include "exabricks/io/image.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <functional>
 
 using namespace exa;
 namespace fs = std::filesystem;
 
 namespace {
-std::string tmpPath(const std::string& name) {
+
+fs::path tmpDir() {
   const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "image";
   fs::create_directories(dir);
-  return (dir / name).string();
+  return dir;
 }
 
+std::string tmpPath(const std::string& name) {
+  return (tmpDir() / name).string();
+}
+
+/// Premultiplied pixels with alpha from 0 to 1 across and colour varying down.
 Image gradientImage() {
   Image img(17, 9);
   for (int y = 0; y < img.height; ++y)
@@ -24,51 +36,236 @@ Image gradientImage() {
     }
   return img;
 }
-} // namespace
 
-TEST(Image, SrgbRoundTrip) {
-  for (int i = 0; i <= 100; ++i) EXPECT_NEAR(srgbToLinear(linearToSrgb(i / 100.f)), i / 100.f, 1e-5f);
-  EXPECT_FLOAT_EQ(linearToSrgb(1.f), 1.f);
-  EXPECT_NEAR(linearToSrgb(0.5f), 0.7354f, 1e-3f);
+/// The 8-bit sRGB code a linear value was stored as (exact for what readPng returns).
+float srgbCode(float linear) {
+  return linearToSrgb(linear) * 255.f;
 }
 
-TEST(Image, PngRoundTripWithAlphaAndBackground) {
-  const Image img = gradientImage();
-  writePng(tmpPath("a.png"), img, true);
-  const Image back = readPng(tmpPath("a.png"));
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+size_t temporaryFilesIn(const fs::path& dir) {
+  size_t n = 0;
+  for (const auto& e : fs::directory_iterator(dir))
+    n += e.path().filename().string().find(".tmp") != std::string::npos;
+  return n;
+}
+
+} // namespace
+
+TEST(Image, SrgbTransferFollowsTheStandard) {
+  // Independent double-precision formulas of IEC 61966-2-1.
+  auto encode = [](double c) {
+    return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055;
+  };
+  auto decode = [](double c) {
+    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+  };
+  for (int i = 0; i <= 1000; ++i) {
+    const double c = i / 1000.0;
+    EXPECT_NEAR(linearToSrgb(float(c)), encode(c), 1e-6);
+    EXPECT_NEAR(srgbToLinear(float(c)), decode(c), 1e-6);
+    EXPECT_NEAR(srgbToLinear(linearToSrgb(float(c))), c, 1e-6);
+  }
+  EXPECT_EQ(linearToSrgb(0.f), 0.f);
+  EXPECT_EQ(linearToSrgb(1.f), 1.f);
+  EXPECT_EQ(srgbToLinear(1.f), 1.f);
+  EXPECT_NEAR(linearToSrgb(0.5f), 0.735357f, 1e-5f);
+  EXPECT_NEAR(srgbToLinear(0.5f), 0.214041f, 1e-5f);
+  // The two pieces meet.
+  EXPECT_NEAR(linearToSrgb(0.0031308f), 0.04045f, 1e-6f);
+  // Outside [0, 1] clamps; NaN gives 0.
+  EXPECT_EQ(linearToSrgb(-1.f), 0.f);
+  EXPECT_EQ(linearToSrgb(7.f), 1.f);
+  EXPECT_EQ(srgbToLinear(2.f), 1.f);
+  EXPECT_EQ(linearToSrgb(NAN), 0.f);
+}
+
+TEST(Image, PngWithAlphaRoundTripsWithinQuantisation) {
+  Image img = gradientImage();
+  img.at(3, 3) = {0.4f, 0.2f, 0.1f, 0.f}; // transparent: no colour survives, and no NaN
+  img.at(4, 3) = {2.f, -1.f, 0.5f, 0.5f}; // out-of-range colour clamps
+  const std::string path = tmpPath("alpha.png");
+  writePng(path, img, true);
+  const Image back = readPng(path);
+  ASSERT_EQ(back.width, img.width);
+  ASSERT_EQ(back.height, img.height);
+  for (int y = 0; y < img.height; ++y)
+    for (int x = 0; x < img.width; ++x) {
+      SCOPED_TRACE(testing::Message() << x << "," << y);
+      const vec4f& o = img.at(x, y);
+      const vec4f& b = back.at(x, y);
+      EXPECT_NEAR(b.w, o.w, 0.5f / 255.f + 1e-6f);
+      if (o.w == 0.f) {
+        EXPECT_EQ(b.x, 0.f);
+        EXPECT_EQ(b.w, 0.f);
+        continue;
+      }
+      // Un-premultiplied colour, compared in 8-bit sRGB codes: within half a step.
+      for (int c = 0; c < 3; ++c) {
+        const float original = std::clamp((&o.x)[c] / o.w, 0.f, 1.f);
+        const float stored = (&b.x)[c] / b.w;
+        EXPECT_NEAR(srgbCode(stored), srgbCode(original), 0.5f + 1e-3f) << "channel " << c;
+        EXPECT_NEAR(srgbCode(stored), std::round(srgbCode(stored)), 1e-3f);
+      }
+    }
+}
+
+TEST(Image, PngOverBackgroundComposites) {
+  Image img = gradientImage();
+  const vec3f bg(0.2f, 0.4f, 0.6f);
+  const std::string path = tmpPath("over.png");
+  writePng(path, img, false, bg);
+  const Image back = readPng(path);
+  ASSERT_EQ(back.width, img.width);
+  for (size_t i = 0; i < img.pixels.size(); ++i) {
+    const vec4f& o = img.pixels[i];
+    const vec4f& b = back.pixels[i];
+    EXPECT_EQ(b.w, 1.f);
+    const float expect[3] = {o.x + (1 - o.w) * bg.x, o.y + (1 - o.w) * bg.y,
+                             o.z + (1 - o.w) * bg.z};
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(srgbCode((&b.x)[c]), srgbCode(expect[c]), 0.5f + 1e-3f) << i << " " << c;
+  }
+  // Fully transparent pixels show the background; opaque ones hide it.
+  EXPECT_NEAR(srgbCode(back.at(0, 0).z), std::round(srgbCode(bg.z)), 1e-3f);
+  EXPECT_NEAR(srgbCode(back.at(16, 0).z), std::round(srgbCode(img.at(16, 0).z)), 1e-3f);
+  // Black background by default: the same pixels as premultiplied colour alone.
+  writePng(path, img, false);
+  const Image black = readPng(path);
+  EXPECT_EQ(black.at(0, 4).x, 0.f);
+  EXPECT_NEAR(srgbCode(black.at(16, 8).x), srgbCode(0.8f), 0.5f + 1e-3f);
+}
+
+TEST(Image, PfmRoundTripIsExactAndStoredBottomUp) {
+  Image img = gradientImage();
+  img.at(0, 0) = {12.5f, -3.f, 1e-30f, 1.f}; // floats keep HDR and negative values
+  const std::string path = tmpPath("c.pfm");
+  writePfm(path, img);
+  const Image back = readPfm(path);
   ASSERT_EQ(back.width, img.width);
   ASSERT_EQ(back.height, img.height);
   for (size_t i = 0; i < img.pixels.size(); ++i) {
-    EXPECT_NEAR(back.pixels[i].w, img.pixels[i].w, 0.51f / 255.f);
-    EXPECT_NEAR(back.pixels[i].x, img.pixels[i].x, 1.5f / 255.f);
+    EXPECT_EQ(back.pixels[i].x, img.pixels[i].x);
+    EXPECT_EQ(back.pixels[i].y, img.pixels[i].y);
+    EXPECT_EQ(back.pixels[i].z, img.pixels[i].z);
+    EXPECT_EQ(back.pixels[i].w, 1.f);
   }
-  // Over a background: c + (1 - a) bg.
-  const vec3f bg(0.2f, 0.4f, 0.6f);
-  writePng(tmpPath("b.png"), img, false, bg);
-  const Image over = readPng(tmpPath("b.png"));
-  for (size_t i = 0; i < img.pixels.size(); ++i) {
-    EXPECT_EQ(over.pixels[i].w, 1.f);
-    EXPECT_NEAR(over.pixels[i].z, img.pixels[i].z + (1 - img.pixels[i].w) * bg.z, 1.5f / 255.f);
-  }
+  // Byte layout: header, then little-endian floats, the bottom row first.
+  std::ifstream in(path, std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string header = "PF\n17 9\n-1.0\n";
+  ASSERT_EQ(bytes.size(), header.size() + 17 * 9 * 12);
+  EXPECT_EQ(bytes.substr(0, header.size()), header);
+  auto floatAt = [&](size_t index) {
+    const auto* p =
+        reinterpret_cast<const unsigned char*>(bytes.data() + header.size() + 4 * index);
+    const uint32_t bits =
+        uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+    float f;
+    std::memcpy(&f, &bits, 4);
+    return f;
+  };
+  EXPECT_EQ(floatAt(0), img.at(0, 8).x);       // first stored: bottom-left
+  EXPECT_EQ(floatAt(3 * (17 * 8) + 0), 12.5f); // last row stored: the top one
+  EXPECT_EQ(floatAt(3 * (17 * 8) + 1), -3.f);
+  EXPECT_EQ(floatAt(3 * 5 + 1), img.at(5, 8).y);
+  // Composited over the background like the PNG.
+  writePfm(path, img, vec3f(1.f));
+  EXPECT_FLOAT_EQ(readPfm(path).at(4, 2).y, img.at(4, 2).y + (1 - img.at(4, 2).w));
 }
 
-TEST(Image, PfmRoundTripIsExact) {
-  const Image img = gradientImage();
-  writePfm(tmpPath("c.pfm"), img);
-  const Image back = readPfm(tmpPath("c.pfm"));
-  for (size_t i = 0; i < img.pixels.size(); ++i) EXPECT_EQ(back.pixels[i].x, img.pixels[i].x);
+TEST(Image, PfmReadsBigEndianAndGreyscale) {
+  // Written by hand: a 2x1 big-endian RGB file and a 1x2 little-endian greyscale one.
+  auto be = [](float f) {
+    uint32_t b;
+    std::memcpy(&b, &f, 4);
+    return std::string{char(b >> 24), char(b >> 16), char(b >> 8), char(b)};
+  };
+  auto le = [](float f) {
+    uint32_t b;
+    std::memcpy(&b, &f, 4);
+    return std::string{char(b), char(b >> 8), char(b >> 16), char(b >> 24)};
+  };
+  const std::string rgb =
+      "PF\n2 1\n1.0\n" + be(1.5f) + be(2.5f) + be(3.5f) + be(-1.f) + be(0.f) + be(0.25f);
+  std::ofstream(tmpPath("be.pfm"), std::ios::binary) << rgb;
+  const Image a = readPfm(tmpPath("be.pfm"));
+  ASSERT_EQ(a.width, 2);
+  ASSERT_EQ(a.height, 1);
+  EXPECT_EQ(a.at(0, 0).y, 2.5f);
+  EXPECT_EQ(a.at(1, 0).x, -1.f);
+  EXPECT_EQ(a.at(1, 0).z, 0.25f);
+  const std::string grey = "Pf\n1 2\n-1\n" + le(0.75f) + le(0.125f);
+  std::ofstream(tmpPath("grey.pfm"), std::ios::binary) << grey;
+  const Image g = readPfm(tmpPath("grey.pfm"));
+  ASSERT_EQ(g.height, 2);
+  EXPECT_EQ(g.at(0, 1).x, 0.75f); // bottom row first
+  EXPECT_EQ(g.at(0, 0).z, 0.125f);
 }
 
-TEST(Image, FailedWritesLeaveNothingAndBadFilesAreNamed) {
-  EXPECT_THROW(writePng(tmpPath("missing/dir/x.png"), gradientImage(), false), Error);
+TEST(Image, FailedWritesLeaveNothing) {
+  const std::string missing = tmpPath("missing/dir/x.png");
+  const std::string m = errorOf([&] { writePng(missing, gradientImage(), false); });
+  EXPECT_NE(m.find(missing), std::string::npos) << m;
   EXPECT_FALSE(fs::exists(tmpPath("missing")));
+  EXPECT_THROW(writePfm(tmpPath("missing/x.pfm"), gradientImage()), Error);
+  EXPECT_FALSE(fs::exists(tmpPath("missing")));
+  // The target is a directory: the temporary file is written, the rename fails, and the
+  // temporary file is removed again.
+  const fs::path dir = tmpDir() / "atomic";
+  fs::remove_all(dir);
+  fs::create_directories(dir / "taken.png");
+  const std::string taken = (dir / "taken.png").string();
+  EXPECT_NE(errorOf([&] { writePng(taken, gradientImage(), true); }).find(taken),
+            std::string::npos);
+  EXPECT_NE(errorOf([&] { writePfm(taken, gradientImage()); }).find(taken), std::string::npos);
+  EXPECT_EQ(temporaryFilesIn(dir), 0u);
+  EXPECT_TRUE(fs::is_directory(taken));
+  // Success replaces an existing file and leaves no temporary behind.
+  const std::string ok = (dir / "ok.png").string();
+  std::ofstream(ok) << "old";
+  writePng(ok, gradientImage(), false);
+  EXPECT_EQ(readPng(ok).width, 17);
+  EXPECT_EQ(temporaryFilesIn(dir), 0u);
+  // Empty images are refused before anything is written.
+  EXPECT_THROW(writePng((dir / "empty.png").string(), Image(), false), Error);
+  EXPECT_FALSE(fs::exists(dir / "empty.png"));
+}
+
+TEST(Image, BadFilesAreNamed) {
   writePfm(tmpPath("d.pfm"), gradientImage());
   fs::resize_file(tmpPath("d.pfm"), 100);
-  try {
-    readPfm(tmpPath("d.pfm"));
-    ADD_FAILURE();
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos);
-  }
-  EXPECT_THROW(readPng(tmpPath("d.pfm")), Error);
+  std::string m = errorOf([] { readPfm(tmpPath("d.pfm")); });
+  EXPECT_NE(m.find(tmpPath("d.pfm")), std::string::npos) << m;
+  EXPECT_NE(m.find("truncated"), std::string::npos) << m;
+  std::ofstream(tmpPath("header.pfm")) << "PF\n12 x\n-1.0\n";
+  m = errorOf([] { readPfm(tmpPath("header.pfm")); });
+  EXPECT_NE(m.find("corrupt PFM header"), std::string::npos) << m;
+  std::ofstream(tmpPath("zero.pfm")) << "PF\n1 1\n0\n............";
+  EXPECT_NE(errorOf([] { readPfm(tmpPath("zero.pfm")); }).find("corrupt"), std::string::npos);
+  std::ofstream(tmpPath("short.pfm")) << "PF\n1 1\n-1.0";
+  EXPECT_NE(errorOf([] { readPfm(tmpPath("short.pfm")); }).find("truncated"), std::string::npos);
+  m = errorOf([] { readPng(tmpPath("d.pfm")); });
+  EXPECT_NE(m.find(tmpPath("d.pfm")), std::string::npos) << m;
+  EXPECT_NE(m.find("not a PNG"), std::string::npos) << m;
+  writePng(tmpPath("e.png"), gradientImage(), false);
+  m = errorOf([] { readPfm(tmpPath("e.png")); });
+  EXPECT_NE(m.find("not a PFM"), std::string::npos) << m;
+  // A PNG cut short: the signature is right, the decoder fails, and the message says so.
+  writePng(tmpPath("cut.png"), gradientImage(), true);
+  fs::resize_file(tmpPath("cut.png"), 40);
+  m = errorOf([] { readPng(tmpPath("cut.png")); });
+  EXPECT_NE(m.find(tmpPath("cut.png")), std::string::npos) << m;
+  EXPECT_NE(m.find("PNG"), std::string::npos) << m;
+  const std::string none = tmpPath("no-such.png");
+  EXPECT_NE(errorOf([&] { readPng(none); }).find(none), std::string::npos);
+  EXPECT_NE(errorOf([&] { readPfm(none); }).find(none), std::string::npos);
 }

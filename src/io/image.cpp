@@ -3,28 +3,42 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/native.h"
 
+// Debian's libstb ships the stb implementations compiled into libstb.so, so only the
+// declarations are included here (no STB_*_IMPLEMENTATION).
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 
+#include <algorithm>
+#include <bit>
+#include <cctype>
 #include <cmath>
-#include <cstdio>
+#include <cstdint>
 #include <cstring>
 
 namespace exa {
 
 float linearToSrgb(float c) {
-  c = std::clamp(c, 0.f, 1.f);
-  return c <= 0.0031308f ? 12.92f * c : 1.055f * std::pow(c, 1.f / 2.4f) - 0.055f;
+  if (!(c > 0.f)) return 0.f; // also NaN
+  if (c >= 1.f) return 1.f;
+  const double d = c;
+  return float(d <= 0.0031308 ? 12.92 * d : 1.055 * std::pow(d, 1.0 / 2.4) - 0.055);
 }
 
 float srgbToLinear(float c) {
-  c = std::clamp(c, 0.f, 1.f);
-  return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
+  if (!(c > 0.f)) return 0.f;
+  if (c >= 1.f) return 1.f;
+  const double d = c;
+  return float(d <= 0.04045 ? d / 12.92 : std::pow((d + 0.055) / 1.055, 2.4));
 }
 
 namespace {
 
-unsigned char toByte(float v) { return (unsigned char)std::lround(std::clamp(v, 0.f, 1.f) * 255.f); }
+/// Nearest 8-bit value of v in [0, 1] (clamped; NaN gives 0).
+unsigned char toByte(float v) {
+  if (!(v > 0.f)) return 0;
+  if (v >= 1.f) return 255;
+  return (unsigned char)std::lround(v * 255.f);
+}
 
 void appendBytes(void* context, void* data, int size) {
   auto* out = static_cast<std::vector<unsigned char>*>(context);
@@ -35,12 +49,32 @@ void appendBytes(void* context, void* data, int size) {
 void checkImage(const std::string& path, const Image& image) {
   if (image.width < 1 || image.height < 1 ||
       image.pixels.size() != size_t(image.width) * size_t(image.height))
-    fail(path, ": cannot write an empty or inconsistent image");
+    fail(path, ": cannot write an empty or inconsistent image (", image.width, "x", image.height,
+         ", ", image.pixels.size(), " pixels)");
+}
+
+/// Linear RGB of a premultiplied pixel over an opaque background.
+vec3f over(const vec4f& p, const vec3f& background) {
+  const float rest = 1.f - std::clamp(p.w, 0.f, 1.f);
+  return {p.x + rest * background.x, p.y + rest * background.y, p.z + rest * background.z};
+}
+
+uint32_t byteSwapped(uint32_t v) {
+  return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
+}
+
+void appendLittleEndian(std::vector<char>& out, float f) {
+  uint32_t bits = std::bit_cast<uint32_t>(f);
+  if constexpr (std::endian::native == std::endian::big) bits = byteSwapped(bits);
+  char b[4];
+  std::memcpy(b, &bits, 4);
+  out.insert(out.end(), b, b + 4);
 }
 
 } // namespace
 
-void writePng(const std::string& path, const Image& image, bool keepAlpha, const vec3f& background) {
+void writePng(const std::string& path, const Image& image, bool keepAlpha,
+              const vec3f& background) {
   checkImage(path, image);
   const int channels = keepAlpha ? 4 : 3;
   std::vector<unsigned char> bytes(image.pixels.size() * size_t(channels));
@@ -48,17 +82,18 @@ void writePng(const std::string& path, const Image& image, bool keepAlpha, const
     const vec4f& p = image.pixels[i];
     unsigned char* out = bytes.data() + i * size_t(channels);
     if (keepAlpha) {
-      const float a = std::clamp(p.w, 0.f, 1.f);
+      // PNG alpha is straight (not premultiplied); a transparent pixel has no colour to keep.
+      const float a = std::isnan(p.w) ? 0.f : std::clamp(p.w, 0.f, 1.f);
       const float inv = a > 0.f ? 1.f / a : 0.f;
       out[0] = toByte(linearToSrgb(p.x * inv));
       out[1] = toByte(linearToSrgb(p.y * inv));
       out[2] = toByte(linearToSrgb(p.z * inv));
       out[3] = toByte(a);
     } else {
-      const float rest = 1.f - std::clamp(p.w, 0.f, 1.f);
-      out[0] = toByte(linearToSrgb(p.x + rest * background.x));
-      out[1] = toByte(linearToSrgb(p.y + rest * background.y));
-      out[2] = toByte(linearToSrgb(p.z + rest * background.z));
+      const vec3f c = over(p, background);
+      out[0] = toByte(linearToSrgb(c.x));
+      out[1] = toByte(linearToSrgb(c.y));
+      out[2] = toByte(linearToSrgb(c.z));
     }
   }
   std::vector<unsigned char> png;
@@ -70,31 +105,41 @@ void writePng(const std::string& path, const Image& image, bool keepAlpha, const
 
 void writePfm(const std::string& path, const Image& image, const vec3f& background) {
   checkImage(path, image);
-  const std::string header = "PF\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
+  // A negative scale marks little-endian data.
+  const std::string header =
+      "PF\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
   std::vector<char> out(header.begin(), header.end());
   out.reserve(header.size() + image.pixels.size() * 12);
   // PFM stores rows bottom to top.
   for (int y = image.height - 1; y >= 0; --y)
     for (int x = 0; x < image.width; ++x) {
-      const vec4f& p = image.at(x, y);
-      const float rest = 1.f - std::clamp(p.w, 0.f, 1.f);
-      const float rgb[3] = {p.x + rest * background.x, p.y + rest * background.y, p.z + rest * background.z};
-      const char* b = reinterpret_cast<const char*>(rgb);
-      out.insert(out.end(), b, b + sizeof rgb);
+      const vec3f c = over(image.at(x, y), background);
+      appendLittleEndian(out, c.x);
+      appendLittleEndian(out, c.y);
+      appendLittleEndian(out, c.z);
     }
   writeFileAtomic(path, out.data(), out.size());
 }
 
 Image readPng(const std::string& path) {
+  const std::vector<char> file = readFile(path);
+  static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  if (file.size() < 8 || std::memcmp(file.data(), signature, 8) != 0)
+    fail(path, ": not a PNG file");
+  if (file.size() > size_t(INT32_MAX)) fail(path, ": PNG file too large");
   int w = 0, h = 0, n = 0;
-  unsigned char* data = stbi_load(path.c_str(), &w, &h, &n, 4);
-  if (!data) fail(path, ": cannot read PNG: ", stbi_failure_reason() ? stbi_failure_reason() : "unknown error");
+  unsigned char* data = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(file.data()),
+                                              int(file.size()), &w, &h, &n, 4);
+  if (!data) {
+    const char* why = stbi_failure_reason();
+    fail(path, ": cannot decode PNG: ", why ? why : "unknown error");
+  }
   Image image(w, h);
   for (size_t i = 0; i < image.pixels.size(); ++i) {
     const unsigned char* p = data + 4 * i;
-    const float a = p[3] / 255.f;
-    image.pixels[i] = {srgbToLinear(p[0] / 255.f) * a, srgbToLinear(p[1] / 255.f) * a,
-                       srgbToLinear(p[2] / 255.f) * a, a};
+    const float a = float(p[3]) / 255.f;
+    image.pixels[i] = {srgbToLinear(float(p[0]) / 255.f) * a, srgbToLinear(float(p[1]) / 255.f) * a,
+                       srgbToLinear(float(p[2]) / 255.f) * a, a};
   }
   stbi_image_free(data);
   return image;
@@ -104,37 +149,53 @@ Image readPfm(const std::string& path) {
   const std::vector<char> bytes = readFile(path);
   size_t pos = 0;
   auto token = [&]() {
-    while (pos < bytes.size() && std::isspace((unsigned char)bytes[pos])) ++pos;
+    while (pos < bytes.size() && std::isspace((unsigned char)bytes[pos]))
+      ++pos;
     const size_t start = pos;
-    while (pos < bytes.size() && !std::isspace((unsigned char)bytes[pos])) ++pos;
+    while (pos < bytes.size() && !std::isspace((unsigned char)bytes[pos]))
+      ++pos;
     return std::string(bytes.data() + start, bytes.data() + pos);
   };
-  if (token() != "PF") fail(path, ": not an RGB PFM file");
-  int w = 0, h = 0;
+  const std::string magic = token();
+  if (magic != "PF" && magic != "Pf") fail(path, ": not a PFM file (no PF or Pf header)");
+  const int channels = magic == "PF" ? 3 : 1;
+  long long w = 0, h = 0;
   double scale = 0;
   try {
-    w = std::stoi(token());
-    h = std::stoi(token());
-    scale = std::stod(token());
-  } catch (...) {
+    size_t used = 0;
+    const std::string ws = token(), hs = token(), ss = token();
+    w = std::stoll(ws, &used);
+    if (used != ws.size()) throw std::invalid_argument(ws);
+    h = std::stoll(hs, &used);
+    if (used != hs.size()) throw std::invalid_argument(hs);
+    scale = std::stod(ss, &used);
+    if (used != ss.size()) throw std::invalid_argument(ss);
+  } catch (const std::logic_error&) {
     fail(path, ": corrupt PFM header");
   }
-  ++pos; // the single whitespace after the scale
-  if (w < 1 || h < 1 || w > 32768 || h > 32768 || scale == 0) fail(path, ": corrupt PFM header");
-  if (bytes.size() - pos < size_t(w) * size_t(h) * 12) fail(path, ": truncated PFM data");
-  const bool bigEndian = scale > 0;
-  Image image(w, h);
-  for (int y = h - 1; y >= 0; --y)
-    for (int x = 0; x < w; ++x) {
-      float rgb[3];
-      for (float& c : rgb) {
-        unsigned char b[4];
-        std::memcpy(b, bytes.data() + pos, 4);
-        if (bigEndian) std::swap(b[0], b[3]), std::swap(b[1], b[2]);
-        std::memcpy(&c, b, 4);
-        pos += 4;
-      }
-      image.at(x, y) = {rgb[0], rgb[1], rgb[2], 1.f};
+  if (w < 1 || h < 1 || w > 32768 || h > 32768 || !std::isfinite(scale) || scale == 0)
+    fail(path, ": corrupt PFM header (", w, "x", h, ", scale ", scale, ")");
+  // Exactly one whitespace character separates the header from the data.
+  if (pos >= bytes.size()) fail(path, ": truncated PFM data");
+  ++pos;
+  const size_t needed = size_t(w) * size_t(h) * size_t(channels) * 4;
+  if (bytes.size() - pos < needed)
+    fail(path, ": truncated PFM data (", bytes.size() - pos, " bytes, ", needed, " needed)");
+  // The sign of the scale gives the byte order: negative little-endian, positive big-endian.
+  const bool swap = (scale < 0) != (std::endian::native == std::endian::little);
+  auto next = [&]() {
+    uint32_t bits;
+    std::memcpy(&bits, bytes.data() + pos, 4);
+    pos += 4;
+    return std::bit_cast<float>(swap ? byteSwapped(bits) : bits);
+  };
+  Image image{int(w), int(h)};
+  for (int y = int(h) - 1; y >= 0; --y)
+    for (int x = 0; x < int(w); ++x) {
+      const float r = next();
+      const float g = channels == 3 ? next() : r;
+      const float b = channels == 3 ? next() : r;
+      image.at(x, y) = {r, g, b, 1.f};
     }
   return image;
 }

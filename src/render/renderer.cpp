@@ -49,6 +49,18 @@ vec3f levelColor(int level) {
   return colors[level & 7];
 }
 
+/// x^e; by repeated squaring when e is a small whole number (the usual case), else powf.
+inline float specularPower(float x, float e) {
+  const int k = int(e);
+  if (float(k) != e || k < 0 || k > 1024) return std::pow(x, e);
+  float result = 1.f, base = x;
+  for (int n = k; n > 0; n >>= 1) {
+    if (n & 1) result *= base;
+    base *= base;
+  }
+  return result;
+}
+
 } // namespace
 
 struct Renderer::Impl {
@@ -56,26 +68,53 @@ struct Renderer::Impl {
   int field;
   FieldView view;
   TransferFunction tf;
-  std::vector<vec4f> table; ///< colour and opacity over the normalised value
+  /// Colour and log2 of the transmittance of one finest cell width, over the normalised value.
+  std::vector<vec4f> table;
+  bool fastLinear = false;                ///< t = (value - normLower) * normScale, else tf.normalize
+  float normLower = 0.f, normScale = 0.f;
   std::vector<uint8_t> visible;
   std::unique_ptr<RegionTraversal> traversal;
   float finestWidth = 1.f;   ///< dataset's finest cell width, lattice units (opacity reference)
+  float invFinestWidth = 1.f;
   vec3f invScale{1.f};       ///< world units per lattice unit, inverted (for gradients)
 
   Impl(const Model& m, int f) : model(m), field(f), view(m.view(f)) {
     int finest = kMaxLevel;
     for (const Brick& b : m.bricks) finest = std::min(finest, b.level);
     finestWidth = float(1 << finest);
+    invFinestWidth = 1.f / finestWidth;
     invScale = vec3f(1.0 / m.world.scale.x, 1.0 / m.world.scale.y, 1.0 / m.world.scale.z);
   }
 
   vec4f lookup(float value) const {
-    const float t = tf.normalize(value) * float(kTableSize - 1);
+    return tableAt(normalized(value));
+  }
+
+  float normalized(float value) const {
+    return fastLinear ? std::clamp((value - normLower) * normScale, 0.f, 1.f) : tf.normalize(value);
+  }
+
+  /// The tabulated transfer function, linearly interpolated, at normalised value n.
+  vec4f tableAt(float n) const {
+    const float t = n * float(kTableSize - 1);
     const int i = std::clamp(int(t), 0, kTableSize - 2);
     const float f = std::clamp(t - float(i), 0.f, 1.f);
     const vec4f& a = table[size_t(i)];
     const vec4f& b = table[size_t(i) + 1];
     return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, a.w + (b.w - a.w) * f};
+  }
+
+  /// Whether any value in r can be visible through the tabulated function the marcher uses
+  /// (its log transmittance is piecewise linear, so its extremes lie at table entries or ends).
+  bool mayBeVisible(const range1f& r) const {
+    if (r.empty()) return false;
+    const float n0 = normalized(r.lower), n1 = normalized(r.upper);
+    if (tableAt(n0).w < 0.f || tableAt(n1).w < 0.f) return true;
+    const int first = int(std::ceil(n0 * float(kTableSize - 1)));
+    const int last = int(std::floor(n1 * float(kTableSize - 1)));
+    for (int i = std::max(first, 0); i <= std::min(last, kTableSize - 1); ++i)
+      if (table[size_t(i)].w < 0.f) return true;
+    return false;
   }
 };
 
@@ -102,24 +141,22 @@ double Renderer::setTransferFunction(const TransferFunction& tfIn) {
     for (const range1f& rr : im.model.regions.valueRanges[size_t(im.field)]) r.extend(rr);
     im.tf.valueRange = r;
   }
-  // Tabulate colour and opacity over the normalised value.
+  // Tabulate colour and log2 transmittance over the normalised value.
   im.table.resize(kTableSize);
-  const range1f r = im.tf.valueRange;
   for (int i = 0; i < kTableSize; ++i) {
-    const double t = double(i) / (kTableSize - 1);
-    double v;
-    if (im.tf.logScale && r.lower > 0.f && r.upper > 0.f)
-      v = std::pow(10.0, std::log10(double(r.lower)) + t * (std::log10(double(r.upper)) - std::log10(double(r.lower))));
-    else
-      v = double(r.lower) + t * (double(r.upper) - double(r.lower));
-    im.table[size_t(i)] = im.tf.lookup(float(v));
+    const vec4f c = im.tf.atNormalized(float(i) / float(kTableSize - 1));
+    im.table[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
   }
+  const range1f r = im.tf.valueRange;
+  im.fastLinear = !im.tf.logScale && r.upper > r.lower;
+  im.normLower = r.lower;
+  im.normScale = im.fastLinear ? 1.f / (r.upper - r.lower) : 0.f;
   // Space skipping: a region whose value range maps to zero opacity cannot contribute.
   const auto& ranges = im.model.regions.valueRanges[size_t(im.field)];
   im.visible.assign(ranges.size(), 1);
   if (options_.spaceSkipping && options_.debug == DebugView::None)
     tbb::parallel_for(size_t(0), ranges.size(), [&](size_t i) {
-      im.visible[i] = im.tf.maxOpacity(ranges[i]) > 0.f;
+      im.visible[i] = im.mayBeVisible(ranges[i]);
     });
   if (!im.traversal || im.traversal->kind() != options_.traversal)
     im.traversal = std::make_unique<RegionTraversal>(im.model, options_.traversal);
@@ -173,6 +210,7 @@ Image Renderer::render(const Camera& camera, RenderStats* statsOut) const {
                   ray.dir = vec3f(dirL);
                   const vec3f viewW = vec3f(normalize(dirW));
                   const vec3f light = o.headlight ? viewW : lightWorld;
+                  const vec3f halfVector = normalize(light + viewW);
                   ++c.rays;
                   vec4f acc; // premultiplied, front to back
                   uint64_t raySamples = 0;
@@ -233,9 +271,10 @@ Image Renderer::render(const Camera& camera, RenderStats* statsOut) const {
                       vec3f grad;
                       const bool wantGrad = o.shading == Shading::Analytic;
                       if (!sampleRegion(im.view, seg.region, p, value, wantGrad ? &grad : nullptr)) continue;
-                      vec4f rgba = im.lookup(value);
-                      if (rgba.w <= 0.f) continue;
-                      const float alpha = 1.f - std::pow(1.f - std::min(rgba.w, 0.999999f), len / im.finestWidth);
+                      const vec4f rgba = im.lookup(value);
+                      if (rgba.w >= 0.f) continue; // log2 transmittance 0: fully transparent
+                      // Opacity correction: 1 - (1 - alpha)^(len / finest width).
+                      const float alpha = 1.f - std::exp2(rgba.w * len * im.invFinestWidth);
                       vec3f color(rgba.x, rgba.y, rgba.z);
                       if (o.shading != Shading::None) {
                         if (o.shading == Shading::Central || o.shading == Shading::ClampedCentral) {
@@ -267,8 +306,7 @@ Image Renderer::render(const Camera& camera, RenderStats* statsOut) const {
                           const vec3f n = gw * (1.f / gl);
                           const float ndl = std::abs(dot(n, light));
                           shade = o.ambient + o.diffuse * ndl;
-                          const vec3f hv = normalize(light + viewW);
-                          spec = o.specular * std::pow(std::abs(dot(n, hv)), o.shininess);
+                          spec = o.specular * specularPower(std::abs(dot(n, halfVector)), o.shininess);
                         }
                         color = color * shade + vec3f(spec);
                       }

@@ -41,9 +41,11 @@ template <typename Real> struct BasisAccumulator {
     for (int a = 0; a < 3; ++a) {
       // Position in cell-centre units: cell i has its centre at q = i.
       const Real q = (p[a] - Real(brick.lower[a])) * invW - Real(0.5);
-      const Real fl = std::floor(q);
-      const int i0 = int(fl);
-      const Real f = q - fl;
+      // floor without a libm call on targets lacking a rounding instruction; q is small here
+      // (points lie within the brick's support, so -1.5 <= q <= size + 0.5).
+      const int truncated = int(q);
+      const int i0 = truncated - (q < Real(truncated) ? 1 : 0);
+      const Real f = q - Real(i0);
       int n = 0;
       if (i0 >= 0 && i0 < brick.size[a]) {
         idx[a][n] = i0;

@@ -45,6 +45,8 @@ public:
   float normalize(float value) const;
   /// Linear-RGB colour and opacity (per finest cell width) of a value.
   vec4f lookup(float value) const;
+  /// The same for a normalised value t in [0, 1]: lookup(v) == atNormalized(normalize(v)).
+  vec4f atNormalized(float t) const;
   /// Exact maximum opacity over all values in [r.lower, r.upper] (used for space skipping).
   float maxOpacity(const range1f& r) const;
 };
