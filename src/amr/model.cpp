@@ -100,7 +100,9 @@ Model buildModel(CellSet&& cells, const BuildOptions& options) {
   Model model;
   model.world = cells.world;
   Timer timer;
+  Progress progress("building bricks and regions", 3);
   BrickBuild bricks = buildBricks(cells.cells, options.bricks);
+  progress.advance(1);
   std::vector<Cell>().swap(cells.cells);
   model.bricks = std::move(bricks.bricks);
   for (Field& f : cells.fields) {
@@ -110,7 +112,9 @@ Model buildModel(CellSet&& cells, const BuildOptions& options) {
   }
   model.stats.brickSeconds = timer.seconds();
   logInfo(strCat("built ", model.bricks.size(), " bricks in ", model.stats.brickSeconds, " s"));
+  progress.advance(1);
   buildRegionsOf(model);
+  progress.finish();
   logInfo(strCat("built ", model.regions.regions.size(), " regions in ",
                  model.stats.regionSeconds + model.stats.rangeSeconds, " s"));
   return model;

@@ -33,7 +33,8 @@ struct Progress::Impl {
   uint64_t total;
   std::atomic<uint64_t> done{0};
   bool enabled;
-  bool finished = false;
+  std::atomic<bool> finished{false};
+  std::atomic<bool> drawn{false};
   Timer timer;
   std::atomic<int64_t> lastDrawMs{0};
 };
@@ -41,7 +42,7 @@ struct Progress::Impl {
 Progress::Progress(std::string label, uint64_t total) : impl_(new Impl) {
   impl_->label = std::move(label);
   impl_->total = total;
-  impl_->enabled = gLevel >= int(LogLevel::Info) && isatty(STDERR_FILENO);
+  impl_->enabled = gLevel >= int(LogLevel::Warning) && isatty(STDERR_FILENO);
 }
 
 Progress::~Progress() {
@@ -51,11 +52,13 @@ Progress::~Progress() {
 
 void Progress::advance(uint64_t amount) {
   const uint64_t done = impl_->done += amount;
-  if (!impl_->enabled) return;
+  if (!impl_->enabled || impl_->finished) return;
   const int64_t ms = int64_t(impl_->timer.seconds() * 1000.0);
   int64_t last = impl_->lastDrawMs.load();
   if (ms - last < 200 || !impl_->lastDrawMs.compare_exchange_strong(last, ms)) return;
   std::lock_guard<std::mutex> lock(gMutex);
+  if (impl_->finished) return;
+  impl_->drawn = true;
   const double pct = impl_->total ? 100.0 * double(done) / double(impl_->total) : 100.0;
   std::fprintf(stderr, "\rexabricks: %s %5.1f%% (%.1f s)", impl_->label.c_str(), pct,
                impl_->timer.seconds());
@@ -63,9 +66,9 @@ void Progress::advance(uint64_t amount) {
 }
 
 void Progress::finish() {
-  if (!impl_->enabled || impl_->finished) return;
-  impl_->finished = true;
+  if (!impl_->enabled || impl_->finished.exchange(true)) return;
   std::lock_guard<std::mutex> lock(gMutex);
+  if (!impl_->drawn) return;
   std::fprintf(stderr, "\rexabricks: %s done (%.2f s)        \n", impl_->label.c_str(),
                impl_->timer.seconds());
 }

@@ -30,7 +30,8 @@ private:
 };
 
 /// A progress line on stderr for long work. It shows only when stderr is a terminal and the
-/// log level is at least Info; updates are thread-safe and rate limited.
+/// tool is not quiet; updates are thread-safe and rate limited, and nothing is drawn for work
+/// that finishes within a fifth of a second.
 class Progress {
 public:
   Progress(std::string label, uint64_t total);
