@@ -153,6 +153,7 @@ TEST(Render, SpaceSkippingAndTraversalsGiveTheSameImage) {
   for (int variant = 0; variant < 4; ++variant) {
     RenderOptions o = base;
     o.spaceSkipping = variant % 2 == 0;
+    o.autoTraversal = false;
     o.traversal = variant < 2 ? TraversalKind::KdTree : TraversalKind::Embree;
     Renderer r(m, 0, o);
     r.setTransferFunction(tf);
@@ -210,4 +211,19 @@ TEST(Render, GradientModesAgreeOnASmoothField) {
   const double central = meanAbsDiff(images[0], images[1]);
   const double none = meanAbsDiff(images[0], images[3]);
   EXPECT_LT(central, 0.5 * none) << "analytic shading should be far closer to central differences than to no shading";
+}
+
+TEST(Render, AutomaticTraversalFollowsVisibility) {
+  CellSet cells = generateScene({"blobs", 20000, 3, 4});
+  const Model m = buildModel(std::move(cells));
+  Renderer r(m, 0, smallOptions(16));
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("viridis");
+  tf.opacity = {{0.f, 0.2f}, {1.f, 0.2f}};
+  r.setTransferFunction(tf);
+  EXPECT_EQ(r.traversalInUse(), TraversalKind::KdTree);
+  tf.opacity = {{0.f, 0.f}, {0.97f, 0.f}, {1.f, 0.5f}};
+  r.setTransferFunction(tf);
+  EXPECT_LT(r.visibleRegions(), m.regions.regions.size() / 10);
+  EXPECT_EQ(r.traversalInUse(), TraversalKind::Embree);
 }

@@ -39,7 +39,7 @@ struct RenderCmdOptions {
   bool alpha = false;
   std::string shading = "analytic";
   std::string light = "headlight";
-  std::string traversal = "kd";
+  std::string traversal = "auto";
   bool noSkip = false;
   bool noEarlyTermination = false;
   std::string sampling = "adaptive";
@@ -120,8 +120,10 @@ void run(const RenderCmdOptions& o) {
   ro.shading = pick<Shading>("shading", o.shading,
                              {{"analytic", Shading::Analytic}, {"central", Shading::Central},
                               {"clamped", Shading::ClampedCentral}, {"none", Shading::None}});
-  ro.traversal = pick<TraversalKind>("traversal", o.traversal,
-                                     {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
+  ro.autoTraversal = o.traversal == "auto";
+  if (!ro.autoTraversal)
+    ro.traversal = pick<TraversalKind>("traversal", o.traversal,
+                                       {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
   ro.sampling = pick<Sampling>("sampling", o.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
   ro.debug = pick<DebugView>("debug view", o.debug,
                              {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},
@@ -204,7 +206,7 @@ void run(const RenderCmdOptions& o) {
     j["regions"] = model.regions.regions.size();
     j["transfer_function_update_seconds"] = updateSeconds;
     j["load_seconds"] = loadSeconds;
-    j["traversal"] = o.traversal;
+    j["traversal"] = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
     std::cout << j.dump(2) << "\n";
   } else if (o.stats) {
     std::printf("frame time       %.4f s (median of %d after one warm-up)\n", stats.seconds, o.frames);
@@ -216,6 +218,7 @@ void run(const RenderCmdOptions& o) {
     std::printf("samples/s        %.3fM\n", stats.samplesPerSecond() / 1e6);
     std::printf("visible regions  %zu of %zu (transfer function update %.4f s)\n", renderer.visibleRegions(),
                 model.regions.regions.size(), updateSeconds);
+    std::printf("traversal        %s\n", renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd-tree");
     std::printf("load + build     %.3f s\n", loadSeconds);
   }
 }
@@ -250,7 +253,7 @@ void addRender(CLI::App& app) {
   cmd->add_flag("--alpha", o->alpha, "Keep the alpha channel instead of a background");
   cmd->add_option("--shading", o->shading, "analytic, central, clamped or none")->capture_default_str();
   cmd->add_option("--light", o->light, "headlight, or the direction x,y,z light travels")->capture_default_str();
-  cmd->add_option("--traversal", o->traversal, "Region traversal: kd or embree")->capture_default_str();
+  cmd->add_option("--traversal", o->traversal, "Region traversal: auto, kd or embree")->capture_default_str();
   cmd->add_flag("--no-skip", o->noSkip, "Disable space skipping");
   cmd->add_flag("--no-early-termination", o->noEarlyTermination, "Integrate every ray to its end");
   cmd->add_option("--sampling", o->sampling, "adaptive (per region) or fixed (finest width everywhere)")

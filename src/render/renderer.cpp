@@ -141,6 +141,10 @@ Renderer::Renderer(const Model& model, int field, const RenderOptions& options)
 
 Renderer::~Renderer() = default;
 
+TraversalKind Renderer::traversalInUse() const {
+  return impl_->traversal ? impl_->traversal->kind() : options_.traversal;
+}
+
 size_t Renderer::visibleRegions() const {
   return impl_->traversal ? impl_->traversal->visibleCount() : 0;
 }
@@ -171,8 +175,16 @@ double Renderer::setTransferFunction(const TransferFunction& tfIn) {
     tbb::parallel_for(size_t(0), ranges.size(), [&](size_t i) {
       im.visible[i] = im.mayBeVisible(ranges[i]);
     });
-  if (!im.traversal || im.traversal->kind() != options_.traversal)
-    im.traversal = std::make_unique<RegionTraversal>(im.model, options_.traversal);
+  TraversalKind kind = options_.traversal;
+  if (options_.autoTraversal) {
+    size_t count = 0;
+    for (uint8_t v : im.visible) count += v;
+    kind = double(count) < double(options_.embreeBelowVisibleFraction) * double(im.visible.size())
+               ? TraversalKind::Embree
+               : TraversalKind::KdTree;
+  }
+  if (!im.traversal || im.traversal->kind() != kind)
+    im.traversal = std::make_unique<RegionTraversal>(im.model, kind);
   im.traversal->setVisible(im.visible);
   return timer.seconds();
 }

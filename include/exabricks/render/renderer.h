@@ -32,7 +32,12 @@ struct RenderOptions {
   bool headlight = true;          ///< light from the eye; else from lightDirection
   vec3f lightDirection{-1.f, -1.f, -1.f}; ///< world direction light travels along
   float ambient = 0.3f, diffuse = 0.7f, specular = 0.25f, shininess = 40.f;
+  /// Region traversal. With autoTraversal the renderer picks per transfer function: Embree when
+  /// few regions are visible (it skips hidden space in its BVH), the k-d tree otherwise (cheaper
+  /// per step); see docs/performance.md for the measurements behind the threshold.
+  bool autoTraversal = true;
   TraversalKind traversal = TraversalKind::KdTree;
+  float embreeBelowVisibleFraction = 0.15f;
   bool spaceSkipping = true;
   Sampling sampling = Sampling::Adaptive;
   DebugView debug = DebugView::None;
@@ -57,6 +62,8 @@ public:
   double setTransferFunction(const TransferFunction& tf);
   /// Regions that may be visible under the current transfer function.
   size_t visibleRegions() const;
+  /// The traversal in use (after setTransferFunction).
+  TraversalKind traversalInUse() const;
 
   /// Renders one frame of options.samplesPerPixel samples per pixel.
   Image render(const Camera& camera, RenderStats* stats = nullptr) const;
