@@ -65,6 +65,18 @@ double meanAbsDiff(const Image& a, const Image& b) {
   return d / double(a.pixels.size());
 }
 
+/// The blobs scene used by several tests, built once.
+const Model& blobsModel() {
+  static const Model model = buildModel(generateScene({"blobs", 20000, 3, 4}));
+  return model;
+}
+
+/// The default framing of the data from the given direction.
+Camera framed(const Model& m, double azimuth, double elevation) {
+  const box3i b = m.cellBounds();
+  return Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), azimuth, elevation, 40, false);
+}
+
 bool identical(const Image& a, const Image& b) {
   for (size_t i = 0; i < a.pixels.size(); ++i)
     if (a.pixels[i].x != b.pixels[i].x || a.pixels[i].y != b.pixels[i].y || a.pixels[i].z != b.pixels[i].z ||
@@ -118,8 +130,7 @@ TEST(Render, RaisingTheRateConverges) {
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
   tf.opacity = {{0.f, 0.f}, {0.5f, 0.05f}, {0.6f, 0.6f}, {1.f, 0.1f}};
-  const box3i b = m.cellBounds();
-  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 30, 20, 40, false);
+  const Camera cam = framed(m, 30, 20);
   std::vector<Image> images;
   for (float rate : {0.5f, 1.f, 2.f, 4.f, 8.f}) {
     RenderOptions o = smallOptions(64);
@@ -139,13 +150,11 @@ TEST(Render, RaisingTheRateConverges) {
 }
 
 TEST(Render, SpaceSkippingAndTraversalsGiveTheSameImage) {
-  CellSet cells = generateScene({"blobs", 20000, 3, 4});
-  const Model m = buildModel(std::move(cells));
+  const Model& m = blobsModel();
   TransferFunction tf;
   tf.colorMap = builtinColorMap("plasma");
   tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {0.9f, 0.3f}, {1.f, 0.8f}}; // hides 80 % of the range
-  const box3i b = m.cellBounds();
-  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 40, 30, 40, false);
+  const Camera cam = framed(m, 40, 30);
   RenderOptions base = smallOptions(64);
   base.shading = Shading::Analytic;
   Image reference;
@@ -171,13 +180,11 @@ TEST(Render, SpaceSkippingAndTraversalsGiveTheSameImage) {
 }
 
 TEST(Render, SameImageForAnyThreadCount) {
-  CellSet cells = generateScene({"blobs", 20000, 3, 4});
-  const Model m = buildModel(std::move(cells));
+  const Model& m = blobsModel();
   TransferFunction tf;
   tf.colorMap = builtinColorMap("magma");
   tf.opacity = {{0.f, 0.f}, {1.f, 0.2f}};
-  const box3i b = m.cellBounds();
-  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 10, 10, 40, false);
+  const Camera cam = framed(m, 10, 10);
   RenderOptions o = smallOptions(40);
   o.samplesPerPixel = 3;
   o.shading = Shading::Analytic;
@@ -193,13 +200,11 @@ TEST(Render, SameImageForAnyThreadCount) {
 
 TEST(Render, GradientModesAgreeOnASmoothField) {
   // Analytic and central-difference shading differ only by the gradient's accuracy.
-  CellSet cells = generateScene({"blobs", 20000, 3, 4});
-  const Model m = buildModel(std::move(cells));
+  const Model& m = blobsModel();
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
   tf.opacity = {{0.f, 0.f}, {1.f, 0.3f}};
-  const box3i b = m.cellBounds();
-  const Camera cam = Camera::frame(box3d(vec3d(b.lower), vec3d(b.upper)), 10, 10, 40, false);
+  const Camera cam = framed(m, 10, 10);
   std::vector<Image> images;
   for (Shading s : {Shading::Analytic, Shading::Central, Shading::ClampedCentral, Shading::None}) {
     RenderOptions o = smallOptions(48);
@@ -214,8 +219,7 @@ TEST(Render, GradientModesAgreeOnASmoothField) {
 }
 
 TEST(Render, AutomaticTraversalFollowsVisibility) {
-  CellSet cells = generateScene({"blobs", 20000, 3, 4});
-  const Model m = buildModel(std::move(cells));
+  const Model& m = blobsModel();
   Renderer r(m, 0, smallOptions(16));
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
