@@ -55,6 +55,13 @@ fails_with "bad image size" "--size" "$exe" render s.cells -o x.png --size 10xte
 fails_with "unknown scene key" "bogus" bash -c "echo '{\"bogus\": 1}' > bad.json && '$exe' render s.cells --scene bad.json -o x.png"
 fails_with "degenerate camera" "degenerate camera" "$exe" render s.cells -o x.png --position 1,1,1 --look-at 1,1,1
 check "failed renders leave no image" bash -c "[ ! -e x.png ]"
+amrex=${EXABRICKS_DATA:-$(dirname "$0")/../../shared/data}/amrex/pele_eb_3d/plt_eb_3d
+if [ -d "$amrex" ]; then
+  check "render an AMReX plotfile directly" "$exe" render "$amrex" -f density -o amrex.png --size 48x48
+  check "info --fields on an AMReX plotfile" bash -c "'$exe' info '$amrex' --fields | tr '\n' ' ' | grep -qx 'volFrac density '"
+else
+  echo "skip AMReX checks: sample data not found at $amrex (set EXABRICKS_DATA)"
+fi
 fails_with "unknown option" "--bogus" "$exe" info --bogus
 fails_with "unknown subcommand" "subcommand" "$exe" nope
 fails_with "missing input" "nothing.cells" "$exe" info nothing.cells

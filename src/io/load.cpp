@@ -3,6 +3,7 @@
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/io/amrex.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
 
@@ -35,10 +36,11 @@ InputKind detectInput(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, ": no such file or directory");
   if (!std::filesystem::is_directory(path, ec) && isModelFile(path)) return InputKind::Model;
+  if (isAmrexPlotfile(path)) return InputKind::Amrex;
   if (endsWith(path, ".cells")) return InputKind::Native;
   if (endsWith(path, ".grids")) return InputKind::Grids;
-  fail(path, ": unknown input format (expected an exabricks model file, NAME.cells or a .grids",
-       " fixture)");
+  fail(path, ": unknown input format (expected an exabricks model file, NAME.cells, a .grids",
+       " fixture or an AMReX plotfile directory)");
 }
 
 CellSet loadCells(const std::string& path, const LoadOptions& options) {
@@ -52,6 +54,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     break;
   case InputKind::Grids:
     set = readGrids(path);
+    break;
+  case InputKind::Amrex:
+    set = readAmrex(path, options.fields);
     break;
   case InputKind::Model:
     fail(path, ": is a built model file; raw cells are needed here");
@@ -86,6 +91,8 @@ std::vector<std::string> listFields(const std::string& path) {
     return listNativeFields(path);
   case InputKind::Grids:
     return {"scalar"};
+  case InputKind::Amrex:
+    return listAmrexFields(path);
   case InputKind::Model:
     return readModel(path).fieldNames;
   case InputKind::Default:

@@ -1,5 +1,6 @@
 // Opens whatever the user names: a model file (known by its magic bytes), a native NAME.cells
-// dataset, a .grids fixture, or the embedded default dataset when no input is given.
+// dataset, a .grids fixture, an AMReX plotfile directory, or the embedded default dataset when
+// no input is given.
 #pragma once
 
 #include "exabricks/amr/model.h"
@@ -14,7 +15,7 @@ struct LoadOptions {
   BuildOptions build;
 };
 
-enum class InputKind { Default, Model, Native, Grids };
+enum class InputKind { Default, Model, Native, Grids, Amrex };
 
 /// Determines the kind of input; throws with the path when it is not recognised.
 InputKind detectInput(const std::string& path);

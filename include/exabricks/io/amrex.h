@@ -1,0 +1,23 @@
+// AMReX plotfiles (HyperCLaw-V1.1 directories with Header, Level_N/Cell_H and Cell_D_* files):
+// overlapping levels reduced to leaf cells, refinement ratios that are powers of two, float64
+// or float32 data in either byte order (VisMF version 1 "FAB" records).
+#pragma once
+
+#include "exabricks/amr/cells.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// True when `path` is a directory whose Header starts with "HyperCLaw".
+bool isAmrexPlotfile(const std::string& path);
+
+/// Names of the plotfile's variables.
+std::vector<std::string> listAmrexFields(const std::string& path);
+
+/// Reads the leaf cells of a plotfile with the requested fields (all when empty). The world
+/// transform maps the finest level's index space onto the physical domain.
+CellSet readAmrex(const std::string& path, const std::vector<std::string>& fields = {});
+
+} // namespace exa

@@ -1,0 +1,360 @@
+#include "exabricks/io/amrex.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace exa {
+namespace fs = std::filesystem;
+
+namespace {
+
+/// Whitespace-separated tokens of a text file, with the line of each for messages.
+class TextReader {
+public:
+  explicit TextReader(const std::string& path) : path_(path) {
+    std::ifstream in(path);
+    if (!in) fail(path, ": cannot open: ", std::strerror(errno));
+    std::ostringstream s;
+    s << in.rdbuf();
+    text_ = s.str();
+  }
+  const std::string& path() const { return path_; }
+  std::string line() {
+    if (pos_ >= text_.size()) fail(path_, ": line ", lineNo_ + 1, ": unexpected end of file");
+    const size_t end = std::min(text_.find('\n', pos_), text_.size());
+    std::string l = text_.substr(pos_, end - pos_);
+    pos_ = end + 1;
+    ++lineNo_;
+    if (!l.empty() && l.back() == '\r') l.pop_back();
+    return l;
+  }
+  size_t lineNo() const { return lineNo_; }
+  [[noreturn]] void bad(const std::string& what) const { fail(path_, ": line ", lineNo_, ": ", what); }
+
+private:
+  std::string path_, text_;
+  size_t pos_ = 0, lineNo_ = 0;
+};
+
+std::vector<double> numbers(TextReader& r, const std::string& line, size_t expected, const char* what) {
+  std::string cleaned = line;
+  for (char& c : cleaned)
+    if (c == '(' || c == ')' || c == ',') c = ' ';
+  std::istringstream in(cleaned);
+  std::vector<double> v;
+  for (double d; in >> d;) v.push_back(d);
+  if (expected && v.size() < expected) r.bad(strCat("expected ", expected, " numbers for ", what));
+  return v;
+}
+
+/// An index-space box "((lo) (hi) (type))", inclusive bounds.
+struct IndexBox {
+  vec3l lo, hi;
+  int64_t cells() const { return (hi.x - lo.x + 1) * (hi.y - lo.y + 1) * (hi.z - lo.z + 1); }
+};
+
+/// Parses every "((a,b,c) (d,e,f) (g,h,i))" box on a line.
+std::vector<IndexBox> parseBoxes(TextReader& r, const std::string& line) {
+  std::vector<IndexBox> boxes;
+  size_t pos = 0;
+  while ((pos = line.find("((", pos)) != std::string::npos) {
+    const size_t end = line.find("))", pos);
+    if (end == std::string::npos) r.bad("unterminated box");
+    const std::vector<double> v = numbers(r, line.substr(pos, end - pos + 2), 9, "a box");
+    IndexBox b{vec3l(int64_t(v[0]), int64_t(v[1]), int64_t(v[2])), vec3l(int64_t(v[3]), int64_t(v[4]), int64_t(v[5]))};
+    if (b.hi.x < b.lo.x || b.hi.y < b.lo.y || b.hi.z < b.lo.z) r.bad("empty box");
+    boxes.push_back(b);
+    pos = end + 2;
+  }
+  return boxes;
+}
+
+struct LevelData {
+  std::vector<IndexBox> boxes;    ///< valid regions (ghost cells stripped)
+  std::vector<std::string> files; ///< data file per box
+  std::vector<uint64_t> offsets;  ///< byte offset per box
+  int nghost = 0;
+};
+
+struct Plotfile {
+  std::string dir;
+  std::vector<std::string> names;
+  int finestLevel = 0;
+  vec3d probLo, probHi;
+  std::vector<int> ratios; ///< per level step (finestLevel entries)
+  std::vector<IndexBox> domains;
+  std::vector<vec3d> dx;
+  std::vector<std::string> levelPrefixes;
+};
+
+Plotfile readHeader(const std::string& dir) {
+  Plotfile pf;
+  pf.dir = dir;
+  TextReader r((fs::path(dir) / "Header").string());
+  const std::string version = r.line();
+  if (version.rfind("HyperCLaw", 0) != 0) r.bad("not an AMReX plotfile header ('" + version + "')");
+  const int nvars = int(numbers(r, r.line(), 1, "the variable count")[0]);
+  if (nvars < 1 || nvars > 100000) r.bad("absurd variable count");
+  for (int i = 0; i < nvars; ++i) {
+    std::string name = r.line();
+    while (!name.empty() && std::isspace((unsigned char)name.back())) name.pop_back();
+    if (name.empty()) r.bad("empty variable name");
+    pf.names.push_back(name);
+  }
+  const int dim = int(numbers(r, r.line(), 1, "the dimension")[0]);
+  if (dim != 3) r.bad(strCat("a ", dim, "-D plotfile; only 3-D AMR data can be read"));
+  r.line(); // time
+  pf.finestLevel = int(numbers(r, r.line(), 1, "the finest level")[0]);
+  if (pf.finestLevel < 0 || pf.finestLevel > 20) r.bad("absurd finest level");
+  const auto lo = numbers(r, r.line(), 3, "prob_lo");
+  const auto hi = numbers(r, r.line(), 3, "prob_hi");
+  pf.probLo = vec3d(lo[0], lo[1], lo[2]);
+  pf.probHi = vec3d(hi[0], hi[1], hi[2]);
+  const auto ratios = numbers(r, r.line(), 0, "refinement ratios");
+  if (int(ratios.size()) < pf.finestLevel) r.bad("fewer refinement ratios than levels");
+  // Ratios may be written as one number per level or as IntVects; take one per level.
+  const size_t stride = ratios.size() >= size_t(3 * pf.finestLevel) && pf.finestLevel > 0 &&
+                                ratios.size() % 3 == 0 && ratios.size() != size_t(pf.finestLevel)
+                            ? 3
+                            : 1;
+  for (int l = 0; l < pf.finestLevel; ++l) {
+    const double rv = ratios[size_t(l) * stride];
+    const int ri = int(rv);
+    if (double(ri) != rv || ri < 2 || (ri & (ri - 1)) != 0)
+      r.bad(strCat("refinement ratio ", rv, " between levels ", l, " and ", l + 1, " is not a power of two"));
+    if (stride == 3 && (ratios[size_t(l) * 3 + 1] != rv || ratios[size_t(l) * 3 + 2] != rv))
+      r.bad("anisotropic refinement ratios are not supported");
+    pf.ratios.push_back(ri);
+  }
+  pf.domains = parseBoxes(r, r.line());
+  if (int(pf.domains.size()) < pf.finestLevel + 1) r.bad("fewer level domains than levels");
+  r.line(); // level steps
+  for (int l = 0; l <= pf.finestLevel; ++l) {
+    const auto d = numbers(r, r.line(), 3, "the cell size");
+    pf.dx.push_back(vec3d(d[0], d[1], d[2]));
+    if (!(d[0] > 0 && d[1] > 0 && d[2] > 0)) r.bad("cell sizes must be positive");
+  }
+  const int coord = int(numbers(r, r.line(), 1, "the coordinate system")[0]);
+  if (coord != 0) r.bad(strCat("coordinate system ", coord, " is not Cartesian"));
+  r.line(); // boundary width
+  for (int l = 0; l <= pf.finestLevel; ++l) {
+    const auto head = numbers(r, r.line(), 2, "the level line");
+    if (int(head[0]) != l) r.bad(strCat("expected level ", l));
+    const int64_t ngrids = int64_t(head[1]);
+    if (ngrids < 0 || ngrids > 100000000) r.bad("absurd grid count");
+    r.line(); // level step
+    for (int64_t g = 0; g < ngrids * 3; ++g) r.line();
+    std::string prefix = r.line();
+    while (!prefix.empty() && std::isspace((unsigned char)prefix.back())) prefix.pop_back();
+    pf.levelPrefixes.push_back(prefix);
+  }
+  return pf;
+}
+
+LevelData readCellHeader(const Plotfile& pf, int level) {
+  const fs::path prefix = fs::path(pf.dir) / pf.levelPrefixes[size_t(level)];
+  TextReader r(prefix.string() + "_H");
+  LevelData ld;
+  const int version = int(numbers(r, r.line(), 1, "the VisMF version")[0]);
+  if (version != 1)
+    r.bad(strCat("VisMF version ", version, " is not supported (version 1 is: re-write the plotfile with ",
+                 "AMReX's default 'VisMF::Header::Version_v1', or convert it)"));
+  r.line(); // how
+  const int ncomp = int(numbers(r, r.line(), 1, "the component count")[0]);
+  if (ncomp != int(pf.names.size())) r.bad(strCat(ncomp, " components, but the Header names ", pf.names.size()));
+  ld.nghost = int(numbers(r, r.line(), 1, "the ghost width")[0]);
+  if (ld.nghost < 0 || ld.nghost > 64) r.bad("absurd ghost width");
+  const auto count = numbers(r, r.line(), 1, "the box count");
+  const int64_t nboxes = int64_t(count[0]);
+  if (nboxes < 0 || nboxes > 100000000) r.bad("absurd box count");
+  for (int64_t b = 0; b < nboxes; ++b) {
+    const std::vector<IndexBox> box = parseBoxes(r, r.line());
+    if (box.size() != 1) r.bad("expected one box");
+    ld.boxes.push_back(box[0]);
+  }
+  r.line(); // ")"
+  const int64_t nfabs = int64_t(numbers(r, r.line(), 1, "the FAB count")[0]);
+  if (nfabs != nboxes) r.bad(strCat(nfabs, " FabOnDisk entries for ", nboxes, " boxes"));
+  for (int64_t b = 0; b < nfabs; ++b) {
+    std::istringstream in(r.line());
+    std::string tag, file;
+    uint64_t offset = 0;
+    if (!(in >> tag >> file >> offset) || tag != "FabOnDisk:") r.bad("expected 'FabOnDisk: FILE OFFSET'");
+    ld.files.push_back((prefix.parent_path() / file).string());
+    ld.offsets.push_back(offset);
+  }
+  return ld;
+}
+
+/// Reads one FAB: its header line, then the requested components as float.
+void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, int nghost,
+             const std::vector<int>& components, std::vector<std::vector<float>>& out,
+             const std::vector<std::string>& names) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) fail(file, ": cannot open: ", std::strerror(errno), " (missing file of the plotfile?)");
+  in.seekg(std::streamoff(offset));
+  std::string header;
+  if (!in || !std::getline(in, header)) fail(file, ": offset ", offset, ": no FAB record (truncated file?)");
+  if (header.rfind("FAB ", 0) != 0) fail(file, ": offset ", offset, ": expected a 'FAB' record");
+  // FAB ((8, (64 11 52 0 1 12 0 1023)),(8, (8 7 6 5 4 3 2 1)))((lo) (hi) (type)) ncomp
+  std::string cleaned = header.substr(4);
+  for (char& c : cleaned)
+    if (c == '(' || c == ')' || c == ',') c = ' ';
+  std::istringstream hs(cleaned);
+  std::vector<int64_t> v;
+  for (int64_t x; hs >> x;) v.push_back(x);
+  if (v.size() < 2 || v.size() < size_t(2 + v[0] + 1)) fail(file, ": offset ", offset, ": corrupt FAB header");
+  const int64_t bits = v[1];
+  const size_t orderAt = size_t(1 + v[0]);
+  const int64_t bytes = v[orderAt];
+  if (!((bits == 64 && bytes == 8) || (bits == 32 && bytes == 4)))
+    fail(file, ": offset ", offset, ": unsupported real format (", bits, " bits)");
+  if (v.size() < orderAt + 1 + size_t(bytes) + 10) fail(file, ": offset ", offset, ": corrupt FAB header");
+  const bool little = v[orderAt + 1] == bytes;
+  const size_t boxAt = orderAt + 1 + size_t(bytes);
+  const IndexBox stored{vec3l(v[boxAt], v[boxAt + 1], v[boxAt + 2]), vec3l(v[boxAt + 3], v[boxAt + 4], v[boxAt + 5])};
+  const int64_t ncomp = v[boxAt + 9];
+  const vec3l g(nghost);
+  if (!(stored.lo == valid.lo - g) || !(stored.hi == valid.hi + g))
+    fail(file, ": offset ", offset, ": FAB box does not match the level's box grown by ", nghost, " ghost cells");
+  if (ncomp != int64_t(names.size())) fail(file, ": offset ", offset, ": FAB holds ", ncomp, " components, expected ", names.size());
+  const vec3l n = stored.hi - stored.lo + vec3l(1);
+  const int64_t count = n.x * n.y * n.z;
+  const std::streamoff dataStart = in.tellg();
+  std::vector<char> raw(size_t(count * bytes));
+  for (size_t k = 0; k < components.size(); ++k) {
+    const int c = components[k];
+    in.seekg(dataStart + std::streamoff(int64_t(c) * count * bytes));
+    if (!in.read(raw.data(), std::streamsize(raw.size())))
+      fail(file, ": offset ", offset, ": truncated data of component '", names[size_t(c)], "'");
+    std::vector<float>& dst = out[k];
+    for (int64_t z = nghost; z < n.z - nghost; ++z)
+      for (int64_t y = nghost; y < n.y - nghost; ++y)
+        for (int64_t x = nghost; x < n.x - nghost; ++x) {
+          const char* p = raw.data() + ((z * n.y + y) * n.x + x) * bytes;
+          unsigned char b[8];
+          std::memcpy(b, p, size_t(bytes));
+          if (!little)
+            for (int64_t i = 0; i < bytes / 2; ++i) std::swap(b[i], b[bytes - 1 - i]);
+          double value;
+          if (bytes == 8) {
+            std::memcpy(&value, b, 8);
+          } else {
+            float f;
+            std::memcpy(&f, b, 4);
+            value = f;
+          }
+          if (!std::isfinite(value) || std::abs(value) > 3.4028234e38)
+            fail(file, ": offset ", offset, ": component '", names[size_t(c)], "' at index (",
+                 valid.lo.x + x - nghost, ",", valid.lo.y + y - nghost, ",", valid.lo.z + z - nghost, ") is ",
+                 value, ": not a finite float32");
+          dst.push_back(float(value));
+        }
+  }
+}
+
+} // namespace
+
+bool isAmrexPlotfile(const std::string& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return false;
+  std::ifstream in(fs::path(path) / "Header");
+  std::string first;
+  return in && std::getline(in, first) && first.rfind("HyperCLaw", 0) == 0;
+}
+
+std::vector<std::string> listAmrexFields(const std::string& path) { return readHeader(path).names; }
+
+CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted) {
+  const Plotfile pf = readHeader(path);
+  std::vector<int> components;
+  std::vector<std::string> names = wanted.empty() ? pf.names : wanted;
+  for (const std::string& name : names) {
+    const auto it = std::find(pf.names.begin(), pf.names.end(), name);
+    if (it == pf.names.end()) {
+      std::string known;
+      for (const std::string& n : pf.names) known += (known.empty() ? "" : ", ") + n;
+      fail(path, ": unknown field '", name, "' (fields: ", known, ")");
+    }
+    components.push_back(int(it - pf.names.begin()));
+  }
+
+  // Width of a level-l cell in finest cells, and its exabricks level.
+  std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
+  for (int l = pf.finestLevel - 1; l >= 0; --l) width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
+  std::vector<LevelData> levels;
+  for (int l = 0; l <= pf.finestLevel; ++l) levels.push_back(readCellHeader(pf, l));
+
+  CellSet set;
+  set.fields.resize(names.size());
+  for (size_t k = 0; k < names.size(); ++k) set.fields[k].name = names[k];
+  uint64_t totalBoxes = 0;
+  for (const LevelData& ld : levels) totalBoxes += ld.boxes.size();
+  Progress progress("reading " + path, totalBoxes);
+
+  for (int l = 0; l <= pf.finestLevel; ++l) {
+    const LevelData& ld = levels[size_t(l)];
+    const int64_t w = width[size_t(l)];
+    const int exaLevel = int(std::lround(std::log2(double(w))));
+    // Finer boxes coarsened to this level, sorted by lower x for a sweep.
+    std::vector<IndexBox> covers;
+    if (l < pf.finestLevel) {
+      const int64_t r = pf.ratios[size_t(l)];
+      for (const IndexBox& b : levels[size_t(l) + 1].boxes) {
+        auto down = [&](int64_t v) { return v >= 0 ? v / r : -((-v + r - 1) / r); };
+        covers.push_back({vec3l(down(b.lo.x), down(b.lo.y), down(b.lo.z)), vec3l(down(b.hi.x), down(b.hi.y), down(b.hi.z))});
+      }
+      std::sort(covers.begin(), covers.end(), [](const IndexBox& a, const IndexBox& b) { return a.lo.x < b.lo.x; });
+    }
+    for (size_t bi = 0; bi < ld.boxes.size(); ++bi) {
+      const IndexBox& box = ld.boxes[bi];
+      std::vector<std::vector<float>> values(components.size());
+      readFab(ld.files[bi], ld.offsets[bi], box, ld.nghost, components, values, pf.names);
+      // Mask of cells covered by the next finer level.
+      const vec3l n = box.hi - box.lo + vec3l(1);
+      std::vector<uint8_t> covered(size_t(n.x * n.y * n.z), 0);
+      for (const IndexBox& c : covers) {
+        if (c.lo.x > box.hi.x) break;
+        const vec3l lo = max(c.lo, box.lo), hi = min(c.hi, box.hi);
+        if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z) continue;
+        for (int64_t z = lo.z; z <= hi.z; ++z)
+          for (int64_t y = lo.y; y <= hi.y; ++y)
+            for (int64_t x = lo.x; x <= hi.x; ++x)
+              covered[size_t(((z - box.lo.z) * n.y + (y - box.lo.y)) * n.x + (x - box.lo.x))] = 1;
+      }
+      for (int64_t z = 0; z < n.z; ++z)
+        for (int64_t y = 0; y < n.y; ++y)
+          for (int64_t x = 0; x < n.x; ++x) {
+            const size_t i = size_t((z * n.y + y) * n.x + x);
+            if (covered[i]) continue;
+            const vec3l corner = (box.lo + vec3l(x, y, z)) * w;
+            for (int a = 0; a < 3; ++a)
+              if (corner[a] < -kLatticeLimit || corner[a] + w > kLatticeLimit)
+                fail(path, ": level ", l, " box ", bi, " lies outside the supported lattice range");
+            set.cells.push_back(Cell{vec3i(int32_t(corner.x), int32_t(corner.y), int32_t(corner.z)), exaLevel});
+            for (size_t k = 0; k < components.size(); ++k) set.fields[k].values.push_back(values[k][i]);
+          }
+      progress.advance(1);
+    }
+  }
+  progress.finish();
+  // Finest index space onto the physical domain.
+  const IndexBox& fineDomain = pf.domains[size_t(pf.finestLevel)];
+  const vec3d dx = pf.dx[size_t(pf.finestLevel)];
+  set.world.scale = dx;
+  set.world.origin = pf.probLo - vec3d(fineDomain.lo) * dx;
+  logInfo(strCat("read ", set.cells.size(), " leaf cells from ", path));
+  return set;
+}
+
+} // namespace exa

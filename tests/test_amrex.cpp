@@ -1,0 +1,237 @@
+#include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
+#include "exabricks/io/amrex.h"
+#include "exabricks/io/load.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+
+using namespace exa;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// The shared sample data: $EXABRICKS_DATA or ../shared/data beside the source tree.
+fs::path sharedData() {
+  if (const char* env = std::getenv("EXABRICKS_DATA")) return env;
+  return fs::path(EXABRICKS_SOURCE_DIR).parent_path() / "shared" / "data";
+}
+
+#define REQUIRE_DATA(sub)                                                                          \
+  const fs::path data = sharedData() / (sub);                                                      \
+  if (!fs::exists(data)) GTEST_SKIP() << "sample data not found at " << data.string()              \
+                                      << " (set EXABRICKS_DATA to the shared data folder)"
+
+std::map<int, uint64_t> cellsPerLevel(const CellSet& s) {
+  std::map<int, uint64_t> m;
+  for (const Cell& c : s.cells) m[c.level]++;
+  return m;
+}
+
+/// Writes a small plotfile: level 0 is one 4^3 box; level 1 (ratio 4) refines the coarse
+/// cells [1,2]x[1,1]x[1,1] as one 8x4x4 box. Values are v = 100 * level + linear index.
+struct Fixture {
+  bool bigEndian = false;
+  bool float32 = false;
+  int ghost = 0;
+  int dim = 3;
+  int ratio = 4;
+  fs::path dir;
+
+  static float value(int level, int64_t i) { return float(100 * level) + float(i); }
+
+  void write() const {
+    fs::remove_all(dir);
+    fs::create_directories(dir / "Level_0");
+    fs::create_directories(dir / "Level_1");
+    std::ofstream h(dir / "Header");
+    h << "HyperCLaw-V1.1\n2\nrho\ntemp\n" << dim << "\n0.5\n1\n-1 0 2\n3 4 6\n" << ratio << "\n";
+    h << "((0,0,0) (3,3,3) (0,0,0)) ((0,0,0) (" << 4 * ratio - 1 << "," << 4 * ratio - 1 << "," << 4 * ratio - 1
+      << ") (0,0,0))\n0 0\n1 1 1\n" << 1.0 / ratio << " " << 1.0 / ratio << " " << 1.0 / ratio << "\n0\n0\n";
+    h << "0 1 0.5\n0\n-1 3\n0 4\n2 6\nLevel_0/Cell\n1 1 0.5\n0\n0 1\n1 2\n3 4\nLevel_1/Cell\n";
+    writeLevel(0, {0, 0, 0}, {3, 3, 3});
+    writeLevel(1, {ratio, ratio, ratio}, {3 * ratio - 1, 2 * ratio - 1, 2 * ratio - 1});
+  }
+
+  void writeLevel(int level, vec3i lo, vec3i hi) const {
+    const fs::path l = dir / ("Level_" + std::to_string(level));
+    std::ostringstream box;
+    box << "((" << lo.x << "," << lo.y << "," << lo.z << ") (" << hi.x << "," << hi.y << "," << hi.z << ") (0,0,0))";
+    std::ofstream ch(l / "Cell_H");
+    ch << "1\n0\n2\n" << ghost << "\n(1 0\n" << box.str() << "\n)\n1\nFabOnDisk: Cell_D_00000 0\n";
+    std::ofstream d(l / "Cell_D_00000", std::ios::binary);
+    const vec3i g(ghost);
+    const vec3i glo = lo - g, ghi = hi + g;
+    const int bytes = float32 ? 4 : 8;
+    d << "FAB ((8, (" << (float32 ? "32 8 23 0 1 9 0 127" : "64 11 52 0 1 12 0 1023") << ")),(" << bytes << ", (";
+    for (int i = 0; i < bytes; ++i) d << (bigEndian ? i + 1 : bytes - i) << (i + 1 < bytes ? " " : "");
+    d << ")))((" << glo.x << "," << glo.y << "," << glo.z << ") (" << ghi.x << "," << ghi.y << "," << ghi.z
+      << ") (0,0,0)) 2\n";
+    const vec3i n = ghi - glo + vec3i(1);
+    for (int comp = 0; comp < 2; ++comp)
+      for (int z = 0; z < n.z; ++z)
+        for (int y = 0; y < n.y; ++y)
+          for (int x = 0; x < n.x; ++x) {
+            const bool inside = x >= ghost && y >= ghost && z >= ghost && x < n.x - ghost && y < n.y - ghost && z < n.z - ghost;
+            const vec3i v = hi - lo + vec3i(1);
+            const int64_t i = (int64_t(z - ghost) * v.y + (y - ghost)) * v.x + (x - ghost);
+            const double value = inside ? value1(level, i) + 1000.0 * comp : -7.0;
+            unsigned char b[8];
+            if (float32) {
+              const float f = float(value);
+              std::memcpy(b, &f, 4);
+            } else {
+              std::memcpy(b, &value, 8);
+            }
+            if (bigEndian)
+              for (int k = 0; k < bytes / 2; ++k) std::swap(b[k], b[bytes - 1 - k]);
+            d.write(reinterpret_cast<const char*>(b), bytes);
+          }
+  }
+  static double value1(int level, int64_t i) { return double(value(level, i)); }
+};
+
+std::string errorOf(const std::string& path) {
+  try {
+    loadModel(path);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "no error";
+}
+
+} // namespace
+
+TEST(Amrex, SharedAdvectionSampleLeafCounts) {
+  REQUIRE_DATA("amrex/advection_3d/plt_small");
+  EXPECT_TRUE(isAmrexPlotfile(data.string()));
+  EXPECT_EQ(listAmrexFields(data.string()), std::vector<std::string>{"phi"});
+  const CellSet s = readAmrex(data.string());
+  // Leaf counts given with the sample (AMReX levels 0..3 are exabricks levels 3..0).
+  EXPECT_EQ(s.size(), 1036288u);
+  const auto levels = cellsPerLevel(s);
+  EXPECT_EQ(levels.at(3), 22528u);
+  EXPECT_EQ(levels.at(2), 40960u);
+  EXPECT_EQ(levels.at(1), 235520u);
+  EXPECT_EQ(levels.at(0), 737280u);
+  // phi lies in [0.99015, 1.99454] over all stored cells; the peak sits on the finest level.
+  range1f r;
+  for (float v : s.fields[0].values) r.extend(v);
+  EXPECT_GE(r.lower, 0.99014f); // the published range is rounded to five digits
+  EXPECT_LE(r.upper, 1.99455f);
+  EXPECT_GT(r.upper, 1.99f);
+  // Domain [0,1]^3 with 256 finest cells per axis.
+  EXPECT_DOUBLE_EQ(s.world.scale.x, 1.0 / 256);
+  EXPECT_DOUBLE_EQ(s.world.origin.x, 0.0);
+}
+
+TEST(Amrex, SharedPeleSamplePartialRefinement) {
+  REQUIRE_DATA("amrex/pele_eb_3d/plt_eb_3d");
+  const CellSet s = readAmrex(data.string(), {"density"});
+  // Level 0: 64x32x16 cells; level 1 (64x64x32 fine cells) covers 16384 of them.
+  EXPECT_EQ(s.size(), 64u * 32 * 16 - 16384 + 64 * 64 * 32);
+  ASSERT_EQ(s.fields.size(), 1u);
+  EXPECT_EQ(s.fields[0].name, "density");
+}
+
+TEST(Amrex, SharedPeleLmSampleValuesAtCellCentres) {
+  REQUIRE_DATA("amrex/pelelm_3lev_3d/example_plt_3d");
+  CellSet s = readAmrex(data.string(), {"temp"});
+  EXPECT_EQ(s.size(), 32768u); // every leaf on the finest level
+  const CellSet copy = s;
+  const Model m = buildModel(std::move(s));
+  // With one level everywhere, the basis method returns the stored value at a cell centre.
+  std::mt19937 rng(1);
+  for (int k = 0; k < 2000; ++k) {
+    const size_t i = rng() % copy.size();
+    const Cell& c = copy.cells[i];
+    const vec3d centre = vec3d(c.lower) + vec3d(0.5 * c.width());
+    double v;
+    ASSERT_TRUE(sampleField(m.view(0), centre, v));
+    EXPECT_NEAR(v, copy.fields[0].values[i], 1e-9 * std::abs(v));
+  }
+}
+
+TEST(Amrex, FixtureBothPrecisionsByteOrdersAndGhostCells) {
+  for (int variant = 0; variant < 4; ++variant) {
+    Fixture f;
+    f.dir = fs::path(EXABRICKS_TEST_TMP) / ("amrex-" + std::to_string(variant));
+    f.bigEndian = variant & 1;
+    f.float32 = variant & 2;
+    f.ghost = variant == 3 ? 2 : 0;
+    f.write();
+    SCOPED_TRACE(variant);
+    const CellSet s = readAmrex(f.dir.string());
+    // 64 coarse cells, 2 of them refined by 4^3 each.
+    ASSERT_EQ(s.size(), 64u - 2 + 2 * 64);
+    ASSERT_EQ(s.fields.size(), 2u);
+    EXPECT_EQ(s.world.scale, vec3d(0.25));
+    EXPECT_EQ(s.world.origin, vec3d(-1, 0, 2));
+    const auto levels = cellsPerLevel(s);
+    EXPECT_EQ(levels.at(2), 62u); // ratio 4: the coarse cells are 4 finest cells wide
+    EXPECT_EQ(levels.at(0), 128u);
+    for (size_t i = 0; i < s.size(); ++i) {
+      const Cell& c = s.cells[i];
+      int64_t index;
+      if (c.level == 2) {
+        const vec3i q = c.lower / 4;
+        index = (int64_t(q.z) * 4 + q.y) * 4 + q.x;
+        EXPECT_FALSE(q.y == 1 && q.z == 1 && (q.x == 1 || q.x == 2)) << "covered cell kept";
+        EXPECT_EQ(s.fields[0].values[i], Fixture::value(0, index));
+      } else {
+        const vec3i q = c.lower - vec3i(4);
+        index = (int64_t(q.z) * 4 + q.y) * 8 + q.x;
+        EXPECT_EQ(s.fields[0].values[i], Fixture::value(1, index));
+      }
+      EXPECT_EQ(s.fields[1].values[i], s.fields[0].values[i] + 1000.f);
+    }
+  }
+}
+
+TEST(Amrex, BadPlotfilesAreRejectedClearly) {
+  Fixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "amrex-bad";
+  f.write();
+  ASSERT_EQ(errorOf(f.dir.string()), "no error");
+
+  fs::resize_file(f.dir / "Level_1" / "Cell_D_00000", 300);
+  std::string m = errorOf(f.dir.string());
+  EXPECT_NE(m.find("Cell_D_00000"), std::string::npos) << m;
+  EXPECT_NE(m.find("truncated"), std::string::npos) << m;
+
+  f.write();
+  fs::remove(f.dir / "Level_1" / "Cell_D_00000");
+  m = errorOf(f.dir.string());
+  EXPECT_NE(m.find("cannot open"), std::string::npos) << m;
+
+  f.write();
+  fs::remove(f.dir / "Level_0" / "Cell_H");
+  m = errorOf(f.dir.string());
+  EXPECT_NE(m.find("Cell_H"), std::string::npos) << m;
+
+  Fixture flat = f;
+  flat.dim = 2;
+  flat.write();
+  m = errorOf(flat.dir.string());
+  EXPECT_NE(m.find("2-D"), std::string::npos) << m;
+  EXPECT_NE(m.find("Header"), std::string::npos) << m;
+
+  Fixture three = f;
+  three.ratio = 3;
+  three.write();
+  m = errorOf(three.dir.string());
+  EXPECT_NE(m.find("power of two"), std::string::npos) << m;
+
+  f.write();
+  { std::ofstream(f.dir / "Header") << "HyperCLaw-V1.1\n2\nrho\n"; }
+  m = errorOf(f.dir.string());
+  EXPECT_NE(m.find("Header"), std::string::npos) << m;
+  EXPECT_NE(m.find("end of file"), std::string::npos) << m;
+}
