@@ -43,6 +43,7 @@ struct RenderCmdOptions {
   bool noSkip = false;
   bool noEarlyTermination = false;
   std::string sampling = "adaptive";
+  std::string reconstruction = "regions";
   std::string debug = "none";
   bool stats = false;
   bool json = false;
@@ -125,6 +126,9 @@ void run(const RenderCmdOptions& o) {
     ro.traversal = pick<TraversalKind>("traversal", o.traversal,
                                        {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
   ro.sampling = pick<Sampling>("sampling", o.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
+  ro.reconstruction = pick<Reconstruction>("reconstruction", o.reconstruction,
+                                           {{"regions", Reconstruction::Regions},
+                                            {"cells", Reconstruction::CellLocation}});
   ro.debug = pick<DebugView>("debug view", o.debug,
                              {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},
                               {"region", DebugView::Region}, {"steps", DebugView::Steps}});
@@ -257,6 +261,9 @@ void addRender(CLI::App& app) {
   cmd->add_flag("--no-skip", o->noSkip, "Disable space skipping");
   cmd->add_flag("--no-early-termination", o->noEarlyTermination, "Integrate every ray to its end");
   cmd->add_option("--sampling", o->sampling, "adaptive (per region) or fixed (finest width everywhere)")
+      ->capture_default_str();
+  cmd->add_option("--reconstruction", o->reconstruction,
+                  "regions (bricks listed by the sample's region) or cells (baseline: locate every cell)")
       ->capture_default_str();
   cmd->add_option("--debug", o->debug, "Debug view: level, brick, region or steps")->capture_default_str();
   cmd->add_flag("--stats", o->stats, "Time the frame after a warm-up and print statistics");

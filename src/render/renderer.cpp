@@ -1,5 +1,6 @@
 #include "exabricks/render/renderer.h"
 
+#include "exabricks/amr/cell_locator.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
@@ -87,6 +88,7 @@ struct Renderer::Impl {
   float normLower = 0.f, normScale = 0.f;
   std::vector<uint8_t> visible;
   std::unique_ptr<RegionTraversal> traversal;
+  std::unique_ptr<CellLocator> locator; ///< only for Reconstruction::CellLocation
   float finestWidth = 1.f;   ///< dataset's finest cell width, lattice units (opacity reference)
   float invFinestWidth = 1.f;
   vec3f invScale{1.f};       ///< world units per lattice unit, inverted (for gradients)
@@ -186,12 +188,16 @@ double Renderer::setTransferFunction(const TransferFunction& tfIn) {
   if (!im.traversal || im.traversal->kind() != kind)
     im.traversal = std::make_unique<RegionTraversal>(im.model, kind);
   im.traversal->setVisible(im.visible);
+  if (options_.reconstruction == Reconstruction::CellLocation && !im.locator)
+    im.locator = std::make_unique<CellLocator>(im.model);
   return timer.seconds();
 }
 
 Image Renderer::render(const Camera& camera, RenderStats* statsOut) const {
   const Impl& im = *impl_;
   if (!im.traversal) fail("no transfer function set");
+  if (options_.reconstruction == Reconstruction::CellLocation && !im.locator)
+    fail("cell-location reconstruction was chosen after the transfer function was set");
   const RenderOptions& o = options_;
   Image image(o.width, o.height);
   const double aspect = double(o.width) / double(o.height);
@@ -295,7 +301,11 @@ Image Renderer::render(const Camera& camera, RenderStats* statsOut) const {
                       float value;
                       vec3f grad;
                       const bool wantGrad = o.shading == Shading::Analytic;
-                      if (!sampleRegion(im.view, seg.region, p, value, wantGrad ? &grad : nullptr)) continue;
+                      const bool found =
+                          o.reconstruction == Reconstruction::Regions
+                              ? sampleRegion(im.view, seg.region, p, value, wantGrad ? &grad : nullptr)
+                              : im.locator->sample(im.field, p, value, wantGrad ? &grad : nullptr);
+                      if (!found) continue;
                       const vec4f rgba = im.lookup(value);
                       if (rgba.w >= 0.f) continue; // log2 transmittance 0: fully transparent
                       // Opacity correction: 1 - (1 - alpha)^(len / finest width).

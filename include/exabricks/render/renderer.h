@@ -19,6 +19,9 @@ enum class DebugView { None, Level, Brick, Region, Steps };
 /// How samples are placed: adaptive (per region, half its finest cell width) or fixed (half
 /// the dataset's finest cell width everywhere).
 enum class Sampling { Adaptive, Fixed };
+/// How a sample's value is reconstructed: from the bricks its region lists (the method), or by
+/// locating every contributing cell in a k-d tree over the bricks (the paper's baseline).
+enum class Reconstruction { Regions, CellLocation };
 
 struct RenderOptions {
   int width = 800, height = 800;
@@ -40,6 +43,7 @@ struct RenderOptions {
   float embreeBelowVisibleFraction = 0.15f;
   bool spaceSkipping = true;
   Sampling sampling = Sampling::Adaptive;
+  Reconstruction reconstruction = Reconstruction::Regions;
   DebugView debug = DebugView::None;
   bool progress = false;          ///< progress line on a terminal
 };
