@@ -4,9 +4,11 @@
 
 #include "exabricks/core/log.h"
 #include "exabricks/io/image.h"
+#include "exabricks/io/mesh.h"
 #include "exabricks/render/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -48,6 +50,23 @@ struct RenderCmdOptions {
   bool stats = false;
   bool json = false;
   int frames = 1;
+  // Surfaces and effects.
+  bool noVolume = false;
+  std::vector<std::string> layers;   ///< FIELD=COLORMAP or FIELD=TF_FILE
+  std::vector<float> iso;
+  std::string isoField;
+  std::vector<float> isoColor;       ///< sRGB triples, one per iso-value (cycled)
+  std::string isoColorField;
+  std::string isoColormap = "cool-to-warm";
+  std::vector<float> isoColorRange;
+  std::vector<std::string> meshes;
+  std::vector<float> meshColor;      ///< sRGB triples, one per mesh (cycled)
+  std::vector<std::string> clipPlanes; ///< px,py,pz,nx,ny,nz each
+  std::vector<double> clipBox;
+  bool clipMeshes = false;
+  int aoRays = 0;
+  float aoLength = 0.f;
+  bool aoVolume = false;
 };
 
 template <typename T> T pick(const std::string& what, const std::string& value,
@@ -109,6 +128,48 @@ TransferFunction makeTransferFunction(const RenderCmdOptions& o, const Model& mo
   return tf;
 }
 
+std::vector<double> parseNumbers(const std::string& text, const char* what) {
+  std::vector<double> out;
+  std::istringstream in(text);
+  for (std::string part; std::getline(in, part, ',');) {
+    size_t used = 0;
+    double v = 0;
+    try {
+      v = std::stod(part, &used);
+    } catch (...) {
+      used = 0;
+    }
+    if (used == 0 || used != part.size() || !std::isfinite(v)) fail(what, ": '", part, "' is not a number");
+    out.push_back(v);
+  }
+  return out;
+}
+
+/// sRGB triples -> linear-RGB colours.
+std::vector<vec3f> colorList(const std::vector<float>& v, const char* what) {
+  if (v.size() % 3 != 0) fail(what, " expects r,g,b triples (sRGB, 0..1)");
+  std::vector<vec3f> out;
+  for (size_t i = 0; i < v.size(); i += 3) {
+    for (size_t k = 0; k < 3; ++k)
+      if (!(v[i + k] >= 0.f && v[i + k] <= 1.f)) fail(what, " components must lie in [0, 1]");
+    out.push_back({srgbToLinear(v[i]), srgbToLinear(v[i + 1]), srgbToLinear(v[i + 2])});
+  }
+  return out;
+}
+
+/// Fields the command needs; empty means all (no field named for the volume).
+std::vector<std::string> neededFields(const RenderCmdOptions& o) {
+  if (o.in.field.empty()) return {};
+  std::vector<std::string> names{o.in.field};
+  auto add = [&](const std::string& n) {
+    if (!n.empty() && std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+  };
+  add(o.isoField);
+  add(o.isoColorField);
+  for (const std::string& l : o.layers) add(l.substr(0, l.find('=')));
+  return names;
+}
+
 void run(const RenderCmdOptions& o) {
   RenderOptions ro;
   parseSize(o.size, ro.width, ro.height);
@@ -154,14 +215,84 @@ void run(const RenderCmdOptions& o) {
   for (float c : o.background)
     if (!(c >= 0.f && c <= 1.f)) fail("--background components must lie in [0, 1]");
 
+  ro.volume = !o.noVolume;
+  for (const std::string& text : o.clipPlanes) {
+    const std::vector<double> v = parseNumbers(text, "--clip-plane");
+    if (v.size() != 6 || (v[3] == 0 && v[4] == 0 && v[5] == 0))
+      fail("--clip-plane expects px,py,pz,nx,ny,nz with a non-zero normal, got '", text, "'");
+    ro.clipPlanes.push_back({vec3d(v[0], v[1], v[2]), vec3d(v[3], v[4], v[5])});
+  }
+  if (!o.clipBox.empty()) {
+    const auto& b = o.clipBox;
+    if (b.size() != 6 || !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
+      fail("--clip-box expects x0,y0,z0,x1,y1,z1 with the lower corner below the upper one");
+    ro.clipBox = box3d(vec3d(b[0], b[1], b[2]), vec3d(b[3], b[4], b[5]));
+  }
+  ro.clipMeshes = o.clipMeshes;
+  if (o.aoRays < 0 || o.aoRays > 1024) fail("--ao must be in 0..1024 rays");
+  if (!(o.aoLength >= 0.f)) fail("--ao-length must not be negative");
+  ro.aoRays = o.aoRays;
+  ro.aoLength = o.aoLength;
+  ro.aoVolume = o.aoVolume;
+  const std::vector<vec3f> isoColors = colorList(o.isoColor, "--iso-color");
+  const std::vector<vec3f> meshColors = colorList(o.meshColor, "--mesh-color");
+  if (!o.isoColorRange.empty() && (o.isoColorRange.size() != 2 || !(o.isoColorRange[0] < o.isoColorRange[1])))
+    fail("--iso-color-range expects LOW,HIGH with LOW < HIGH");
+  if (o.iso.empty() && (!o.isoField.empty() || !o.isoColorField.empty() || !o.isoColor.empty()))
+    fail("iso-surface options need --iso VALUES");
+  for (float v : o.iso)
+    if (!std::isfinite(v)) fail("--iso values must be finite numbers");
+
+  // Meshes first: a bad mesh file should fail before the (longer) model build.
+  std::vector<TriangleMesh> meshes;
+  for (const std::string& path : o.meshes) meshes.push_back(readMesh(path));
+
   Timer loadTimer;
-  const Model model = loadModel(o.in.input, o.in.loadOptions(true));
+  LoadOptions lo = o.in.loadOptions(false);
+  lo.fields = neededFields(o);
+  const Model model = loadModel(o.in.input, lo);
   const double loadSeconds = loadTimer.seconds();
   const int field = model.requireField(o.in.field);
   const TransferFunction tf = makeTransferFunction(o, model);
 
   Renderer renderer(model, field, ro);
-  const double updateSeconds = renderer.setTransferFunction(tf);
+  std::vector<VolumeLayer> layers{{field, tf}};
+  for (const std::string& spec : o.layers) {
+    const size_t eq = spec.find('=');
+    const std::string name = spec.substr(0, eq);
+    if (name.empty()) fail("--layer expects FIELD or FIELD=COLORMAP or FIELD=TF_FILE, got '", spec, "'");
+    RenderCmdOptions lo2 = o;
+    lo2.tfFile.clear();
+    lo2.colormap = o.colormap;
+    lo2.range.clear();
+    lo2.logScale = false;
+    if (eq != std::string::npos) {
+      const std::string what = spec.substr(eq + 1);
+      if (std::ifstream(what).good())
+        lo2.tfFile = what;
+      else
+        lo2.colormap = what;
+    }
+    layers.push_back({model.requireField(name), makeTransferFunction(lo2, model)});
+  }
+  double updateSeconds = renderer.setVolumeLayers(layers);
+  double isoSeconds = 0.0;
+  if (!o.iso.empty()) {
+    IsoSurfaces iso;
+    iso.field = model.requireField(o.isoField.empty() ? o.in.field : o.isoField);
+    iso.values = o.iso;
+    iso.colors = isoColors;
+    if (!o.isoColorField.empty()) {
+      iso.colorField = model.requireField(o.isoColorField);
+      iso.colorTf.colorMap = builtinColorMap(o.isoColormap);
+      if (!o.isoColorRange.empty()) iso.colorTf.valueRange = range1f{o.isoColorRange[0], o.isoColorRange[1]};
+    }
+    isoSeconds = renderer.setIsoSurfaces(iso);
+    logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(),
+                   ", built in ", isoSeconds, " s"));
+  }
+  for (size_t i = 0; i < meshes.size(); ++i)
+    renderer.addMesh(meshes[i], meshColors.empty() ? vec3f(0.6f, 0.6f, 0.62f) : meshColors[i % meshColors.size()]);
 
   const box3i cb = model.cellBounds();
   const box3d worldBox(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
@@ -211,6 +342,12 @@ void run(const RenderCmdOptions& o) {
     j["transfer_function_update_seconds"] = updateSeconds;
     j["load_seconds"] = loadSeconds;
     j["traversal"] = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+    j["surface_hits"] = stats.surfaceHits;
+    j["iso_samples"] = stats.isoSamples;
+    j["ao_rays"] = stats.aoRays;
+    j["iso_regions"] = renderer.isoRegions();
+    j["iso_update_seconds"] = isoSeconds;
+    j["meshes"] = renderer.meshCount();
     std::cout << j.dump(2) << "\n";
   } else if (o.stats) {
     std::printf("frame time       %.4f s (median of %d after one warm-up)\n", stats.seconds, o.frames);
@@ -223,6 +360,12 @@ void run(const RenderCmdOptions& o) {
     std::printf("visible regions  %zu of %zu (transfer function update %.4f s)\n", renderer.visibleRegions(),
                 model.regions.regions.size(), updateSeconds);
     std::printf("traversal        %s\n", renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd-tree");
+    if (!o.iso.empty())
+      std::printf("iso regions      %zu of %zu (built in %.4f s), %llu iso samples\n", renderer.isoRegions(),
+                  model.regions.regions.size(), isoSeconds, (unsigned long long)stats.isoSamples);
+    if (!o.iso.empty() || !meshes.empty())
+      std::printf("surface hits     %llu, ambient occlusion rays %llu\n", (unsigned long long)stats.surfaceHits,
+                  (unsigned long long)stats.aoRays);
     std::printf("load + build     %.3f s\n", loadSeconds);
   }
 }
@@ -266,6 +409,28 @@ void addRender(CLI::App& app) {
                   "regions (bricks listed by the sample's region) or cells (baseline: locate every cell)")
       ->capture_default_str();
   cmd->add_option("--debug", o->debug, "Debug view: level, brick, region or steps")->capture_default_str();
+  cmd->add_flag("--no-volume", o->noVolume, "Draw surfaces only");
+  cmd->add_option("--layer", o->layers,
+                  "Another field in the volume: FIELD, FIELD=COLORMAP or FIELD=TF_FILE (repeatable)");
+  cmd->add_option("--iso", o->iso, "Iso-values v1,v2,... of implicit iso-surfaces")->delimiter(',');
+  cmd->add_option("--iso-field", o->isoField, "Field of the iso-surfaces (default: the rendered field)");
+  cmd->add_option("--iso-color", o->isoColor, "Iso-surface colours r,g,b[,r,g,b...] (sRGB), one per value")
+      ->delimiter(',');
+  cmd->add_option("--iso-color-field", o->isoColorField, "Colour the iso-surfaces by this field");
+  cmd->add_option("--iso-colormap", o->isoColormap, "Colour map for --iso-color-field")->capture_default_str();
+  cmd->add_option("--iso-color-range", o->isoColorRange, "Value range LOW,HIGH for --iso-color-field")
+      ->delimiter(',');
+  cmd->add_option("--mesh", o->meshes, "Triangle mesh (OBJ, PLY or .tris) in world space (repeatable)");
+  cmd->add_option("--mesh-color", o->meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")
+      ->delimiter(',');
+  cmd->add_option("--clip-plane", o->clipPlanes,
+                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
+  cmd->add_option("--clip-box", o->clipBox, "Keep only the inside of a box x0,y0,z0,x1,y1,z1 (world)")
+      ->delimiter(',');
+  cmd->add_flag("--clip-meshes", o->clipMeshes, "Clip meshes too");
+  cmd->add_option("--ao", o->aoRays, "Ambient occlusion rays per surface hit (0: off)")->capture_default_str();
+  cmd->add_option("--ao-length", o->aoLength, "Ambient occlusion ray length, world units (0: a tenth of the diagonal)");
+  cmd->add_flag("--ao-volume", o->aoVolume, "Let the volume attenuate ambient occlusion rays");
   cmd->add_flag("--stats", o->stats, "Time the frame after a warm-up and print statistics");
   cmd->add_option("--frames", o->frames, "Frames to time with --stats (median)")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print statistics as one JSON object on stdout");
