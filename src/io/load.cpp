@@ -4,6 +4,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/amrex.h"
+#include "exabricks/io/chombo.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
 
@@ -37,6 +38,7 @@ InputKind detectInput(const std::string& path) {
   if (!std::filesystem::exists(path, ec)) fail(path, ": no such file or directory");
   if (!std::filesystem::is_directory(path, ec) && isModelFile(path)) return InputKind::Model;
   if (isAmrexPlotfile(path)) return InputKind::Amrex;
+  if (isChomboFile(path)) return InputKind::Chombo;
   if (endsWith(path, ".cells")) return InputKind::Native;
   if (endsWith(path, ".grids")) return InputKind::Grids;
   fail(path, ": unknown input format (expected an exabricks model file, NAME.cells, a .grids",
@@ -57,6 +59,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     break;
   case InputKind::Amrex:
     set = readAmrex(path, options.fields);
+    break;
+  case InputKind::Chombo:
+    set = readChombo(path, options.fields);
     break;
   case InputKind::Model:
     fail(path, ": is a built model file; raw cells are needed here");
@@ -93,6 +98,8 @@ std::vector<std::string> listFields(const std::string& path) {
     return {"scalar"};
   case InputKind::Amrex:
     return listAmrexFields(path);
+  case InputKind::Chombo:
+    return listChomboFields(path);
   case InputKind::Model:
     return readModel(path).fieldNames;
   case InputKind::Default:

@@ -1,0 +1,211 @@
+#include "exabricks/io/chombo.h"
+
+#include "hdf5_file.h"
+#include "patches.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace exa {
+namespace {
+
+struct ChomboLevel {
+  std::string group;               ///< "/level_L"
+  std::vector<io::Patch> boxes;    ///< valid boxes in this level's index space (width 1)
+  std::vector<int64_t> offsets;    ///< start of each box's data, nboxes + 1 entries
+  vec3l ghost{0};                  ///< outputGhost: stored boxes are grown by it
+  vec3d dx{0.0};
+  int64_t ratio = 0;               ///< to the next finer level (0 on the finest)
+};
+
+struct ChomboHeader {
+  std::vector<std::string> names;
+  std::vector<ChomboLevel> levels;
+};
+
+std::vector<std::string> componentNames(const h5::File& f) {
+  const std::vector<double> n = f.attrNumbers("/", "num_components");
+  if (n.size() != 1 || n[0] < 1 || n[0] > 100000 || n[0] != std::floor(n[0]))
+    f.bad("/", "attribute 'num_components' is not a positive count");
+  std::vector<std::string> names;
+  for (int c = 0; c < int(n[0]); ++c) {
+    const std::string attr = "component_" + std::to_string(c);
+    std::string name = f.attrString("/", attr);
+    if (name.empty()) f.bad("/", "attribute '" + attr + "' is empty");
+    names.push_back(name);
+  }
+  return names;
+}
+
+ChomboHeader readHeader(const h5::File& f) {
+  ChomboHeader h;
+  if (f.hasAttribute("/Chombo_global", "SpaceDim")) {
+    const std::vector<double> dim = f.attrNumbers("/Chombo_global", "SpaceDim");
+    if (dim.size() != 1 || dim[0] != 3)
+      f.bad("/Chombo_global", strCat("SpaceDim is ", dim.empty() ? 0.0 : dim[0], ": only 3-D AMR data can be read"));
+  }
+  h.names = componentNames(f);
+  const std::vector<double> nl = f.attrNumbers("/", "num_levels");
+  if (nl.size() != 1 || nl[0] < 1 || nl[0] > 30 || nl[0] != std::floor(nl[0]))
+    f.bad("/", "attribute 'num_levels' is not a level count (1..30)");
+  const int numLevels = int(nl[0]);
+  for (int l = 0; l < numLevels; ++l) {
+    ChomboLevel lv;
+    lv.group = "/level_" + std::to_string(l);
+    if (!f.exists(lv.group)) f.bad(lv.group, strCat("missing group (num_levels is ", numLevels, ")"));
+    const std::vector<double> dx = f.attrNumbers(lv.group, "dx");
+    if (dx.size() == 1) lv.dx = vec3d(dx[0]);
+    else if (dx.size() == 3) lv.dx = vec3d(dx[0], dx[1], dx[2]);
+    else f.bad(lv.group, "attribute 'dx' has neither 1 nor 3 values");
+    if (!(lv.dx.x > 0 && lv.dx.y > 0 && lv.dx.z > 0) || !std::isfinite(lv.dx.x + lv.dx.y + lv.dx.z))
+      f.bad(lv.group, "attribute 'dx' must be positive");
+    if (l + 1 < numLevels) {
+      const std::vector<double> r = f.attrNumbers(lv.group, "ref_ratio");
+      if (r.empty()) f.bad(lv.group, "attribute 'ref_ratio' is empty");
+      for (double v : r)
+        if (v != r[0]) f.bad(lv.group, "anisotropic refinement ratios are not supported");
+      if (r[0] != std::floor(r[0]) || r[0] < 2 || r[0] > 1024 || io::log2Exact(int64_t(r[0])) < 0)
+        f.bad(lv.group, strCat("refinement ratio ", r[0], " between levels ", l, " and ", l + 1,
+                               " is not a power of two"));
+      lv.ratio = int64_t(r[0]);
+    }
+    const std::string dataAttrs = lv.group + "/data_attributes";
+    if (f.hasAttribute(dataAttrs, "outputGhost")) {
+      const std::vector<double> g = f.attrNumbers(dataAttrs, "outputGhost");
+      if (g.size() != 3) f.bad(dataAttrs, strCat("attribute 'outputGhost' has ", g.size(), " values, expected 3 (a 3-D file)"));
+      for (int a = 0; a < 3; ++a) {
+        if (g[size_t(a)] < 0 || g[size_t(a)] > 64) f.bad(dataAttrs, "attribute 'outputGhost' is out of range");
+        lv.ghost[a] = int64_t(g[size_t(a)]);
+      }
+    }
+    const h5::CompoundTable boxes = f.readCompound(lv.group + "/boxes");
+    if (boxes.members.size() != 6)
+      f.bad(lv.group + "/boxes", strCat("records have ", boxes.members.size(), " members; a 3-D box has 6 (a ",
+                                        boxes.members.size() / 2, "-D file?)"));
+    // Members by name when they carry Chombo's names, else in file order.
+    static const char* kNames[6] = {"lo_i", "lo_j", "lo_k", "hi_i", "hi_j", "hi_k"};
+    size_t order[6];
+    for (size_t m = 0; m < 6; ++m) {
+      const auto it = std::find(boxes.members.begin(), boxes.members.end(), kNames[m]);
+      order[m] = it == boxes.members.end() ? m : size_t(it - boxes.members.begin());
+    }
+    for (size_t b = 0; b < boxes.records; ++b) {
+      const double* v = boxes.values.data() + b * 6;
+      vec3l lo, hi;
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = int64_t(v[order[a]]);
+        hi[a] = int64_t(v[order[a + 3]]);
+        if (std::abs(v[order[a]]) > double(kLatticeLimit) || std::abs(v[order[a + 3]]) > double(kLatticeLimit))
+          f.bad(lv.group + "/boxes", strCat("box ", b, " lies outside the supported index range"));
+      }
+      if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z) f.bad(lv.group + "/boxes", strCat("box ", b, " is empty"));
+      lv.boxes.push_back({lo, hi - lo + vec3l(1), 1});
+    }
+    const std::string offsetsName = lv.group + "/data:offsets=0";
+    lv.offsets = f.readInts(offsetsName);
+    if (lv.offsets.size() != lv.boxes.size() + 1)
+      f.bad(offsetsName, strCat(lv.offsets.size(), " offsets for ", lv.boxes.size(), " boxes (expected boxes + 1)"));
+    const int64_t ncomp = int64_t(h.names.size());
+    for (size_t b = 0; b < lv.boxes.size(); ++b) {
+      const vec3l n = lv.boxes[b].cells + lv.ghost * int64_t(2);
+      const int64_t expected = ncomp * n.x * n.y * n.z;
+      if (lv.offsets[b + 1] - lv.offsets[b] != expected)
+        f.bad(offsetsName, strCat("box ", b, " has ", lv.offsets[b + 1] - lv.offsets[b], " values, expected ", expected,
+                                  " (", ncomp, " components of ", n.x, "x", n.y, "x", n.z, " cells with ghost cells)"));
+    }
+    const std::string dataName = lv.group + "/data:datatype=0";
+    const std::vector<uint64_t> dims = f.dims(dataName);
+    if (dims.size() != 1) f.bad(dataName, "expected a one-dimensional dataset");
+    if (lv.offsets.front() != 0 || int64_t(dims[0]) != lv.offsets.back())
+      f.bad(dataName, strCat("holds ", dims[0], " values, but the offsets describe ", lv.offsets.back() - lv.offsets.front()));
+    h.levels.push_back(std::move(lv));
+  }
+  // The cell sizes must follow the ratios; a mismatch means the header contradicts itself.
+  for (size_t l = 0; l + 1 < h.levels.size(); ++l) {
+    const vec3d expect = h.levels[l].dx / double(h.levels[l].ratio);
+    const vec3d got = h.levels[l + 1].dx;
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(expect[a] - got[a]) > 1e-6 * expect[a])
+        f.bad(h.levels[l + 1].group, strCat("dx ", got[a], " does not equal the coarser level's dx ", h.levels[l].dx[a],
+                                            " divided by its ref_ratio ", h.levels[l].ratio, " (inconsistent headers)"));
+  }
+  return h;
+}
+
+} // namespace
+
+bool isChomboFile(const std::string& path) {
+  if (!h5::hasSignature(path)) return false;
+  try {
+    const h5::File f(path);
+    return f.exists("/level_0") && f.hasAttribute("/", "num_levels");
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+std::vector<std::string> listChomboFields(const std::string& path) { return componentNames(h5::File(path)); }
+
+CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted) {
+  const h5::File f(path);
+  const ChomboHeader h = readHeader(f);
+  const std::vector<size_t> comps = io::pickFields(path, h.names, wanted);
+
+  // Width of each level's cells in finest cells.
+  const size_t nl = h.levels.size();
+  std::vector<int64_t> width(nl, 1);
+  for (size_t l = nl - 1; l-- > 0;) {
+    width[l] = width[l + 1] * h.levels[l].ratio;
+    if (width[l] > (int64_t(1) << kMaxLevel)) f.bad(h.levels[l].group, "refinement too deep for the lattice");
+  }
+  std::vector<io::Patch> patches;
+  std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
+  for (size_t l = 0; l < nl; ++l)
+    for (size_t b = 0; b < h.levels[l].boxes.size(); ++b) {
+      const io::Patch& box = h.levels[l].boxes[b];
+      patches.push_back({box.lower * width[l], box.cells, width[l]});
+      owner.push_back({l, b});
+    }
+  auto patchName = [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); };
+  const io::Coverage coverage(patches, patchName);
+
+  CellSet set;
+  for (size_t c : comps) set.fields.push_back({h.names[c], {}});
+  Progress progress("reading " + path, patches.size());
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const auto [l, b] = owner[i];
+    const ChomboLevel& lv = h.levels[l];
+    const vec3l g = lv.ghost;
+    const vec3l n = lv.boxes[b].cells + g * int64_t(2);
+    const int64_t stored = n.x * n.y * n.z;
+    const std::vector<double> raw =
+        f.readRows(lv.group + "/data:datatype=0", uint64_t(lv.offsets[b]), uint64_t(lv.offsets[b + 1] - lv.offsets[b]));
+    std::vector<std::vector<float>> values(comps.size());
+    const vec3l cells = lv.boxes[b].cells;
+    for (size_t k = 0; k < comps.size(); ++k) {
+      values[k].reserve(size_t(cells.x * cells.y * cells.z));
+      const double* src = raw.data() + int64_t(comps[k]) * stored;
+      for (int64_t z = 0; z < cells.z; ++z)
+        for (int64_t y = 0; y < cells.y; ++y)
+          for (int64_t x = 0; x < cells.x; ++x) {
+            const double v = src[((z + g.z) * n.y + (y + g.y)) * n.x + (x + g.x)];
+            values[k].push_back(io::toFloat32(v, [&] {
+              const vec3l at = lv.boxes[b].lower + vec3l(x, y, z);
+              return strCat(patchName(i), ": component '", h.names[comps[k]], "' at index (", at.x, ",", at.y, ",", at.z, ")");
+            }));
+          }
+    }
+    io::appendLeafCells(set, patches[i], coverage.covered(i), values, patchName(i));
+    progress.advance(1);
+  }
+  progress.finish();
+  set.world.scale = h.levels.back().dx;
+  set.world.origin = vec3d(0.0);
+  logInfo(strCat("read ", set.cells.size(), " leaf cells from ", path));
+  return set;
+}
+
+} // namespace exa

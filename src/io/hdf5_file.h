@@ -1,0 +1,98 @@
+// A thin read-only layer over the HDF5 C library for the simulation-code readers: owned ids,
+// whole-dataset and row-range reads converted to double or int64, attributes, and every failure
+// turned into exa::Error naming the file and the object. HDF5's own error printing is silenced.
+#pragma once
+
+#include <hdf5.h>
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace exa::h5 {
+
+/// True when the file carries the HDF5 signature (at offset 0 or a power of two from 512 on).
+bool hasSignature(const std::string& path);
+
+/// An owned HDF5 id, closed with the matching H5?close function.
+class Id {
+public:
+  using Closer = herr_t (*)(hid_t);
+  Id() = default;
+  Id(hid_t id, Closer closer) : id_(id), closer_(closer) {}
+  Id(Id&& o) noexcept : id_(std::exchange(o.id_, H5I_INVALID_HID)), closer_(o.closer_) {}
+  Id& operator=(Id&& o) noexcept {
+    if (this != &o) {
+      reset();
+      id_ = std::exchange(o.id_, H5I_INVALID_HID);
+      closer_ = o.closer_;
+    }
+    return *this;
+  }
+  Id(const Id&) = delete;
+  Id& operator=(const Id&) = delete;
+  ~Id() { reset(); }
+  hid_t get() const { return id_; }
+  explicit operator bool() const { return id_ >= 0; }
+  void reset() {
+    if (id_ >= 0 && closer_) closer_(id_);
+    id_ = H5I_INVALID_HID;
+  }
+
+private:
+  hid_t id_ = H5I_INVALID_HID;
+  Closer closer_ = nullptr;
+};
+
+/// One named member of a compound record, as read by readCompound.
+struct CompoundTable {
+  std::vector<std::string> members; ///< member names in file order
+  std::vector<double> values;       ///< members.size() values per record (numeric members)
+  std::vector<std::string> strings; ///< one string per record and string member
+  size_t records = 0;
+};
+
+/// A read-only HDF5 file. Object paths are absolute ("/level_0/boxes") or relative to the root.
+class File {
+public:
+  explicit File(const std::string& path);
+  const std::string& path() const { return path_; }
+
+  /// True when every link on the path exists.
+  bool exists(const std::string& object) const;
+  /// Names of a group's members, in name order.
+  std::vector<std::string> members(const std::string& group) const;
+  bool isDataset(const std::string& object) const;
+
+  /// Dimensions of a dataset (outermost first).
+  std::vector<uint64_t> dims(const std::string& dataset) const;
+  /// True when the dataset stores floating-point values of more than 4 bytes.
+  bool isDouble(const std::string& dataset) const;
+  /// The whole dataset, converted.
+  std::vector<double> readDoubles(const std::string& dataset) const;
+  std::vector<int64_t> readInts(const std::string& dataset) const;
+  /// Rows [first, first + count) along the outermost dimension, converted.
+  std::vector<double> readRows(const std::string& dataset, uint64_t first, uint64_t count) const;
+  /// Fixed- or variable-length strings of a string dataset, trailing blanks and NULs removed.
+  std::vector<std::string> readStrings(const std::string& dataset) const;
+  /// A compound dataset whose members are numbers or strings.
+  CompoundTable readCompound(const std::string& dataset) const;
+
+  bool hasAttribute(const std::string& object, const std::string& name) const;
+  /// Numeric attribute values (a compound of numbers gives its members in order).
+  std::vector<double> attrNumbers(const std::string& object, const std::string& name) const;
+  std::string attrString(const std::string& object, const std::string& name) const;
+
+  /// Throws exa::Error "FILE: OBJECT: what".
+  [[noreturn]] void bad(const std::string& object, const std::string& what) const;
+
+private:
+  Id openObject(const std::string& object) const;
+  Id openDataset(const std::string& dataset) const;
+  Id openAttribute(const std::string& object, const std::string& name, Id& holder) const;
+  std::string path_;
+  Id file_;
+};
+
+} // namespace exa::h5

@@ -1,0 +1,147 @@
+#include "patches.h"
+
+#include "exabricks/core/error.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace exa::io {
+
+int log2Exact(int64_t width) {
+  if (width < 1 || (width & (width - 1)) != 0) return -1;
+  int l = 0;
+  while ((int64_t(1) << l) < width) ++l;
+  return l;
+}
+
+Coverage::Coverage(std::vector<Patch> patches, std::function<std::string(size_t)> name)
+    : patches_(std::move(patches)), name_(std::move(name)) {
+  items_.resize(patches_.size());
+  for (size_t i = 0; i < items_.size(); ++i) items_[i] = uint32_t(i);
+  nodes_.push_back({});
+  if (!items_.empty()) build(0, 0, uint32_t(items_.size()));
+  for (const Patch& p : patches_) widths_.push_back(p.width);
+  std::sort(widths_.begin(), widths_.end());
+  widths_.erase(std::unique(widths_.begin(), widths_.end()), widths_.end());
+}
+
+void Coverage::build(uint32_t node, uint32_t begin, uint32_t end) {
+  vec3l lo(INT64_MAX), hi(INT64_MIN), clo(INT64_MAX), chi(INT64_MIN);
+  for (uint32_t i = begin; i < end; ++i) {
+    const Patch& p = patches_[items_[i]];
+    lo = min(lo, p.lower);
+    hi = max(hi, p.upper());
+    const vec3l c2 = p.lower + p.upper(); // twice the centre, to stay integer
+    clo = min(clo, c2);
+    chi = max(chi, c2);
+  }
+  nodes_[node].lo = lo;
+  nodes_[node].hi = hi;
+  if (end - begin <= 4 || clo == chi) {
+    nodes_[node].first = begin;
+    nodes_[node].count = end - begin;
+    return;
+  }
+  const vec3l ext = chi - clo;
+  const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
+  const uint32_t mid = begin + (end - begin) / 2;
+  std::nth_element(items_.begin() + begin, items_.begin() + mid, items_.begin() + end, [&](uint32_t a, uint32_t b) {
+    return (patches_[a].lower + patches_[a].upper())[axis] < (patches_[b].lower + patches_[b].upper())[axis];
+  });
+  const uint32_t child = uint32_t(nodes_.size());
+  nodes_.push_back({});
+  nodes_.push_back({});
+  nodes_[node].first = child;
+  nodes_[node].count = 0;
+  build(child, begin, mid);
+  build(child + 1, mid, end);
+}
+
+std::vector<uint8_t> Coverage::covered(size_t i) const {
+  const Patch& p = patches_[i];
+  std::vector<uint8_t> mask(size_t(p.cellCount()), 0);
+  // Only the next finer width decides: the formats nest each level inside the one above, so a
+  // deeper patch lies under next-finer patches and may legitimately cut coarse cells.
+  const auto next = std::lower_bound(widths_.begin(), widths_.end(), p.width);
+  if (next == widths_.begin()) return mask;
+  const int64_t coverWidth = *(next - 1);
+  const vec3l plo = p.lower, phi = p.upper();
+  auto overlaps = [&](const vec3l& lo, const vec3l& hi) {
+    return lo.x < phi.x && lo.y < phi.y && lo.z < phi.z && plo.x < hi.x && plo.y < hi.y && plo.z < hi.z;
+  };
+  std::vector<uint32_t> stack{0};
+  while (!stack.empty()) {
+    const Node& n = nodes_[stack.back()];
+    stack.pop_back();
+    if (!overlaps(n.lo, n.hi)) continue;
+    if (n.count == 0) {
+      stack.push_back(n.first);
+      stack.push_back(n.first + 1);
+      continue;
+    }
+    for (uint32_t k = n.first; k < n.first + n.count; ++k) {
+      const Patch& q = patches_[items_[k]];
+      if (q.width != coverWidth || !overlaps(q.lower, q.upper())) continue;
+      const vec3l lo = max(q.lower, plo), hi = min(q.upper(), phi);
+      // The overlap must consist of whole cells of p: a finer patch never splits a cell.
+      for (int a = 0; a < 3; ++a)
+        if ((lo[a] - plo[a]) % p.width != 0 || (hi[a] - plo[a]) % p.width != 0)
+          fail(name_(items_[k]), " covers only part of a cell of ", name_(i),
+               " (finer patches must cover whole coarser cells)");
+      const vec3l clo = (lo - plo) / p.width, chi = (hi - plo) / p.width;
+      for (int64_t z = clo.z; z < chi.z; ++z)
+        for (int64_t y = clo.y; y < chi.y; ++y)
+          std::fill_n(mask.begin() + ((z * p.cells.y + y) * p.cells.x + clo.x), chi.x - clo.x, uint8_t(1));
+    }
+  }
+  return mask;
+}
+
+float toFloat32(double value, const std::function<std::string()>& where) {
+  if (std::isnan(value)) fail(where(), " is NaN");
+  if (!std::isfinite(value) || std::abs(value) > 3.4028234663852886e38)
+    fail(where(), " is ", value, ", outside the float32 range");
+  return float(value);
+}
+
+void appendLeafCells(CellSet& set, const Patch& patch, const std::vector<uint8_t>& covered,
+                     const std::vector<std::vector<float>>& values, const std::string& where) {
+  const int level = log2Exact(patch.width);
+  if (level < 0 || level > kMaxLevel) fail(where, ": cell width ", patch.width, " is not a power of two up to 2^", kMaxLevel);
+  const vec3l hi = patch.upper();
+  for (int a = 0; a < 3; ++a)
+    if (patch.lower[a] < -kLatticeLimit || hi[a] > kLatticeLimit)
+      fail(where, ": lies outside the supported lattice range (±2^29 finest cells)");
+  for (const auto& v : values)
+    if (int64_t(v.size()) != patch.cellCount()) fail(where, ": ", v.size(), " values for ", patch.cellCount(), " cells");
+  size_t i = 0;
+  for (int64_t z = 0; z < patch.cells.z; ++z)
+    for (int64_t y = 0; y < patch.cells.y; ++y)
+      for (int64_t x = 0; x < patch.cells.x; ++x, ++i) {
+        if (covered[i]) continue;
+        const vec3l c = patch.lower + vec3l(x, y, z) * patch.width;
+        set.cells.push_back(Cell{vec3i(int32_t(c.x), int32_t(c.y), int32_t(c.z)), level});
+        for (size_t f = 0; f < values.size(); ++f) set.fields[f].values.push_back(values[f][i]);
+      }
+}
+
+std::vector<size_t> pickFields(const std::string& source, const std::vector<std::string>& available,
+                               const std::vector<std::string>& wanted) {
+  std::vector<size_t> out;
+  if (wanted.empty()) {
+    for (size_t i = 0; i < available.size(); ++i) out.push_back(i);
+    return out;
+  }
+  for (const std::string& name : wanted) {
+    const auto it = std::find(available.begin(), available.end(), name);
+    if (it == available.end()) {
+      std::string known;
+      for (const std::string& n : available) known += (known.empty() ? "" : ", ") + n;
+      fail(source, ": unknown field '", name, "' (fields: ", known, ")");
+    }
+    out.push_back(size_t(it - available.begin()));
+  }
+  return out;
+}
+
+} // namespace exa::io

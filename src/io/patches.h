@@ -1,0 +1,65 @@
+// Shared by the readers of overlapping-level AMR formats (Chombo, Enzo, VTK overlapping AMR):
+// patches (boxes of same-width cells) placed on the finest lattice, which of their cells are
+// covered by finer patches, and the leaf cells and float32 values they contribute.
+#pragma once
+
+#include "exabricks/amr/cells.h"
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace exa::io {
+
+/// A box of cells of one width. `lower` is in finest-lattice units, `cells` counts cells per
+/// axis (so the box spans [lower, lower + cells * width) on the lattice).
+struct Patch {
+  vec3l lower;
+  vec3l cells;
+  int64_t width = 1;
+  vec3l upper() const { return lower + cells * width; }
+  int64_t cellCount() const { return cells.x * cells.y * cells.z; }
+};
+
+/// log2 of a width that is a power of two, or -1.
+int log2Exact(int64_t width);
+
+/// Finds, for each patch, the cells covered by patches of smaller width. A bounding-volume
+/// hierarchy over the patches keeps the search proportional to the overlaps.
+class Coverage {
+public:
+  /// `name(i)` describes patch i in messages ("level 2 box 7", "grid 12").
+  Coverage(std::vector<Patch> patches, std::function<std::string(size_t)> name);
+  /// One flag per cell of patch i (x fastest): 1 where a patch of the next finer width present
+  /// covers the cell. Such a patch covering only part of a cell is an error naming both.
+  std::vector<uint8_t> covered(size_t i) const;
+
+private:
+  struct Node {
+    vec3l lo, hi;             ///< bounds of the subtree's patches, exclusive upper
+    uint32_t first, count;    ///< leaf: item range; inner: count == 0, children at first, first+1
+  };
+  void build(uint32_t node, uint32_t begin, uint32_t end);
+  std::vector<Patch> patches_;
+  std::vector<uint32_t> items_;
+  std::vector<Node> nodes_;
+  std::vector<int64_t> widths_; ///< distinct widths, ascending
+  std::function<std::string(size_t)> name_;
+};
+
+/// Converts a value to float32; NaN, infinities and values outside the float32 range throw
+/// with `where` (file, record and field) in the message.
+float toFloat32(double value, const std::function<std::string()>& where);
+
+/// Appends the uncovered cells of `patch` to `set`; `values[f]` holds the patch's values of
+/// field f (x fastest, one per cell). Checks the lattice range.
+void appendLeafCells(CellSet& set, const Patch& patch, const std::vector<uint8_t>& covered,
+                     const std::vector<std::vector<float>>& values, const std::string& where);
+
+/// Indices into `available` of the wanted fields (all when `wanted` is empty); an unknown name
+/// throws "SOURCE: unknown field 'x' (fields: ...)".
+std::vector<size_t> pickFields(const std::string& source, const std::vector<std::string>& available,
+                               const std::vector<std::string>& wanted);
+
+} // namespace exa::io
