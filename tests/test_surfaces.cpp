@@ -1,0 +1,450 @@
+// Surfaces and effects against analytic truth: iso-surfaces of linear and radial fields, meshes
+// hiding the volume, clipping removing exactly a half-space, ambient occlusion in a corner and
+// on an open plane, colouring by a second field, and the multi-field combination rule.
+#include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
+#include "exabricks/io/mesh.h"
+#include "exabricks/render/renderer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+using namespace exa;
+
+namespace {
+
+/// Level-0 cells filling [0, n)^3 with value f(cell centre) in one field per function.
+template <typename... F> CellSet uniformCells(int n, const std::vector<std::string>& names, F... fs) {
+  CellSet s;
+  for (const std::string& name : names) s.fields.push_back({name, {}});
+  for (int z = 0; z < n; ++z)
+    for (int y = 0; y < n; ++y)
+      for (int x = 0; x < n; ++x) {
+        s.cells.push_back({vec3i(x, y, z), 0});
+        const vec3d c(x + 0.5, y + 0.5, z + 0.5);
+        size_t i = 0;
+        ((s.fields[i++].values.push_back(float(fs(c)))), ...);
+      }
+  return s;
+}
+
+/// Two levels over [0, 64)^3: finest cells where a 2^3 block's centre lies within `fineRadius`
+/// of `centre`, cells of width 2 elsewhere; value = distance of the cell centre from `centre`.
+CellSet radialTwoLevels(const vec3d& centre, double fineRadius) {
+  CellSet s;
+  s.fields.push_back({"radius", {}});
+  s.fields.push_back({"x", {}});
+  for (int z = 0; z < 64; z += 2)
+    for (int y = 0; y < 64; y += 2)
+      for (int x = 0; x < 64; x += 2) {
+        const vec3d bc(x + 1.0, y + 1.0, z + 1.0);
+        if (length(bc - centre) < fineRadius) {
+          for (int k = 0; k < 8; ++k) {
+            const vec3i lo(x + (k & 1), y + ((k >> 1) & 1), z + (k >> 2));
+            const vec3d c = vec3d(lo) + vec3d(0.5);
+            s.cells.push_back({lo, 0});
+            s.fields[0].values.push_back(float(length(c - centre)));
+            s.fields[1].values.push_back(float(c.x));
+          }
+        } else {
+          s.cells.push_back({vec3i(x, y, z), 1});
+          s.fields[0].values.push_back(float(length(bc - centre)));
+          s.fields[1].values.push_back(float(bc.x));
+        }
+      }
+  return s;
+}
+
+TransferFunction grayRamp(float lo, float hi, float alpha) {
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("grayscale");
+  tf.opacity = {{0.f, alpha}, {1.f, alpha}};
+  tf.valueRange = range1f{lo, hi};
+  return tf;
+}
+
+/// A transfer function that shows nothing (surfaces only).
+TransferFunction invisible() { return grayRamp(0.f, 1.f, 0.f); }
+
+/// Orthographic camera looking along `dir` at `target`, `height` world units tall.
+Camera ortho(const vec3d& target, const vec3d& dir, const vec3d& up, double height) {
+  Camera c;
+  c.orthographic = true;
+  c.position = target - dir * 200.0;
+  c.lookAt = target;
+  c.up = up;
+  c.orthoHeight = height;
+  return c;
+}
+
+/// A quad (two triangles) with corners a, b, c, d in order.
+TriangleMesh quad(const vec3f& a, const vec3f& b, const vec3f& c, const vec3f& d) {
+  TriangleMesh m;
+  m.vertices = {a, b, c, d};
+  m.triangles = {vec3i(0, 1, 2), vec3i(0, 2, 3)};
+  return m;
+}
+
+double maxAbsDiff(const Image& a, const Image& b) {
+  double m = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    m = std::max<double>(m, std::abs(a.pixels[i].x - b.pixels[i].x));
+    m = std::max<double>(m, std::abs(a.pixels[i].y - b.pixels[i].y));
+    m = std::max<double>(m, std::abs(a.pixels[i].z - b.pixels[i].z));
+    m = std::max<double>(m, std::abs(a.pixels[i].w - b.pixels[i].w));
+  }
+  return m;
+}
+
+RenderOptions surfaceOptions(int size) {
+  RenderOptions o;
+  o.width = o.height = size;
+  o.earlyTermination = false;
+  o.jitter = false;
+  return o;
+}
+
+} // namespace
+
+TEST(Surfaces, LinearFieldIsoSurfaceIsThePlane) {
+  // f = a . lattice centre; with a world transform the plane in world space is
+  // a . (w - origin) / scale = c.
+  const vec3d a(0.3, 0.2, 0.1);
+  CellSet cells = uniformCells(32, {"f"}, [&](const vec3d& p) { return dot(a, p); });
+  cells.world.origin = vec3d(-3.0, 4.0, 1.0);
+  cells.world.scale = vec3d(2.0, 1.0, 0.5);
+  BuildOptions bo;
+  bo.bricks.maxBrickWidth = 8; // many bricks and regions, so that the iso set is a true subset
+  const Model m = buildModel(std::move(cells), bo);
+  Renderer r(m, 0, surfaceOptions(8));
+  r.setTransferFunction(invisible());
+  const float iso = 8.f;
+  IsoSurfaces is;
+  is.field = 0;
+  is.values = {iso};
+  r.setIsoSurfaces(is);
+  EXPECT_GT(r.isoRegions(), 0u);
+  EXPECT_LT(r.isoRegions(), m.regions.regions.size());
+  const vec3d worldNormal = normalize(a / m.world.scale);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits = 0;
+  for (int i = 0; i < 400; ++i) {
+    // Rays from outside towards random interior points.
+    const vec3d target = m.world.toWorld(vec3d(16.0 + 10 * u(rng), 16.0 + 10 * u(rng), 16.0 + 10 * u(rng)));
+    const vec3d dir = normalize(vec3d(u(rng), u(rng), u(rng)) + vec3d(0.01));
+    const vec3d org = target - dir * 200.0;
+    SurfaceHit hit;
+    if (!r.pick(org, dir, hit)) continue;
+    const vec3d lat = m.world.toLattice(hit.position);
+    if (reduceMin(lat) < 1.0 || reduceMax(lat) > 31.0) continue; // exact only away from the border
+    ++hits;
+    EXPECT_EQ(hit.kind, SurfaceHit::Iso);
+    // Distance from the plane in lattice units along the gradient: root finding is to 1e-3 of
+    // the cell width.
+    const double distance = std::abs(dot(a, lat) - iso) / length(a);
+    EXPECT_LT(distance, 1.5e-3) << "hit " << lat.x << "," << lat.y << "," << lat.z;
+    EXPECT_GT(std::abs(dot(vec3d(hit.normal), worldNormal)), 1.0 - 1e-5);
+    EXPECT_LE(dot(vec3d(hit.normal), dir), 0.0); // faces the viewer
+  }
+  EXPECT_GT(hits, 100);
+}
+
+TEST(Surfaces, RadialFieldIsoSurfaceIsASphere) {
+  const vec3d centre(31.3, 32.6, 30.9);
+  const Model m = buildModel(radialTwoLevels(centre, 26.0));
+  Renderer r(m, 0, surfaceOptions(8));
+  r.setTransferFunction(invisible());
+  const float radius = 20.f;
+  IsoSurfaces is;
+  is.field = 0;
+  is.values = {radius, 40.f}; // the second lies mostly outside the data
+  r.setIsoSurfaces(is);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> g;
+  double worstRadius = 0, worstAngle = 0;
+  int hits = 0;
+  for (int i = 0; i < 300; ++i) {
+    const vec3d dir = normalize(vec3d(g(rng), g(rng), g(rng)));
+    // Aim at points within 15 units of the centre: the ray crosses the sphere.
+    const vec3d aim = centre + vec3d(g(rng), g(rng), g(rng)) * 5.0;
+    const vec3d org = aim - dir * 60.0; // well outside the sphere
+    SurfaceHit hit;
+    if (!r.pick(org, dir, hit)) continue;
+    if (hit.index != 0) continue;
+    ++hits;
+    const vec3d toHit = hit.position - centre;
+    worstRadius = std::max(worstRadius, std::abs(length(toHit) - radius));
+    // Seen from outside, the normal points outwards.
+    worstAngle = std::max(worstAngle, std::acos(std::min(1.0, dot(vec3d(hit.normal), normalize(toHit)))));
+  }
+  EXPECT_GT(hits, 150);
+  RecordProperty("worst_radius_error", std::to_string(worstRadius));
+  RecordProperty("worst_normal_degrees", std::to_string(worstAngle * 180.0 / M_PI));
+  // Trilinear-like reconstruction of |p - c| deviates by about w^2 / (8 r) from the sphere.
+  EXPECT_LT(worstRadius, 0.03);
+  EXPECT_LT(worstAngle * 180.0 / M_PI, 3.0);
+}
+
+TEST(Surfaces, IsoRegionSetFollowsTheIsoValues) {
+  const Model m = buildModel(radialTwoLevels(vec3d(32.0), 20.0));
+  Renderer r(m, 0, surfaceOptions(8));
+  r.setTransferFunction(invisible());
+  IsoSurfaces is;
+  is.field = 0;
+  is.values = {10.f};
+  r.setIsoSurfaces(is);
+  const size_t one = r.isoRegions();
+  size_t expected = 0;
+  for (const range1f& v : m.regions.valueRanges[0]) expected += v.lower <= 10.f && 10.f <= v.upper;
+  EXPECT_EQ(one, expected);
+  is.values = {10.f, 25.f};
+  r.setIsoSurfaces(is);
+  EXPECT_GT(r.isoRegions(), one);
+  is.values = {1000.f};
+  r.setIsoSurfaces(is);
+  EXPECT_EQ(r.isoRegions(), 0u);
+  SurfaceHit hit;
+  EXPECT_FALSE(r.pick(vec3d(32, 32, -50), vec3d(0, 0, 1), hit));
+}
+
+TEST(Surfaces, MeshInFrontHidesTheVolume) {
+  CellSet cells = uniformCells(16, {"f"}, [](const vec3d& p) { return p.x / 16.0; });
+  const Model m = buildModel(std::move(cells));
+  RenderOptions o = surfaceOptions(32);
+  const Camera cam = ortho(vec3d(8.0), vec3d(0, 0, 1), vec3d(0, 1, 0), 20.0);
+  // A quad in front of the volume (z = -1) covering the whole view.
+  const TriangleMesh front = quad({-20, -20, -1}, {40, -20, -1}, {40, 40, -1}, {-20, 40, -1});
+  Renderer both(m, 0, o);
+  both.setTransferFunction(grayRamp(0.f, 1.f, 0.5f));
+  both.addMesh(front, vec3f(0.2f, 0.5f, 0.8f));
+  o.volume = false;
+  Renderer meshOnly(m, 0, o);
+  meshOnly.setTransferFunction(grayRamp(0.f, 1.f, 0.5f));
+  meshOnly.addMesh(front, vec3f(0.2f, 0.5f, 0.8f));
+  RenderStats st;
+  const Image a = both.render(cam, &st);
+  EXPECT_EQ(st.samples, 0u); // the volume behind the mesh is never sampled
+  EXPECT_EQ(maxAbsDiff(a, meshOnly.render(cam)), 0.0);
+
+  // The same mesh behind the volume: the volume shows in front of it.
+  const TriangleMesh back = quad({-20, -20, 17}, {40, -20, 17}, {40, 40, 17}, {-20, 40, 17});
+  RenderOptions o2 = surfaceOptions(32);
+  Renderer behind(m, 0, o2);
+  behind.setTransferFunction(grayRamp(0.f, 1.f, 0.5f));
+  behind.addMesh(back, vec3f(0.2f, 0.5f, 0.8f));
+  const Image b = behind.render(cam, &st);
+  EXPECT_GT(st.samples, 0u);
+  EXPECT_GT(maxAbsDiff(a, b), 0.1);
+  for (const vec4f& p : b.pixels) EXPECT_FLOAT_EQ(p.w, 1.f);
+}
+
+TEST(Surfaces, ClipPlaneRemovesExactlyOneHalfSpace) {
+  CellSet cells = uniformCells(16, {"f"}, [](const vec3d& p) { return (p.x + p.y + p.z) / 48.0; });
+  const Model m = buildModel(std::move(cells));
+  RenderOptions o = surfaceOptions(40);
+  o.shading = Shading::None;
+  const Camera cam = ortho(vec3d(8.0), vec3d(0, 0, 1), vec3d(0, 1, 0), 20.0);
+  Renderer full(m, 0, o);
+  full.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
+  // Remove y > 7.3 (the plane is parallel to the view direction): a pixel is either kept whole
+  // or removed whole.
+  o.clipPlanes = {{vec3d(0.0, 7.3, 0.0), vec3d(0.0, 1.0, 0.0)}};
+  Renderer clipped(m, 0, o);
+  clipped.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
+  const Image a = full.render(cam), b = clipped.render(cam);
+  int kept = 0, removed = 0;
+  for (int y = 0; y < o.height; ++y)
+    for (int x = 0; x < o.width; ++x) {
+      vec3d org, dir;
+      cam.ray((x + 0.5) / o.width, (y + 0.5) / o.height, 1.0, org, dir);
+      const vec4f &pa = a.at(x, y), &pb = b.at(x, y);
+      if (org.y > 7.3 + 1e-6) {
+        EXPECT_EQ(pb.w, 0.f);
+        ++removed;
+      } else {
+        EXPECT_EQ(pa.x, pb.x);
+        EXPECT_EQ(pa.w, pb.w);
+        kept += pa.w > 0.f;
+      }
+    }
+  EXPECT_GT(kept, 100);
+  EXPECT_GT(removed, 100);
+
+  // Across the view direction, a plane at z = 8 removes the far half of each ray: the clipped
+  // image equals the image of a dataset cut in half at z = 8 (clipped the same way, so that the
+  // margin of its supports beyond z = 8 does not count). The opacity is constant, so alpha
+  // matches to round-off; colours differ only by the reconstruction just below z = 8.
+  CellSet half;
+  half.fields.push_back({"f", {}});
+  for (int z = 0; z < 8; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) {
+        half.cells.push_back({vec3i(x, y, z), 0});
+        half.fields[0].values.push_back(float((x + y + z + 1.5) / 48.0));
+      }
+  const Model mh = buildModel(std::move(half));
+  RenderOptions oh = surfaceOptions(40);
+  oh.shading = Shading::None;
+  oh.clipPlanes = {{vec3d(0.0, 0.0, 8.0), vec3d(0.0, 0.0, 1.0)}};
+  Renderer halfRenderer(mh, 0, oh);
+  halfRenderer.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
+  o.clipPlanes = {{vec3d(0.0, 0.0, 8.0), vec3d(0.0, 0.0, 1.0)}};
+  Renderer cut(m, 0, o);
+  cut.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
+  const Image c = cut.render(cam), d = halfRenderer.render(cam);
+  double alphaDiff = 0, colorDiff = 0, alphaMax = 0;
+  for (size_t i = 0; i < c.pixels.size(); ++i) {
+    alphaDiff = std::max<double>(alphaDiff, std::abs(c.pixels[i].w - d.pixels[i].w));
+    colorDiff = std::max<double>(colorDiff, std::abs(c.pixels[i].x - d.pixels[i].x));
+    alphaMax = std::max<double>(alphaMax, c.pixels[i].w);
+  }
+  EXPECT_GT(alphaMax, 0.5);
+  EXPECT_LT(alphaDiff, 1e-4);
+  EXPECT_LT(colorDiff, 0.02);
+
+  // A clip box keeps only its inside.
+  RenderOptions ob = surfaceOptions(40);
+  ob.shading = Shading::None;
+  ob.clipBox = box3d(vec3d(-1.0, -1.0, -1.0), vec3d(4.0, 20.0, 20.0));
+  Renderer boxed(m, 0, ob);
+  boxed.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
+  const Image e = boxed.render(cam);
+  for (int y = 0; y < ob.height; ++y)
+    for (int x = 0; x < ob.width; ++x) {
+      vec3d org, dir;
+      cam.ray((x + 0.5) / ob.width, (y + 0.5) / ob.height, 1.0, org, dir);
+      if (org.x > 4.0 + 1e-6) {
+        EXPECT_EQ(e.at(x, y).w, 0.f);
+      }
+    }
+}
+
+TEST(Surfaces, AmbientOcclusionDarkensACornerAndLeavesAnOpenPlane) {
+  // A tiny volume far away; only meshes are in view.
+  CellSet cells = uniformCells(2, {"f"}, [](const vec3d&) { return 0.0; });
+  cells.world.origin = vec3d(1000.0);
+  const Model m = buildModel(std::move(cells));
+  const TriangleMesh floor = quad({-10, -10, 0}, {10, -10, 0}, {10, 10, 0}, {-10, 10, 0});
+  const TriangleMesh wall = quad({0, -10, 0}, {0, 10, 0}, {0, 10, 10}, {0, -10, 10});
+  const Camera cam = ortho(vec3d(2.0, 0.0, 0.0), normalize(vec3d(-1.0, 0.0, -1.0)), vec3d(0, 0, 1), 8.0);
+  auto render = [&](bool withWall, int aoRays) {
+    RenderOptions o = surfaceOptions(48);
+    o.aoRays = aoRays;
+    o.aoLength = 2.f;
+    Renderer r(m, 0, o);
+    r.setTransferFunction(invisible());
+    r.addMesh(floor, vec3f(0.8f));
+    if (withWall) r.addMesh(wall, vec3f(0.8f));
+    return r.render(cam);
+  };
+  // An open plane: no AO ray can hit anything, the image is unchanged.
+  EXPECT_EQ(maxAbsDiff(render(false, 0), render(false, 8)), 0.0);
+  // The corner: pixels near the wall's foot get darker, far ones stay.
+  const Image plain = render(true, 0), occluded = render(true, 16);
+  double darkened = 0;
+  int unchanged = 0, total = 0;
+  for (int y = 0; y < 48; ++y)
+    for (int x = 0; x < 48; ++x) {
+      vec3d org, dir;
+      cam.ray((x + 0.5) / 48, (y + 0.5) / 48, 1.0, org, dir);
+      // Where does the pixel land? Intersect with the floor z = 0 and the wall x = 0.
+      const double sFloor = -org.z / dir.z, sWall = -org.x / dir.x;
+      const double s = std::min(sFloor > 0 ? sFloor : 1e30, sWall > 0 ? sWall : 1e30);
+      const vec3d p = org + dir * s;
+      const float a = plain.at(x, y).x, b = occluded.at(x, y).x;
+      EXPECT_LE(b, a + 1e-6f);
+      const double distanceToCorner = std::sqrt(p.x * p.x + p.z * p.z);
+      if (distanceToCorner < 0.3 && std::abs(p.y) < 5) darkened = std::max<double>(darkened, (a - b) / a);
+      if (distanceToCorner > 2.5 && std::abs(p.y) < 5) {
+        ++total;
+        unchanged += a == b;
+      }
+    }
+  EXPECT_GT(darkened, 0.15);
+  EXPECT_GT(total, 20);
+  EXPECT_EQ(unchanged, total);
+}
+
+TEST(Surfaces, SecondFieldColoursTheIsoSurface) {
+  const vec3d centre(32.0);
+  const Model m = buildModel(radialTwoLevels(centre, 26.0));
+  RenderOptions o = surfaceOptions(64);
+  o.ambient = 1.f, o.diffuse = 0.f, o.specular = 0.f; // unlit: the pixel is the surface colour
+  Renderer r(m, 0, o);
+  r.setTransferFunction(invisible());
+  IsoSurfaces is;
+  is.field = 0;
+  is.values = {20.f};
+  is.colorField = 1;
+  is.colorTf.colorMap = builtinColorMap("viridis");
+  is.colorTf.valueRange = range1f{12.f, 52.f};
+  r.setIsoSurfaces(is);
+  const Camera cam = ortho(centre, vec3d(0, 0, 1), vec3d(0, 1, 0), 48.0);
+  const Image img = r.render(cam);
+  const ColorMap viridis = builtinColorMap("viridis");
+  int checked = 0;
+  for (int y = 0; y < 64; y += 3)
+    for (int x = 0; x < 64; x += 3) {
+      vec3d org, dir;
+      cam.ray((x + 0.5) / 64, (y + 0.5) / 64, 1.0, org, dir);
+      SurfaceHit hit;
+      if (!r.pick(org, dir, hit)) continue;
+      const vec3f expected = viridis.at(float((hit.position.x - 12.0) / 40.0));
+      const vec4f& p = img.at(x, y);
+      EXPECT_NEAR(p.x, expected.x, 0.01);
+      EXPECT_NEAR(p.y, expected.y, 0.01);
+      EXPECT_NEAR(p.z, expected.z, 0.01);
+      ++checked;
+    }
+  EXPECT_GT(checked, 50);
+}
+
+TEST(Surfaces, LayersCombineAsSummedOpticalDepth) {
+  CellSet cells = uniformCells(16, {"a", "b"}, [](const vec3d& p) { return p.x / 16.0; },
+                               [](const vec3d& p) { return p.y / 16.0; });
+  const Model m = buildModel(std::move(cells));
+  RenderOptions o = surfaceOptions(24);
+  o.shading = Shading::None;
+  const Camera cam = ortho(vec3d(8.0), normalize(vec3d(0.3, 0.2, 1.0)), vec3d(0, 1, 0), 24.0);
+  const float alpha = 0.1f;
+  // Two identical layers = one layer with opacity 1 - (1 - alpha)^2.
+  Renderer one(m, 0, o), two(m, 0, o);
+  one.setTransferFunction(grayRamp(0.f, 1.f, 1.f - (1.f - alpha) * (1.f - alpha)));
+  two.setVolumeLayers({{0, grayRamp(0.f, 1.f, alpha)}, {0, grayRamp(0.f, 1.f, alpha)}});
+  EXPECT_LT(maxAbsDiff(one.render(cam), two.render(cam)), 2e-3);
+  // A transparent second layer changes nothing; a second field's layer does.
+  Renderer single(m, 0, o), withClear(m, 0, o), withB(m, 0, o);
+  single.setTransferFunction(grayRamp(0.f, 1.f, alpha));
+  withClear.setVolumeLayers({{0, grayRamp(0.f, 1.f, alpha)}, {1, grayRamp(0.f, 1.f, 0.f)}});
+  TransferFunction red = grayRamp(0.f, 1.f, alpha);
+  red.colorMap = builtinColorMap("inferno");
+  withB.setVolumeLayers({{0, grayRamp(0.f, 1.f, alpha)}, {1, red}});
+  const Image s = single.render(cam);
+  EXPECT_LT(maxAbsDiff(s, withClear.render(cam)), 1e-5);
+  EXPECT_GT(maxAbsDiff(s, withB.render(cam)), 0.05);
+}
+
+TEST(Surfaces, BadSurfaceOptionsAreRejected) {
+  CellSet cells = uniformCells(4, {"f"}, [](const vec3d& p) { return p.x; });
+  const Model m = buildModel(std::move(cells));
+  RenderOptions o = surfaceOptions(8);
+  Renderer r(m, 0, o);
+  IsoSurfaces is;
+  is.field = 3;
+  is.values = {1.f};
+  EXPECT_THROW(r.setIsoSurfaces(is), Error);
+  is.field = 0;
+  is.values = {std::nanf("")};
+  EXPECT_THROW(r.setIsoSurfaces(is), Error);
+  TriangleMesh bad = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});
+  bad.triangles.push_back(vec3i(0, 1, 7));
+  EXPECT_THROW(r.addMesh(bad, vec3f(1.f)), Error);
+  TriangleMesh nan = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});
+  nan.vertices[2].y = std::nanf("");
+  EXPECT_THROW(r.addMesh(nan, vec3f(1.f)), Error);
+  o.clipPlanes = {{vec3d(0.0), vec3d(0.0)}};
+  EXPECT_THROW(Renderer(m, 0, o), Error);
+}
