@@ -55,6 +55,19 @@ fails_with "bad image size" "--size" "$exe" render s.cells -o x.png --size 10xte
 fails_with "unknown scene key" "bogus" bash -c "echo '{\"bogus\": 1}' > bad.json && '$exe' render s.cells --scene bad.json -o x.png"
 fails_with "degenerate camera" "degenerate camera" "$exe" render s.cells -o x.png --position 1,1,1 --look-at 1,1,1
 check "failed renders leave no image" bash -c "[ ! -e x.png ]"
+# Surfaces and effects: iso-surface coloured by a second field, a mesh, clipping and AO.
+printf 'v -10 -10 -1\nv 60 -10 -1\nv 60 60 -1\nv -10 60 -1\nf 1 2 3 4\n' > floor.obj
+check "render surfaces, mesh, clipping and AO" bash -c "'$exe' render s.cells -o surf.png --size 48x48 --iso 0.5 --iso-color-field radius --mesh floor.obj --mesh-color 0.7,0.7,0.7 --clip-plane 20,20,20,1,0,0 --clip-box -5,-5,-5,50,50,50 --ao 2 --stats --json | $py -c '
+import json,sys; j=json.load(sys.stdin); assert j[\"surface_hits\"] > 0 and j[\"ao_rays\"] > 0 and j[\"iso_regions\"] > 0 and j[\"meshes\"] == 1'"
+check "surfaces through a scene file" bash -c "'$exe' render s.cells -o s1.png --size 32x32 --iso 0.3,0.6 --layer radius=magma --clip-plane 1,2,3,0,0,1 --clip-plane 4,5,6,1,0,0 --write-scene surf.json && '$exe' render s.cells --scene surf.json -o s2.png && cmp s1.png s2.png"
+check "iso-surfaces only" "$exe" render s.cells -o iso.png --size 32x32 --no-volume --iso 0.4
+fails_with "bad clip plane" "--clip-plane" "$exe" render s.cells -o x.png --clip-plane 1,2,3,0,0,0
+fails_with "bad clip box" "--clip-box" "$exe" render s.cells -o x.png --clip-box 1,1,1,0,0,0
+fails_with "iso options without values" "--iso" "$exe" render s.cells -o x.png --iso-field radius
+fails_with "unknown layer field" "unknown field 'nope'" "$exe" render s.cells -o x.png --layer nope
+printf 'v 0 0 0\nv 1 0 0\nf 1 2 9\n' > badidx.obj
+fails_with "mesh index out of range" "badidx.obj" "$exe" render s.cells -o x.png --mesh badidx.obj
+check "failed surface renders leave no image" bash -c "[ ! -e x.png ]"
 amrex=${EXABRICKS_DATA:-$(dirname "$0")/../../shared/data}/amrex/pele_eb_3d/plt_eb_3d
 if [ -d "$amrex" ]; then
   check "render an AMReX plotfile directly" "$exe" render "$amrex" -f density -o amrex.png --size 48x48

@@ -5,6 +5,7 @@
 //   EXABRICKS_UPDATE_REFERENCES=1 build/tests/exabricks_tests --gtest_filter='Regression.*'
 #include "exabricks/amr/scenes.h"
 #include "exabricks/io/image.h"
+#include "exabricks/io/mesh.h"
 #include "exabricks/render/renderer.h"
 
 #include <gtest/gtest.h>
@@ -132,4 +133,37 @@ TEST(Regression, DebugViewSteps) {
 }
 TEST(Regression, ShadedVolume) {
   compareWithReference("shaded-volume", renderView(DebugView::None, Shading::Analytic, 4), true);
+}
+
+TEST(Regression, CombinedScene) {
+  // Volume + iso-surface coloured by a second field + mesh floor + clipping plane + ambient
+  // occlusion, in one image.
+  const Model& m = regressionModel();
+  ASSERT_GE(m.fieldNames.size(), 2u);
+  const box3i b = m.cellBounds();
+  const box3d wb(vec3d(b.lower), vec3d(b.upper));
+  RenderOptions o;
+  o.width = o.height = 96;
+  o.samplesPerPixel = 2;
+  o.aoRays = 2;
+  const vec3d centre = (wb.lower + wb.upper) * 0.5;
+  o.clipPlanes = {{centre, vec3d(1.0, 1.0, 0.0)}};
+  Renderer r(m, 0, o);
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("viridis");
+  tf.opacity = {{0.f, 0.f}, {0.3f, 0.f}, {0.6f, 0.05f}, {1.f, 0.3f}};
+  r.setTransferFunction(tf);
+  IsoSurfaces iso;
+  iso.field = 0;
+  iso.values = {0.5f};
+  iso.colorField = 1;
+  iso.colorTf.colorMap = builtinColorMap("cool-to-warm");
+  r.setIsoSurfaces(iso);
+  TriangleMesh floor;
+  const float z = float(wb.lower.z) - 1.f, lo = float(wb.lower.x) - 40.f, hi = float(wb.upper.x) + 40.f;
+  floor.vertices = {{lo, lo, z}, {hi, lo, z}, {hi, hi, z}, {lo, hi, z}};
+  floor.triangles = {vec3i(0, 1, 2), vec3i(0, 2, 3)};
+  r.addMesh(floor, vec3f(0.7f, 0.7f, 0.7f));
+  const Image img = r.render(Camera::frame(wb, 35, 25, 40, false));
+  compareWithReference("combined-scene", img, true);
 }
