@@ -1,5 +1,7 @@
 #include "hdf5_file.h"
 
+#include "exabricks/io/hdf5.h"
+
 #include "exabricks/core/error.h"
 
 #include <algorithm>
@@ -361,3 +363,7 @@ std::string File::attrString(const std::string& object, const std::string& name)
 }
 
 } // namespace exa::h5
+
+namespace exa {
+bool isHdf5File(const std::string& path) { return h5::hasSignature(path); }
+} // namespace exa

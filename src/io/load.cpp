@@ -5,6 +5,8 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/amrex.h"
 #include "exabricks/io/chombo.h"
+#include "exabricks/io/flash.h"
+#include "exabricks/io/hdf5.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
 
@@ -39,6 +41,10 @@ InputKind detectInput(const std::string& path) {
   if (!std::filesystem::is_directory(path, ec) && isModelFile(path)) return InputKind::Model;
   if (isAmrexPlotfile(path)) return InputKind::Amrex;
   if (isChomboFile(path)) return InputKind::Chombo;
+  if (isFlashFile(path)) return InputKind::Flash;
+  if (isHdf5File(path))
+    fail(path, ": an HDF5 file with neither Chombo's nor FLASH's layout, or one that cannot be opened",
+         " (truncated or damaged?)");
   if (endsWith(path, ".cells")) return InputKind::Native;
   if (endsWith(path, ".grids")) return InputKind::Grids;
   fail(path, ": unknown input format (expected an exabricks model file, NAME.cells, a .grids",
@@ -62,6 +68,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     break;
   case InputKind::Chombo:
     set = readChombo(path, options.fields);
+    break;
+  case InputKind::Flash:
+    set = readFlash(path, options.fields);
     break;
   case InputKind::Model:
     fail(path, ": is a built model file; raw cells are needed here");
@@ -100,6 +109,8 @@ std::vector<std::string> listFields(const std::string& path) {
     return listAmrexFields(path);
   case InputKind::Chombo:
     return listChomboFields(path);
+  case InputKind::Flash:
+    return listFlashFields(path);
   case InputKind::Model:
     return readModel(path).fieldNames;
   case InputKind::Default:

@@ -1,0 +1,24 @@
+// FLASH (PARAMESH) HDF5 checkpoint and plot files: the leaf blocks (node type 1) of any block
+// size, float32 or float64 variables and coordinates, several variables. Each block's level
+// comes from its cell size relative to the finest leaf block's; corners are checked to lie
+// exactly on the finest lattice. Only 3-D files are read.
+#pragma once
+
+#include "exabricks/amr/cells.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// True when `path` is an HDF5 file with FLASH's layout ("node type" and "bounding box").
+bool isFlashFile(const std::string& path);
+
+/// Names of the variables stored in the file ("unknown names" that have a dataset).
+std::vector<std::string> listFlashFields(const std::string& path);
+
+/// Reads the leaf blocks' cells with the requested variables (all when empty). The world
+/// transform places the finest cell size at the lowest leaf-block corner.
+CellSet readFlash(const std::string& path, const std::vector<std::string>& fields = {});
+
+} // namespace exa
