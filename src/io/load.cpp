@@ -5,6 +5,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/amrex.h"
 #include "exabricks/io/chombo.h"
+#include "exabricks/io/enzo.h"
 #include "exabricks/io/flash.h"
 #include "exabricks/io/hdf5.h"
 #include "exabricks/io/model_file.h"
@@ -42,6 +43,7 @@ InputKind detectInput(const std::string& path) {
   if (isAmrexPlotfile(path)) return InputKind::Amrex;
   if (isChomboFile(path)) return InputKind::Chombo;
   if (isFlashFile(path)) return InputKind::Flash;
+  if (isEnzoOutput(path)) return InputKind::Enzo;
   if (isHdf5File(path))
     fail(path, ": an HDF5 file with neither Chombo's nor FLASH's layout, or one that cannot be opened",
          " (truncated or damaged?)");
@@ -71,6 +73,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     break;
   case InputKind::Flash:
     set = readFlash(path, options.fields);
+    break;
+  case InputKind::Enzo:
+    set = readEnzo(path, options.fields);
     break;
   case InputKind::Model:
     fail(path, ": is a built model file; raw cells are needed here");
@@ -111,6 +116,8 @@ std::vector<std::string> listFields(const std::string& path) {
     return listChomboFields(path);
   case InputKind::Flash:
     return listFlashFields(path);
+  case InputKind::Enzo:
+    return listEnzoFields(path);
   case InputKind::Model:
     return readModel(path).fieldNames;
   case InputKind::Default:

@@ -1,0 +1,26 @@
+// Enzo packed-HDF5 outputs: the DDnnnn parameter file, the DDnnnn.hierarchy text and the
+// DDnnnn.cpuNNNN HDF5 data files named by each grid's BaryonFileName (its basename, looked up
+// beside the hierarchy). Ghost zones are dropped (arrays may hold active zones only or the full
+// GridDimension), overlapping grids are reduced to leaf cells, float32 and float64 fields are
+// read. Refinement must be by powers of two; only 3-D outputs are read.
+#pragma once
+
+#include "exabricks/amr/cells.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// True when `path` is an Enzo parameter file with a PATH.hierarchy beside it, or the
+/// hierarchy file itself.
+bool isEnzoOutput(const std::string& path);
+
+/// Names of the grid fields (the 3-D datasets of the first grid with fields).
+std::vector<std::string> listEnzoFields(const std::string& path);
+
+/// Reads the leaf cells with the requested fields (all when empty). The world transform maps
+/// the finest grid cell size onto code units, with DomainLeftEdge as origin.
+CellSet readEnzo(const std::string& path, const std::vector<std::string>& fields = {});
+
+} // namespace exa

@@ -1,0 +1,343 @@
+#include "exabricks/io/enzo.h"
+
+#include "hdf5_file.h"
+#include "patches.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <sstream>
+
+namespace exa {
+namespace fs = std::filesystem;
+
+namespace {
+
+bool endsWith(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+std::string trim(const std::string& s) {
+  const size_t b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  return s.substr(b, s.find_last_not_of(" \t\r") - b + 1);
+}
+
+/// "Key = value" lines of a text file, with the line number of each key's last occurrence.
+struct KeyLine {
+  std::string key, value;
+  size_t line;
+};
+
+std::vector<KeyLine> readKeyLines(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) fail(path, ": cannot open: ", std::strerror(errno));
+  std::vector<KeyLine> out;
+  std::string l;
+  for (size_t n = 1; std::getline(in, l); ++n) {
+    const size_t eq = l.find('=');
+    if (eq == std::string::npos || l.find("Pointer:") != std::string::npos) continue;
+    const std::string key = trim(l.substr(0, eq));
+    if (key.empty() || key[0] == '#') continue;
+    out.push_back({key, trim(l.substr(eq + 1)), n});
+  }
+  return out;
+}
+
+std::vector<double> numbersOf(const std::string& path, const KeyLine& k, size_t expected) {
+  std::istringstream in(k.value);
+  std::vector<double> v;
+  for (double d; in >> d;) v.push_back(d);
+  if (v.size() < expected || !in.eof())
+    fail(path, ": line ", k.line, ": expected ", expected, " numbers for ", k.key, ", got '", k.value, "'");
+  for (double d : v)
+    if (!std::isfinite(d)) fail(path, ": line ", k.line, ": ", k.key, " is not finite");
+  return v;
+}
+
+struct Parameters {
+  int rank = 3;
+  int64_t refineBy = 2;
+  vec3d left{0.0}, right{1.0};
+};
+
+struct Grid {
+  int64_t id = 0;
+  size_t line = 0;
+  int rank = 0;
+  vec3l dimension{0}, start{0}, end{0};
+  vec3d left{0.0}, right{0.0};
+  std::string file; ///< data file beside the hierarchy
+  int64_t fields = -1;
+  unsigned seen = 0;
+  vec3l active() const { return end - start + vec3l(1); }
+};
+
+struct Output {
+  std::string parameterPath, hierarchyPath;
+  Parameters params;
+  std::vector<Grid> grids;
+};
+
+Parameters readParameters(const std::string& path) {
+  Parameters p;
+  for (const KeyLine& k : readKeyLines(path)) {
+    if (k.key == "TopGridRank") {
+      p.rank = int(numbersOf(path, k, 1)[0]);
+      if (p.rank != 3) fail(path, ": line ", k.line, ": TopGridRank is ", p.rank, ": a ", p.rank, "-D output; only 3-D AMR data can be read");
+    } else if (k.key == "RefineBy") {
+      const double r = numbersOf(path, k, 1)[0];
+      if (r != std::floor(r) || r < 2 || r > 1024 || io::log2Exact(int64_t(r)) < 0)
+        fail(path, ": line ", k.line, ": RefineBy ", r, " is not a power of two");
+      p.refineBy = int64_t(r);
+    } else if (k.key == "DomainLeftEdge") {
+      const auto v = numbersOf(path, k, 3);
+      p.left = vec3d(v[0], v[1], v[2]);
+    } else if (k.key == "DomainRightEdge") {
+      const auto v = numbersOf(path, k, 3);
+      p.right = vec3d(v[0], v[1], v[2]);
+    }
+  }
+  return p;
+}
+
+Output readOutput(const std::string& path) {
+  Output o;
+  if (endsWith(path, ".hierarchy")) {
+    o.hierarchyPath = path;
+    o.parameterPath = path.substr(0, path.size() - 10);
+  } else {
+    o.parameterPath = path;
+    o.hierarchyPath = path + ".hierarchy";
+  }
+  std::error_code ec;
+  if (!fs::exists(o.parameterPath, ec)) fail(o.parameterPath, ": missing parameter file of the Enzo output");
+  if (!fs::exists(o.hierarchyPath, ec)) fail(o.hierarchyPath, ": missing hierarchy file of the Enzo output");
+  o.params = readParameters(o.parameterPath);
+  const fs::path dir = fs::path(o.hierarchyPath).parent_path();
+  const std::string& h = o.hierarchyPath;
+  enum : unsigned { kRank = 1, kDim = 2, kStart = 4, kEnd = 8, kLeft = 16, kRight = 32, kFile = 64 };
+  for (const KeyLine& k : readKeyLines(h)) {
+    if (k.key == "Grid") {
+      const double id = numbersOf(h, k, 1)[0];
+      o.grids.push_back({});
+      o.grids.back().id = int64_t(id);
+      o.grids.back().line = k.line;
+      continue;
+    }
+    if (o.grids.empty()) continue;
+    Grid& g = o.grids.back();
+    auto v3 = [&](unsigned bit) {
+      const auto v = numbersOf(h, k, 3);
+      g.seen |= bit;
+      return v;
+    };
+    auto l3 = [&](unsigned bit) {
+      const auto v = v3(bit);
+      for (double d : v)
+        if (d != std::floor(d) || std::abs(d) > 1e9) fail(h, ": line ", k.line, ": ", k.key, " must be integers");
+      return vec3l(int64_t(v[0]), int64_t(v[1]), int64_t(v[2]));
+    };
+    if (k.key == "GridRank") {
+      g.rank = int(numbersOf(h, k, 1)[0]);
+      g.seen |= kRank;
+      if (g.rank != 3) fail(h, ": grid ", g.id, ": GridRank is ", g.rank, ": only 3-D AMR data can be read");
+    } else if (k.key == "GridDimension") {
+      g.dimension = l3(kDim);
+    } else if (k.key == "GridStartIndex") {
+      g.start = l3(kStart);
+    } else if (k.key == "GridEndIndex") {
+      g.end = l3(kEnd);
+    } else if (k.key == "GridLeftEdge") {
+      const auto v = v3(kLeft);
+      g.left = vec3d(v[0], v[1], v[2]);
+    } else if (k.key == "GridRightEdge") {
+      const auto v = v3(kRight);
+      g.right = vec3d(v[0], v[1], v[2]);
+    } else if (k.key == "BaryonFileName") {
+      // Written with the path of the machine that ran the simulation: keep the basename.
+      g.file = (dir / fs::path(k.value).filename()).string();
+      g.seen |= kFile;
+    } else if (k.key == "NumberOfBaryonFields") {
+      g.fields = int64_t(numbersOf(h, k, 1)[0]);
+    }
+  }
+  if (o.grids.empty()) fail(h, ": no 'Grid = N' entries (not an Enzo hierarchy, or an empty one)");
+  static const std::pair<unsigned, const char*> kNeeded[] = {{kRank, "GridRank"}, {kDim, "GridDimension"},
+                                                             {kStart, "GridStartIndex"}, {kEnd, "GridEndIndex"},
+                                                             {kLeft, "GridLeftEdge"}, {kRight, "GridRightEdge"}};
+  for (const Grid& g : o.grids) {
+    for (const auto& [bit, name] : kNeeded)
+      if (!(g.seen & bit)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing ", name, " (truncated hierarchy?)");
+    if (g.fields != 0 && !(g.seen & kFile)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing BaryonFileName");
+    for (int a = 0; a < 3; ++a) {
+      if (g.start[a] < 0 || g.end[a] < g.start[a] || g.end[a] >= g.dimension[a])
+        fail(h, ": grid ", g.id, ": active zones ", g.start[a], "..", g.end[a], " on axis ", a, " do not fit GridDimension ",
+             g.dimension[a]);
+      if (!(g.right[a] > g.left[a])) fail(h, ": grid ", g.id, ": GridRightEdge is not above GridLeftEdge on axis ", a);
+    }
+  }
+  return o;
+}
+
+/// The data files, opened once each.
+class DataFiles {
+public:
+  const h5::File& get(const std::string& path) {
+    auto it = files_.find(path);
+    if (it == files_.end()) {
+      std::error_code ec;
+      if (!fs::exists(path, ec)) fail(path, ": missing data file of the Enzo output");
+      it = files_.emplace(path, std::make_unique<h5::File>(path)).first;
+    }
+    return *it->second;
+  }
+
+private:
+  std::map<std::string, std::unique_ptr<h5::File>> files_;
+};
+
+std::string groupOf(int64_t id) {
+  char name[32];
+  std::snprintf(name, sizeof name, "/Grid%08lld", static_cast<long long>(id));
+  return name;
+}
+
+/// Field names of the first grid that has fields: its 3-D datasets.
+std::vector<std::string> fieldNames(const Output& o, DataFiles& files) {
+  for (const Grid& g : o.grids) {
+    if (g.fields == 0) continue;
+    const h5::File& f = files.get(g.file);
+    const std::string group = groupOf(g.id);
+    if (!f.exists(group)) f.bad(group, strCat("missing group of grid ", g.id));
+    std::vector<std::string> names;
+    for (const std::string& m : f.members(group))
+      if (f.isDataset(group + "/" + m) && f.dims(group + "/" + m).size() == 3) names.push_back(m);
+    if (names.empty()) f.bad(group, "holds no 3-D field datasets");
+    return names;
+  }
+  fail(o.hierarchyPath, ": no grid has fields");
+}
+
+} // namespace
+
+bool isEnzoOutput(const std::string& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return false;
+  const std::string h = endsWith(path, ".hierarchy") ? path : path + ".hierarchy";
+  std::ifstream in(h);
+  if (!in) return false;
+  char buf[4096] = {};
+  in.read(buf, sizeof buf - 1);
+  const std::string head(buf, size_t(in.gcount()));
+  return head.find("GridRank") != std::string::npos || head.find("Grid = ") != std::string::npos;
+}
+
+std::vector<std::string> listEnzoFields(const std::string& path) {
+  const Output o = readOutput(path);
+  DataFiles files;
+  return fieldNames(o, files);
+}
+
+CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted) {
+  const Output o = readOutput(path);
+  const std::string& h = o.hierarchyPath;
+  DataFiles files;
+  const std::vector<std::string> available = fieldNames(o, files);
+  const std::vector<size_t> picked = io::pickFields(path, available, wanted);
+
+  // The finest cell size over all grids fixes the lattice; every grid must sit on it exactly.
+  vec3d finest(INFINITY);
+  for (const Grid& g : o.grids)
+    for (int a = 0; a < 3; ++a) finest[a] = std::min(finest[a], (g.right[a] - g.left[a]) / double(g.active()[a]));
+  std::vector<io::Patch> patches;
+  for (const Grid& g : o.grids) {
+    io::Patch p;
+    p.cells = g.active();
+    for (int a = 0; a < 3; ++a) {
+      const double ratio = (g.right[a] - g.left[a]) / double(p.cells[a]) / finest[a];
+      const double w = std::round(ratio);
+      if (std::abs(ratio - w) > 1e-6 * w || io::log2Exact(int64_t(w)) < 0 || w > double(int64_t(1) << kMaxLevel))
+        fail(h, ": grid ", g.id, ": cell size on axis ", a, " is ", ratio, " times the finest, not a power of two");
+      if (a > 0 && int64_t(w) != p.width) fail(h, ": grid ", g.id, ": refined differently along the axes");
+      p.width = int64_t(w);
+      const double c = (g.left[a] - o.params.left[a]) / finest[a];
+      const double ci = std::round(c);
+      if (std::abs(c - ci) > 1e-5 + 1e-12 * std::abs(c) || std::abs(ci) > double(kLatticeLimit))
+        fail(h, ": grid ", g.id, ": GridLeftEdge on axis ", a, " lies ", c, " finest cells from DomainLeftEdge, not on the lattice");
+      p.lower[a] = int64_t(ci);
+      if (p.lower[a] % p.width != 0)
+        fail(h, ": grid ", g.id, ": corner ", p.lower[a], " on axis ", a, " is not a multiple of its cell width ", p.width);
+    }
+    patches.push_back(p);
+  }
+  auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[i].id); };
+  const io::Coverage coverage(patches, gridName);
+
+  CellSet set;
+  for (size_t k : picked) set.fields.push_back({available[k], {}});
+  Progress progress("reading " + path, o.grids.size());
+  for (size_t i = 0; i < o.grids.size(); ++i) {
+    const Grid& g = o.grids[i];
+    const std::vector<uint8_t> covered = coverage.covered(i);
+    if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
+      progress.advance(1); // fully refined: its data is not needed
+      continue;
+    }
+    if (g.fields == 0) fail(gridName(i), ": has leaf cells but no fields");
+    const h5::File& f = files.get(g.file);
+    const std::string group = groupOf(g.id);
+    if (!f.exists(group)) f.bad(group, strCat("missing group of grid ", g.id, " (named by ", h, ")"));
+    const vec3l n = g.active();
+    std::vector<std::vector<float>> values(picked.size());
+    for (size_t k = 0; k < picked.size(); ++k) {
+      const std::string name = group + "/" + available[picked[k]];
+      const std::vector<uint64_t> d = f.dims(name);
+      // Arrays are stored (z, y, x): active zones only, or the whole grid with ghost zones.
+      vec3l stored, offset;
+      if (d.size() == 3 && int64_t(d[0]) == n.z && int64_t(d[1]) == n.y && int64_t(d[2]) == n.x) {
+        stored = n;
+        offset = vec3l(0);
+      } else if (d.size() == 3 && int64_t(d[0]) == g.dimension.z && int64_t(d[1]) == g.dimension.y &&
+                 int64_t(d[2]) == g.dimension.x) {
+        stored = g.dimension;
+        offset = g.start;
+      } else {
+        std::string shape;
+        for (uint64_t x : d) {
+          if (!shape.empty()) shape += 'x';
+          shape += std::to_string(x);
+        }
+        f.bad(name, strCat("grid ", g.id, ": shape ", shape, " is neither the active zones ", n.z, "x", n.y, "x", n.x,
+                           " nor GridDimension ", g.dimension.z, "x", g.dimension.y, "x", g.dimension.x, " (z, y, x)"));
+      }
+      const std::vector<double> raw = f.readDoubles(name);
+      values[k].reserve(size_t(n.x * n.y * n.z));
+      for (int64_t z = 0; z < n.z; ++z)
+        for (int64_t y = 0; y < n.y; ++y)
+          for (int64_t x = 0; x < n.x; ++x) {
+            const double v = raw[size_t(((z + offset.z) * stored.y + (y + offset.y)) * stored.x + (x + offset.x))];
+            values[k].push_back(io::toFloat32(v, [&] {
+              return strCat(f.path(), ": ", name, ": grid ", g.id, " cell (", x, ",", y, ",", z, ")");
+            }));
+          }
+    }
+    io::appendLeafCells(set, patches[i], covered, values, gridName(i));
+    progress.advance(1);
+  }
+  progress.finish();
+  set.world.origin = o.params.left;
+  set.world.scale = finest;
+  logInfo(strCat("read ", set.cells.size(), " leaf cells of ", o.grids.size(), " grids from ", path));
+  return set;
+}
+
+} // namespace exa
