@@ -11,5 +11,6 @@ void addBuild(CLI::App& app);
 void addGenerate(CLI::App& app);
 void addConvert(CLI::App& app);
 void addRender(CLI::App& app);
+void addBench(CLI::App& app);
 
 } // namespace exa::cli

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   exa::cli::addGenerate(app);
   exa::cli::addConvert(app);
   exa::cli::addRender(app);
+  exa::cli::addBench(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ConfigError& e) {

@@ -1,0 +1,470 @@
+// exabricks bench: renderer variants measured in one run on one dataset (frame times, samples,
+// regions, the ratios between variants and the image differences), build times and memory;
+// with --orbit, the orbit study: frame time against samples and regions over many viewpoints.
+#include "bench_plot.h"
+#include "commands.h"
+#include "common.h"
+
+#include "exabricks/amr/cell_locator.h"
+#include "exabricks/core/log.h"
+#include "exabricks/io/image.h"
+#include "exabricks/render/renderer.h"
+
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+#include <unistd.h>
+
+namespace exa::cli {
+namespace {
+
+struct BenchOptions {
+  InputOptions in;
+  std::string size = "512x512";
+  int frames = 3;
+  std::string cases = "all";
+  int orbit = 0;
+  std::string csv = "exabricks-orbit.csv";
+  std::string plot = "exabricks-orbit.png";
+  bool json = false;
+};
+
+int tbbThreads() { return tbb::this_task_arena::max_concurrency(); }
+
+const std::vector<std::string> kCaseNames = {"reconstruction", "sampling", "skipping", "traversal"};
+
+/// Peak resident set size of this process so far (VmHWM), bytes; 0 where unknown.
+uint64_t peakRssBytes() {
+  std::ifstream in("/proc/self/status");
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("VmHWM:", 0) == 0) return uint64_t(std::stoull(line.substr(6))) * 1024u;
+  return 0;
+}
+
+void parseSize(const std::string& s, int& w, int& h) {
+  char x = 0;
+  std::istringstream in(s);
+  if (!(in >> w >> x >> h) || x != 'x' || !in.eof() || w < 1 || h < 1 || w > 32768 || h > 32768)
+    fail("--size expects WIDTHxHEIGHT with each in 1..32768, got '", s, "'");
+}
+
+/// The render command's default transfer function: viridis, a linear opacity ramp, scaled so
+/// that a ray through the whole dataset at full opacity gathers an optical depth of about eight.
+TransferFunction defaultTransferFunction(const Model& model) {
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap("viridis");
+  const box3i b = model.cellBounds();
+  int finest = kMaxLevel;
+  for (const Brick& br : model.bricks) finest = std::min(finest, br.level);
+  const float extentCells = float(reduceMax(b.size())) / float(1 << finest);
+  tf.opacityScale = std::min(1.f, 8.f / std::max(1.f, extentCells));
+  return tf;
+}
+
+/// The same colours, transparent over the lower 80 % of the value range.
+TransferFunction hiding80(TransferFunction tf) {
+  tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {0.9f, 0.5f}, {1.f, 1.f}};
+  return tf;
+}
+
+struct VariantResult {
+  std::string name;
+  RenderStats stats; ///< seconds: median frame time
+  size_t visibleRegions = 0;
+  double updateSeconds = 0;
+  std::string traversal;
+  Image image;
+};
+
+struct ImageDiff {
+  double rmse = 0, maxAbs = 0;
+};
+
+/// Over every channel of every pixel (linear, premultiplied).
+ImageDiff difference(const Image& a, const Image& b) {
+  ImageDiff d;
+  double sum = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    const vec4f& p = a.pixels[i];
+    const vec4f& q = b.pixels[i];
+    for (const double e : {double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z, double(p.w) - q.w}) {
+      sum += e * e;
+      d.maxAbs = std::max(d.maxAbs, std::abs(e));
+    }
+  }
+  d.rmse = a.pixels.empty() ? 0.0 : std::sqrt(sum / (4.0 * double(a.pixels.size())));
+  return d;
+}
+
+VariantResult measure(const std::string& name, const Model& model, int field, const RenderOptions& ro,
+                      const TransferFunction& tf, const Camera& camera, int frames) {
+  logInfo(strCat("bench: ", name));
+  VariantResult r;
+  r.name = name;
+  Renderer renderer(model, field, ro);
+  r.updateSeconds = renderer.setTransferFunction(tf);
+  r.visibleRegions = renderer.visibleRegions();
+  r.traversal = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+  RenderStats warm;
+  renderer.render(camera, &warm); // warm-up, not counted
+  std::vector<double> seconds;
+  for (int f = 0; f < frames; ++f) {
+    r.image = renderer.render(camera, &r.stats);
+    seconds.push_back(r.stats.seconds);
+  }
+  std::sort(seconds.begin(), seconds.end());
+  r.stats.seconds = seconds[seconds.size() / 2];
+  return r;
+}
+
+std::vector<std::string> parseCases(const std::string& s) {
+  if (s == "all") return kCaseNames;
+  std::vector<std::string> out;
+  std::istringstream in(s);
+  for (std::string part; std::getline(in, part, ',');) {
+    if (std::find(kCaseNames.begin(), kCaseNames.end(), part) == kCaseNames.end())
+      fail("unknown case '", part, "' (choose from: all, reconstruction, sampling, skipping, traversal)");
+    if (std::find(out.begin(), out.end(), part) == out.end()) out.push_back(part);
+  }
+  if (out.empty()) fail("--cases names no case");
+  return out;
+}
+
+/// Least squares fit y = a x1 + b x2 + c (normal equations); false when singular.
+bool fitTwo(const std::vector<double>& x1, const std::vector<double>& x2, const std::vector<double>& y,
+            double& a, double& b, double& c) {
+  double m[3][4] = {};
+  for (size_t i = 0; i < y.size(); ++i) {
+    const double row[3] = {x1[i], x2[i], 1.0};
+    for (int r = 0; r < 3; ++r) {
+      for (int k = 0; k < 3; ++k) m[r][k] += row[r] * row[k];
+      m[r][3] += row[r] * y[i];
+    }
+  }
+  for (int col = 0; col < 3; ++col) {
+    int pivot = col;
+    for (int r = col + 1; r < 3; ++r)
+      if (std::abs(m[r][col]) > std::abs(m[pivot][col])) pivot = r;
+    if (std::abs(m[pivot][col]) < 1e-300) return false;
+    std::swap(m[col], m[pivot]);
+    for (int r = 0; r < 3; ++r) {
+      if (r == col) continue;
+      const double f = m[r][col] / m[col][col];
+      for (int k = col; k < 4; ++k) m[r][k] -= f * m[col][k];
+    }
+  }
+  a = m[0][3] / m[0][0];
+  b = m[1][3] / m[1][1];
+  c = m[2][3] / m[2][2];
+  return std::isfinite(a) && std::isfinite(b) && std::isfinite(c);
+}
+
+double correlation(const std::vector<double>& x, const std::vector<double>& y) {
+  const double n = double(x.size());
+  double mx = 0, my = 0;
+  for (size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i];
+  mx /= n, my /= n;
+  double sxy = 0, sxx = 0, syy = 0;
+  for (size_t i = 0; i < x.size(); ++i) {
+    sxy += (x[i] - mx) * (y[i] - my);
+    sxx += (x[i] - mx) * (x[i] - mx);
+    syy += (y[i] - my) * (y[i] - my);
+  }
+  return sxx > 0 && syy > 0 ? sxy / std::sqrt(sxx * syy) : 0.0;
+}
+
+struct Setup {
+  Model model;
+  int field = 0;
+  double loadSeconds = 0;
+  uint64_t peakAfterLoad = 0;
+  RenderOptions base;
+  TransferFunction tf;
+  box3d worldBox;
+};
+
+nlohmann::json describe(const Setup& s, const BenchOptions& o) {
+  const ModelSummary sum = summarize(s.model);
+  nlohmann::json j;
+  j["dataset"] = o.in.name();
+  j["field"] = s.model.fieldNames[size_t(s.field)];
+  j["cells"] = sum.cells;
+  j["bricks"] = sum.bricks;
+  j["regions"] = sum.regions;
+  nlohmann::json levels = nlohmann::json::array();
+  for (const ModelSummary::Level& l : sum.levels)
+    levels.push_back({{"cell_width", uint64_t(1) << l.level}, {"cells", l.cells}, {"bricks", l.bricks}});
+  j["levels"] = levels;
+  j["width"] = s.base.width;
+  j["height"] = s.base.height;
+  j["threads"] = tbbThreads();
+  j["build"] = {{"load_seconds", s.loadSeconds},
+                {"bricks_seconds", s.model.stats.brickSeconds},
+                {"regions_seconds", s.model.stats.regionSeconds},
+                {"value_ranges_seconds", s.model.stats.rangeSeconds}};
+  j["memory"] = {{"peak_rss_after_load_bytes", s.peakAfterLoad},
+                 {"model_bytes", sum.brickBytes + sum.valueBytes + sum.regionBytes},
+                 {"brick_bytes", sum.brickBytes},
+                 {"value_bytes", sum.valueBytes},
+                 {"region_bytes", sum.regionBytes}};
+  return j;
+}
+
+void runCases(const Setup& s, const BenchOptions& o) {
+  const std::vector<std::string> cases = parseCases(o.cases);
+  auto has = [&](const char* c) { return std::find(cases.begin(), cases.end(), c) != cases.end(); };
+  const Camera camera = Camera::frame(s.worldBox, 30.0, 25.0, 40.0, false);
+
+  // The cell locator's own build, timed apart from the renderer.
+  double locatorSeconds = 0;
+  size_t locatorNodes = 0;
+  if (has("reconstruction")) {
+    Timer t;
+    const CellLocator locator(s.model);
+    locatorSeconds = t.seconds();
+    locatorNodes = locator.nodeCount();
+  }
+
+  std::vector<VariantResult> results;
+  auto run = [&](const std::string& name, const RenderOptions& ro, const TransferFunction& tf) -> const VariantResult& {
+    for (const VariantResult& r : results)
+      if (r.name == name) return r;
+    results.push_back(measure(name, s.model, s.field, ro, tf, camera, o.frames));
+    return results.back();
+  };
+  auto with = [&](auto change) {
+    RenderOptions ro = s.base;
+    change(ro);
+    return ro;
+  };
+
+  nlohmann::json ratios;
+  auto diffJson = [](const ImageDiff& d) { return nlohmann::json{{"rmse", d.rmse}, {"max_abs", d.maxAbs}}; };
+  // Results are copied out of `results` before the next run, which may grow the vector.
+  const VariantResult base = run("regions, kd, adaptive", s.base, s.tf);
+  if (has("reconstruction")) {
+    const VariantResult cells =
+        run("cell location", with([](RenderOptions& r) { r.reconstruction = Reconstruction::CellLocation; }), s.tf);
+    ratios["cells_over_regions_time"] = cells.stats.seconds / base.stats.seconds;
+    ratios["cells_vs_regions_image"] = diffJson(difference(cells.image, base.image));
+  }
+  if (has("sampling")) {
+    const VariantResult fixed = run("fixed-step sampling", with([](RenderOptions& r) { r.sampling = Sampling::Fixed; }), s.tf);
+    ratios["fixed_over_adaptive_samples"] = double(fixed.stats.samples) / double(std::max<uint64_t>(base.stats.samples, 1));
+    ratios["fixed_over_adaptive_time"] = fixed.stats.seconds / base.stats.seconds;
+    ratios["adaptive_vs_fixed_image"] = diffJson(difference(base.image, fixed.image));
+  }
+  if (has("skipping")) {
+    const TransferFunction tf80 = hiding80(s.tf);
+    const VariantResult on = run("hide 80%, skipping on", s.base, tf80);
+    const VariantResult off = run("hide 80%, skipping off", with([](RenderOptions& r) { r.spaceSkipping = false; }), tf80);
+    ratios["skip_off_over_on_time"] = off.stats.seconds / on.stats.seconds;
+    ratios["skip_on_vs_off_image"] = diffJson(difference(on.image, off.image));
+  }
+  if (has("traversal")) {
+    const VariantResult embree =
+        run("embree traversal", with([](RenderOptions& r) { r.traversal = TraversalKind::Embree; }), s.tf);
+    ratios["embree_over_kd_time"] = embree.stats.seconds / base.stats.seconds;
+    ratios["embree_vs_kd_image"] = diffJson(difference(embree.image, base.image));
+  }
+
+  nlohmann::json j = describe(s, o);
+  j["frames"] = o.frames;
+  j["build"]["cell_locator_seconds"] = locatorSeconds;
+  j["build"]["cell_locator_nodes"] = locatorNodes;
+  nlohmann::json variants = nlohmann::json::array();
+  for (const VariantResult& r : results)
+    variants.push_back({{"name", r.name},
+                        {"frame_seconds", r.stats.seconds},
+                        {"rays", r.stats.rays},
+                        {"samples", r.stats.samples},
+                        {"regions_visited", r.stats.regionsVisited},
+                        {"samples_per_second", r.stats.samplesPerSecond()},
+                        {"visible_regions", r.visibleRegions},
+                        {"traversal", r.traversal},
+                        {"transfer_function_update_seconds", r.updateSeconds}});
+  j["variants"] = variants;
+  j["ratios"] = ratios;
+  j["memory"]["peak_rss_bytes"] = peakRssBytes();
+  j["memory"]["cell_locator_bytes"] = locatorNodes * 16 + s.model.bricks.size() * 4;
+
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("dataset %s: %llu cells, %llu bricks, %llu regions; %dx%d, %d threads, median of %d frames after a "
+              "warm-up, early termination off\n",
+              o.in.name().c_str(), (unsigned long long)j["cells"].get<uint64_t>(),
+              (unsigned long long)j["bricks"].get<uint64_t>(), (unsigned long long)j["regions"].get<uint64_t>(),
+              s.base.width, s.base.height, tbbThreads(), o.frames);
+  std::printf("build: load %.3f s (bricks %.3f s, regions %.3f s, value ranges %.3f s), cell locator %.3f s\n",
+              s.loadSeconds, s.model.stats.brickSeconds, s.model.stats.regionSeconds, s.model.stats.rangeSeconds,
+              locatorSeconds);
+  std::printf("memory: model %.1f MiB, peak RSS %.1f MiB (%.1f MiB after load)\n\n",
+              double(j["memory"]["model_bytes"].get<uint64_t>()) / 1048576.0, double(peakRssBytes()) / 1048576.0,
+              double(s.peakAfterLoad) / 1048576.0);
+  std::printf("%-26s %9s %13s %12s %11s %9s\n", "variant", "frame s", "samples", "regions", "Msamples/s", "visible");
+  for (const VariantResult& r : results)
+    std::printf("%-26s %9.3f %13llu %12llu %11.2f %9zu\n", r.name.c_str(), r.stats.seconds,
+                (unsigned long long)r.stats.samples, (unsigned long long)r.stats.regionsVisited,
+                r.stats.samplesPerSecond() / 1e6, r.visibleRegions);
+  std::printf("\n");
+  auto line = [&](const char* label, const char* key, const char* diffKey) {
+    if (!ratios.contains(key)) return;
+    std::printf("%-40s %8.2fx", label, ratios[key].get<double>());
+    if (diffKey && ratios.contains(diffKey))
+      std::printf("   image difference: rmse %.2e, max %.2e", ratios[diffKey]["rmse"].get<double>(),
+                  ratios[diffKey]["max_abs"].get<double>());
+    std::printf("\n");
+  };
+  line("cell location / regions, frame time", "cells_over_regions_time", "cells_vs_regions_image");
+  line("fixed / adaptive sampling, samples", "fixed_over_adaptive_samples", "adaptive_vs_fixed_image");
+  line("fixed / adaptive sampling, frame time", "fixed_over_adaptive_time", nullptr);
+  line("skipping off / on (hide 80%), frame time", "skip_off_over_on_time", "skip_on_vs_off_image");
+  line("embree / kd traversal, frame time", "embree_over_kd_time", "embree_vs_kd_image");
+}
+
+void writeCsv(const std::string& path, const std::vector<std::array<double, 6>>& rows) {
+  std::ofstream out(path);
+  if (!out) fail("cannot write ", path);
+  out << "view,azimuth_deg,elevation_deg,frame_seconds,samples,regions_visited\n";
+  for (size_t i = 0; i < rows.size(); ++i) {
+    char buf[256];
+    std::snprintf(buf, sizeof buf, "%zu,%.4f,%.4f,%.6f,%.0f,%.0f\n", i, rows[i][0], rows[i][1], rows[i][2], rows[i][3],
+                  rows[i][4]);
+    out << buf;
+  }
+  if (!out) fail("cannot write ", path);
+}
+
+void runOrbit(const Setup& s, const BenchOptions& o) {
+  if (o.orbit < 1 || o.orbit > 100000) fail("--orbit must be in 1..100000");
+  Renderer renderer(s.model, s.field, s.base);
+  renderer.setTransferFunction(s.tf);
+  // Viewpoints on the bounding sphere: a Fibonacci sphere, evenly spread, never at a pole.
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  std::vector<std::array<double, 6>> rows; // azimuth, elevation, seconds, samples, regions, rays
+  std::vector<double> t, samples, regions;
+  const bool onTerminal = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
+  for (int i = 0; i < o.orbit; ++i) {
+    const double z = 1.0 - (2.0 * i + 1.0) / o.orbit;
+    const double azimuth = std::fmod(i * golden, 2.0 * M_PI) * 180.0 / M_PI;
+    const double elevation = std::asin(z) * 180.0 / M_PI;
+    const Camera camera = Camera::frame(s.worldBox, azimuth, elevation, 40.0, false);
+    RenderStats st;
+    if (i == 0) renderer.render(camera, &st); // warm-up, not counted
+    renderer.render(camera, &st);
+    rows.push_back({azimuth, elevation, st.seconds, double(st.samples), double(st.regionsVisited), double(st.rays)});
+    t.push_back(st.seconds);
+    samples.push_back(double(st.samples));
+    regions.push_back(double(st.regionsVisited));
+    if (onTerminal) std::fprintf(stderr, "\rorbit: view %d of %d", i + 1, o.orbit);
+  }
+  if (onTerminal) std::fprintf(stderr, "\n");
+  writeCsv(o.csv, rows);
+
+  double a = 0, b = 0, c = 0;
+  const bool fitted = fitTwo(samples, regions, t, a, b, c);
+  auto stats = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    double mean = 0;
+    for (double x : v) mean += x;
+    return nlohmann::json{{"min", v.front()}, {"median", v[v.size() / 2]}, {"max", v.back()},
+                          {"mean", mean / double(v.size())}};
+  };
+
+  // Plot: time against samples and against regions visited, in millions.
+  const double maxSamples = *std::max_element(samples.begin(), samples.end());
+  const double maxRegions = *std::max_element(regions.begin(), regions.end());
+  auto scaled = [](const std::vector<double>& v, double maxValue, std::string& unit) {
+    double div = 1.0;
+    unit = "";
+    if (maxValue >= 1e6) div = 1e6, unit = " (M)";
+    else if (maxValue >= 1e3) div = 1e3, unit = " (k)";
+    std::vector<double> out;
+    for (double x : v) out.push_back(x / div);
+    return out;
+  };
+  std::string su, ru;
+  ScatterPanel ps{"frame time vs samples", "", "frame time (s)", scaled(samples, maxSamples, su), t};
+  ps.xLabel = "samples" + su;
+  ScatterPanel pr{"frame time vs regions visited", "", "frame time (s)", scaled(regions, maxRegions, ru), t};
+  pr.xLabel = "regions visited" + ru;
+  writePng(o.plot, drawScatterPanels({ps, pr}, 640, 480), false);
+
+  nlohmann::json j = describe(s, o);
+  j["views"] = o.orbit;
+  j["csv"] = o.csv;
+  j["plot"] = o.plot;
+  j["frame_seconds"] = stats(t);
+  j["samples"] = stats(samples);
+  j["regions_visited"] = stats(regions);
+  j["correlation_time_samples"] = correlation(samples, t);
+  j["correlation_time_regions"] = correlation(regions, t);
+  if (fitted)
+    j["fit"] = {{"seconds_per_million_samples", a * 1e6}, {"seconds_per_million_regions", b * 1e6}, {"seconds_constant", c}};
+  j["memory"]["peak_rss_bytes"] = peakRssBytes();
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("orbit of %d views around %s (%dx%d, %d threads, early termination off)\n", o.orbit, o.in.name().c_str(),
+              s.base.width, s.base.height, tbbThreads());
+  for (const char* key : {"frame_seconds", "samples", "regions_visited"})
+    std::printf("%-16s min %.4g  median %.4g  max %.4g  mean %.4g\n", key, j[key]["min"].get<double>(),
+                j[key]["median"].get<double>(), j[key]["max"].get<double>(), j[key]["mean"].get<double>());
+  std::printf("correlation of frame time with samples %.3f, with regions visited %.3f\n",
+              j["correlation_time_samples"].get<double>(), j["correlation_time_regions"].get<double>());
+  if (fitted)
+    std::printf("fit: time = %.4f s per M samples + %.4f s per M regions + %.4f s\n", a * 1e6, b * 1e6, c);
+  std::printf("wrote %s and %s\n", o.csv.c_str(), o.plot.c_str());
+}
+
+void run(const BenchOptions& o) {
+  Setup s;
+  parseSize(o.size, s.base.width, s.base.height);
+  if (o.frames < 1 || o.frames > 1000) fail("--frames must be in 1..1000");
+  s.base.earlyTermination = false;
+  s.base.autoTraversal = false;
+  s.base.traversal = TraversalKind::KdTree;
+  Timer loadTimer;
+  s.model = loadModel(o.in.input, o.in.loadOptions(true));
+  s.loadSeconds = loadTimer.seconds();
+  s.peakAfterLoad = peakRssBytes();
+  s.field = s.model.requireField(o.in.field);
+  s.tf = defaultTransferFunction(s.model);
+  const box3i cb = s.model.cellBounds();
+  s.worldBox = box3d(s.model.world.toWorld(vec3d(cb.lower)), s.model.world.toWorld(vec3d(cb.upper)));
+  if (o.orbit > 0)
+    runOrbit(s, o);
+  else
+    runCases(s, o);
+}
+
+} // namespace
+
+void addBench(CLI::App& app) {
+  auto o = std::make_shared<BenchOptions>();
+  CLI::App* cmd = app.add_subcommand("bench", "Measure renderer variants, or frame time over an orbit of views");
+  o->in.add(*cmd);
+  cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Frames timed per variant (median, after one warm-up)")->capture_default_str();
+  cmd->add_option("--cases", o->cases, "all, or a comma list of: reconstruction, sampling, skipping, traversal")
+      ->capture_default_str();
+  cmd->add_option("--orbit", o->orbit, "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
+      ->expected(0, 1)
+      ->default_str("50");
+  cmd->add_option("--csv", o->csv, "Orbit study: CSV file to write")->capture_default_str();
+  cmd->add_option("--plot", o->plot, "Orbit study: PNG plot to write")->capture_default_str();
+  cmd->add_flag("--json", o->json, "Print the results as one JSON object on stdout");
+  cmd->callback([o] { run(*o); });
+}
+
+} // namespace exa::cli
