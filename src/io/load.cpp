@@ -10,6 +10,7 @@
 #include "exabricks/io/hdf5.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
+#include "exabricks/io/vtk_amr.h"
 
 #include <filesystem>
 
@@ -44,6 +45,7 @@ InputKind detectInput(const std::string& path) {
   if (isChomboFile(path)) return InputKind::Chombo;
   if (isFlashFile(path)) return InputKind::Flash;
   if (isEnzoOutput(path)) return InputKind::Enzo;
+  if (isVtkAmrFile(path)) return InputKind::VtkAmr;
   if (isHdf5File(path))
     fail(path, ": an HDF5 file with neither Chombo's nor FLASH's layout, or one that cannot be opened",
          " (truncated or damaged?)");
@@ -76,6 +78,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     break;
   case InputKind::Enzo:
     set = readEnzo(path, options.fields);
+    break;
+  case InputKind::VtkAmr:
+    set = readVtkAmr(path, options.fields);
     break;
   case InputKind::Model:
     fail(path, ": is a built model file; raw cells are needed here");
@@ -118,6 +123,8 @@ std::vector<std::string> listFields(const std::string& path) {
     return listFlashFields(path);
   case InputKind::Enzo:
     return listEnzoFields(path);
+  case InputKind::VtkAmr:
+    return listVtkAmrFields(path);
   case InputKind::Model:
     return readModel(path).fieldNames;
   case InputKind::Default:

@@ -15,7 +15,7 @@ struct LoadOptions {
   BuildOptions build;
 };
 
-enum class InputKind { Default, Model, Native, Grids, Amrex, Chombo, Flash, Enzo };
+enum class InputKind { Default, Model, Native, Grids, Amrex, Chombo, Flash, Enzo, VtkAmr };
 
 /// Determines the kind of input; throws with the path when it is not recognised.
 InputKind detectInput(const std::string& path);

@@ -1,0 +1,25 @@
+// VTK overlapping AMR: a .vthb file (vtkOverlappingAMR: one Block per level with its spacing,
+// one DataSet per box with amr_box and a .vti file) and its ImageData pieces. Cell-data arrays
+// in ascii, base64 binary or raw appended form, UInt32 or UInt64 headers, either byte order,
+// uncompressed or zlib-compressed (vtkZLibDataCompressor). Leaf cells are found from the finer
+// levels' amr_box entries; refinement must be by powers of two; only 3-D data is read.
+#pragma once
+
+#include "exabricks/amr/cells.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// True when `path` is a file whose XML names a vtkOverlappingAMR VTKFile.
+bool isVtkAmrFile(const std::string& path);
+
+/// Names of the scalar cell-data arrays of the first piece (vtkGhostType excluded).
+std::vector<std::string> listVtkAmrFields(const std::string& path);
+
+/// Reads the leaf cells with the requested fields (all when empty). The world transform is
+/// the file's origin with the finest level's spacing.
+CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& fields = {});
+
+} // namespace exa
