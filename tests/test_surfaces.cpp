@@ -518,3 +518,28 @@ TEST(Surfaces, IsoHitsAreTheFirstRootsOfTheBruteForceReconstruction) {
   EXPECT_EQ(agree, rays);
   EXPECT_LE(grazing, rays / 10);
 }
+
+TEST(Surfaces, VolumeAttenuatesAmbientOcclusionWhenAsked) {
+  // An opaque 4^3 block standing on a floor: with --ao-volume the floor around it darkens.
+  CellSet cells = uniformCells(4, {"f"}, [](const vec3d&) { return 1.0; });
+  const Model m = buildModel(std::move(cells));
+  const TriangleMesh floor = quad({-20, -20, -0.01f}, {20, -20, -0.01f}, {20, 20, -0.01f}, {-20, 20, -0.01f});
+  const Camera cam = ortho(vec3d(2.0, 2.0, 0.0), normalize(vec3d(-0.5, -0.3, -1.0)), vec3d(0, 0, 1), 14.0);
+  auto render = [&](bool aoVolume) {
+    RenderOptions o = surfaceOptions(40);
+    o.aoRays = 16;
+    o.aoLength = 3.f;
+    o.aoVolume = aoVolume;
+    Renderer r(m, 0, o);
+    r.setTransferFunction(grayRamp(0.f, 2.f, 0.9f));
+    r.addMesh(floor, vec3f(0.8f));
+    return r.render(cam);
+  };
+  const Image plain = render(false), attenuated = render(true);
+  double darkest = 0;
+  for (size_t i = 0; i < plain.pixels.size(); ++i) {
+    EXPECT_LE(attenuated.pixels[i].x, plain.pixels[i].x + 1e-6f);
+    darkest = std::max<double>(darkest, plain.pixels[i].x - attenuated.pixels[i].x);
+  }
+  EXPECT_GT(darkest, 0.05);
+}
