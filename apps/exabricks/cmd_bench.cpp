@@ -30,7 +30,8 @@ struct BenchOptions {
   std::string size = "512x512";
   int frames = 3;
   std::string cases = "all";
-  int orbit = 0;
+  int orbit = 50;
+  bool orbitStudy = false; ///< --orbit was given
   std::string csv = "exabricks-orbit.csv";
   std::string plot = "exabricks-orbit.png";
   bool json = false;
@@ -442,7 +443,7 @@ void run(const BenchOptions& o) {
   s.tf = defaultTransferFunction(s.model);
   const box3i cb = s.model.cellBounds();
   s.worldBox = box3d(s.model.world.toWorld(vec3d(cb.lower)), s.model.world.toWorld(vec3d(cb.upper)));
-  if (o.orbit > 0)
+  if (o.orbitStudy)
     runOrbit(s, o);
   else
     runCases(s, o);
@@ -458,13 +459,16 @@ void addBench(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Frames timed per variant (median, after one warm-up)")->capture_default_str();
   cmd->add_option("--cases", o->cases, "all, or a comma list of: reconstruction, sampling, skipping, traversal")
       ->capture_default_str();
-  cmd->add_option("--orbit", o->orbit, "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
+  CLI::Option* orbit = cmd->add_option("--orbit", o->orbit, "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
       ->expected(0, 1)
       ->default_str("50");
   cmd->add_option("--csv", o->csv, "Orbit study: CSV file to write")->capture_default_str();
   cmd->add_option("--plot", o->plot, "Orbit study: PNG plot to write")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the results as one JSON object on stdout");
-  cmd->callback([o] { run(*o); });
+  cmd->callback([o, orbit] {
+    o->orbitStudy = orbit->count() > 0;
+    run(*o);
+  });
 }
 
 } // namespace exa::cli
