@@ -2,6 +2,8 @@
 
 #include "exabricks/amr/scenes.h"
 
+#include <cstdio>
+
 namespace exa::cli {
 
 void InputOptions::add(CLI::App& cmd, bool fieldOption) {
@@ -10,12 +12,28 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
   if (fieldOption) cmd.add_option("-f,--field", field, "Field to use (default: the first)");
   cmd.add_option("--max-brick-width", maxBrickWidth, "Most cells per axis in one brick")
       ->check(CLI::Range(1, 1024));
+  cmd.add_option("--raw-dims", rawDims, "Raw volume: voxels per axis as NXxNYxNZ (default: from NAME_NXxNYxNZ_TYPE.raw)");
+  cmd.add_option("--raw-type", rawType, "Raw volume: uint8, uint16, float32 or float64");
+  cmd.add_option("--raw-threshold", rawThreshold, "Raw volume: largest value spread merged into one cell")
+      ->check(CLI::NonNegativeNumber);
+  cmd.add_option("--raw-max-level", rawMaxLevel, "Raw volume: coarsest merged cells are 2^L voxels wide")
+      ->check(CLI::Range(0, 28));
 }
 
 LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
   LoadOptions o;
   if (onlySelectedField && !field.empty()) o.fields = {field};
   o.build.bricks.maxBrickWidth = maxBrickWidth;
+  if (!rawDims.empty()) {
+    long long x = 0, y = 0, z = 0;
+    char extra = 0;
+    if (std::sscanf(rawDims.c_str(), "%lldx%lldx%lld%c", &x, &y, &z, &extra) != 3)
+      fail("--raw-dims: expected NXxNYxNZ (e.g. 256x256x128), got '", rawDims, "'");
+    o.raw.dims = vec3l(x, y, z);
+  }
+  o.raw.type = rawType;
+  o.raw.threshold = rawThreshold;
+  o.raw.maxLevel = rawMaxLevel;
   return o;
 }
 

@@ -17,6 +17,10 @@ struct InputOptions {
   std::string input; ///< empty: the embedded default dataset
   std::string field; ///< empty: the first field
   int maxBrickWidth = 32;
+  std::string rawDims;       ///< raw volumes: NXxNYxNZ (default: from the file name)
+  std::string rawType;       ///< raw volumes: uint8, uint16, float32 or float64
+  double rawThreshold = 0.0; ///< raw volumes: largest value spread of a merged cell
+  int rawMaxLevel = 4;       ///< raw volumes: coarsest merged level
 
   void add(CLI::App& cmd, bool fieldOption = true);
   LoadOptions loadOptions(bool onlySelectedField) const;

@@ -46,13 +46,15 @@ InputKind detectInput(const std::string& path) {
   if (isFlashFile(path)) return InputKind::Flash;
   if (isEnzoOutput(path)) return InputKind::Enzo;
   if (isVtkAmrFile(path)) return InputKind::VtkAmr;
+  if (isRawVolume(path)) return InputKind::Raw;
   if (isHdf5File(path))
     fail(path, ": an HDF5 file with neither Chombo's nor FLASH's layout, or one that cannot be opened",
          " (truncated or damaged?)");
   if (endsWith(path, ".cells")) return InputKind::Native;
   if (endsWith(path, ".grids")) return InputKind::Grids;
   fail(path, ": unknown input format (expected an exabricks model file, NAME.cells, a .grids",
-       " fixture or an AMReX plotfile directory)");
+       " fixture, an AMReX plotfile directory, a Chombo or FLASH HDF5 file, an Enzo parameter file,",
+       " a VTK .vthb file or a NAME_NXxNYxNZ_TYPE.raw volume)");
 }
 
 CellSet loadCells(const std::string& path, const LoadOptions& options) {
@@ -81,6 +83,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     break;
   case InputKind::VtkAmr:
     set = readVtkAmr(path, options.fields);
+    break;
+  case InputKind::Raw:
+    set = readRaw(path, options.raw);
     break;
   case InputKind::Model:
     fail(path, ": is a built model file; raw cells are needed here");
@@ -125,6 +130,8 @@ std::vector<std::string> listFields(const std::string& path) {
     return listEnzoFields(path);
   case InputKind::VtkAmr:
     return listVtkAmrFields(path);
+  case InputKind::Raw:
+    return {"scalar"};
   case InputKind::Model:
     return readModel(path).fieldNames;
   case InputKind::Default:

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "exabricks/amr/model.h"
+#include "exabricks/io/raw.h"
 
 #include <string>
 #include <vector>
@@ -13,9 +14,10 @@ namespace exa {
 struct LoadOptions {
   std::vector<std::string> fields; ///< fields to load (all when empty)
   BuildOptions build;
+  RawOptions raw; ///< dimensions, type and merging of raw volumes
 };
 
-enum class InputKind { Default, Model, Native, Grids, Amrex, Chombo, Flash, Enzo, VtkAmr };
+enum class InputKind { Default, Model, Native, Grids, Amrex, Chombo, Flash, Enzo, VtkAmr, Raw };
 
 /// Determines the kind of input; throws with the path when it is not recognised.
 InputKind detectInput(const std::string& path);
