@@ -75,6 +75,19 @@ if [ -d "$amrex" ]; then
 else
   echo "skip AMReX checks: sample data not found at $amrex (set EXABRICKS_DATA)"
 fi
+if [ -n "${EXABRICKS_WRITE_FIXTURE:-}" ]; then
+  cells_of() { "$exe" info "$@" --json | $py -c 'import json,sys; print(json.load(sys.stdin)["cells"])'; }
+  check "write a Chombo HDF5 fixture" "$EXABRICKS_WRITE_FIXTURE" chombo "$PWD/chombo.3d.hdf5"
+  check "info --fields on a Chombo file" bash -c "'$exe' info chombo.3d.hdf5 --fields | tr '\n' ' ' | grep -qx 'density energy '"
+  check "render a Chombo file" "$exe" render chombo.3d.hdf5 -f energy -o chombo.png --size 48x48
+  check "convert a Chombo file" "$exe" -q convert chombo.3d.hdf5 -o chombo.cells
+  check "the converted file keeps every cell" test "$(cells_of chombo.cells)" = "$(cells_of chombo.3d.hdf5)"
+  head -c 3000 chombo.3d.hdf5 > cut.3d.hdf5
+  fails_with "truncated HDF5 file" "cut.3d.hdf5" "$exe" info cut.3d.hdf5
+fi
+head -c 32768 /dev/zero > zero_32x32x32_uint8.raw
+check "raw volume merges to 16^3 cells" bash -c "[ \"\$('$exe' info zero_32x32x32_uint8.raw --json | $py -c 'import json,sys; print(json.load(sys.stdin)[\"cells\"])')\" = 8 ]"
+fails_with "raw volume without dimensions" "--raw-dims" bash -c "cp zero_32x32x32_uint8.raw anon.raw && '$exe' info anon.raw"
 fails_with "unknown option" "--bogus" "$exe" info --bogus
 fails_with "unknown subcommand" "subcommand" "$exe" nope
 fails_with "missing input" "nothing.cells" "$exe" info nothing.cells

@@ -8,7 +8,8 @@ namespace exa::cli {
 
 void InputOptions::add(CLI::App& cmd, bool fieldOption) {
   cmd.add_option("input", input,
-                 "Model file, NAME.cells dataset or .grids fixture (default: embedded dataset)");
+                 "Model file, NAME.cells dataset, .grids fixture, AMReX plotfile, Chombo or FLASH HDF5 file, "
+                 "Enzo parameter file, VTK .vthb file or .raw volume (default: embedded dataset)");
   if (fieldOption) cmd.add_option("-f,--field", field, "Field to use (default: the first)");
   cmd.add_option("--max-brick-width", maxBrickWidth, "Most cells per axis in one brick")
       ->check(CLI::Range(1, 1024));
