@@ -1,0 +1,246 @@
+#!/usr/bin/python3
+"""Renders one AMReX plotfile with exabricks and with yt at the same resolution, camera,
+value range, colour map and opacity ramp; prints the times and their ratios and writes both
+images side by side into one PNG. Not a test. Run with Debian's Python, which has yt:
+
+  /usr/bin/python3 bench/peers/compare_yt.py build/exabricks /work/shared/data/amrex/advection_3d/plt_drop \\
+      --size 1024 --out /tmp/peers
+
+See bench/peers/README.md for what each renderer does differently.
+"""
+import argparse
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import time
+
+
+def camera(lower, upper, azimuth, elevation, fov):
+    """The camera exabricks' Camera::frame builds: the bounding sphere fills the view."""
+    deg = math.pi / 180.0
+    centre = [(a + b) / 2 for a, b in zip(lower, upper)]
+    radius = 0.5 * math.sqrt(sum((b - a) ** 2 for a, b in zip(lower, upper)))
+    d = [math.cos(elevation * deg) * math.cos(azimuth * deg),
+         math.cos(elevation * deg) * math.sin(azimuth * deg), math.sin(elevation * deg)]
+    distance = radius / math.sin(0.5 * fov * deg)
+    position = [c + x * distance for c, x in zip(centre, d)]
+    up = [0.0, 1.0, 0.0] if abs(d[2]) > 0.999 else [0.0, 0.0, 1.0]
+    return position, centre, up, distance
+
+
+def bright_level(rgb):
+    """Brightness of the brightest pixels: 99.9th percentile of the per-pixel mean of r, g, b."""
+    import numpy as np
+    return float(np.percentile(np.asarray(rgb, dtype=np.float64).mean(axis=-1), 99.9))
+
+
+def run_exabricks(exe, plot, field, size, pos, look, up, fov, value_range, opacity_scale, out_png, extra, frames):
+    common = [plot, "-f", field, "--size", f"{size}x{size}", "--colormap", "viridis",
+              "--position", ",".join(map(repr, pos)), "--look-at", ",".join(map(repr, look)),
+              "--up", ",".join(map(repr, up)), "--fov", repr(fov),
+              "--range", f"{value_range[0]!r},{value_range[1]!r}", "--opacity-scale", repr(opacity_scale),
+              "--background", "0,0,0"] + extra
+    # End to end: read the plotfile, build bricks and regions, render one frame, write the PNG.
+    t0 = time.perf_counter()
+    subprocess.run([exe, "-q", "render", "-o", out_png] + common, check=True)
+    wall = time.perf_counter() - t0
+    # Frame time: median of `frames` after a warm-up, in the same process.
+    stats = json.loads(subprocess.run([exe, "-q", "render", "-o", out_png, "--stats", "--json", "--frames", str(frames)]
+                                      + common, check=True, capture_output=True, text=True).stdout)
+    return wall, stats
+
+
+def main():
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("exabricks")
+    p.add_argument("plotfile")
+    p.add_argument("--field", default="phi")
+    p.add_argument("--size", type=int, default=1024)
+    p.add_argument("--azimuth", type=float, default=30.0)
+    p.add_argument("--elevation", type=float, default=25.0)
+    p.add_argument("--fov", type=float, default=40.0)
+    p.add_argument("--frames", type=int, default=3, help="exabricks frames timed (median)")
+    p.add_argument("--calibration-size", type=int, default=256,
+                   help="resolution at which yt's opacity is matched to exabricks' mean coverage")
+    p.add_argument("--out", default="peer-comparison")
+    a = p.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+
+    info = json.loads(subprocess.run([a.exabricks, "-q", "info", a.plotfile, "-f", a.field, "--json"], check=True,
+                                     capture_output=True, text=True).stdout)
+    lower, upper = info["bounds"]["world"]["lower"], info["bounds"]["world"]["upper"]
+    fr = [f for f in info["fields"] if f["name"] == a.field][0]["range"]
+    value_range = (fr["min"], fr["max"])
+    finest_cells = max((u - l) for l, u in zip(info["bounds"]["lattice"]["lower"], info["bounds"]["lattice"]["upper"]))
+    # exabricks' default opacity: per finest cell, a ray through the whole data at full opacity
+    # gathers an optical depth of about eight.
+    opacity_scale = min(1.0, 8.0 / finest_cells)
+    pos, look, up, distance = camera(lower, upper, a.azimuth, a.elevation, a.fov)
+
+    # --- exabricks ---
+    ex_png = os.path.join(a.out, "exabricks.png")
+    ex_wall, ex = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
+                                opacity_scale, ex_png, [], a.frames)
+    _, ex_noet = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
+                               opacity_scale, os.path.join(a.out, "exabricks-no-et.png"),
+                               ["--no-early-termination"], a.frames)
+    _, ex_flat = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
+                               opacity_scale, os.path.join(a.out, "exabricks-unshaded.png"),
+                               ["--no-early-termination", "--shading", "none"], a.frames)
+    # Mean brightness over black at the calibration size, unshaded, for matching yt's opacity.
+    cal_png = os.path.join(a.out, "exabricks-calibration.png")
+    subprocess.run([a.exabricks, "-q", "render", "-o", cal_png, "--background", "0,0,0", "--shading", "none",
+                    a.plotfile, "-f", a.field,
+                    "--size", f"{a.calibration_size}x{a.calibration_size}", "--colormap", "viridis",
+                    "--position", ",".join(map(repr, pos)), "--look-at", ",".join(map(repr, look)),
+                    "--up", ",".join(map(repr, up)), "--fov", repr(a.fov),
+                    "--range", f"{value_range[0]!r},{value_range[1]!r}", "--opacity-scale", repr(opacity_scale),
+                    "--no-early-termination"], check=True)
+
+    # --- yt ---
+    import numpy as np
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import yt
+    yt.set_log_level(40)
+
+    ex_cal = bright_level(plt.imread(cal_png)[..., :3])
+
+    yfield = ("boxlib", a.field)
+
+    def make_scene(resolution, alpha_scale):
+        sc = yt.create_scene(ds, yfield, lens_type="perspective")
+        src = sc[0]
+        src.set_log(False)
+        # grey_opacity: the alpha channel attenuates every colour channel (emission-absorption
+        # with one opacity, as in exabricks).
+        tf = yt.ColorTransferFunction(value_range, grey_opacity=True)
+        # viridis over the whole range, opacity a linear ramp 0 -> 1 (times alpha_scale), the
+        # emitted colour weighted the same way: emission = colour x opacity, as exabricks does.
+        tf.map_to_colormap(value_range[0], value_range[1], scale=alpha_scale, colormap="viridis",
+                           scale_func=lambda v, lo, hi: (v - lo) / (hi - lo))
+        for ch in (tf.red, tf.green, tf.blue):
+            ch.y *= alpha_scale
+        src.set_transfer_function(tf)
+        cam = sc.camera
+        cam.resolution = (resolution, resolution)
+        cam.focus = ds.arr(look, "code_length")
+        cam.set_position(ds.arr(pos, "code_length"), north_vector=np.array(up))
+        # The perspective lens puts an image plane of size width[0] x width[1] at distance width[2].
+        w = 2.0 * distance * math.tan(0.5 * a.fov * math.pi / 180.0)
+        cam.width = ds.arr([w, w, distance], "code_length")
+        return sc
+
+    def brightness(img):
+        # yt's image is composited over black (alpha 1 everywhere).
+        return bright_level(np.clip(np.asarray(img)[..., :3], 0, 1))
+
+    def quiet(fn):
+        """Runs fn with the process's stdout silenced (yt's k-d tree prints a line for every
+        grid it cannot split); returns fn's result and the number of such lines."""
+        sys.stdout.flush()
+        saved = os.dup(1)
+        with tempfile.TemporaryFile() as tmp:
+            os.dup2(tmp.fileno(), 1)
+            try:
+                result = fn()
+            finally:
+                sys.stdout.flush()
+                os.dup2(saved, 1)
+                os.close(saved)
+            tmp.seek(0)
+            count = tmp.read().count(b"Failed to split grids")
+        return result, count
+
+    # Timed: the first render of a scene builds yt's brick k-d tree (vertex-centred data per
+    # grid), the second reuses it. Render time does not depend on the opacity (yt integrates
+    # every ray to its end).
+    t0 = time.perf_counter()
+    ds = yt.load(a.plotfile)
+    ds.index
+    t_load = time.perf_counter() - t0
+    sc = make_scene(a.size, 8.0)
+    t0 = time.perf_counter()
+    _, split_messages = quiet(sc.render)
+    t_first = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    sc.render()
+    t_second = time.perf_counter() - t0
+
+    # yt's integrator scales opacity and emission by its own ray parameter, not per finest cell:
+    # find the scale that gives the same brightness of the brightest pixels (99.9th percentile)
+    # over black as exabricks' unshaded image
+    # (small renders, not timed), then render the image shown.
+    scale = 8.0
+    t_cal = time.perf_counter()
+    for _ in range(5):
+        cur = brightness(quiet(make_scene(a.calibration_size, scale).render)[0])
+        scale *= min(8.0, ex_cal / cur) if cur > 0 else 8.0
+    t_cal = time.perf_counter() - t_cal
+    t0 = time.perf_counter()
+    im, _ = quiet(make_scene(a.size, scale).render)
+    t_third = time.perf_counter() - t0
+    yt_bright = brightness(im)
+
+    # yt's image: colour channels as accumulated over black (they are the colour map's own sRGB
+    # values), shown as they are.
+    rgb = np.clip(np.asarray(im, dtype=np.float64)[..., :3], 0, 1)
+    # yt's image is indexed [x, y]: transpose to rows.
+    rgb = rgb.transpose(1, 0, 2)
+    yt_png = os.path.join(a.out, "yt.png")
+    plt.imsave(yt_png, rgb)
+
+    ex_frame = ex["frame_seconds"]
+    rows = [
+        ("exabricks, full quality (shaded, early termination), frame", ex_frame),
+        ("exabricks, shaded, early termination off, frame", ex_noet["frame_seconds"]),
+        ("exabricks, unshaded, early termination off, frame", ex_flat["frame_seconds"]),
+        ("exabricks, load + build (plotfile read, bricks, regions)", ex["load_seconds"]),
+        ("exabricks, end to end (one process: load, build, one frame, PNG)", ex_wall),
+        ("yt, load (plotfile index)", t_load),
+        ("yt, first render (brick k-d tree + render)", t_first),
+        ("yt, second render (same scene)", t_second),
+        ("yt, render of a new scene on the loaded data (image shown)", t_third),
+    ]
+    print(f"dataset {a.plotfile} ({info['cells']} leaf cells), field {a.field}, {a.size}x{a.size}, "
+          f"value range [{value_range[0]:.6g}, {value_range[1]:.6g}]")
+    for name, t in rows:
+        print(f"  {name:66s} {t:8.3f} s")
+    print(f"  yt opacity scale {scale:.4g}: brightest pixels {yt_bright:.4f} (exabricks unshaded {ex_cal:.4f}), "
+          f"found in {t_cal:.1f} s")
+    print(f"  yt printed 'Failed to split grids.' {split_messages} times while building its k-d tree")
+    print("ratios (yt / exabricks):")
+    ratios = {
+        "yt first render / exabricks full-quality frame": t_first / ex_frame,
+        "yt second render / exabricks full-quality frame": t_second / ex_frame,
+        "yt second render / exabricks frame, early termination off": t_second / ex_noet["frame_seconds"],
+        "yt second render / exabricks unshaded frame, early termination off": t_second / ex_flat["frame_seconds"],
+        "yt load + first render / exabricks end to end": (t_load + t_first) / ex_wall,
+    }
+    for name, r in ratios.items():
+        print(f"  {name:66s} {r:8.2f}x")
+
+    # Side by side, one PNG.
+    ex_img = plt.imread(ex_png)[..., :3]
+    fig, axes = plt.subplots(1, 2, figsize=(16, 8.6), dpi=a.size / 8)
+    for ax, img, title in ((axes[0], ex_img, f"exabricks: frame {ex_frame:.2f} s (basis, shaded, adaptive)"),
+                           (axes[1], rgb, f"yt {yt.__version__}: render {t_second:.2f} s, first {t_first:.2f} s")):
+        ax.imshow(img)
+        ax.set_title(title, fontsize=14)
+        ax.axis("off")
+    fig.suptitle(f"{os.path.basename(os.path.normpath(a.plotfile))}: {info['cells']:,} leaf cells, "
+                 f"{a.size}x{a.size}, same camera, range and colour map", fontsize=15)
+    fig.tight_layout()
+    side = os.path.join(a.out, "side-by-side.png")
+    fig.savefig(side)
+    json.dump({"rows": dict(rows), "ratios": ratios, "yt_opacity_scale": scale, "brightness": [ex_cal, yt_bright], "yt_split_failures": split_messages},
+              open(os.path.join(a.out, "results.json"), "w"), indent=1)
+    print(f"wrote {side}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
