@@ -52,6 +52,16 @@ std::vector<KeyLine> readKeyLines(const std::string& path) {
   return out;
 }
 
+std::vector<double> numbersOf(const std::string& path, const KeyLine& k, size_t expected);
+
+/// One integer value of a key (checked before conversion).
+int64_t integerOf(const std::string& path, const KeyLine& k) {
+  const std::vector<double> v = numbersOf(path, k, 1);
+  if (v.size() != 1 || v[0] != std::floor(v[0]) || std::abs(v[0]) > 1e15)
+    fail(path, ": line ", k.line, ": ", k.key, " must be one integer, got '", k.value, "'");
+  return int64_t(v[0]);
+}
+
 std::vector<double> numbersOf(const std::string& path, const KeyLine& k, size_t expected) {
   std::istringstream in(k.value);
   std::vector<double> v;
@@ -91,7 +101,7 @@ Parameters readParameters(const std::string& path) {
   Parameters p;
   for (const KeyLine& k : readKeyLines(path)) {
     if (k.key == "TopGridRank") {
-      p.rank = int(numbersOf(path, k, 1)[0]);
+      p.rank = int(std::clamp<int64_t>(integerOf(path, k), -1, 1000));
       if (p.rank != 3) fail(path, ": line ", k.line, ": TopGridRank is ", p.rank, ": a ", p.rank, "-D output; only 3-D AMR data can be read");
     } else if (k.key == "RefineBy") {
       const double r = numbersOf(path, k, 1)[0];
@@ -127,9 +137,10 @@ Output readOutput(const std::string& path) {
   enum : unsigned { kRank = 1, kDim = 2, kStart = 4, kEnd = 8, kLeft = 16, kRight = 32, kFile = 64 };
   for (const KeyLine& k : readKeyLines(h)) {
     if (k.key == "Grid") {
-      const double id = numbersOf(h, k, 1)[0];
+      const int64_t id = integerOf(h, k);
+      if (id < 0 || id > 99999999) fail(h, ": line ", k.line, ": grid number ", id, " out of range");
       o.grids.push_back({});
-      o.grids.back().id = int64_t(id);
+      o.grids.back().id = id;
       o.grids.back().line = k.line;
       continue;
     }
@@ -147,7 +158,7 @@ Output readOutput(const std::string& path) {
       return vec3l(int64_t(v[0]), int64_t(v[1]), int64_t(v[2]));
     };
     if (k.key == "GridRank") {
-      g.rank = int(numbersOf(h, k, 1)[0]);
+      g.rank = int(std::clamp<int64_t>(integerOf(h, k), -1, 1000));
       g.seen |= kRank;
       if (g.rank != 3) fail(h, ": grid ", g.id, ": GridRank is ", g.rank, ": only 3-D AMR data can be read");
     } else if (k.key == "GridDimension") {
@@ -167,7 +178,7 @@ Output readOutput(const std::string& path) {
       g.file = (dir / fs::path(k.value).filename()).string();
       g.seen |= kFile;
     } else if (k.key == "NumberOfBaryonFields") {
-      g.fields = int64_t(numbersOf(h, k, 1)[0]);
+      g.fields = integerOf(h, k);
     }
   }
   if (o.grids.empty()) fail(h, ": no 'Grid = N' entries (not an Enzo hierarchy, or an empty one)");
@@ -265,13 +276,14 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
     for (int a = 0; a < 3; ++a) {
       const double ratio = (g.right[a] - g.left[a]) / double(p.cells[a]) / finest[a];
       const double w = std::round(ratio);
-      if (std::abs(ratio - w) > 1e-6 * w || io::log2Exact(int64_t(w)) < 0 || w > double(int64_t(1) << kMaxLevel))
+      if (!(w >= 1 && w <= double(int64_t(1) << kMaxLevel)) || std::abs(ratio - w) > 1e-6 * w ||
+          io::log2Exact(int64_t(w)) < 0)
         fail(h, ": grid ", g.id, ": cell size on axis ", a, " is ", ratio, " times the finest, not a power of two");
       if (a > 0 && int64_t(w) != p.width) fail(h, ": grid ", g.id, ": refined differently along the axes");
       p.width = int64_t(w);
       const double c = (g.left[a] - o.params.left[a]) / finest[a];
       const double ci = std::round(c);
-      if (std::abs(c - ci) > 1e-5 + 1e-12 * std::abs(c) || std::abs(ci) > double(kLatticeLimit))
+      if (!(std::abs(c) <= double(kLatticeLimit)) || std::abs(c - ci) > 1e-5 + 1e-12 * std::abs(c))
         fail(h, ": grid ", g.id, ": GridLeftEdge on axis ", a, " lies ", c, " finest cells from DomainLeftEdge, not on the lattice");
       p.lower[a] = int64_t(ci);
       if (p.lower[a] % p.width != 0)

@@ -22,7 +22,10 @@ int64_t tableInt(const h5::CompoundTable& t, const std::string& name) {
   const size_t vi = size_t(valueAt - t.members.begin());
   // One string per record: "name" is the table's only string member.
   for (size_t r = 0; r < t.records; ++r)
-    if (r < t.strings.size() && t.strings[r] == name) return int64_t(t.values[r * m + vi]);
+    if (r < t.strings.size() && t.strings[r] == name) {
+      const double v = t.values[r * m + vi];
+      return std::abs(v) < 1e9 ? int64_t(v) : -2;
+    }
   return -1;
 }
 
@@ -119,7 +122,8 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
       const double lo = bbox[b * 6 + size_t(a) * 2], hi = bbox[b * 6 + size_t(a) * 2 + 1];
       ratio[a] = (hi - lo) / double(h.blockCells[a]) / finest[a];
       const double w = std::round(ratio[a]);
-      if (std::abs(ratio[a] - w) > 1e-5 * w || io::log2Exact(int64_t(w)) < 0 || w > double(int64_t(1) << kMaxLevel))
+      if (!(w >= 1 && w <= double(int64_t(1) << kMaxLevel)) || std::abs(ratio[a] - w) > 1e-5 * w ||
+          io::log2Exact(int64_t(w)) < 0)
         f.bad("bounding box", strCat("block ", b, ": cell size on axis ", a, " is ", ratio[a],
                                      " times the finest leaf cell size, not a power of two"));
       if (a > 0 && int64_t(w) != p.width)
@@ -128,7 +132,7 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
       p.width = int64_t(w);
       const double c = (lo - origin[a]) / finest[a];
       const double ci = std::round(c);
-      if (std::abs(c - ci) > 1e-6 + 16 * eps * (std::abs(c) + 1) || std::abs(c) > double(kLatticeLimit))
+      if (!(std::abs(c) <= double(kLatticeLimit)) || std::abs(c - ci) > 1e-6 + 16 * eps * (std::abs(c) + 1))
         f.bad("bounding box", strCat("block ", b, ": lower corner on axis ", a, " lies ", c,
                                      " finest cells from the domain corner, not on the finest lattice"));
       p.lower[a] = int64_t(ci);

@@ -157,6 +157,8 @@ CellSet readRaw(const std::string& path, const RawOptions& options) {
       fail(path, ": raw dimensions ", o.dims.x, "x", o.dims.y, "x", o.dims.z, " out of range (1..2^29 per axis)");
   if (!(o.threshold >= 0) || !std::isfinite(o.threshold)) fail(path, ": merge threshold must be a finite value >= 0");
   if (o.maxLevel < 0 || o.maxLevel > kMaxLevel) fail(path, ": maximum level must be within 0..", kMaxLevel);
+  if (double(o.dims.x) * double(o.dims.y) * double(o.dims.z) > double(uint64_t(1) << 34))
+    fail(path, ": raw dimensions ", o.dims.x, "x", o.dims.y, "x", o.dims.z, " are too large (at most 2^34 voxels)");
   const uint64_t count = uint64_t(o.dims.x) * uint64_t(o.dims.y) * uint64_t(o.dims.z);
   std::error_code ec;
   const uintmax_t size = fs::file_size(path, ec);

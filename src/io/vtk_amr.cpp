@@ -232,7 +232,9 @@ std::string readBlock(const std::string& path, const std::string& what, BlockSou
     return src.take(size_t(n));
   }
   const uint64_t blocks = header(), blockSize = header(), lastSize = header();
-  if (blocks > (uint64_t(1) << 32) || blockSize > (uint64_t(1) << 32))
+  // Bound the header by the expected size before anything is allocated from it.
+  if (blockSize > expectedBytes || lastSize > blockSize ||
+      (blocks > 0 && (blockSize == 0 || blocks > expectedBytes / blockSize + 1)))
     fail(path, ": ", what, ": corrupt compression header");
   const uint64_t total = blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize == 0 ? blockSize : lastSize);
   if (total != expectedBytes) fail(path, ": ", what, ": compressed data holds ", total, " bytes, expected ", expectedBytes);
@@ -318,6 +320,8 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
       if (sawPiece) fail(path, ": more than one <Piece> (one is expected per AMR box)");
       sawPiece = true;
       const auto e = numbers(path, t.attr("Extent"), 6, "Piece Extent");
+      for (double v : e)
+        if (!(std::abs(v) <= double(kLatticeLimit))) fail(path, ": Piece Extent is out of range");
       piece.cells = vec3l(int64_t(e[1] - e[0]), int64_t(e[3] - e[2]), int64_t(e[5] - e[4]));
       if (piece.cells.x < 0 || piece.cells.y < 0 || piece.cells.z < 0) fail(path, ": Piece Extent is inverted");
       if (piece.cells.x == 0 || piece.cells.y == 0 || piece.cells.z == 0)
@@ -335,6 +339,8 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
       const std::string what = "array '" + name + "'";
       const std::string type = t.attr("type");
       if (typeSize(type) == 0) fail(path, ": ", what, ": unsupported type '", type, "'");
+      if (double(piece.cells.x) * double(piece.cells.y) * double(piece.cells.z) > double(uint64_t(1) << 32))
+        fail(path, ": Piece Extent is too large");
       const uint64_t count = uint64_t(piece.cells.x * piece.cells.y * piece.cells.z);
       std::vector<double> values;
       const std::string format = t.attr("format");
@@ -405,8 +411,8 @@ Hierarchy readHierarchy(const std::string& path) {
       if (gd != "XYZ") fail(path, ": grid_description '", gd, "': only 3-D (XYZ) AMR data can be read");
     } else if (t.name == "Block") {
       const auto l = numbers(path, t.attr("level"), 1, "Block level");
+      if (!(l[0] >= 0 && l[0] <= 30) || l[0] != std::floor(l[0])) fail(path, ": Block level ", l[0], " is out of range");
       level = int(l[0]);
-      if (level < 0 || level > 30 || l[0] != level) fail(path, ": Block level ", l[0], " is out of range");
       const auto s = numbers(path, t.attr("spacing"), 3, strCat("Block ", level, " spacing"));
       if (!(s[0] > 0 && s[1] > 0 && s[2] > 0)) fail(path, ": Block ", level, ": spacing must be positive");
       if (h.spacing.size() <= size_t(level)) h.spacing.resize(size_t(level) + 1, vec3d(0.0));
@@ -415,7 +421,9 @@ Hierarchy readHierarchy(const std::string& path) {
       if (level < 0) fail(path, ": <DataSet> outside a <Block>");
       DataSetRef d;
       d.level = level;
-      d.index = size_t(numbers(path, t.attr("index", "0"), 1, "DataSet index")[0]);
+      const double index = numbers(path, t.attr("index", "0"), 1, "DataSet index")[0];
+      if (!(index >= 0 && index < 1e12)) fail(path, ": level ", level, ": DataSet index ", index, " out of range");
+      d.index = size_t(index);
       const auto b = numbers(path, t.attr("amr_box"), 6, strCat("level ", level, " DataSet ", d.index, " amr_box"));
       for (int a = 0; a < 3; ++a) {
         if (std::abs(b[size_t(2 * a)]) > double(kLatticeLimit) || std::abs(b[size_t(2 * a + 1)]) > double(kLatticeLimit))
@@ -474,7 +482,8 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
     for (int a = 0; a < 3; ++a) {
       const double r = s[a] / h.spacing[size_t(finestLevel)][a];
       const double w = std::round(r);
-      if (std::abs(r - w) > 1e-6 * w || io::log2Exact(int64_t(w)) < 0 || w > double(int64_t(1) << kMaxLevel))
+      if (!(w >= 1 && w <= double(int64_t(1) << kMaxLevel)) || std::abs(r - w) > 1e-6 * w ||
+          io::log2Exact(int64_t(w)) < 0)
         fail(path, ": level ", d.level, ": spacing is ", r, " times the finest level's, not a power of two");
       if (a > 0 && int64_t(w) != width) fail(path, ": level ", d.level, ": refined differently along the axes");
       width = int64_t(w);
