@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <tuple>
 
 using namespace exa;
@@ -195,5 +196,32 @@ TEST(Enzo, BadOutputsAreRejectedClearly) {
     text.replace(name, 14, "DD0010.cpu0000");
     std::ofstream(f.dir / "DD0010.hierarchy") << text;
     expectIn(loadError(f.parameterFile().string()), {"DD0010.cpu0000", "Grid00000003", "missing group"});
+  }
+}
+
+TEST(Enzo, CutHierarchiesGiveErrorsNotCrashes) {
+  EnzoFixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "enzo-corrupt";
+  f.write();
+  std::string original;
+  {
+    std::ifstream in(f.dir / "DD0010.hierarchy");
+    std::stringstream ss;
+    ss << in.rdbuf();
+    original = ss.str();
+  }
+  for (size_t at = 0; at < original.size(); at += 29) {
+    for (int mode = 0; mode < 2; ++mode) {
+      std::string text = original;
+      if (mode == 0) text.resize(at);
+      else text[at] = "9 -x\n="[at % 6];
+      std::ofstream(f.dir / "DD0010.hierarchy") << text;
+      try {
+        loadCells(f.parameterFile().string());
+      } catch (const Error&) {
+      } catch (const std::exception& e) {
+        ADD_FAILURE() << "mode " << mode << " at " << at << ": " << e.what();
+      }
+    }
   }
 }
