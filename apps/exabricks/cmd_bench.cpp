@@ -19,6 +19,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <sstream>
 #include <unistd.h>
 
@@ -104,25 +105,41 @@ ImageDiff difference(const Image& a, const Image& b) {
   return d;
 }
 
-VariantResult measure(const std::string& name, const Model& model, int field, const RenderOptions& ro,
-                      const TransferFunction& tf, const Camera& camera, int frames) {
-  logInfo(strCat("bench: ", name));
-  VariantResult r;
-  r.name = name;
-  Renderer renderer(model, field, ro);
-  r.updateSeconds = renderer.setTransferFunction(tf);
-  r.visibleRegions = renderer.visibleRegions();
-  r.traversal = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
-  RenderStats warm;
-  renderer.render(camera, &warm); // warm-up, not counted
-  std::vector<double> seconds;
-  for (int f = 0; f < frames; ++f) {
-    r.image = renderer.render(camera, &r.stats);
-    seconds.push_back(r.stats.seconds);
+struct Variant {
+  std::string name;
+  RenderOptions options;
+  TransferFunction tf;
+};
+
+/// Renders every variant once as a warm-up, then `frames` rounds of one frame per variant, so
+/// that a change of the machine's load during the run touches every variant alike; the frame
+/// time of a variant is its median over the rounds.
+std::vector<VariantResult> measureInterleaved(const std::vector<Variant>& variants, const Model& model, int field,
+                                              const Camera& camera, int frames) {
+  std::vector<std::unique_ptr<Renderer>> renderers;
+  std::vector<VariantResult> results(variants.size());
+  for (size_t v = 0; v < variants.size(); ++v) {
+    logInfo(strCat("bench: ", variants[v].name));
+    renderers.push_back(std::make_unique<Renderer>(model, field, variants[v].options));
+    VariantResult& r = results[v];
+    r.name = variants[v].name;
+    r.updateSeconds = renderers[v]->setTransferFunction(variants[v].tf);
+    r.visibleRegions = renderers[v]->visibleRegions();
+    r.traversal = renderers[v]->traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+    RenderStats warm;
+    renderers[v]->render(camera, &warm); // warm-up, not counted
   }
-  std::sort(seconds.begin(), seconds.end());
-  r.stats.seconds = seconds[seconds.size() / 2];
-  return r;
+  std::vector<std::vector<double>> seconds(variants.size());
+  for (int f = 0; f < frames; ++f)
+    for (size_t v = 0; v < variants.size(); ++v) {
+      results[v].image = renderers[v]->render(camera, &results[v].stats);
+      seconds[v].push_back(results[v].stats.seconds);
+    }
+  for (size_t v = 0; v < variants.size(); ++v) {
+    std::sort(seconds[v].begin(), seconds[v].end());
+    results[v].stats.seconds = seconds[v][seconds[v].size() / 2];
+  }
+  return results;
 }
 
 std::vector<std::string> parseCases(const std::string& s) {
@@ -233,45 +250,53 @@ void runCases(const Setup& s, const BenchOptions& o) {
     locatorNodes = locator.nodeCount();
   }
 
-  std::vector<VariantResult> results;
-  auto run = [&](const std::string& name, const RenderOptions& ro, const TransferFunction& tf) -> const VariantResult& {
-    for (const VariantResult& r : results)
-      if (r.name == name) return r;
-    results.push_back(measure(name, s.model, s.field, ro, tf, camera, o.frames));
-    return results.back();
-  };
   auto with = [&](auto change) {
     RenderOptions ro = s.base;
     change(ro);
     return ro;
   };
+  const TransferFunction tf80 = hiding80(s.tf);
+  std::vector<Variant> variants = {{"regions, kd, adaptive", s.base, s.tf}};
+  if (has("reconstruction"))
+    variants.push_back(
+        {"cell location", with([](RenderOptions& r) { r.reconstruction = Reconstruction::CellLocation; }), s.tf});
+  if (has("sampling"))
+    variants.push_back({"fixed-step sampling", with([](RenderOptions& r) { r.sampling = Sampling::Fixed; }), s.tf});
+  if (has("skipping")) {
+    variants.push_back({"hide 80%, skipping on", s.base, tf80});
+    variants.push_back({"hide 80%, skipping off", with([](RenderOptions& r) { r.spaceSkipping = false; }), tf80});
+  }
+  if (has("traversal"))
+    variants.push_back({"embree traversal", with([](RenderOptions& r) { r.traversal = TraversalKind::Embree; }), s.tf});
+  const std::vector<VariantResult> results = measureInterleaved(variants, s.model, s.field, camera, o.frames);
+  auto result = [&](const char* name) -> const VariantResult& {
+    for (const VariantResult& r : results)
+      if (r.name == name) return r;
+    fail("internal: no variant ", name);
+  };
 
   nlohmann::json ratios;
   auto diffJson = [](const ImageDiff& d) { return nlohmann::json{{"rmse", d.rmse}, {"max_abs", d.maxAbs}}; };
-  // Results are copied out of `results` before the next run, which may grow the vector.
-  const VariantResult base = run("regions, kd, adaptive", s.base, s.tf);
+  const VariantResult& base = result("regions, kd, adaptive");
   if (has("reconstruction")) {
-    const VariantResult cells =
-        run("cell location", with([](RenderOptions& r) { r.reconstruction = Reconstruction::CellLocation; }), s.tf);
+    const VariantResult& cells = result("cell location");
     ratios["cells_over_regions_time"] = cells.stats.seconds / base.stats.seconds;
     ratios["cells_vs_regions_image"] = diffJson(difference(cells.image, base.image));
   }
   if (has("sampling")) {
-    const VariantResult fixed = run("fixed-step sampling", with([](RenderOptions& r) { r.sampling = Sampling::Fixed; }), s.tf);
+    const VariantResult& fixed = result("fixed-step sampling");
     ratios["fixed_over_adaptive_samples"] = double(fixed.stats.samples) / double(std::max<uint64_t>(base.stats.samples, 1));
     ratios["fixed_over_adaptive_time"] = fixed.stats.seconds / base.stats.seconds;
     ratios["adaptive_vs_fixed_image"] = diffJson(difference(base.image, fixed.image));
   }
   if (has("skipping")) {
-    const TransferFunction tf80 = hiding80(s.tf);
-    const VariantResult on = run("hide 80%, skipping on", s.base, tf80);
-    const VariantResult off = run("hide 80%, skipping off", with([](RenderOptions& r) { r.spaceSkipping = false; }), tf80);
+    const VariantResult& on = result("hide 80%, skipping on");
+    const VariantResult& off = result("hide 80%, skipping off");
     ratios["skip_off_over_on_time"] = off.stats.seconds / on.stats.seconds;
     ratios["skip_on_vs_off_image"] = diffJson(difference(on.image, off.image));
   }
   if (has("traversal")) {
-    const VariantResult embree =
-        run("embree traversal", with([](RenderOptions& r) { r.traversal = TraversalKind::Embree; }), s.tf);
+    const VariantResult& embree = result("embree traversal");
     ratios["embree_over_kd_time"] = embree.stats.seconds / base.stats.seconds;
     ratios["embree_vs_kd_image"] = diffJson(difference(embree.image, base.image));
   }
@@ -280,9 +305,9 @@ void runCases(const Setup& s, const BenchOptions& o) {
   j["frames"] = o.frames;
   j["build"]["cell_locator_seconds"] = locatorSeconds;
   j["build"]["cell_locator_nodes"] = locatorNodes;
-  nlohmann::json variants = nlohmann::json::array();
+  nlohmann::json variantsJson = nlohmann::json::array();
   for (const VariantResult& r : results)
-    variants.push_back({{"name", r.name},
+    variantsJson.push_back({{"name", r.name},
                         {"frame_seconds", r.stats.seconds},
                         {"rays", r.stats.rays},
                         {"samples", r.stats.samples},
@@ -291,7 +316,7 @@ void runCases(const Setup& s, const BenchOptions& o) {
                         {"visible_regions", r.visibleRegions},
                         {"traversal", r.traversal},
                         {"transfer_function_update_seconds", r.updateSeconds}});
-  j["variants"] = variants;
+  j["variants"] = variantsJson;
   j["ratios"] = ratios;
   j["memory"]["peak_rss_bytes"] = peakRssBytes();
   j["memory"]["cell_locator_bytes"] = locatorNodes * 16 + s.model.bricks.size() * 4;
@@ -456,7 +481,7 @@ void addBench(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("bench", "Measure renderer variants, or frame time over an orbit of views");
   o->in.add(*cmd);
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Frames timed per variant (median, after one warm-up)")->capture_default_str();
+  cmd->add_option("--frames", o->frames, "Rounds of one frame per variant, interleaved (median, after a warm-up)")->capture_default_str();
   cmd->add_option("--cases", o->cases, "all, or a comma list of: reconstruction, sampling, skipping, traversal")
       ->capture_default_str();
   CLI::Option* orbit = cmd->add_option("--orbit", o->orbit, "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
