@@ -97,11 +97,9 @@ std::vector<uint8_t> Coverage::covered(size_t i) const {
   return mask;
 }
 
-float toFloat32(double value, const std::function<std::string()>& where) {
-  if (std::isnan(value)) fail(where(), " is NaN");
-  if (!std::isfinite(value) || std::abs(value) > 3.4028234663852886e38)
-    fail(where(), " is ", value, ", outside the float32 range");
-  return float(value);
+void badValue(double value, const std::string& where) {
+  if (std::isnan(value)) fail(where, " is NaN");
+  fail(where, " is ", value, ", outside the float32 range");
 }
 
 void appendLeafCells(CellSet& set, const Patch& patch, const std::vector<uint8_t>& covered,

@@ -5,6 +5,7 @@
 
 #include "exabricks/amr/cells.h"
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -48,9 +49,15 @@ private:
   std::function<std::string(size_t)> name_;
 };
 
+/// Throws the error for a value that is not a finite float32; `where` names file, record, field.
+[[noreturn]] void badValue(double value, const std::string& where);
+
 /// Converts a value to float32; NaN, infinities and values outside the float32 range throw
-/// with `where` (file, record and field) in the message.
-float toFloat32(double value, const std::function<std::string()>& where);
+/// with `where()` (file, record and field) in the message. Inline: it runs once per value.
+template <typename Where> inline float toFloat32(double value, Where&& where) {
+  if (std::abs(value) <= 3.4028234663852886e38) return float(value); // false for NaN and inf
+  badValue(value, where());
+}
 
 /// Appends the uncovered cells of `patch` to `set`; `values[f]` holds the patch's values of
 /// field f (x fastest, one per cell). Checks the lattice range.
