@@ -36,6 +36,7 @@ struct ChomboFixture {
   int numLevels = 3;
   bool nanValue = false;
   bool shortData = false;
+  bool badDx = false; ///< level 2's dx disagrees with the ratios
   std::vector<std::vector<Box>> levels{{{{0, 0, 0}, {3, 7, 7}}, {{4, 0, 0}, {7, 7, 7}}},
                                        {{{4, 4, 4}, {7, 7, 7}}},
                                        {{{16, 16, 16}, {23, 23, 23}}, {{24, 16, 16}, {27, 19, 19}}}};
@@ -58,7 +59,7 @@ struct ChomboFixture {
     for (int l = 0; l < 3; ++l) {
       const std::string g = "/level_" + std::to_string(l);
       w.group(g);
-      w.attrDoubles(g, "dx", {dx(l)});
+      w.attrDoubles(g, "dx", {badDx && l == 2 ? 1.5 * dx(l) : dx(l)});
       w.attrInts(g, "ref_ratio", {ratios()[size_t(l)]});
       w.group(g + "/data_attributes");
       w.attrIntCompound(g + "/data_attributes", "outputGhost", {"intvecti", "intvectj", "intvectk"}, {ghost, ghost, ghost});

@@ -99,6 +99,7 @@ TEST(Chombo, BadFilesAreRejectedClearly) {
   expectIn(errorFor("nan", [](ChomboFixture& f) { f.nanValue = true; }), {"nan.3d.hdf5", "level 2 box 0", "density", "NaN"});
   expectIn(errorFor("short", [](ChomboFixture& f) { f.shortData = true; }), {"short.3d.hdf5", "level_1/data:datatype=0", "values"});
   expectIn(errorFor("levels", [](ChomboFixture& f) { f.numLevels = 4; }), {"levels.3d.hdf5", "level_3", "missing group"});
+  expectIn(errorFor("dx", [](ChomboFixture& f) { f.badDx = true; }), {"dx.3d.hdf5", "level_2", "inconsistent headers"});
   // A truncated file keeps its signature but cannot be opened.
   ChomboFixture f;
   f.file = dir / "cut.3d.hdf5";
