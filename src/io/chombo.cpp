@@ -178,6 +178,11 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
   for (size_t i = 0; i < patches.size(); ++i) {
     const auto [l, b] = owner[i];
     const ChomboLevel& lv = h.levels[l];
+    const std::vector<uint8_t> covered = coverage.covered(i);
+    if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
+      progress.advance(1); // fully refined: its data is not needed
+      continue;
+    }
     const vec3l g = lv.ghost;
     const vec3l n = lv.boxes[b].cells + g * int64_t(2);
     const int64_t stored = n.x * n.y * n.z;
@@ -198,7 +203,7 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
             }));
           }
     }
-    io::appendLeafCells(set, patches[i], coverage.covered(i), values, patchName(i));
+    io::appendLeafCells(set, patches[i], covered, values, patchName(i));
     progress.advance(1);
   }
   progress.finish();
