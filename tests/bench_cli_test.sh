@@ -34,7 +34,8 @@ assert r[\"skip_on_vs_off_image\"][\"max_abs\"]==0 and r[\"embree_vs_kd_image\"]
 assert r[\"cells_vs_regions_image\"][\"rmse\"]<1e-4
 assert j[\"memory\"][\"peak_rss_bytes\"]>0 and j[\"memory\"][\"model_bytes\"]>0
 assert j[\"build\"][\"cell_locator_nodes\"]==2*j[\"bricks\"]-1
-assert j[\"cells\"]==sum(l[\"cells\"] for l in j[\"levels\"])'"
+assert j[\"cells\"]==sum(l[\"cells\"] for l in j[\"levels\"])
+assert j[\"load_average_at_start\"]>=0 and j[\"load_average_at_end\"]>=0'"
 check "bench --cases picks cases" bash -c "'$exe' -q bench b.cells --size 16x16 --frames 1 --cases sampling --json | $py -c '
 import json,sys; j=json.load(sys.stdin)
 assert [v[\"name\"] for v in j[\"variants\"]]==[\"regions, kd, adaptive\",\"fixed-step sampling\"]

@@ -42,6 +42,15 @@ int tbbThreads() { return tbb::this_task_arena::max_concurrency(); }
 
 const std::vector<std::string> kCaseNames = {"reconstruction", "sampling", "skipping", "traversal"};
 
+/// The machine's load average over the last minute (/proc/loadavg), or -1 where unknown: the
+/// figures are only as quiet as the machine was.
+double loadAverage() {
+  std::ifstream in("/proc/loadavg");
+  double l = -1;
+  if (!(in >> l)) return -1;
+  return l;
+}
+
 /// Peak resident set size of this process so far (VmHWM), bytes; 0 where unknown.
 uint64_t peakRssBytes() {
   std::ifstream in("/proc/self/status");
@@ -203,6 +212,7 @@ struct Setup {
   int field = 0;
   double loadSeconds = 0;
   uint64_t peakAfterLoad = 0;
+  double loadAtStart = -1;
   RenderOptions base;
   TransferFunction tf;
   box3d worldBox;
@@ -223,6 +233,8 @@ nlohmann::json describe(const Setup& s, const BenchOptions& o) {
   j["width"] = s.base.width;
   j["height"] = s.base.height;
   j["threads"] = tbbThreads();
+  j["load_average_at_start"] = s.loadAtStart;
+  j["load_average_at_end"] = loadAverage();
   j["build"] = {{"load_seconds", s.loadSeconds},
                 {"bricks_seconds", s.model.stats.brickSeconds},
                 {"regions_seconds", s.model.stats.regionSeconds},
@@ -325,17 +337,19 @@ void runCases(const Setup& s, const BenchOptions& o) {
     std::cout << j.dump(2) << "\n";
     return;
   }
-  std::printf("dataset %s: %llu cells, %llu bricks, %llu regions; %dx%d, %d threads, median of %d frames after a "
-              "warm-up, early termination off\n",
+  std::printf("dataset %s: %llu cells, %llu bricks, %llu regions; %dx%d, %d threads, median of %d interleaved "
+              "rounds after a warm-up, early termination off\n",
               o.in.name().c_str(), (unsigned long long)j["cells"].get<uint64_t>(),
               (unsigned long long)j["bricks"].get<uint64_t>(), (unsigned long long)j["regions"].get<uint64_t>(),
               s.base.width, s.base.height, tbbThreads(), o.frames);
   std::printf("build: load %.3f s (bricks %.3f s, regions %.3f s, value ranges %.3f s), cell locator %.3f s\n",
               s.loadSeconds, s.model.stats.brickSeconds, s.model.stats.regionSeconds, s.model.stats.rangeSeconds,
               locatorSeconds);
-  std::printf("memory: model %.1f MiB, peak RSS %.1f MiB (%.1f MiB after load)\n\n",
+  std::printf("memory: model %.1f MiB, peak RSS %.1f MiB (%.1f MiB after load)\n",
               double(j["memory"]["model_bytes"].get<uint64_t>()) / 1048576.0, double(peakRssBytes()) / 1048576.0,
               double(s.peakAfterLoad) / 1048576.0);
+  std::printf("load average (1 min): %.2f at the start, %.2f at the end\n\n", j["load_average_at_start"].get<double>(),
+              j["load_average_at_end"].get<double>());
   std::printf("%-26s %9s %13s %12s %11s %9s\n", "variant", "frame s", "samples", "regions", "Msamples/s", "visible");
   for (const VariantResult& r : results)
     std::printf("%-26s %9.3f %13llu %12llu %11.2f %9zu\n", r.name.c_str(), r.stats.seconds,
@@ -443,6 +457,8 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
   }
   std::printf("orbit of %d views around %s (%dx%d, %d threads, early termination off)\n", o.orbit, o.in.name().c_str(),
               s.base.width, s.base.height, tbbThreads());
+  std::printf("load average (1 min): %.2f at the start, %.2f at the end\n", j["load_average_at_start"].get<double>(),
+              j["load_average_at_end"].get<double>());
   for (const char* key : {"frame_seconds", "samples", "regions_visited"})
     std::printf("%-16s min %.4g  median %.4g  max %.4g  mean %.4g\n", key, j[key]["min"].get<double>(),
                 j[key]["median"].get<double>(), j[key]["max"].get<double>(), j[key]["mean"].get<double>());
@@ -460,6 +476,7 @@ void run(const BenchOptions& o) {
   s.base.earlyTermination = false;
   s.base.autoTraversal = false;
   s.base.traversal = TraversalKind::KdTree;
+  s.loadAtStart = loadAverage();
   Timer loadTimer;
   s.model = loadModel(o.in.input, o.in.loadOptions(true));
   s.loadSeconds = loadTimer.seconds();
