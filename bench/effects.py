@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Frame time of each rendering effect on one dataset, in one run: volume alone, iso-surface
-alone, volume + iso-surface, volume + iso-surface + mesh + ambient occlusion (2 rays), and the
-same with a clipping plane. Prints a table and the cost of each effect relative to the volume
+alone, volume + iso-surface, + mesh, + ambient occlusion (2 rays), and the same with a clipping
+plane. Prints a table and the cost of each effect relative to the volume
 alone. Not a test.
 
 usage: effects.py EXABRICKS [INPUT] [--size 1024x1024] [--frames 3] [--iso VALUE]
@@ -90,6 +90,7 @@ def main():
             ("volume", []),
             ("iso-surface", ["--no-volume"] + iso_opt),
             ("volume + iso", iso_opt),
+            ("volume + iso + mesh", iso_opt + ["--mesh", mesh]),
             ("volume + iso + mesh + AO 2", iso_opt + ["--mesh", mesh, "--ao", "2"]),
             ("... + clipping plane", iso_opt + ["--mesh", mesh, "--ao", "2"] + clip),
         ]
