@@ -2,22 +2,11 @@
 # End-to-end checks of `exabricks bench`: the JSON it prints, the orbit study's CSV and plot, and
 # its errors. Small images and one frame: this checks outputs, not speed.
 set -u
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 exe=${EXABRICKS:?set EXABRICKS to the exabricks binary}
 dir=${1:?usage: bench_cli_test.sh TMPDIR}
 rm -rf "$dir" && mkdir -p "$dir" && cd "$dir" || exit 1
-failures=0
-check() { # description, then a command that must succeed
-  local what=$1; shift
-  if "$@"; then echo "ok   $what"; else echo "FAIL $what"; failures=$((failures + 1)); fi
-}
-fails_with() { # description, expected message part, command that must fail with it
-  local what=$1 part=$2; shift 2
-  local out rc
-  out=$("$@" 2>&1 >/dev/null); rc=$?
-  if [ $rc -ne 0 ] && grep -qF -- "$part" <<<"$out"; then echo "ok   $what"
-  else echo "FAIL $what (rc=$rc): $out"; failures=$((failures + 1)); fi
-}
-py=/usr/bin/python3; [ -x $py ] || py=python3
+source "$here/cli_checks.sh"
 
 check "generate a small dataset" "$exe" -q generate -s blobs -n 20000 --seed 2 -o b.cells
 check "bench --json reports every variant and ratio" bash -c "'$exe' -q bench b.cells --size 24x24 --frames 1 --json > cases.json && $py -c '

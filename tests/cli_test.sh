@@ -1,22 +1,11 @@
 #!/usr/bin/env bash
 # End-to-end checks of the exabricks command line: outputs, JSON, exit codes and error messages.
 set -u
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 exe=${EXABRICKS:?set EXABRICKS to the exabricks binary}
 dir=${1:?usage: cli_test.sh TMPDIR}
 rm -rf "$dir" && mkdir -p "$dir" && cd "$dir" || exit 1
-failures=0
-check() { # description, then a command that must succeed
-  local what=$1; shift
-  if "$@"; then echo "ok   $what"; else echo "FAIL $what"; failures=$((failures + 1)); fi
-}
-fails_with() { # description, expected message part, command that must fail with it
-  local what=$1 part=$2; shift 2
-  local out rc
-  out=$("$@" 2>&1 >/dev/null); rc=$?
-  if [ $rc -ne 0 ] && grep -qF -- "$part" <<<"$out"; then echo "ok   $what"
-  else echo "FAIL $what (rc=$rc): $out"; failures=$((failures + 1)); fi
-}
-py=/usr/bin/python3; [ -x $py ] || py=python3
+source "$here/cli_checks.sh"
 
 check "info on the default dataset" "$exe" info
 check "info --json has the required keys" bash -c "'$exe' info --json | $py -c '

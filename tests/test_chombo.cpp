@@ -1,3 +1,4 @@
+#include "errors.h"
 #include "exabricks/core/error.h"
 #include "exabricks/io/chombo.h"
 #include "exabricks/io/load.h"
@@ -12,22 +13,10 @@
 #include <tuple>
 
 using namespace exa;
+using namespace exa::test;
 namespace fs = std::filesystem;
 using chombo_fixture::ChomboFixture;
 using chombo_fixture::truth;
-
-namespace {
-
-std::string loadError(const std::string& path) {
-  try {
-    loadCells(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
-} // namespace
 
 TEST(Chombo, LeafCellsAndValuesBothPrecisionsWithGhostCells) {
   for (int variant = 0; variant < 4; ++variant) {

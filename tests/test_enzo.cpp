@@ -1,3 +1,4 @@
+#include "errors.h"
 #include "exabricks/core/error.h"
 #include "exabricks/io/enzo.h"
 #include "exabricks/io/load.h"
@@ -15,6 +16,7 @@
 #include <tuple>
 
 using namespace exa;
+using namespace exa::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -97,19 +99,6 @@ struct EnzoFixture {
     }
   }
 };
-
-std::string loadError(const std::string& path) {
-  try {
-    loadCells(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
-void expectIn(const std::string& m, std::initializer_list<const char*> parts) {
-  for (const char* p : parts) EXPECT_NE(m.find(p), std::string::npos) << "'" << p << "' not in: " << m;
-}
 
 } // namespace
 

@@ -1,3 +1,4 @@
+#include "errors.h"
 #include "exabricks/core/error.h"
 #include "exabricks/io/load.h"
 #include "exabricks/io/raw.h"
@@ -10,6 +11,7 @@
 #include <fstream>
 
 using namespace exa;
+using namespace exa::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -69,15 +71,6 @@ void writeRaw(const fs::path& path, const std::string& type, const std::vector<f
       out.write(reinterpret_cast<const char*>(&d), 8);
     }
   }
-}
-
-std::string loadError(const std::string& path, const LoadOptions& o = {}) {
-  try {
-    loadCells(path, o);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
 }
 
 } // namespace

@@ -1,3 +1,4 @@
+#include "errors.h"
 #include "exabricks/core/error.h"
 #include "exabricks/io/load.h"
 #include "exabricks/io/vtk_amr.h"
@@ -14,6 +15,7 @@
 #include <tuple>
 
 using namespace exa;
+using namespace exa::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -180,19 +182,6 @@ struct VtkFixture {
     if (truncate && last) fs::resize_file(path, fs::file_size(path) - 60); // ends inside the data
   }
 };
-
-std::string loadError(const std::string& path) {
-  try {
-    loadCells(path);
-  } catch (const Error& e) {
-    return e.what();
-  }
-  return "no error";
-}
-
-void expectIn(const std::string& m, std::initializer_list<const char*> parts) {
-  for (const char* p : parts) EXPECT_NE(m.find(p), std::string::npos) << "'" << p << "' not in: " << m;
-}
 
 } // namespace
 

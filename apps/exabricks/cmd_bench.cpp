@@ -59,23 +59,12 @@ uint64_t peakRssBytes() {
   return 0;
 }
 
-void parseSize(const std::string& s, int& w, int& h) {
-  char x = 0;
-  std::istringstream in(s);
-  if (!(in >> w >> x >> h) || x != 'x' || !in.eof() || w < 1 || h < 1 || w > 32768 || h > 32768)
-    fail("--size expects WIDTHxHEIGHT with each in 1..32768, got '", s, "'");
-}
-
 /// The render command's default transfer function: viridis, a linear opacity ramp, scaled so
 /// that a ray through the whole dataset at full opacity gathers an optical depth of about eight.
 TransferFunction defaultTransferFunction(const Model& model) {
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
-  const box3i b = model.cellBounds();
-  int finest = kMaxLevel;
-  for (const Brick& br : model.bricks) finest = std::min(finest, br.level);
-  const float extentCells = float(reduceMax(b.size())) / float(1 << finest);
-  tf.opacityScale = std::min(1.f, 8.f / std::max(1.f, extentCells));
+  tf.opacityScale = defaultOpacityScale(model);
   return tf;
 }
 

@@ -84,13 +84,6 @@ vec3d toVec(const std::vector<double>& v, const char* what) {
   return {v[0], v[1], v[2]};
 }
 
-void parseSize(const std::string& s, int& w, int& h) {
-  char x = 0;
-  std::istringstream in(s);
-  if (!(in >> w >> x >> h) || x != 'x' || !in.eof() || w < 1 || h < 1 || w > 32768 || h > 32768)
-    fail("--size expects WIDTHxHEIGHT with each in 1..32768, got '", s, "'");
-}
-
 TransferFunction makeTransferFunction(const RenderCmdOptions& o, const Model& model) {
   TransferFunction tf;
   if (!o.tfFile.empty()) {
@@ -117,13 +110,7 @@ TransferFunction makeTransferFunction(const RenderCmdOptions& o, const Model& mo
   if (o.opacityScale > 0.f) {
     tf.opacityScale = o.opacityScale;
   } else if (o.tfFile.empty()) {
-    // Opacity is per finest cell: by default a ray through the whole dataset at full opacity
-    // gathers an optical depth of about eight.
-    const box3i b = model.cellBounds();
-    int finest = kMaxLevel;
-    for (const Brick& br : model.bricks) finest = std::min(finest, br.level);
-    const float extentCells = float(reduceMax(b.size())) / float(1 << finest);
-    tf.opacityScale = std::min(1.f, 8.f / std::max(1.f, extentCells));
+    tf.opacityScale = defaultOpacityScale(model);
   }
   return tf;
 }

@@ -2,7 +2,9 @@
 
 #include "exabricks/amr/scenes.h"
 
+#include <algorithm>
 #include <cstdio>
+#include <sstream>
 
 namespace exa::cli {
 
@@ -39,6 +41,22 @@ LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
 }
 
 std::string InputOptions::name() const { return input.empty() ? kDefaultDatasetName : input; }
+
+void parseSize(const std::string& text, int& width, int& height) {
+  char x = 0;
+  std::istringstream in(text);
+  if (!(in >> width >> x >> height) || x != 'x' || !in.eof() || width < 1 || height < 1 || width > 32768 ||
+      height > 32768)
+    fail("--size expects WIDTHxHEIGHT with each in 1..32768, got '", text, "'");
+}
+
+float defaultOpacityScale(const Model& model) {
+  const box3i b = model.cellBounds();
+  int finest = kMaxLevel;
+  for (const Brick& br : model.bricks) finest = std::min(finest, br.level);
+  const float extentCells = float(reduceMax(b.size())) / float(1 << finest);
+  return std::min(1.f, 8.f / std::max(1.f, extentCells));
+}
 
 nlohmann::json toJson(const range1f& r) {
   if (r.empty()) return {{"min", nullptr}, {"max", nullptr}};
