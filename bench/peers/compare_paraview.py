@@ -1,0 +1,255 @@
+#!/usr/bin/python3
+"""Renders one AMReX plotfile with exabricks and with ParaView (pvbatch, AMR volume
+representation) at the same resolution, camera, value range, colour map and opacity ramp;
+prints the times and their ratios and writes both images side by side into one PNG. Not a
+test. Run with Debian's Python; it starts ParaView's pvbatch under a virtual X server with
+Mesa's llvmpipe software OpenGL (packages paraview, python3-paraview, xvfb):
+
+  /usr/bin/python3 bench/peers/compare_paraview.py build/exabricks /work/shared/data/amrex/advection_3d/plt_drop \\
+      --size 1024 --out /tmp/peers-pv
+
+The same file is the script pvbatch runs (given one JSON file of settings). See
+bench/peers/README.md for what each renderer does differently.
+"""
+import argparse
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+
+def camera(lower, upper, azimuth, elevation, fov):
+    """The camera exabricks' Camera::frame builds: the bounding sphere fills the view."""
+    deg = math.pi / 180.0
+    centre = [(a + b) / 2 for a, b in zip(lower, upper)]
+    radius = 0.5 * math.sqrt(sum((b - a) ** 2 for a, b in zip(lower, upper)))
+    d = [math.cos(elevation * deg) * math.cos(azimuth * deg),
+         math.cos(elevation * deg) * math.sin(azimuth * deg), math.sin(elevation * deg)]
+    distance = radius / math.sin(0.5 * fov * deg)
+    position = [c + x * distance for c, x in zip(centre, d)]
+    up = [0.0, 1.0, 0.0] if abs(d[2]) > 0.999 else [0.0, 0.0, 1.0]
+    return position, centre, up
+
+
+# ---------------------------------------------------------------------------------------------
+# The ParaView side: runs inside pvbatch.
+
+def paraview_worker(cfg_path):
+    cfg = json.load(open(cfg_path))
+    from paraview.simple import (AMReXBoxLibGridReader, CreateView, Show, Render, SaveScreenshot,
+                                 GetColorTransferFunction, GetOpacityTransferFunction)
+    import paraview
+    result = {"paraview_version": paraview.__version__ if hasattr(paraview, "__version__") else None}
+
+    # Load: the reader's metadata, then every level of the one field, as a vtkOverlappingAMR.
+    t0 = time.perf_counter()
+    reader = AMReXBoxLibGridReader(FileNames=[cfg["plotfile"]])
+    reader.UpdatePipelineInformation()
+    levels = int(reader.GetPropertyValue("NumLevels"))
+    reader.Level = levels  # the finest level to read (0 is the coarsest)
+    reader.CellArrayStatus = [cfg["field"]]
+    reader.UpdatePipeline()
+    result["load_seconds"] = time.perf_counter() - t0
+    info = reader.GetDataInformation()
+    result["reader"] = {"levels_read": levels + 1, "blocks": int(reader.GetPropertyValue("NumBlocks")),
+                        "cells": int(info.GetNumberOfCells()), "type": info.GetDataSetTypeAsString()}
+
+    size = cfg["size"]
+    view = CreateView("RenderView")
+    view.ViewSize = [size, size]
+    view.OrientationAxesVisibility = 0
+    if hasattr(view, "UseColorPaletteForBackground"):
+        view.UseColorPaletteForBackground = 0
+    view.Background = [0.0, 0.0, 0.0]
+    view.CameraPosition = cfg["position"]
+    view.CameraFocalPoint = cfg["look_at"]
+    view.CameraViewUp = cfg["up"]
+    view.CameraViewAngle = cfg["fov"]  # VTK's view angle is the vertical one, as exabricks'
+    view.CameraParallelProjection = 0
+
+    rep = Show(reader, view)
+    rep.SetRepresentationType("Volume")
+    rep.ColorArrayName = ["CELLS", cfg["field"]]
+    lo, hi = cfg["range"]
+    lut = GetColorTransferFunction(cfg["field"])
+    lut.ApplyPreset("Viridis (matplotlib)", True)
+    lut.RescaleTransferFunction(lo, hi)
+    lut.AutomaticRescaleRangeMode = "Never"
+    pwf = GetOpacityTransferFunction(cfg["field"])
+    # exabricks' ramp: opacity 0 at the lowest value to opacity_scale per finest cell width at
+    # the highest; VTK corrects the opacity for its step from ScalarOpacityUnitDistance.
+    pwf.Points = [lo, 0.0, 0.5, 0.0, hi, cfg["opacity_scale"], 0.5, 0.0]
+    rep.LookupTable = lut
+    rep.ScalarOpacityFunction = pwf
+    rep.ScalarOpacityUnitDistance = cfg["finest_width"]
+    if cfg.get("samples"):
+        rep.NumberOfSamples = cfg["samples"]
+    result["representation"] = {p: str(rep.GetPropertyValue(p)) for p in (
+        "VolumeRenderingMode", "ResamplingMode", "NumberOfSamples", "Shade", "ScalarOpacityUnitDistance")}
+
+    def timed_render():
+        t = time.perf_counter()
+        Render(view)
+        return time.perf_counter() - t
+
+    renders = {}
+    for shade in (0, 1):
+        rep.Shade = shade
+        first = timed_render()  # warm-up: for the very first, the resampling to a uniform grid
+        times = [timed_render() for _ in range(cfg["frames"])]
+        renders["shaded" if shade else "unshaded"] = {"first": first, "times": times,
+                                                       "median": statistics.median(times)}
+        png = os.path.join(cfg["out"], "paraview-shaded.png" if shade else "paraview.png")
+        SaveScreenshot(png, view, ImageResolution=[size, size], OverrideColorPalette="BlackBackground")
+    result["renders"] = renders
+
+    # What VTK ended up using, where the objects can be reached.
+    try:
+        window = view.GetRenderWindow()
+        caps = window.ReportCapabilities()
+        result["opengl"] = [l.strip() for l in caps.splitlines() if "renderer" in l.lower() or "version" in l.lower()][:3]
+    except Exception as e:  # noqa: BLE001
+        result["opengl"] = [f"unavailable: {e}"]
+    json.dump(result, open(os.path.join(cfg["out"], "paraview.json"), "w"), indent=1)
+
+
+# ---------------------------------------------------------------------------------------------
+# The driver: Debian's Python.
+
+def run_exabricks(exe, plot, field, size, pos, look, up, fov, value_range, opacity_scale, out_png, extra, frames):
+    common = [plot, "-f", field, "--size", f"{size}x{size}", "--colormap", "viridis",
+              "--position", ",".join(map(repr, pos)), "--look-at", ",".join(map(repr, look)),
+              "--up", ",".join(map(repr, up)), "--fov", repr(fov),
+              "--range", f"{value_range[0]!r},{value_range[1]!r}", "--opacity-scale", repr(opacity_scale),
+              "--background", "0,0,0"] + extra
+    t0 = time.perf_counter()
+    subprocess.run([exe, "-q", "render", "-o", out_png] + common, check=True)
+    wall = time.perf_counter() - t0
+    stats = json.loads(subprocess.run([exe, "-q", "render", "-o", out_png, "--stats", "--json", "--frames", str(frames)]
+                                      + common, check=True, capture_output=True, text=True).stdout)
+    return wall, stats
+
+
+def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--paraview-worker":
+        return paraview_worker(sys.argv[2])
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("exabricks")
+    p.add_argument("plotfile")
+    p.add_argument("--field", default="phi")
+    p.add_argument("--size", type=int, default=1024)
+    p.add_argument("--azimuth", type=float, default=30.0)
+    p.add_argument("--elevation", type=float, default=25.0)
+    p.add_argument("--fov", type=float, default=40.0)
+    p.add_argument("--frames", type=int, default=3, help="frames timed (median), after a warm-up")
+    p.add_argument("--samples", default="",
+                   help="ParaView's resampling grid NXxNYxNZ (default: the representation's own default)")
+    p.add_argument("--pvbatch", default="pvbatch")
+    p.add_argument("--out", default="peer-comparison-paraview")
+    a = p.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    print("uptime:", subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
+
+    info = json.loads(subprocess.run([a.exabricks, "-q", "info", a.plotfile, "-f", a.field, "--json"], check=True,
+                                     capture_output=True, text=True).stdout)
+    lower, upper = info["bounds"]["world"]["lower"], info["bounds"]["world"]["upper"]
+    fr = [f for f in info["fields"] if f["name"] == a.field][0]["range"]
+    value_range = (fr["min"], fr["max"])
+    finest_cells = max((u - l) for l, u in zip(info["bounds"]["lattice"]["lower"], info["bounds"]["lattice"]["upper"]))
+    finest_width = max(u - l for l, u in zip(lower, upper)) / finest_cells
+    opacity_scale = min(1.0, 8.0 / finest_cells)  # exabricks' default, as in compare_yt.py
+    pos, look, up = camera(lower, upper, a.azimuth, a.elevation, a.fov)
+
+    # --- exabricks ---
+    ex_png = os.path.join(a.out, "exabricks.png")
+    ex_wall, ex = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
+                                opacity_scale, ex_png, [], a.frames)
+    _, ex_flat = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
+                               opacity_scale, os.path.join(a.out, "exabricks-unshaded.png"),
+                               ["--no-early-termination", "--shading", "none"], a.frames)
+
+    # --- ParaView ---
+    cfg = {"plotfile": os.path.abspath(a.plotfile), "field": a.field, "size": a.size, "position": pos,
+           "look_at": look, "up": up, "fov": a.fov, "range": list(value_range), "opacity_scale": opacity_scale,
+           "finest_width": finest_width, "frames": a.frames, "out": os.path.abspath(a.out),
+           "samples": [int(v) for v in a.samples.split("x")] if a.samples else None}
+    cfg_path = os.path.join(a.out, "paraview-settings.json")
+    json.dump(cfg, open(cfg_path, "w"), indent=1)
+    env = dict(os.environ, GALLIUM_DRIVER="llvmpipe", LP_NUM_THREADS="2")
+    side = max(1280, a.size + 256)
+    cmd = ["xvfb-run", "-a", "-s", f"-screen 0 {side}x{side}x24", a.pvbatch, os.path.abspath(__file__),
+           "--paraview-worker", cfg_path]
+    pv_json = os.path.join(a.out, "paraview.json")
+    if os.path.exists(pv_json):
+        os.remove(pv_json)
+    t0 = time.perf_counter()
+    # pvbatch may exit non-zero while tearing down its X window (GLXBadContext) after it has
+    # written its results; what counts is that the results file exists.
+    rc = subprocess.run(cmd, env=env).returncode
+    pv_wall = time.perf_counter() - t0
+    if not os.path.exists(pv_json):
+        sys.exit(f"pvbatch failed (exit status {rc}) before writing {pv_json}")
+    pv = json.load(open(pv_json))
+    pv["pvbatch_exit_status"] = rc
+
+    ex_frame, ex_flat_frame = ex["frame_seconds"], ex_flat["frame_seconds"]
+    pr = pv["renders"]
+    rows = [
+        ("exabricks, full quality (shaded, early termination), frame", ex_frame),
+        ("exabricks, unshaded, early termination off, frame", ex_flat_frame),
+        ("exabricks, load + build (plotfile read, bricks, regions)", ex["load_seconds"]),
+        ("exabricks, end to end (one process: load, build, one frame, PNG)", ex_wall),
+        ("ParaView, load (reader: all levels, one field)", pv["load_seconds"]),
+        ("ParaView, first render (resampling + render), unshaded", pr["unshaded"]["first"]),
+        ("ParaView, render, unshaded (median)", pr["unshaded"]["median"]),
+        ("ParaView, first render after switching shading on", pr["shaded"]["first"]),
+        ("ParaView, render, shaded (median)", pr["shaded"]["median"]),
+        ("ParaView, whole pvbatch process (X server, start, load, all renders, PNGs)", pv_wall),
+    ]
+    print(f"dataset {a.plotfile} ({info['cells']} leaf cells), field {a.field}, {a.size}x{a.size}, "
+          f"value range [{value_range[0]:.6g}, {value_range[1]:.6g}]")
+    print("ParaView:", json.dumps({k: pv[k] for k in ("reader", "representation", "opengl")}))
+    for name, t in rows:
+        print(f"  {name:76s} {t:8.3f} s")
+    ratios = {
+        "ParaView shaded render / exabricks full-quality frame": pr["shaded"]["median"] / ex_frame,
+        "ParaView unshaded render / exabricks unshaded frame (no early termination)":
+            pr["unshaded"]["median"] / ex_flat_frame,
+        "ParaView first render / exabricks full-quality frame": pr["unshaded"]["first"] / ex_frame,
+        "ParaView load / exabricks load + build": pv["load_seconds"] / ex["load_seconds"],
+        "ParaView load + first render / exabricks end to end":
+            (pv["load_seconds"] + pr["unshaded"]["first"]) / ex_wall,
+    }
+    print("ratios (ParaView / exabricks):")
+    for name, r in ratios.items():
+        print(f"  {name:76s} {r:8.2f}x")
+
+    # Side by side, one PNG: exabricks (full quality) | ParaView (shaded).
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    ex_img = plt.imread(ex_png)[..., :3]
+    pv_img = plt.imread(os.path.join(a.out, "paraview-shaded.png"))[..., :3]
+    fig, axes = plt.subplots(1, 2, figsize=(12, 6.6), dpi=100)
+    samples = pv["representation"]["NumberOfSamples"]
+    for ax, img, title in ((axes[0], ex_img, f"exabricks: frame {ex_frame:.2f} s (basis, shaded, adaptive)"),
+                           (axes[1], pv_img, f"ParaView {pv.get('paraview_version') or ''}: render "
+                                             f"{pr['shaded']['median']:.2f} s (resampled {samples}, shaded)")):
+        ax.imshow(img)
+        ax.set_title(title, fontsize=10)
+        ax.axis("off")
+    fig.suptitle(f"{os.path.basename(os.path.normpath(a.plotfile))}: {info['cells']:,} leaf cells, "
+                 f"{a.size}x{a.size}, same camera, range and colour map", fontsize=12)
+    fig.tight_layout()
+    out_side = os.path.join(a.out, "side-by-side.png")
+    fig.savefig(out_side)
+    json.dump({"rows": dict(rows), "ratios": ratios, "paraview": pv}, open(os.path.join(a.out, "results.json"), "w"),
+              indent=1)
+    print(f"wrote {out_side}")
+
+
+if __name__ == "__main__":
+    sys.exit(main())
