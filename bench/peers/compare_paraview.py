@@ -13,25 +13,14 @@ bench/peers/README.md for what each renderer does differently.
 """
 import argparse
 import json
-import math
 import os
 import statistics
 import subprocess
 import sys
 import time
 
-
-def camera(lower, upper, azimuth, elevation, fov):
-    """The camera exabricks' Camera::frame builds: the bounding sphere fills the view."""
-    deg = math.pi / 180.0
-    centre = [(a + b) / 2 for a, b in zip(lower, upper)]
-    radius = 0.5 * math.sqrt(sum((b - a) ** 2 for a, b in zip(lower, upper)))
-    d = [math.cos(elevation * deg) * math.cos(azimuth * deg),
-         math.cos(elevation * deg) * math.sin(azimuth * deg), math.sin(elevation * deg)]
-    distance = radius / math.sin(0.5 * fov * deg)
-    position = [c + x * distance for c, x in zip(centre, d)]
-    up = [0.0, 1.0, 0.0] if abs(d[2]) > 0.999 else [0.0, 0.0, 1.0]
-    return position, centre, up
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from peer_common import camera, run_exabricks  # noqa: E402
 
 
 # ---------------------------------------------------------------------------------------------
@@ -119,20 +108,6 @@ def paraview_worker(cfg_path):
 # ---------------------------------------------------------------------------------------------
 # The driver: Debian's Python.
 
-def run_exabricks(exe, plot, field, size, pos, look, up, fov, value_range, opacity_scale, out_png, extra, frames):
-    common = [plot, "-f", field, "--size", f"{size}x{size}", "--colormap", "viridis",
-              "--position", ",".join(map(repr, pos)), "--look-at", ",".join(map(repr, look)),
-              "--up", ",".join(map(repr, up)), "--fov", repr(fov),
-              "--range", f"{value_range[0]!r},{value_range[1]!r}", "--opacity-scale", repr(opacity_scale),
-              "--background", "0,0,0"] + extra
-    t0 = time.perf_counter()
-    subprocess.run([exe, "-q", "render", "-o", out_png] + common, check=True)
-    wall = time.perf_counter() - t0
-    stats = json.loads(subprocess.run([exe, "-q", "render", "-o", out_png, "--stats", "--json", "--frames", str(frames)]
-                                      + common, check=True, capture_output=True, text=True).stdout)
-    return wall, stats
-
-
 def main():
     if len(sys.argv) == 3 and sys.argv[1] == "--paraview-worker":
         return paraview_worker(sys.argv[2])
@@ -161,7 +136,7 @@ def main():
     finest_cells = max((u - l) for l, u in zip(info["bounds"]["lattice"]["lower"], info["bounds"]["lattice"]["upper"]))
     finest_width = max(u - l for l, u in zip(lower, upper)) / finest_cells
     opacity_scale = min(1.0, 8.0 / finest_cells)  # exabricks' default, as in compare_yt.py
-    pos, look, up = camera(lower, upper, a.azimuth, a.elevation, a.fov)
+    pos, look, up, _ = camera(lower, upper, a.azimuth, a.elevation, a.fov)
 
     # --- exabricks ---
     ex_png = os.path.join(a.out, "exabricks.png")
