@@ -3,7 +3,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
-#include <embree3/rtcore.h>
+#include "embree_util.h"
 
 namespace exa {
 
@@ -27,10 +27,6 @@ struct RegionTraversal::EmbreeScene {
 };
 
 namespace {
-
-void errorCallback(void*, RTCError code, const char* message) {
-  logWarning(strCat("embree error ", int(code), ": ", message ? message : ""));
-}
 
 void boundsFunction(const RTCBoundsFunctionArguments* args) {
   const auto* p = static_cast<const Payload*>(args->geometryUserPtr);
@@ -87,10 +83,7 @@ double RegionTraversal::setVisible(const std::vector<uint8_t>& visible) {
 
   if (!embree_) {
     embree_ = std::make_unique<EmbreeScene>();
-    embree_->device = rtcNewDevice("");
-    if (!embree_->device)
-      fail("cannot create an Embree device (error ", int(rtcGetDeviceError(nullptr)), ")");
-    rtcSetDeviceErrorFunction(embree_->device, errorCallback, nullptr);
+    embree_->device = embree::newDevice();
   }
   EmbreeScene* es = embree_.get();
   if (es->scene) rtcReleaseScene(es->scene);
@@ -119,21 +112,7 @@ bool RegionTraversal::nextEmbree(const Ray& ray, float tnear, Segment& seg) cons
   if (!embree_ || embree_->primToRegion.empty()) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
-  RTCRayHit rh;
-  rh.ray.org_x = ray.org.x;
-  rh.ray.org_y = ray.org.y;
-  rh.ray.org_z = ray.org.z;
-  rh.ray.dir_x = ray.dir.x;
-  rh.ray.dir_y = ray.dir.y;
-  rh.ray.dir_z = ray.dir.z;
-  rh.ray.tnear = tnear;
-  rh.ray.tfar = ray.tmax;
-  rh.ray.time = 0.f;
-  rh.ray.mask = ~0u;
-  rh.ray.id = 0;
-  rh.ray.flags = 0;
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+  RTCRayHit rh = embree::makeRayHit(ray.org, ray.dir, tnear, ray.tmax);
   rtcIntersect1(embree_->scene, &context, &rh);
   if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
   seg.t0 = rh.ray.tfar;

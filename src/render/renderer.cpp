@@ -5,7 +5,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/mesh.h"
 
-#include <embree3/rtcore.h>
+#include "../accel/embree_util.h"
 
 #include <tbb/blocked_range2d.h>
 #include <tbb/combinable.h>
@@ -144,10 +144,6 @@ struct LayerTable {
 const vec3f kIsoColors[4] = {{0.80f, 0.80f, 0.78f}, {0.85f, 0.35f, 0.20f}, {0.20f, 0.45f, 0.85f},
                              {0.35f, 0.70f, 0.30f}};
 
-void embreeError(void*, RTCError code, const char* message) {
-  logWarning(strCat("embree error ", int(code), ": ", message ? message : ""));
-}
-
 /// Per-thread counters of a frame.
 struct Counters {
   uint64_t rays = 0, samples = 0, regions = 0, surfaceHits = 0, isoSamples = 0, aoRays = 0;
@@ -262,17 +258,8 @@ struct Renderer::Impl {
     if (!meshScene || !(sMax >= sMin)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRayHit rh;
-    rh.ray.org_x = float(r.orgW.x), rh.ray.org_y = float(r.orgW.y), rh.ray.org_z = float(r.orgW.z);
-    rh.ray.dir_x = float(r.dirW.x), rh.ray.dir_y = float(r.dirW.y), rh.ray.dir_z = float(r.dirW.z);
-    rh.ray.tnear = float(std::max(sMin, 0.0));
-    rh.ray.tfar = std::isinf(sMax) ? std::numeric_limits<float>::infinity() : float(sMax);
-    rh.ray.time = 0.f;
-    rh.ray.mask = ~0u;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    RTCRayHit rh = embree::makeRayHit(vec3f(r.orgW), vec3f(r.dirW), float(std::max(sMin, 0.0)),
+                                      std::isinf(sMax) ? std::numeric_limits<float>::infinity() : float(sMax));
     rtcIntersect1(meshScene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit.kind = SurfaceHit::Mesh;
@@ -290,15 +277,7 @@ struct Renderer::Impl {
     if (!meshScene || !(sMax > sMin)) return false;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    RTCRay ray;
-    ray.org_x = float(r.orgW.x), ray.org_y = float(r.orgW.y), ray.org_z = float(r.orgW.z);
-    ray.dir_x = float(r.dirW.x), ray.dir_y = float(r.dirW.y), ray.dir_z = float(r.dirW.z);
-    ray.tnear = float(std::max(sMin, 0.0));
-    ray.tfar = float(sMax);
-    ray.time = 0.f;
-    ray.mask = ~0u;
-    ray.id = 0;
-    ray.flags = 0;
+    RTCRay ray = embree::makeRay(vec3f(r.orgW), vec3f(r.dirW), float(std::max(sMin, 0.0)), float(sMax));
     rtcOccluded1(meshScene, &context, &ray);
     return ray.tfar < 0.f;
   }
@@ -676,9 +655,7 @@ void Renderer::addMesh(const TriangleMesh& mesh, const vec3f& color) {
         fail("mesh ", meshNumber, ": triangle ", i, " refers to vertex ", mesh.triangles[i][k], " of ",
              mesh.vertices.size());
   if (!im.device) {
-    im.device = rtcNewDevice("");
-    if (!im.device) fail("cannot create an Embree device (error ", int(rtcGetDeviceError(nullptr)), ")");
-    rtcSetDeviceErrorFunction(im.device, embreeError, nullptr);
+    im.device = embree::newDevice();
     im.meshScene = rtcNewScene(im.device);
     rtcSetSceneFlags(im.meshScene, RTC_SCENE_FLAG_ROBUST);
   }
