@@ -20,7 +20,7 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peer_common import camera, run_exabricks  # noqa: E402
+from peer_common import add_common_arguments, camera, run_exabricks  # noqa: E402
 
 
 # ---------------------------------------------------------------------------------------------
@@ -112,13 +112,7 @@ def main():
     if len(sys.argv) == 3 and sys.argv[1] == "--paraview-worker":
         return paraview_worker(sys.argv[2])
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("exabricks")
-    p.add_argument("plotfile")
-    p.add_argument("--field", default="phi")
-    p.add_argument("--size", type=int, default=1024)
-    p.add_argument("--azimuth", type=float, default=30.0)
-    p.add_argument("--elevation", type=float, default=25.0)
-    p.add_argument("--fov", type=float, default=40.0)
+    add_common_arguments(p)
     p.add_argument("--frames", type=int, default=3, help="frames timed (median), after a warm-up")
     p.add_argument("--samples", default="",
                    help="ParaView's resampling grid NXxNYxNZ (default: the representation's own default)")

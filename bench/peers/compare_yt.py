@@ -18,7 +18,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peer_common import camera, run_exabricks  # noqa: E402
+from peer_common import add_common_arguments, camera, run_exabricks  # noqa: E402
 
 
 def bright_level(rgb):
@@ -29,13 +29,7 @@ def bright_level(rgb):
 
 def main():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("exabricks")
-    p.add_argument("plotfile")
-    p.add_argument("--field", default="phi")
-    p.add_argument("--size", type=int, default=1024)
-    p.add_argument("--azimuth", type=float, default=30.0)
-    p.add_argument("--elevation", type=float, default=25.0)
-    p.add_argument("--fov", type=float, default=40.0)
+    add_common_arguments(p)
     p.add_argument("--frames", type=int, default=3, help="exabricks frames timed (median)")
     p.add_argument("--calibration-size", type=int, default=256,
                    help="resolution at which yt's opacity is matched to exabricks' mean coverage")

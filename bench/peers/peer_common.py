@@ -5,6 +5,17 @@ import subprocess
 import time
 
 
+def add_common_arguments(parser):
+    """The arguments every comparison takes: the exabricks binary, the plotfile and the view."""
+    parser.add_argument("exabricks")
+    parser.add_argument("plotfile")
+    parser.add_argument("--field", default="phi")
+    parser.add_argument("--size", type=int, default=1024)
+    parser.add_argument("--azimuth", type=float, default=30.0)
+    parser.add_argument("--elevation", type=float, default=25.0)
+    parser.add_argument("--fov", type=float, default=40.0)
+
+
 def camera(lower, upper, azimuth, elevation, fov):
     """The camera exabricks' Camera::frame builds: the bounding sphere fills the view."""
     deg = math.pi / 180.0
