@@ -4,6 +4,7 @@
 #include "exabricks/amr/cell_locator.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/render/renderer.h"
+#include "render_setup.h"
 
 #include <gtest/gtest.h>
 
@@ -158,17 +159,17 @@ TEST(CellLocator, RenderMatchesRegionReconstruction) {
       tf.opacity = {{0.f, 0.f}, {0.3f, 0.05f}, {0.7f, 0.4f}, {1.f, 0.8f}};
       const box3i cb = m.cellBounds();
       const Camera cam = Camera::frame(box3d(vec3d(cb.lower), vec3d(cb.upper)), 35, 20, 40, false);
-      RenderOptions o;
-      o.width = o.height = 56;
-      o.earlyTermination = false;
-      o.shading = shading;
-      o.autoTraversal = false;
-      Renderer regions(m, 0, o);
+      RenderSetup o;
+      o.frame.width = o.frame.height = 56;
+      o.scene.integration.earlyTermination = false;
+      o.scene.shading = shading;
+      o.scene.integration.autoTraversal = false;
+      SceneRenderer regions(m, 0, o);
       regions.setTransferFunction(tf);
       RenderStats regionStats, cellStats;
       const Image want = regions.render(cam, &regionStats);
-      o.reconstruction = Reconstruction::CellLocation;
-      Renderer cellsRenderer(m, 0, o);
+      o.scene.integration.reconstruction = Reconstruction::CellLocation;
+      SceneRenderer cellsRenderer(m, 0, o);
       cellsRenderer.setTransferFunction(tf);
       const Image got = cellsRenderer.render(cam, &cellStats);
       const std::string what = std::string(scene) + (shading == Shading::None ? ", unshaded" : ", shaded");

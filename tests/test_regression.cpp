@@ -7,6 +7,7 @@
 #include "exabricks/io/image.h"
 #include "exabricks/io/mesh.h"
 #include "exabricks/render/renderer.h"
+#include "render_setup.h"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +15,7 @@
 #include <filesystem>
 
 using namespace exa;
+using namespace exa::test;
 namespace fs = std::filesystem;
 
 namespace {
@@ -25,12 +27,12 @@ const Model& regressionModel() {
 
 Image renderView(DebugView debug, Shading shading, int spp) {
   const Model& m = regressionModel();
-  RenderOptions o;
-  o.width = o.height = 96;
-  o.debug = debug;
-  o.shading = shading;
-  o.samplesPerPixel = spp;
-  Renderer r(m, 0, o);
+  RenderSetup o;
+  o.frame.width = o.frame.height = 96;
+  o.scene.debug = debug;
+  o.scene.shading = shading;
+  o.frame.samplesPerPixel = spp;
+  SceneRenderer r(m, 0, o);
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
   tf.opacity = {{0.f, 0.f}, {0.2f, 0.f}, {0.6f, 0.1f}, {1.f, 0.6f}};
@@ -142,21 +144,21 @@ TEST(Regression, CombinedScene) {
   ASSERT_GE(m.fieldNames.size(), 2u);
   const box3i b = m.cellBounds();
   const box3d wb(vec3d(b.lower), vec3d(b.upper));
-  RenderOptions o;
-  o.width = o.height = 96;
-  o.samplesPerPixel = 2;
-  o.aoRays = 2;
+  RenderSetup o;
+  o.frame.width = o.frame.height = 96;
+  o.frame.samplesPerPixel = 2;
+  o.scene.ao.rays = 2;
   const vec3d centre = (wb.lower + wb.upper) * 0.5;
-  o.clipPlanes = {{centre, vec3d(1.0, 1.0, 0.0)}};
-  Renderer r(m, 0, o);
+  o.scene.clip.planes = {{centre, vec3d(1.0, 1.0, 0.0)}};
+  SceneRenderer r(m, 0, o);
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
   tf.opacity = {{0.f, 0.f}, {0.3f, 0.f}, {0.6f, 0.05f}, {1.f, 0.3f}};
   r.setTransferFunction(tf);
   IsoSurfaces iso;
-  iso.field = 0;
+  iso.field = r.field(0);
   iso.values = {0.5f};
-  iso.colorField = 1;
+  iso.colorField = r.field(1);
   iso.colorTf.colorMap = builtinColorMap("cool-to-warm");
   r.setIsoSurfaces(iso);
   TriangleMesh floor;

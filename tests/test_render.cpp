@@ -1,5 +1,6 @@
 #include "datasets.h"
 #include "exabricks/render/renderer.h"
+#include "render_setup.h"
 
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
@@ -37,11 +38,11 @@ TransferFunction constantOpacity(float alpha) {
   return tf;
 }
 
-RenderOptions smallOptions(int size = 48) {
-  RenderOptions o;
-  o.width = o.height = size;
-  o.shading = Shading::None;
-  o.earlyTermination = false;
+RenderSetup smallOptions(int size = 48) {
+  RenderSetup o;
+  o.frame.width = o.frame.height = size;
+  o.scene.shading = Shading::None;
+  o.scene.integration.earlyTermination = false;
   return o;
 }
 
@@ -93,7 +94,7 @@ TEST(Render, HomogeneousSlabTransmittanceIsExponential) {
   for (const std::vector<int>& levels : {std::vector<int>{0}, std::vector<int>{1, 0, 2}}) {
     const Model m = buildModel(constantSlabs(levels));
     const float alpha = 0.02f;
-    Renderer r(m, 0, smallOptions());
+    SceneRenderer r(m, 0, smallOptions());
     r.setTransferFunction(constantOpacity(alpha));
     const Image img = r.render(alongX(m));
     const int finestLevel = *std::min_element(levels.begin(), levels.end());
@@ -108,7 +109,7 @@ TEST(Render, HomogeneousSlabTransmittanceIsExponential) {
 
 TEST(Render, ConstantFieldAcrossLevelsHasNoSeams) {
   const Model m = buildModel(constantSlabs({2, 0, 1, 3}));
-  Renderer r(m, 0, smallOptions(64));
+  SceneRenderer r(m, 0, smallOptions(64));
   r.setTransferFunction(constantOpacity(0.03f));
   // Every ray along x crosses the same thickness: all pixels covering the interior agree.
   Camera c = alongX(m);
@@ -133,11 +134,11 @@ TEST(Render, RaisingTheRateConverges) {
   const Camera cam = framed(m, 30, 20);
   std::vector<Image> images;
   for (float rate : {0.5f, 1.f, 2.f, 4.f, 8.f}) {
-    RenderOptions o = smallOptions(64);
-    o.rate = rate;
-    o.jitter = false;
-    o.shading = Shading::Analytic;
-    Renderer r(m, 0, o);
+    RenderSetup o = smallOptions(64);
+    o.frame.rate = rate;
+    o.frame.jitter = false;
+    o.scene.shading = Shading::Analytic;
+    SceneRenderer r(m, 0, o);
     r.setTransferFunction(tf);
     images.push_back(r.render(cam));
   }
@@ -155,16 +156,16 @@ TEST(Render, SpaceSkippingAndTraversalsGiveTheSameImage) {
   tf.colorMap = builtinColorMap("plasma");
   tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {0.9f, 0.3f}, {1.f, 0.8f}}; // hides 80 % of the range
   const Camera cam = framed(m, 40, 30);
-  RenderOptions base = smallOptions(64);
-  base.shading = Shading::Analytic;
+  RenderSetup base = smallOptions(64);
+  base.scene.shading = Shading::Analytic;
   Image reference;
   size_t allRegions = 0, visibleRegions = 0;
   for (int variant = 0; variant < 4; ++variant) {
-    RenderOptions o = base;
-    o.spaceSkipping = variant % 2 == 0;
-    o.autoTraversal = false;
-    o.traversal = variant < 2 ? TraversalKind::KdTree : TraversalKind::Embree;
-    Renderer r(m, 0, o);
+    RenderSetup o = base;
+    o.scene.integration.spaceSkipping = variant % 2 == 0;
+    o.scene.integration.autoTraversal = false;
+    o.scene.integration.traversal = variant < 2 ? TraversalKind::KdTree : TraversalKind::Embree;
+    SceneRenderer r(m, 0, o);
     r.setTransferFunction(tf);
     RenderStats stats;
     const Image img = r.render(cam, &stats);
@@ -185,10 +186,10 @@ TEST(Render, SameImageForAnyThreadCount) {
   tf.colorMap = builtinColorMap("magma");
   tf.opacity = {{0.f, 0.f}, {1.f, 0.2f}};
   const Camera cam = framed(m, 10, 10);
-  RenderOptions o = smallOptions(40);
-  o.samplesPerPixel = 3;
-  o.shading = Shading::Analytic;
-  Renderer r(m, 0, o);
+  RenderSetup o = smallOptions(40);
+  o.frame.samplesPerPixel = 3;
+  o.scene.shading = Shading::Analytic;
+  SceneRenderer r(m, 0, o);
   r.setTransferFunction(tf);
   Image one;
   {
@@ -207,9 +208,9 @@ TEST(Render, GradientModesAgreeOnASmoothField) {
   const Camera cam = framed(m, 10, 10);
   std::vector<Image> images;
   for (Shading s : {Shading::Analytic, Shading::Central, Shading::ClampedCentral, Shading::None}) {
-    RenderOptions o = smallOptions(48);
-    o.shading = s;
-    Renderer r(m, 0, o);
+    RenderSetup o = smallOptions(48);
+    o.scene.shading = s;
+    SceneRenderer r(m, 0, o);
     r.setTransferFunction(tf);
     images.push_back(r.render(cam));
   }
@@ -220,7 +221,7 @@ TEST(Render, GradientModesAgreeOnASmoothField) {
 
 TEST(Render, AutomaticTraversalFollowsVisibility) {
   const Model& m = blobsModel();
-  Renderer r(m, 0, smallOptions(16));
+  SceneRenderer r(m, 0, smallOptions(16));
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
   tf.opacity = {{0.f, 0.2f}, {1.f, 0.2f}};

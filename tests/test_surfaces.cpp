@@ -7,6 +7,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/mesh.h"
 #include "exabricks/render/renderer.h"
+#include "render_setup.h"
 
 #include <gtest/gtest.h>
 
@@ -14,6 +15,7 @@
 #include <random>
 
 using namespace exa;
+using namespace exa::test;
 
 namespace {
 
@@ -100,11 +102,11 @@ double maxAbsDiff(const Image& a, const Image& b) {
   return m;
 }
 
-RenderOptions surfaceOptions(int size) {
-  RenderOptions o;
-  o.width = o.height = size;
-  o.earlyTermination = false;
-  o.jitter = false;
+RenderSetup surfaceOptions(int size) {
+  RenderSetup o;
+  o.frame.width = o.frame.height = size;
+  o.scene.integration.earlyTermination = false;
+  o.frame.jitter = false;
   return o;
 }
 
@@ -120,11 +122,11 @@ TEST(Surfaces, LinearFieldIsoSurfaceIsThePlane) {
   BuildOptions bo;
   bo.bricks.maxBrickWidth = 8; // many bricks and regions, so that the iso set is a true subset
   const Model m = buildModel(std::move(cells), bo);
-  Renderer r(m, 0, surfaceOptions(8));
+  SceneRenderer r(m, 0, surfaceOptions(8));
   r.setTransferFunction(invisible());
   const float iso = 8.f;
   IsoSurfaces is;
-  is.field = 0;
+  is.field = r.field(0);
   is.values = {iso};
   r.setIsoSurfaces(is);
   EXPECT_GT(r.isoRegions(), 0u);
@@ -157,11 +159,11 @@ TEST(Surfaces, LinearFieldIsoSurfaceIsThePlane) {
 TEST(Surfaces, RadialFieldIsoSurfaceIsASphere) {
   const vec3d centre(31.3, 32.6, 30.9);
   const Model m = buildModel(radialTwoLevels(centre, 26.0));
-  Renderer r(m, 0, surfaceOptions(8));
+  SceneRenderer r(m, 0, surfaceOptions(8));
   r.setTransferFunction(invisible());
   const float radius = 20.f;
   IsoSurfaces is;
-  is.field = 0;
+  is.field = r.field(0);
   is.values = {radius, 40.f}; // the second lies mostly outside the data
   r.setIsoSurfaces(is);
   std::mt19937 rng(5);
@@ -192,10 +194,10 @@ TEST(Surfaces, RadialFieldIsoSurfaceIsASphere) {
 
 TEST(Surfaces, IsoRegionSetFollowsTheIsoValues) {
   const Model m = buildModel(radialTwoLevels(vec3d(32.0), 20.0));
-  Renderer r(m, 0, surfaceOptions(8));
+  SceneRenderer r(m, 0, surfaceOptions(8));
   r.setTransferFunction(invisible());
   IsoSurfaces is;
-  is.field = 0;
+  is.field = r.field(0);
   is.values = {10.f};
   r.setIsoSurfaces(is);
   const size_t one = r.isoRegions();
@@ -215,15 +217,15 @@ TEST(Surfaces, IsoRegionSetFollowsTheIsoValues) {
 TEST(Surfaces, MeshInFrontHidesTheVolume) {
   CellSet cells = uniformCells(16, {"f"}, [](const vec3d& p) { return p.x / 16.0; });
   const Model m = buildModel(std::move(cells));
-  RenderOptions o = surfaceOptions(32);
+  RenderSetup o = surfaceOptions(32);
   const Camera cam = ortho(vec3d(8.0), vec3d(0, 0, 1), vec3d(0, 1, 0), 20.0);
   // A quad in front of the volume (z = -1) covering the whole view.
   const TriangleMesh front = quad({-20, -20, -1}, {40, -20, -1}, {40, 40, -1}, {-20, 40, -1});
-  Renderer both(m, 0, o);
+  SceneRenderer both(m, 0, o);
   both.setTransferFunction(grayRamp(0.f, 1.f, 0.5f));
   both.addMesh(front, vec3f(0.2f, 0.5f, 0.8f));
-  o.volume = false;
-  Renderer meshOnly(m, 0, o);
+  o.scene.volume = false;
+  SceneRenderer meshOnly(m, 0, o);
   meshOnly.setTransferFunction(grayRamp(0.f, 1.f, 0.5f));
   meshOnly.addMesh(front, vec3f(0.2f, 0.5f, 0.8f));
   RenderStats st;
@@ -233,8 +235,8 @@ TEST(Surfaces, MeshInFrontHidesTheVolume) {
 
   // The same mesh behind the volume: the volume shows in front of it.
   const TriangleMesh back = quad({-20, -20, 17}, {40, -20, 17}, {40, 40, 17}, {-20, 40, 17});
-  RenderOptions o2 = surfaceOptions(32);
-  Renderer behind(m, 0, o2);
+  RenderSetup o2 = surfaceOptions(32);
+  SceneRenderer behind(m, 0, o2);
   behind.setTransferFunction(grayRamp(0.f, 1.f, 0.5f));
   behind.addMesh(back, vec3f(0.2f, 0.5f, 0.8f));
   const Image b = behind.render(cam, &st);
@@ -246,22 +248,22 @@ TEST(Surfaces, MeshInFrontHidesTheVolume) {
 TEST(Surfaces, ClipPlaneRemovesExactlyOneHalfSpace) {
   CellSet cells = uniformCells(16, {"f"}, [](const vec3d& p) { return (p.x + p.y + p.z) / 48.0; });
   const Model m = buildModel(std::move(cells));
-  RenderOptions o = surfaceOptions(40);
-  o.shading = Shading::None;
+  RenderSetup o = surfaceOptions(40);
+  o.scene.shading = Shading::None;
   const Camera cam = ortho(vec3d(8.0), vec3d(0, 0, 1), vec3d(0, 1, 0), 20.0);
-  Renderer full(m, 0, o);
+  SceneRenderer full(m, 0, o);
   full.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
   // Remove y > 7.3 (the plane is parallel to the view direction): a pixel is either kept whole
   // or removed whole.
-  o.clipPlanes = {{vec3d(0.0, 7.3, 0.0), vec3d(0.0, 1.0, 0.0)}};
-  Renderer clipped(m, 0, o);
+  o.scene.clip.planes = {{vec3d(0.0, 7.3, 0.0), vec3d(0.0, 1.0, 0.0)}};
+  SceneRenderer clipped(m, 0, o);
   clipped.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
   const Image a = full.render(cam), b = clipped.render(cam);
   int kept = 0, removed = 0;
-  for (int y = 0; y < o.height; ++y)
-    for (int x = 0; x < o.width; ++x) {
+  for (int y = 0; y < o.frame.height; ++y)
+    for (int x = 0; x < o.frame.width; ++x) {
       vec3d org, dir;
-      cam.ray((x + 0.5) / o.width, (y + 0.5) / o.height, 1.0, org, dir);
+      cam.ray((x + 0.5) / o.frame.width, (y + 0.5) / o.frame.height, 1.0, org, dir);
       const vec4f &pa = a.at(x, y), &pb = b.at(x, y);
       if (org.y > 7.3 + 1e-6) {
         EXPECT_EQ(pb.w, 0.f);
@@ -288,13 +290,13 @@ TEST(Surfaces, ClipPlaneRemovesExactlyOneHalfSpace) {
         half.fields[0].values.push_back(float((x + y + z + 1.5) / 48.0));
       }
   const Model mh = buildModel(std::move(half));
-  RenderOptions oh = surfaceOptions(40);
-  oh.shading = Shading::None;
-  oh.clipPlanes = {{vec3d(0.0, 0.0, 8.0), vec3d(0.0, 0.0, 1.0)}};
-  Renderer halfRenderer(mh, 0, oh);
+  RenderSetup oh = surfaceOptions(40);
+  oh.scene.shading = Shading::None;
+  oh.scene.clip.planes = {{vec3d(0.0, 0.0, 8.0), vec3d(0.0, 0.0, 1.0)}};
+  SceneRenderer halfRenderer(mh, 0, oh);
   halfRenderer.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
-  o.clipPlanes = {{vec3d(0.0, 0.0, 8.0), vec3d(0.0, 0.0, 1.0)}};
-  Renderer cut(m, 0, o);
+  o.scene.clip.planes = {{vec3d(0.0, 0.0, 8.0), vec3d(0.0, 0.0, 1.0)}};
+  SceneRenderer cut(m, 0, o);
   cut.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
   const Image c = cut.render(cam), d = halfRenderer.render(cam);
   double alphaDiff = 0, colorDiff = 0, alphaMax = 0;
@@ -308,16 +310,16 @@ TEST(Surfaces, ClipPlaneRemovesExactlyOneHalfSpace) {
   EXPECT_LT(colorDiff, 0.02);
 
   // A clip box keeps only its inside.
-  RenderOptions ob = surfaceOptions(40);
-  ob.shading = Shading::None;
-  ob.clipBox = box3d(vec3d(-1.0, -1.0, -1.0), vec3d(4.0, 20.0, 20.0));
-  Renderer boxed(m, 0, ob);
+  RenderSetup ob = surfaceOptions(40);
+  ob.scene.shading = Shading::None;
+  ob.scene.clip.box = box3d(vec3d(-1.0, -1.0, -1.0), vec3d(4.0, 20.0, 20.0));
+  SceneRenderer boxed(m, 0, ob);
   boxed.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
   const Image e = boxed.render(cam);
-  for (int y = 0; y < ob.height; ++y)
-    for (int x = 0; x < ob.width; ++x) {
+  for (int y = 0; y < ob.frame.height; ++y)
+    for (int x = 0; x < ob.frame.width; ++x) {
       vec3d org, dir;
-      cam.ray((x + 0.5) / ob.width, (y + 0.5) / ob.height, 1.0, org, dir);
+      cam.ray((x + 0.5) / ob.frame.width, (y + 0.5) / ob.frame.height, 1.0, org, dir);
       if (org.x > 4.0 + 1e-6) {
         EXPECT_EQ(e.at(x, y).w, 0.f);
       }
@@ -333,10 +335,10 @@ TEST(Surfaces, AmbientOcclusionDarkensACornerAndLeavesAnOpenPlane) {
   const TriangleMesh wall = quad({0, -10, 0}, {0, 10, 0}, {0, 10, 10}, {0, -10, 10});
   const Camera cam = ortho(vec3d(2.0, 0.0, 0.0), normalize(vec3d(-1.0, 0.0, -1.0)), vec3d(0, 0, 1), 8.0);
   auto render = [&](bool withWall, int aoRays) {
-    RenderOptions o = surfaceOptions(48);
-    o.aoRays = aoRays;
-    o.aoLength = 2.f;
-    Renderer r(m, 0, o);
+    RenderSetup o = surfaceOptions(48);
+    o.scene.ao.rays = aoRays;
+    o.scene.ao.length = 2.f;
+    SceneRenderer r(m, 0, o);
     r.setTransferFunction(invisible());
     r.addMesh(floor, vec3f(0.8f));
     if (withWall) r.addMesh(wall, vec3f(0.8f));
@@ -373,14 +375,14 @@ TEST(Surfaces, AmbientOcclusionDarkensACornerAndLeavesAnOpenPlane) {
 TEST(Surfaces, SecondFieldColoursTheIsoSurface) {
   const vec3d centre(32.0);
   const Model m = buildModel(radialTwoLevels(centre, 26.0));
-  RenderOptions o = surfaceOptions(64);
-  o.ambient = 1.f, o.diffuse = 0.f, o.specular = 0.f; // unlit: the pixel is the surface colour
-  Renderer r(m, 0, o);
+  RenderSetup o = surfaceOptions(64);
+  o.scene.light.terms.ambient = 1.f, o.scene.light.terms.diffuse = 0.f, o.scene.light.terms.specular = 0.f; // unlit: the pixel is the surface colour
+  SceneRenderer r(m, 0, o);
   r.setTransferFunction(invisible());
   IsoSurfaces is;
-  is.field = 0;
+  is.field = r.field(0);
   is.values = {20.f};
-  is.colorField = 1;
+  is.colorField = r.field(1);
   is.colorTf.colorMap = builtinColorMap("viridis");
   is.colorTf.valueRange = range1f{12.f, 52.f};
   r.setIsoSurfaces(is);
@@ -408,17 +410,17 @@ TEST(Surfaces, LayersCombineAsSummedOpticalDepth) {
   CellSet cells = uniformCells(16, {"a", "b"}, [](const vec3d& p) { return p.x / 16.0; },
                                [](const vec3d& p) { return p.y / 16.0; });
   const Model m = buildModel(std::move(cells));
-  RenderOptions o = surfaceOptions(24);
-  o.shading = Shading::None;
+  RenderSetup o = surfaceOptions(24);
+  o.scene.shading = Shading::None;
   const Camera cam = ortho(vec3d(8.0), normalize(vec3d(0.3, 0.2, 1.0)), vec3d(0, 1, 0), 24.0);
   const float alpha = 0.1f;
   // Two identical layers = one layer with opacity 1 - (1 - alpha)^2.
-  Renderer one(m, 0, o), two(m, 0, o);
+  SceneRenderer one(m, 0, o), two(m, 0, o);
   one.setTransferFunction(grayRamp(0.f, 1.f, 1.f - (1.f - alpha) * (1.f - alpha)));
   two.setVolumeLayers({{0, grayRamp(0.f, 1.f, alpha)}, {0, grayRamp(0.f, 1.f, alpha)}});
   EXPECT_LT(maxAbsDiff(one.render(cam), two.render(cam)), 2e-3);
   // A transparent second layer changes nothing; a second field's layer does.
-  Renderer single(m, 0, o), withClear(m, 0, o), withB(m, 0, o);
+  SceneRenderer single(m, 0, o), withClear(m, 0, o), withB(m, 0, o);
   single.setTransferFunction(grayRamp(0.f, 1.f, alpha));
   withClear.setVolumeLayers({{0, grayRamp(0.f, 1.f, alpha)}, {1, grayRamp(0.f, 1.f, 0.f)}});
   TransferFunction red = grayRamp(0.f, 1.f, alpha);
@@ -432,13 +434,13 @@ TEST(Surfaces, LayersCombineAsSummedOpticalDepth) {
 TEST(Surfaces, BadSurfaceOptionsAreRejected) {
   CellSet cells = uniformCells(4, {"f"}, [](const vec3d& p) { return p.x; });
   const Model m = buildModel(std::move(cells));
-  RenderOptions o = surfaceOptions(8);
-  Renderer r(m, 0, o);
+  RenderSetup o = surfaceOptions(8);
+  SceneRenderer r(m, 0, o);
   IsoSurfaces is;
-  is.field = 3;
+  is.field = "nope";
   is.values = {1.f};
   EXPECT_THROW(r.setIsoSurfaces(is), Error);
-  is.field = 0;
+  is.field = r.field(0);
   is.values = {std::nanf("")};
   EXPECT_THROW(r.setIsoSurfaces(is), Error);
   TriangleMesh bad = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});
@@ -447,8 +449,8 @@ TEST(Surfaces, BadSurfaceOptionsAreRejected) {
   TriangleMesh nan = quad({0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0});
   nan.vertices[2].y = std::nanf("");
   EXPECT_THROW(r.addMesh(nan, vec3f(1.f)), Error);
-  o.clipPlanes = {{vec3d(0.0), vec3d(0.0)}};
-  EXPECT_THROW(Renderer(m, 0, o), Error);
+  o.scene.clip.planes = {{vec3d(0.0), vec3d(0.0)}};
+  EXPECT_THROW(SceneRenderer(m, 0, o), Error);
 }
 
 TEST(Surfaces, IsoHitsAreTheFirstRootsOfTheBruteForceReconstruction) {
@@ -456,13 +458,13 @@ TEST(Surfaces, IsoHitsAreTheFirstRootsOfTheBruteForceReconstruction) {
   // over all cells, and the first one along the ray.
   const CellSet cells = generateScene({"shells", 3000, 2, 4});
   const Model m = buildModel(CellSet(cells));
-  Renderer r(m, 0, surfaceOptions(8));
+  SceneRenderer r(m, 0, surfaceOptions(8));
   r.setTransferFunction(invisible());
   range1f range;
   for (float v : cells.fields[0].values) range.extend(v);
   const float iso = range.lower + 0.45f * (range.upper - range.lower);
   IsoSurfaces is;
-  is.field = 0;
+  is.field = r.field(0);
   is.values = {iso};
   r.setIsoSurfaces(is);
   const box3l b = cells.bounds();
@@ -526,11 +528,11 @@ TEST(Surfaces, VolumeAttenuatesAmbientOcclusionWhenAsked) {
   const TriangleMesh floor = quad({-20, -20, -0.01f}, {20, -20, -0.01f}, {20, 20, -0.01f}, {-20, 20, -0.01f});
   const Camera cam = ortho(vec3d(2.0, 2.0, 0.0), normalize(vec3d(-0.5, -0.3, -1.0)), vec3d(0, 0, 1), 14.0);
   auto render = [&](bool aoVolume) {
-    RenderOptions o = surfaceOptions(40);
-    o.aoRays = 16;
-    o.aoLength = 3.f;
-    o.aoVolume = aoVolume;
-    Renderer r(m, 0, o);
+    RenderSetup o = surfaceOptions(40);
+    o.scene.ao.rays = 16;
+    o.scene.ao.length = 3.f;
+    o.scene.ao.volume = aoVolume;
+    SceneRenderer r(m, 0, o);
     r.setTransferFunction(grayRamp(0.f, 2.f, 0.9f));
     r.addMesh(floor, vec3f(0.8f));
     return r.render(cam);

@@ -59,15 +59,6 @@ uint64_t peakRssBytes() {
   return 0;
 }
 
-/// The render command's default transfer function: viridis, a linear opacity ramp, scaled so
-/// that a ray through the whole dataset at full opacity gathers an optical depth of about eight.
-TransferFunction defaultTransferFunction(const Model& model) {
-  TransferFunction tf;
-  tf.colorMap = builtinColorMap("viridis");
-  tf.opacityScale = defaultOpacityScale(model);
-  return tf;
-}
-
 /// The same colours, transparent over the lower 80 % of the value range.
 TransferFunction hiding80(TransferFunction tf) {
   tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {0.9f, 0.5f}, {1.f, 1.f}};
@@ -105,32 +96,31 @@ ImageDiff difference(const Image& a, const Image& b) {
 
 struct Variant {
   std::string name;
-  RenderOptions options;
-  TransferFunction tf;
+  Scene scene;
 };
 
 /// Renders every variant once as a warm-up, then `frames` rounds of one frame per variant, so
 /// that a change of the machine's load during the run touches every variant alike; the frame
 /// time of a variant is its median over the rounds.
-std::vector<VariantResult> measureInterleaved(const std::vector<Variant>& variants, const Model& model, int field,
-                                              const Camera& camera, int frames) {
+std::vector<VariantResult> measureInterleaved(const std::vector<Variant>& variants, const Model& model,
+                                              const Frame& frame, int frames) {
   std::vector<std::unique_ptr<Renderer>> renderers;
   std::vector<VariantResult> results(variants.size());
   for (size_t v = 0; v < variants.size(); ++v) {
     logInfo(strCat("bench: ", variants[v].name));
-    renderers.push_back(std::make_unique<Renderer>(model, field, variants[v].options));
+    renderers.push_back(std::make_unique<Renderer>(model));
     VariantResult& r = results[v];
     r.name = variants[v].name;
-    r.updateSeconds = renderers[v]->setTransferFunction(variants[v].tf);
+    r.updateSeconds = renderers[v]->setScene(variants[v].scene).seconds();
     r.visibleRegions = renderers[v]->visibleRegions();
     r.traversal = renderers[v]->traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
     RenderStats warm;
-    renderers[v]->render(camera, &warm); // warm-up, not counted
+    renderers[v]->render(frame, &warm); // warm-up, not counted
   }
   std::vector<std::vector<double>> seconds(variants.size());
   for (int f = 0; f < frames; ++f)
     for (size_t v = 0; v < variants.size(); ++v) {
-      results[v].image = renderers[v]->render(camera, &results[v].stats);
+      results[v].image = renderers[v]->render(frame, &results[v].stats);
       seconds[v].push_back(results[v].stats.seconds);
     }
   for (size_t v = 0; v < variants.size(); ++v) {
@@ -202,8 +192,8 @@ struct Setup {
   double loadSeconds = 0;
   uint64_t peakAfterLoad = 0;
   double loadAtStart = -1;
-  RenderOptions base;
-  TransferFunction tf;
+  Scene base;  ///< the field with the default transfer function, k-d traversal, no early termination
+  Frame frame;
   box3d worldBox;
 };
 
@@ -219,8 +209,8 @@ nlohmann::json describe(const Setup& s, const BenchOptions& o) {
   for (const ModelSummary::Level& l : sum.levels)
     levels.push_back({{"cell_width", uint64_t(1) << l.level}, {"cells", l.cells}, {"bricks", l.bricks}});
   j["levels"] = levels;
-  j["width"] = s.base.width;
-  j["height"] = s.base.height;
+  j["width"] = s.frame.width;
+  j["height"] = s.frame.height;
   j["threads"] = tbbThreads();
   j["load_average_at_start"] = s.loadAtStart;
   j["load_average_at_end"] = loadAverage();
@@ -239,7 +229,8 @@ nlohmann::json describe(const Setup& s, const BenchOptions& o) {
 void runCases(const Setup& s, const BenchOptions& o) {
   const std::vector<std::string> cases = parseCases(o.cases);
   auto has = [&](const char* c) { return std::find(cases.begin(), cases.end(), c) != cases.end(); };
-  const Camera camera = Camera::frame(s.worldBox, 30.0, 25.0, 40.0, false);
+  Frame frame = s.frame;
+  frame.camera = Camera::frame(s.worldBox, 30.0, 25.0, 40.0, false);
 
   // The cell locator's own build, timed apart from the renderer.
   double locatorSeconds = 0;
@@ -252,24 +243,27 @@ void runCases(const Setup& s, const BenchOptions& o) {
   }
 
   auto with = [&](auto change) {
-    RenderOptions ro = s.base;
-    change(ro);
-    return ro;
+    Scene scene = s.base;
+    change(scene);
+    return scene;
   };
-  const TransferFunction tf80 = hiding80(s.tf);
-  std::vector<Variant> variants = {{"regions, kd, adaptive", s.base, s.tf}};
+  auto hide80 = [](Scene& sc) { sc.layers[0].tf = hiding80(sc.layers[0].tf); };
+  std::vector<Variant> variants = {{"regions, kd, adaptive", s.base}};
   if (has("reconstruction"))
     variants.push_back(
-        {"cell location", with([](RenderOptions& r) { r.reconstruction = Reconstruction::CellLocation; }), s.tf});
+        {"cell location", with([](Scene& r) { r.integration.reconstruction = Reconstruction::CellLocation; })});
   if (has("sampling"))
-    variants.push_back({"fixed-step sampling", with([](RenderOptions& r) { r.sampling = Sampling::Fixed; }), s.tf});
+    variants.push_back({"fixed-step sampling", with([](Scene& r) { r.integration.sampling = Sampling::Fixed; })});
   if (has("skipping")) {
-    variants.push_back({"hide 80%, skipping on", s.base, tf80});
-    variants.push_back({"hide 80%, skipping off", with([](RenderOptions& r) { r.spaceSkipping = false; }), tf80});
+    variants.push_back({"hide 80%, skipping on", with(hide80)});
+    variants.push_back({"hide 80%, skipping off", with([&](Scene& r) {
+                          hide80(r);
+                          r.integration.spaceSkipping = false;
+                        })});
   }
   if (has("traversal"))
-    variants.push_back({"embree traversal", with([](RenderOptions& r) { r.traversal = TraversalKind::Embree; }), s.tf});
-  const std::vector<VariantResult> results = measureInterleaved(variants, s.model, s.field, camera, o.frames);
+    variants.push_back({"embree traversal", with([](Scene& r) { r.integration.traversal = TraversalKind::Embree; })});
+  const std::vector<VariantResult> results = measureInterleaved(variants, s.model, frame, o.frames);
   auto result = [&](const char* name) -> const VariantResult& {
     for (const VariantResult& r : results)
       if (r.name == name) return r;
@@ -330,7 +324,7 @@ void runCases(const Setup& s, const BenchOptions& o) {
               "rounds after a warm-up, early termination off\n",
               o.in.name().c_str(), (unsigned long long)j["cells"].get<uint64_t>(),
               (unsigned long long)j["bricks"].get<uint64_t>(), (unsigned long long)j["regions"].get<uint64_t>(),
-              s.base.width, s.base.height, tbbThreads(), o.frames);
+              s.frame.width, s.frame.height, tbbThreads(), o.frames);
   std::printf("build: load %.3f s (bricks %.3f s, regions %.3f s, value ranges %.3f s), cell locator %.3f s\n",
               s.loadSeconds, s.model.stats.brickSeconds, s.model.stats.regionSeconds, s.model.stats.rangeSeconds,
               locatorSeconds);
@@ -375,8 +369,9 @@ void writeCsv(const std::string& path, const std::vector<std::array<double, 6>>&
 
 void runOrbit(const Setup& s, const BenchOptions& o) {
   if (o.orbit < 1 || o.orbit > 100000) fail("--orbit must be in 1..100000");
-  Renderer renderer(s.model, s.field, s.base);
-  renderer.setTransferFunction(s.tf);
+  Renderer renderer(s.model);
+  renderer.setScene(s.base);
+  Frame frame = s.frame;
   // Viewpoints on the bounding sphere: a Fibonacci sphere, evenly spread, never at a pole.
   const double golden = M_PI * (3.0 - std::sqrt(5.0));
   std::vector<std::array<double, 6>> rows; // azimuth, elevation, seconds, samples, regions, rays
@@ -386,10 +381,10 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
     const double z = 1.0 - (2.0 * i + 1.0) / o.orbit;
     const double azimuth = std::fmod(i * golden, 2.0 * M_PI) * 180.0 / M_PI;
     const double elevation = std::asin(z) * 180.0 / M_PI;
-    const Camera camera = Camera::frame(s.worldBox, azimuth, elevation, 40.0, false);
+    frame.camera = Camera::frame(s.worldBox, azimuth, elevation, 40.0, false);
     RenderStats st;
-    if (i == 0) renderer.render(camera, &st); // warm-up, not counted
-    renderer.render(camera, &st);
+    if (i == 0) renderer.render(frame, &st); // warm-up, not counted
+    renderer.render(frame, &st);
     rows.push_back({azimuth, elevation, st.seconds, double(st.samples), double(st.regionsVisited), double(st.rays)});
     t.push_back(st.seconds);
     samples.push_back(double(st.samples));
@@ -445,7 +440,7 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
     return;
   }
   std::printf("orbit of %d views around %s (%dx%d, %d threads, early termination off)\n", o.orbit, o.in.name().c_str(),
-              s.base.width, s.base.height, tbbThreads());
+              s.frame.width, s.frame.height, tbbThreads());
   std::printf("load average (1 min): %.2f at the start, %.2f at the end\n", j["load_average_at_start"].get<double>(),
               j["load_average_at_end"].get<double>());
   for (const char* key : {"frame_seconds", "samples", "regions_visited"})
@@ -460,18 +455,18 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
 
 void run(const BenchOptions& o) {
   Setup s;
-  parseSize(o.size, s.base.width, s.base.height);
+  parseSize(o.size, s.frame.width, s.frame.height);
   if (o.frames < 1 || o.frames > 1000) fail("--frames must be in 1..1000");
-  s.base.earlyTermination = false;
-  s.base.autoTraversal = false;
-  s.base.traversal = TraversalKind::KdTree;
+  s.base.integration.earlyTermination = false;
+  s.base.integration.autoTraversal = false;
+  s.base.integration.traversal = TraversalKind::KdTree;
   s.loadAtStart = loadAverage();
   Timer loadTimer;
   s.model = loadModel(o.in.input, o.in.loadOptions(true));
   s.loadSeconds = loadTimer.seconds();
   s.peakAfterLoad = peakRssBytes();
   s.field = s.model.requireField(o.in.field);
-  s.tf = defaultTransferFunction(s.model);
+  s.base.layers = {VolumeLayer{s.model.fieldNames[size_t(s.field)], defaultTransferFunction()}};
   const box3i cb = s.model.cellBounds();
   s.worldBox = box3d(s.model.world.toWorld(vec3d(cb.lower)), s.model.world.toWorld(vec3d(cb.upper)));
   if (o.orbitStudy)

@@ -5,6 +5,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/image.h"
 #include "exabricks/io/mesh.h"
+#include "exabricks/io/native.h"
 #include "exabricks/render/renderer.h"
 
 #include <algorithm>
@@ -67,6 +68,8 @@ struct RenderCmdOptions {
   int aoRays = 0;
   float aoLength = 0.f;
   bool aoVolume = false;
+  std::string sceneFile;
+  std::string writeScene;
 };
 
 template <typename T> T pick(const std::string& what, const std::string& value,
@@ -82,37 +85,6 @@ template <typename T> T pick(const std::string& what, const std::string& value,
 vec3d toVec(const std::vector<double>& v, const char* what) {
   if (v.size() != 3) fail(what, " needs three numbers x,y,z");
   return {v[0], v[1], v[2]};
-}
-
-TransferFunction makeTransferFunction(const RenderCmdOptions& o, const Model& model) {
-  TransferFunction tf;
-  if (!o.tfFile.empty()) {
-    tf = readTransferFunction(o.tfFile);
-  } else {
-    tf.colorMap = builtinColorMap(o.colormap);
-  }
-  if (!o.opacity.empty()) {
-    if (o.opacity.size() % 2 != 0 || o.opacity.size() < 2)
-      fail("--opacity expects pairs 'x,alpha' of normalised value and opacity");
-    tf.opacity.clear();
-    for (size_t i = 0; i < o.opacity.size(); i += 2) {
-      if (!(o.opacity[i] >= 0.f && o.opacity[i] <= 1.f && o.opacity[i + 1] >= 0.f && o.opacity[i + 1] <= 1.f))
-        fail("--opacity values must lie in [0, 1]");
-      if (i > 0 && !(o.opacity[i] > o.opacity[i - 2])) fail("--opacity positions must increase");
-      tf.opacity.push_back({o.opacity[i], o.opacity[i + 1]});
-    }
-  }
-  if (!o.range.empty()) {
-    if (o.range.size() != 2 || !(o.range[0] < o.range[1])) fail("--range expects LOW,HIGH with LOW < HIGH");
-    tf.valueRange = range1f{o.range[0], o.range[1]};
-  }
-  if (o.logScale) tf.logScale = true;
-  if (o.opacityScale > 0.f) {
-    tf.opacityScale = o.opacityScale;
-  } else if (o.tfFile.empty()) {
-    tf.opacityScale = defaultOpacityScale(model);
-  }
-  return tf;
 }
 
 std::vector<double> parseNumbers(const std::string& text, const char* what) {
@@ -144,180 +116,286 @@ std::vector<vec3f> colorList(const std::vector<float>& v, const char* what) {
   return out;
 }
 
-/// Fields the command needs; empty means all (no field named for the volume).
-std::vector<std::string> neededFields(const RenderCmdOptions& o) {
-  if (o.in.field.empty()) return {};
-  std::vector<std::string> names{o.in.field};
-  auto add = [&](const std::string& n) {
-    if (!n.empty() && std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
-  };
-  add(o.isoField);
-  add(o.isoColorField);
-  for (const std::string& l : o.layers) add(l.substr(0, l.find('=')));
-  return names;
+/// The options of one volume layer's transfer function, applied over `tf`: a file replaces
+/// it, then every option that was given overrides its part.
+TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderCmdOptions& o, const std::string& tfFile,
+                                              const std::string* colormap, bool withRange) {
+  if (!tfFile.empty()) tf = readTransferFunction(tfFile);
+  if (colormap) tf.colorMap = builtinColorMap(*colormap);
+  if (!o.opacity.empty()) {
+    if (o.opacity.size() % 2 != 0 || o.opacity.size() < 2)
+      fail("--opacity expects pairs 'x,alpha' of normalised value and opacity");
+    tf.opacity.clear();
+    for (size_t i = 0; i < o.opacity.size(); i += 2) {
+      if (!(o.opacity[i] >= 0.f && o.opacity[i] <= 1.f && o.opacity[i + 1] >= 0.f && o.opacity[i + 1] <= 1.f))
+        fail("--opacity values must lie in [0, 1]");
+      if (i > 0 && !(o.opacity[i] > o.opacity[i - 2])) fail("--opacity positions must increase");
+      tf.opacity.push_back({o.opacity[i], o.opacity[i + 1]});
+    }
+  }
+  if (withRange && !o.range.empty()) {
+    if (o.range.size() != 2 || !(o.range[0] < o.range[1])) fail("--range expects LOW,HIGH with LOW < HIGH");
+    tf.valueRange = range1f{o.range[0], o.range[1]};
+  }
+  if (withRange && o.logScale) tf.logScale = true;
+  if (o.opacityScale > 0.f) tf.opacityScale = o.opacityScale;
+  return tf;
 }
 
-void run(const RenderCmdOptions& o) {
-  RenderOptions ro;
-  parseSize(o.size, ro.width, ro.height);
-  if (o.spp < 1 || o.spp > 65536) fail("--spp must be in 1..65536");
-  if (o.frames < 1 || o.frames > 1000) fail("--frames must be in 1..1000");
-  ro.samplesPerPixel = o.spp;
-  ro.rate = o.rate;
-  ro.seed = o.seed;
-  ro.jitter = !o.noJitter;
-  ro.shading = pick<Shading>("shading", o.shading,
-                             {{"analytic", Shading::Analytic}, {"central", Shading::Central},
-                              {"clamped", Shading::ClampedCentral}, {"none", Shading::None}});
-  ro.autoTraversal = o.traversal == "auto";
-  if (!ro.autoTraversal)
-    ro.traversal = pick<TraversalKind>("traversal", o.traversal,
-                                       {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
-  ro.sampling = pick<Sampling>("sampling", o.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
-  ro.reconstruction = pick<Reconstruction>("reconstruction", o.reconstruction,
-                                           {{"regions", Reconstruction::Regions},
-                                            {"cells", Reconstruction::CellLocation}});
-  ro.debug = pick<DebugView>("debug view", o.debug,
-                             {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},
-                              {"region", DebugView::Region}, {"steps", DebugView::Steps}});
-  if (o.light != "headlight") {
-    std::vector<float> d;
-    std::istringstream in(o.light);
-    for (std::string part; std::getline(in, part, ',');) {
-      try {
-        d.push_back(std::stof(part));
-      } catch (...) {
-        fail("--light expects 'headlight' or a direction x,y,z, got '", o.light, "'");
-      }
-    }
-    if (d.size() != 3 || (d[0] == 0 && d[1] == 0 && d[2] == 0))
-      fail("--light expects 'headlight' or a non-zero direction x,y,z");
-    ro.headlight = false;
-    ro.lightDirection = vec3f(d[0], d[1], d[2]);
-  }
-  ro.spaceSkipping = !o.noSkip;
-  ro.earlyTermination = !o.noEarlyTermination;
-  ro.progress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
-  if (o.background.size() != 3) fail("--background expects r,g,b (sRGB, 0..1)");
-  for (float c : o.background)
-    if (!(c >= 0.f && c <= 1.f)) fail("--background components must lie in [0, 1]");
+/// The scene and frame the options describe, over the scene file when one is given: without a
+/// file every option applies (defaults included); with one, only the options given.
+SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
+  const bool fromFile = !o.sceneFile.empty();
+  SceneDocument doc = fromFile ? readSceneFile(o.sceneFile) : SceneDocument();
+  auto given = [&](const char* name) { return cmd.count(name) > 0; };
+  auto apply = [&](const char* name) { return !fromFile || given(name); };
+  Scene& s = doc.scene;
+  Frame& f = doc.frame;
+  if (!o.in.input.empty()) doc.input = o.in.input;
 
-  ro.volume = !o.noVolume;
-  for (const std::string& text : o.clipPlanes) {
-    const std::vector<double> v = parseNumbers(text, "--clip-plane");
-    if (v.size() != 6 || (v[3] == 0 && v[4] == 0 && v[5] == 0))
-      fail("--clip-plane expects px,py,pz,nx,ny,nz with a non-zero normal, got '", text, "'");
-    ro.clipPlanes.push_back({vec3d(v[0], v[1], v[2]), vec3d(v[3], v[4], v[5])});
+  if (apply("--size")) parseSize(o.size, f.width, f.height);
+  if (apply("--spp")) {
+    if (o.spp < 1 || o.spp > 65536) fail("--spp must be in 1..65536");
+    f.samplesPerPixel = o.spp;
   }
-  if (!o.clipBox.empty()) {
-    const auto& b = o.clipBox;
-    if (b.size() != 6 || !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
-      fail("--clip-box expects x0,y0,z0,x1,y1,z1 with the lower corner below the upper one");
-    ro.clipBox = box3d(vec3d(b[0], b[1], b[2]), vec3d(b[3], b[4], b[5]));
+  if (apply("--rate")) f.rate = o.rate;
+  if (apply("--seed")) f.seed = o.seed;
+  if (apply("--no-jitter")) f.jitter = !o.noJitter;
+
+  // The first volume layer: the field and its transfer function.
+  if (s.layers.empty()) s.layers.push_back(VolumeLayer{});
+  VolumeLayer& first = s.layers[0];
+  if (apply("--field")) first.field = o.in.field;
+  const bool colormapGiven = given("--colormap") || (!fromFile && o.tfFile.empty());
+  first.tf = applyTransferFunctionOptions(fromFile || !o.tfFile.empty() ? first.tf : defaultTransferFunction(),
+                                          o, o.tfFile, colormapGiven ? &o.colormap : nullptr, true);
+  if (apply("--layer")) {
+    s.layers.resize(1);
+    for (const std::string& spec : o.layers) {
+      const size_t eq = spec.find('=');
+      const std::string name = spec.substr(0, eq);
+      if (name.empty()) fail("--layer expects FIELD or FIELD=COLORMAP or FIELD=TF_FILE, got '", spec, "'");
+      std::string file, colormap = o.colormap;
+      if (eq != std::string::npos) {
+        const std::string what = spec.substr(eq + 1);
+        if (std::ifstream(what).good())
+          file = what;
+        else
+          colormap = what;
+      }
+      s.layers.push_back({name, applyTransferFunctionOptions(defaultTransferFunction(), o, file,
+                                                             file.empty() ? &colormap : nullptr, false)});
+    }
   }
-  ro.clipMeshes = o.clipMeshes;
-  if (o.aoRays < 0 || o.aoRays > 1024) fail("--ao must be in 0..1024 rays");
-  if (!(o.aoLength >= 0.f)) fail("--ao-length must not be negative");
-  ro.aoRays = o.aoRays;
-  ro.aoLength = o.aoLength;
-  ro.aoVolume = o.aoVolume;
-  const std::vector<vec3f> isoColors = colorList(o.isoColor, "--iso-color");
-  const std::vector<vec3f> meshColors = colorList(o.meshColor, "--mesh-color");
+
+  if (apply("--shading"))
+    s.shading = pick<Shading>("shading", o.shading,
+                              {{"analytic", Shading::Analytic}, {"central", Shading::Central},
+                               {"clamped", Shading::ClampedCentral}, {"none", Shading::None}});
+  Integration& in = s.integration;
+  if (apply("--traversal")) {
+    in.autoTraversal = o.traversal == "auto";
+    if (!in.autoTraversal)
+      in.traversal = pick<TraversalKind>("traversal", o.traversal,
+                                         {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
+  }
+  if (apply("--sampling"))
+    in.sampling = pick<Sampling>("sampling", o.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
+  if (apply("--reconstruction"))
+    in.reconstruction = pick<Reconstruction>("reconstruction", o.reconstruction,
+                                             {{"regions", Reconstruction::Regions},
+                                              {"cells", Reconstruction::CellLocation}});
+  if (apply("--no-skip")) in.spaceSkipping = !o.noSkip;
+  if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
+  if (apply("--debug"))
+    s.debug = pick<DebugView>("debug view", o.debug,
+                              {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},
+                               {"region", DebugView::Region}, {"steps", DebugView::Steps}});
+  if (apply("--light")) {
+    s.light.headlight = o.light == "headlight";
+    if (!s.light.headlight) {
+      std::vector<float> d;
+      std::istringstream lin(o.light);
+      for (std::string part; std::getline(lin, part, ',');) {
+        try {
+          d.push_back(std::stof(part));
+        } catch (...) {
+          fail("--light expects 'headlight' or a direction x,y,z, got '", o.light, "'");
+        }
+      }
+      if (d.size() != 3 || (d[0] == 0 && d[1] == 0 && d[2] == 0))
+        fail("--light expects 'headlight' or a non-zero direction x,y,z");
+      s.light.direction = vec3f(d[0], d[1], d[2]);
+    }
+  }
+  if (apply("--background")) {
+    if (o.background.size() != 3) fail("--background expects r,g,b (sRGB, 0..1)");
+    for (float c : o.background)
+      if (!(c >= 0.f && c <= 1.f)) fail("--background components must lie in [0, 1]");
+    s.background = srgbToLinear(vec3f(o.background[0], o.background[1], o.background[2]));
+  }
+  if (apply("--alpha")) s.keepAlpha = o.alpha;
+
+  if (apply("--no-volume")) s.volume = !o.noVolume;
+  if (apply("--clip-plane")) {
+    s.clip.planes.clear();
+    for (const std::string& text : o.clipPlanes) {
+      const std::vector<double> v = parseNumbers(text, "--clip-plane");
+      if (v.size() != 6 || (v[3] == 0 && v[4] == 0 && v[5] == 0))
+        fail("--clip-plane expects px,py,pz,nx,ny,nz with a non-zero normal, got '", text, "'");
+      s.clip.planes.push_back({vec3d(v[0], v[1], v[2]), vec3d(v[3], v[4], v[5])});
+    }
+  }
+  if (apply("--clip-box")) {
+    s.clip.box = box3d();
+    if (!o.clipBox.empty()) {
+      const auto& b = o.clipBox;
+      if (b.size() != 6 || !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
+        fail("--clip-box expects x0,y0,z0,x1,y1,z1 with the lower corner below the upper one");
+      s.clip.box = box3d(vec3d(b[0], b[1], b[2]), vec3d(b[3], b[4], b[5]));
+    }
+  }
+  if (apply("--clip-meshes")) s.clip.meshes = o.clipMeshes;
+  if (apply("--ao")) {
+    if (o.aoRays < 0 || o.aoRays > 1024) fail("--ao must be in 0..1024 rays");
+    s.ao.rays = o.aoRays;
+  }
+  if (apply("--ao-length")) {
+    if (!(o.aoLength >= 0.f)) fail("--ao-length must not be negative");
+    s.ao.length = o.aoLength;
+  }
+  if (apply("--ao-volume")) s.ao.volume = o.aoVolume;
+
+  // Iso-surfaces.
   if (!o.isoColorRange.empty() && (o.isoColorRange.size() != 2 || !(o.isoColorRange[0] < o.isoColorRange[1])))
     fail("--iso-color-range expects LOW,HIGH with LOW < HIGH");
-  if (o.iso.empty() && (!o.isoField.empty() || !o.isoColorField.empty() || !o.isoColor.empty()))
+  if (o.iso.empty() && !fromFile && (!o.isoField.empty() || !o.isoColorField.empty() || !o.isoColor.empty()))
     fail("iso-surface options need --iso VALUES");
   for (float v : o.iso)
     if (!std::isfinite(v)) fail("--iso values must be finite numbers");
+  IsoSurfaces& iso = s.iso;
+  if (apply("--iso")) iso.values = o.iso;
+  if (apply("--iso-field")) iso.field = o.isoField.empty() ? o.in.field : o.isoField;
+  if (apply("--iso-color")) iso.colors = colorList(o.isoColor, "--iso-color");
+  if (apply("--iso-color-field")) iso.colorField = o.isoColorField;
+  if (apply("--iso-colormap")) iso.colorTf.colorMap = builtinColorMap(o.isoColormap);
+  if (apply("--iso-color-range"))
+    iso.colorTf.valueRange = o.isoColorRange.empty() ? range1f() : range1f{o.isoColorRange[0], o.isoColorRange[1]};
 
-  // Meshes first: a bad mesh file should fail before the (longer) model build.
-  std::vector<TriangleMesh> meshes;
-  for (const std::string& path : o.meshes) meshes.push_back(readMesh(path));
-
-  Timer loadTimer;
-  LoadOptions lo = o.in.loadOptions(false);
-  lo.fields = neededFields(o);
-  const Model model = loadModel(o.in.input, lo);
-  const double loadSeconds = loadTimer.seconds();
-  const int field = model.requireField(o.in.field);
-  const TransferFunction tf = makeTransferFunction(o, model);
-
-  Renderer renderer(model, field, ro);
-  std::vector<VolumeLayer> layers{{field, tf}};
-  for (const std::string& spec : o.layers) {
-    const size_t eq = spec.find('=');
-    const std::string name = spec.substr(0, eq);
-    if (name.empty()) fail("--layer expects FIELD or FIELD=COLORMAP or FIELD=TF_FILE, got '", spec, "'");
-    RenderCmdOptions lo2 = o;
-    lo2.tfFile.clear();
-    lo2.colormap = o.colormap;
-    lo2.range.clear();
-    lo2.logScale = false;
-    if (eq != std::string::npos) {
-      const std::string what = spec.substr(eq + 1);
-      if (std::ifstream(what).good())
-        lo2.tfFile = what;
-      else
-        lo2.colormap = what;
+  // Meshes: read here, so that a bad mesh file fails before the (longer) model build.
+  if (apply("--mesh") || apply("--mesh-color")) {
+    const std::vector<vec3f> meshColors = colorList(o.meshColor, "--mesh-color");
+    if (apply("--mesh")) {
+      s.meshes.clear();
+      for (const std::string& path : o.meshes)
+        s.meshes.push_back({std::make_shared<TriangleMesh>(readMesh(path)), vec3f(0.6f, 0.6f, 0.62f), path});
     }
-    layers.push_back({model.requireField(name), makeTransferFunction(lo2, model)});
+    if (!meshColors.empty())
+      for (size_t i = 0; i < s.meshes.size(); ++i) s.meshes[i].color = meshColors[i % meshColors.size()];
   }
-  double updateSeconds = renderer.setVolumeLayers(layers);
-  double isoSeconds = 0.0;
-  if (!o.iso.empty()) {
-    IsoSurfaces iso;
-    iso.field = model.requireField(o.isoField.empty() ? o.in.field : o.isoField);
-    iso.values = o.iso;
-    iso.colors = isoColors;
-    if (!o.isoColorField.empty()) {
-      iso.colorField = model.requireField(o.isoColorField);
-      iso.colorTf.colorMap = builtinColorMap(o.isoColormap);
-      if (!o.isoColorRange.empty()) iso.colorTf.valueRange = range1f{o.isoColorRange[0], o.isoColorRange[1]};
-    }
-    isoSeconds = renderer.setIsoSurfaces(iso);
-    logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(),
-                   ", built in ", isoSeconds, " s"));
-  }
-  for (size_t i = 0; i < meshes.size(); ++i)
-    renderer.addMesh(meshes[i], meshColors.empty() ? vec3f(0.6f, 0.6f, 0.62f) : meshColors[i % meshColors.size()]);
+  s.validate();
+  return doc;
+}
 
+/// Fields the scene needs; empty means all (a layer names the default field).
+std::vector<std::string> neededFields(const Scene& s) {
+  std::vector<std::string> names;
+  bool all = false;
+  auto add = [&](const std::string& n) {
+    if (n.empty()) all = true;
+    else if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+  };
+  for (const VolumeLayer& l : s.layers) add(l.field);
+  if (!s.iso.values.empty()) {
+    if (!s.iso.field.empty()) add(s.iso.field);
+    if (!s.iso.colorField.empty()) add(s.iso.colorField);
+  }
+  return all ? std::vector<std::string>() : names;
+}
+
+/// The camera: the scene file's, or framing the data from azimuth and elevation; explicit
+/// position, look-at and up override either.
+Camera cameraFromOptions(const RenderCmdOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model) {
+  auto given = [&](const char* name) { return cmd.count(name) > 0; };
+  if (!(o.fov > 0 && o.fov < 180)) fail("--fov must be in (0, 180) degrees");
   const box3i cb = model.cellBounds();
   const box3d worldBox(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
-  Camera camera = Camera::frame(worldBox, o.azimuth, o.elevation, o.fov, o.ortho);
+  const bool reframe = given("--azimuth") || given("--elevation") || given("--fov") || given("--ortho");
+  Camera camera = doc.hasCamera && !reframe ? doc.frame.camera
+                                           : Camera::frame(worldBox, o.azimuth, o.elevation, o.fov, o.ortho);
   if (!o.position.empty()) camera.position = toVec(o.position, "--position");
   if (!o.lookAt.empty()) camera.lookAt = toVec(o.lookAt, "--look-at");
   if (!o.up.empty()) camera.up = toVec(o.up, "--up");
-  if (!(o.fov > 0 && o.fov < 180)) fail("--fov must be in (0, 180) degrees");
-  const vec3d forward = camera.lookAt - camera.position;
-  if (length(forward) == 0 || length(cross(forward, camera.up)) == 0)
-    fail("degenerate camera: position equals look-at, or up is parallel to the view direction");
+  return camera;
+}
 
+void run(const RenderCmdOptions& o, const CLI::App& cmd) {
+  if (o.frames < 1 || o.frames > 1000) fail("--frames must be in 1..1000");
+  SceneDocument doc = sceneFromOptions(o, cmd);
+  Scene& scene = doc.scene;
+  Frame& frame = doc.frame;
+
+  Timer loadTimer;
+  LoadOptions lo = o.in.loadOptions(false);
+  lo.fields = neededFields(scene);
+  const Model model = loadModel(doc.input, lo);
+  const double loadSeconds = loadTimer.seconds();
+  frame.camera = cameraFromOptions(o, cmd, doc, model);
+  frame.validate();
+  doc.hasCamera = true;
+  if (!o.writeScene.empty()) {
+    const std::string text = writeSceneJson(doc);
+    writeFileAtomic(o.writeScene, text.data(), text.size());
+  }
+
+  Renderer renderer(model);
+  const SceneUpdate update = renderer.setScene(scene);
+  if (!scene.iso.values.empty())
+    logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(),
+                   ", built in ", update.isoSeconds, " s"));
+
+  // A frame is samplesPerPixel passes into one buffer; a progress line on a terminal.
+  FrameBuffer buffer(frame.width, frame.height);
+  const bool showProgress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
+  auto renderFrame = [&](RenderStats& stats) {
+    buffer.clear();
+    Progress progress("rendering", uint64_t(buffer.tileCount()) * uint64_t(frame.samplesPerPixel));
+    if (!showProgress) progress.finish();
+    PassControl control;
+    control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
+    Frame pass = frame;
+    for (int s = 0; s < frame.samplesPerPixel; ++s) {
+      pass.frameIndex = s;
+      renderer.renderPass(pass, buffer, control);
+    }
+    progress.finish();
+    stats = buffer.stats();
+  };
   RenderStats stats;
-  Image image;
   std::vector<double> frameSeconds;
   if (o.stats) {
-    RenderStats warm;
-    renderer.render(camera, &warm); // warm-up, not counted
+    renderFrame(stats); // warm-up, not counted
     for (int f = 0; f < o.frames; ++f) {
-      image = renderer.render(camera, &stats);
+      renderFrame(stats);
       frameSeconds.push_back(stats.seconds);
     }
     std::sort(frameSeconds.begin(), frameSeconds.end());
     stats.seconds = frameSeconds[frameSeconds.size() / 2];
   } else {
-    image = renderer.render(camera, &stats);
+    renderFrame(stats);
   }
-  const vec3f bg(srgbToLinear(o.background[0]), srgbToLinear(o.background[1]), srgbToLinear(o.background[2]));
-  writePng(o.output, image, o.alpha, bg);
-  if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, bg);
+  const Image image = buffer.resolve();
+  writePng(o.output, image, scene.keepAlpha, scene.background);
+  if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, scene.background);
   logInfo(strCat("wrote ", o.output));
 
+  const char* traversal = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
   if (o.json) {
     nlohmann::json j;
     j["output"] = o.output;
-    j["width"] = ro.width;
-    j["height"] = ro.height;
-    j["samples_per_pixel"] = ro.samplesPerPixel;
+    j["width"] = frame.width;
+    j["height"] = frame.height;
+    j["samples_per_pixel"] = frame.samplesPerPixel;
     j["frame_seconds"] = stats.seconds;
     j["frames"] = frameSeconds.empty() ? 1 : frameSeconds.size();
     j["rays"] = stats.rays;
@@ -326,14 +404,14 @@ void run(const RenderCmdOptions& o) {
     j["samples_per_second"] = stats.samplesPerSecond();
     j["visible_regions"] = renderer.visibleRegions();
     j["regions"] = model.regions.regions.size();
-    j["transfer_function_update_seconds"] = updateSeconds;
+    j["transfer_function_update_seconds"] = update.volumeSeconds;
     j["load_seconds"] = loadSeconds;
-    j["traversal"] = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+    j["traversal"] = traversal;
     j["surface_hits"] = stats.surfaceHits;
     j["iso_samples"] = stats.isoSamples;
     j["ao_rays"] = stats.aoRays;
     j["iso_regions"] = renderer.isoRegions();
-    j["iso_update_seconds"] = isoSeconds;
+    j["iso_update_seconds"] = update.isoSeconds;
     j["meshes"] = renderer.meshCount();
     std::cout << j.dump(2) << "\n";
   } else if (o.stats) {
@@ -345,12 +423,12 @@ void run(const RenderCmdOptions& o) {
                 double(stats.regionsVisited) / double(std::max<uint64_t>(stats.rays, 1)));
     std::printf("samples/s        %.3fM\n", stats.samplesPerSecond() / 1e6);
     std::printf("visible regions  %zu of %zu (transfer function update %.4f s)\n", renderer.visibleRegions(),
-                model.regions.regions.size(), updateSeconds);
+                model.regions.regions.size(), update.volumeSeconds);
     std::printf("traversal        %s\n", renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd-tree");
-    if (!o.iso.empty())
+    if (!scene.iso.values.empty())
       std::printf("iso regions      %zu of %zu (built in %.4f s), %llu iso samples\n", renderer.isoRegions(),
-                  model.regions.regions.size(), isoSeconds, (unsigned long long)stats.isoSamples);
-    if (!o.iso.empty() || !meshes.empty())
+                  model.regions.regions.size(), update.isoSeconds, (unsigned long long)stats.isoSamples);
+    if (!scene.iso.values.empty() || !scene.meshes.empty())
       std::printf("surface hits     %llu, ambient occlusion rays %llu\n", (unsigned long long)stats.surfaceHits,
                   (unsigned long long)stats.aoRays);
     std::printf("load + build     %.3f s\n", loadSeconds);
@@ -421,11 +499,10 @@ void addRender(CLI::App& app) {
   cmd->add_flag("--stats", o->stats, "Time the frame after a warm-up and print statistics");
   cmd->add_option("--frames", o->frames, "Frames to time with --stats (median)")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print statistics as one JSON object on stdout");
-  const std::function<void()> writeScene = addSceneFile(app, *cmd);
-  cmd->callback([o, writeScene] {
-    writeScene();
-    run(*o);
-  });
+  cmd->add_option("--scene", o->sceneFile,
+                  "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
+  cmd->add_option("--write-scene", o->writeScene, "Write the scene and frame in effect as a JSON scene file");
+  cmd->callback([o, cmd] { run(*o, *cmd); });
 }
 
 } // namespace exa::cli

@@ -50,14 +50,6 @@ void parseSize(const std::string& text, int& width, int& height) {
     fail("--size expects WIDTHxHEIGHT with each in 1..32768, got '", text, "'");
 }
 
-float defaultOpacityScale(const Model& model) {
-  const box3i b = model.cellBounds();
-  int finest = kMaxLevel;
-  for (const Brick& br : model.bricks) finest = std::min(finest, br.level);
-  const float extentCells = float(reduceMax(b.size())) / float(1 << finest);
-  return std::min(1.f, 8.f / std::max(1.f, extentCells));
-}
-
 nlohmann::json toJson(const range1f& r) {
   if (r.empty()) return {{"min", nullptr}, {"max", nullptr}};
   return {{"min", r.lower}, {"max", r.upper}};

@@ -27,16 +27,8 @@ struct InputOptions {
   std::string name() const;
 };
 
-/// Adds --scene FILE (read options from JSON) and --write-scene FILE to a subcommand of root;
-/// returns the function that writes the scene file when one was asked for.
-std::function<void()> addSceneFile(CLI::App& root, CLI::App& cmd);
-
 /// Parses WIDTHxHEIGHT (each 1..32768) as given to --size; throws with the text otherwise.
 void parseSize(const std::string& text, int& width, int& height);
-
-/// The default opacity scale of a dataset: a ray through the whole dataset at full opacity
-/// gathers an optical depth of about eight (opacity is per finest cell width).
-float defaultOpacityScale(const Model& model);
 
 /// JSON for a range; null bounds for an empty range.
 nlohmann::json toJson(const range1f& r);

@@ -27,13 +27,6 @@ int main(int argc, char** argv) {
   exa::cli::addBench(app);
   try {
     app.parse(argc, argv);
-  } catch (const CLI::ConfigError& e) {
-    // CLI11 words its configuration errors for INI files; name the scene file's problem instead.
-    std::string message = e.what();
-    const std::string ini = "INI was not able to parse ";
-    if (message.rfind(ini, 0) == 0) message = "unknown option '" + message.substr(ini.size()) + "'";
-    std::fprintf(stderr, "exabricks: error: scene file: %s\n", message.c_str());
-    return 2;
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const exa::Error& e) {

@@ -130,11 +130,11 @@ bool CellLocator::sample(int field, const vec3f& p, float& value, vec3f* gradien
   for (int a = 0; a < 3; ++a)
     if (!(p[a] >= im.sampleBounds.lower[a] && p[a] <= im.sampleBounds.upper[a])) return false;
   const float* values = im.model.fieldValues[size_t(field)].data();
-  // The same sums and weights as BasisAccumulator, but every cell is found on its own.
-  float sumW = 0.f, sumWV = 0.f;
-  vec3f dSumW(0.f), dSumWV(0.f);
+  // The same sums and weights as the region path (BasisAccumulator), but every cell is found
+  // on its own.
+  BasisAccumulator<float> acc;
   for (const int level : im.levels) {
-    const float invW = kInverseWidth[level];
+    const float invW = inverseWidth(level);
     int idx[3][2];
     float h[3][2], dh[3][2];
     for (int a = 0; a < 3; ++a) {
@@ -152,28 +152,19 @@ bool CellLocator::sample(int field, const vec3f& p, float& value, vec3f* gradien
       h[a][1] = f;
       dh[a][1] = invW;
     }
+    const int32_t w = int32_t(1) << level;
     for (int iz = 0; iz < 2; ++iz)
       for (int iy = 0; iy < 2; ++iy)
         for (int ix = 0; ix < 2; ++ix) {
-          const int32_t w = int32_t(1) << level;
           const vec3i corner(idx[0][ix] * w, idx[1][iy] * w, idx[2][iz] * w);
           const float* slot = im.findCell(values, corner, level);
-          if (!slot) continue;
-          const float v = *slot;
-          const float hyz = h[1][iy] * h[2][iz];
-          const float weight = h[0][ix] * hyz;
-          sumW += weight;
-          sumWV += weight * v;
-          if (gradient) {
-            const vec3f d(dh[0][ix] * hyz, h[0][ix] * dh[1][iy] * h[2][iz], h[0][ix] * h[1][iy] * dh[2][iz]);
-            dSumW += d;
-            dSumWV += d * v;
-          }
+          if (slot)
+            acc.addCell(*slot, h[0][ix], h[1][iy], h[2][iz], dh[0][ix], dh[1][iy], dh[2][iz], gradient != nullptr);
         }
   }
-  if (!(sumW > 0.f)) return false;
-  value = sumWV / sumW;
-  if (gradient) *gradient = (dSumWV * sumW - dSumW * sumWV) / (sumW * sumW);
+  if (!acc.valid()) return false;
+  value = acc.value();
+  if (gradient) *gradient = acc.gradient();
   return true;
 }
 

@@ -17,12 +17,6 @@
 
 namespace exa {
 
-box3f TriangleMesh::bounds() const {
-  box3f b;
-  for (const vec3f& v : vertices) b.extend(v);
-  return b;
-}
-
 namespace {
 
 constexpr int64_t kMaxVertices = std::numeric_limits<int32_t>::max();

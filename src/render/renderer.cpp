@@ -1,153 +1,76 @@
 #include "exabricks/render/renderer.h"
 
 #include "exabricks/amr/cell_locator.h"
+#include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
-#include "exabricks/io/mesh.h"
+#include "exabricks/core/random.h"
 
 #include "../accel/embree_util.h"
 
-#include <tbb/blocked_range2d.h>
-#include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
 
 #include <cmath>
-#include <cstring>
 
 namespace exa {
 namespace {
 
-constexpr int kTableSize = 4096;
-constexpr int kTile = 16;
-
-uint64_t mixBits(uint64_t x) {
-  x ^= x >> 33;
-  x *= 0xff51afd7ed558ccdull;
-  x ^= x >> 33;
-  x *= 0xc4ceb9fe1a85ec53ull;
-  return x ^ (x >> 33);
-}
-
-/// Deterministic per-pixel, per-sample random numbers in [0, 1).
-struct PixelRandom {
-  uint64_t state;
-  PixelRandom(int x, int y, int sample, uint64_t seed)
-      : state(mixBits(seed * 0x9e3779b97f4a7c15ull ^ mixBits((uint64_t(uint32_t(y)) << 32) | uint32_t(x)) ^
-                      (uint64_t(sample) << 48))) {}
-  float next() {
-    state = mixBits(state + 0x9e3779b97f4a7c15ull);
-    return float(state >> 40) * (1.f / 16777216.f);
-  }
-};
-
-vec3f hashColor(uint32_t id) {
-  const uint64_t h = mixBits(uint64_t(id) + 12345);
-  return vec3f(0.15f + 0.85f * float(h & 255) / 255.f, 0.15f + 0.85f * float((h >> 8) & 255) / 255.f,
-               0.15f + 0.85f * float((h >> 16) & 255) / 255.f);
-}
-
 /// Colours for levels 0..7, cycling: distinct hues, finest warm.
 vec3f levelColor(int level) {
-  static const vec3f colors[8] = {{0.90f, 0.10f, 0.10f}, {0.95f, 0.55f, 0.05f}, {0.90f, 0.85f, 0.10f},
-                                  {0.20f, 0.75f, 0.20f}, {0.10f, 0.60f, 0.85f}, {0.25f, 0.25f, 0.90f},
-                                  {0.60f, 0.20f, 0.80f}, {0.55f, 0.55f, 0.55f}};
-  return colors[level & 7];
+  switch (level & 7) {
+  case 0: return {0.90f, 0.10f, 0.10f};
+  case 1: return {0.95f, 0.55f, 0.05f};
+  case 2: return {0.90f, 0.85f, 0.10f};
+  case 3: return {0.20f, 0.75f, 0.20f};
+  case 4: return {0.10f, 0.60f, 0.85f};
+  case 5: return {0.25f, 0.25f, 0.90f};
+  case 6: return {0.60f, 0.20f, 0.80f};
+  default: return {0.55f, 0.55f, 0.55f};
+  }
 }
 
-/// 2^x for x <= 0 to float precision (relative error below 2e-7): a degree-6 Taylor
-/// polynomial of 2^f on [-1/2, 1/2] times 2^i built from the exponent bits. Cheaper than a libm
-/// call on the hot path of every sample's opacity correction.
-inline float exp2Negative(float x) {
-  if (x < -126.f) return 0.f;
-  const float i = std::nearbyint(x);
-  const float f = x - i;
-  float p = 0.00015403530393381606f;
-  p = p * f + 0.0013333558146428443f;
-  p = p * f + 0.009618129107628477f;
-  p = p * f + 0.05550410866482158f;
-  p = p * f + 0.2402265069591007f;
-  p = p * f + 0.6931471805599453f;
-  p = p * f + 1.f;
-  const uint32_t bits = uint32_t(int32_t(i) + 127) << 23;
-  float scale;
-  std::memcpy(&scale, &bits, sizeof scale);
-  return p * scale;
+/// Default iso-surface colours (linear RGB), cycled over the iso-values.
+vec3f defaultIsoColor(int index) {
+  switch (index & 3) {
+  case 0: return {0.80f, 0.80f, 0.78f};
+  case 1: return {0.85f, 0.35f, 0.20f};
+  case 2: return {0.20f, 0.45f, 0.85f};
+  default: return {0.35f, 0.70f, 0.30f};
+  }
 }
 
-/// Schlick's rational approximation of x^e for x in [0, 1]: exact at 0 and 1, one division
-/// instead of a power per sample.
-inline float specularPower(float x, float e) { return x / (e - (e - 1.f) * x); }
-
-/// A transfer function tabulated for the marcher: colour and log2 of the transmittance of one
-/// finest cell width over the normalised value.
+/// A transfer function tabulated for the marcher (the storage behind a TfTableView).
 struct LayerTable {
   int field = 0;
   FieldView view;
   TransferFunction tf;
   std::vector<vec4f> table;
-  bool fastLinear = false; ///< t = (value - normLower) * normScale, else tf.normalize
-  float normLower = 0.f, normScale = 0.f;
+  TfTableView t;
 
-  void build(const Model& model, int fieldIndex, const TransferFunction& tfIn) {
-    if (fieldIndex < 0 || size_t(fieldIndex) >= model.fieldValues.size())
-      fail("field index ", fieldIndex, " is out of range (", model.fieldValues.size(), " fields)");
+  void build(const Model& model, const DatasetInfo& dataset, int fieldIndex, const TransferFunction& tfIn) {
     field = fieldIndex;
     view = model.view(fieldIndex);
     tf = tfIn;
-    if (tf.valueRange.empty()) {
-      range1f r;
-      for (const range1f& rr : model.regions.valueRanges[size_t(field)]) r.extend(rr);
-      tf.valueRange = r;
-    }
-    table.resize(kTableSize);
-    for (int i = 0; i < kTableSize; ++i) {
-      const vec4f c = tf.atNormalized(float(i) / float(kTableSize - 1));
+    if (tf.valueRange.empty() && size_t(field) < dataset.valueRanges.size())
+      tf.valueRange = dataset.valueRanges[size_t(field)];
+    if (tf.opacityScale == 0.f) tf.opacityScale = dataset.defaultOpacityScale;
+    table.resize(kTfTableSize);
+    for (int i = 0; i < kTfTableSize; ++i) {
+      const vec4f c = tf.atNormalized(float(i) / float(kTfTableSize - 1));
       table[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
     }
     const range1f r = tf.valueRange;
-    fastLinear = !tf.logScale && r.upper > r.lower;
-    normLower = r.lower;
-    normScale = fastLinear ? 1.f / (r.upper - r.lower) : 0.f;
+    t.entries = table.data();
+    t.range = r;
+    t.logScale = tf.logScale;
+    t.fastLinear = !tf.logScale && r.upper > r.lower;
+    t.lower = r.lower;
+    t.scale = t.fastLinear ? 1.f / (r.upper - r.lower) : 0.f;
   }
-
-  float normalized(float value) const {
-    return fastLinear ? std::clamp((value - normLower) * normScale, 0.f, 1.f) : tf.normalize(value);
-  }
-
-  /// The tabulated transfer function, linearly interpolated, at normalised value n.
-  vec4f tableAt(float n) const {
-    const float t = n * float(kTableSize - 1);
-    const int i = std::clamp(int(t), 0, kTableSize - 2);
-    const float f = std::clamp(t - float(i), 0.f, 1.f);
-    const vec4f& a = table[size_t(i)];
-    const vec4f& b = table[size_t(i) + 1];
-    return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, a.w + (b.w - a.w) * f};
-  }
-
-  vec4f lookup(float value) const { return tableAt(normalized(value)); }
-
-  /// Whether any value in r can be visible through the tabulated function the marcher uses
-  /// (its log transmittance is piecewise linear, so its extremes lie at table entries or ends).
-  bool mayBeVisible(const range1f& r) const {
-    if (r.empty()) return false;
-    const float n0 = normalized(r.lower), n1 = normalized(r.upper);
-    if (tableAt(n0).w < 0.f || tableAt(n1).w < 0.f) return true;
-    const int first = int(std::ceil(n0 * float(kTableSize - 1)));
-    const int last = int(std::floor(n1 * float(kTableSize - 1)));
-    for (int i = std::max(first, 0); i <= std::min(last, kTableSize - 1); ++i)
-      if (table[size_t(i)].w < 0.f) return true;
-    return false;
-  }
+  vec4f lookup(float value) const { return tfLookup(t, value); }
 };
 
-/// Default iso-surface colours (linear RGB), cycled over the iso-values.
-const vec3f kIsoColors[4] = {{0.80f, 0.80f, 0.78f}, {0.85f, 0.35f, 0.20f}, {0.20f, 0.45f, 0.85f},
-                             {0.35f, 0.70f, 0.30f}};
-
-/// Per-thread counters of a frame.
-struct Counters {
-  uint64_t rays = 0, samples = 0, regions = 0, surfaceHits = 0, isoSamples = 0, aoRays = 0;
-};
+using Counters = FrameBuffer::TileCounters;
 
 /// A ray in both spaces: world origin and unit direction, and the lattice ray whose t is in
 /// finest lattice units along a unit lattice direction; t = s * kappa for world distance s.
@@ -165,54 +88,249 @@ void orthonormalBasis(const vec3f& n, vec3f& u, vec3f& v) {
   v = cross(n, u);
 }
 
+/// Field index of a layer's field name (empty: the dataset's default field).
+int resolveField(const Model& model, const std::string& name) { return model.requireField(name); }
+
 } // namespace
+
+DatasetInfo DatasetInfo::of(const Model& m) {
+  DatasetInfo d;
+  int finest = kMaxLevel;
+  for (const Brick& b : m.bricks) finest = std::min(finest, b.level);
+  d.referenceWidth = float(1 << finest);
+  const box3i cb = m.cellBounds();
+  if (!cb.empty()) d.worldDiagonal = length(vec3d(cb.size()) * m.world.scale);
+  d.valueRanges.resize(m.fieldValues.size());
+  for (size_t f = 0; f < m.fieldValues.size() && f < m.regions.valueRanges.size(); ++f)
+    for (const range1f& r : m.regions.valueRanges[f]) d.valueRanges[f].extend(r);
+  const float extentCells = cb.empty() ? 1.f : float(reduceMax(cb.size())) / d.referenceWidth;
+  d.defaultOpacityScale = std::min(1.f, 8.f / std::max(1.f, extentCells));
+  return d;
+}
+
+RenderStats& RenderStats::operator+=(const RenderStats& o) {
+  seconds += o.seconds;
+  rays += o.rays;
+  samples += o.samples;
+  regionsVisited += o.regionsVisited;
+  surfaceHits += o.surfaceHits;
+  isoSamples += o.isoSamples;
+  aoRays += o.aoRays;
+  tiles += o.tiles;
+  return *this;
+}
+
+void FrameBuffer::resize(int width, int height) {
+  if (width < 1 || height < 1 || width > 32768 || height > 32768)
+    fail("frame buffer size ", width, "x", height, " is out of range (1..32768)");
+  width_ = width;
+  height_ = height;
+  tilesX_ = (width + kRenderTile - 1) / kRenderTile;
+  tilesY_ = (height + kRenderTile - 1) / kRenderTile;
+  sum_.resize(size_t(width) * size_t(height));
+  steps_.resize(size_t(width) * size_t(height));
+  tilePasses_.resize(size_t(tilesX_) * size_t(tilesY_));
+  counters_.resize(size_t(tilesX_) * size_t(tilesY_));
+  clear();
+}
+
+void FrameBuffer::clear() {
+  std::fill(sum_.begin(), sum_.end(), vec4f());
+  std::fill(steps_.begin(), steps_.end(), 0.f);
+  std::fill(tilePasses_.begin(), tilePasses_.end(), 0u);
+  stats_ = RenderStats();
+}
+
+uint32_t FrameBuffer::passes() const {
+  if (tilePasses_.empty()) return 0;
+  return *std::min_element(tilePasses_.begin(), tilePasses_.end());
+}
+
+void FrameBuffer::resolve(Image& out) const {
+  if (out.width != width_ || out.height != height_) out = Image(width_, height_);
+  auto tilePassesAt = [&](int x, int y) {
+    return tilePasses_[size_t(y / kRenderTile) * size_t(tilesX_) + size_t(x / kRenderTile)];
+  };
+  // The steps view: samples per ray, averaged over the passes, scaled to the image's maximum.
+  float maxSteps = 1.f;
+  if (stepsView_)
+    for (int y = 0; y < height_; ++y)
+      for (int x = 0; x < width_; ++x)
+        if (const uint32_t n = tilePassesAt(x, y))
+          maxSteps = std::max(maxSteps, steps_[size_t(y) * size_t(width_) + size_t(x)] * (1.f / float(n)));
+  const ColorMap heat = stepsView_ ? builtinColorMap("inferno") : ColorMap();
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = size_t(y) * size_t(width_) + size_t(x);
+      const uint32_t n = tilePassesAt(x, y);
+      if (n == 0) {
+        out.pixels[i] = vec4f();
+        continue;
+      }
+      const float inv = 1.f / float(n);
+      if (stepsView_) {
+        const vec3f c = heat.at(steps_[i] * inv / maxSteps);
+        out.pixels[i] = {c.x, c.y, c.z, 1.f};
+      } else {
+        const vec4f& s = sum_[i];
+        out.pixels[i] = {s.x * inv, s.y * inv, s.z * inv, s.w * inv};
+      }
+    }
+}
+
+Image FrameBuffer::resolve() const {
+  Image image;
+  resolve(image);
+  return image;
+}
 
 struct Renderer::Impl {
   const Model& model;
-  int field;                 ///< the renderer's field (single-layer transfer function)
+  DatasetInfo dataset;
+  Scene scene;
+  bool haveScene = false;
+
   std::vector<LayerTable> layers;
   std::vector<uint8_t> visible;
   std::unique_ptr<RegionTraversal> traversal;
   std::unique_ptr<CellLocator> locator; ///< only for Reconstruction::CellLocation
-  float finestWidth = 1.f;   ///< dataset's finest cell width, lattice units (opacity reference)
-  float invFinestWidth = 1.f;
-  vec3f invScale{1.f};       ///< world units per lattice unit, inverted (for gradients)
-  double worldDiagonal = 1.0;
+  float referenceWidth = 1.f;  ///< opacity reference (dataset's finest cell width), lattice units
+  float invReferenceWidth = 1.f;
+  vec3f invScale{1.f};         ///< world units per lattice unit, inverted (for gradients)
   double minScale = 1.0;
 
   // Iso-surfaces: their own set of regions (value range holds an iso-value) and traversal.
-  IsoSurfaces iso;
+  std::vector<float> isoValues;
   FieldView isoView;
   std::vector<uint8_t> isoVisible;
   std::unique_ptr<RegionTraversal> isoTraversal;
-  LayerTable isoColor;       ///< colour map of iso.colorField
+  bool isoColored = false;
+  LayerTable isoColor;         ///< colour map of the iso colour field
 
   // Triangle meshes in world space.
   RTCDevice device = nullptr;
   RTCScene meshScene = nullptr;
   std::vector<vec3f> meshColors;
 
-  Impl(const Model& m, int f) : model(m), field(f) {
-    if (f < 0 || size_t(f) >= m.fieldValues.size())
-      fail("field index ", f, " is out of range (", m.fieldValues.size(), " fields)");
-    int finest = kMaxLevel;
-    for (const Brick& b : m.bricks) finest = std::min(finest, b.level);
-    finestWidth = float(1 << finest);
-    invFinestWidth = 1.f / finestWidth;
+  Impl(const Model& m, const DatasetInfo& d) : model(m), dataset(d) {
+    if (dataset.valueRanges.size() != m.fieldValues.size())
+      fail("dataset information holds ", dataset.valueRanges.size(), " value ranges for ", m.fieldValues.size(),
+           " fields");
+    if (!(dataset.referenceWidth > 0.f) || !std::isfinite(dataset.referenceWidth))
+      fail("dataset reference width must be a positive number");
+    referenceWidth = dataset.referenceWidth;
+    invReferenceWidth = 1.f / referenceWidth;
     invScale = vec3f(1.0 / m.world.scale.x, 1.0 / m.world.scale.y, 1.0 / m.world.scale.z);
     minScale = reduceMin(m.world.scale);
-    const box3i cb = m.cellBounds();
-    if (!cb.empty()) worldDiagonal = length(vec3d(cb.size()) * m.world.scale);
   }
 
-  ~Impl() {
+  ~Impl() { releaseMeshes(); }
+
+  void releaseMeshes() {
     if (meshScene) rtcReleaseScene(meshScene);
     if (device) rtcReleaseDevice(device);
+    meshScene = nullptr;
+    device = nullptr;
+    meshColors.clear();
+  }
+
+  /// Rebuilds the layer tables, the visible regions and the volume traversal.
+  void updateVolume(const Scene& s, const std::vector<int>& fields) {
+    std::vector<LayerTable> tables(s.layers.size());
+    for (size_t i = 0; i < s.layers.size(); ++i) tables[i].build(model, dataset, fields[i], s.layers[i].tf);
+    layers = std::move(tables);
+    // Space skipping: a region whose value ranges map to zero opacity in every layer cannot
+    // contribute.
+    const Integration& in = s.integration;
+    const size_t regionCount = model.regions.regions.size();
+    const bool skipping = in.spaceSkipping && s.debug == DebugView::None;
+    visible.assign(regionCount, layers.empty() && skipping ? 0 : 1);
+    if (skipping && !layers.empty())
+      tbb::parallel_for(size_t(0), regionCount, [&](size_t i) {
+        bool any = false;
+        for (const LayerTable& layer : layers)
+          any = any || tfMayBeVisible(layer.t, model.regions.valueRanges[size_t(layer.field)][i]);
+        visible[i] = any;
+      });
+    TraversalKind kind = in.traversal;
+    if (in.autoTraversal) {
+      size_t count = 0;
+      for (uint8_t v : visible) count += v;
+      kind = double(count) < double(in.embreeBelowVisibleFraction) * double(visible.size()) ? TraversalKind::Embree
+                                                                                           : TraversalKind::KdTree;
+    }
+    if (!traversal || traversal->kind() != kind) traversal = std::make_unique<RegionTraversal>(model, kind);
+    traversal->setVisible(visible);
+    if (in.reconstruction == Reconstruction::CellLocation && !locator) locator = std::make_unique<CellLocator>(model);
+  }
+
+  /// Rebuilds the iso region set (regions whose value range holds an iso-value).
+  void updateIso(const Scene& s, int field, int colorField) {
+    const IsoSurfaces& iso = s.iso;
+    isoValues = iso.values;
+    isoColored = colorField >= 0;
+    if (iso.values.empty()) {
+      isoTraversal.reset();
+      isoVisible.clear();
+      return;
+    }
+    isoView = model.view(field);
+    if (isoColored) isoColor.build(model, dataset, colorField, iso.colorTf);
+    const auto& ranges = model.regions.valueRanges[size_t(field)];
+    isoVisible.assign(ranges.size(), 0);
+    tbb::parallel_for(size_t(0), ranges.size(), [&](size_t i) {
+      const range1f& r = ranges[i];
+      bool any = false;
+      for (float v : iso.values) any = any || (!r.empty() && r.lower <= v && v <= r.upper);
+      isoVisible[i] = any;
+    });
+    size_t count = 0;
+    for (uint8_t v : isoVisible) count += v;
+    // Iso-surfaces are sparse: Embree skips the empty space in its BVH unless most regions hold one.
+    const TraversalKind kind =
+        double(count) < double(s.integration.embreeBelowVisibleFraction) * double(ranges.size())
+            ? TraversalKind::Embree
+            : TraversalKind::KdTree;
+    if (!isoTraversal || isoTraversal->kind() != kind) isoTraversal = std::make_unique<RegionTraversal>(model, kind);
+    isoTraversal->setVisible(isoVisible);
+  }
+
+  /// Rebuilds the mesh BVH.
+  void updateMeshes(const Scene& s) {
+    releaseMeshes();
+    if (s.meshes.empty()) return;
+    device = embree::newDevice();
+    meshScene = rtcNewScene(device);
+    rtcSetSceneFlags(meshScene, RTC_SCENE_FLAG_ROBUST);
+    for (size_t m = 0; m < s.meshes.size(); ++m) {
+      const TriangleMesh& mesh = *s.meshes[m].mesh;
+      RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+      auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
+                                                                  3 * sizeof(float), mesh.vertices.size()));
+      auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+          geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangles.size()));
+      if (!vertices || !indices) {
+        rtcReleaseGeometry(geom);
+        releaseMeshes();
+        fail("mesh ", m, ": out of memory for ", mesh.triangles.size(), " triangles");
+      }
+      for (size_t i = 0; i < mesh.vertices.size(); ++i)
+        for (int k = 0; k < 3; ++k) vertices[3 * i + size_t(k)] = mesh.vertices[i][k];
+      for (size_t i = 0; i < mesh.triangles.size(); ++i)
+        for (int k = 0; k < 3; ++k) indices[3 * i + size_t(k)] = uint32_t(mesh.triangles[i][k]);
+      rtcCommitGeometry(geom);
+      const unsigned id = rtcAttachGeometry(meshScene, geom);
+      rtcReleaseGeometry(geom);
+      EXA_CHECK(id == m);
+      meshColors.push_back(s.meshes[m].color);
+    }
+    rtcCommitScene(meshScene);
   }
 
   /// World ray -> lattice ray with the clip interval applied (planes and box, world space).
   /// The lattice interval may be empty; sMin/sMax keep the clipped world interval.
-  DualRay makeRay(const vec3d& orgW, const vec3d& dirWIn, const RenderOptions& o, bool clip) const {
+  DualRay makeRay(const vec3d& orgW, const vec3d& dirWIn, bool clip) const {
+    const Clipping& c = scene.clip;
     DualRay r;
     r.orgW = orgW;
     r.dirW = normalize(dirWIn);
@@ -222,7 +340,7 @@ struct Renderer::Impl {
     r.lattice.org = vec3f(orgL);
     r.lattice.dir = vec3f(dL / r.kappa);
     if (clip) {
-      for (const ClipPlane& cp : o.clipPlanes) {
+      for (const ClipPlane& cp : c.planes) {
         const double g0 = dot(orgW - cp.point, cp.normal), dn = dot(r.dirW, cp.normal);
         if (dn == 0.0) {
           if (g0 > 0.0) r.sMax = -1.0;
@@ -232,14 +350,14 @@ struct Renderer::Impl {
           r.sMin = std::max(r.sMin, -g0 / dn);
         }
       }
-      if (!o.clipBox.empty()) {
+      if (!c.box.empty()) {
         for (int a = 0; a < 3; ++a) {
           if (r.dirW[a] == 0.0) {
-            if (orgW[a] < o.clipBox.lower[a] || orgW[a] > o.clipBox.upper[a]) r.sMax = -1.0;
+            if (orgW[a] < c.box.lower[a] || orgW[a] > c.box.upper[a]) r.sMax = -1.0;
             continue;
           }
-          const double ta = (o.clipBox.lower[a] - orgW[a]) / r.dirW[a];
-          const double tb = (o.clipBox.upper[a] - orgW[a]) / r.dirW[a];
+          const double ta = (c.box.lower[a] - orgW[a]) / r.dirW[a];
+          const double tb = (c.box.upper[a] - orgW[a]) / r.dirW[a];
           r.sMin = std::max(r.sMin, std::min(ta, tb));
           r.sMax = std::min(r.sMax, std::max(ta, tb));
         }
@@ -282,20 +400,24 @@ struct Renderer::Impl {
     return ray.tfar < 0.f;
   }
 
+  /// Lattice step of a region at the given rate.
+  float stepOf(const Region& region, float rate) const {
+    const float width = scene.integration.sampling == Sampling::Adaptive ? region.finestWidth() : referenceWidth;
+    return 0.5f * width / rate;
+  }
+
   /// Nearest iso-surface crossing along a lattice ray within [ray.tmin, ray.tmax]: each region
   /// is stepped at its adaptive rate (and at its entry and exit), and a sign change of
   /// value - isovalue is refined by bisection to 1e-3 of the region's finest cell width, then
   /// by one secant step. Returns the lattice t, the region and the iso-value's index.
-  bool findIso(const Ray& ray, const RenderOptions& o, float& tHit, uint32_t& regionHit, int& which,
-               uint64_t& samples) const {
-    if (!isoTraversal || iso.values.empty() || !(ray.tmax > ray.tmin)) return false;
+  bool findIso(const Ray& ray, float rate, float& tHit, uint32_t& regionHit, int& which, uint64_t& samples) const {
+    if (!isoTraversal || isoValues.empty() || !(ray.tmax > ray.tmin)) return false;
     bool found = false;
     isoTraversal->traverse(ray, [&](const Segment& seg) {
       const float t0 = std::max(seg.t0, ray.tmin), t1 = std::min(seg.t1, ray.tmax);
       if (!(t1 > t0)) return true;
       const Region& region = model.regions.regions[seg.region];
-      const float width = o.sampling == Sampling::Adaptive ? region.finestWidth() : finestWidth;
-      const float dt = 0.5f * width / o.rate;
+      const float dt = stepOf(region, rate);
       const float tolerance = 1e-3f * region.finestWidth();
       auto value = [&](float t, float& v) {
         ++samples;
@@ -311,26 +433,11 @@ struct Renderer::Impl {
         if (aValid && bValid) {
           float best = std::numeric_limits<float>::infinity();
           int bestIndex = -1;
-          for (size_t j = 0; j < iso.values.size(); ++j) {
-            const float c = iso.values[j];
+          for (size_t j = 0; j < isoValues.size(); ++j) {
+            const float c = isoValues[j];
             const bool sideA = va >= c, sideB = vb >= c;
             if (sideA == sideB) continue;
-            float lo = ta, hi = tb, vlo = va, vhi = vb;
-            while (hi - lo > tolerance) {
-              const float mid = 0.5f * (lo + hi);
-              if (!(mid > lo && mid < hi)) break; // float resolution reached
-              float vm;
-              if (!value(mid, vm)) {
-                hi = mid, vhi = vm = vlo; // no value inside: keep the near part
-                break;
-              }
-              if ((vm >= c) == sideA)
-                lo = mid, vlo = vm;
-              else
-                hi = mid, vhi = vm;
-            }
-            const float denom = vhi - vlo;
-            const float t = denom != 0.f ? lo + (hi - lo) * std::clamp((c - vlo) / denom, 0.f, 1.f) : hi;
+            const float t = refineCrossing(value, ta, tb, va, vb, c, sideA, tolerance);
             if (t < best) best = t, bestIndex = int(j);
           }
           if (bestIndex >= 0) {
@@ -349,11 +456,12 @@ struct Renderer::Impl {
   }
 
   /// Nearest surface (mesh or iso-surface) along a primary ray.
-  bool nearestSurface(const DualRay& r, const RenderOptions& o, SurfaceHit& hit, uint64_t& isoSamples) const {
+  bool nearestSurface(const DualRay& r, float rate, SurfaceHit& hit, uint64_t& isoSamples) const {
     bool have = false;
+    const bool clipMeshes = scene.clip.meshes;
     if (meshScene) {
-      const double s0 = o.clipMeshes ? r.sMin : 0.0;
-      const double s1 = o.clipMeshes ? r.sMax : std::numeric_limits<double>::infinity();
+      const double s0 = clipMeshes ? r.sMin : 0.0;
+      const double s1 = clipMeshes ? r.sMax : std::numeric_limits<double>::infinity();
       have = traceMesh(r, s0, s1, hit);
     }
     if (isoTraversal && !clippedAway(r)) {
@@ -362,7 +470,7 @@ struct Renderer::Impl {
       float t;
       uint32_t region;
       int which;
-      if (findIso(lr, o, t, region, which, isoSamples)) {
+      if (findIso(lr, rate, t, region, which, isoSamples)) {
         const vec3f p = lr.org + lr.dir * t;
         float v;
         vec3f g;
@@ -386,67 +494,68 @@ struct Renderer::Impl {
   /// Colour of a surface hit before lighting.
   vec3f surfaceColor(const SurfaceHit& hit) const {
     if (hit.kind == SurfaceHit::Mesh) return meshColors[size_t(hit.index)];
-    if (iso.colorField >= 0) {
+    if (isoColored) {
       float v;
       const vec3d pl = model.world.toLattice(hit.position);
-      if (sampleField(isoColor.view, vec3f(pl), v)) {
-        const vec4f c = isoColor.lookup(v);
-        return {c.x, c.y, c.z};
-      }
+      if (sampleField(isoColor.view, vec3f(pl), v)) return isoColor.lookup(v).rgb();
     }
-    if (!iso.colors.empty()) return iso.colors[size_t(hit.index) % iso.colors.size()];
-    return kIsoColors[hit.index % 4];
+    const std::vector<vec3f>& colors = scene.iso.colors;
+    if (!colors.empty()) return colors[size_t(hit.index) % colors.size()];
+    return defaultIsoColor(hit.index);
   }
 
   /// Fraction of unoccluded cosine-weighted rays over the hemisphere of the hit's normal.
-  float ambientOcclusion(const SurfaceHit& hit, const RenderOptions& o, PixelRandom& rng, Counters& c) const {
-    const double lengthW = o.aoLength > 0.f ? double(o.aoLength) : 0.1 * worldDiagonal;
-    const double eps = std::max(1e-5 * worldDiagonal, 1e-2 * double(finestWidth) * minScale);
+  float ambientOcclusion(const SurfaceHit& hit, float rate, PixelRandom& rng, Counters& c) const {
+    const AmbientOcclusion& ao = scene.ao;
+    const double lengthW = ao.length > 0.f ? double(ao.length) : 0.1 * dataset.worldDiagonal;
+    const double eps = std::max(1e-5 * dataset.worldDiagonal, 1e-2 * double(referenceWidth) * minScale);
     vec3f u, v;
     orthonormalBasis(hit.normal, u, v);
     float open = 0.f;
-    for (int i = 0; i < o.aoRays; ++i) {
+    for (int i = 0; i < ao.rays; ++i) {
       const float r1 = rng.next(), r2 = rng.next();
       const float radius = std::sqrt(r1), phi = 6.2831853f * r2;
       const vec3f d = u * (radius * std::cos(phi)) + v * (radius * std::sin(phi)) +
                       hit.normal * std::sqrt(std::max(0.f, 1.f - r1));
       ++c.aoRays;
-      const DualRay ar = makeRay(hit.position + vec3d(hit.normal) * eps, vec3d(d), o, true);
-      const double meshMin = o.clipMeshes ? ar.sMin : 0.0;
-      const double meshMax = o.clipMeshes ? std::min(ar.sMax, lengthW) : lengthW;
+      const DualRay ar = makeRay(hit.position + vec3d(hit.normal) * eps, vec3d(d), true);
+      const double meshMin = scene.clip.meshes ? ar.sMin : 0.0;
+      const double meshMax = scene.clip.meshes ? std::min(ar.sMax, lengthW) : lengthW;
       if (meshOccludes(ar, meshMin, meshMax)) continue;
       Ray lr = ar.lattice;
       lr.tmax = std::min(lr.tmax, float(lengthW * ar.kappa));
       float t;
       uint32_t region;
       int which;
-      if (!clippedAway(ar) && findIso(lr, o, t, region, which, c.isoSamples)) continue;
+      if (!clippedAway(ar) && findIso(lr, rate, t, region, which, c.isoSamples)) continue;
       float visibility = 1.f;
-      if (o.aoVolume && o.volume && !clippedAway(ar) && lr.tmax > lr.tmin) {
+      if (ao.volume && scene.volume && !clippedAway(ar) && lr.tmax > lr.tmin) {
         vec4f acc;
         uint64_t samples = 0, regions = 0;
-        integrate<true>(lr, 0.5f, vec3f(0.f), vec3f(0.f), o, acc, samples, regions);
+        integrate<true>(lr, 0.5f, rate, vec3f(0.f), vec3f(0.f), acc, samples, regions);
         c.samples += samples;
         visibility = 1.f - acc.w;
       }
       open += visibility;
     }
-    return o.aoRays > 0 ? open / float(o.aoRays) : 1.f;
+    return ao.rays > 0 ? open / float(ao.rays) : 1.f;
   }
 
   /// Marches the visible regions along the lattice ray within [tmin, tmax], compositing front to
   /// back into acc (premultiplied). OpacityOnly skips colour and shading (shadow-like rays).
   template <bool OpacityOnly>
-  void integrate(const Ray& ray, float rho, const vec3f& light, const vec3f& halfVector, const RenderOptions& o,
-                 vec4f& acc, uint64_t& raySamples, uint64_t& regionCount) const {
+  void integrate(const Ray& ray, float rho, float rate, const vec3f& light, const vec3f& halfVector, vec4f& acc,
+                 uint64_t& raySamples, uint64_t& regionCount) const {
     if (layers.empty() || !(ray.tmax > ray.tmin)) return;
     const size_t layerCount = layers.size();
-    const bool wantGrad = !OpacityOnly && o.shading == Shading::Analytic;
+    const Shading shading = scene.shading;
+    const ShadingTerms& terms = scene.light.terms;
+    const Integration& in = scene.integration;
+    const bool wantGrad = !OpacityOnly && shading == Shading::Analytic;
     traversal->traverse(ray, [&](const Segment& seg) {
       ++regionCount;
       const Region& region = model.regions.regions[seg.region];
-      const float width = o.sampling == Sampling::Adaptive ? region.finestWidth() : finestWidth;
-      const float dt = 0.5f * width / o.rate;
+      const float dt = stepOf(region, rate);
       const float segEnd = std::min(seg.t1, ray.tmax);
       // Sample positions (k + rho) dt delimit intervals; each interval is sampled at its
       // midpoint and weighted by its length.
@@ -468,51 +577,20 @@ struct Renderer::Impl {
           const LayerTable& layer = layers[li];
           float value;
           vec3f grad;
-          const bool found =
-              o.reconstruction == Reconstruction::Regions
-                  ? sampleRegion(layer.view, seg.region, p, value, wantGrad ? &grad : nullptr)
-                  : locator->sample(layer.field, p, value, wantGrad ? &grad : nullptr);
+          const bool found = in.reconstruction == Reconstruction::Regions
+                                 ? sampleRegion(layer.view, seg.region, p, value, wantGrad ? &grad : nullptr)
+                                 : locator->sample(layer.field, p, value, wantGrad ? &grad : nullptr);
           if (!found) break; // no value here for any field: the cells are shared
           const vec4f rgba = layer.lookup(value);
           if (rgba.w >= 0.f) continue; // log2 transmittance 0: fully transparent
-          // Opacity correction: 1 - (1 - alpha)^(len / finest width).
-          const float layerAlpha = 1.f - exp2Negative(rgba.w * len * invFinestWidth);
+          const float layerAlpha = correctedOpacity(rgba.w, len, invReferenceWidth);
           logSum += rgba.w;
           if (OpacityOnly) continue;
-          vec3f c(rgba.x, rgba.y, rgba.z);
-          if (o.shading != Shading::None) {
-            if (o.shading == Shading::Central || o.shading == Shading::ClampedCentral) {
-              const float h = 0.5f * region.finestWidth();
-              const box3f rb = region.bounds();
-              for (int ax = 0; ax < 3; ++ax) {
-                vec3f pp = p, pm = p;
-                pp[ax] += h;
-                pm[ax] -= h;
-                float vp = value, vm = value;
-                if (o.shading == Shading::ClampedCentral) {
-                  pp[ax] = std::min(pp[ax], rb.upper[ax]);
-                  pm[ax] = std::max(pm[ax], rb.lower[ax]);
-                  sampleRegion(layer.view, seg.region, pp, vp);
-                  sampleRegion(layer.view, seg.region, pm, vm);
-                } else {
-                  sampleField(layer.view, pp, vp);
-                  sampleField(layer.view, pm, vm);
-                }
-                const float span = pp[ax] - pm[ax];
-                grad[ax] = span > 0.f ? (vp - vm) / span : 0.f;
-              }
-            }
-            const vec3f gw = grad * invScale; // per world unit
-            const float gl = length(gw);
-            float shade = o.ambient + o.diffuse;
-            float spec = 0.f;
-            if (gl > 1e-20f) {
-              const vec3f n = gw * (1.f / gl);
-              const float ndl = std::abs(dot(n, light));
-              shade = o.ambient + o.diffuse * ndl;
-              spec = o.specular * specularPower(std::abs(dot(n, halfVector)), o.shininess);
-            }
-            c = c * shade + vec3f(spec);
+          vec3f c = rgba.rgb();
+          if (shading != Shading::None) {
+            if (shading == Shading::Central || shading == Shading::ClampedCentral)
+              grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
+            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms);
           }
           if (layerCount == 1) {
             alpha = layerAlpha;
@@ -523,306 +601,266 @@ struct Renderer::Impl {
           }
         }
         if (!(logSum < 0.f)) continue;
-        if (OpacityOnly || layerCount > 1) alpha = 1.f - exp2Negative(logSum * len * invFinestWidth);
+        if (OpacityOnly || layerCount > 1) alpha = correctedOpacity(logSum, len, invReferenceWidth);
         if (!OpacityOnly && layerCount > 1) color = alphaSum > 0.f ? colorSum * (1.f / alphaSum) : vec3f(0.f);
-        const float wgt = (1.f - acc.w) * alpha;
-        if (!OpacityOnly) {
-          acc.x += wgt * color.x;
-          acc.y += wgt * color.y;
-          acc.z += wgt * color.z;
-        }
-        acc.w += wgt;
-        if (o.earlyTermination && acc.w >= o.terminationOpacity) return false;
+        if (OpacityOnly)
+          acc.w += (1.f - acc.w) * alpha;
+        else
+          compositeBehind(acc, color, alpha);
+        if (in.earlyTermination && acc.w >= in.terminationOpacity) return false;
       }
       return true;
     });
   }
+
+  /// Central differences over half the region's finest width (the shading baselines); clamped
+  /// to the region's box, or sampled wherever the points fall.
+  vec3f centralGradient(const LayerTable& layer, uint32_t regionIndex, const Region& region, const vec3f& p,
+                        float value, bool clamped) const {
+    vec3f grad;
+    const float h = 0.5f * region.finestWidth();
+    const box3f rb = region.bounds();
+    for (int ax = 0; ax < 3; ++ax) {
+      vec3f pp = p, pm = p;
+      pp[ax] += h;
+      pm[ax] -= h;
+      float vp = value, vm = value;
+      if (clamped) {
+        pp[ax] = std::min(pp[ax], rb.upper[ax]);
+        pm[ax] = std::max(pm[ax], rb.lower[ax]);
+        sampleRegion(layer.view, regionIndex, pp, vp);
+        sampleRegion(layer.view, regionIndex, pm, vm);
+      } else {
+        sampleField(layer.view, pp, vp);
+        sampleField(layer.view, pm, vm);
+      }
+      const float span = pp[ax] - pm[ax];
+      grad[ax] = span > 0.f ? (vp - vm) / span : 0.f;
+    }
+    return grad;
+  }
+
+  /// Colour of a debug view for one ray: the first visible region's level, brick or id.
+  vec4f debugColor(const Ray& ray, Counters& c) const {
+    vec4f acc;
+    const DebugView view = scene.debug;
+    traversal->traverse(ray, [&](const Segment& seg) {
+      const Region& region = model.regions.regions[seg.region];
+      vec3f color;
+      if (view == DebugView::Region) {
+        color = hashColor(seg.region);
+      } else {
+        // The brick whose cells hold the segment's midpoint; where no cell does (the margin of
+        // the supports), the region's finest brick.
+        const vec3f p = ray.org + ray.dir * (0.5f * (seg.t0 + seg.t1));
+        uint32_t brickId = kNoRegion;
+        for (uint32_t k = 0; k < region.brickCount; ++k) {
+          const uint32_t id = model.regions.brickIds[region.brickBegin + k];
+          const box3i b = model.bricks[id].bounds();
+          if (brickId == kNoRegion || model.bricks[id].level < model.bricks[brickId].level) brickId = id;
+          if (p.x >= b.lower.x && p.x < b.upper.x && p.y >= b.lower.y && p.y < b.upper.y && p.z >= b.lower.z &&
+              p.z < b.upper.z) {
+            brickId = id;
+            break;
+          }
+        }
+        color = view == DebugView::Level ? levelColor(model.bricks[brickId].level) : hashColor(brickId);
+      }
+      acc = {color.x, color.y, color.z, 1.f};
+      ++c.regions;
+      return false;
+    });
+    return acc;
+  }
+
+  /// What every ray of a pass shares.
+  struct PassSetup {
+    double aspect;
+    vec3f lightWorld;
+    bool surfaces, clipping, jitter, pixelJitter;
+  };
+
+  /// One sample of pixel (x, y) for pass frame.frameIndex: premultiplied colour and volume
+  /// samples taken.
+  vec4f tracePixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& c, uint64_t& raySamples) const {
+    PixelRandom rng(x, y, frame.frameIndex, frame.seed);
+    const float jx = ps.pixelJitter ? rng.next() : 0.5f;
+    const float jy = ps.pixelJitter ? rng.next() : 0.5f;
+    const float rho = ps.jitter ? rng.next() : 0.5f;
+    vec3d orgW, dirW;
+    frame.camera.ray((x + jx) / frame.width, (y + jy) / frame.height, ps.aspect, orgW, dirW);
+    // March in lattice space with a unit-length lattice direction: t is in finest-level lattice
+    // units.
+    const DualRay dr = makeRay(orgW, dirW, ps.clipping && scene.debug == DebugView::None);
+    const Ray& ray = dr.lattice;
+    const vec3f viewW = vec3f(dr.dirW);
+    const vec3f light = scene.light.headlight ? viewW : ps.lightWorld;
+    const vec3f halfVector = normalize(light + viewW);
+    ++c.rays;
+    raySamples = 0;
+    if (scene.debug == DebugView::Level || scene.debug == DebugView::Region || scene.debug == DebugView::Brick)
+      return debugColor(ray, c);
+
+    vec4f acc; // premultiplied, front to back
+    SurfaceHit hit;
+    const bool haveHit = ps.surfaces && nearestSurface(dr, frame.rate, hit, c.isoSamples);
+    Ray volumeRay = ray;
+    if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(hit.distance * dr.kappa));
+    if (scene.volume && !clippedAway(dr))
+      integrate<false>(volumeRay, rho, frame.rate, light, halfVector, acc, raySamples, c.regions);
+    if (haveHit && acc.w < 1.f) {
+      ++c.surfaceHits;
+      const vec3f base = surfaceColor(hit);
+      const float ao = scene.ao.rays > 0 ? ambientOcclusion(hit, frame.rate, rng, c) : 1.f;
+      compositeOpaqueBehind(acc, shadeSurface(base, hit.normal, light, halfVector, ao, scene.light.terms));
+    }
+    c.samples += raySamples;
+    return acc;
+  }
 };
 
-Renderer::Renderer(const Model& model, int field, const RenderOptions& options)
-    : impl_(std::make_unique<Impl>(model, field)), options_(options) {
-  if (options_.width < 1 || options_.height < 1 || options_.width > 32768 || options_.height > 32768)
-    fail("image size ", options_.width, "x", options_.height, " is out of range (1..32768)");
-  if (options_.samplesPerPixel < 1) fail("samples per pixel must be at least 1");
-  if (!(options_.rate > 0.f) || options_.rate > 1024.f) fail("sampling rate must be in (0, 1024]");
-  if (options_.aoRays < 0 || options_.aoRays > 1024) fail("ambient occlusion rays must be in 0..1024");
-  if (!(options_.aoLength >= 0.f) || std::isinf(options_.aoLength))
-    fail("ambient occlusion length must be a finite non-negative number");
-  for (const ClipPlane& p : options_.clipPlanes)
-    if (!(length(p.normal) > 0.0) || !std::isfinite(length(p.normal)) || !std::isfinite(length(p.point)))
-      fail("a clip plane needs a finite point and a non-zero normal");
-}
+Renderer::Renderer(const Model& model) : Renderer(model, DatasetInfo::of(model)) {}
+
+Renderer::Renderer(const Model& model, const DatasetInfo& dataset)
+    : impl_(std::make_unique<Impl>(model, dataset)) {}
 
 Renderer::~Renderer() = default;
 
+const Scene& Renderer::scene() const { return impl_->scene; }
+const DatasetInfo& Renderer::dataset() const { return impl_->dataset; }
+const Model& Renderer::model() const { return impl_->model; }
+
 TraversalKind Renderer::traversalInUse() const {
-  return impl_->traversal ? impl_->traversal->kind() : options_.traversal;
+  return impl_->traversal ? impl_->traversal->kind() : impl_->scene.integration.traversal;
 }
 
-size_t Renderer::visibleRegions() const {
-  return impl_->traversal ? impl_->traversal->visibleCount() : 0;
-}
+size_t Renderer::visibleRegions() const { return impl_->traversal ? impl_->traversal->visibleCount() : 0; }
 
 size_t Renderer::isoRegions() const { return impl_->isoTraversal ? impl_->isoTraversal->visibleCount() : 0; }
 
 size_t Renderer::meshCount() const { return impl_->meshColors.size(); }
 
-double Renderer::setTransferFunction(const TransferFunction& tf) {
-  return setVolumeLayers({VolumeLayer{impl_->field, tf}});
-}
-
-double Renderer::setVolumeLayers(const std::vector<VolumeLayer>& layersIn) {
-  Timer timer;
+SceneUpdate Renderer::setScene(const Scene& s) {
   Impl& im = *impl_;
-  std::vector<LayerTable> layers(layersIn.size());
-  for (size_t i = 0; i < layersIn.size(); ++i) layers[i].build(im.model, layersIn[i].field, layersIn[i].tf);
-  im.layers = std::move(layers);
-  // Space skipping: a region whose value ranges map to zero opacity in every layer cannot
-  // contribute.
-  const size_t regionCount = im.model.regions.regions.size();
-  im.visible.assign(regionCount, im.layers.empty() ? 0 : 1);
-  if (options_.spaceSkipping && options_.debug == DebugView::None && !im.layers.empty())
-    tbb::parallel_for(size_t(0), regionCount, [&](size_t i) {
-      bool any = false;
-      for (const LayerTable& layer : im.layers)
-        any = any || layer.mayBeVisible(im.model.regions.valueRanges[size_t(layer.field)][i]);
-      im.visible[i] = any;
-    });
-  TraversalKind kind = options_.traversal;
-  if (options_.autoTraversal) {
-    size_t count = 0;
-    for (uint8_t v : im.visible) count += v;
-    kind = double(count) < double(options_.embreeBelowVisibleFraction) * double(im.visible.size())
-               ? TraversalKind::Embree
-               : TraversalKind::KdTree;
+  s.validate();
+  // Resolve every field name first: an unknown one leaves the current scene as it is.
+  std::vector<int> fields;
+  for (const VolumeLayer& layer : s.layers) fields.push_back(resolveField(im.model, layer.field));
+  int isoField = -1, isoColorField = -1;
+  if (!s.iso.values.empty()) {
+    isoField = !s.iso.field.empty() ? resolveField(im.model, s.iso.field)
+                                    : (fields.empty() ? resolveField(im.model, "") : fields[0]);
+    if (!s.iso.colorField.empty()) isoColorField = resolveField(im.model, s.iso.colorField);
   }
-  if (!im.traversal || im.traversal->kind() != kind)
-    im.traversal = std::make_unique<RegionTraversal>(im.model, kind);
-  im.traversal->setVisible(im.visible);
-  if (options_.reconstruction == Reconstruction::CellLocation && !im.locator)
-    im.locator = std::make_unique<CellLocator>(im.model);
-  return timer.seconds();
-}
 
-double Renderer::setIsoSurfaces(const IsoSurfaces& isoIn) {
-  Timer timer;
-  Impl& im = *impl_;
-  const size_t fieldCount = im.model.fieldValues.size();
-  if (isoIn.field >= int(fieldCount)) fail("iso-surface field index ", isoIn.field, " is out of range");
-  if (isoIn.colorField >= int(fieldCount)) fail("iso-surface colour field index ", isoIn.colorField, " is out of range");
-  for (float v : isoIn.values)
-    if (!std::isfinite(v)) fail("iso-values must be finite numbers");
-  im.iso = isoIn;
-  if (isoIn.field < 0 || isoIn.values.empty()) {
-    im.isoTraversal.reset();
-    im.isoVisible.clear();
-    return timer.seconds();
+  const Scene& cur = im.scene;
+  const bool first = !im.haveScene;
+  SceneUpdate u;
+  u.volume = first || s.layers != cur.layers || s.integration != cur.integration || s.debug != cur.debug;
+  u.iso = first || s.iso != cur.iso || s.integration.embreeBelowVisibleFraction != cur.integration.embreeBelowVisibleFraction;
+  u.meshes = first || s.meshes != cur.meshes;
+  // Helpers read the scene while rebuilding: make the new one current first.
+  im.scene = s;
+  im.haveScene = true;
+  if (u.volume) {
+    Timer t;
+    im.updateVolume(s, fields);
+    u.volumeSeconds = t.seconds();
   }
-  im.isoView = im.model.view(isoIn.field);
-  if (isoIn.colorField >= 0) im.isoColor.build(im.model, isoIn.colorField, isoIn.colorTf);
-  const auto& ranges = im.model.regions.valueRanges[size_t(isoIn.field)];
-  im.isoVisible.assign(ranges.size(), 0);
-  tbb::parallel_for(size_t(0), ranges.size(), [&](size_t i) {
-    const range1f& r = ranges[i];
-    bool any = false;
-    for (float v : isoIn.values) any = any || (!r.empty() && r.lower <= v && v <= r.upper);
-    im.isoVisible[i] = any;
-  });
-  size_t count = 0;
-  for (uint8_t v : im.isoVisible) count += v;
-  // Iso-surfaces are sparse: Embree skips the empty space in its BVH unless most regions hold one.
-  const TraversalKind kind = double(count) < double(options_.embreeBelowVisibleFraction) * double(ranges.size())
-                                 ? TraversalKind::Embree
-                                 : TraversalKind::KdTree;
-  if (!im.isoTraversal || im.isoTraversal->kind() != kind)
-    im.isoTraversal = std::make_unique<RegionTraversal>(im.model, kind);
-  im.isoTraversal->setVisible(im.isoVisible);
-  return timer.seconds();
-}
-
-void Renderer::addMesh(const TriangleMesh& mesh, const vec3f& color) {
-  Impl& im = *impl_;
-  const size_t meshNumber = im.meshColors.size();
-  if (mesh.triangles.empty()) fail("mesh ", meshNumber, " has no triangles");
-  for (size_t i = 0; i < mesh.vertices.size(); ++i) {
-    const vec3f& v = mesh.vertices[i];
-    if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-      fail("mesh ", meshNumber, ": vertex ", i, " is not finite");
+  if (u.iso) {
+    Timer t;
+    im.updateIso(s, isoField, isoColorField);
+    u.isoSeconds = t.seconds();
   }
-  for (size_t i = 0; i < mesh.triangles.size(); ++i)
-    for (int k = 0; k < 3; ++k)
-      if (mesh.triangles[i][k] < 0 || size_t(mesh.triangles[i][k]) >= mesh.vertices.size())
-        fail("mesh ", meshNumber, ": triangle ", i, " refers to vertex ", mesh.triangles[i][k], " of ",
-             mesh.vertices.size());
-  if (!im.device) {
-    im.device = embree::newDevice();
-    im.meshScene = rtcNewScene(im.device);
-    rtcSetSceneFlags(im.meshScene, RTC_SCENE_FLAG_ROBUST);
+  if (u.meshes) {
+    Timer t;
+    im.updateMeshes(s);
+    u.meshSeconds = t.seconds();
   }
-  RTCGeometry geom = rtcNewGeometry(im.device, RTC_GEOMETRY_TYPE_TRIANGLE);
-  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                              3 * sizeof(float), mesh.vertices.size()));
-  auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                                 3 * sizeof(uint32_t), mesh.triangles.size()));
-  if (!vertices || !indices) {
-    rtcReleaseGeometry(geom);
-    fail("mesh ", meshNumber, ": out of memory for ", mesh.triangles.size(), " triangles");
-  }
-  for (size_t i = 0; i < mesh.vertices.size(); ++i)
-    for (int k = 0; k < 3; ++k) vertices[3 * i + size_t(k)] = mesh.vertices[i][k];
-  for (size_t i = 0; i < mesh.triangles.size(); ++i)
-    for (int k = 0; k < 3; ++k) indices[3 * i + size_t(k)] = uint32_t(mesh.triangles[i][k]);
-  rtcCommitGeometry(geom);
-  const unsigned id = rtcAttachGeometry(im.meshScene, geom);
-  rtcReleaseGeometry(geom);
-  EXA_CHECK(id == meshNumber);
-  rtcCommitScene(im.meshScene);
-  im.meshColors.push_back(color);
+  return u;
 }
 
 bool Renderer::pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const {
-  if (!(length(direction) > 0.0)) return false;
-  const DualRay r = impl_->makeRay(origin, direction, options_, true);
+  if (!(length(direction) > 0.0) || !impl_->haveScene) return false;
+  const DualRay r = impl_->makeRay(origin, direction, true);
   uint64_t samples = 0;
-  return impl_->nearestSurface(r, options_, hit, samples);
+  return impl_->nearestSurface(r, 1.f, hit, samples);
 }
 
-Image Renderer::render(const Camera& camera, RenderStats* statsOut) const {
+bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassControl& control) const {
   const Impl& im = *impl_;
-  if (!im.traversal) fail("no transfer function set");
-  if (options_.reconstruction == Reconstruction::CellLocation && !im.locator)
-    fail("cell-location reconstruction was chosen after the transfer function was set");
-  const RenderOptions& o = options_;
-  Image image(o.width, o.height);
-  const double aspect = double(o.width) / double(o.height);
-  const vec3f lightWorld = normalize(o.lightDirection);
-  const bool surfaces = (im.isoTraversal || im.meshScene) && o.debug == DebugView::None;
-  const bool clipping = !o.clipPlanes.empty() || !o.clipBox.empty();
+  if (!im.haveScene) fail("no scene set");
+  frame.validate();
+  if (buffer.width() != frame.width || buffer.height() != frame.height)
+    fail("frame buffer is ", buffer.width(), "x", buffer.height(), ", the frame ", frame.width, "x", frame.height);
+  const Scene& s = im.scene;
+  Impl::PassSetup ps;
+  ps.aspect = double(frame.width) / double(frame.height);
+  ps.lightWorld = normalize(s.light.direction);
+  ps.surfaces = (im.isoTraversal || im.meshScene) && s.debug == DebugView::None;
+  ps.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
+  ps.jitter = frame.jitter && s.debug == DebugView::None;
+  ps.pixelJitter = frame.samplesPerPixel > 1 && ps.jitter;
 
-  tbb::combinable<Counters> counters;
-  const int tilesX = (o.width + kTile - 1) / kTile, tilesY = (o.height + kTile - 1) / kTile;
-  Progress progress("rendering", uint64_t(tilesX) * uint64_t(tilesY));
-  if (!o.progress) progress.finish();
-  std::vector<float> steps; // per pixel, for the steps view
-  if (o.debug == DebugView::Steps) steps.assign(size_t(o.width) * size_t(o.height), 0.f);
+  const int tileCount = buffer.tileCount();
+  const int end = control.tileEnd < 0 ? tileCount : std::min(control.tileEnd, tileCount);
+  const int stride = std::max(1, control.tileStride);
+  const int begin = std::max(0, control.tileBegin);
+  const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
+  const bool steps = s.debug == DebugView::Steps;
+  buffer.stepsView_ = steps;
+  std::atomic<bool> cancelled{false};
+  std::atomic<uint64_t> done{0};
   Timer timer;
 
-  tbb::parallel_for(
-      tbb::blocked_range2d<int>(0, tilesY, 1, 0, tilesX, 1), [&](const tbb::blocked_range2d<int>& tiles) {
-        Counters& c = counters.local();
-        for (int ty = tiles.rows().begin(); ty < tiles.rows().end(); ++ty)
-          for (int tx = tiles.cols().begin(); tx < tiles.cols().end(); ++tx) {
-            for (int y = ty * kTile; y < std::min(o.height, (ty + 1) * kTile); ++y)
-              for (int x = tx * kTile; x < std::min(o.width, (tx + 1) * kTile); ++x) {
-                vec4f sum;
-                uint64_t pixelSteps = 0;
-                for (int s = 0; s < o.samplesPerPixel; ++s) {
-                  PixelRandom rng(x, y, s, o.seed);
-                  const bool jitter = o.jitter && o.debug == DebugView::None;
-                  const float jx = o.samplesPerPixel > 1 && jitter ? rng.next() : 0.5f;
-                  const float jy = o.samplesPerPixel > 1 && jitter ? rng.next() : 0.5f;
-                  const float rho = jitter ? rng.next() : 0.5f;
-                  vec3d orgW, dirW;
-                  camera.ray((x + jx) / o.width, (y + jy) / o.height, aspect, orgW, dirW);
-                  // March in lattice space with a unit-length lattice direction: t is in
-                  // finest-level lattice units.
-                  const DualRay dr = im.makeRay(orgW, dirW, o, clipping && o.debug == DebugView::None);
-                  const Ray& ray = dr.lattice;
-                  const vec3f viewW = vec3f(dr.dirW);
-                  const vec3f light = o.headlight ? viewW : lightWorld;
-                  const vec3f halfVector = normalize(light + viewW);
-                  ++c.rays;
-                  vec4f acc; // premultiplied, front to back
-                  uint64_t raySamples = 0;
-
-                  if (o.debug == DebugView::Level || o.debug == DebugView::Region || o.debug == DebugView::Brick) {
-                    im.traversal->traverse(ray, [&](const Segment& seg) {
-                      const Region& region = im.model.regions.regions[seg.region];
-                      vec3f color;
-                      if (o.debug == DebugView::Region) {
-                        color = hashColor(seg.region);
-                      } else {
-                        // The brick whose cells hold the segment's midpoint; where no cell does (the
-                        // margin of the supports), the region's finest brick.
-                        const vec3f p = ray.org + ray.dir * (0.5f * (seg.t0 + seg.t1));
-                        uint32_t brickId = kNoRegion;
-                        for (uint32_t k = 0; k < region.brickCount; ++k) {
-                          const uint32_t id = im.model.regions.brickIds[region.brickBegin + k];
-                          const box3i b = im.model.bricks[id].bounds();
-                          if (brickId == kNoRegion || im.model.bricks[id].level < im.model.bricks[brickId].level)
-                            brickId = id;
-                          if (p.x >= b.lower.x && p.x < b.upper.x && p.y >= b.lower.y && p.y < b.upper.y &&
-                              p.z >= b.lower.z && p.z < b.upper.z) {
-                            brickId = id;
-                            break;
-                          }
-                        }
-                        color = o.debug == DebugView::Level ? levelColor(im.model.bricks[brickId].level)
-                                                            : hashColor(brickId);
-                      }
-                      acc = {color.x, color.y, color.z, 1.f};
-                      ++c.regions;
-                      return false;
-                    });
-                    sum.x += acc.x, sum.y += acc.y, sum.z += acc.z, sum.w += acc.w;
-                    continue;
-                  }
-
-                  SurfaceHit hit;
-                  const bool haveHit = surfaces && im.nearestSurface(dr, o, hit, c.isoSamples);
-                  Ray volumeRay = ray;
-                  if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(hit.distance * dr.kappa));
-                  if (o.volume && !im.clippedAway(dr))
-                    im.integrate<false>(volumeRay, rho, light, halfVector, o, acc, raySamples, c.regions);
-                  if (haveHit && acc.w < 1.f) {
-                    ++c.surfaceHits;
-                    const vec3f base = im.surfaceColor(hit);
-                    const float ao = o.aoRays > 0 ? im.ambientOcclusion(hit, o, rng, c) : 1.f;
-                    const float ndl = std::max(0.f, -dot(hit.normal, light));
-                    const float spec = o.specular * specularPower(std::max(0.f, -dot(hit.normal, halfVector)), o.shininess);
-                    const vec3f color = base * (o.ambient * ao + o.diffuse * ndl * (0.5f + 0.5f * ao)) + vec3f(spec);
-                    const float wgt = 1.f - acc.w;
-                    acc.x += wgt * color.x;
-                    acc.y += wgt * color.y;
-                    acc.z += wgt * color.z;
-                    acc.w = 1.f;
-                  }
-                  c.samples += raySamples;
-                  pixelSteps += raySamples;
-                  sum.x += acc.x, sum.y += acc.y, sum.z += acc.z, sum.w += acc.w;
-                }
-                const float inv = 1.f / float(o.samplesPerPixel);
-                image.at(x, y) = {sum.x * inv, sum.y * inv, sum.z * inv, sum.w * inv};
-                if (!steps.empty()) steps[size_t(y) * size_t(o.width) + size_t(x)] = float(pixelSteps) * inv;
-              }
-            progress.advance(1);
-          }
-      });
-  progress.finish();
-
-  if (!steps.empty()) {
-    // Steps per ray as a heat map, scaled to the image's maximum.
-    float maxSteps = 1.f;
-    for (float st : steps) maxSteps = std::max(maxSteps, st);
-    const ColorMap heat = builtinColorMap("inferno");
-    for (size_t i = 0; i < steps.size(); ++i) {
-      const vec3f col = heat.at(steps[i] / maxSteps);
-      image.pixels[i] = {col.x, col.y, col.z, 1.f};
+  tbb::parallel_for(0, passTiles, [&](int i) {
+    const int tile = begin + i * stride;
+    Counters& c = buffer.counters_[size_t(tile)];
+    c = Counters();
+    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
+      cancelled.store(true, std::memory_order_relaxed);
+      return;
     }
-  }
+    const int tx = tile % buffer.tilesX_, ty = tile / buffer.tilesX_;
+    for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
+      for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x) {
+        uint64_t raySamples = 0;
+        const vec4f acc = im.tracePixel(x, y, frame, ps, c, raySamples);
+        const size_t p = size_t(y) * size_t(frame.width) + size_t(x);
+        buffer.sum_[p] += acc;
+        if (steps) buffer.steps_[p] += float(raySamples);
+      }
+    ++buffer.tilePasses_[size_t(tile)];
+    const uint64_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;
+    if (control.progress) control.progress(n, uint64_t(passTiles));
+  });
 
   RenderStats st;
   st.seconds = timer.seconds();
-  counters.combine_each([&](const Counters& c) {
+  for (int i = 0; i < passTiles; ++i) {
+    const Counters& c = buffer.counters_[size_t(begin + i * stride)];
     st.rays += c.rays;
     st.samples += c.samples;
     st.regionsVisited += c.regions;
     st.surfaceHits += c.surfaceHits;
     st.isoSamples += c.isoSamples;
     st.aoRays += c.aoRays;
-  });
-  if (statsOut) *statsOut = st;
-  return image;
+  }
+  st.tiles = done.load();
+  buffer.stats_ += st;
+  return !cancelled.load();
+}
+
+Image Renderer::render(const Frame& frame, RenderStats* stats) const {
+  frame.validate();
+  FrameBuffer buffer(frame.width, frame.height);
+  Frame pass = frame;
+  for (int s = 0; s < frame.samplesPerPixel; ++s) {
+    pass.frameIndex = s;
+    renderPass(pass, buffer);
+  }
+  if (stats) *stats = buffer.stats();
+  return buffer.resolve();
 }
 
 } // namespace exa

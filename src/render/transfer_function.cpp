@@ -1,7 +1,10 @@
 #include "exabricks/render/transfer_function.h"
 
 #include "exabricks/core/error.h"
-#include "exabricks/io/image.h"
+#include "exabricks/core/color.h"
+#include "exabricks/render/sample_math.h"
+
+#include "tf_json.h"
 
 #include <nlohmann/json.hpp>
 
@@ -196,24 +199,7 @@ ColorMap builtinColorMap(const std::string& name) {
   fail("unknown colour map '", name, "' (built in: ", known, ")");
 }
 
-float TransferFunction::normalize(float value) const {
-  if (std::isnan(value)) return 0.f;
-  double lo = valueRange.lower, hi = valueRange.upper, v = value;
-  // No usable range yet: everything in the middle of the map.
-  if (valueRange.empty() || !std::isfinite(lo) || !std::isfinite(hi)) return 0.5f;
-  if (logScale) {
-    if (!(v > 0.0)) return 0.f;
-    if (!(hi > 0.0)) return 1.f; // every positive value lies above the range
-    // A range reaching zero or below is cut six decades under its upper end.
-    if (!(lo > 0.0)) lo = hi * 1e-6;
-    lo = std::log10(lo);
-    hi = std::log10(hi);
-    v = std::log10(v);
-  }
-  // A single value: below it 0, above it 1, on it the middle; still monotonic.
-  if (!(hi > lo)) return v < lo ? 0.f : (v > hi ? 1.f : 0.5f);
-  return float(std::clamp((v - lo) / (hi - lo), 0.0, 1.0));
-}
+float TransferFunction::normalize(float value) const { return normalizeValue(valueRange, logScale, value); }
 
 vec4f TransferFunction::lookup(float value) const { return atNormalized(normalize(value)); }
 
@@ -420,7 +406,11 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
       fail(path, ": a logarithmic range must be positive, got [", lo, ", ", hi, "]");
     tf.valueRange = range1f{float(lo), float(hi)};
   }
-  if (const auto s = j.find("opacity_scale"); s != j.end()) {
+  if (const auto s = j.find("opacity_scale"); s != j.end() && s->is_string()) {
+    if (s->get<std::string>() != "auto")
+      fail(path, ": opacity_scale must be a number >= 0 or \"auto\", not ", s->dump());
+    tf.opacityScale = 0.f; // the dataset's default scale
+  } else if (s != j.end()) {
     const double scale = number(*s, path, "opacity_scale");
     if (scale < 0.0) fail(path, ": opacity_scale must not be negative, got ", scale);
     tf.opacityScale = float(scale);
@@ -438,6 +428,59 @@ bool isParaViewPreset(const json& j) {
 
 } // namespace
 
+TransferFunction transferFunctionFromJson(const json& j, const std::string& source) {
+  try {
+    if (j.is_array()) {
+      // ParaView writes a list of presets; the first one is used.
+      if (j.empty() || !j[0].is_object())
+        fail(source, ": expected an array of ParaView colour-map preset objects");
+      return fromParaView(j[0], source);
+    }
+    if (!j.is_object())
+      fail(source, ": expected a JSON object (exabricks transfer function or ParaView preset) or an "
+                   "array of ParaView presets");
+    return isParaViewPreset(j) ? fromParaView(j, source) : fromExabricks(j, source);
+  } catch (const json::exception& e) {
+    fail(source, ": ", jsonMessage(e));
+  }
+}
+
+json transferFunctionToJson(const TransferFunction& tf) {
+  json j = json::object();
+  bool builtin = false;
+  for (const std::string& name : builtinColorMapNames())
+    if (name == tf.colorMap.name && builtinColorMap(name) == tf.colorMap) builtin = true;
+  if (builtin) {
+    j["colormap"] = tf.colorMap.name;
+  } else {
+    json points = json::array();
+    for (size_t i = 0; i < tf.colorMap.positions.size() && i < tf.colorMap.colors.size(); ++i) {
+      const vec3f c = linearToSrgb(tf.colorMap.colors[i]);
+      points.push_back({tf.colorMap.positions[i], c.x, c.y, c.z});
+    }
+    j["colormap"] = {{"points", points}};
+  }
+  if (!tf.opacity.empty()) {
+    json op = json::array();
+    for (const OpacityPoint& p : tf.opacity) op.push_back({p.x, p.alpha});
+    j["opacity"] = op;
+  }
+  if (!tf.valueRange.empty()) j["range"] = {tf.valueRange.lower, tf.valueRange.upper};
+  j["log"] = tf.logScale;
+  if (tf.opacityScale == 0.f)
+    j["opacity_scale"] = "auto";
+  else
+    j["opacity_scale"] = tf.opacityScale;
+  return j;
+}
+
+TransferFunction defaultTransferFunction(const std::string& colorMap) {
+  TransferFunction tf;
+  tf.colorMap = builtinColorMap(colorMap);
+  tf.opacityScale = 0.f;
+  return tf;
+}
+
 TransferFunction readTransferFunction(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot open: is a directory");
@@ -449,20 +492,19 @@ TransferFunction readTransferFunction(const std::string& path) {
   } catch (const json::exception& e) {
     fail(path, ": invalid JSON: ", jsonMessage(e));
   }
-  try {
-    if (j.is_array()) {
-      // ParaView writes a list of presets; the first one is used.
-      if (j.empty() || !j[0].is_object())
-        fail(path, ": expected an array of ParaView colour-map preset objects");
-      return fromParaView(j[0], path);
-    }
-    if (!j.is_object())
-      fail(path, ": expected a JSON object (exabricks transfer function or ParaView preset) or an "
-                 "array of ParaView presets");
-    return isParaViewPreset(j) ? fromParaView(j, path) : fromExabricks(j, path);
-  } catch (const json::exception& e) {
-    fail(path, ": ", jsonMessage(e));
-  }
+  return transferFunctionFromJson(j, path);
 }
+
+TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source) {
+  json j;
+  try {
+    j = json::parse(jsonText);
+  } catch (const json::exception& e) {
+    fail(source, ": invalid JSON: ", jsonMessage(e));
+  }
+  return transferFunctionFromJson(j, source);
+}
+
+std::string transferFunctionJson(const TransferFunction& tf) { return transferFunctionToJson(tf).dump(2); }
 
 } // namespace exa

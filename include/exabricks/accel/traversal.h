@@ -31,7 +31,7 @@ struct Segment {
 /// inside when lower <= org < upper (half-open, like the k-d tree's split rule), so a ray
 /// running exactly along a shared face belongs to one region only. Returns false when the ray
 /// misses the box.
-inline bool rayBoxInterval(const Ray& ray, const vec3f& invDir, const box3f& box, float& t0,
+EXA_HOST_DEVICE inline bool rayBoxInterval(const Ray& ray, const vec3f& invDir, const box3f& box, float& t0,
                            float& t1) {
   t0 = -std::numeric_limits<float>::infinity();
   t1 = std::numeric_limits<float>::infinity();
@@ -48,8 +48,71 @@ inline bool rayBoxInterval(const Ray& ray, const vec3f& invDir, const box3f& box
   return t0 <= t1;
 }
 
-inline vec3f safeInverse(const vec3f& d) {
+EXA_HOST_DEVICE inline vec3f safeInverse(const vec3f& d) {
   return {d.x != 0.f ? 1.f / d.x : 0.f, d.y != 0.f ? 1.f / d.y : 0.f, d.z != 0.f ? 1.f / d.z : 0.f};
+}
+
+/// The regions' k-d tree as plain arrays, with one visibility flag per region.
+struct RegionTreeView {
+  const RegionKdNode* nodes = nullptr; ///< null when there are no regions
+  const Region* regions = nullptr;
+  const uint8_t* visible = nullptr;
+  box3f bounds;                        ///< box of the root
+};
+
+/// Front-to-back walk of the k-d tree with an explicit stack: calls `emit(const Segment&)` for
+/// every visible region the ray passes through, in order, until it returns false. Each leaf's
+/// segment comes from its region's box, clipped to the previous exit.
+template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const RegionTreeView& tree, const Ray& ray, Emit&& emit) {
+  if (!tree.nodes) return;
+  const vec3f inv = safeInverse(ray.dir);
+  float t0, t1;
+  if (!rayBoxInterval(ray, inv, tree.bounds, t0, t1)) return;
+  t0 = std::max(t0, ray.tmin);
+  t1 = std::min(t1, ray.tmax);
+  if (!(t0 <= t1)) return;
+  struct Entry {
+    uint32_t node;
+    float t0, t1;
+  };
+  Entry stack[128];
+  int top = 0;
+  stack[top++] = {0, t0, t1};
+  float last = ray.tmin;
+  while (top > 0) {
+    Entry e = stack[--top];
+    while (tree.nodes[e.node].axis != kLeafAxis) {
+      const RegionKdNode& n = tree.nodes[e.node];
+      const int a = int(n.axis);
+      const float o = ray.org[a], d = ray.dir[a];
+      const bool lowerFirst = o < n.pos || (o == n.pos && d < 0.f);
+      const uint32_t nearChild = n.index + (lowerFirst ? 0u : 1u);
+      const uint32_t farChild = n.index + (lowerFirst ? 1u : 0u);
+      if (d == 0.f) {
+        e.node = nearChild;
+        continue;
+      }
+      const float ts = (n.pos - o) * inv[a];
+      if (ts >= e.t1 || ts <= 0.f) { // never crosses the plane ahead of the origin
+        e.node = nearChild;
+      } else if (ts <= e.t0) {
+        e.node = farChild;
+      } else {
+        if (top < 128) stack[top++] = {farChild, ts, e.t1};
+        e.node = nearChild;
+        e.t1 = ts;
+      }
+    }
+    const uint32_t r = tree.nodes[e.node].index;
+    if (r == kNoRegion || !tree.visible[r]) continue;
+    float b0, b1;
+    if (!rayBoxInterval(ray, inv, tree.regions[r].bounds(), b0, b1)) continue;
+    b0 = std::max(b0, last);
+    b1 = std::min(b1, ray.tmax);
+    if (!(b1 > b0)) continue;
+    if (!emit(Segment{b0, b1, r})) return;
+    last = b1;
+  }
 }
 
 enum class TraversalKind { Embree, KdTree };
@@ -92,58 +155,12 @@ template <typename Emit> void RegionTraversal::traverse(const Ray& ray, Emit&& e
     }
     return;
   }
-  // Front-to-back k-d tree walk with an explicit stack; each leaf's segment comes from its
-  // region's box, clipped to the previous exit exactly as the Embree path does.
-  const std::vector<RegionKdNode>& nodes = model_.regions.nodes;
-  if (nodes.empty()) return;
-  const vec3f inv = safeInverse(ray.dir);
-  float t0, t1;
-  if (!rayBoxInterval(ray, inv, model_.regions.bounds, t0, t1)) return;
-  t0 = std::max(t0, ray.tmin);
-  t1 = std::min(t1, ray.tmax);
-  if (!(t0 <= t1)) return;
-  struct Entry {
-    uint32_t node;
-    float t0, t1;
-  };
-  Entry stack[128];
-  int top = 0;
-  stack[top++] = {0, t0, t1};
-  float last = ray.tmin;
-  while (top > 0) {
-    Entry e = stack[--top];
-    while (nodes[e.node].axis != kLeafAxis) {
-      const RegionKdNode& n = nodes[e.node];
-      const int a = int(n.axis);
-      const float o = ray.org[a], d = ray.dir[a];
-      const bool lowerFirst = o < n.pos || (o == n.pos && d < 0.f);
-      const uint32_t nearChild = n.index + (lowerFirst ? 0u : 1u);
-      const uint32_t farChild = n.index + (lowerFirst ? 1u : 0u);
-      if (d == 0.f) {
-        e.node = nearChild;
-        continue;
-      }
-      const float ts = (n.pos - o) * inv[a];
-      if (ts >= e.t1 || ts <= 0.f) { // never crosses the plane ahead of the origin
-        e.node = nearChild;
-      } else if (ts <= e.t0) {
-        e.node = farChild;
-      } else {
-        if (top < 128) stack[top++] = {farChild, ts, e.t1};
-        e.node = nearChild;
-        e.t1 = ts;
-      }
-    }
-    const uint32_t r = nodes[e.node].index;
-    if (r == kNoRegion || !visible_[r]) continue;
-    float b0, b1;
-    if (!rayBoxInterval(ray, inv, model_.regions.regions[r].bounds(), b0, b1)) continue;
-    b0 = std::max(b0, last);
-    b1 = std::min(b1, ray.tmax);
-    if (!(b1 > b0)) continue;
-    if (!emit(Segment{b0, b1, r})) return;
-    last = b1;
-  }
+  RegionTreeView tree;
+  tree.nodes = model_.regions.nodes.empty() ? nullptr : model_.regions.nodes.data();
+  tree.regions = model_.regions.regions.data();
+  tree.visible = visible_.data();
+  tree.bounds = model_.regions.bounds;
+  walkRegionTree(tree, ray, emit);
 }
 
 } // namespace exa

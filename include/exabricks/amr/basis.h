@@ -13,6 +13,8 @@
 
 #include "exabricks/amr/regions.h"
 
+#include <cstring>
+
 namespace exa {
 
 /// Trivially copyable view of the structures one field is sampled from.
@@ -25,11 +27,14 @@ struct FieldView {
   box3f bounds;                        ///< lattice box of the k-d tree root
 };
 
-/// 1 / 2^level for every level, exact in float: saves a division per brick and sample.
-constexpr float kInverseWidth[kMaxLevel + 1] = {
-    1.f,        0x1p-1f,  0x1p-2f,  0x1p-3f,  0x1p-4f,  0x1p-5f,  0x1p-6f,  0x1p-7f,  0x1p-8f,  0x1p-9f,
-    0x1p-10f, 0x1p-11f, 0x1p-12f, 0x1p-13f, 0x1p-14f, 0x1p-15f, 0x1p-16f, 0x1p-17f, 0x1p-18f, 0x1p-19f,
-    0x1p-20f, 0x1p-21f, 0x1p-22f, 0x1p-23f, 0x1p-24f, 0x1p-25f, 0x1p-26f, 0x1p-27f, 0x1p-28f};
+/// 1 / 2^level, exact in float (built from the exponent bits; level in 0..kMaxLevel): saves a
+/// division per brick and sample.
+EXA_HOST_DEVICE inline float inverseWidth(int level) {
+  const uint32_t bits = uint32_t(127 - level) << 23;
+  float w;
+  std::memcpy(&w, &bits, sizeof w);
+  return w;
+}
 
 /// Running sums of the quotient B = sumWV / sumW and of their derivatives.
 template <typename Real> struct BasisAccumulator {
@@ -39,7 +44,7 @@ template <typename Real> struct BasisAccumulator {
   /// Adds every cell of `brick` whose support holds p (lattice units).
   EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const float* brickValues,
                                        const vec3<Real>& p, bool withGradient) {
-    const Real invW = Real(kInverseWidth[brick.level]);
+    const Real invW = Real(inverseWidth(brick.level));
     int idx[3][2];
     Real h[3][2], dh[3][2];
     int count[3];
@@ -71,20 +76,25 @@ template <typename Real> struct BasisAccumulator {
       for (int iy = 0; iy < count[1]; ++iy) {
         const float* row =
             values + size_t(brick.size.x) * (size_t(idx[1][iy]) + size_t(brick.size.y) * idx[2][iz]);
-        const Real hyz = h[1][iy] * h[2][iz];
-        for (int ix = 0; ix < count[0]; ++ix) {
-          const Real v = Real(row[idx[0][ix]]);
-          const Real weight = h[0][ix] * hyz;
-          sumW += weight;
-          sumWV += weight * v;
-          if (withGradient) {
-            const vec3<Real> d(dh[0][ix] * hyz, h[0][ix] * dh[1][iy] * h[2][iz],
-                               h[0][ix] * h[1][iy] * dh[2][iz]);
-            dSumW += d;
-            dSumWV += d * v;
-          }
-        }
+        for (int ix = 0; ix < count[0]; ++ix)
+          addCell(Real(row[idx[0][ix]]), h[0][ix], h[1][iy], h[2][iz], dh[0][ix], dh[1][iy], dh[2][iz],
+                  withGradient);
       }
+  }
+
+  /// Adds one cell of value v whose hat has the per-axis factors h and derivatives dh at the
+  /// sample point: weight hx hy hz, d/dx weight = dhx hy hz, and so on.
+  EXA_HOST_DEVICE inline void addCell(Real v, Real hx, Real hy, Real hz, Real dhx, Real dhy, Real dhz,
+                                      bool withGradient) {
+    const Real hyz = hy * hz;
+    const Real weight = hx * hyz;
+    sumW += weight;
+    sumWV += weight * v;
+    if (withGradient) {
+      const vec3<Real> d(dhx * hyz, hx * dhy * hz, hx * hy * dhz);
+      dSumW += d;
+      dSumWV += d * v;
+    }
   }
 
   EXA_HOST_DEVICE inline bool valid() const { return sumW > Real(0); }

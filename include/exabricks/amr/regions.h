@@ -18,9 +18,9 @@ struct Region {
   int32_t finestLevel; ///< finest level among the active bricks
 
   /// Closed box in lattice units.
-  box3f bounds() const { return {vec3f(halfBounds.lower) * 0.5f, vec3f(halfBounds.upper) * 0.5f}; }
+  EXA_HOST_DEVICE box3f bounds() const { return {vec3f(halfBounds.lower) * 0.5f, vec3f(halfBounds.upper) * 0.5f}; }
   /// Smallest cell width of the active bricks, lattice units.
-  float finestWidth() const { return float(int32_t(1) << finestLevel); }
+  EXA_HOST_DEVICE float finestWidth() const { return float(int32_t(1) << finestLevel); }
 };
 
 /// k-d tree node over regions. Inner nodes split `axis` at `pos` (lattice units); points with

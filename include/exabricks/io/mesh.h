@@ -6,19 +6,12 @@
 // the groups and objects of an OBJ file are merged, polygons are fan-triangulated.
 #pragma once
 
-#include "exabricks/core/math.h"
+#include "exabricks/core/mesh.h"
 
 #include <string>
 #include <vector>
 
 namespace exa {
-
-struct TriangleMesh {
-  std::vector<vec3f> vertices;  ///< world space
-  std::vector<vec3i> triangles; ///< 0-based vertex indices, each within `vertices`
-  /// Bounds of all vertices (empty box when there are none).
-  box3f bounds() const;
-};
 
 /// Reads OBJ, PLY (ascii, binary_little_endian, binary_big_endian) or the binary `.tris` format.
 /// PLY is known by its "ply" magic line; `.tris` and `.obj` by extension (and `.tris` also by

@@ -3,93 +3,42 @@
 // width, mid-interval samples with opacity correction, basis reconstruction with analytic
 // gradients and front-to-back compositing; several fields with their own transfer functions;
 // implicit iso-surfaces found by root finding in their own region set; triangle meshes;
-// clipping planes and a clip box; ambient occlusion on surfaces. The same image for any thread
-// count.
+// clipping planes and a clip box; ambient occlusion on surfaces.
+//
+// The renderer holds a Scene; setScene() compares the new scene with the current one and
+// rebuilds only what changed (transfer functions -> visible regions and traversal; iso-values
+// -> iso region set; meshes -> mesh BVH). renderPass() adds one sample per pixel to a
+// caller-owned FrameBuffer, with random numbers from (pixel, frame index, seed), so N passes
+// equal one N-sample render bit for bit, for any thread count. Passes can be cancelled from
+// another thread between tiles and allocate nothing once the buffer has its size.
 //
 // Per ray: clip [tmin, tmax] by the planes and the box, find the nearest mesh hit (Embree) and
 // the nearest iso-surface hit before it, integrate the volume up to that surface, then composite
 // the shaded surface behind the volume.
 #pragma once
 
-#include "exabricks/accel/traversal.h"
-#include "exabricks/io/image.h"
-#include "exabricks/render/camera.h"
-#include "exabricks/render/transfer_function.h"
+#include "exabricks/core/image.h"
+#include "exabricks/render/scene.h"
 
+#include <atomic>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace exa {
 
-enum class Shading { Analytic, Central, ClampedCentral, None };
-enum class DebugView { None, Level, Brick, Region, Steps };
-/// How samples are placed: adaptive (per region, half its finest cell width) or fixed (half
-/// the dataset's finest cell width everywhere).
-enum class Sampling { Adaptive, Fixed };
-/// How a sample's value is reconstructed: from the bricks its region lists (the method), or by
-/// locating every contributing cell in a k-d tree over the bricks (the paper's baseline).
-enum class Reconstruction { Regions, CellLocation };
+struct Model;
 
-struct TriangleMesh;
+/// Dataset-wide values the renderer needs, explicit so that a renderer that sees only part of
+/// the data can be given the whole dataset's values. `of()` computes them once from a model.
+struct DatasetInfo {
+  float referenceWidth = 1.f;        ///< lattice units: opacity is per this width; fixed steps use it
+  double worldDiagonal = 1.0;        ///< default ambient-occlusion length is a tenth of it
+  std::vector<range1f> valueRanges;  ///< per field: the default transfer-function range
+  float defaultOpacityScale = 1.f;   ///< a ray through the whole data gathers an optical depth of ~8
 
-/// One volume field and its transfer function.
-struct VolumeLayer {
-  int field = 0;
-  TransferFunction tf;
-};
-
-/// Implicit iso-surfaces of one field at one or more values.
-struct IsoSurfaces {
-  int field = -1;                 ///< -1: none
-  std::vector<float> values;
-  /// Linear-RGB colour per iso-value (cycled when fewer than values), used without colorField.
-  std::vector<vec3f> colors;
-  int colorField = -1;            ///< >= 0: colour by this field's value at the hit point ...
-  TransferFunction colorTf;       ///< ... through this colour map and value range
-};
-
-/// Removes the half-space the normal points into: points x with dot(x - point, normal) > 0.
-struct ClipPlane {
-  vec3d point{0.0};
-  vec3d normal{1.0, 0.0, 0.0};
-};
-
-struct RenderOptions {
-  int width = 800, height = 800;
-  int samplesPerPixel = 1;
-  float rate = 1.f;               ///< quality factor: step = finest width x 0.5 / rate
-  bool jitter = true;             ///< per-pixel random offset of the sample positions
-  uint64_t seed = 0;
-  bool earlyTermination = true;
-  float terminationOpacity = 0.98f;
-  Shading shading = Shading::Analytic;
-  bool headlight = true;          ///< light from the eye; else from lightDirection
-  vec3f lightDirection{-1.f, -1.f, -1.f}; ///< world direction light travels along
-  float ambient = 0.3f, diffuse = 0.7f, specular = 0.25f, shininess = 40.f;
-  /// Region traversal. With autoTraversal the renderer picks per transfer function: Embree when
-  /// few regions are visible (it skips hidden space in its BVH), the k-d tree otherwise (cheaper
-  /// per step); see docs/performance.md for the measurements behind the threshold.
-  bool autoTraversal = true;
-  TraversalKind traversal = TraversalKind::KdTree;
-  float embreeBelowVisibleFraction = 0.15f;
-  bool spaceSkipping = true;
-  Sampling sampling = Sampling::Adaptive;
-  Reconstruction reconstruction = Reconstruction::Regions;
-  DebugView debug = DebugView::None;
-  bool progress = false;          ///< progress line on a terminal
-
-  bool volume = true;             ///< integrate the volume (off: surfaces only)
-  /// Clipping (world space): every plane removes its half-space; the box, when not empty,
-  /// keeps only its inside. Applies to volume and iso-surfaces, and to meshes with clipMeshes.
-  std::vector<ClipPlane> clipPlanes;
-  box3d clipBox;
-  bool clipMeshes = false;
-  /// Ambient occlusion on surface hits: rays per hit (0: off), their length in world units (0:
-  /// a tenth of the data's world diagonal), and whether the volume also attenuates them.
-  int aoRays = 0;
-  float aoLength = 0.f;
-  bool aoVolume = false;
+  static DatasetInfo of(const Model& model);
 };
 
 /// The nearest surface along a ray.
@@ -102,54 +51,115 @@ struct SurfaceHit {
 };
 
 struct RenderStats {
-  double seconds = 0;             ///< wall time of the frame(s)
+  double seconds = 0;             ///< wall time of the pass(es)
   uint64_t rays = 0;
   uint64_t samples = 0;           ///< reconstructed samples (value + gradient each)
   uint64_t regionsVisited = 0;    ///< segments integrated
   uint64_t surfaceHits = 0;       ///< primary rays that ended on a mesh or iso-surface
   uint64_t isoSamples = 0;        ///< samples taken to find iso-surfaces (incl. root finding)
   uint64_t aoRays = 0;
-  double samplesPerSecond() const { return seconds > 0 ? double(samples) / seconds : 0; }
+  uint64_t tiles = 0;             ///< tiles rendered
+  double samplesPerSecond() const { return seconds > 0 ? double(samples) / double(seconds) : 0; }
+  RenderStats& operator+=(const RenderStats& o);
+};
+
+/// What setScene() rebuilt, and how long each part took.
+struct SceneUpdate {
+  bool volume = false;      ///< layer tables, visible regions and traversal
+  bool iso = false;         ///< iso region set
+  bool meshes = false;      ///< mesh BVH
+  double volumeSeconds = 0, isoSeconds = 0, meshSeconds = 0;
+  double seconds() const { return volumeSeconds + isoSeconds + meshSeconds; }
+};
+
+/// Square tiles of this many pixels are the unit of work, progress and cancellation.
+constexpr int kRenderTile = 16;
+
+/// The sums of a progressive image: per pixel the premultiplied colours of every pass and per
+/// tile the number of passes added. Owned by the caller; resize() allocates, passes do not.
+class FrameBuffer {
+public:
+  /// Counters of one tile in the last pass that covered it.
+  struct TileCounters {
+    uint64_t rays = 0, samples = 0, regions = 0, surfaceHits = 0, isoSamples = 0, aoRays = 0;
+  };
+
+  FrameBuffer() = default;
+  FrameBuffer(int width, int height) { resize(width, height); }
+  /// Sets the size and clears; keeps the memory when the size is unchanged.
+  void resize(int width, int height);
+  void clear();
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int tilesX() const { return tilesX_; }
+  int tilesY() const { return tilesY_; }
+  int tileCount() const { return tilesX_ * tilesY_; }
+  /// Passes added to a tile, and the fewest over all tiles (complete passes).
+  uint32_t tilePasses(int tile) const { return tilePasses_[size_t(tile)]; }
+  uint32_t passes() const;
+  /// The mean of the passes (each tile divided by its own count; tiles without a pass are
+  /// transparent black). The steps debug view resolves to a heat map scaled to its maximum.
+  void resolve(Image& out) const;
+  Image resolve() const;
+  /// Statistics summed over the passes since the last clear.
+  const RenderStats& stats() const { return stats_; }
+
+private:
+  friend class Renderer;
+  int width_ = 0, height_ = 0, tilesX_ = 0, tilesY_ = 0;
+  std::vector<vec4f> sum_;
+  std::vector<float> steps_;        ///< samples per pixel, summed (steps debug view)
+  std::vector<uint32_t> tilePasses_;
+  std::vector<TileCounters> counters_;
+  bool stepsView_ = false;
+  RenderStats stats_;
+};
+
+/// Controls of one pass: a share of the tiles, cancellation and progress.
+struct PassControl {
+  /// Tiles tileBegin, tileBegin + tileStride, ... below tileEnd (-1: all), row-major.
+  int tileBegin = 0, tileEnd = -1, tileStride = 1;
+  /// Checked before every tile; once true, the pass adds no further tile and returns false.
+  const std::atomic<bool>* cancel = nullptr;
+  /// Called from worker threads after each tile with (tiles done, tiles in the pass).
+  std::function<void(uint64_t, uint64_t)> progress;
 };
 
 class Renderer {
 public:
-  Renderer(const Model& model, int field, const RenderOptions& options);
+  explicit Renderer(const Model& model);
+  Renderer(const Model& model, const DatasetInfo& dataset);
   ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
 
-  /// Sets the transfer function of the renderer's field (a single volume layer) and rebuilds
-  /// the set of visible regions; returns the update time in seconds (visibility + traversal).
-  double setTransferFunction(const TransferFunction& tf);
-  /// Several fields, each with its own transfer function. A sample's opacities add up as
-  /// optical depths, alpha = 1 - prod(1 - alpha_i), and its colour is the opacity-weighted mean
-  /// of the layers' shaded colours; a region is visible when any layer may see it.
-  double setVolumeLayers(const std::vector<VolumeLayer>& layers);
-  /// Sets the iso-surfaces and rebuilds their own region set (regions whose value range holds an
-  /// iso-value); returns the rebuild time in seconds.
-  double setIsoSurfaces(const IsoSurfaces& iso);
-  /// Regions that may hold an iso-surface.
-  size_t isoRegions() const;
-  /// Adds a triangle mesh (world space) drawn in a linear-RGB colour.
-  void addMesh(const TriangleMesh& mesh, const vec3f& color);
-  size_t meshCount() const;
+  /// Makes `scene` current, rebuilding only what differs from the current scene. Throws
+  /// exa::Error (and keeps the previous scene) when a setting is invalid or names an unknown
+  /// field.
+  SceneUpdate setScene(const Scene& scene);
+  const Scene& scene() const;
+  const DatasetInfo& dataset() const;
+  const Model& model() const;
+
+  /// Adds pass `frame.frameIndex` (one sample per pixel) to the buffer, which must have the
+  /// frame's size. Returns false when cancelled (only whole tiles were added).
+  bool renderPass(const Frame& frame, FrameBuffer& buffer, const PassControl& control = {}) const;
+  /// A whole frame: passes 0..samplesPerPixel-1 into a fresh buffer, resolved.
+  Image render(const Frame& frame, RenderStats* stats = nullptr) const;
 
   /// The nearest (clipped) mesh or iso-surface hit along a world ray; false when there is none.
   bool pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const;
-  /// Regions that may be visible under the current transfer function.
+  /// Regions that may be visible under the current transfer functions.
   size_t visibleRegions() const;
-  /// The traversal in use (after setTransferFunction).
+  /// Regions that may hold an iso-surface.
+  size_t isoRegions() const;
+  size_t meshCount() const;
+  /// The traversal in use for the volume.
   TraversalKind traversalInUse() const;
-
-  /// Renders one frame of options.samplesPerPixel samples per pixel.
-  Image render(const Camera& camera, RenderStats* stats = nullptr) const;
-
-  const RenderOptions& options() const { return options_; }
-  RenderOptions& options() { return options_; }
 
 private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
-  RenderOptions options_;
 };
 
 } // namespace exa

@@ -2,16 +2,12 @@
 // logarithmic). Opacity is per finest cell width: the ray marcher corrects it for its step.
 #pragma once
 
-#include "exabricks/core/math.h"
+#include "exabricks/core/color.h"
 
 #include <string>
 #include <vector>
 
 namespace exa {
-
-struct vec4f {
-  float x = 0, y = 0, z = 0, w = 0;
-};
 
 /// A colour map: control points at increasing positions in [0, 1] with linear-RGB colours,
 /// interpolated linearly between them.
@@ -20,6 +16,7 @@ struct ColorMap {
   std::vector<float> positions; ///< increasing, first 0, last 1
   std::vector<vec3f> colors;    ///< linear RGB in [0, 1], one per position
   vec3f at(float t) const;      ///< t is clamped to [0, 1]
+  friend bool operator==(const ColorMap&, const ColorMap&) = default;
 };
 
 /// Names of the built-in colour maps: viridis, plasma, inferno, magma, cool-to-warm, grayscale.
@@ -31,6 +28,7 @@ ColorMap builtinColorMap(const std::string& name);
 struct OpacityPoint {
   float x = 0;
   float alpha = 0;
+  friend bool operator==(const OpacityPoint&, const OpacityPoint&) = default;
 };
 
 class TransferFunction {
@@ -39,7 +37,7 @@ public:
   std::vector<OpacityPoint> opacity; ///< increasing x; empty means a linear ramp 0 -> 1
   range1f valueRange;                ///< values mapped to [0, 1]; empty: not set yet
   bool logScale = false;             ///< map log10(value) (values <= 0 map to 0)
-  float opacityScale = 1.f;          ///< multiplies every opacity
+  float opacityScale = 1.f;          ///< multiplies every opacity (0 in a Scene: the dataset default)
 
   /// Value -> [0, 1] (clamped), linear or logarithmic over valueRange.
   float normalize(float value) const;
@@ -49,12 +47,24 @@ public:
   vec4f atNormalized(float t) const;
   /// Exact maximum opacity over all values in [r.lower, r.upper] (used for space skipping).
   float maxOpacity(const range1f& r) const;
+
+  friend bool operator==(const TransferFunction&, const TransferFunction&) = default;
 };
+
+/// The default of a scene: the named built-in colour map, a linear opacity ramp, the field's
+/// range and the dataset's default opacity scale (opacityScale 0).
+TransferFunction defaultTransferFunction(const std::string& colorMap = "viridis");
 
 /// Reads a transfer function file: a ParaView colour-map preset (a JSON array or object with
 /// "RGBPoints" and optional "Points" for opacity, "ColorSpace", "Name") or an exabricks JSON
 /// object (see docs/transfer-functions.md). The value range in the file, if any, is kept in
 /// valueRange; errors name the file and the problem.
 TransferFunction readTransferFunction(const std::string& path);
+
+/// The same from JSON text; errors name `source`.
+TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source);
+/// The exabricks JSON form of a transfer function (built-in colour maps by name, others as
+/// points; an opacity scale of 0 as "auto").
+std::string transferFunctionJson(const TransferFunction& tf);
 
 } // namespace exa

@@ -1,0 +1,188 @@
+// The per-sample math of the ray marcher, header-only over plain structs so that the CPU driver,
+// the tests and a GPU path share one copy: transfer-function tables and their lookup, opacity
+// correction, volume and surface shading, front-to-back compositing and the refinement of an
+// iso-surface crossing. Free of allocation, exceptions, virtual calls and run-time-indexed
+// constant tables.
+#pragma once
+
+#include "exabricks/core/color.h"
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+namespace exa {
+
+/// Entries of a tabulated transfer function.
+constexpr int kTfTableSize = 4096;
+
+/// Value -> [0, 1] over `range`, linear or logarithmic (base 10), clamped; NaN maps to 0, an
+/// unusable range to 0.5; a logarithmic range reaching zero or below is cut six decades under
+/// its upper end. Monotonic in the value (space skipping relies on it).
+EXA_HOST_DEVICE inline float normalizeValue(const range1f& range, bool logScale, float value) {
+  if (value != value) return 0.f;
+  double lo = range.lower, hi = range.upper, v = value;
+  if (range.empty() || !std::isfinite(lo) || !std::isfinite(hi)) return 0.5f;
+  if (logScale) {
+    if (!(v > 0.0)) return 0.f;
+    if (!(hi > 0.0)) return 1.f; // every positive value lies above the range
+    if (!(lo > 0.0)) lo = hi * 1e-6;
+    lo = std::log10(lo);
+    hi = std::log10(hi);
+    v = std::log10(v);
+  }
+  // A single value: below it 0, above it 1, on it the middle; still monotonic.
+  if (!(hi > lo)) return v < lo ? 0.f : (v > hi ? 1.f : 0.5f);
+  const double t = (v - lo) / (hi - lo);
+  return float(t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t));
+}
+
+/// A transfer function tabulated for the marcher: linear-RGB colour and log2 of the
+/// transmittance of one reference width (the dataset's finest cell) per normalised value.
+struct TfTableView {
+  const vec4f* entries = nullptr; ///< kTfTableSize entries
+  range1f range;
+  bool logScale = false;
+  bool fastLinear = false;        ///< linear with a proper range: n = (v - lower) * scale
+  float lower = 0.f, scale = 0.f;
+};
+
+EXA_HOST_DEVICE inline float clamp01(float x) { return x < 0.f ? 0.f : (x > 1.f ? 1.f : x); }
+
+EXA_HOST_DEVICE inline float tfNormalized(const TfTableView& t, float value) {
+  return t.fastLinear ? clamp01((value - t.lower) * t.scale) : normalizeValue(t.range, t.logScale, value);
+}
+
+/// The table, linearly interpolated, at normalised value n.
+EXA_HOST_DEVICE inline vec4f tfTableAt(const TfTableView& t, float n) {
+  const float x = n * float(kTfTableSize - 1);
+  int i = int(x);
+  i = i < 0 ? 0 : (i > kTfTableSize - 2 ? kTfTableSize - 2 : i);
+  const float f = clamp01(x - float(i));
+  const vec4f& a = t.entries[i];
+  const vec4f& b = t.entries[i + 1];
+  return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, a.w + (b.w - a.w) * f};
+}
+
+EXA_HOST_DEVICE inline vec4f tfLookup(const TfTableView& t, float value) {
+  return tfTableAt(t, tfNormalized(t, value));
+}
+
+/// Whether any value in r can be visible through the table (its log transmittance is piecewise
+/// linear, so its extremes lie at table entries or at the ends).
+EXA_HOST_DEVICE inline bool tfMayBeVisible(const TfTableView& t, const range1f& r) {
+  if (r.empty()) return false;
+  const float n0 = tfNormalized(t, r.lower), n1 = tfNormalized(t, r.upper);
+  if (tfTableAt(t, n0).w < 0.f || tfTableAt(t, n1).w < 0.f) return true;
+  const int first = int(std::ceil(n0 * float(kTfTableSize - 1)));
+  const int last = int(std::floor(n1 * float(kTfTableSize - 1)));
+  for (int i = first < 0 ? 0 : first; i <= (last > kTfTableSize - 1 ? kTfTableSize - 1 : last); ++i)
+    if (t.entries[i].w < 0.f) return true;
+  return false;
+}
+
+/// 2^x for x <= 0 to float precision (relative error below 2e-7): a degree-6 Taylor
+/// polynomial of 2^f on [-1/2, 1/2] times 2^i built from the exponent bits. Cheaper than a libm
+/// call on the hot path of every sample's opacity correction.
+EXA_HOST_DEVICE inline float exp2Negative(float x) {
+  if (x < -126.f) return 0.f;
+  const float i = std::nearbyint(x);
+  const float f = x - i;
+  float p = 0.00015403530393381606f;
+  p = p * f + 0.0013333558146428443f;
+  p = p * f + 0.009618129107628477f;
+  p = p * f + 0.05550410866482158f;
+  p = p * f + 0.2402265069591007f;
+  p = p * f + 0.6931471805599453f;
+  p = p * f + 1.f;
+  const uint32_t bits = uint32_t(int32_t(i) + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale;
+}
+
+/// Opacity correction: a step of `length` through a medium whose transmittance over one
+/// reference width is 2^log2Transmittance has opacity 1 - (1 - alpha)^(length / reference).
+EXA_HOST_DEVICE inline float correctedOpacity(float log2Transmittance, float length, float invReferenceWidth) {
+  return 1.f - exp2Negative(log2Transmittance * length * invReferenceWidth);
+}
+
+/// Schlick's rational approximation of x^e for x in [0, 1]: exact at 0 and 1, one division
+/// instead of a power per sample.
+EXA_HOST_DEVICE inline float specularPower(float x, float e) { return x / (e - (e - 1.f) * x); }
+
+/// Blinn-Phong terms.
+struct ShadingTerms {
+  float ambient = 0.3f, diffuse = 0.7f, specular = 0.25f, shininess = 40.f;
+};
+
+/// A volume sample's colour lit two-sided by the normal along its gradient (any units); where
+/// the gradient vanishes the sample is lit as if facing the light, without highlight.
+EXA_HOST_DEVICE inline vec3f shadeVolumeSample(const vec3f& color, const vec3f& gradient, const vec3f& light,
+                                               const vec3f& halfVector, const ShadingTerms& s) {
+  const float gl = length(gradient);
+  float shade = s.ambient + s.diffuse;
+  float spec = 0.f;
+  if (gl > 1e-20f) {
+    const vec3f n = gradient * (1.f / gl);
+    const float ndl = std::abs(dot(n, light));
+    shade = s.ambient + s.diffuse * ndl;
+    spec = s.specular * specularPower(std::abs(dot(n, halfVector)), s.shininess);
+  }
+  return color * shade + vec3f(spec);
+}
+
+/// A surface's colour lit one-sided (normal facing the viewer), with ambient occlusion `ao`
+/// (1: open) dimming the ambient term fully and the diffuse term by half.
+EXA_HOST_DEVICE inline vec3f shadeSurface(const vec3f& base, const vec3f& normal, const vec3f& light,
+                                          const vec3f& halfVector, float ao, const ShadingTerms& s) {
+  const float ndl = -dot(normal, light) > 0.f ? -dot(normal, light) : 0.f;
+  const float nh = -dot(normal, halfVector) > 0.f ? -dot(normal, halfVector) : 0.f;
+  const float spec = s.specular * specularPower(nh, s.shininess);
+  return base * (s.ambient * ao + s.diffuse * ndl * (0.5f + 0.5f * ao)) + vec3f(spec);
+}
+
+/// Front-to-back compositing into a premultiplied accumulator: what lies behind is seen
+/// through what is already in front.
+EXA_HOST_DEVICE inline void compositeBehind(vec4f& acc, const vec3f& color, float alpha) {
+  const float wgt = (1.f - acc.w) * alpha;
+  acc.x += wgt * color.x;
+  acc.y += wgt * color.y;
+  acc.z += wgt * color.z;
+  acc.w += wgt;
+}
+
+/// An opaque surface behind everything accumulated so far.
+EXA_HOST_DEVICE inline void compositeOpaqueBehind(vec4f& acc, const vec3f& color) {
+  const float wgt = 1.f - acc.w;
+  acc.x += wgt * color.x;
+  acc.y += wgt * color.y;
+  acc.z += wgt * color.z;
+  acc.w = 1.f;
+}
+
+/// Refines a crossing of `level` between lo and hi (values vlo, vhi on opposite sides;
+/// `loAbove` says whether vlo >= level) by bisection down to `tolerance`, then one secant step.
+/// `value(t, v)` reconstructs at t and returns false where there is no value; there the search
+/// keeps the near part. Returns the crossing's t.
+template <typename ValueAt>
+EXA_HOST_DEVICE inline float refineCrossing(ValueAt&& value, float lo, float hi, float vlo, float vhi, float level,
+                                            bool loAbove, float tolerance) {
+  while (hi - lo > tolerance) {
+    const float mid = 0.5f * (lo + hi);
+    if (!(mid > lo && mid < hi)) break; // float resolution reached
+    float vm;
+    if (!value(mid, vm)) {
+      hi = mid, vhi = vlo; // no value inside: keep the near part
+      break;
+    }
+    if ((vm >= level) == loAbove)
+      lo = mid, vlo = vm;
+    else
+      hi = mid, vhi = vm;
+  }
+  const float denom = vhi - vlo;
+  return denom != 0.f ? lo + (hi - lo) * clamp01((level - vlo) / denom) : hi;
+}
+
+} // namespace exa

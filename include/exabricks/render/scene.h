@@ -1,0 +1,158 @@
+// What is rendered (Scene) and how one frame is taken (Frame), as plain values that a caller
+// edits between frames; the Renderer updates only what a change needs. Scenes and frames read
+// from and write to JSON (the format of `exabricks render --scene`), see docs/rendering.md.
+#pragma once
+
+#include "exabricks/accel/traversal.h"
+#include "exabricks/core/mesh.h"
+#include "exabricks/render/camera.h"
+#include "exabricks/render/sample_math.h"
+#include "exabricks/render/transfer_function.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace exa {
+
+enum class Shading { Analytic, Central, ClampedCentral, None };
+enum class DebugView { None, Level, Brick, Region, Steps };
+/// How samples are placed: adaptive (per region, half its finest cell width) or fixed (half
+/// the dataset's finest cell width everywhere).
+enum class Sampling { Adaptive, Fixed };
+/// How a sample's value is reconstructed: from the bricks its region lists (the method), or by
+/// locating every contributing cell in a k-d tree over the bricks (the paper's baseline).
+enum class Reconstruction { Regions, CellLocation };
+
+/// One volume field and its transfer function. An empty field name is the dataset's default
+/// field ("scalar", else the first); an empty value range is the field's range, and an opacity
+/// scale of 0 is the dataset's default scale (DatasetInfo).
+struct VolumeLayer {
+  std::string field;
+  TransferFunction tf = defaultTransferFunction();
+  friend bool operator==(const VolumeLayer&, const VolumeLayer&) = default;
+};
+
+/// Implicit iso-surfaces of one field at one or more values.
+struct IsoSurfaces {
+  std::string field;              ///< empty: the first volume layer's field
+  std::vector<float> values;      ///< none: no iso-surfaces
+  /// Linear-RGB colour per iso-value (cycled when fewer than values), used without colorField.
+  std::vector<vec3f> colors;
+  std::string colorField;         ///< not empty: colour by this field's value at the hit point ...
+  TransferFunction colorTf = defaultTransferFunction("cool-to-warm"); ///< ... through this map and range
+  friend bool operator==(const IsoSurfaces&, const IsoSurfaces&) = default;
+};
+
+/// A triangle mesh drawn in one linear-RGB colour. `source` names the file it came from, which
+/// is what a scene file records (a mesh without one is written inline).
+struct SceneMesh {
+  std::shared_ptr<const TriangleMesh> mesh;
+  vec3f color{0.8f};
+  std::string source;
+  friend bool operator==(const SceneMesh&, const SceneMesh&) = default;
+};
+
+/// Removes the half-space the normal points into: points x with dot(x - point, normal) > 0.
+struct ClipPlane {
+  vec3d point{0.0};
+  vec3d normal{1.0, 0.0, 0.0};
+  friend bool operator==(const ClipPlane&, const ClipPlane&) = default;
+};
+
+/// Clipping (world space): every plane removes its half-space; the box, when not empty, keeps
+/// only its inside. Applies to volume and iso-surfaces, and to meshes with `meshes`.
+struct Clipping {
+  std::vector<ClipPlane> planes;
+  box3d box;
+  bool meshes = false;
+  friend bool operator==(const Clipping&, const Clipping&) = default;
+};
+
+struct Light {
+  bool headlight = true;                  ///< light from the eye; else from direction
+  vec3f direction{-1.f, -1.f, -1.f};      ///< world direction light travels along
+  ShadingTerms terms;
+};
+
+/// Ambient occlusion on surface hits: rays per hit (0: off), their length in world units (0: a
+/// tenth of the data's world diagonal), and whether the volume also attenuates them.
+struct AmbientOcclusion {
+  int rays = 0;
+  float length = 0.f;
+  bool volume = false;
+};
+
+/// How the volume is integrated. With autoTraversal the renderer picks per transfer function:
+/// Embree when few regions are visible (it skips hidden space in its BVH), the k-d tree
+/// otherwise (cheaper per step); docs/performance.md has the measurements behind the threshold.
+struct Integration {
+  Sampling sampling = Sampling::Adaptive;
+  Reconstruction reconstruction = Reconstruction::Regions;
+  bool autoTraversal = true;
+  TraversalKind traversal = TraversalKind::KdTree;
+  float embreeBelowVisibleFraction = 0.15f;
+  bool spaceSkipping = true;
+  bool earlyTermination = true;
+  float terminationOpacity = 0.98f;
+  friend bool operator==(const Integration&, const Integration&) = default;
+};
+
+struct Scene {
+  std::vector<VolumeLayer> layers{VolumeLayer{}}; ///< several fields: summed optical depth
+  bool volume = true;                            ///< integrate the volume (off: surfaces only)
+  IsoSurfaces iso;
+  std::vector<SceneMesh> meshes;
+  Clipping clip;
+  Light light;
+  Shading shading = Shading::Analytic;
+  AmbientOcclusion ao;
+  Integration integration;
+  DebugView debug = DebugView::None;
+  vec3f background{1.f};                         ///< linear RGB, used when images are written
+  bool keepAlpha = false;                        ///< images keep alpha instead of the background
+
+  /// A scene of one volume layer.
+  static Scene volumeOf(const TransferFunction& tf, const std::string& field = {});
+  /// Throws exa::Error naming the first invalid setting.
+  void validate() const;
+};
+
+/// One frame: camera, size and sampling. `frameIndex` selects the random numbers of a
+/// progressive pass (pixel jitter and sample offsets come from pixel, frame index and seed);
+/// `samplesPerPixel` is the number of passes a full image takes, and pixel positions are
+/// jittered only when it is above one, so passes 0..N-1 of a frame with samplesPerPixel N sum
+/// to the same image as one N-sample render.
+struct Frame {
+  Camera camera;
+  int width = 800, height = 800;
+  int samplesPerPixel = 1;
+  int frameIndex = 0;
+  float rate = 1.f;              ///< quality factor: step = region's finest width x 0.5 / rate
+  bool jitter = true;            ///< random offsets of the sample positions
+  uint64_t seed = 0;
+
+  /// A cheap draft of this frame: 1/divisor of the resolution per axis (at least one pixel)
+  /// and the given sampling rate.
+  Frame preview(int divisor, float previewRate) const;
+  /// Throws exa::Error naming the first invalid setting.
+  void validate() const;
+};
+
+/// A scene file: the scene, the frame, and optionally the input they were made for.
+struct SceneDocument {
+  std::string input;     ///< dataset path, empty when not recorded
+  Scene scene;
+  Frame frame;
+  bool hasCamera = false; ///< the document set a camera (else the caller frames the data)
+};
+
+/// Writes a scene document as JSON (every setting, colours in sRGB).
+std::string writeSceneJson(const SceneDocument& doc);
+/// Reads JSON written by writeSceneJson, or any subset of its keys (the rest keep their
+/// defaults); meshes named by file are read relative to the working directory. Errors name
+/// `source` and the offending key.
+SceneDocument readSceneJson(const std::string& text, const std::string& source);
+SceneDocument readSceneFile(const std::string& path);
+
+} // namespace exa

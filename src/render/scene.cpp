@@ -1,0 +1,465 @@
+#include "exabricks/render/scene.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/io/mesh.h"
+
+#include "tf_json.h"
+
+#include <nlohmann/json.hpp>
+
+#include <cerrno>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace exa {
+
+Scene Scene::volumeOf(const TransferFunction& tf, const std::string& field) {
+  Scene s;
+  s.layers = {VolumeLayer{field, tf}};
+  return s;
+}
+
+void Scene::validate() const {
+  if (ao.rays < 0 || ao.rays > 1024) fail("ambient occlusion rays must be in 0..1024");
+  if (!(ao.length >= 0.f) || std::isinf(ao.length))
+    fail("ambient occlusion length must be a finite non-negative number");
+  for (const ClipPlane& p : clip.planes)
+    if (!(length(p.normal) > 0.0) || !std::isfinite(length(p.normal)) || !std::isfinite(length(p.point)))
+      fail("a clip plane needs a finite point and a non-zero normal");
+  for (float v : iso.values)
+    if (!std::isfinite(v)) fail("iso-values must be finite numbers");
+  if (!(integration.terminationOpacity > 0.f && integration.terminationOpacity <= 1.f))
+    fail("termination opacity must be in (0, 1]");
+  if (!(integration.embreeBelowVisibleFraction >= 0.f && integration.embreeBelowVisibleFraction <= 1.f))
+    fail("the Embree threshold must be a fraction in [0, 1]");
+  if (!light.headlight && !(length(light.direction) > 0.f && std::isfinite(length(light.direction))))
+    fail("the light direction must be finite and non-zero");
+  for (size_t m = 0; m < meshes.size(); ++m) {
+    if (!meshes[m].mesh) fail("mesh ", m, " has no data");
+    const TriangleMesh& mesh = *meshes[m].mesh;
+    if (mesh.triangles.empty()) fail("mesh ", m, " has no triangles");
+    for (size_t i = 0; i < mesh.vertices.size(); ++i) {
+      const vec3f& v = mesh.vertices[i];
+      if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+        fail("mesh ", m, ": vertex ", i, " is not finite");
+    }
+    for (size_t i = 0; i < mesh.triangles.size(); ++i)
+      for (int k = 0; k < 3; ++k)
+        if (mesh.triangles[i][k] < 0 || size_t(mesh.triangles[i][k]) >= mesh.vertices.size())
+          fail("mesh ", m, ": triangle ", i, " refers to vertex ", mesh.triangles[i][k], " of ",
+               mesh.vertices.size());
+  }
+}
+
+Frame Frame::preview(int divisor, float previewRate) const {
+  Frame f = *this;
+  divisor = std::max(1, divisor);
+  f.width = std::max(1, width / divisor);
+  f.height = std::max(1, height / divisor);
+  f.rate = previewRate;
+  return f;
+}
+
+void Frame::validate() const {
+  if (width < 1 || height < 1 || width > 32768 || height > 32768)
+    fail("image size ", width, "x", height, " is out of range (1..32768)");
+  if (samplesPerPixel < 1 || samplesPerPixel > 65536) fail("samples per pixel must be in 1..65536");
+  if (frameIndex < 0) fail("the frame index must not be negative");
+  if (!(rate > 0.f) || rate > 1024.f) fail("sampling rate must be in (0, 1024]");
+  const Camera& c = camera;
+  const vec3d forward = c.lookAt - c.position;
+  if (!std::isfinite(length(forward)) || !std::isfinite(length(c.up)) || !std::isfinite(length(c.position)))
+    fail("camera position, look-at and up must be finite");
+  if (length(forward) == 0 || length(cross(forward, c.up)) == 0)
+    fail("degenerate camera: position equals look-at, or up is parallel to the view direction");
+  if (c.orthographic ? !(c.orthoHeight > 0 && std::isfinite(c.orthoHeight)) : !(c.fovy > 0 && c.fovy < 180))
+    fail(c.orthographic ? "orthographic height must be positive" : "field of view must be in (0, 180) degrees");
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON
+
+namespace {
+
+using json = nlohmann::json;
+
+const char* shadingName(Shading s) {
+  switch (s) {
+  case Shading::Analytic: return "analytic";
+  case Shading::Central: return "central";
+  case Shading::ClampedCentral: return "clamped";
+  case Shading::None: return "none";
+  }
+  return "analytic";
+}
+
+const char* debugName(DebugView d) {
+  switch (d) {
+  case DebugView::None: return "none";
+  case DebugView::Level: return "level";
+  case DebugView::Brick: return "brick";
+  case DebugView::Region: return "region";
+  case DebugView::Steps: return "steps";
+  }
+  return "none";
+}
+
+json vec(const vec3d& v) { return {v.x, v.y, v.z}; }
+json vec(const vec3f& v) { return {v.x, v.y, v.z}; }
+json srgb(const vec3f& linear) { return vec(linearToSrgb(linear)); }
+
+/// Reads the keys of one JSON object with errors that name the key path.
+class Reader {
+public:
+  Reader(const json& j, std::string source, std::string path) : j_(j), source_(std::move(source)), path_(std::move(path)) {
+    if (!j_.is_object()) fail(where(), " must be a JSON object");
+  }
+  /// Fails on keys not in `known`.
+  void only(std::initializer_list<const char*> known) const {
+    for (auto it = j_.begin(); it != j_.end(); ++it) {
+      bool ok = false;
+      std::string list;
+      for (const char* k : known) {
+        ok = ok || it.key() == k;
+        list += (list.empty() ? "" : ", ") + std::string(k);
+      }
+      if (!ok) fail(source_, ": unknown key \"", key(it.key()), "\" (known: ", list, ")");
+    }
+  }
+  const json* find(const char* k) const {
+    const auto it = j_.find(k);
+    return it == j_.end() ? nullptr : &*it;
+  }
+  std::string key(const std::string& k) const { return path_.empty() ? k : path_ + "." + k; }
+  std::string where() const { return source_ + (path_.empty() ? "" : ": \"" + path_ + "\""); }
+  const std::string& source() const { return source_; }
+
+  bool boolean(const char* k, bool& out) const {
+    const json* v = find(k);
+    if (!v) return false;
+    if (!v->is_boolean()) fail(source_, ": \"", key(k), "\" must be true or false, not ", v->dump());
+    out = v->get<bool>();
+    return true;
+  }
+  template <typename T> bool number(const char* k, T& out) const {
+    const json* v = find(k);
+    if (!v) return false;
+    if (!v->is_number()) fail(source_, ": \"", key(k), "\" must be a number, not ", v->dump());
+    const double d = v->get<double>();
+    if (!std::isfinite(d)) fail(source_, ": \"", key(k), "\" must be finite");
+    if constexpr (std::is_integral_v<T>) {
+      if (d != std::floor(d) || d < double(std::numeric_limits<T>::min()) || d > double(std::numeric_limits<T>::max()))
+        fail(source_, ": \"", key(k), "\" must be an integer in range, not ", v->dump());
+    }
+    out = T(d);
+    return true;
+  }
+  bool string(const char* k, std::string& out) const {
+    const json* v = find(k);
+    if (!v) return false;
+    if (!v->is_string()) fail(source_, ": \"", key(k), "\" must be a string, not ", v->dump());
+    out = v->get<std::string>();
+    return true;
+  }
+  std::vector<double> numbers(const json& v, const std::string& what, size_t count) const {
+    if (!v.is_array() || (count && v.size() != count))
+      fail(source_, ": \"", what, "\" must be an array of ", count, " numbers, not ", v.dump());
+    std::vector<double> out;
+    for (const json& x : v) {
+      if (!x.is_number() || !std::isfinite(x.get<double>()))
+        fail(source_, ": \"", what, "\" must hold finite numbers, not ", x.dump());
+      out.push_back(x.get<double>());
+    }
+    return out;
+  }
+  vec3d triple(const json& v, const std::string& what) const {
+    const std::vector<double> n = numbers(v, what, 3);
+    return {n[0], n[1], n[2]};
+  }
+  bool vec3(const char* k, vec3d& out) const {
+    const json* v = find(k);
+    if (!v) return false;
+    const std::vector<double> n = numbers(*v, key(k), 3);
+    out = {n[0], n[1], n[2]};
+    return true;
+  }
+  bool color(const char* k, vec3f& linear) const {
+    vec3d c;
+    if (!vec3(k, c)) return false;
+    for (int a = 0; a < 3; ++a)
+      if (!(c[a] >= 0.0 && c[a] <= 1.0)) fail(source_, ": \"", key(k), "\" components must lie in [0, 1] (sRGB)");
+    linear = srgbToLinear(vec3f(c));
+    return true;
+  }
+  template <typename E> bool choice(const char* k, E& out, std::initializer_list<std::pair<const char*, E>> choices) const {
+    std::string v;
+    if (!string(k, v)) return false;
+    std::string names;
+    for (const auto& [name, e] : choices) {
+      if (v == name) {
+        out = e;
+        return true;
+      }
+      names += (names.empty() ? "" : ", ") + std::string(name);
+    }
+    fail(source_, ": \"", key(k), "\" is '", v, "' (choose from: ", names, ")");
+  }
+  Reader child(const char* k) const { return Reader(*find(k), source_, key(k)); }
+
+private:
+  const json& j_;
+  std::string source_, path_;
+};
+
+TransferFunction readTf(const Reader& r, const char* k, const TransferFunction& fallback) {
+  const json* v = r.find(k);
+  if (!v) return fallback;
+  return transferFunctionFromJson(*v, r.source() + ": \"" + r.key(k) + "\"");
+}
+
+} // namespace
+
+std::string writeSceneJson(const SceneDocument& doc) {
+  const Scene& s = doc.scene;
+  const Frame& f = doc.frame;
+  json j = json::object();
+  if (!doc.input.empty()) j["input"] = doc.input;
+  const Camera& c = f.camera;
+  j["camera"] = {{"position", vec(c.position)}, {"look_at", vec(c.lookAt)}, {"up", vec(c.up)},
+                 {"fov", c.fovy},           {"orthographic", c.orthographic}, {"ortho_height", c.orthoHeight}};
+  j["frame"] = {{"width", f.width}, {"height", f.height}, {"samples_per_pixel", f.samplesPerPixel},
+                {"rate", f.rate},   {"jitter", f.jitter}, {"seed", f.seed}};
+  json layers = json::array();
+  for (const VolumeLayer& l : s.layers)
+    layers.push_back({{"field", l.field}, {"transfer_function", transferFunctionToJson(l.tf)}});
+  j["layers"] = layers;
+  j["volume"] = s.volume;
+  json iso = {{"field", s.iso.field}, {"values", s.iso.values}};
+  json isoColors = json::array();
+  for (const vec3f& col : s.iso.colors) isoColors.push_back(srgb(col));
+  iso["colors"] = isoColors;
+  iso["color_field"] = s.iso.colorField;
+  iso["color_map"] = transferFunctionToJson(s.iso.colorTf);
+  j["iso"] = iso;
+  json meshes = json::array();
+  for (const SceneMesh& m : s.meshes) {
+    json jm = {{"color", srgb(m.color)}};
+    if (!m.source.empty()) {
+      jm["file"] = m.source;
+    } else if (m.mesh) {
+      json verts = json::array(), tris = json::array();
+      for (const vec3f& v : m.mesh->vertices) verts.push_back(vec(v));
+      for (const vec3i& t : m.mesh->triangles) tris.push_back({t.x, t.y, t.z});
+      jm["vertices"] = verts;
+      jm["triangles"] = tris;
+    }
+    meshes.push_back(jm);
+  }
+  j["meshes"] = meshes;
+  json planes = json::array();
+  for (const ClipPlane& p : s.clip.planes) planes.push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
+  j["clip"] = {{"planes", planes}, {"meshes", s.clip.meshes}};
+  if (!s.clip.box.empty())
+    j["clip"]["box"] = {s.clip.box.lower.x, s.clip.box.lower.y, s.clip.box.lower.z,
+                        s.clip.box.upper.x, s.clip.box.upper.y, s.clip.box.upper.z};
+  j["light"] = {{"headlight", s.light.headlight}, {"direction", vec(s.light.direction)},
+                {"ambient", s.light.terms.ambient}, {"diffuse", s.light.terms.diffuse},
+                {"specular", s.light.terms.specular}, {"shininess", s.light.terms.shininess}};
+  j["shading"] = shadingName(s.shading);
+  j["ambient_occlusion"] = {{"rays", s.ao.rays}, {"length", s.ao.length}, {"volume", s.ao.volume}};
+  const Integration& in = s.integration;
+  j["integration"] = {
+      {"sampling", in.sampling == Sampling::Adaptive ? "adaptive" : "fixed"},
+      {"reconstruction", in.reconstruction == Reconstruction::Regions ? "regions" : "cells"},
+      {"traversal", in.autoTraversal ? "auto" : (in.traversal == TraversalKind::KdTree ? "kd" : "embree")},
+      {"embree_below_visible_fraction", in.embreeBelowVisibleFraction},
+      {"space_skipping", in.spaceSkipping},
+      {"early_termination", in.earlyTermination},
+      {"termination_opacity", in.terminationOpacity}};
+  j["debug"] = debugName(s.debug);
+  j["background"] = srgb(s.background);
+  j["alpha"] = s.keepAlpha;
+  return j.dump(2) + "\n";
+}
+
+SceneDocument readSceneJson(const std::string& text, const std::string& source) {
+  json j;
+  try {
+    j = json::parse(text);
+  } catch (const json::exception& e) {
+    std::string m = e.what();
+    if (const size_t p = m.find("] "); m.rfind("[json.exception.", 0) == 0 && p != std::string::npos) m = m.substr(p + 2);
+    fail(source, ": invalid JSON: ", m);
+  }
+  SceneDocument doc;
+  Scene& s = doc.scene;
+  Frame& f = doc.frame;
+  const Reader r(j, source, "");
+  r.only({"input", "camera", "frame", "layers", "volume", "iso", "meshes", "clip", "light", "shading",
+          "ambient_occlusion", "integration", "debug", "background", "alpha"});
+  r.string("input", doc.input);
+  if (r.find("camera")) {
+    const Reader c = r.child("camera");
+    c.only({"position", "look_at", "up", "fov", "orthographic", "ortho_height"});
+    Camera& cam = f.camera;
+    doc.hasCamera = c.vec3("position", cam.position);
+    c.vec3("look_at", cam.lookAt);
+    c.vec3("up", cam.up);
+    c.number("fov", cam.fovy);
+    c.boolean("orthographic", cam.orthographic);
+    c.number("ortho_height", cam.orthoHeight);
+    if (!doc.hasCamera) fail(source, ": \"camera\" needs a \"position\"");
+  }
+  if (r.find("frame")) {
+    const Reader c = r.child("frame");
+    c.only({"width", "height", "samples_per_pixel", "rate", "jitter", "seed", "frame_index"});
+    c.number("width", f.width);
+    c.number("height", f.height);
+    c.number("samples_per_pixel", f.samplesPerPixel);
+    c.number("frame_index", f.frameIndex);
+    c.number("rate", f.rate);
+    c.boolean("jitter", f.jitter);
+    c.number("seed", f.seed);
+  }
+  if (const json* layers = r.find("layers")) {
+    if (!layers->is_array()) fail(source, ": \"layers\" must be an array of {\"field\", \"transfer_function\"}");
+    s.layers.clear();
+    for (size_t i = 0; i < layers->size(); ++i) {
+      const Reader l((*layers)[i], source, "layers[" + std::to_string(i) + "]");
+      l.only({"field", "transfer_function"});
+      VolumeLayer layer;
+      l.string("field", layer.field);
+      layer.tf = readTf(l, "transfer_function", layer.tf);
+      s.layers.push_back(layer);
+    }
+  }
+  r.boolean("volume", s.volume);
+  if (r.find("iso")) {
+    const Reader c = r.child("iso");
+    c.only({"field", "values", "colors", "color_field", "color_map"});
+    c.string("field", s.iso.field);
+    if (const json* v = c.find("values"))
+      for (double d : c.numbers(*v, c.key("values"), 0)) s.iso.values.push_back(float(d));
+    if (const json* v = c.find("colors")) {
+      if (!v->is_array()) fail(source, ": \"iso.colors\" must be an array of [r, g, b] (sRGB)");
+      for (const json& col : *v) {
+        const std::vector<double> n = c.numbers(col, c.key("colors"), 3);
+        for (double x : n)
+          if (!(x >= 0.0 && x <= 1.0)) fail(source, ": \"iso.colors\" components must lie in [0, 1] (sRGB)");
+        s.iso.colors.push_back(srgbToLinear(vec3f(float(n[0]), float(n[1]), float(n[2]))));
+      }
+    }
+    c.string("color_field", s.iso.colorField);
+    s.iso.colorTf = readTf(c, "color_map", s.iso.colorTf);
+  }
+  if (const json* meshes = r.find("meshes")) {
+    if (!meshes->is_array()) fail(source, ": \"meshes\" must be an array");
+    for (size_t i = 0; i < meshes->size(); ++i) {
+      const Reader m((*meshes)[i], source, "meshes[" + std::to_string(i) + "]");
+      m.only({"file", "color", "vertices", "triangles"});
+      SceneMesh sm;
+      m.color("color", sm.color);
+      if (m.string("file", sm.source)) {
+        sm.mesh = std::make_shared<TriangleMesh>(readMesh(sm.source));
+      } else {
+        const json* v = m.find("vertices");
+        const json* t = m.find("triangles");
+        if (!v || !t || !v->is_array() || !t->is_array())
+          fail(source, ": \"", m.key("file"), "\" or \"vertices\" and \"triangles\" arrays are needed");
+        auto mesh = std::make_shared<TriangleMesh>();
+        for (const json& x : *v) mesh->vertices.push_back(vec3f(m.triple(x, m.key("vertices"))));
+        for (const json& x : *t) {
+          const vec3d idx = m.triple(x, m.key("triangles"));
+          mesh->triangles.push_back(vec3i(int(idx.x), int(idx.y), int(idx.z)));
+        }
+        sm.mesh = mesh;
+      }
+      s.meshes.push_back(sm);
+    }
+  }
+  if (r.find("clip")) {
+    const Reader c = r.child("clip");
+    c.only({"planes", "box", "meshes"});
+    if (const json* planes = c.find("planes")) {
+      if (!planes->is_array()) fail(source, ": \"clip.planes\" must be an array of {\"point\", \"normal\"}");
+      for (size_t i = 0; i < planes->size(); ++i) {
+        const Reader p((*planes)[i], source, "clip.planes[" + std::to_string(i) + "]");
+        p.only({"point", "normal"});
+        ClipPlane cp;
+        if (!p.vec3("point", cp.point) || !p.vec3("normal", cp.normal))
+          fail(source, ": \"clip.planes[", i, "]\" needs \"point\" and \"normal\"");
+        s.clip.planes.push_back(cp);
+      }
+    }
+    if (const json* b = c.find("box"); b && !b->is_null()) {
+      const std::vector<double> n = c.numbers(*b, "clip.box", 6);
+      if (!(n[0] < n[3] && n[1] < n[4] && n[2] < n[5]))
+        fail(source, ": \"clip.box\" needs its lower corner below its upper one");
+      s.clip.box = box3d(vec3d(n[0], n[1], n[2]), vec3d(n[3], n[4], n[5]));
+    }
+    c.boolean("meshes", s.clip.meshes);
+  }
+  if (r.find("light")) {
+    const Reader c = r.child("light");
+    c.only({"headlight", "direction", "ambient", "diffuse", "specular", "shininess"});
+    c.boolean("headlight", s.light.headlight);
+    vec3d d;
+    if (c.vec3("direction", d)) s.light.direction = vec3f(d);
+    c.number("ambient", s.light.terms.ambient);
+    c.number("diffuse", s.light.terms.diffuse);
+    c.number("specular", s.light.terms.specular);
+    c.number("shininess", s.light.terms.shininess);
+  }
+  r.choice<Shading>("shading", s.shading,
+                    {{"analytic", Shading::Analytic}, {"central", Shading::Central},
+                     {"clamped", Shading::ClampedCentral}, {"none", Shading::None}});
+  if (r.find("ambient_occlusion")) {
+    const Reader c = r.child("ambient_occlusion");
+    c.only({"rays", "length", "volume"});
+    c.number("rays", s.ao.rays);
+    c.number("length", s.ao.length);
+    c.boolean("volume", s.ao.volume);
+  }
+  if (r.find("integration")) {
+    const Reader c = r.child("integration");
+    c.only({"sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
+            "early_termination", "termination_opacity"});
+    Integration& in = s.integration;
+    c.choice<Sampling>("sampling", in.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
+    c.choice<Reconstruction>("reconstruction", in.reconstruction,
+                             {{"regions", Reconstruction::Regions}, {"cells", Reconstruction::CellLocation}});
+    std::string t;
+    if (c.string("traversal", t)) {
+      in.autoTraversal = t == "auto";
+      if (!in.autoTraversal)
+        c.choice<TraversalKind>("traversal", in.traversal, {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
+    }
+    c.number("embree_below_visible_fraction", in.embreeBelowVisibleFraction);
+    c.boolean("space_skipping", in.spaceSkipping);
+    c.boolean("early_termination", in.earlyTermination);
+    c.number("termination_opacity", in.terminationOpacity);
+  }
+  r.choice<DebugView>("debug", s.debug,
+                      {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},
+                       {"region", DebugView::Region}, {"steps", DebugView::Steps}});
+  r.color("background", s.background);
+  r.boolean("alpha", s.keepAlpha);
+  try {
+    s.validate();
+    if (doc.hasCamera || r.find("frame")) f.validate();
+  } catch (const Error& e) {
+    fail(source, ": ", e.what());
+  }
+  return doc;
+}
+
+SceneDocument readSceneFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) fail(path, ": cannot open: ", std::strerror(errno));
+  std::ostringstream text;
+  text << in.rdbuf();
+  return readSceneJson(text.str(), path);
+}
+
+} // namespace exa
