@@ -9,7 +9,7 @@ namespace exa {
 /// Four floats: an RGBA colour (premultiplied where an image says so) or any 4-vector.
 struct vec4f {
   float x = 0, y = 0, z = 0, w = 0;
-  EXA_HOST_DEVICE constexpr vec4f() = default;
+  constexpr vec4f() = default;
   EXA_HOST_DEVICE constexpr vec4f(float x_, float y_, float z_, float w_) : x(x_), y(y_), z(z_), w(w_) {}
   EXA_HOST_DEVICE constexpr vec4f(const vec3f& c, float w_) : x(c.x), y(c.y), z(c.z), w(w_) {}
   EXA_HOST_DEVICE constexpr vec3f rgb() const { return {x, y, z}; }

@@ -20,7 +20,7 @@ namespace exa {
 
 template <typename T> struct vec3 {
   T x{}, y{}, z{};
-  EXA_HOST_DEVICE constexpr vec3() = default;
+  constexpr vec3() = default;
   EXA_HOST_DEVICE constexpr explicit vec3(T s) : x(s), y(s), z(s) {}
   EXA_HOST_DEVICE constexpr vec3(T x_, T y_, T z_) : x(x_), y(y_), z(z_) {}
   template <typename U>
@@ -98,7 +98,7 @@ template <typename T> EXA_HOST_DEVICE constexpr int argMax(const vec3<T>& a) {
 template <typename T> struct box3 {
   vec3<T> lower{std::numeric_limits<T>::max()};
   vec3<T> upper{std::numeric_limits<T>::lowest()};
-  EXA_HOST_DEVICE constexpr box3() = default;
+  constexpr box3() = default;
   EXA_HOST_DEVICE constexpr box3(const vec3<T>& lo, const vec3<T>& hi) : lower(lo), upper(hi) {}
   EXA_HOST_DEVICE constexpr bool empty() const {
     return !(lower.x < upper.x && lower.y < upper.y && lower.z < upper.z);

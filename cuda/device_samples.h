@@ -1,0 +1,24 @@
+// Inputs of the device check: views of one field, its region tree and a transfer-function
+// table, all in memory the device can read.
+#pragma once
+
+#include "exabricks/accel/traversal.h"
+#include "exabricks/amr/basis.h"
+#include "exabricks/render/sample_math.h"
+
+namespace exa {
+
+struct DeviceRayInputs {
+  FieldView field;
+  RegionTreeView tree;
+  TfTableView table;
+  ShadingTerms shading;
+  float dt = 0.5f;
+  float invReferenceWidth = 1.f;
+  float isoValue = 0.5f;
+};
+
+/// The same rays on the host, for comparison.
+void integrateRaysHost(const DeviceRayInputs& in, const Ray* rays, int count, vec4f* colors, float* isoT);
+
+} // namespace exa
