@@ -195,6 +195,50 @@ TEST(Amrex, FixtureBothPrecisionsByteOrdersAndGhostCells) {
   }
 }
 
+TEST(Amrex, ABoxReadsOnlyTheCellsThatOverlapIt) {
+  Fixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "amrex-box";
+  f.write();
+  const CellSet all = readAmrex(f.dir.string());
+  for (const box3i& box : {box3i(vec3i(0), vec3i(4)), box3i(vec3i(5, 5, 5), vec3i(6, 6, 6)),
+                           box3i(vec3i(-100), vec3i(100)), box3i(vec3i(100), vec3i(101))}) {
+    CellSet cropped = all;
+    cropCells(cropped, box);
+    const CellSet part = readAmrex(f.dir.string(), {}, box);
+    // The reader skips whole boxes; what it returns holds every overlapping cell.
+    CellSet partCropped = part;
+    cropCells(partCropped, box);
+    EXPECT_EQ(partCropped.cells, cropped.cells);
+    EXPECT_EQ(partCropped.fields[1].values, cropped.fields[1].values);
+    // Through the registry the result is cropped exactly; no cell at all is an error.
+    LoadOptions o;
+    o.box = box;
+    if (cropped.cells.empty())
+      EXPECT_THROW(loadCells(f.dir.string(), o), Error);
+    else
+      EXPECT_EQ(loadCells(f.dir.string(), o).cells, cropped.cells);
+  }
+  // The box (0,0,0)-(4,4,4) lies in the coarse level only: the fine box's data is not read.
+  const CellSet coarseOnly = readAmrex(f.dir.string(), {}, box3i(vec3i(0), vec3i(4)));
+  for (const Cell& c : coarseOnly.cells) EXPECT_EQ(c.level, 2);
+}
+
+TEST(Amrex, TheRegistryNamesEveryFormatOnce) {
+  std::vector<InputKind> kinds;
+  for (const FormatReader& r : formatReaders()) {
+    EXPECT_TRUE(std::find(kinds.begin(), kinds.end(), r.kind) == kinds.end()) << r.name;
+    kinds.push_back(r.kind);
+  }
+  EXPECT_EQ(kinds.size(), 8u);
+  Fixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "amrex-registry";
+  f.write();
+  const FormatReader* r = findReader(f.dir.string());
+  ASSERT_NE(r, nullptr);
+  EXPECT_EQ(r->kind, InputKind::Amrex);
+  EXPECT_EQ(r->listFields(f.dir.string()), listAmrexFields(f.dir.string()));
+}
+
 TEST(Amrex, BadPlotfilesAreRejectedClearly) {
   Fixture f;
   f.dir = fs::path(EXABRICKS_TEST_TMP) / "amrex-bad";

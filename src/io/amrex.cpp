@@ -3,6 +3,9 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
+#include "byte_order.h"
+#include "patches.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -220,7 +223,8 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
   if (!((bits == 64 && bytes == 8) || (bits == 32 && bytes == 4)))
     fail(file, ": offset ", offset, ": unsupported real format (", bits, " bits)");
   if (v.size() < orderAt + 1 + size_t(bytes) + 10) fail(file, ": offset ", offset, ": corrupt FAB header");
-  const bool little = v[orderAt + 1] == bytes;
+  // The byte order lists byte positions: (8 7 ... 1), the highest first, is little-endian.
+  const bool swap = io::needsSwap(v[orderAt + 1] != bytes);
   const size_t boxAt = orderAt + 1 + size_t(bytes);
   const IndexBox stored{vec3l(v[boxAt], v[boxAt + 1], v[boxAt + 2]), vec3l(v[boxAt + 3], v[boxAt + 4], v[boxAt + 5])};
   const int64_t ncomp = v[boxAt + 9];
@@ -241,24 +245,12 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
     for (int64_t z = nghost; z < n.z - nghost; ++z)
       for (int64_t y = nghost; y < n.y - nghost; ++y)
         for (int64_t x = nghost; x < n.x - nghost; ++x) {
-          const char* p = raw.data() + ((z * n.y + y) * n.x + x) * bytes;
-          unsigned char b[8];
-          std::memcpy(b, p, size_t(bytes));
-          if (!little)
-            for (int64_t i = 0; i < bytes / 2; ++i) std::swap(b[i], b[bytes - 1 - i]);
-          double value;
-          if (bytes == 8) {
-            std::memcpy(&value, b, 8);
-          } else {
-            float f;
-            std::memcpy(&f, b, 4);
-            value = f;
-          }
-          if (!std::isfinite(value) || std::abs(value) > 3.4028234e38)
-            fail(file, ": offset ", offset, ": component '", names[size_t(c)], "' at index (",
-                 valid.lo.x + x - nghost, ",", valid.lo.y + y - nghost, ",", valid.lo.z + z - nghost, ") is ",
-                 value, ": not a finite float32");
-          dst.push_back(float(value));
+          const auto* p = reinterpret_cast<const unsigned char*>(raw.data() + ((z * n.y + y) * n.x + x) * bytes);
+          const double value = bytes == 8 ? io::loadScalar<double>(p, swap) : double(io::loadScalar<float>(p, swap));
+          dst.push_back(io::toFloat32(value, [&] {
+            return strCat(file, ": offset ", offset, ": component '", names[size_t(c)], "' at index (",
+                          valid.lo.x + x - nghost, ",", valid.lo.y + y - nghost, ",", valid.lo.z + z - nghost, ")");
+          }));
         }
   }
 }
@@ -275,7 +267,7 @@ bool isAmrexPlotfile(const std::string& path) {
 
 std::vector<std::string> listAmrexFields(const std::string& path) { return readHeader(path).names; }
 
-CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted) {
+CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted, const box3i& box) {
   const Plotfile pf = readHeader(path);
   std::vector<int> components;
   std::vector<std::string> names = wanted.empty() ? pf.names : wanted;
@@ -302,50 +294,31 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
   for (const LevelData& ld : levels) totalBoxes += ld.boxes.size();
   Progress progress("reading " + path, totalBoxes);
 
-  for (int l = 0; l <= pf.finestLevel; ++l) {
+  // Every box of every level on the finest lattice; a cell is a leaf unless a box of the next
+  // finer level covers it.
+  std::vector<io::Patch> patches;
+  std::vector<std::pair<int, size_t>> origin; // level and box of each patch
+  for (int l = 0; l <= pf.finestLevel; ++l)
+    for (size_t bi = 0; bi < levels[size_t(l)].boxes.size(); ++bi) {
+      const IndexBox& b = levels[size_t(l)].boxes[bi];
+      const int64_t w = width[size_t(l)];
+      patches.push_back({b.lo * w, b.hi - b.lo + vec3l(1), w});
+      origin.push_back({l, bi});
+    }
+  const io::Coverage coverage(patches, [&](size_t i) { return strCat("level ", origin[i].first, " box ", origin[i].second); });
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const auto [l, bi] = origin[i];
     const LevelData& ld = levels[size_t(l)];
-    const int64_t w = width[size_t(l)];
-    const int exaLevel = int(std::lround(std::log2(double(w))));
-    // Finer boxes coarsened to this level, sorted by lower x for a sweep.
-    std::vector<IndexBox> covers;
-    if (l < pf.finestLevel) {
-      const int64_t r = pf.ratios[size_t(l)];
-      for (const IndexBox& b : levels[size_t(l) + 1].boxes) {
-        auto down = [&](int64_t v) { return v >= 0 ? v / r : -((-v + r - 1) / r); };
-        covers.push_back({vec3l(down(b.lo.x), down(b.lo.y), down(b.lo.z)), vec3l(down(b.hi.x), down(b.hi.y), down(b.hi.z))});
-      }
-      std::sort(covers.begin(), covers.end(), [](const IndexBox& a, const IndexBox& b) { return a.lo.x < b.lo.x; });
-    }
-    for (size_t bi = 0; bi < ld.boxes.size(); ++bi) {
-      const IndexBox& box = ld.boxes[bi];
-      std::vector<std::vector<float>> values(components.size());
-      readFab(ld.files[bi], ld.offsets[bi], box, ld.nghost, components, values, pf.names);
-      // Mask of cells covered by the next finer level.
-      const vec3l n = box.hi - box.lo + vec3l(1);
-      std::vector<uint8_t> covered(size_t(n.x * n.y * n.z), 0);
-      for (const IndexBox& c : covers) {
-        if (c.lo.x > box.hi.x) break;
-        const vec3l lo = max(c.lo, box.lo), hi = min(c.hi, box.hi);
-        if (lo.x > hi.x || lo.y > hi.y || lo.z > hi.z) continue;
-        for (int64_t z = lo.z; z <= hi.z; ++z)
-          for (int64_t y = lo.y; y <= hi.y; ++y)
-            for (int64_t x = lo.x; x <= hi.x; ++x)
-              covered[size_t(((z - box.lo.z) * n.y + (y - box.lo.y)) * n.x + (x - box.lo.x))] = 1;
-      }
-      for (int64_t z = 0; z < n.z; ++z)
-        for (int64_t y = 0; y < n.y; ++y)
-          for (int64_t x = 0; x < n.x; ++x) {
-            const size_t i = size_t((z * n.y + y) * n.x + x);
-            if (covered[i]) continue;
-            const vec3l corner = (box.lo + vec3l(x, y, z)) * w;
-            for (int a = 0; a < 3; ++a)
-              if (corner[a] < -kLatticeLimit || corner[a] + w > kLatticeLimit)
-                fail(path, ": level ", l, " box ", bi, " lies outside the supported lattice range");
-            set.cells.push_back(Cell{vec3i(int32_t(corner.x), int32_t(corner.y), int32_t(corner.z)), exaLevel});
-            for (size_t k = 0; k < components.size(); ++k) set.fields[k].values.push_back(values[k][i]);
-          }
+    const vec3l lo = patches[i].lower, hi = patches[i].upper();
+    if (!box.empty() && (hi.x <= box.lower.x || hi.y <= box.lower.y || hi.z <= box.lower.z || lo.x >= box.upper.x ||
+                         lo.y >= box.upper.y || lo.z >= box.upper.z)) {
       progress.advance(1);
+      continue; // outside the requested box: its data is not read
     }
+    std::vector<std::vector<float>> values(components.size());
+    readFab(ld.files[bi], ld.offsets[bi], ld.boxes[bi], ld.nghost, components, values, pf.names);
+    io::appendLeafCells(set, patches[i], coverage.covered(i), values, strCat(path, ": level ", l, " box ", bi));
+    progress.advance(1);
   }
   progress.finish();
   // Finest index space onto the physical domain.

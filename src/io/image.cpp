@@ -3,6 +3,8 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/native.h"
 
+#include "byte_order.h"
+
 // Debian's libstb ships the stb implementations compiled into libstb.so, so only the
 // declarations are included here (no STB_*_IMPLEMENTATION).
 #include <stb/stb_image.h>
@@ -45,15 +47,14 @@ vec3f over(const vec4f& p, const vec3f& background) {
   return {p.x + rest * background.x, p.y + rest * background.y, p.z + rest * background.z};
 }
 
-uint32_t byteSwapped(uint32_t v) {
-  return (v >> 24) | ((v >> 8) & 0xff00u) | ((v << 8) & 0xff0000u) | (v << 24);
-}
-
 void appendLittleEndian(std::vector<char>& out, float f) {
-  uint32_t bits = std::bit_cast<uint32_t>(f);
-  if constexpr (std::endian::native == std::endian::big) bits = byteSwapped(bits);
+  // Bytes of the little-endian form: loading them with the host's swap rule gives them back.
+  const uint32_t bits = std::bit_cast<uint32_t>(f);
+  unsigned char host[4];
+  std::memcpy(host, &bits, 4);
+  const uint32_t le = io::loadScalar<uint32_t>(host, io::needsSwap(false));
   char b[4];
-  std::memcpy(b, &bits, 4);
+  std::memcpy(b, &le, 4);
   out.insert(out.end(), b, b + 4);
 }
 
@@ -168,12 +169,11 @@ Image readPfm(const std::string& path) {
   if (bytes.size() - pos < needed)
     fail(path, ": truncated PFM data (", bytes.size() - pos, " bytes, ", needed, " needed)");
   // The sign of the scale gives the byte order: negative little-endian, positive big-endian.
-  const bool swap = (scale < 0) != (std::endian::native == std::endian::little);
+  const bool swap = io::needsSwap(scale > 0);
   auto next = [&]() {
-    uint32_t bits;
-    std::memcpy(&bits, bytes.data() + pos, 4);
+    const float v = io::loadScalar<float>(reinterpret_cast<const unsigned char*>(bytes.data() + pos), swap);
     pos += 4;
-    return std::bit_cast<float>(swap ? byteSwapped(bits) : bits);
+    return v;
   };
   Image image{int(w), int(h)};
   for (int y = int(h) - 1; y >= 0; --y)

@@ -36,22 +36,70 @@ void selectFields(CellSet& set, const std::vector<std::string>& wanted, const st
 }
 } // namespace
 
+namespace {
+std::vector<std::string> scalarOnly(const std::string&) { return {"scalar"}; }
+bool isNativeName(const std::string& path) { return endsWith(path, ".cells"); }
+bool isGridsName(const std::string& path) { return endsWith(path, ".grids"); }
+/// Readers that recognise an input by its name only are probed after every content probe.
+bool probesByName(const FormatReader& r) { return r.kind == InputKind::Native || r.kind == InputKind::Grids; }
+} // namespace
+
+const std::vector<FormatReader>& formatReaders() {
+  static const std::vector<FormatReader> readers = {
+      {InputKind::Amrex, "AMReX plotfile", isAmrexPlotfile, listAmrexFields,
+       [](const std::string& p, const ReadRequest& r) { return readAmrex(p, r.fields, r.box); }},
+      {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
+       [](const std::string& p, const ReadRequest& r) { return readChombo(p, r.fields); }},
+      {InputKind::Flash, "FLASH HDF5 file", isFlashFile, listFlashFields,
+       [](const std::string& p, const ReadRequest& r) { return readFlash(p, r.fields); }},
+      {InputKind::Enzo, "Enzo output", isEnzoOutput, listEnzoFields,
+       [](const std::string& p, const ReadRequest& r) { return readEnzo(p, r.fields); }},
+      {InputKind::VtkAmr, "VTK overlapping AMR file", isVtkAmrFile, listVtkAmrFields,
+       [](const std::string& p, const ReadRequest& r) { return readVtkAmr(p, r.fields); }},
+      {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
+       [](const std::string& p, const ReadRequest& r) { return readRaw(p, r.raw); }},
+      {InputKind::Native, "exabricks cells", isNativeName, listNativeFields,
+       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields); }},
+      {InputKind::Grids, ".grids fixture", isGridsName, scalarOnly,
+       [](const std::string& p, const ReadRequest&) { return readGrids(p); }},
+  };
+  return readers;
+}
+
+const FormatReader* findReader(const std::string& path) {
+  for (const FormatReader& r : formatReaders())
+    if (!probesByName(r) && r.probe(path)) return &r;
+  if (isHdf5File(path))
+    fail(path, ": an HDF5 file with neither Chombo's nor FLASH's layout, or one that cannot be opened",
+         " (truncated or damaged?)");
+  for (const FormatReader& r : formatReaders())
+    if (probesByName(r) && r.probe(path)) return &r;
+  return nullptr;
+}
+
+void cropCells(CellSet& set, const box3i& box) {
+  size_t kept = 0;
+  for (size_t i = 0; i < set.cells.size(); ++i) {
+    const Cell& c = set.cells[i];
+    const int64_t w = int64_t(1) << c.level;
+    bool inside = true;
+    for (int a = 0; a < 3; ++a)
+      inside = inside && int64_t(c.lower[a]) + w > box.lower[a] && c.lower[a] < box.upper[a];
+    if (!inside) continue;
+    set.cells[kept] = c;
+    for (Field& f : set.fields) f.values[kept] = f.values[i];
+    ++kept;
+  }
+  set.cells.resize(kept);
+  for (Field& f : set.fields) f.values.resize(kept);
+}
+
 InputKind detectInput(const std::string& path) {
   if (path.empty()) return InputKind::Default;
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, ": no such file or directory");
   if (!std::filesystem::is_directory(path, ec) && isModelFile(path)) return InputKind::Model;
-  if (isAmrexPlotfile(path)) return InputKind::Amrex;
-  if (isChomboFile(path)) return InputKind::Chombo;
-  if (isFlashFile(path)) return InputKind::Flash;
-  if (isEnzoOutput(path)) return InputKind::Enzo;
-  if (isVtkAmrFile(path)) return InputKind::VtkAmr;
-  if (isRawVolume(path)) return InputKind::Raw;
-  if (isHdf5File(path))
-    fail(path, ": an HDF5 file with neither Chombo's nor FLASH's layout, or one that cannot be opened",
-         " (truncated or damaged?)");
-  if (endsWith(path, ".cells")) return InputKind::Native;
-  if (endsWith(path, ".grids")) return InputKind::Grids;
+  if (const FormatReader* r = findReader(path)) return r->kind;
   fail(path, ": unknown input format (expected an exabricks model file, NAME.cells, a .grids",
        " fixture, an AMReX plotfile directory, a Chombo or FLASH HDF5 file, an Enzo parameter file,",
        " a VTK .vthb file or a NAME_NXxNYxNZ_TYPE.raw volume)");
@@ -59,39 +107,20 @@ InputKind detectInput(const std::string& path) {
 
 CellSet loadCells(const std::string& path, const LoadOptions& options) {
   CellSet set;
-  switch (detectInput(path)) {
-  case InputKind::Default:
+  const InputKind kind = detectInput(path);
+  if (kind == InputKind::Model) fail(path, ": is a built model file; raw cells are needed here");
+  if (kind == InputKind::Default) {
     set = defaultDataset();
-    break;
-  case InputKind::Native:
-    set = readNative(path, options.fields);
-    break;
-  case InputKind::Grids:
-    set = readGrids(path);
-    break;
-  case InputKind::Amrex:
-    set = readAmrex(path, options.fields);
-    break;
-  case InputKind::Chombo:
-    set = readChombo(path, options.fields);
-    break;
-  case InputKind::Flash:
-    set = readFlash(path, options.fields);
-    break;
-  case InputKind::Enzo:
-    set = readEnzo(path, options.fields);
-    break;
-  case InputKind::VtkAmr:
-    set = readVtkAmr(path, options.fields);
-    break;
-  case InputKind::Raw:
-    set = readRaw(path, options.raw);
-    break;
-  case InputKind::Model:
-    fail(path, ": is a built model file; raw cells are needed here");
+  } else {
+    ReadRequest request;
+    request.fields = options.fields;
+    request.box = options.box;
+    request.raw = options.raw;
+    set = findReader(path)->read(path, request);
   }
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   selectFields(set, options.fields, source);
+  if (!options.box.empty()) cropCells(set, options.box);
   validateCells(set, source);
   return set;
 }
@@ -115,28 +144,9 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
 }
 
 std::vector<std::string> listFields(const std::string& path) {
-  switch (detectInput(path)) {
-  case InputKind::Native:
-    return listNativeFields(path);
-  case InputKind::Grids:
-    return {"scalar"};
-  case InputKind::Amrex:
-    return listAmrexFields(path);
-  case InputKind::Chombo:
-    return listChomboFields(path);
-  case InputKind::Flash:
-    return listFlashFields(path);
-  case InputKind::Enzo:
-    return listEnzoFields(path);
-  case InputKind::VtkAmr:
-    return listVtkAmrFields(path);
-  case InputKind::Raw:
-    return {"scalar"};
-  case InputKind::Model:
-    return readModel(path).fieldNames;
-  case InputKind::Default:
-    break;
-  }
+  const InputKind kind = detectInput(path);
+  if (kind == InputKind::Model) return readModel(path).fieldNames;
+  if (kind != InputKind::Default) return findReader(path)->listFields(path);
   std::vector<std::string> names;
   for (const Field& f : defaultDataset().fields) names.push_back(f.name);
   return names;

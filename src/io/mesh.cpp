@@ -3,6 +3,8 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/native.h"
 
+#include "byte_order.h"
+
 #include <bit>
 #include <cctype>
 #include <charconv>
@@ -374,39 +376,28 @@ void checkCounts(const std::string& path, const PlyHeader& header, size_t size) 
   }
 }
 
-template <typename T> T loadScalar(const unsigned char* p, bool swap) {
-  unsigned char bytes[sizeof(T)];
-  if (swap)
-    for (size_t i = 0; i < sizeof(T); ++i) bytes[i] = p[sizeof(T) - 1 - i];
-  else
-    std::memcpy(bytes, p, sizeof(T));
-  T v;
-  std::memcpy(&v, bytes, sizeof(T));
-  return v;
-}
-
 double loadNumber(PlyType t, const unsigned char* p, bool swap) {
   switch (t) {
-  case PlyType::Int8: return loadScalar<int8_t>(p, swap);
-  case PlyType::UInt8: return loadScalar<uint8_t>(p, swap);
-  case PlyType::Int16: return loadScalar<int16_t>(p, swap);
-  case PlyType::UInt16: return loadScalar<uint16_t>(p, swap);
-  case PlyType::Int32: return loadScalar<int32_t>(p, swap);
-  case PlyType::UInt32: return loadScalar<uint32_t>(p, swap);
-  case PlyType::Float32: return loadScalar<float>(p, swap);
-  case PlyType::Float64: return loadScalar<double>(p, swap);
+  case PlyType::Int8: return io::loadScalar<int8_t>(p, swap);
+  case PlyType::UInt8: return io::loadScalar<uint8_t>(p, swap);
+  case PlyType::Int16: return io::loadScalar<int16_t>(p, swap);
+  case PlyType::UInt16: return io::loadScalar<uint16_t>(p, swap);
+  case PlyType::Int32: return io::loadScalar<int32_t>(p, swap);
+  case PlyType::UInt32: return io::loadScalar<uint32_t>(p, swap);
+  case PlyType::Float32: return io::loadScalar<float>(p, swap);
+  case PlyType::Float64: return io::loadScalar<double>(p, swap);
   }
   return 0;
 }
 
 int64_t loadInteger(PlyType t, const unsigned char* p, bool swap) {
   switch (t) {
-  case PlyType::Int8: return loadScalar<int8_t>(p, swap);
-  case PlyType::UInt8: return loadScalar<uint8_t>(p, swap);
-  case PlyType::Int16: return loadScalar<int16_t>(p, swap);
-  case PlyType::UInt16: return loadScalar<uint16_t>(p, swap);
-  case PlyType::Int32: return loadScalar<int32_t>(p, swap);
-  case PlyType::UInt32: return loadScalar<uint32_t>(p, swap);
+  case PlyType::Int8: return io::loadScalar<int8_t>(p, swap);
+  case PlyType::UInt8: return io::loadScalar<uint8_t>(p, swap);
+  case PlyType::Int16: return io::loadScalar<int16_t>(p, swap);
+  case PlyType::UInt16: return io::loadScalar<uint16_t>(p, swap);
+  case PlyType::Int32: return io::loadScalar<int32_t>(p, swap);
+  case PlyType::UInt32: return io::loadScalar<uint32_t>(p, swap);
   default: return -1; // float types are rejected for counts and indices in the header
   }
 }
@@ -452,9 +443,7 @@ public:
     if (header_.format == PlyFormat::Ascii)
       readAscii();
     else
-      readBinary(header_.format == PlyFormat::BinaryBig
-                     ? std::endian::native != std::endian::big
-                     : std::endian::native != std::endian::little);
+      readBinary(io::needsSwap(header_.format == PlyFormat::BinaryBig));
     return std::move(mesh_);
   }
 
@@ -614,12 +603,10 @@ TriangleMesh readPly(const std::string& path, const char* data, size_t size) {
 // .tris
 
 int32_t loadInt32LE(const char* p) {
-  return loadScalar<int32_t>(reinterpret_cast<const unsigned char*>(p),
-                             std::endian::native != std::endian::little);
+  return io::loadScalar<int32_t>(reinterpret_cast<const unsigned char*>(p), io::needsSwap(false));
 }
 float loadFloatLE(const char* p) {
-  return loadScalar<float>(reinterpret_cast<const unsigned char*>(p),
-                           std::endian::native != std::endian::little);
+  return io::loadScalar<float>(reinterpret_cast<const unsigned char*>(p), io::needsSwap(false));
 }
 
 /// True when the counts chain through the whole file exactly (one mesh at least).

@@ -5,6 +5,8 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
+#include "byte_order.h"
+
 #include <zlib.h>
 
 #include <algorithm>
@@ -123,12 +125,6 @@ Encoding encodingOf(const std::string& path, const Tag& vtkFile) {
   return e;
 }
 
-uint64_t readUInt(const unsigned char* p, size_t bytes, bool bigEndian) {
-  uint64_t v = 0;
-  for (size_t i = 0; i < bytes; ++i) v |= uint64_t(p[bigEndian ? bytes - 1 - i : i]) << (8 * i);
-  return v;
-}
-
 std::string decodeBase64(const std::string& path, const std::string& what, const std::string& text, size_t& consumed,
                          size_t wantBytes) {
   static int8_t table[256];
@@ -224,7 +220,7 @@ std::string readBlock(const std::string& path, const std::string& what, BlockSou
                       uint64_t expectedBytes) {
   auto header = [&] {
     const std::string h = src.take(e.headerBytes);
-    return readUInt(reinterpret_cast<const unsigned char*>(h.data()), e.headerBytes, e.bigEndian);
+    return io::loadUnsigned(reinterpret_cast<const unsigned char*>(h.data()), e.headerBytes, e.bigEndian);
   };
   if (!e.zlib) {
     const uint64_t n = header();
@@ -266,19 +262,10 @@ size_t typeSize(const std::string& type) {
 
 double toDouble(const unsigned char* p, const std::string& type, bool bigEndian) {
   const size_t n = typeSize(type);
-  unsigned char b[8];
-  for (size_t i = 0; i < n; ++i) b[i] = p[bigEndian ? n - 1 - i : i];
-  if (type == "Float32") {
-    float f;
-    std::memcpy(&f, b, 4);
-    return f;
-  }
-  if (type == "Float64") {
-    double d;
-    std::memcpy(&d, b, 8);
-    return d;
-  }
-  const uint64_t u = readUInt(b, n, false);
+  const bool swap = io::needsSwap(bigEndian);
+  if (type == "Float32") return io::loadScalar<float>(p, swap);
+  if (type == "Float64") return io::loadScalar<double>(p, swap);
+  const uint64_t u = io::loadUnsigned(p, n, bigEndian);
   if (type[0] == 'U') return double(u);
   const int64_t s = n == 8 ? int64_t(u) : int64_t(u << (64 - 8 * n)) >> (64 - 8 * n);
   return double(s);

@@ -17,7 +17,8 @@ bool isAmrexPlotfile(const std::string& path);
 std::vector<std::string> listAmrexFields(const std::string& path);
 
 /// Reads the leaf cells of a plotfile with the requested fields (all when empty). The world
-/// transform maps the finest level's index space onto the physical domain.
-CellSet readAmrex(const std::string& path, const std::vector<std::string>& fields = {});
+/// transform maps the finest level's index space onto the physical domain. With a box (finest
+/// lattice units), the data of boxes that do not overlap it is not read.
+CellSet readAmrex(const std::string& path, const std::vector<std::string>& fields = {}, const box3i& box = {});
 
 } // namespace exa

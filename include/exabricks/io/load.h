@@ -1,10 +1,9 @@
-// Opens whatever the user names: a model file (known by its magic bytes), a native NAME.cells
-// dataset, a .grids fixture, an AMReX plotfile directory, or the embedded default dataset when
-// no input is given.
+// Opens whatever the user names: a model file (known by its magic bytes), any input a registered
+// reader recognises (io/reader.h), or the embedded default dataset when no input is given.
 #pragma once
 
 #include "exabricks/amr/model.h"
-#include "exabricks/io/raw.h"
+#include "exabricks/io/reader.h"
 
 #include <string>
 #include <vector>
@@ -15,9 +14,8 @@ struct LoadOptions {
   std::vector<std::string> fields; ///< fields to load (all when empty)
   BuildOptions build;
   RawOptions raw; ///< dimensions, type and merging of raw volumes
+  box3i box;      ///< finest-lattice box: only cells that overlap it (empty: all)
 };
-
-enum class InputKind { Default, Model, Native, Grids, Amrex, Chombo, Flash, Enzo, VtkAmr, Raw };
 
 /// Determines the kind of input; throws with the path when it is not recognised.
 InputKind detectInput(const std::string& path);

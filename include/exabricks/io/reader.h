@@ -1,0 +1,42 @@
+// The readers of simulation outputs behind one interface: each format registers how to
+// recognise an input (probe), list its fields and read selected fields, optionally only the
+// cells inside a box. io/load.h picks the reader for a path.
+#pragma once
+
+#include "exabricks/amr/cells.h"
+#include "exabricks/io/raw.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+enum class InputKind { Default, Model, Native, Grids, Amrex, Chombo, Flash, Enzo, VtkAmr, Raw };
+
+/// What a read asks for.
+struct ReadRequest {
+  std::vector<std::string> fields; ///< in this order; all when empty
+  /// Finest-lattice box; when not empty, only cells that overlap it are returned (readers that
+  /// can skip the data of whole patches outside it do so).
+  box3i box;
+  RawOptions raw;                  ///< dimensions, type and merging of raw volumes
+};
+
+struct FormatReader {
+  InputKind kind;
+  const char* name;                                          ///< "AMReX plotfile", ...
+  bool (*probe)(const std::string& path);                     ///< by content first, by name last
+  std::vector<std::string> (*listFields)(const std::string& path);
+  CellSet (*read)(const std::string& path, const ReadRequest& request);
+};
+
+/// The registered readers, in the order in which inputs are probed.
+const std::vector<FormatReader>& formatReaders();
+
+/// The reader that recognises `path`, or null.
+const FormatReader* findReader(const std::string& path);
+
+/// Keeps the cells that overlap `box` (finest lattice units), with their values.
+void cropCells(CellSet& set, const box3i& box);
+
+} // namespace exa
