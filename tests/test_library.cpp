@@ -4,6 +4,7 @@
 #include "datasets.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
+#include "exabricks/io/scene_file.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/sample_math.h"
 
@@ -415,7 +416,17 @@ TEST(Library, SceneJsonErrorsNameTheSourceAndTheKey) {
   EXPECT_NE(message("{\"camera\": {\"position\": [1, 1, 1], \"look_at\": [1, 1, 1]}}").find("degenerate camera"),
             std::string::npos);
   EXPECT_NE(message("[1, 2").find("invalid JSON"), std::string::npos);
-  EXPECT_NE(message("{\"meshes\": [{\"file\": \"/no/such/mesh.obj\"}]}").find("/no/such/mesh.obj"), std::string::npos);
+  // Meshes named by file are read by the io layer, with errors naming the file.
+  const SceneDocument named = readSceneJson("{\"meshes\": [{\"file\": \"/no/such/mesh.obj\"}]}", "view.json");
+  ASSERT_EQ(named.scene.meshes.size(), 1u);
+  EXPECT_FALSE(named.scene.meshes[0].mesh);
+  Scene withMesh = named.scene;
+  try {
+    loadSceneMeshes(withMesh, "view.json");
+    ADD_FAILURE() << "a missing mesh file must be an error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("/no/such/mesh.obj"), std::string::npos);
+  }
   // Any subset of keys is a scene; the rest keep their defaults.
   const SceneDocument d = readSceneJson("{\"iso\": {\"values\": [0.5]}}", "view.json");
   EXPECT_EQ(d.scene.iso.values, std::vector<float>{0.5f});

@@ -33,6 +33,9 @@ struct BenchOptions {
   std::string cases = "all";
   int orbit = 50;
   bool orbitStudy = false; ///< --orbit was given
+  int progressive = 0;      ///< progressive study: preview passes after a transfer-function change
+  int previewDivisor = 2;
+  float previewRate = 0.5f;
   std::string csv = "exabricks-orbit.csv";
   std::string plot = "exabricks-orbit.png";
   bool json = false;
@@ -453,6 +456,95 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
   std::printf("wrote %s and %s\n", o.csv.c_str(), o.plot.c_str());
 }
 
+/// Median of a list of seconds.
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v.empty() ? 0.0 : v[v.size() / 2];
+}
+
+/// The interactive loop: a transfer-function change, then preview passes (a fraction of the
+/// resolution, a lower rate) accumulated progressively; and the same change followed by one
+/// full-quality pass. The scene is the render command's default (early termination on,
+/// automatic traversal).
+void runProgressive(const Setup& s, const BenchOptions& o) {
+  if (o.progressive < 1 || o.progressive > 100000) fail("--progressive must be in 1..100000");
+  if (o.previewDivisor < 1 || o.previewDivisor > 64) fail("--preview-divisor must be in 1..64");
+  Scene a;
+  a.layers = s.base.layers;
+  Scene b = a; // the change: another colour map and an opacity that hides the lower half
+  b.layers[0].tf.colorMap = builtinColorMap("inferno");
+  b.layers[0].tf.opacity = {{0.f, 0.f}, {0.5f, 0.f}, {1.f, 1.f}};
+  Frame full = s.frame;
+  full.camera = Camera::frame(s.worldBox, 30.0, 25.0, 40.0, false);
+  Frame preview = full.preview(o.previewDivisor, o.previewRate);
+  preview.samplesPerPixel = o.progressive; // the target: passes are jittered
+  Renderer renderer(s.model);
+  FrameBuffer previewBuffer(preview.width, preview.height), fullBuffer(full.width, full.height);
+
+  // Warm-up with the first scene, then time the change and the passes after it.
+  renderer.setScene(a);
+  renderer.renderPass(preview, previewBuffer);
+  renderer.renderPass(full, fullBuffer);
+  const int rounds = std::max(3, o.frames);
+  std::vector<double> changeSeconds, firstPreview, passSeconds, fullSeconds, fullChange;
+  uint64_t previewSamples = 0;
+  for (int round = 0; round < rounds; ++round) {
+    renderer.setScene(a);
+    Timer change;
+    const SceneUpdate u = renderer.setScene(b);
+    changeSeconds.push_back(u.seconds());
+    previewBuffer.clear();
+    for (int i = 0; i < o.progressive; ++i) {
+      preview.frameIndex = i;
+      Timer pass;
+      renderer.renderPass(preview, previewBuffer);
+      passSeconds.push_back(pass.seconds());
+      if (i == 0) firstPreview.push_back(change.seconds());
+    }
+    previewSamples = previewBuffer.stats().samples;
+    renderer.setScene(a);
+    Timer fullChangeTimer;
+    renderer.setScene(b);
+    fullBuffer.clear();
+    Timer fullPass;
+    renderer.renderPass(full, fullBuffer);
+    fullSeconds.push_back(fullPass.seconds());
+    fullChange.push_back(fullChangeTimer.seconds());
+  }
+  nlohmann::json j = describe(s, o);
+  j["preview_width"] = preview.width;
+  j["preview_height"] = preview.height;
+  j["preview_rate"] = preview.rate;
+  j["passes"] = o.progressive;
+  j["rounds"] = rounds;
+  j["change_seconds"] = median(changeSeconds);
+  j["first_preview_after_change_seconds"] = median(firstPreview);
+  j["preview_pass_seconds"] = median(passSeconds);
+  j["preview_samples_per_pass"] = double(previewSamples) / double(o.progressive);
+  j["full_pass_seconds"] = median(fullSeconds);
+  j["full_frame_after_change_seconds"] = median(fullChange);
+  j["traversal"] = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+  j["visible_regions"] = renderer.visibleRegions();
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("progressive passes on %s: preview %dx%d at rate %.2f, full %dx%d (%d threads, median of %d rounds)\n",
+              o.in.name().c_str(), preview.width, preview.height, double(preview.rate), full.width, full.height,
+              tbbThreads(), rounds);
+  std::printf("load average (1 min): %.2f at the start, %.2f at the end\n", j["load_average_at_start"].get<double>(),
+              j["load_average_at_end"].get<double>());
+  std::printf("transfer-function change          %8.2f ms (%zu of %zu regions visible, %s traversal)\n",
+              1e3 * median(changeSeconds), renderer.visibleRegions(), s.model.regions.regions.size(),
+              j["traversal"].get<std::string>().c_str());
+  std::printf("first preview after the change     %8.2f ms\n", 1e3 * median(firstPreview));
+  std::printf("preview pass (of %d)               %8.2f ms, %.0f samples\n", o.progressive, 1e3 * median(passSeconds),
+              double(previewSamples) / double(o.progressive));
+  std::printf("full-quality pass                  %8.2f ms\n", 1e3 * median(fullSeconds));
+  std::printf("full frame after the change        %8.2f ms (%.1fx the first preview)\n", 1e3 * median(fullChange),
+              median(fullChange) / std::max(1e-9, median(firstPreview)));
+}
+
 void run(const BenchOptions& o) {
   Setup s;
   parseSize(o.size, s.frame.width, s.frame.height);
@@ -469,7 +561,9 @@ void run(const BenchOptions& o) {
   s.base.layers = {VolumeLayer{s.model.fieldNames[size_t(s.field)], defaultTransferFunction()}};
   const box3i cb = s.model.cellBounds();
   s.worldBox = box3d(s.model.world.toWorld(vec3d(cb.lower)), s.model.world.toWorld(vec3d(cb.upper)));
-  if (o.orbitStudy)
+  if (o.progressive > 0)
+    runProgressive(s, o);
+  else if (o.orbitStudy)
     runOrbit(s, o);
   else
     runCases(s, o);
@@ -488,6 +582,11 @@ void addBench(CLI::App& app) {
   CLI::Option* orbit = cmd->add_option("--orbit", o->orbit, "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
       ->expected(0, 1)
       ->default_str("50");
+  cmd->add_option("--progressive", o->progressive,
+                  "Progressive study instead of the cases: N preview passes after a transfer-function change");
+  cmd->add_option("--preview-divisor", o->previewDivisor, "Progressive study: preview resolution divisor")
+      ->capture_default_str();
+  cmd->add_option("--preview-rate", o->previewRate, "Progressive study: preview sampling rate")->capture_default_str();
   cmd->add_option("--csv", o->csv, "Orbit study: CSV file to write")->capture_default_str();
   cmd->add_option("--plot", o->plot, "Orbit study: PNG plot to write")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the results as one JSON object on stdout");

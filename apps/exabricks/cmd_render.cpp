@@ -5,7 +5,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/image.h"
 #include "exabricks/io/mesh.h"
-#include "exabricks/io/native.h"
+#include "exabricks/io/scene_file.h"
 #include "exabricks/render/renderer.h"
 
 #include <algorithm>
@@ -344,8 +344,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   frame.validate();
   doc.hasCamera = true;
   if (!o.writeScene.empty()) {
-    const std::string text = writeSceneJson(doc);
-    writeFileAtomic(o.writeScene, text.data(), text.size());
+    writeSceneFile(o.writeScene, doc);
   }
 
   Renderer renderer(model);

@@ -1,16 +1,11 @@
 #include "exabricks/render/scene.h"
 
 #include "exabricks/core/error.h"
-#include "exabricks/io/mesh.h"
 
 #include "tf_json.h"
 
 #include <nlohmann/json.hpp>
 
-#include <cerrno>
-#include <cstring>
-#include <fstream>
-#include <sstream>
 
 namespace exa {
 
@@ -361,7 +356,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
       SceneMesh sm;
       m.color("color", sm.color);
       if (m.string("file", sm.source)) {
-        sm.mesh = std::make_shared<TriangleMesh>(readMesh(sm.source));
+        // Read by the caller (io/scene_file.h): the library's render layer reads no files.
       } else {
         const json* v = m.find("vertices");
         const json* t = m.find("triangles");
@@ -446,20 +441,14 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   r.color("background", s.background);
   r.boolean("alpha", s.keepAlpha);
   try {
-    s.validate();
+    Scene withoutFiles = s; // meshes named by file are checked once they are read
+    std::erase_if(withoutFiles.meshes, [](const SceneMesh& m) { return !m.mesh; });
+    withoutFiles.validate();
     if (doc.hasCamera || r.find("frame")) f.validate();
   } catch (const Error& e) {
     fail(source, ": ", e.what());
   }
   return doc;
-}
-
-SceneDocument readSceneFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, ": cannot open: ", std::strerror(errno));
-  std::ostringstream text;
-  text << in.rdbuf();
-  return readSceneJson(text.str(), path);
 }
 
 } // namespace exa

@@ -150,9 +150,8 @@ struct SceneDocument {
 /// Writes a scene document as JSON (every setting, colours in sRGB).
 std::string writeSceneJson(const SceneDocument& doc);
 /// Reads JSON written by writeSceneJson, or any subset of its keys (the rest keep their
-/// defaults); meshes named by file are read relative to the working directory. Errors name
-/// `source` and the offending key.
+/// defaults). Meshes named by file keep their `source` and no data: io/scene_file.h reads them.
+/// Errors name `source` and the offending key.
 SceneDocument readSceneJson(const std::string& text, const std::string& source);
-SceneDocument readSceneFile(const std::string& path);
 
 } // namespace exa
