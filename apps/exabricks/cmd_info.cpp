@@ -2,6 +2,8 @@
 #include "commands.h"
 #include "common.h"
 
+#include "exabricks/io/model_info.h"
+
 #include "exabricks/core/log.h"
 
 #include <cstdio>
@@ -37,39 +39,7 @@ void run(const InfoOptions& o) {
   const double perCell = s.cells ? 1.0 / double(s.cells) : 0.0;
 
   if (o.json) {
-    nlohmann::json j;
-    j["input"] = o.in.name();
-    j["cells"] = s.cells;
-    j["bricks"] = s.bricks;
-    j["single_cell_bricks"] = s.singleCellBricks;
-    j["regions"] = s.regions;
-    j["bricks_per_region_by_count"] = s.bricksPerRegionByCount;
-    j["bricks_per_region_by_volume"] = s.bricksPerRegionByVolume;
-    j["max_bricks_per_region"] = s.maxBricksPerRegion;
-    j["bounds"] = {{"lattice", {{"lower", {lattice.lower.x, lattice.lower.y, lattice.lower.z}},
-                                {"upper", {lattice.upper.x, lattice.upper.y, lattice.upper.z}}}},
-                   {"world", {{"lower", {worldLo.x, worldLo.y, worldLo.z}},
-                              {"upper", {worldHi.x, worldHi.y, worldHi.z}}}}};
-    j["world"] = {{"origin", {model.world.origin.x, model.world.origin.y, model.world.origin.z}},
-                  {"scale", {model.world.scale.x, model.world.scale.y, model.world.scale.z}}};
-    nlohmann::json levels = nlohmann::json::array();
-    for (const auto& l : s.levels)
-      levels.push_back({{"level", l.level}, {"cell_width", 1 << l.level}, {"cells", l.cells},
-                        {"bricks", l.bricks}});
-    j["levels"] = levels;
-    nlohmann::json fields = nlohmann::json::array();
-    for (size_t f = 0; f < model.fieldNames.size(); ++f)
-      fields.push_back({{"name", model.fieldNames[f]}, {"range", toJson(s.fieldRanges[f])}});
-    j["fields"] = fields;
-    j["memory_bytes"] = {{"bricks", s.brickBytes},
-                         {"regions", s.regionBytes},
-                         {"values", s.valueBytes},
-                         {"structures_per_cell", double(s.brickBytes + s.regionBytes) * perCell}};
-    j["build_seconds"] = {{"bricks", model.stats.brickSeconds},
-                          {"regions", model.stats.regionSeconds},
-                          {"value_ranges", model.stats.rangeSeconds},
-                          {"load_total", loadSeconds}};
-    std::cout << j.dump(2) << "\n";
+    std::cout << modelInfoJson(model, o.in.name(), loadSeconds) << "\n";
     return;
   }
 

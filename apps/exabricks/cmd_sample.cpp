@@ -22,7 +22,6 @@ struct SampleOptions {
 void run(const SampleOptions& o) {
   const Model model = loadModel(o.in.input, o.in.loadOptions(true));
   const int field = model.requireField(o.in.field);
-  const FieldView view = model.view(field);
 
   std::ifstream file;
   std::istream* in = &std::cin;
@@ -45,12 +44,9 @@ void run(const SampleOptions& o) {
     std::string rest;
     if (!(ls >> w[1] >> w[2]) || (ls >> rest))
       fail(source, ": line ", lineNo, ": expected three numbers 'x y z'");
-    const vec3d p = model.world.toLattice(vec3d(w[0], w[1], w[2]));
     double value;
-    vec3d grad;
-    if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) &&
-        sampleField(view, p, value, &grad)) {
-      const vec3d g = grad / model.world.scale; // per world unit
+    vec3d g;
+    if (model.sampleWorld(field, vec3d(w[0], w[1], w[2]), value, g)) {
       std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %.9g\n", value, g.x, g.y, g.z);
       out += buffer;
     } else {

@@ -3,6 +3,8 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
+#include <cmath>
+
 namespace exa {
 
 uint64_t Model::cellCount() const {
@@ -118,6 +120,15 @@ Model buildModel(CellSet&& cells, const BuildOptions& options) {
   logInfo(strCat("built ", model.regions.regions.size(), " regions in ",
                  model.stats.regionSeconds + model.stats.rangeSeconds, " s"));
   return model;
+}
+
+bool Model::sampleWorld(int field, const vec3d& position, double& value, vec3d& gradient) const {
+  const vec3d p = world.toLattice(position);
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return false;
+  vec3d g;
+  if (!sampleField(view(field), p, value, &g)) return false;
+  gradient = g / world.scale; // per world unit
+  return true;
 }
 
 } // namespace exa

@@ -60,9 +60,8 @@ void appendLittleEndian(std::vector<char>& out, float f) {
 
 } // namespace
 
-void writePng(const std::string& path, const Image& image, bool keepAlpha,
-              const vec3f& background) {
-  checkImage(path, image);
+std::vector<unsigned char> encodePng(const Image& image, bool keepAlpha, const vec3f& background) {
+  checkImage("PNG image", image);
   const int channels = keepAlpha ? 4 : 3;
   std::vector<unsigned char> bytes(image.pixels.size() * size_t(channels));
   for (size_t i = 0; i < image.pixels.size(); ++i) {
@@ -86,7 +85,13 @@ void writePng(const std::string& path, const Image& image, bool keepAlpha,
   std::vector<unsigned char> png;
   if (!stbi_write_png_to_func(appendBytes, &png, image.width, image.height, channels, bytes.data(),
                               image.width * channels))
-    fail(path, ": PNG encoding failed");
+    fail("PNG encoding failed");
+  return png;
+}
+
+void writePng(const std::string& path, const Image& image, bool keepAlpha, const vec3f& background) {
+  checkImage(path, image);
+  const std::vector<unsigned char> png = encodePng(image, keepAlpha, background);
   writeFileAtomic(path, png.data(), png.size());
 }
 

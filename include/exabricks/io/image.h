@@ -9,6 +9,9 @@
 
 namespace exa {
 
+/// An 8-bit sRGB PNG in memory, as writePng writes it.
+std::vector<unsigned char> encodePng(const Image& image, bool keepAlpha, const vec3f& background = vec3f(0.f));
+
 /// Writes an 8-bit sRGB PNG atomically. With keepAlpha the PNG has an alpha channel
 /// (un-premultiplied colour); otherwise pixels are composited over `background` (linear RGB).
 void writePng(const std::string& path, const Image& image, bool keepAlpha,

@@ -81,7 +81,7 @@ EXA_HOST_DEVICE inline bool tfMayBeVisible(const TfTableView& t, const range1f& 
   return false;
 }
 
-/// 2^x for x <= 0 to float precision (relative error below 2e-7): a degree-6 Taylor
+/// 2^x for x <= 0 to float precision (relative error below 2.5e-7): a degree-6 Taylor
 /// polynomial of 2^f on [-1/2, 1/2] times 2^i built from the exponent bits. Cheaper than a libm
 /// call on the hot path of every sample's opacity correction.
 EXA_HOST_DEVICE inline float exp2Negative(float x) {

@@ -1,0 +1,16 @@
+// The description of a built model as JSON: what `exabricks info --json` prints and what the
+// Python module's Dataset.info() returns.
+#pragma once
+
+#include "exabricks/amr/model.h"
+
+#include <string>
+
+namespace exa {
+
+/// Cells, bricks and regions (per level), bounds (lattice and world), the world transform,
+/// fields with their ranges, memory per structure and build times; `loadSeconds` is the total
+/// time to load and build, as the caller measured it.
+std::string modelInfoJson(const Model& model, const std::string& input, double loadSeconds);
+
+} // namespace exa
