@@ -1,0 +1,81 @@
+"""An interactive view of a Scene in Jupyter (ipywidgets): orbit, transfer-function range and
+opacity scale, iso-value. Every change renders a cheap preview at once; a background thread then
+refines the full-resolution image pass by pass until the target is reached or the next change."""
+
+import threading
+
+import numpy as np
+
+
+class SceneWidget:
+    def __init__(self, scene, width=512, height=512, preview=4, passes=16):
+        import ipywidgets as w
+
+        self.scene = scene
+        self.width, self.height = int(width), int(height)
+        self.preview = max(1, int(preview))
+        self.passes = max(1, int(passes))
+        self._generation = 0
+        self._lock = threading.Lock()
+        self._thread = None
+        field = scene.field
+        info = scene.dataset.info()
+        rng = next((f["range"] for f in info["fields"] if f["name"] == field), {"min": 0.0, "max": 1.0})
+        lo, hi = float(rng["min"] or 0.0), float(rng["max"] or 1.0)
+        if not hi > lo:
+            hi = lo + 1.0
+        step = (hi - lo) / 200.0
+        self.image = w.Image(format="png", width=self.width, height=self.height)
+        self.azimuth = w.FloatSlider(value=30.0, min=-180.0, max=180.0, step=1.0, description="azimuth")
+        self.elevation = w.FloatSlider(value=25.0, min=-89.0, max=89.0, step=1.0, description="elevation")
+        self.range = w.FloatRangeSlider(value=[lo, hi], min=lo, max=hi, step=step, description="range")
+        self.opacity = w.FloatSlider(value=0.0, min=-2.0, max=2.0, step=0.05, description="log10 opacity×")
+        self.iso = w.FloatSlider(value=0.5 * (lo + hi), min=lo, max=hi, step=step, description="iso-value")
+        self.iso_on = w.Checkbox(value=False, description="iso-surface")
+        self.status = w.Label()
+        for control in (self.azimuth, self.elevation, self.range, self.opacity, self.iso, self.iso_on):
+            control.observe(self._changed, names="value")
+        controls = w.VBox([self.azimuth, self.elevation, self.range, self.opacity, w.HBox([self.iso_on, self.iso]),
+                           self.status])
+        self.widget = w.HBox([self.image, controls])
+        base = scene.transfer_function.opacity_scale
+        # The slider multiplies the scale in effect ("auto": the dataset's default scale).
+        self._base_scale = scene.dataset.default_opacity_scale if base == "auto" else float(base)
+        self._changed(None)
+
+    def _apply(self):
+        s = self.scene
+        s.orbit(self.azimuth.value, self.elevation.value)
+        tf = s.transfer_function
+        tf.range = tuple(self.range.value)
+        tf.opacity_scale = self._base_scale * 10.0 ** self.opacity.value
+        s.iso_values = [self.iso.value] if self.iso_on.value else []
+
+    def _changed(self, _change):
+        with self._lock:
+            self._generation += 1
+            generation = self._generation
+            self._apply()
+            # A preview at once, at a fraction of the resolution.
+            w, h = max(1, self.width // self.preview), max(1, self.height // self.preview)
+            self.image.value = self.scene.png(w, h, 1)
+        self.status.value = "preview %dx%d" % (w, h)
+        self._thread = threading.Thread(target=self._refine, args=(generation,), daemon=True)
+        self._thread.start()
+
+    def _refine(self, generation):
+        for _ in range(self.passes):
+            with self._lock:
+                if generation != self._generation:
+                    return
+                done = self.scene.render_progressive(self.width, self.height, self.passes)
+                self.image.value = self.scene._renderer.png()
+            self.status.value = "%d of %d samples per pixel" % (done, self.passes)
+            if done >= self.passes:
+                return
+
+    def wait(self):
+        """Waits for the refinement in progress (for scripts and tests)."""
+        if self._thread is not None:
+            self._thread.join()
+        return np.asarray(self.scene.image())

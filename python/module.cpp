@@ -1,0 +1,428 @@
+// exabricks._core: the library for Python. Datasets (loaded, from numpy cells or from grids),
+// a renderer driven by the scene JSON of render/scene.h, meshes from numpy arrays, sampling and
+// the model description. The pure-Python package (python/exabricks) builds on it.
+#include "exabricks/amr/model.h"
+#include "exabricks/amr/scenes.h"
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+#include "exabricks/io/grids.h"
+#include "exabricks/io/image.h"
+#include "exabricks/io/load.h"
+#include "exabricks/io/mesh.h"
+#include "exabricks/io/model_info.h"
+#include "exabricks/io/scene_file.h"
+#include "exabricks/render/renderer.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <chrono>
+#include <cstring>
+#include <thread>
+
+namespace py = pybind11;
+using namespace exa;
+
+namespace {
+
+/// A built model, shared by every renderer made from it (they keep it alive).
+struct Dataset {
+  std::shared_ptr<const Model> model;
+  std::string name;
+  double loadSeconds = 0;
+};
+
+/// A triangle mesh made once from numpy arrays: scenes that keep it are not rebuilt.
+struct Mesh {
+  std::shared_ptr<const TriangleMesh> mesh;
+};
+
+std::shared_ptr<Dataset> makeDataset(Model&& m, std::string name, double seconds) {
+  auto d = std::make_shared<Dataset>();
+  d->model = std::make_shared<const Model>(std::move(m));
+  d->name = std::move(name);
+  d->loadSeconds = seconds;
+  return d;
+}
+
+std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::string>& fields, int maxBrickWidth,
+                              const std::vector<int>& box) {
+  LoadOptions o;
+  o.fields = fields;
+  o.build.bricks.maxBrickWidth = maxBrickWidth;
+  if (!box.empty()) {
+    if (box.size() != 6) fail("box must hold six integers x0, y0, z0, x1, y1, z1 (finest lattice units)");
+    o.box = box3i(vec3i(box[0], box[1], box[2]), vec3i(box[3], box[4], box[5]));
+  }
+  Timer t;
+  Model m;
+  {
+    py::gil_scoped_release release;
+    m = loadModel(path, o);
+  }
+  return makeDataset(std::move(m), path.empty() ? kDefaultDatasetName : path, t.seconds());
+}
+
+std::shared_ptr<Dataset> fromCells(py::array_t<int64_t, py::array::c_style | py::array::forcecast> corners,
+                                   py::array_t<int64_t, py::array::c_style | py::array::forcecast> levels,
+                                   const std::vector<std::pair<std::string, py::array>>& fields,
+                                   const std::vector<double>& origin, const std::vector<double>& spacing,
+                                   int maxBrickWidth) {
+  if (corners.ndim() != 2 || corners.shape(1) != 3) fail("corners must be an (N, 3) integer array");
+  const size_t n = size_t(corners.shape(0));
+  if (levels.ndim() != 1 || size_t(levels.shape(0)) != n)
+    fail("levels must be an (N,) integer array with one level per corner (", n, " corners, ",
+         levels.ndim() == 1 ? size_t(levels.shape(0)) : size_t(0), " levels)");
+  if (origin.size() != 3 || spacing.size() != 3) fail("origin and spacing need three numbers each");
+  CellSet set;
+  set.world.origin = vec3d(origin[0], origin[1], origin[2]);
+  set.world.scale = vec3d(spacing[0], spacing[1], spacing[2]);
+  for (int a = 0; a < 3; ++a)
+    if (!(set.world.scale[a] > 0.0) || !std::isfinite(set.world.scale[a]) || !std::isfinite(set.world.origin[a]))
+      fail("spacing must be positive and finite, origin finite");
+  set.cells.resize(n);
+  const int64_t* c = corners.data();
+  const int64_t* l = levels.data();
+  for (size_t i = 0; i < n; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      const int64_t v = c[3 * i + size_t(a)];
+      if (v < -kLatticeLimit || v > kLatticeLimit)
+        fail("cell ", i, ": corner ", v, " is outside the supported lattice range (±2^29)");
+      set.cells[i].lower[a] = int32_t(v);
+    }
+    if (l[i] < 0 || l[i] > kMaxLevel) fail("cell ", i, ": level ", l[i], " is outside 0..", kMaxLevel);
+    set.cells[i].level = int(l[i]);
+  }
+  if (fields.empty()) fail("at least one field is needed");
+  for (const auto& [name, array] : fields) {
+    const auto values = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(array);
+    if (!values || values.ndim() != 1 || size_t(values.shape(0)) != n)
+      fail("field '", name, "' must be an (N,) array of numbers with one value per cell (", n, " cells)");
+    set.fields.push_back({name, std::vector<float>(values.data(), values.data() + n)});
+  }
+  BuildOptions bo;
+  bo.bricks.maxBrickWidth = maxBrickWidth;
+  Timer t;
+  Model m;
+  {
+    py::gil_scoped_release release;
+    validateCells(set, "cells");
+    m = buildModel(std::move(set), bo);
+  }
+  return makeDataset(std::move(m), "<numpy cells>", t.seconds());
+}
+
+/// grids: list of (lower xyz, upper xyz, cells xyz, [arrays per field, x fastest]).
+std::shared_ptr<Dataset> fromGrids(const py::list& grids, const std::vector<std::string>& names,
+                                   const std::vector<double>& origin, int maxBrickWidth) {
+  std::vector<GridPatch> patches;
+  for (size_t g = 0; g < grids.size(); ++g) {
+    const py::tuple t = grids[g].cast<py::tuple>();
+    GridPatch p;
+    const auto lo = t[0].cast<std::vector<double>>(), hi = t[1].cast<std::vector<double>>();
+    const auto n = t[2].cast<std::vector<int64_t>>();
+    if (lo.size() != 3 || hi.size() != 3 || n.size() != 3) fail("grid ", g, ": edges and dimensions need three numbers");
+    p.lower = vec3d(lo[0], lo[1], lo[2]);
+    p.upper = vec3d(hi[0], hi[1], hi[2]);
+    p.cells = vec3l(n[0], n[1], n[2]);
+    for (const py::handle& a : t[3].cast<py::list>()) {
+      const auto v = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(a);
+      if (!v) fail("grid ", g, ": field values must be numeric arrays");
+      p.values.emplace_back(v.data(), v.data() + v.size());
+    }
+    patches.push_back(std::move(p));
+  }
+  vec3d o;
+  if (origin.size() == 3) o = vec3d(origin[0], origin[1], origin[2]);
+  else if (!origin.empty()) fail("origin needs three numbers");
+  BuildOptions bo;
+  bo.bricks.maxBrickWidth = maxBrickWidth;
+  Timer t;
+  Model m;
+  {
+    py::gil_scoped_release release;
+    CellSet set = cellsFromGrids(patches, names, "grids", origin.empty() ? nullptr : &o);
+    patches.clear();
+    m = buildModel(std::move(set), bo);
+  }
+  return makeDataset(std::move(m), "<grids>", t.seconds());
+}
+
+py::tuple sample(const Dataset& d, py::array_t<double, py::array::c_style | py::array::forcecast> points,
+                 const std::string& field) {
+  if (points.ndim() != 2 || points.shape(1) != 3) fail("points must be an (N, 3) array of world positions");
+  const int f = d.model->requireField(field);
+  const size_t n = size_t(points.shape(0));
+  py::array_t<double> values(n);
+  py::array_t<double> gradients({n, size_t(3)});
+  const double* p = points.data();
+  double* v = values.mutable_data();
+  double* g = gradients.mutable_data();
+  {
+    py::gil_scoped_release release;
+    for (size_t i = 0; i < n; ++i) {
+      double value;
+      vec3d grad;
+      if (d.model->sampleWorld(f, vec3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]), value, grad)) {
+        v[i] = value;
+        g[3 * i] = grad.x, g[3 * i + 1] = grad.y, g[3 * i + 2] = grad.z;
+      } else {
+        v[i] = g[3 * i] = g[3 * i + 1] = g[3 * i + 2] = std::numeric_limits<double>::quiet_NaN();
+      }
+    }
+  }
+  return py::make_tuple(values, gradients);
+}
+
+std::shared_ptr<Mesh> makeMesh(py::array_t<float, py::array::c_style | py::array::forcecast> vertices,
+                               py::array_t<int64_t, py::array::c_style | py::array::forcecast> triangles) {
+  if (vertices.ndim() != 2 || vertices.shape(1) != 3) fail("mesh vertices must be an (V, 3) array");
+  if (triangles.ndim() != 2 || triangles.shape(1) != 3) fail("mesh triangles must be a (T, 3) integer array");
+  auto mesh = std::make_shared<TriangleMesh>();
+  const float* v = vertices.data();
+  for (py::ssize_t i = 0; i < vertices.shape(0); ++i) mesh->vertices.push_back({v[3 * i], v[3 * i + 1], v[3 * i + 2]});
+  const int64_t* t = triangles.data();
+  for (py::ssize_t i = 0; i < triangles.shape(0); ++i) {
+    vec3i tri;
+    for (int k = 0; k < 3; ++k) {
+      const int64_t idx = t[3 * i + k];
+      if (idx < 0 || idx >= vertices.shape(0))
+        fail("mesh triangle ", i, " refers to vertex ", idx, " of ", vertices.shape(0));
+      tri[k] = int32_t(idx);
+    }
+    mesh->triangles.push_back(tri);
+  }
+  auto m = std::make_shared<Mesh>();
+  m->mesh = mesh;
+  return m;
+}
+
+/// A renderer over one dataset: the scene comes as JSON (plus meshes), frames as JSON; passes
+/// accumulate in the renderer's own buffer until the scene or the frame changes.
+class PyRenderer {
+public:
+  explicit PyRenderer(std::shared_ptr<Dataset> d) : dataset_(std::move(d)), renderer_(*dataset_->model) {}
+
+  py::dict setScene(const std::string& json, const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
+    SceneDocument doc = readSceneJson(json, "scene");
+    loadSceneMeshes(doc.scene, "scene");
+    std::string key = json;
+    for (const auto& [mesh, color] : meshes) {
+      if (color.size() != 3) fail("a mesh colour needs three numbers (sRGB)");
+      doc.scene.meshes.push_back({mesh->mesh, srgbToLinear(vec3f(color[0], color[1], color[2])), ""});
+      key += strCat("|", reinterpret_cast<uintptr_t>(mesh->mesh.get()), ",", color[0], ",", color[1], ",", color[2]);
+    }
+    SceneUpdate u;
+    {
+      py::gil_scoped_release release;
+      u = renderer_.setScene(doc.scene);
+    }
+    // Any change of the scene starts the accumulation over.
+    if (key != sceneKey_) stale_ = true;
+    sceneKey_ = key;
+    scene_ = doc.scene;
+    py::dict out;
+    out["volume"] = u.volume;
+    out["iso"] = u.iso;
+    out["meshes"] = u.meshes;
+    out["seconds"] = u.seconds();
+    return out;
+  }
+
+  /// Adds passes until the buffer holds `passes` (or one more pass when 0) for the frame;
+  /// returns the passes in the buffer. Ctrl-C cancels between tiles.
+  int render(const std::string& frameJson, int passes) {
+    const Frame f = parseFrame(frameJson);
+    const std::string key = frameJson;
+    if (stale_ || key != frameKey_ || buffer_.width() != f.width || buffer_.height() != f.height) {
+      if (buffer_.width() != f.width || buffer_.height() != f.height) buffer_.resize(f.width, f.height);
+      buffer_.clear();
+      frameKey_ = key;
+      stale_ = false;
+    }
+    const int target = passes > 0 ? passes : int(buffer_.passes()) + 1;
+    std::atomic<bool> cancel{false}, done{false};
+    std::exception_ptr error;
+    bool interrupted = false;
+    {
+      py::gil_scoped_release release;
+      std::thread worker([&] {
+        try {
+          PassControl control;
+          control.cancel = &cancel;
+          Frame pass = f;
+          while (int(buffer_.passes()) < target && !cancel) {
+            pass.frameIndex = int(buffer_.passes());
+            if (!renderer_.renderPass(pass, buffer_, control)) break;
+          }
+        } catch (...) {
+          error = std::current_exception();
+        }
+        done = true;
+      });
+      while (!done) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        py::gil_scoped_acquire acquire;
+        if (PyErr_CheckSignals() != 0) {
+          interrupted = true;
+          cancel = true;
+          break;
+        }
+      }
+      worker.join();
+    }
+    if (interrupted) {
+      stale_ = true; // partial passes: start over next time
+      throw py::error_already_set();
+    }
+    if (error) std::rethrow_exception(error);
+    return int(buffer_.passes());
+  }
+
+  py::array_t<float> image() const {
+    Image img;
+    buffer_.resolve(img);
+    py::array_t<float> out({size_t(img.height), size_t(img.width), size_t(4)});
+    std::memcpy(out.mutable_data(), img.pixels.data(), img.pixels.size() * sizeof(vec4f));
+    return out;
+  }
+
+  py::bytes png() const {
+    Image img;
+    buffer_.resolve(img);
+    const std::vector<unsigned char> bytes = encodePng(img, scene_.keepAlpha, scene_.background);
+    return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  }
+
+  void save(const std::string& path) const {
+    Image img;
+    buffer_.resolve(img);
+    writePng(path, img, scene_.keepAlpha, scene_.background);
+  }
+
+  py::dict stats() const {
+    const RenderStats& s = buffer_.stats();
+    py::dict d;
+    d["seconds"] = s.seconds;
+    d["rays"] = s.rays;
+    d["samples"] = s.samples;
+    d["regions_visited"] = s.regionsVisited;
+    d["surface_hits"] = s.surfaceHits;
+    d["iso_samples"] = s.isoSamples;
+    d["ao_rays"] = s.aoRays;
+    d["samples_per_second"] = s.samplesPerSecond();
+    d["passes"] = buffer_.passes();
+    d["visible_regions"] = renderer_.visibleRegions();
+    d["iso_regions"] = renderer_.isoRegions();
+    d["regions"] = dataset_->model->regions.regions.size();
+    return d;
+  }
+
+  py::object pick(const std::vector<double>& origin, const std::vector<double>& direction) const {
+    if (origin.size() != 3 || direction.size() != 3) fail("origin and direction need three numbers each");
+    SurfaceHit hit;
+    if (!renderer_.pick(vec3d(origin[0], origin[1], origin[2]), vec3d(direction[0], direction[1], direction[2]), hit))
+      return py::none();
+    py::dict d;
+    d["kind"] = hit.kind == SurfaceHit::Mesh ? "mesh" : "iso";
+    d["index"] = hit.index;
+    d["distance"] = hit.distance;
+    d["position"] = py::make_tuple(hit.position.x, hit.position.y, hit.position.z);
+    d["normal"] = py::make_tuple(hit.normal.x, hit.normal.y, hit.normal.z);
+    return d;
+  }
+
+private:
+  static Frame parseFrame(const std::string& json) {
+    const SceneDocument doc = readSceneJson(json, "frame");
+    if (!doc.hasCamera) fail("frame: a camera is needed");
+    return doc.frame;
+  }
+
+  std::shared_ptr<Dataset> dataset_; ///< declared first: outlives the renderer
+  Renderer renderer_;
+  FrameBuffer buffer_;
+  Scene scene_;
+  std::string frameKey_, sceneKey_;
+  bool stale_ = true;
+};
+
+} // namespace
+
+PYBIND11_MODULE(_core, m) {
+  m.doc() = "exabricks: ExaBricks rendering of structured AMR data (C++ core)";
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const Error& e) {
+      PyErr_SetString(PyExc_ValueError, e.what());
+    } catch (const std::bad_alloc&) {
+      PyErr_SetString(PyExc_MemoryError, "out of memory");
+    }
+  });
+
+  py::class_<Dataset, std::shared_ptr<Dataset>>(m, "Dataset")
+      .def_property_readonly("name", [](const Dataset& d) { return d.name; })
+      .def_property_readonly("fields", [](const Dataset& d) { return d.model->fieldNames; })
+      .def_property_readonly("cells", [](const Dataset& d) { return d.model->cellCount(); })
+      .def_property_readonly("bounds",
+                             [](const Dataset& d) {
+                               const box3i b = d.model->cellBounds();
+                               const vec3d lo = d.model->world.toWorld(vec3d(b.lower));
+                               const vec3d hi = d.model->world.toWorld(vec3d(b.upper));
+                               return py::make_tuple(py::make_tuple(lo.x, lo.y, lo.z), py::make_tuple(hi.x, hi.y, hi.z));
+                             })
+      .def("default_field", [](const Dataset& d) { return d.model->fieldNames[size_t(d.model->requireField(""))]; })
+      .def_property_readonly("default_opacity_scale",
+                             [](const Dataset& d) { return DatasetInfo::of(*d.model).defaultOpacityScale; })
+      .def("info_json", [](const Dataset& d) { return modelInfoJson(*d.model, d.name, d.loadSeconds); })
+      .def("sample", &sample, py::arg("points"), py::arg("field") = "");
+
+  py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh")
+      .def(py::init(&makeMesh), py::arg("vertices"), py::arg("triangles"))
+      .def_static("read", [](const std::string& path) {
+        auto x = std::make_shared<Mesh>();
+        x->mesh = std::make_shared<TriangleMesh>(readMesh(path));
+        return x;
+      }, py::arg("path"), "Reads an OBJ, PLY or .tris file")
+      .def_property_readonly("vertex_count", [](const Mesh& x) { return x.mesh->vertices.size(); })
+      .def_property_readonly("triangle_count", [](const Mesh& x) { return x.mesh->triangles.size(); });
+
+  py::class_<PyRenderer>(m, "Renderer")
+      .def(py::init<std::shared_ptr<Dataset>>(), py::arg("dataset"))
+      .def("set_scene", &PyRenderer::setScene, py::arg("scene_json"), py::arg("meshes"))
+      .def("render", &PyRenderer::render, py::arg("frame_json"), py::arg("passes") = 0)
+      .def("image", &PyRenderer::image)
+      .def("png", &PyRenderer::png)
+      .def("save", &PyRenderer::save, py::arg("path"))
+      .def("stats", &PyRenderer::stats)
+      .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"));
+
+  m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(),
+        py::arg("max_brick_width") = 32, py::arg("box") = std::vector<int>());
+  m.def("from_cells", &fromCells, py::arg("corners"), py::arg("levels"), py::arg("fields"), py::arg("origin"),
+        py::arg("spacing"), py::arg("max_brick_width") = 32);
+  m.def("from_grids", &fromGrids, py::arg("grids"), py::arg("names"), py::arg("origin"), py::arg("max_brick_width") = 32);
+  m.def("list_fields", &listFields, py::arg("path"));
+  m.def("frame_camera",
+        [](const std::vector<double>& lo, const std::vector<double>& hi, double azimuth, double elevation, double fov,
+           bool orthographic) {
+          if (lo.size() != 3 || hi.size() != 3) fail("bounds need three numbers per corner");
+          const Camera c = Camera::frame(box3d(vec3d(lo[0], lo[1], lo[2]), vec3d(hi[0], hi[1], hi[2])), azimuth,
+                                         elevation, fov, orthographic);
+          py::dict d;
+          d["position"] = py::make_tuple(c.position.x, c.position.y, c.position.z);
+          d["look_at"] = py::make_tuple(c.lookAt.x, c.lookAt.y, c.lookAt.z);
+          d["up"] = py::make_tuple(c.up.x, c.up.y, c.up.z);
+          d["fov"] = c.fovy;
+          d["orthographic"] = c.orthographic;
+          d["ortho_height"] = c.orthoHeight;
+          return d;
+        },
+        py::arg("lower"), py::arg("upper"), py::arg("azimuth"), py::arg("elevation"), py::arg("fov"),
+        py::arg("orthographic"), "The command line's default framing of a world box");
+  m.def("colormap_names", &builtinColorMapNames);
+  m.def("transfer_function_json", [](const std::string& path) { return transferFunctionJson(readTransferFunction(path)); },
+        py::arg("path"), "A transfer function file (exabricks JSON or ParaView preset) in exabricks JSON form");
+}
