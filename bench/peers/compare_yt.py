@@ -162,6 +162,35 @@ def main():
     yt_png = os.path.join(a.out, "yt.png")
     plt.imsave(yt_png, rgb)
 
+    # --- exabricks in the same Python process: the loaded yt dataset handed over with from_yt ---
+    eb_rows = []
+    try:
+        import exabricks as eb
+    except ImportError:
+        eb = None
+        print("  (exabricks Python module not importable: build it and add build/python to PYTHONPATH)")
+    if eb is not None:
+        t0 = time.perf_counter()
+        eds = eb.from_yt(ds, [yfield])
+        t_from_yt = time.perf_counter() - t0
+        scene = eb.Scene(eds, width=a.size, height=a.size)
+        scene.camera = eb.Camera(pos, look, up, a.fov)
+        scene.transfer_function = eb.TransferFunction("viridis", range=value_range, opacity_scale=opacity_scale)
+        t0 = time.perf_counter()
+        scene.render()
+        t_eb_first = time.perf_counter() - t0
+        frames = []
+        for _ in range(a.frames):
+            scene.ambient += 1e-6  # a new frame each time (the accumulation starts over)
+            t0 = time.perf_counter()
+            scene.render()
+            frames.append(time.perf_counter() - t0)
+        t_eb_frame = sorted(frames)[len(frames) // 2]
+        scene.save(os.path.join(a.out, "exabricks-from-yt.png"))
+        eb_rows = [("exabricks.from_yt (yt grids -> leaf cells, bricks, regions)", t_from_yt),
+                   ("exabricks.from_yt: first render in Python", t_eb_first),
+                   ("exabricks.from_yt: full-quality frame in Python (median)", t_eb_frame)]
+
     ex_frame = ex["frame_seconds"]
     rows = [
         ("exabricks, full quality (shaded, early termination), frame", ex_frame),
@@ -176,7 +205,7 @@ def main():
     ]
     print(f"dataset {a.plotfile} ({info['cells']} leaf cells), field {a.field}, {a.size}x{a.size}, "
           f"value range [{value_range[0]:.6g}, {value_range[1]:.6g}]")
-    for name, t in rows:
+    for name, t in rows + eb_rows:
         print(f"  {name:66s} {t:8.3f} s")
     print(f"  yt opacity scale {scale:.4g}: brightest pixels {yt_bright:.4f} (exabricks unshaded {ex_cal:.4f}), "
           f"found in {t_cal:.1f} s")
@@ -189,6 +218,9 @@ def main():
         "yt second render / exabricks unshaded frame, early termination off": t_second / ex_flat["frame_seconds"],
         "yt load + first render / exabricks end to end": (t_load + t_first) / ex_wall,
     }
+    if eb_rows:
+        ratios["yt first render / (exabricks.from_yt + first render)"] = t_first / (t_from_yt + t_eb_first)
+        ratios["yt second render / exabricks frame through from_yt"] = t_second / t_eb_frame
     for name, r in ratios.items():
         print(f"  {name:66s} {r:8.2f}x")
 
