@@ -462,7 +462,8 @@ TEST(SampleMath, OpacityCorrectionComposesOverSteps) {
     EXPECT_EQ(correctedOpacity(log2T, 0.f, 1.f), 0.f);
   }
   // The documented bound, measured densely: 2.4e-7 relative.
-  for (float x = -126.f; x <= 0.f; x += 0.37f) EXPECT_NEAR(exp2Negative(x), std::exp2(x), 2.5e-7f * std::exp2(x));
+  for (float x = -126.f; x <= 0.f; x += 0.37f)
+    EXPECT_NEAR(exp2Negative(x), std::exp2(double(x)), 2.5e-7 * std::exp2(double(x)));
   EXPECT_EQ(exp2Negative(-200.f), 0.f);
 }
 

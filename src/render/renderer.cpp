@@ -46,6 +46,7 @@ struct LayerTable {
   TransferFunction tf;
   std::vector<vec4f> table;
   TfTableView t;
+  float span = 0.f; ///< width of the value range (the scale of shading weights)
 
   void build(const Model& model, const DatasetInfo& dataset, int fieldIndex, const TransferFunction& tfIn) {
     field = fieldIndex;
@@ -66,6 +67,7 @@ struct LayerTable {
     t.fastLinear = !tf.logScale && r.upper > r.lower;
     t.lower = r.lower;
     t.scale = t.fastLinear ? 1.f / (r.upper - r.lower) : 0.f;
+    span = r.empty() ? 0.f : r.upper - r.lower;
   }
   vec4f lookup(float value) const { return tfLookup(t, value); }
 };
@@ -590,7 +592,10 @@ struct Renderer::Impl {
           if (shading != Shading::None) {
             if (shading == Shading::Central || shading == Shading::ClampedCentral)
               grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
-            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms);
+            const float weight = shadingWeight(length(grad), region.finestWidth(),
+                                               layer.tf.logScale || !(layer.span > 0.f) ? std::abs(value)
+                                                                                          : layer.span);
+            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, weight);
           }
           if (layerCount == 1) {
             alpha = layerAlpha;

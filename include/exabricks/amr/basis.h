@@ -9,6 +9,10 @@
 // i.e. +1/w while p lies below the centre and -1/w above it. Where that derivative jumps (at a
 // centre or at a support face), we use the one-sided derivative towards +axis: a point exactly
 // on a centre gets -1/w, a point exactly on the lower support face gets +1/w.
+//
+// The sums are kept relative to the first cell's value v0 (B = v0 + sum H (v - v0) / sum H): the
+// same quotient, but a constant field reconstructs exactly with an exactly zero gradient, and a
+// nearly constant one without the cancellation that would turn round-off into gradients.
 #pragma once
 
 #include "exabricks/amr/regions.h"
@@ -38,8 +42,10 @@ EXA_HOST_DEVICE inline float inverseWidth(int level) {
 
 /// Running sums of the quotient B = sumWV / sumW and of their derivatives.
 template <typename Real> struct BasisAccumulator {
-  Real sumW = 0, sumWV = 0;
+  Real sumW = 0, sumWV = 0;          ///< sum H, sum H (v - v0)
   vec3<Real> dSumW{Real(0)}, dSumWV{Real(0)};
+  Real v0 = 0;                       ///< reference value: the first cell's
+  bool haveReference = false;
 
   /// Adds every cell of `brick` whose support holds p (lattice units).
   EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const float* brickValues,
@@ -84,8 +90,13 @@ template <typename Real> struct BasisAccumulator {
 
   /// Adds one cell of value v whose hat has the per-axis factors h and derivatives dh at the
   /// sample point: weight hx hy hz, d/dx weight = dhx hy hz, and so on.
-  EXA_HOST_DEVICE inline void addCell(Real v, Real hx, Real hy, Real hz, Real dhx, Real dhy, Real dhz,
+  EXA_HOST_DEVICE inline void addCell(Real value, Real hx, Real hy, Real hz, Real dhx, Real dhy, Real dhz,
                                       bool withGradient) {
+    if (!haveReference) {
+      v0 = value;
+      haveReference = true;
+    }
+    const Real v = value - v0;
     const Real hyz = hy * hz;
     const Real weight = hx * hyz;
     sumW += weight;
@@ -98,7 +109,7 @@ template <typename Real> struct BasisAccumulator {
   }
 
   EXA_HOST_DEVICE inline bool valid() const { return sumW > Real(0); }
-  EXA_HOST_DEVICE inline Real value() const { return sumWV / sumW; }
+  EXA_HOST_DEVICE inline Real value() const { return v0 + sumWV / sumW; }
   /// Gradient in lattice units (per finest-level cell width).
   EXA_HOST_DEVICE inline vec3<Real> gradient() const {
     return (dSumWV * sumW - dSumW * sumWV) / (sumW * sumW);

@@ -116,18 +116,40 @@ struct ShadingTerms {
   float ambient = 0.3f, diffuse = 0.7f, specular = 0.25f, shininess = 40.f;
 };
 
+/// How much of the gradient shading a volume sample gets: the gradient's relative change per
+/// cell, |g| w / scale (w the cell width, scale the field's value range or, for logarithmic
+/// mapping, the value itself), below 1e-5 is round-off of a nearly constant field and gets none
+/// (shading it would draw its noise as lines and haze), above 1e-4 gets full shading, and
+/// linearly between.
+constexpr float kShadingFadeLow = 1e-5f, kShadingFadeHigh = 1e-4f;
+EXA_HOST_DEVICE inline float shadingWeight(float gradientLength, float cellWidth, float scale) {
+  if (!(scale > 0.f)) return gradientLength > 0.f ? 1.f : 0.f;
+  const float relative = gradientLength * cellWidth / scale;
+  if (relative >= kShadingFadeHigh) return 1.f;
+  if (!(relative > kShadingFadeLow)) return 0.f;
+  return (relative - kShadingFadeLow) / (kShadingFadeHigh - kShadingFadeLow);
+}
+
 /// A volume sample's colour lit two-sided by the normal along its gradient (any units); where
-/// the gradient vanishes the sample is lit as if facing the light, without highlight.
+/// the gradient vanishes, or `weight` (shadingWeight) is 0, the sample is lit as if facing the
+/// light, without highlight; weights between blend the two.
 EXA_HOST_DEVICE inline vec3f shadeVolumeSample(const vec3f& color, const vec3f& gradient, const vec3f& light,
-                                               const vec3f& halfVector, const ShadingTerms& s) {
+                                               const vec3f& halfVector, const ShadingTerms& s, float weight = 1.f) {
   const float gl = length(gradient);
   float shade = s.ambient + s.diffuse;
   float spec = 0.f;
-  if (gl > 1e-20f) {
+  if (gl > 1e-20f && weight > 0.f) {
     const vec3f n = gradient * (1.f / gl);
     const float ndl = std::abs(dot(n, light));
-    shade = s.ambient + s.diffuse * ndl;
-    spec = s.specular * specularPower(std::abs(dot(n, halfVector)), s.shininess);
+    const float lit = s.ambient + s.diffuse * ndl;
+    const float highlight = s.specular * specularPower(std::abs(dot(n, halfVector)), s.shininess);
+    if (weight >= 1.f) {
+      shade = lit;
+      spec = highlight;
+    } else {
+      shade = shade + (lit - shade) * weight;
+      spec = highlight * weight;
+    }
   }
   return color * shade + vec3f(spec);
 }
