@@ -26,7 +26,7 @@ EXA_HOST_DEVICE inline vec4f integrateRay(const DeviceRayInputs& in, const Ray& 
       if (!sampleRegion(in.field, seg.region, p, v, &g)) continue;
       const vec4f rgba = tfLookup(in.table, v);
       if (rgba.w >= 0.f) continue;
-      const vec3f c = shadeVolumeSample(rgba.rgb(), g, light, halfVector, in.shading);
+      const vec3f c = shadeVolumeSample(rgba.rgb(), g, light, halfVector, in.shading, in.fadeScale);
       compositeBehind(acc, c, correctedOpacity(rgba.w, in.dt, in.invReferenceWidth));
       if (isoT < 0.f) {
         float vn;

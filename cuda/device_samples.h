@@ -16,6 +16,7 @@ struct DeviceRayInputs {
   float dt = 0.5f;
   float invReferenceWidth = 1.f;
   float isoValue = 0.5f;
+  float fadeScale = 1.f; ///< cell width / value range, for the shading weight
 };
 
 /// The same rays on the host, for comparison.

@@ -471,17 +471,24 @@ TEST(SampleMath, ShadingTerms) {
   const ShadingTerms t{0.2f, 0.6f, 0.3f, 20.f};
   const vec3f red(1.f, 0.f, 0.f), light(0.f, 0.f, -1.f), half(0.f, 0.f, -1.f);
   // No gradient: lit as if facing the light, no highlight.
-  const vec3f flat = shadeVolumeSample(red, vec3f(0.f), light, half, t);
+  const vec3f flat = shadeVolumeSample(red, vec3f(0.f), light, half, t, 1.f);
   EXPECT_FLOAT_EQ(flat.x, 0.8f);
   EXPECT_FLOAT_EQ(flat.y, 0.f);
   // Gradient along the light, either sign (two-sided): full diffuse and highlight.
   for (float sign : {1.f, -1.f}) {
-    const vec3f lit = shadeVolumeSample(red, vec3f(0.f, 0.f, 5.f * sign), light, half, t);
+    const vec3f lit = shadeVolumeSample(red, vec3f(0.f, 0.f, 5.f * sign), light, half, t, 1.f);
     EXPECT_FLOAT_EQ(lit.x, 0.2f + 0.6f + 0.3f);
     EXPECT_FLOAT_EQ(lit.y, 0.3f);
   }
   // Gradient across the light: ambient only.
-  EXPECT_FLOAT_EQ(shadeVolumeSample(red, vec3f(1.f, 0.f, 0.f), light, half, t).x, 0.2f);
+  EXPECT_FLOAT_EQ(shadeVolumeSample(red, vec3f(1.f, 0.f, 0.f), light, half, t, 1.f).x, 0.2f);
+  // The shaded term fades out where the gradient's change per cell is round-off.
+  EXPECT_EQ(shadingWeight(1e-6f), 0.f);
+  EXPECT_EQ(shadingWeight(1e-3f), 1.f);
+  EXPECT_NEAR(shadingWeight(5.5e-5f), 0.5f, 1e-5f);
+  const vec3f faint = shadeVolumeSample(red, vec3f(0.f, 0.f, 1.f), light, half, t, 5.5e-5f); // half the shading
+  EXPECT_NEAR(faint.x, 0.8f + 0.5f * (1.1f - 0.8f), 1e-5f);
+  EXPECT_FLOAT_EQ(shadeVolumeSample(red, vec3f(0.f, 0.f, 1.f), light, half, t, 1e-7f).x, 0.8f);
   // Surfaces are one-sided; occlusion dims ambient fully and diffuse by half.
   const vec3f facing = shadeSurface(red, vec3f(0.f, 0.f, 1.f), light, half, 1.f, t);
   EXPECT_FLOAT_EQ(facing.x, 1.1f);

@@ -158,8 +158,9 @@ bool CellLocator::sample(int field, const vec3f& p, float& value, vec3f* gradien
         for (int ix = 0; ix < 2; ++ix) {
           const vec3i corner(idx[0][ix] * w, idx[1][iy] * w, idx[2][iz] * w);
           const float* slot = im.findCell(values, corner, level);
-          if (slot)
-            acc.addCell(*slot, h[0][ix], h[1][iy], h[2][iz], dh[0][ix], dh[1][iy], dh[2][iz], gradient != nullptr);
+          if (!slot) continue;
+          if (!acc.haveReference) acc.setReference(*slot);
+          acc.addCell(*slot, h[0][ix], h[1][iy], h[2][iz], dh[0][ix], dh[1][iy], dh[2][iz], gradient != nullptr);
         }
   }
   if (!acc.valid()) return false;

@@ -46,7 +46,7 @@ struct LayerTable {
   TransferFunction tf;
   std::vector<vec4f> table;
   TfTableView t;
-  float span = 0.f; ///< width of the value range (the scale of shading weights)
+  float span = 0.f, invSpan = 0.f; ///< width of the value range (the scale of shading weights)
 
   void build(const Model& model, const DatasetInfo& dataset, int fieldIndex, const TransferFunction& tfIn) {
     field = fieldIndex;
@@ -68,6 +68,7 @@ struct LayerTable {
     t.lower = r.lower;
     t.scale = t.fastLinear ? 1.f / (r.upper - r.lower) : 0.f;
     span = r.empty() ? 0.f : r.upper - r.lower;
+    invSpan = span > 0.f ? 1.f / span : 0.f;
   }
   vec4f lookup(float value) const { return tfLookup(t, value); }
 };
@@ -200,6 +201,7 @@ struct Renderer::Impl {
   float invReferenceWidth = 1.f;
   vec3f invScale{1.f};         ///< world units per lattice unit, inverted (for gradients)
   double minScale = 1.0;
+  float meanScale = 1.f;       ///< world units per lattice unit, averaged over the axes
 
   // Iso-surfaces: their own set of regions (value range holds an iso-value) and traversal.
   std::vector<float> isoValues;
@@ -224,6 +226,7 @@ struct Renderer::Impl {
     invReferenceWidth = 1.f / referenceWidth;
     invScale = vec3f(1.0 / m.world.scale.x, 1.0 / m.world.scale.y, 1.0 / m.world.scale.z);
     minScale = reduceMin(m.world.scale);
+    meanScale = float((m.world.scale.x + m.world.scale.y + m.world.scale.z) / 3.0);
   }
 
   ~Impl() { releaseMeshes(); }
@@ -592,10 +595,12 @@ struct Renderer::Impl {
           if (shading != Shading::None) {
             if (shading == Shading::Central || shading == Shading::ClampedCentral)
               grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
-            const float weight = shadingWeight(length(grad), region.finestWidth(),
-                                               layer.tf.logScale || !(layer.span > 0.f) ? std::abs(value)
-                                                                                          : layer.span);
-            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, weight);
+            // Cell width (world) over the scale of the field's changes.
+            const float cellWidth = region.finestWidth() * meanScale;
+            const float fadeScale = layer.tf.logScale || !(layer.span > 0.f)
+                                        ? (value != 0.f ? cellWidth / std::abs(value) : 0.f)
+                                        : cellWidth * layer.invSpan;
+            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, fadeScale);
           }
           if (layerCount == 1) {
             alpha = layerAlpha;

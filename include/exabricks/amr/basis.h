@@ -78,6 +78,9 @@ template <typename Real> struct BasisAccumulator {
       count[a] = n;
     }
     const float* values = brickValues + brick.valueOffset;
+    if (!haveReference && count[0] > 0 && count[1] > 0 && count[2] > 0)
+      setReference(Real(values[size_t(idx[0][0]) + size_t(brick.size.x) * (size_t(idx[1][0]) +
+                                                                           size_t(brick.size.y) * idx[2][0])]));
     for (int iz = 0; iz < count[2]; ++iz)
       for (int iy = 0; iy < count[1]; ++iy) {
         const float* row =
@@ -88,14 +91,16 @@ template <typename Real> struct BasisAccumulator {
       }
   }
 
-  /// Adds one cell of value v whose hat has the per-axis factors h and derivatives dh at the
-  /// sample point: weight hx hy hz, d/dx weight = dhx hy hz, and so on.
+  /// Sets the reference value; addCell needs one first.
+  EXA_HOST_DEVICE inline void setReference(Real value) {
+    v0 = value;
+    haveReference = true;
+  }
+
+  /// Adds one cell of value `value` (after setReference) whose hat has the per-axis factors h
+  /// and derivatives dh at the sample point: weight hx hy hz, d/dx weight = dhx hy hz, and so on.
   EXA_HOST_DEVICE inline void addCell(Real value, Real hx, Real hy, Real hz, Real dhx, Real dhy, Real dhz,
                                       bool withGradient) {
-    if (!haveReference) {
-      v0 = value;
-      haveReference = true;
-    }
     const Real v = value - v0;
     const Real hyz = hy * hz;
     const Real weight = hx * hyz;

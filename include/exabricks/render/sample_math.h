@@ -117,25 +117,25 @@ struct ShadingTerms {
 };
 
 /// How much of the gradient shading a volume sample gets: the gradient's relative change per
-/// cell, |g| w / scale (w the cell width, scale the field's value range or, for logarithmic
-/// mapping, the value itself), below 1e-5 is round-off of a nearly constant field and gets none
-/// (shading it would draw its noise as lines and haze), above 1e-4 gets full shading, and
-/// linearly between.
+/// cell, |g| w / scale (w the cell width, scale the value range of the transfer function or, for
+/// logarithmic mapping, the value itself), below 1e-5 is round-off of a nearly constant field and
+/// gets none (shading it would draw its noise as lines and haze), above 1e-4 gets full shading,
+/// and linearly between. `relative` is |g| w / scale.
 constexpr float kShadingFadeLow = 1e-5f, kShadingFadeHigh = 1e-4f;
-EXA_HOST_DEVICE inline float shadingWeight(float gradientLength, float cellWidth, float scale) {
-  if (!(scale > 0.f)) return gradientLength > 0.f ? 1.f : 0.f;
-  const float relative = gradientLength * cellWidth / scale;
+EXA_HOST_DEVICE inline float shadingWeight(float relative) {
   if (relative >= kShadingFadeHigh) return 1.f;
   if (!(relative > kShadingFadeLow)) return 0.f;
   return (relative - kShadingFadeLow) / (kShadingFadeHigh - kShadingFadeLow);
 }
 
-/// A volume sample's colour lit two-sided by the normal along its gradient (any units); where
-/// the gradient vanishes, or `weight` (shadingWeight) is 0, the sample is lit as if facing the
-/// light, without highlight; weights between blend the two.
+/// A volume sample's colour lit two-sided by the normal along its gradient (any units); the
+/// shaded term is weighted by shadingWeight(|gradient| x fadeScale) (fadeScale = cell width /
+/// scale, in the gradient's units), so where the gradient is round-off the sample is lit as if
+/// facing the light, without highlight.
 EXA_HOST_DEVICE inline vec3f shadeVolumeSample(const vec3f& color, const vec3f& gradient, const vec3f& light,
-                                               const vec3f& halfVector, const ShadingTerms& s, float weight = 1.f) {
+                                               const vec3f& halfVector, const ShadingTerms& s, float fadeScale) {
   const float gl = length(gradient);
+  const float weight = shadingWeight(gl * fadeScale);
   float shade = s.ambient + s.diffuse;
   float spec = 0.f;
   if (gl > 1e-20f && weight > 0.f) {
