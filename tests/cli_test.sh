@@ -90,5 +90,40 @@ fails_with "build into a missing folder" "no/such" "$exe" build s.cells -o no/su
 check "no half-written output" bash -c "[ ! -e no ]"
 fails_with "unknown scene" "unknown scene" "$exe" generate -s nope -o x.cells
 
+# Every point line gives one output line or a clear error; outputs that are not regular files.
+check "sample: nan and out-of-range points give nan lines" bash -c "[ \"\$(printf '1 2 3\nnan 0 0\n1e400 1 1\n# note\n\n4 5 6\n' | '$exe' sample s.cells | wc -l)\" = 4 ]"
+fails_with "sample: a line that is not three numbers" "line 2: expected three numbers 'x y z', got 'x y z'" bash -c "printf '1 2 3\nx y z\n' | '$exe' sample s.cells"
+fails_with "sample: four numbers" "line 1" bash -c "printf '1 2 3 4\n' | '$exe' sample s.cells"
+if [ -w /dev/full ]; then
+  fails_with "info --json into a full disk" "writing standard output" bash -c "'$exe' info s.cells --json > /dev/full"
+  fails_with "sample into a full disk" "writing standard output" bash -c "printf '1 2 3\n' | '$exe' sample s.cells > /dev/full"
+  fails_with "render to a full device" "/dev/full" "$exe" render s.cells -o /dev/full --size 8x8
+  check "a device is written through, never replaced" test -c /dev/full
+fi
+ln -sf target.png link.png
+check "a symlink output replaces its target" bash -c "'$exe' render s.cells -o link.png --size 8x8 && [ -L link.png ] && [ -f target.png ]"
+mkfifo pipe.png
+(cat pipe.png > pipe.out) & reader=$!
+check "a FIFO output is written through" bash -c "'$exe' render s.cells -o pipe.png --size 8x8 && [ -p pipe.png ]"
+wait $reader
+check "the FIFO carried the PNG" bash -c "head -c 8 pipe.out | od -c | grep -q 'P   N   G'"
+check "JPEG output" bash -c "'$exe' render s.cells -o out.jpg --size 16x16 && head -c 3 out.jpg | od -An -tx1 | grep -q 'ff d8 ff'"
+fails_with "unknown image format" "unknown image format '.gif'" "$exe" render s.cells -o x.gif
+usage_rc() { "$@" > /dev/null 2>&1; [ $? -eq 2 ]; }
+check "a bad option value is a usage error (exit 2)" usage_rc "$exe" render s.cells -o x.png --opacity-scale 0
+fails_with "opacity scale 0 is refused" "--opacity-scale must be a positive number" "$exe" render s.cells -o x.png --opacity-scale 0
+fails_with "negative opacity scale is refused" "--opacity-scale" "$exe" render s.cells -o x.png --opacity-scale -1
+check "an unreadable input exits 1" bash -c "'$exe' info nothing.cells 2>/dev/null; [ \$? -eq 1 ]"
+check "--version" bash -c "'$exe' --version | grep -q '^exabricks [0-9]'"
+check "--threads 1 renders the same image" bash -c "'$exe' --threads 1 render s.cells -o t1.png --size 24x24 && '$exe' render s.cells -o t2.png --size 24x24 && cmp t1.png t2.png"
+mkdir -p elsewhere
+check "a written scene reads from another folder" bash -c "'$exe' render s.cells -o here.png --size 24x16 --mesh floor.obj --write-scene elsewhere/rel.json && cd elsewhere && '$exe' render --scene rel.json -o there.png && cmp there.png ../here.png"
+# An interrupted convert leaves no temporary file and either every file of the dataset or none.
+"$exe" -q generate -s blobs -n 3000000 -o big.cells
+"$exe" -q convert big.cells -o copy.cells & pid=$!
+sleep 0.3; kill -INT $pid 2>/dev/null; wait $pid
+check "an interrupted convert leaves no temporary file" bash -c "! ls | grep -q tmp"
+check "an interrupted convert publishes all files or none" bash -c "n=\$(ls copy.* 2>/dev/null | wc -l); [ \$n -eq 0 ] || [ \$n -eq 3 ]"
+
 if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
 echo "all command-line checks passed"

@@ -217,3 +217,37 @@ TEST_F(IoTest, FailedWritesLeaveNoFile) {
   EXPECT_THROW(writeModel(m, path("no/such/dir/m.exa")), Error);
   EXPECT_FALSE(fs::exists(path("no")));
 }
+
+TEST_F(IoTest, FilesArePublishedTogetherOrNotAtAll) {
+  const std::string a = (dir / "a.bin").string(), b = (dir / "b.bin").string();
+  const char data[4] = {1, 2, 3, 4};
+  auto leftovers = [&] {
+    int n = 0;
+    for (const auto& e : fs::directory_iterator(dir)) n += e.path().filename().string().find(".tmp") != std::string::npos;
+    return n;
+  };
+  {
+    AtomicFiles files;
+    files.write(a, data, 4);
+    files.write(b, data, 4);
+    EXPECT_FALSE(fs::exists(a)); // nothing appears before commit
+    EXPECT_EQ(leftovers(), 2);
+  } // not committed: the temporaries go
+  EXPECT_FALSE(fs::exists(a));
+  EXPECT_EQ(leftovers(), 0);
+  {
+    AtomicFiles files;
+    files.write(a, data, 4);
+    files.write(b, data, 4);
+    files.commit();
+  }
+  EXPECT_EQ(fs::file_size(a), 4u);
+  EXPECT_EQ(fs::file_size(b), 4u);
+  EXPECT_EQ(leftovers(), 0);
+  // What an interrupt handler calls: every pending temporary is removed.
+  AtomicFiles pending;
+  pending.write((dir / "c.bin").string(), data, 4);
+  EXPECT_EQ(leftovers(), 1);
+  removePendingTemporaries();
+  EXPECT_EQ(leftovers(), 0);
+}

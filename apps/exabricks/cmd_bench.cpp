@@ -142,7 +142,7 @@ std::vector<std::string> parseCases(const std::string& s) {
       fail("unknown case '", part, "' (choose from: all, reconstruction, sampling, skipping, traversal)");
     if (std::find(out.begin(), out.end(), part) == out.end()) out.push_back(part);
   }
-  if (out.empty()) fail("--cases names no case");
+  if (out.empty()) failUsage("--cases names no case");
   return out;
 }
 
@@ -371,7 +371,7 @@ void writeCsv(const std::string& path, const std::vector<std::array<double, 6>>&
 }
 
 void runOrbit(const Setup& s, const BenchOptions& o) {
-  if (o.orbit < 1 || o.orbit > 100000) fail("--orbit must be in 1..100000");
+  if (o.orbit < 1 || o.orbit > 100000) failUsage("--orbit must be in 1..100000");
   Renderer renderer(s.model);
   renderer.setScene(s.base);
   Frame frame = s.frame;
@@ -467,8 +467,8 @@ double median(std::vector<double> v) {
 /// full-quality pass. The scene is the render command's default (early termination on,
 /// automatic traversal).
 void runProgressive(const Setup& s, const BenchOptions& o) {
-  if (o.progressive < 1 || o.progressive > 100000) fail("--progressive must be in 1..100000");
-  if (o.previewDivisor < 1 || o.previewDivisor > 64) fail("--preview-divisor must be in 1..64");
+  if (o.progressive < 1 || o.progressive > 100000) failUsage("--progressive must be in 1..100000");
+  if (o.previewDivisor < 1 || o.previewDivisor > 64) failUsage("--preview-divisor must be in 1..64");
   Scene a;
   a.layers = s.base.layers;
   Scene b = a; // the change: another colour map and an opacity that hides the lower half
@@ -548,7 +548,7 @@ void runProgressive(const Setup& s, const BenchOptions& o) {
 void run(const BenchOptions& o) {
   Setup s;
   parseSize(o.size, s.frame.width, s.frame.height);
-  if (o.frames < 1 || o.frames > 1000) fail("--frames must be in 1..1000");
+  if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
   s.base.integration.earlyTermination = false;
   s.base.integration.autoTraversal = false;
   s.base.integration.traversal = TraversalKind::KdTree;

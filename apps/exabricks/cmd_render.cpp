@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -79,11 +80,11 @@ template <typename T> T pick(const std::string& what, const std::string& value,
     if (value == name) return v;
     names += (names.empty() ? "" : ", ") + std::string(name);
   }
-  fail("unknown ", what, " '", value, "' (choose from: ", names, ")");
+  failUsage("unknown ", what, " '", value, "' (choose from: ", names, ")");
 }
 
 vec3d toVec(const std::vector<double>& v, const char* what) {
-  if (v.size() != 3) fail(what, " needs three numbers x,y,z");
+  if (v.size() != 3) failUsage(what, " needs three numbers x,y,z");
   return {v[0], v[1], v[2]};
 }
 
@@ -98,7 +99,7 @@ std::vector<double> parseNumbers(const std::string& text, const char* what) {
     } catch (...) {
       used = 0;
     }
-    if (used == 0 || used != part.size() || !std::isfinite(v)) fail(what, ": '", part, "' is not a number");
+    if (used == 0 || used != part.size() || !std::isfinite(v)) failUsage(what, ": '", part, "' is not a number");
     out.push_back(v);
   }
   return out;
@@ -106,11 +107,11 @@ std::vector<double> parseNumbers(const std::string& text, const char* what) {
 
 /// sRGB triples -> linear-RGB colours.
 std::vector<vec3f> colorList(const std::vector<float>& v, const char* what) {
-  if (v.size() % 3 != 0) fail(what, " expects r,g,b triples (sRGB, 0..1)");
+  if (v.size() % 3 != 0) failUsage(what, " expects r,g,b triples (sRGB, 0..1)");
   std::vector<vec3f> out;
   for (size_t i = 0; i < v.size(); i += 3) {
     for (size_t k = 0; k < 3; ++k)
-      if (!(v[i + k] >= 0.f && v[i + k] <= 1.f)) fail(what, " components must lie in [0, 1]");
+      if (!(v[i + k] >= 0.f && v[i + k] <= 1.f)) failUsage(what, " components must lie in [0, 1]");
     out.push_back({srgbToLinear(v[i]), srgbToLinear(v[i + 1]), srgbToLinear(v[i + 2])});
   }
   return out;
@@ -124,17 +125,17 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderC
   if (colormap) tf.colorMap = builtinColorMap(*colormap);
   if (!o.opacity.empty()) {
     if (o.opacity.size() % 2 != 0 || o.opacity.size() < 2)
-      fail("--opacity expects pairs 'x,alpha' of normalised value and opacity");
+      failUsage("--opacity expects pairs 'x,alpha' of normalised value and opacity");
     tf.opacity.clear();
     for (size_t i = 0; i < o.opacity.size(); i += 2) {
       if (!(o.opacity[i] >= 0.f && o.opacity[i] <= 1.f && o.opacity[i + 1] >= 0.f && o.opacity[i + 1] <= 1.f))
-        fail("--opacity values must lie in [0, 1]");
-      if (i > 0 && !(o.opacity[i] > o.opacity[i - 2])) fail("--opacity positions must increase");
+        failUsage("--opacity values must lie in [0, 1]");
+      if (i > 0 && !(o.opacity[i] > o.opacity[i - 2])) failUsage("--opacity positions must increase");
       tf.opacity.push_back({o.opacity[i], o.opacity[i + 1]});
     }
   }
   if (withRange && !o.range.empty()) {
-    if (o.range.size() != 2 || !(o.range[0] < o.range[1])) fail("--range expects LOW,HIGH with LOW < HIGH");
+    if (o.range.size() != 2 || !(o.range[0] < o.range[1])) failUsage("--range expects LOW,HIGH with LOW < HIGH");
     tf.valueRange = range1f{o.range[0], o.range[1]};
   }
   if (withRange && o.logScale) tf.logScale = true;
@@ -155,7 +156,7 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
 
   if (apply("--size")) parseSize(o.size, f.width, f.height);
   if (apply("--spp")) {
-    if (o.spp < 1 || o.spp > 65536) fail("--spp must be in 1..65536");
+    if (o.spp < 1 || o.spp > 65536) failUsage("--spp must be in 1..65536");
     f.samplesPerPixel = o.spp;
   }
   if (apply("--rate")) f.rate = o.rate;
@@ -163,6 +164,8 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (apply("--no-jitter")) f.jitter = !o.noJitter;
 
   // The first volume layer: the field and its transfer function.
+  if (given("--opacity-scale") && !(o.opacityScale > 0.f && std::isfinite(o.opacityScale)))
+    failUsage("--opacity-scale must be a positive number (leave it out for the dataset's default)");
   if (s.layers.empty()) s.layers.push_back(VolumeLayer{});
   VolumeLayer& first = s.layers[0];
   if (apply("--field")) first.field = o.in.field;
@@ -174,7 +177,7 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
     for (const std::string& spec : o.layers) {
       const size_t eq = spec.find('=');
       const std::string name = spec.substr(0, eq);
-      if (name.empty()) fail("--layer expects FIELD or FIELD=COLORMAP or FIELD=TF_FILE, got '", spec, "'");
+      if (name.empty()) failUsage("--layer expects FIELD or FIELD=COLORMAP or FIELD=TF_FILE, got '", spec, "'");
       std::string file, colormap = o.colormap;
       if (eq != std::string::npos) {
         const std::string what = spec.substr(eq + 1);
@@ -220,18 +223,18 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
         try {
           d.push_back(std::stof(part));
         } catch (...) {
-          fail("--light expects 'headlight' or a direction x,y,z, got '", o.light, "'");
+          failUsage("--light expects 'headlight' or a direction x,y,z, got '", o.light, "'");
         }
       }
       if (d.size() != 3 || (d[0] == 0 && d[1] == 0 && d[2] == 0))
-        fail("--light expects 'headlight' or a non-zero direction x,y,z");
+        failUsage("--light expects 'headlight' or a non-zero direction x,y,z");
       s.light.direction = vec3f(d[0], d[1], d[2]);
     }
   }
   if (apply("--background")) {
-    if (o.background.size() != 3) fail("--background expects r,g,b (sRGB, 0..1)");
+    if (o.background.size() != 3) failUsage("--background expects r,g,b (sRGB, 0..1)");
     for (float c : o.background)
-      if (!(c >= 0.f && c <= 1.f)) fail("--background components must lie in [0, 1]");
+      if (!(c >= 0.f && c <= 1.f)) failUsage("--background components must lie in [0, 1]");
     s.background = srgbToLinear(vec3f(o.background[0], o.background[1], o.background[2]));
   }
   if (apply("--alpha")) s.keepAlpha = o.alpha;
@@ -242,7 +245,7 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
     for (const std::string& text : o.clipPlanes) {
       const std::vector<double> v = parseNumbers(text, "--clip-plane");
       if (v.size() != 6 || (v[3] == 0 && v[4] == 0 && v[5] == 0))
-        fail("--clip-plane expects px,py,pz,nx,ny,nz with a non-zero normal, got '", text, "'");
+        failUsage("--clip-plane expects px,py,pz,nx,ny,nz with a non-zero normal, got '", text, "'");
       s.clip.planes.push_back({vec3d(v[0], v[1], v[2]), vec3d(v[3], v[4], v[5])});
     }
   }
@@ -251,28 +254,28 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
     if (!o.clipBox.empty()) {
       const auto& b = o.clipBox;
       if (b.size() != 6 || !(b[0] < b[3] && b[1] < b[4] && b[2] < b[5]))
-        fail("--clip-box expects x0,y0,z0,x1,y1,z1 with the lower corner below the upper one");
+        failUsage("--clip-box expects x0,y0,z0,x1,y1,z1 with the lower corner below the upper one");
       s.clip.box = box3d(vec3d(b[0], b[1], b[2]), vec3d(b[3], b[4], b[5]));
     }
   }
   if (apply("--clip-meshes")) s.clip.meshes = o.clipMeshes;
   if (apply("--ao")) {
-    if (o.aoRays < 0 || o.aoRays > 1024) fail("--ao must be in 0..1024 rays");
+    if (o.aoRays < 0 || o.aoRays > 1024) failUsage("--ao must be in 0..1024 rays");
     s.ao.rays = o.aoRays;
   }
   if (apply("--ao-length")) {
-    if (!(o.aoLength >= 0.f)) fail("--ao-length must not be negative");
+    if (!(o.aoLength >= 0.f)) failUsage("--ao-length must not be negative");
     s.ao.length = o.aoLength;
   }
   if (apply("--ao-volume")) s.ao.volume = o.aoVolume;
 
   // Iso-surfaces.
   if (!o.isoColorRange.empty() && (o.isoColorRange.size() != 2 || !(o.isoColorRange[0] < o.isoColorRange[1])))
-    fail("--iso-color-range expects LOW,HIGH with LOW < HIGH");
+    failUsage("--iso-color-range expects LOW,HIGH with LOW < HIGH");
   if (o.iso.empty() && !fromFile && (!o.isoField.empty() || !o.isoColorField.empty() || !o.isoColor.empty()))
-    fail("iso-surface options need --iso VALUES");
+    failUsage("iso-surface options need --iso VALUES");
   for (float v : o.iso)
-    if (!std::isfinite(v)) fail("--iso values must be finite numbers");
+    if (!std::isfinite(v)) failUsage("--iso values must be finite numbers");
   IsoSurfaces& iso = s.iso;
   if (apply("--iso")) iso.values = o.iso;
   if (apply("--iso-field")) iso.field = o.isoField.empty() ? o.in.field : o.isoField;
@@ -317,7 +320,7 @@ std::vector<std::string> neededFields(const Scene& s) {
 /// position, look-at and up override either.
 Camera cameraFromOptions(const RenderCmdOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
-  if (!(o.fov > 0 && o.fov < 180)) fail("--fov must be in (0, 180) degrees");
+  if (!(o.fov > 0 && o.fov < 180)) failUsage("--fov must be in (0, 180) degrees");
   const box3i cb = model.cellBounds();
   const box3d worldBox(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
   const bool reframe = given("--azimuth") || given("--elevation") || given("--fov") || given("--ortho");
@@ -329,8 +332,30 @@ Camera cameraFromOptions(const RenderCmdOptions& o, const CLI::App& cmd, const S
   return camera;
 }
 
+/// The image format the output's extension names: PNG (also without an extension, as for a
+/// device or a pipe), or JPEG for .jpg / .jpeg.
+bool isJpeg(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".png" || ext.empty()) return false;
+  if (ext == ".jpg" || ext == ".jpeg") return true;
+  failUsage("-o ", path, ": unknown image format '", ext, "' (write .png, .jpg or .jpeg)");
+}
+
+/// The scene document as a file records it: paths made absolute, so that it reads the same from
+/// any folder.
+SceneDocument withAbsolutePaths(SceneDocument doc) {
+  std::error_code ec;
+  if (!doc.input.empty()) doc.input = std::filesystem::absolute(doc.input, ec).lexically_normal().string();
+  for (SceneMesh& m : doc.scene.meshes)
+    if (!m.source.empty()) m.source = std::filesystem::absolute(m.source, ec).lexically_normal().string();
+  return doc;
+}
+
 void run(const RenderCmdOptions& o, const CLI::App& cmd) {
-  if (o.frames < 1 || o.frames > 1000) fail("--frames must be in 1..1000");
+  if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
+  const bool jpeg = isJpeg(o.output);
+  if (jpeg && cmd.count("--alpha")) failUsage("--alpha needs a PNG output (JPEG has no alpha channel)");
   SceneDocument doc = sceneFromOptions(o, cmd);
   Scene& scene = doc.scene;
   Frame& frame = doc.frame;
@@ -344,7 +369,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   frame.validate();
   doc.hasCamera = true;
   if (!o.writeScene.empty()) {
-    writeSceneFile(o.writeScene, doc);
+    writeSceneFile(o.writeScene, withAbsolutePaths(doc));
   }
 
   Renderer renderer(model);
@@ -384,7 +409,10 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     renderFrame(stats);
   }
   const Image image = buffer.resolve();
-  writePng(o.output, image, scene.keepAlpha, scene.background);
+  if (jpeg)
+    writeJpeg(o.output, image, scene.background);
+  else
+    writePng(o.output, image, scene.keepAlpha, scene.background);
   if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, scene.background);
   logInfo(strCat("wrote ", o.output));
 
@@ -440,7 +468,7 @@ void addRender(CLI::App& app) {
   auto o = std::make_shared<RenderCmdOptions>();
   CLI::App* cmd = app.add_subcommand("render", "Volume-render a field to a PNG image");
   o->in.add(*cmd);
-  cmd->add_option("-o,--output", o->output, "PNG file to write")->required();
+  cmd->add_option("-o,--output", o->output, "Image to write: .png, or .jpg / .jpeg")->required();
   cmd->add_option("--float", o->floatOutput, "Also write the float image as PFM");
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--spp", o->spp, "Jittered samples per pixel, accumulated")->capture_default_str();

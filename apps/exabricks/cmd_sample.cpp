@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <sstream>
+#include <vector>
 
 namespace exa::cli {
 namespace {
@@ -18,6 +19,12 @@ struct SampleOptions {
   InputOptions in;
   std::string points; ///< empty or "-": standard input
 };
+
+/// Writes to standard output; a failed write (a full disk, a closed pipe) fails the command.
+void writeOut(const std::string& text) {
+  if (!text.empty() && std::fwrite(text.data(), 1, text.size(), stdout) != text.size())
+    fail("writing standard output: ", std::strerror(errno));
+}
 
 void run(const SampleOptions& o) {
   const Model model = loadModel(o.in.input, o.in.loadOptions(true));
@@ -38,12 +45,21 @@ void run(const SampleOptions& o) {
     ++lineNo;
     const size_t hash = line.find('#');
     if (hash != std::string::npos) line.resize(hash);
+    // Blank and comment lines hold no point and give no output; every other line is one point
+    // and gives one line, or the command fails naming it. nan and out-of-range numbers (1e400)
+    // are points outside the data.
     std::istringstream ls(line);
+    std::vector<std::string> words;
+    for (std::string word; ls >> word;) words.push_back(word);
+    if (words.empty()) continue;
     double w[3];
-    if (!(ls >> w[0])) continue; // blank or comment line
-    std::string rest;
-    if (!(ls >> w[1] >> w[2]) || (ls >> rest))
-      fail(source, ": line ", lineNo, ": expected three numbers 'x y z'");
+    bool ok = words.size() == 3;
+    for (size_t k = 0; ok && k < 3; ++k) {
+      char* end = nullptr;
+      w[k] = std::strtod(words[k].c_str(), &end);
+      ok = end && *end == '\0';
+    }
+    if (!ok) fail(source, ": line ", lineNo, ": expected three numbers 'x y z', got '", line, "'");
     double value;
     vec3d g;
     if (model.sampleWorld(field, vec3d(w[0], w[1], w[2]), value, g)) {
@@ -53,11 +69,11 @@ void run(const SampleOptions& o) {
       out += "nan nan nan nan\n";
     }
     if (out.size() > (1 << 16)) {
-      std::fwrite(out.data(), 1, out.size(), stdout);
+      writeOut(out);
       out.clear();
     }
   }
-  std::fwrite(out.data(), 1, out.size(), stdout);
+  writeOut(out);
 }
 
 } // namespace

@@ -31,7 +31,7 @@ LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
     long long x = 0, y = 0, z = 0;
     char extra = 0;
     if (std::sscanf(rawDims.c_str(), "%lldx%lldx%lld%c", &x, &y, &z, &extra) != 3)
-      fail("--raw-dims: expected NXxNYxNZ (e.g. 256x256x128), got '", rawDims, "'");
+      failUsage("--raw-dims: expected NXxNYxNZ (e.g. 256x256x128), got '", rawDims, "'");
     o.raw.dims = vec3l(x, y, z);
   }
   o.raw.type = rawType;
@@ -47,7 +47,7 @@ void parseSize(const std::string& text, int& width, int& height) {
   std::istringstream in(text);
   if (!(in >> width >> x >> height) || x != 'x' || !in.eof() || width < 1 || height < 1 || width > 32768 ||
       height > 32768)
-    fail("--size expects WIDTHxHEIGHT with each in 1..32768, got '", text, "'");
+    failUsage("--size expects WIDTHxHEIGHT with each in 1..32768, got '", text, "'");
 }
 
 nlohmann::json toJson(const range1f& r) {

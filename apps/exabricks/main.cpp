@@ -1,22 +1,67 @@
 // exabricks: render and inspect structured AMR data with the ExaBricks method.
+//
+// Exit status: 0 success; 1 a failure while working (unreadable or invalid input, a render or
+// write that failed, including standard output); 2 a usage error (unknown option, bad option
+// value, missing argument); 130 / 143 interrupted by SIGINT / SIGTERM (no temporary file is left).
 #include "commands.h"
 
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/io/native.h"
 
+#include <tbb/global_control.h>
+
+#include <cerrno>
+#include <csignal>
 #include <cstdio>
+#include <cstring>
 #include <exception>
+#include <iostream>
+#include <memory>
 #include <new>
 
+#ifndef EXABRICKS_VERSION
+#define EXABRICKS_VERSION "unknown"
+#endif
+
+namespace {
+
+extern "C" void onInterrupt(int signal) {
+  exa::removePendingTemporaries();
+  std::signal(signal, SIG_DFL);
+  std::raise(signal);
+}
+
+/// Standard output is part of the result: a write error (a full disk, a closed pipe) fails.
+bool flushStandardOutput() {
+  std::cout.flush();
+  if (std::fflush(stdout) != 0 || std::ferror(stdout) || !std::cout) {
+    std::fprintf(stderr, "exabricks: error: writing standard output: %s\n",
+                 std::strerror(errno ? errno : EIO));
+    return false;
+  }
+  return true;
+}
+
+} // namespace
+
 int main(int argc, char** argv) {
+  std::signal(SIGINT, onInterrupt);
+  std::signal(SIGTERM, onInterrupt);
   CLI::App app{"exabricks: fast, faithful rendering of structured AMR data (ExaBricks method)"};
   app.require_subcommand(1);
+  app.set_version_flag("--version", std::string("exabricks ") + EXABRICKS_VERSION);
   bool quiet = false, verbose = false;
+  int threads = 0;
+  std::unique_ptr<tbb::global_control> threadLimit;
   app.add_flag("-q,--quiet", quiet, "Print nothing but results and errors");
   app.add_flag("-v,--verbose", verbose, "Log build steps and timings on stderr");
+  app.add_option("--threads", threads, "Worker threads (default: every core)")->check(CLI::Range(1, 4096));
   app.parse_complete_callback([&] {
     exa::setLogLevel(quiet ? exa::LogLevel::Quiet
                            : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
+    if (threads > 0)
+      threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
   });
   exa::cli::addInfo(app);
   exa::cli::addSample(app);
@@ -28,7 +73,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    return app.exit(e); // usage errors: 2 (help and version: 0)
+  } catch (const exa::UsageError& e) {
+    std::fprintf(stderr, "exabricks: error: %s\n", e.what());
+    return 2;
   } catch (const exa::Error& e) {
     std::fprintf(stderr, "exabricks: error: %s\n", e.what());
     return 1;
@@ -39,5 +87,5 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "exabricks: error: %s\n", e.what());
     return 1;
   }
-  return 0;
+  return flushStandardOutput() ? 0 : 1;
 }

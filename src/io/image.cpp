@@ -95,6 +95,22 @@ void writePng(const std::string& path, const Image& image, bool keepAlpha, const
   writeFileAtomic(path, png.data(), png.size());
 }
 
+void writeJpeg(const std::string& path, const Image& image, const vec3f& background, int quality) {
+  checkImage(path, image);
+  if (quality < 1 || quality > 100) fail(path, ": JPEG quality ", quality, " is outside 1..100");
+  std::vector<unsigned char> bytes(image.pixels.size() * 3);
+  for (size_t i = 0; i < image.pixels.size(); ++i) {
+    const vec3f c = over(image.pixels[i], background);
+    bytes[3 * i] = toByte(linearToSrgb(c.x));
+    bytes[3 * i + 1] = toByte(linearToSrgb(c.y));
+    bytes[3 * i + 2] = toByte(linearToSrgb(c.z));
+  }
+  std::vector<unsigned char> jpeg;
+  if (!stbi_write_jpg_to_func(appendBytes, &jpeg, image.width, image.height, 3, bytes.data(), quality))
+    fail(path, ": JPEG encoding failed");
+  writeFileAtomic(path, jpeg.data(), jpeg.size());
+}
+
 void writePfm(const std::string& path, const Image& image, const vec3f& background) {
   checkImage(path, image);
   // A negative scale marks little-endian data.

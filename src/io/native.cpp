@@ -2,6 +2,7 @@
 
 #include "exabricks/core/error.h"
 
+#include <atomic>
 #include <bit>
 #include <cerrno>
 #include <cmath>
@@ -56,21 +57,113 @@ std::vector<char> readFile(const std::string& path) {
   return data;
 }
 
-void writeFileAtomic(const std::string& path, const void* data, size_t size) {
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
-  std::FILE* f = std::fopen(tmp.c_str(), "wb");
+namespace {
+
+/// Temporary files not yet published, for removePendingTemporaries() (which a signal handler
+/// may call): fixed slots, each claimed and released with an atomic flag.
+constexpr int kPendingSlots = 64;
+struct PendingSlot {
+  std::atomic<bool> used{false};
+  char path[4096];
+};
+PendingSlot gPending[kPendingSlots];
+
+int claimPending(const std::string& path) {
+  if (path.size() >= sizeof(PendingSlot::path)) return -1;
+  for (int i = 0; i < kPendingSlots; ++i) {
+    bool expected = false;
+    if (gPending[i].used.load() || !gPending[i].used.compare_exchange_strong(expected, true)) continue;
+    std::memcpy(gPending[i].path, path.c_str(), path.size() + 1);
+    return i;
+  }
+  return -1;
+}
+
+void releasePending(int slot) {
+  if (slot >= 0) gPending[slot].used.store(false);
+}
+
+/// Where a write to `path` goes: symlinks are followed, so the link stays and its target changes.
+std::string resolveTarget(const std::string& path) {
+  std::error_code ec;
+  fs::path p(path);
+  for (int hops = 0; hops < 40 && fs::is_symlink(fs::symlink_status(p, ec)); ++hops) {
+    const fs::path target = fs::read_symlink(p, ec);
+    if (ec) break;
+    p = target.is_absolute() ? target : p.parent_path() / target;
+  }
+  return p.string();
+}
+
+void writeWhole(const std::string& path, const std::string& target, const void* data, size_t size) {
+  std::FILE* f = std::fopen(target.c_str(), "wb");
   if (!f) fail(path, ": cannot write: ", std::strerror(errno));
   const bool ok = std::fwrite(data, 1, size, f) == size;
+  const bool flushed = std::fflush(f) == 0;
+  const int err = errno;
   const bool closed = std::fclose(f) == 0;
-  if (!ok || !closed) {
-    std::remove(tmp.c_str());
-    fail(path, ": write failed (disk full?)");
+  if (!ok || !flushed || !closed) fail(path, ": write failed: ", std::strerror(err ? err : EIO));
+}
+
+} // namespace
+
+void removePendingTemporaries() {
+  for (PendingSlot& s : gPending)
+    if (s.used.load()) ::unlink(s.path);
+}
+
+void AtomicFiles::write(const std::string& path, const void* data, size_t size) {
+  const std::string target = resolveTarget(path);
+  std::error_code ec;
+  const fs::file_status st = fs::status(target, ec);
+  if (!ec && fs::exists(st) && !fs::is_regular_file(st)) {
+    // A device, a FIFO or another special file: written through, never replaced.
+    if (fs::is_directory(st)) fail(path, ": cannot write: is a directory");
+    writeWhole(path, target, data, size);
+    return;
   }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    const std::string why = std::strerror(errno);
-    std::remove(tmp.c_str());
-    fail(path, ": cannot rename temporary file into place: ", why);
+  Pending p;
+  p.path = path;
+  p.target = target;
+  p.temporary = target + ".tmp" + std::to_string(::getpid()) + "." + std::to_string(pending_.size());
+  p.slot = claimPending(p.temporary);
+  pending_.push_back(p);
+  try {
+    writeWhole(path, p.temporary, data, size);
+  } catch (...) {
+    discard();
+    throw;
   }
+}
+
+void AtomicFiles::commit() {
+  for (size_t i = 0; i < pending_.size(); ++i) {
+    Pending& p = pending_[i];
+    if (std::rename(p.temporary.c_str(), p.target.c_str()) != 0) {
+      const std::string why = std::strerror(errno);
+      pending_.erase(pending_.begin(), pending_.begin() + long(i)); // those are published
+      discard();
+      fail(p.path, ": cannot rename the temporary file into place: ", why);
+    }
+    releasePending(p.slot);
+  }
+  pending_.clear();
+}
+
+void AtomicFiles::discard() {
+  for (const Pending& p : pending_) {
+    std::remove(p.temporary.c_str());
+    releasePending(p.slot);
+  }
+  pending_.clear();
+}
+
+AtomicFiles::~AtomicFiles() { discard(); }
+
+void writeFileAtomic(const std::string& path, const void* data, size_t size) {
+  AtomicFiles files;
+  files.write(path, data, size);
+  files.commit();
 }
 
 std::vector<std::string> listNativeFields(const std::string& cellsPath) {
@@ -139,12 +232,15 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
 void writeNative(const CellSet& set, const std::string& cellsPath) {
   const std::string stem = stemOf(cellsPath);
   if (set.fields.empty()) fail(cellsPath, ": nothing to write: no fields");
-  writeFileAtomic(cellsPath, set.cells.data(), set.cells.size() * sizeof(Cell));
-  for (const Field& f : set.fields) {
+  for (const Field& f : set.fields)
     if (f.name.empty() || f.name.find_first_of("./\\") != std::string::npos)
       fail(cellsPath, ": field name '", f.name, "' cannot be stored in a file name");
-    writeFileAtomic(scalarsPath(stem, f.name), f.values.data(), f.values.size() * sizeof(float));
-  }
+  // Every file to a temporary first; the dataset appears only when all are written.
+  AtomicFiles files;
+  files.write(cellsPath, set.cells.data(), set.cells.size() * sizeof(Cell));
+  for (const Field& f : set.fields)
+    files.write(scalarsPath(stem, f.name), f.values.data(), f.values.size() * sizeof(float));
+  files.commit();
 }
 
 CellSet readGrids(const std::string& path) {

@@ -21,6 +21,18 @@ public:
   explicit Error(const std::string& message) : std::runtime_error(message) {}
 };
 
+/// A request that cannot be valid (a bad option or option value), as opposed to input or work
+/// that failed; the command line exits with 2 for it.
+class UsageError : public Error {
+public:
+  explicit UsageError(const std::string& message) : Error(message) {}
+};
+
+/// Throws exa::UsageError with the concatenated arguments as message.
+template <typename... Args> [[noreturn]] void failUsage(Args&&... args) {
+  throw UsageError(strCat(std::forward<Args>(args)...));
+}
+
 /// Throws exa::Error with the concatenated arguments as message.
 template <typename... Args> [[noreturn]] void fail(Args&&... args) {
   throw Error(strCat(std::forward<Args>(args)...));

@@ -17,6 +17,9 @@ std::vector<unsigned char> encodePng(const Image& image, bool keepAlpha, const v
 void writePng(const std::string& path, const Image& image, bool keepAlpha,
               const vec3f& background = vec3f(0.f));
 
+/// Writes an 8-bit sRGB JPEG (composited over `background`) atomically.
+void writeJpeg(const std::string& path, const Image& image, const vec3f& background = vec3f(0.f), int quality = 92);
+
 /// Writes the RGB channels (composited over `background`) as a little-endian float PFM, atomically.
 void writePfm(const std::string& path, const Image& image, const vec3f& background = vec3f(0.f));
 

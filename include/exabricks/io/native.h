@@ -20,14 +20,39 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
 std::vector<std::string> listNativeFields(const std::string& cellsPath);
 
 /// Writes NAME.cells and one NAME[.FIELD].scalars per field (field "scalar" is NAME.scalars).
-/// Each file is written to a temporary name and renamed into place.
+/// Every file is written to a temporary name first; they are renamed into place together.
 void writeNative(const CellSet& cells, const std::string& cellsPath);
 
 /// Reads a .grids text fixture (field "scalar").
 CellSet readGrids(const std::string& path);
 
-/// Writes `size` bytes to `path` atomically: a temporary file in the same folder, then rename.
+/// Files published together: each write goes to a temporary file beside its target, commit()
+/// renames them all into place, and whatever was not committed is removed. A symlink keeps
+/// pointing where it did (its target is replaced); a device, FIFO or other special file is
+/// written through, never replaced.
+class AtomicFiles {
+public:
+  AtomicFiles() = default;
+  AtomicFiles(const AtomicFiles&) = delete;
+  AtomicFiles& operator=(const AtomicFiles&) = delete;
+  ~AtomicFiles();
+  void write(const std::string& path, const void* data, size_t size);
+  void commit();
+  void discard();
+
+private:
+  struct Pending {
+    std::string path, target, temporary;
+    int slot = -1;
+  };
+  std::vector<Pending> pending_;
+};
+
+/// Writes `size` bytes to `path` atomically (AtomicFiles with one file).
 void writeFileAtomic(const std::string& path, const void* data, size_t size);
+
+/// Removes every temporary file not yet published; async-signal-safe, for an interrupt handler.
+void removePendingTemporaries();
 
 /// Reads a whole binary file; fails with the path when it cannot.
 std::vector<char> readFile(const std::string& path);
