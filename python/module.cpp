@@ -11,6 +11,7 @@
 #include "exabricks/io/mesh.h"
 #include "exabricks/io/model_info.h"
 #include "exabricks/io/scene_file.h"
+#include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 
 #include <pybind11/numpy.h>
@@ -319,6 +320,12 @@ public:
     return d;
   }
 
+  py::object visibleBounds() const {
+    const box3d b = renderer_.visibleBounds();
+    if (b.empty()) return py::none();
+    return py::make_tuple(py::make_tuple(b.lower.x, b.lower.y, b.lower.z), py::make_tuple(b.upper.x, b.upper.y, b.upper.z));
+  }
+
   py::object pick(const std::vector<double>& origin, const std::vector<double>& direction) const {
     if (origin.size() != 3 || direction.size() != 3) fail("origin and direction need three numbers each");
     SurfaceHit hit;
@@ -377,7 +384,22 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("default_opacity_scale",
                              [](const Dataset& d) { return DatasetInfo::of(*d.model).defaultOpacityScale; })
       .def("info_json", [](const Dataset& d) { return modelInfoJson(*d.model, d.name, d.loadSeconds); })
-      .def("sample", &sample, py::arg("points"), py::arg("field") = "");
+      .def("sample", &sample, py::arg("points"), py::arg("field") = "")
+      .def("adapt_transfer_function",
+           [](const Dataset& d, const std::string& field, const std::string& tfJson, bool autoLog, bool autoOpacity) {
+             const int f = d.model->requireField(field);
+             const DefaultChoices c = adaptTransferFunction(*d.model, DatasetInfo::of(*d.model), f,
+                                                            parseTransferFunction(tfJson, "transfer function"), autoLog,
+                                                            autoOpacity);
+             return py::make_tuple(transferFunctionJson(c.tf), c.notes);
+           },
+           py::arg("field"), py::arg("tf_json"), py::arg("auto_log") = true, py::arg("auto_opacity") = true)
+      .def("warnings",
+           [](const Dataset& d, const std::string& sceneJson) {
+             const SceneDocument doc = readSceneJson(sceneJson, "scene");
+             return sceneWarnings(doc.scene, *d.model, DatasetInfo::of(*d.model));
+           },
+           py::arg("scene_json"));
 
   py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh")
       .def(py::init(&makeMesh), py::arg("vertices"), py::arg("triangles"))
@@ -397,7 +419,8 @@ PYBIND11_MODULE(_core, m) {
       .def("png", &PyRenderer::png)
       .def("save", &PyRenderer::save, py::arg("path"))
       .def("stats", &PyRenderer::stats)
-      .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"));
+      .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"))
+      .def("visible_bounds", &PyRenderer::visibleBounds);
 
   m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(),
         py::arg("max_brick_width") = 32, py::arg("box") = std::vector<int>());

@@ -6,6 +6,7 @@
 #include "exabricks/io/image.h"
 #include "exabricks/io/mesh.h"
 #include "exabricks/io/scene_file.h"
+#include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 
 #include <algorithm>
@@ -35,11 +36,13 @@ struct RenderCmdOptions {
   float opacityScale = 0.f;         ///< 0: chosen from the dataset's size
   std::vector<float> range;
   bool logScale = false;
+  bool linear = false;
+  bool frameAll = false;
   std::vector<double> position, lookAt, up;
   double fov = 40.0;
   bool ortho = false;
   double azimuth = 30.0, elevation = 25.0;
-  std::vector<float> background{1.f, 1.f, 1.f};
+  std::vector<float> background{0.f, 0.f, 0.f};
   bool alpha = false;
   std::string shading = "analytic";
   std::string light = "headlight";
@@ -138,7 +141,7 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderC
     if (o.range.size() != 2 || !(o.range[0] < o.range[1])) failUsage("--range expects LOW,HIGH with LOW < HIGH");
     tf.valueRange = range1f{o.range[0], o.range[1]};
   }
-  if (withRange && o.logScale) tf.logScale = true;
+  if (o.logScale) tf.logScale = true;
   if (o.opacityScale > 0.f) tf.opacityScale = o.opacityScale;
   return tf;
 }
@@ -164,6 +167,7 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (apply("--no-jitter")) f.jitter = !o.noJitter;
 
   // The first volume layer: the field and its transfer function.
+  if (o.linear && o.logScale) failUsage("--log and --linear exclude each other");
   if (given("--opacity-scale") && !(o.opacityScale > 0.f && std::isfinite(o.opacityScale)))
     failUsage("--opacity-scale must be a positive number (leave it out for the dataset's default)");
   if (s.layers.empty()) s.layers.push_back(VolumeLayer{});
@@ -296,6 +300,8 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
     if (!meshColors.empty())
       for (size_t i = 0; i < s.meshes.size(); ++i) s.meshes[i].color = meshColors[i % meshColors.size()];
   }
+  if (!s.volume && s.iso.values.empty() && s.meshes.empty())
+    failUsage("--no-volume leaves nothing to draw: add --iso or --mesh");
   s.validate();
   return doc;
 }
@@ -316,16 +322,19 @@ std::vector<std::string> neededFields(const Scene& s) {
   return all ? std::vector<std::string>() : names;
 }
 
-/// The camera: the scene file's, or framing the data from azimuth and elevation; explicit
+/// The camera: the scene file's, or framing from azimuth and elevation the part of the data the
+/// transfer function shows (all of it with --frame-all, or when nothing is visible); explicit
 /// position, look-at and up override either.
-Camera cameraFromOptions(const RenderCmdOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model) {
+Camera cameraFromOptions(const RenderCmdOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
+                         const box3d& visible) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
   if (!(o.fov > 0 && o.fov < 180)) failUsage("--fov must be in (0, 180) degrees");
   const box3i cb = model.cellBounds();
-  const box3d worldBox(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
+  const box3d all(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
+  const box3d target = o.frameAll || visible.empty() ? all : visible;
   const bool reframe = given("--azimuth") || given("--elevation") || given("--fov") || given("--ortho");
   Camera camera = doc.hasCamera && !reframe ? doc.frame.camera
-                                           : Camera::frame(worldBox, o.azimuth, o.elevation, o.fov, o.ortho);
+                                           : Camera::frame(target, o.azimuth, o.elevation, o.fov, o.ortho);
   if (!o.position.empty()) camera.position = toVec(o.position, "--position");
   if (!o.lookAt.empty()) camera.lookAt = toVec(o.lookAt, "--look-at");
   if (!o.up.empty()) camera.up = toVec(o.up, "--up");
@@ -365,18 +374,36 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   lo.fields = neededFields(scene);
   const Model model = loadModel(doc.input, lo);
   const double loadSeconds = loadTimer.seconds();
-  frame.camera = cameraFromOptions(o, cmd, doc, model);
-  frame.validate();
-  doc.hasCamera = true;
-  if (!o.writeScene.empty()) {
-    writeSceneFile(o.writeScene, withAbsolutePaths(doc));
-  }
+  const DatasetInfo dataset = DatasetInfo::of(model);
+  auto given = [&](const char* name) { return cmd.count(name) > 0; };
+  const bool fromFile = !o.sceneFile.empty();
 
-  Renderer renderer(model);
+  // The first picture: the default field named, and transfer-function defaults adapted to the
+  // data unless a file or the options chose them.
+  VolumeLayer& first = scene.layers.at(0);
+  const int field = model.requireField(first.field);
+  if (first.field.empty() && model.fieldNames.size() > 1)
+    logNote(strCat("field '", model.fieldNames[size_t(field)], "' (the default; -f chooses another of ",
+                   model.fieldNames.size(), ")"));
+  if (!fromFile && o.tfFile.empty()) {
+    const DefaultChoices c = adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
+                                                   !given("--opacity"));
+    first.tf = c.tf;
+    for (const std::string& note : c.notes) logNote(note);
+  }
+  if (given("--linear"))
+    for (VolumeLayer& l : scene.layers) l.tf.logScale = false;
+  for (const std::string& w : sceneWarnings(scene, model, dataset)) logWarning(w);
+
+  Renderer renderer(model, dataset);
   const SceneUpdate update = renderer.setScene(scene);
   if (!scene.iso.values.empty())
     logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(),
                    ", built in ", update.isoSeconds, " s"));
+  frame.camera = cameraFromOptions(o, cmd, doc, model, renderer.visibleBounds());
+  frame.validate();
+  doc.hasCamera = true;
+  if (!o.writeScene.empty()) writeSceneFile(o.writeScene, withAbsolutePaths(doc));
 
   // A frame is samplesPerPixel passes into one buffer; a progress line on a terminal.
   FrameBuffer buffer(frame.width, frame.height);
@@ -409,6 +436,9 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     renderFrame(stats);
   }
   const Image image = buffer.resolve();
+  if (imageIsEmpty(image))
+    logWarning(strCat("the image is empty: nothing in view is visible (", renderer.visibleRegions(), " of ",
+                      model.regions.regions.size(), " regions may be; check --range, --opacity and the camera)"));
   if (jpeg)
     writeJpeg(o.output, image, scene.background);
   else
@@ -480,7 +510,9 @@ void addRender(CLI::App& app) {
   cmd->add_option("--opacity", o->opacity, "Opacity points x,alpha,... over the normalised value")->delimiter(',');
   cmd->add_option("--opacity-scale", o->opacityScale, "Multiplies the opacity (default: from the dataset size)");
   cmd->add_option("--range", o->range, "Value range LOW,HIGH mapped by the transfer function")->delimiter(',');
-  cmd->add_flag("--log", o->logScale, "Map values logarithmically");
+  cmd->add_flag("--log", o->logScale, "Map values logarithmically (every layer)");
+  cmd->add_flag("--linear", o->linear, "Map values linearly even where the data spans many decades");
+  cmd->add_flag("--frame-all", o->frameAll, "Default view: frame the whole data, not only its visible part");
   cmd->add_option("--position", o->position, "Camera position x,y,z (world)")->delimiter(',');
   cmd->add_option("--look-at", o->lookAt, "Camera target x,y,z (world)")->delimiter(',');
   cmd->add_option("--up", o->up, "Camera up vector x,y,z")->delimiter(',');

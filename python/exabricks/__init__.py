@@ -287,7 +287,15 @@ class Scene:
         self.dataset = dataset
         self._input = "" if dataset.name.startswith("<") else dataset.name
         self._renderer = _core.Renderer(dataset._core)  # holds the dataset alive
-        self.layers = [Layer(field or dataset.default_field, transfer_function)]
+        field = field or dataset.default_field
+        self.notes = []  # what the defaults chose, as the command line says on stderr
+        if transfer_function is None:
+            # The command line's first picture: log mapping for positive data spanning many
+            # decades, transparent over the dominant background.
+            tf_json, self.notes = dataset._core.adapt_transfer_function(
+                field, json.dumps(TransferFunction().to_dict()), True, True)
+            transfer_function = TransferFunction.from_dict(json.loads(tf_json))
+        self.layers = [Layer(field, transfer_function)]
         self.volume = True
         self.iso_values = []
         self.iso_field = ""
@@ -308,9 +316,9 @@ class Scene:
         self.space_skipping = True
         self.traversal = "auto"
         self.debug = "none"
-        self.background = (1.0, 1.0, 1.0)
+        self.background = (0.0, 0.0, 0.0)
         self.alpha = False
-        self.camera = Camera.frame(dataset.bounds)
+        self.camera = None
         self.width, self.height = 800, 800
         self.spp = 1
         self.rate = 1.0
@@ -320,6 +328,23 @@ class Scene:
             if not hasattr(self, key):
                 raise AttributeError("Scene has no setting '%s'" % key)
             setattr(self, key, value)
+        if self.camera is None:
+            self.camera = self.frame_visible()
+
+    def frame_visible(self, azimuth=30.0, elevation=25.0, fov=40.0):
+        """A camera that frames the part of the data the transfer functions show (the whole data
+        when none of it is visible), as the command line's default view does."""
+        self._update()
+        box = self._renderer.visible_bounds() or self.dataset.bounds
+        return Camera.frame(box, azimuth, elevation, fov)
+
+    def warnings(self):
+        """What in the scene can never show anything (iso-values outside the data, a range that
+        excludes it, ...), as the command line warns."""
+        d = self.to_dict()
+        for key in ("camera", "frame", "input"):
+            d.pop(key, None)
+        return list(self.dataset._core.warnings(json.dumps(d)))
 
     # -- convenience ------------------------------------------------------------------------
     @property
@@ -354,8 +379,8 @@ class Scene:
         self.clip_planes.append((tuple(map(float, point)), tuple(map(float, normal))))
 
     def orbit(self, azimuth, elevation=25.0, fov=None):
-        """Frames the data from another direction."""
-        self.camera = Camera.frame(self.dataset.bounds, azimuth, elevation, fov or self.camera.fov)
+        """Frames the visible part of the data from another direction."""
+        self.camera = self.frame_visible(azimuth, elevation, fov or self.camera.fov)
 
     # -- the scene file -----------------------------------------------------------------------
     def to_dict(self, with_meshes=False):
@@ -363,7 +388,7 @@ class Scene:
         written inline only with with_meshes)."""
         d = {
             "input": self._input,
-            "camera": self.camera.to_dict(),
+            "camera": self.camera.to_dict() if self.camera is not None else Camera().to_dict(),
             "frame": {"width": int(self.width), "height": int(self.height), "samples_per_pixel": int(self.spp),
                       "rate": float(self.rate), "jitter": bool(self.jitter), "seed": int(self.seed)},
             "layers": [{"field": l.field, "transfer_function": l.transfer_function.to_dict()} for l in self.layers],

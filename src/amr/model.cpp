@@ -21,7 +21,13 @@ int Model::fieldIndex(const std::string& name) const {
 
 int Model::requireField(const std::string& name) const {
   if (fieldNames.empty()) fail("the data has no fields");
-  if (name.empty()) return std::max(fieldIndex("scalar"), 0);
+  if (name.empty()) {
+    // The principal field where the data names one: the native default, then the density of
+    // Enzo, FLASH and most codes; otherwise the first in file order.
+    for (const char* principal : {"scalar", "Density", "density", "dens", "rho"})
+      if (const int i = fieldIndex(principal); i >= 0) return i;
+    return 0;
+  }
   const int i = fieldIndex(name);
   if (i < 0) {
     std::string known;

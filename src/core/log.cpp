@@ -21,6 +21,9 @@ LogLevel logLevel() { return LogLevel(gLevel.load()); }
 void logInfo(const std::string& m) {
   if (gLevel >= int(LogLevel::Info)) emit("", m);
 }
+void logNote(const std::string& m) {
+  if (gLevel >= int(LogLevel::Warning)) emit("", m);
+}
 void logWarning(const std::string& m) {
   if (gLevel >= int(LogLevel::Warning)) emit("warning: ", m);
 }

@@ -746,6 +746,15 @@ TraversalKind Renderer::traversalInUse() const {
 
 size_t Renderer::visibleRegions() const { return impl_->traversal ? impl_->traversal->visibleCount() : 0; }
 
+box3d Renderer::visibleBounds() const {
+  const Impl& im = *impl_;
+  box3f lattice;
+  for (size_t i = 0; i < im.visible.size(); ++i)
+    if (im.visible[i]) lattice.extend(im.model.regions.regions[i].bounds());
+  if (lattice.empty()) return box3d();
+  return box3d(im.model.world.toWorld(vec3d(lattice.lower)), im.model.world.toWorld(vec3d(lattice.upper)));
+}
+
 size_t Renderer::isoRegions() const { return impl_->isoTraversal ? impl_->isoTraversal->visibleCount() : 0; }
 
 size_t Renderer::meshCount() const { return impl_->meshColors.size(); }
@@ -753,6 +762,8 @@ size_t Renderer::meshCount() const { return impl_->meshColors.size(); }
 SceneUpdate Renderer::setScene(const Scene& s) {
   Impl& im = *impl_;
   s.validate();
+  for (size_t m = 0; m < s.meshes.size(); ++m)
+    if (!s.meshes[m].mesh) fail("mesh ", m, " (", s.meshes[m].source, ") has not been read");
   // Resolve every field name first: an unknown one leaves the current scene as it is.
   std::vector<int> fields;
   for (const VolumeLayer& layer : s.layers) fields.push_back(resolveField(im.model, layer.field));

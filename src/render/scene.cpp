@@ -31,7 +31,10 @@ void Scene::validate() const {
   if (!light.headlight && !(length(light.direction) > 0.f && std::isfinite(length(light.direction))))
     fail("the light direction must be finite and non-zero");
   for (size_t m = 0; m < meshes.size(); ++m) {
-    if (!meshes[m].mesh) fail("mesh ", m, " has no data");
+    if (!meshes[m].mesh) {
+      if (meshes[m].source.empty()) fail("mesh ", m, " has no data");
+      continue; // named by file: checked once it is read
+    }
     const TriangleMesh& mesh = *meshes[m].mesh;
     if (mesh.triangles.empty()) fail("mesh ", m, " has no triangles");
     for (size_t i = 0; i < mesh.vertices.size(); ++i) {
@@ -441,9 +444,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   r.color("background", s.background);
   r.boolean("alpha", s.keepAlpha);
   try {
-    Scene withoutFiles = s; // meshes named by file are checked once they are read
-    std::erase_if(withoutFiles.meshes, [](const SceneMesh& m) { return !m.mesh; });
-    withoutFiles.validate();
+    s.validate(); // meshes named by file are checked once they are read
     if (doc.hasCamera || r.find("frame")) f.validate();
   } catch (const Error& e) {
     fail(source, ": ", e.what());

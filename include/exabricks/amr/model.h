@@ -30,8 +30,9 @@ struct Model {
 
   uint64_t cellCount() const;
   int fieldIndex(const std::string& name) const;
-  /// Index of `name`; when `name` is empty, of field "scalar" if present, else of the first
-  /// field. Throws when the field is unknown.
+  /// Index of `name`; when `name` is empty, the default field: "scalar", "Density", "density",
+  /// "dens" or "rho" (the first present), else the first in file order. Throws when the field is
+  /// unknown.
   int requireField(const std::string& name) const;
   FieldView view(int field) const;
   /// Lattice box covered by cells (upper exclusive).

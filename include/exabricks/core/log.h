@@ -14,6 +14,8 @@ void setLogLevel(LogLevel level);
 LogLevel logLevel();
 void logInfo(const std::string& message);
 void logWarning(const std::string& message);
+/// What a command chose for the user (a default field, a log scale), shown unless -q.
+void logNote(const std::string& message);
 void logDebug(const std::string& message);
 
 /// Wall-clock stopwatch in seconds.

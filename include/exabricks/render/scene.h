@@ -109,7 +109,9 @@ struct Scene {
   AmbientOcclusion ao;
   Integration integration;
   DebugView debug = DebugView::None;
-  vec3f background{1.f};                         ///< linear RGB, used when images are written
+  /// Linear RGB, used when images are written. Black: the volume emits light, and faint
+  /// structure shows against black where it vanishes against white.
+  vec3f background{0.f};
   bool keepAlpha = false;                        ///< images keep alpha instead of the background
 
   /// A scene of one volume layer.

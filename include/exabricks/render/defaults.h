@@ -1,0 +1,38 @@
+// A first picture that shows the data: transfer-function defaults chosen from the field's values
+// and a view of the part of the data the transfer function shows. Used by the command line and
+// the Python module alike; every choice comes with a note that says what was chosen and why.
+#pragma once
+
+#include "exabricks/render/renderer.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+struct DefaultChoices {
+  TransferFunction tf;
+  std::vector<std::string> notes; ///< one line per choice, for stderr or a log
+};
+
+/// Adapts `tf` (whose value range may be empty: the field's) to field `field`:
+/// - with `autoLog`, logarithmic mapping when every value is positive, they span more than
+///   three decades and a linear map would crowd half the volume into its lowest percent;
+/// - with `autoOpacity`, an opacity transparent over the background: the value that fills the
+///   most volume (a volume-weighted histogram of the normalised value) and its neighbourhood,
+///   and at least the half of the volume on its side (the volume-weighted median): the value
+///   range becomes the rest, so that colours and a linear opacity ramp span what lies beyond
+///   the background (towards high values unless a dominant background, a fifth of the volume or
+///   more, sits in the upper third, then towards low values).
+DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
+                                     const TransferFunction& tf, bool autoLog, bool autoOpacity);
+
+/// What in a scene can never show anything, said before rendering: nothing to draw at all (no
+/// volume, iso-surface or mesh), iso-values outside their field's range, a value range that
+/// excludes all of a layer's data, logarithmic mapping of a field without positive values.
+std::vector<std::string> sceneWarnings(const Scene& scene, const Model& model, const DatasetInfo& dataset);
+
+/// Whether every pixel of an image is transparent (the render shows only the background).
+bool imageIsEmpty(const Image& image);
+
+} // namespace exa

@@ -1,0 +1,156 @@
+#include "exabricks/render/defaults.h"
+
+#include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
+
+#include <cmath>
+
+namespace exa {
+
+namespace {
+
+constexpr int kBins = 256;
+
+/// Volume-weighted histogram of the normalised value; returns the total volume.
+double histogram(const Model& model, int field, const TransferFunction& tf, std::vector<double>& hist) {
+  hist.assign(kBins, 0.0);
+  const std::vector<float>& values = model.fieldValues.at(size_t(field));
+  double total = 0.0;
+  for (const Brick& b : model.bricks) {
+    const double volume = std::ldexp(1.0, 3 * b.level);
+    const size_t n = size_t(b.cellCount());
+    for (size_t i = 0; i < n; ++i) {
+      const float t = tf.normalize(values[b.valueOffset + i]);
+      hist[size_t(std::clamp(int(t * kBins), 0, kBins - 1))] += volume;
+    }
+    total += volume * double(n);
+  }
+  return total;
+}
+
+/// The bin holding the volume-weighted median, counted from the low or the high end.
+int medianBin(const std::vector<double>& hist, double total, bool fromHigh) {
+  double cumulative = 0.0;
+  for (int k = 0; k < kBins; ++k) {
+    const int bin = fromHigh ? kBins - 1 - k : k;
+    cumulative += hist[size_t(bin)];
+    if (cumulative >= 0.5 * total) return bin;
+  }
+  return fromHigh ? 0 : kBins - 1;
+}
+
+} // namespace
+
+DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
+                                     const TransferFunction& tfIn, bool autoLog, bool autoOpacity) {
+  DefaultChoices out;
+  out.tf = tfIn;
+  TransferFunction& tf = out.tf;
+  const std::string& name = model.fieldNames.at(size_t(field));
+  const range1f range = tf.valueRange.empty() ? dataset.valueRanges.at(size_t(field)) : tf.valueRange;
+  if (range.empty()) return out;
+  TransferFunction norm = tf;
+  norm.valueRange = range;
+  std::vector<double> hist;
+  double total = histogram(model, field, norm, hist);
+  if (!(total > 0.0)) return out;
+  // Logarithmic mapping where a linear one would crowd most of the volume into the lowest
+  // percent of the colour map: positive values over more than three decades, half the volume
+  // below 1 % of the range.
+  if (autoLog && !tf.logScale && range.lower > 0.f && range.upper > 1e3f * range.lower &&
+      medianBin(hist, total, false) < kBins / 100) {
+    tf.logScale = norm.logScale = true;
+    total = histogram(model, field, norm, hist);
+    out.notes.push_back(strCat("'", name, "' is positive, spans ",
+                               std::lround(std::log10(double(range.upper) / double(range.lower))),
+                               " decades and half its volume lies in the lowest percent of the range: ",
+                               "logarithmic colour mapping (--linear to refuse)"));
+  }
+  if (!autoOpacity || !tfIn.valueRange.empty()) return out; // a range given is kept
+
+  // The background: the value filling the most volume, with its neighbours while they hold a
+  // tenth of its volume or more, when it fills a fifth of the volume or more; and at least the
+  // half of the volume on its side (the volume-weighted median).
+  const int mode = int(std::max_element(hist.begin(), hist.end()) - hist.begin());
+  const double share = hist[size_t(mode)] / total;
+  const bool dominant = share >= 0.2;
+  int lo = mode, hi = mode;
+  while (lo > 0 && hist[size_t(lo - 1)] >= 0.1 * hist[size_t(mode)]) --lo;
+  while (hi < kBins - 1 && hist[size_t(hi + 1)] >= 0.1 * hist[size_t(mode)]) ++hi;
+  const bool backgroundHigh = dominant && (float(mode) + 0.5f) / kBins > 2.f / 3.f;
+  const int median = medianBin(hist, total, backgroundHigh);
+  const float tLo = float(dominant ? std::min(lo, median) : median) / kBins;
+  const float tHi = float((dominant ? std::max(hi, median) : median) + 1) / kBins;
+  // The colour map and the opacity ramp span what lies beyond the background: the value range
+  // starts (or ends) where the background ends.
+  auto valueAt = [&](float t) {
+    double l = range.lower, h = range.upper;
+    if (!tf.logScale) return float(l + (h - l) * double(t));
+    if (!(l > 0.0)) l = h * 1e-6;
+    return float(std::pow(10.0, std::log10(l) + (std::log10(h) - std::log10(l)) * double(t)));
+  };
+  if (backgroundHigh && tLo > 0.f) {
+    tf.valueRange = range1f{range.lower, valueAt(tLo)};
+    tf.opacity = {{0.f, 1.f}, {1.f, 0.f}};
+  } else if (!backgroundHigh && tHi < 1.f) {
+    tf.valueRange = range1f{valueAt(tHi), range.upper};
+    tf.opacity = {{0.f, 0.f}, {1.f, 1.f}};
+  } else {
+    return out;
+  }
+  if (!(tf.valueRange.upper > tf.valueRange.lower)) {
+    tf.valueRange = tfIn.valueRange;
+    tf.opacity = tfIn.opacity;
+    return out;
+  }
+  if (dominant)
+    out.notes.push_back(strCat(std::lround(100.0 * share), " % of the volume holds '", name,
+                               "' near one value (the background): transparent there; colours and opacity span [",
+                               tf.valueRange.lower, ", ", tf.valueRange.upper, "] (--range, --opacity to choose)"));
+  else
+    out.notes.push_back(strCat("transparent over the ", backgroundHigh ? "upper" : "lower", " half of the volume of '",
+                               name, "'; colours and opacity span [", tf.valueRange.lower, ", ", tf.valueRange.upper,
+                               "] (--range, --opacity to choose)"));
+  return out;
+}
+
+std::vector<std::string> sceneWarnings(const Scene& scene, const Model& model, const DatasetInfo& dataset) {
+  std::vector<std::string> out;
+  if (!scene.volume && scene.iso.values.empty() && scene.meshes.empty())
+    out.push_back("nothing to draw: the volume is off and there are no iso-surfaces or meshes");
+  auto fieldOf = [&](const std::string& name) { return model.requireField(name); };
+  auto describe = [](const range1f& r) { return strCat("[", r.lower, ", ", r.upper, "]"); };
+  if (scene.volume)
+    for (const VolumeLayer& layer : scene.layers) {
+      const int f = fieldOf(layer.field);
+      const std::string& name = model.fieldNames[size_t(f)];
+      const range1f data = dataset.valueRanges.at(size_t(f));
+      const range1f& r = layer.tf.valueRange;
+      if (!r.empty() && !data.empty() && (r.upper < data.lower || r.lower > data.upper))
+        out.push_back(strCat("the value range ", describe(r), " excludes all of '", name, "' (its values lie in ",
+                             describe(data), "): every sample maps to one end of the colour map"));
+      if (layer.tf.logScale && !data.empty() && !(data.upper > 0.f))
+        out.push_back(strCat("'", name, "' has no positive values (", describe(data),
+                             "): with logarithmic mapping every sample maps to the low end"));
+    }
+  if (!scene.iso.values.empty()) {
+    const std::string& isoName = !scene.iso.field.empty() ? scene.iso.field
+                                 : !scene.layers.empty()   ? scene.layers[0].field
+                                                           : std::string();
+    const int f = fieldOf(isoName);
+    const range1f data = dataset.valueRanges.at(size_t(f));
+    for (float v : scene.iso.values)
+      if (data.empty() || v < data.lower || v > data.upper)
+        out.push_back(strCat("iso-value ", v, " lies outside the range of '", model.fieldNames[size_t(f)], "' ",
+                             describe(data), ": that surface does not exist"));
+  }
+  return out;
+}
+
+bool imageIsEmpty(const Image& image) {
+  for (const vec4f& p : image.pixels)
+    if (p.w > 0.f) return false;
+  return true;
+}
+
+} // namespace exa

@@ -1,0 +1,163 @@
+// The first picture: default field, transfer-function defaults adapted to the data, warnings
+// for requests that can never show anything, and default renders of real data that are neither
+// blank nor saturated.
+#include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
+#include "exabricks/io/image.h"
+#include "exabricks/render/defaults.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+
+using namespace exa;
+namespace fs = std::filesystem;
+
+namespace {
+
+/// 32^3 finest cells with values from f(x, y, z), in fields named as given.
+Model uniformModel(const std::vector<std::string>& names, float (*f)(int, int, int)) {
+  CellSet s;
+  for (const std::string& n : names) s.fields.push_back({n, {}});
+  for (int z = 0; z < 32; ++z)
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        s.cells.push_back({vec3i(x, y, z), 0});
+        for (Field& fld : s.fields) fld.values.push_back(f(x, y, z));
+      }
+  return buildModel(std::move(s));
+}
+
+fs::path sharedData() {
+  const char* env = std::getenv("EXABRICKS_DATA");
+  return env ? fs::path(env) : fs::path(EXABRICKS_SOURCE_DIR) / ".." / "shared" / "data";
+}
+
+} // namespace
+
+TEST(Defaults, TheDefaultFieldIsTheDensity) {
+  auto one = [](int, int, int) { return 1.f; };
+  EXPECT_EQ(uniformModel({"Dark_Matter_Density", "Density", "Temperature"}, one).requireField(""), 1);
+  EXPECT_EQ(uniformModel({"pres", "dens"}, one).requireField(""), 1);
+  EXPECT_EQ(uniformModel({"phi", "temp"}, one).requireField(""), 0); // first in file order
+  EXPECT_EQ(uniformModel({"radius", "scalar"}, one).requireField(""), 1);
+}
+
+TEST(Defaults, TransparentOverTheBackgroundAndLogWhereTheDataAsksForIt) {
+  // A low background (0.1) filling most of the volume, a sphere of higher values.
+  const Model low = uniformModel({"f"}, [](int x, int y, int z) {
+    const float r2 = float((x - 16) * (x - 16) + (y - 16) * (y - 16) + (z - 16) * (z - 16));
+    return r2 < 64.f ? 0.1f + (1.f - r2 / 64.f) : 0.1f;
+  });
+  const DatasetInfo info = DatasetInfo::of(low);
+  DefaultChoices c = adaptTransferFunction(low, info, 0, defaultTransferFunction(), true, true);
+  EXPECT_FALSE(c.tf.logScale);
+  EXPECT_GT(c.tf.valueRange.lower, 0.1f);     // the background lies below the range: transparent
+  EXPECT_EQ(c.tf.valueRange.upper, info.valueRanges[0].upper);
+  TransferFunction scaled = c.tf; // opacity scale "auto" (0) is the renderer's to resolve
+  scaled.opacityScale = 1.f;
+  EXPECT_EQ(scaled.lookup(0.1f).w, 0.f);
+  EXPECT_GT(scaled.lookup(1.0f).w, 0.f);
+  ASSERT_EQ(c.notes.size(), 1u);
+  // A high background (1.0, like a volume fraction) with a hole of low values: the ramp runs
+  // towards low values.
+  const Model high = uniformModel({"volFrac"}, [](int x, int y, int z) {
+    return (x - 16) * (x - 16) + (y - 16) * (y - 16) < 25 && z > 4 ? 0.f : 1.f;
+  });
+  c = adaptTransferFunction(high, DatasetInfo::of(high), 0, defaultTransferFunction(), true, true);
+  scaled = c.tf;
+  scaled.opacityScale = 1.f;
+  EXPECT_EQ(scaled.lookup(1.f).w, 0.f);
+  EXPECT_GT(scaled.lookup(0.f).w, 0.f);
+  // Log-normal "densities" over eight decades, most of the volume near the bottom: log mapping.
+  std::mt19937 rng(3);
+  static std::vector<float> cosmic;
+  std::lognormal_distribution<float> ln(0.f, 2.5f);
+  for (int i = 0; i < 32 * 32 * 32; ++i) cosmic.push_back(std::min(1e4f, std::max(1e-4f, ln(rng))));
+  cosmic[0] = 1e-4f, cosmic[1] = 1e4f;
+  const Model web = uniformModel({"Density"}, [](int x, int y, int z) { return cosmic[size_t((z * 32 + y) * 32 + x)]; });
+  c = adaptTransferFunction(web, DatasetInfo::of(web), 0, defaultTransferFunction(), true, true);
+  EXPECT_TRUE(c.tf.logScale);
+  c = adaptTransferFunction(web, DatasetInfo::of(web), 0, defaultTransferFunction(), false, true);
+  EXPECT_FALSE(c.tf.logScale); // --linear
+  // A range given is kept.
+  TransferFunction given = defaultTransferFunction();
+  given.valueRange = range1f{0.2f, 0.5f};
+  c = adaptTransferFunction(low, info, 0, given, true, true);
+  EXPECT_EQ(c.tf.valueRange, given.valueRange);
+  EXPECT_EQ(c.tf.opacity, given.opacity);
+}
+
+TEST(Defaults, RequestsThatCanNeverShowAnythingAreNamed) {
+  const Model m = uniformModel({"f", "g"}, [](int x, int, int) { return float(x) / 31.f - 2.f; });
+  const DatasetInfo info = DatasetInfo::of(m);
+  Scene s = Scene::volumeOf(defaultTransferFunction(), "f");
+  EXPECT_TRUE(sceneWarnings(s, m, info).empty());
+  s.iso.values = {5.f};
+  s.layers[0].tf.valueRange = range1f{10.f, 20.f};
+  s.layers[0].tf.logScale = true;
+  const std::vector<std::string> w = sceneWarnings(s, m, info);
+  ASSERT_EQ(w.size(), 3u);
+  auto has = [&](const char* part) {
+    for (const std::string& x : w)
+      if (x.find(part) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("iso-value 5 lies outside the range of 'f'"));
+  EXPECT_TRUE(has("excludes all of 'f'"));
+  EXPECT_TRUE(has("no positive values"));
+  Scene none;
+  none.volume = false;
+  EXPECT_EQ(sceneWarnings(none, m, info).size(), 1u);
+  Image empty(4, 4);
+  EXPECT_TRUE(imageIsEmpty(empty));
+  empty.at(1, 2).w = 0.01f;
+  EXPECT_FALSE(imageIsEmpty(empty));
+}
+
+TEST(Defaults, DefaultRendersOfRealDataShowTheData) {
+  // Every shared sample and the embedded dataset, rendered by the command line with no option
+  // but the size: some pixels show the data, some the background, and the colours vary.
+  std::vector<std::string> inputs{""};
+  for (const char* sub : {"amrex/advection_3d/plt_drop", "amrex/advection_3d/plt_small",
+                          "amrex/pele_eb_3d/plt_eb_3d", "amrex/pelelm_3lev_3d/example_plt_3d"})
+    if (fs::exists(sharedData() / sub)) inputs.push_back((sharedData() / sub).string());
+  if (inputs.size() == 1)
+    std::printf("shared samples not found at %s (set EXABRICKS_DATA): the embedded dataset only\n",
+                sharedData().string().c_str());
+  const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "defaults";
+  fs::create_directories(dir);
+  for (const std::string& input : inputs) {
+    SCOPED_TRACE(input.empty() ? "embedded dataset" : input);
+    const fs::path out = dir / "default.png";
+    fs::remove(out);
+    const std::string cmd = std::string(EXABRICKS_CLI) + " -q render " + (input.empty() ? "" : "'" + input + "'") +
+                            " -o '" + out.string() + "' --size 96x96";
+    ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+    const Image img = readPng(out.string());
+    int shown = 0, saturated = 0;
+    double sum = 0, sum2 = 0;
+    for (const vec4f& p : img.pixels) {
+      const double lum = 0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z;
+      if (lum > 0.004) {
+        ++shown;
+        sum += lum;
+        sum2 += lum * lum;
+      }
+      if (p.x > 0.995f && p.y > 0.995f && p.z > 0.995f) ++saturated;
+    }
+    const double n = double(img.pixels.size());
+    EXPECT_GT(shown / n, 0.02) << "blank";
+    EXPECT_LT(shown / n, 0.98) << "no background left";
+    EXPECT_LT(saturated / n, 0.05) << "saturated";
+    const double mean = sum / std::max(shown, 1), spread = std::sqrt(std::max(0.0, sum2 / std::max(shown, 1) - mean * mean));
+    // (plt_eb_3d's density is two values, 0 in the obstacle and 1.18 around it: its picture is
+    // the obstacle, unshaded inside, with a spread of 0.005.)
+    EXPECT_GT(spread, 0.004) << "a flat picture";
+    std::printf("%s: %.1f %% shown, luminance %.3f +- %.3f\n", input.empty() ? "embedded" : input.c_str(),
+                100.0 * shown / n, mean, spread);
+  }
+}
