@@ -446,6 +446,12 @@ PYBIND11_MODULE(_core, m) {
         py::arg("lower"), py::arg("upper"), py::arg("azimuth"), py::arg("elevation"), py::arg("fov"),
         py::arg("orthographic"), "The command line's default framing of a world box");
   m.def("colormap_names", &builtinColorMapNames);
-  m.def("transfer_function_json", [](const std::string& path) { return transferFunctionJson(readTransferFunction(path)); },
-        py::arg("path"), "A transfer function file (exabricks JSON or ParaView preset) in exabricks JSON form");
+  m.def("transfer_function_json",
+        [](const std::string& path) {
+          bool preset = false;
+          const TransferFunction tf = readTransferFunction(path, &preset);
+          return py::make_tuple(transferFunctionJson(tf), preset);
+        },
+        py::arg("path"), "A transfer function file (exabricks JSON or ParaView preset) in exabricks JSON form, "
+                         "and whether it was a ParaView preset");
 }

@@ -118,6 +118,14 @@ check "--version" bash -c "'$exe' --version | grep -q '^exabricks [0-9]'"
 check "--threads 1 renders the same image" bash -c "'$exe' --threads 1 render s.cells -o t1.png --size 24x24 && '$exe' render s.cells -o t2.png --size 24x24 && cmp t1.png t2.png"
 mkdir -p elsewhere
 check "a written scene reads from another folder" bash -c "'$exe' render s.cells -o here.png --size 24x16 --mesh floor.obj --write-scene elsewhere/rel.json && cd elsewhere && '$exe' render --scene rel.json -o there.png && cmp there.png ../here.png"
+# A stock ParaView preset (points over 0..1) is applied as ParaView applies it: rescaled to the data.
+printf '[{"Name": "stock", "RGBPoints": [0, 0, 0, 1, 0.5, 1, 1, 1, 1, 1, 0, 0]}]' > stock.json
+range=$("$exe" info s.cells --json | $py -c 'import json,sys; f=[f for f in json.load(sys.stdin)["fields"] if f["name"]=="scalar"][0]["range"]; print("%r,%r" % (f["min"], f["max"]))')
+check "a preset spans the data's range" bash -c "'$exe' render s.cells -o p1.png --size 32x32 --tf stock.json --opacity 0,0,1,1 && '$exe' render s.cells -o p2.png --size 32x32 --tf stock.json --opacity 0,0,1,1 --range $range && cmp p1.png p2.png"
+check "warnings for iso-values outside the data" bash -c "'$exe' render s.cells -o w.png --size 16x16 --iso 99 2>&1 >/dev/null | grep -q 'iso-value 99 lies outside'"
+check "a warning for an empty image" bash -c "'$exe' render s.cells -o w.png --size 16x16 --range 50,60 2>&1 >/dev/null | grep -q 'the image is empty'"
+fails_with "nothing to draw" "--no-volume leaves nothing to draw" "$exe" render s.cells -o x.png --no-volume
+check "the default field is named on stderr" bash -c "'$exe' render s.cells -o w.png --size 16x16 2>&1 >/dev/null | grep -q \"field 'scalar' (the default\""
 # An interrupted convert leaves no temporary file and either every file of the dataset or none.
 "$exe" -q generate -s blobs -n 3000000 -o big.cells
 "$exe" -q convert big.cells -o copy.cells & pid=$!

@@ -418,13 +418,15 @@ TEST(TransferFunction, ExabricksJson) {
   EXPECT_TRUE(l.logScale);
   EXPECT_NEAR(l.normalize(10.f), 0.5f, 1e-6f);
 
-  // Everything is optional: viridis, a ramp, the range of the data.
+  // Everything is optional: viridis, a ramp, the range of the data, the dataset's default
+  // opacity scale (0, resolved by the renderer), as for built-in maps.
   const TransferFunction d = readTransferFunction(writeTemp("empty.json", "{}"));
   EXPECT_EQ(d.colorMap.name, "viridis");
   EXPECT_TRUE(d.opacity.empty());
   EXPECT_TRUE(d.valueRange.empty());
   EXPECT_FALSE(d.logScale);
-  EXPECT_EQ(d.opacityScale, 1.f);
+  EXPECT_EQ(d.opacityScale, 0.f);
+  EXPECT_EQ(readTransferFunction(writeTemp("auto.json", R"({"opacity_scale": "auto"})")).opacityScale, 0.f);
 }
 
 TEST(TransferFunction, BadFilesAreRejectedClearly) {
@@ -457,7 +459,7 @@ TEST(TransferFunction, BadFilesAreRejectedClearly) {
       {"range-float.json", R"({"range": [0, 1e39]})", "finite"},
       {"logrange.json", R"({"log": true, "range": [0, 10]})", "positive"},
       {"logtype.json", R"({"log": "yes"})", "true or false"},
-      {"scale.json", R"({"opacity_scale": -1})", "not be negative"},
+      {"scale.json", R"({"opacity_scale": -1})", "must be positive"},
       {"rgb4.json", R"({"RGBPoints": [0, 0, 0]})", "multiple of 4"},
       {"rgb1.json", R"({"RGBPoints": [0, 0, 0, 0]})", "at least two"},
       {"rgbtype.json", R"({"RGBPoints": "none"})", "RGBPoints"},

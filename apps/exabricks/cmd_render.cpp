@@ -64,6 +64,7 @@ struct RenderCmdOptions {
   std::string isoColorField;
   std::string isoColormap = "cool-to-warm";
   std::vector<float> isoColorRange;
+  bool isoColorLog = false;
   std::vector<std::string> meshes;
   std::vector<float> meshColor;      ///< sRGB triples, one per mesh (cycled)
   std::vector<std::string> clipPlanes; ///< px,py,pz,nx,ny,nz each
@@ -124,7 +125,16 @@ std::vector<vec3f> colorList(const std::vector<float>& v, const char* what) {
 /// it, then every option that was given overrides its part.
 TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderCmdOptions& o, const std::string& tfFile,
                                               const std::string* colormap, bool withRange) {
-  if (!tfFile.empty()) tf = readTransferFunction(tfFile);
+  if (!tfFile.empty()) {
+    bool preset = false;
+    tf = readTransferFunction(tfFile, &preset);
+    if (preset) {
+      // As ParaView applies a preset: its points span the data's range (or --range), and its
+      // opacity takes the default scale of built-in maps.
+      tf.valueRange = range1f();
+      tf.opacityScale = 0.f;
+    }
+  }
   if (colormap) tf.colorMap = builtinColorMap(*colormap);
   if (!o.opacity.empty()) {
     if (o.opacity.size() % 2 != 0 || o.opacity.size() < 2)
@@ -286,6 +296,7 @@ SceneDocument sceneFromOptions(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (apply("--iso-color")) iso.colors = colorList(o.isoColor, "--iso-color");
   if (apply("--iso-color-field")) iso.colorField = o.isoColorField;
   if (apply("--iso-colormap")) iso.colorTf.colorMap = builtinColorMap(o.isoColormap);
+  if (apply("--iso-color-log")) iso.colorTf.logScale = o.isoColorLog;
   if (apply("--iso-color-range"))
     iso.colorTf.valueRange = o.isoColorRange.empty() ? range1f() : range1f{o.isoColorRange[0], o.isoColorRange[1]};
 
@@ -542,6 +553,7 @@ void addRender(CLI::App& app) {
       ->delimiter(',');
   cmd->add_option("--iso-color-field", o->isoColorField, "Colour the iso-surfaces by this field");
   cmd->add_option("--iso-colormap", o->isoColormap, "Colour map for --iso-color-field")->capture_default_str();
+  cmd->add_flag("--iso-color-log", o->isoColorLog, "Map --iso-color-field logarithmically");
   cmd->add_option("--iso-color-range", o->isoColorRange, "Value range LOW,HIGH for --iso-color-field")
       ->delimiter(',');
   cmd->add_option("--mesh", o->meshes, "Triangle mesh (OBJ, PLY or .tris) in world space (repeatable)");

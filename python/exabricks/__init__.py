@@ -191,9 +191,16 @@ class TransferFunction:
         self.opacity_scale = opacity_scale
 
     @classmethod
-    def from_file(cls, path):
-        """A transfer-function file: exabricks JSON or a ParaView colour-map preset."""
-        return cls.from_dict(json.loads(_core.transfer_function_json(str(path))))
+    def from_file(cls, path, preset_range=False):
+        """A transfer-function file: exabricks JSON or a ParaView colour-map preset. A preset is
+        applied as ParaView applies it: its points span the data's range (preset_range=True
+        keeps the span of its points instead) and its opacity takes the default scale."""
+        text, preset = _core.transfer_function_json(str(path))
+        tf = cls.from_dict(json.loads(text))
+        if preset and not preset_range:
+            tf.range = None
+            tf.opacity_scale = "auto"
+        return tf
 
     @classmethod
     def from_dict(cls, d):

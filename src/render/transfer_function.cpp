@@ -367,6 +367,7 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
 
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
+  tf.opacityScale = 0.f; // without "opacity_scale": the dataset's default, as for built-in maps
   if (const auto cm = j.find("colormap"); cm != j.end()) {
     if (cm->is_string()) {
       try {
@@ -412,7 +413,7 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
     tf.opacityScale = 0.f; // the dataset's default scale
   } else if (s != j.end()) {
     const double scale = number(*s, path, "opacity_scale");
-    if (scale < 0.0) fail(path, ": opacity_scale must not be negative, got ", scale);
+    if (!(scale > 0.0)) fail(path, ": opacity_scale must be positive (or \"auto\"), got ", scale);
     tf.opacityScale = float(scale);
   }
   return tf;
@@ -481,7 +482,7 @@ TransferFunction defaultTransferFunction(const std::string& colorMap) {
   return tf;
 }
 
-TransferFunction readTransferFunction(const std::string& path) {
+TransferFunction readTransferFunction(const std::string& path, bool* isPreset) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot open: is a directory");
   std::ifstream in(path, std::ios::binary);
@@ -492,6 +493,7 @@ TransferFunction readTransferFunction(const std::string& path) {
   } catch (const json::exception& e) {
     fail(path, ": invalid JSON: ", jsonMessage(e));
   }
+  if (isPreset) *isPreset = j.is_array() || (j.is_object() && isParaViewPreset(j));
   return transferFunctionFromJson(j, path);
 }
 

@@ -276,7 +276,8 @@ def test_transfer_functions_cameras_and_files(tmp_path):
     assert eb.TransferFunction.from_dict(tf.to_dict()).to_dict() == tf.to_dict()
     (tmp_path / "preset.json").write_text(json.dumps([{"Name": "two", "RGBPoints": [0, 0, 0, 1, 5, 1, 0, 0]}]))
     p = eb.TransferFunction.from_file(tmp_path / "preset.json")
-    assert p.range == (0.0, 5.0)
+    assert p.range is None and p.opacity_scale == "auto"  # rescaled to the data, as ParaView applies it
+    assert eb.TransferFunction.from_file(tmp_path / "preset.json", preset_range=True).range == (0.0, 5.0)
     assert "viridis" in eb.colormap_names()
     c = eb.Camera.frame(((0, 0, 0), (1, 1, 1)), 0.0, 0.0, 40.0)
     assert c.position[1] == pytest.approx(0.5) and c.position[0] > 1.0

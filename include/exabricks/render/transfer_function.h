@@ -58,8 +58,10 @@ TransferFunction defaultTransferFunction(const std::string& colorMap = "viridis"
 /// Reads a transfer function file: a ParaView colour-map preset (a JSON array or object with
 /// "RGBPoints" and optional "Points" for opacity, "ColorSpace", "Name") or an exabricks JSON
 /// object (see docs/transfer-functions.md). The value range in the file, if any, is kept in
-/// valueRange; errors name the file and the problem.
-TransferFunction readTransferFunction(const std::string& path);
+/// valueRange (a preset's is the span of its points; `isPreset` says which form the file had,
+/// for callers that rescale presets to the data as ParaView does); errors name the file and the
+/// problem.
+TransferFunction readTransferFunction(const std::string& path, bool* isPreset = nullptr);
 
 /// The same from JSON text; errors name `source`.
 TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source);
