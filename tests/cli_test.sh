@@ -126,6 +126,8 @@ check "warnings for iso-values outside the data" bash -c "'$exe' render s.cells 
 check "a warning for an empty image" bash -c "'$exe' render s.cells -o w.png --size 16x16 --range 50,60 2>&1 >/dev/null | grep -q 'the image is empty'"
 fails_with "nothing to draw" "--no-volume leaves nothing to draw" "$exe" render s.cells -o x.png --no-volume
 check "the default field is named on stderr" bash -c "'$exe' render s.cells -o w.png --size 16x16 2>&1 >/dev/null | grep -q \"field 'scalar' (the default\""
+check "a colour bar and annotations are drawn" bash -c "'$exe' render s.cells -o plain.png --size 160x120 && '$exe' render s.cells -o bar.png --size 160x120 --colorbar --annotate && ! cmp -s plain.png bar.png"
+check "info reports the simulation's time and cycle (null when unknown)" bash -c "'$exe' info s.cells --json | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"simulation\"] == {\"time\": None, \"cycle\": None}'"
 # An interrupted convert leaves no temporary file and either every file of the dataset or none.
 "$exe" -q generate -s blobs -n 3000000 -o big.cells
 "$exe" -q convert big.cells -o copy.cells & pid=$!

@@ -127,6 +127,9 @@ TEST(Amrex, SharedAdvectionSampleLeafCounts) {
   EXPECT_GE(r.lower, 0.99014f); // the published range is rounded to five digits
   EXPECT_LE(r.upper, 1.99455f);
   EXPECT_GT(r.upper, 1.99f);
+  // The simulation's time and step, from the Header.
+  EXPECT_TRUE(s.simulation.hasTime());
+  EXPECT_TRUE(s.simulation.hasCycle());
   // Domain [0,1]^3 with 256 finest cells per axis.
   EXPECT_DOUBLE_EQ(s.world.scale.x, 1.0 / 256);
   EXPECT_DOUBLE_EQ(s.world.origin.x, 0.0);

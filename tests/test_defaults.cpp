@@ -5,6 +5,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/image.h"
 #include "exabricks/render/defaults.h"
+#include "exabricks/render/overlay.h"
 
 #include <gtest/gtest.h>
 
@@ -160,4 +161,47 @@ TEST(Defaults, DefaultRendersOfRealDataShowTheData) {
     std::printf("%s: %.1f %% shown, luminance %.3f +- %.3f\n", input.empty() ? "embedded" : input.c_str(),
                 100.0 * shown / n, mean, spread);
   }
+}
+
+TEST(Overlay, TicksTextColourBarOutlineAndProjection) {
+  auto near = [](const std::vector<double>& a, const std::vector<double>& b) {
+    if (a.size() != b.size()) return false;
+    for (size_t i = 0; i < a.size(); ++i)
+      if (std::abs(a[i] - b[i]) > 1e-9 * std::max(1.0, std::abs(b[i]))) return false;
+    return true;
+  };
+  EXPECT_TRUE(near(colorBarTicks(range1f{0.f, 1.f}, false), {0.0, 0.2, 0.4, 0.6, 0.8, 1.0}));
+  EXPECT_TRUE(near(colorBarTicks(range1f{-3.f, 7.f}, false), {-2.0, 0.0, 2.0, 4.0, 6.0}));
+  EXPECT_TRUE(near(colorBarTicks(range1f{1e-3f, 10.f}, true), {1e-3, 1e-2, 1e-1, 1.0, 1e1}));
+  EXPECT_LE(colorBarTicks(range1f{1e-20f, 1e20f}, true).size(), 7u);
+  Image img(200, 150);
+  EXPECT_GT(drawText(img, 5, 5, "exabricks 1.5", vec3f(1.f), 1), 40);
+  int lit = 0;
+  for (const vec4f& p : img.pixels) lit += p.w == 1.f;
+  EXPECT_GT(lit, 30);
+  Image bar(200, 150);
+  TransferFunction tf = defaultTransferFunction("viridis");
+  tf.valueRange = range1f{0.f, 10.f};
+  drawColorBar(bar, tf, "density", vec3f(1.f));
+  int right = 0, left = 0;
+  for (int y = 0; y < 150; ++y)
+    for (int x = 0; x < 200; ++x) (x > 140 ? right : left) += bar.at(x, y).w == 1.f;
+  EXPECT_GT(right, 500);
+  EXPECT_LT(left, right);
+  // project() inverts ray(), for both projections.
+  for (bool ortho : {false, true}) {
+    const Camera c = Camera::frame(box3d(vec3d(0.0), vec3d(4.0, 2.0, 1.0)), 40, 30, 35, ortho);
+    vec3d org, dir;
+    c.ray(0.3, 0.8, 1.5, org, dir);
+    double u, v;
+    ASSERT_TRUE(c.project(org + dir * 7.0, 1.5, u, v));
+    EXPECT_NEAR(u, 0.3, 1e-9);
+    EXPECT_NEAR(v, 0.8, 1e-9);
+  }
+  Image box(64, 64);
+  drawBoxOutline(box, Camera::frame(box3d(vec3d(0.0), vec3d(1.0)), 30, 25, 40, false), box3d(vec3d(0.0), vec3d(1.0)),
+                 vec3f(1.f));
+  lit = 0;
+  for (const vec4f& p : box.pixels) lit += p.w == 1.f;
+  EXPECT_GT(lit, 100);
 }

@@ -44,6 +44,10 @@ void run(const InfoOptions& o) {
   }
 
   std::printf("input            %s\n", o.in.name().c_str());
+  if (model.simulation.hasTime() || model.simulation.hasCycle())
+    std::printf("simulation       time %s, cycle %s\n",
+                model.simulation.hasTime() ? strCat(model.simulation.time).c_str() : "unknown",
+                model.simulation.hasCycle() ? std::to_string(model.simulation.cycle).c_str() : "unknown");
   std::printf("lattice bounds   [%d %d %d] - [%d %d %d] (finest-level units, upper exclusive)\n",
               lattice.lower.x, lattice.lower.y, lattice.lower.z, lattice.upper.x,
               lattice.upper.y, lattice.upper.z);

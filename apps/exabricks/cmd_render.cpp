@@ -7,6 +7,7 @@
 #include "exabricks/io/mesh.h"
 #include "exabricks/io/scene_file.h"
 #include "exabricks/render/defaults.h"
+#include "exabricks/render/overlay.h"
 #include "exabricks/render/renderer.h"
 
 #include <algorithm>
@@ -38,6 +39,8 @@ struct RenderCmdOptions {
   bool logScale = false;
   bool linear = false;
   bool frameAll = false;
+  bool colorbar = false;
+  bool annotate = false;
   std::vector<double> position, lookAt, up;
   double fov = 40.0;
   bool ortho = false;
@@ -372,6 +375,38 @@ SceneDocument withAbsolutePaths(SceneDocument doc) {
   return doc;
 }
 
+/// The colour bar, annotations and level legend the options ask for, drawn into the image in a
+/// colour that stands out against the background.
+void drawOverlays(const RenderCmdOptions& o, const Scene& scene, const Frame& frame, const Model& model,
+                  const DatasetInfo& dataset, int field, Image& image) {
+  const vec3f bg = scene.background;
+  const float luminance = 0.2126f * bg.x + 0.7152f * bg.y + 0.0722f * bg.z;
+  const vec3f ink = luminance > 0.3f ? vec3f(0.f) : vec3f(1.f);
+  const std::string name = model.fieldNames[size_t(field)];
+  if (scene.debug == DebugView::Level) {
+    std::vector<int> levels;
+    for (const ModelSummary::Level& l : summarize(model).levels) levels.push_back(l.level);
+    drawLevelLegend(image, levels, ink);
+  }
+  if (o.colorbar && scene.debug == DebugView::None && scene.volume) {
+    TransferFunction tf = scene.layers.at(0).tf;
+    if (tf.valueRange.empty()) tf.valueRange = dataset.valueRanges[size_t(field)];
+    drawColorBar(image, tf, name, ink);
+  }
+  if (o.annotate) {
+    const box3i cb = model.cellBounds();
+    drawBoxOutline(image, frame.camera,
+                   box3d(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper))), ink * 0.6f);
+    std::vector<std::string> lines{o.in.name(), "field " + name};
+    const SimulationState& sim = model.simulation;
+    if (sim.hasTime() || sim.hasCycle())
+      lines.push_back(strCat(sim.hasTime() ? strCat("time ", sim.time) : std::string(),
+                             sim.hasTime() && sim.hasCycle() ? ", " : "",
+                             sim.hasCycle() ? strCat("cycle ", sim.cycle) : std::string()));
+    drawLines(image, lines, ink);
+  }
+}
+
 void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
   const bool jpeg = isJpeg(o.output);
@@ -446,7 +481,8 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   } else {
     renderFrame(stats);
   }
-  const Image image = buffer.resolve();
+  Image image = buffer.resolve();
+  drawOverlays(o, scene, frame, model, dataset, field, image);
   if (imageIsEmpty(image))
     logWarning(strCat("the image is empty: nothing in view is visible (", renderer.visibleRegions(), " of ",
                       model.regions.regions.size(), " regions may be; check --range, --opacity and the camera)"));
@@ -523,6 +559,8 @@ void addRender(CLI::App& app) {
   cmd->add_option("--range", o->range, "Value range LOW,HIGH mapped by the transfer function")->delimiter(',');
   cmd->add_flag("--log", o->logScale, "Map values logarithmically (every layer)");
   cmd->add_flag("--linear", o->linear, "Map values linearly even where the data spans many decades");
+  cmd->add_flag("--colorbar", o->colorbar, "Draw a labelled colour bar of the first layer");
+  cmd->add_flag("--annotate", o->annotate, "Write the dataset, field and simulation time, and outline the domain");
   cmd->add_flag("--frame-all", o->frameAll, "Default view: frame the whole data, not only its visible part");
   cmd->add_option("--position", o->position, "Camera position x,y,z (world)")->delimiter(',');
   cmd->add_option("--look-at", o->lookAt, "Camera target x,y,z (world)")->delimiter(',');

@@ -107,6 +107,7 @@ void buildRegionsOf(Model& model) {
 Model buildModel(CellSet&& cells, const BuildOptions& options) {
   Model model;
   model.world = cells.world;
+  model.simulation = cells.simulation;
   Timer timer;
   Progress progress("building bricks and regions", 3);
   BrickBuild bricks = buildBricks(cells.cells, options.bricks);

@@ -98,6 +98,8 @@ struct Plotfile {
   std::vector<IndexBox> domains;
   std::vector<vec3d> dx;
   std::vector<std::string> levelPrefixes;
+  double time = std::numeric_limits<double>::quiet_NaN();
+  int64_t cycle = -1; ///< steps of the coarsest level
 };
 
 Plotfile readHeader(const std::string& dir) {
@@ -116,7 +118,10 @@ Plotfile readHeader(const std::string& dir) {
   }
   const int dim = int(numbers(r, r.line(), 1, "the dimension")[0]);
   if (dim != 3) r.bad(strCat("a ", dim, "-D plotfile; only 3-D AMR data can be read"));
-  r.line(); // time
+  {
+    const auto t = numbers(r, r.line(), 1, "the time");
+    if (std::isfinite(t[0])) pf.time = t[0];
+  }
   pf.finestLevel = int(numbers(r, r.line(), 1, "the finest level")[0]);
   if (pf.finestLevel < 0 || pf.finestLevel > 20) r.bad("absurd finest level");
   const auto lo = numbers(r, r.line(), 3, "prob_lo");
@@ -141,7 +146,11 @@ Plotfile readHeader(const std::string& dir) {
   }
   pf.domains = parseBoxes(r, r.line());
   if (int(pf.domains.size()) < pf.finestLevel + 1) r.bad("fewer level domains than levels");
-  r.line(); // level steps
+  {
+    const auto steps = numbers(r, r.line(), 0, "the level steps");
+    if (!steps.empty() && steps[0] >= 0 && steps[0] < 9.0e18 && steps[0] == std::floor(steps[0]))
+      pf.cycle = int64_t(steps[0]);
+  }
   for (int l = 0; l <= pf.finestLevel; ++l) {
     const auto d = numbers(r, r.line(), 3, "the cell size");
     pf.dx.push_back(vec3d(d[0], d[1], d[2]));
@@ -326,6 +335,8 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
   const vec3d dx = pf.dx[size_t(pf.finestLevel)];
   set.world.scale = dx;
   set.world.origin = pf.probLo - vec3d(fineDomain.lo) * dx;
+  set.simulation.time = pf.time;
+  set.simulation.cycle = pf.cycle;
   logInfo(strCat("read ", set.cells.size(), " leaf cells from ", path));
   return set;
 }

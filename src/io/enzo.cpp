@@ -77,6 +77,7 @@ struct Parameters {
   int rank = 3;
   int64_t refineBy = 2;
   vec3d left{0.0}, right{1.0};
+  SimulationState simulation;
 };
 
 struct Grid {
@@ -114,6 +115,12 @@ Parameters readParameters(const std::string& path) {
     } else if (k.key == "DomainRightEdge") {
       const auto v = numbersOf(path, k, 3);
       p.right = vec3d(v[0], v[1], v[2]);
+    } else if (k.key == "InitialTime") {
+      const double t = numbersOf(path, k, 1)[0];
+      if (std::isfinite(t)) p.simulation.time = t;
+    } else if (k.key == "InitialCycleNumber") {
+      const double c = numbersOf(path, k, 1)[0];
+      if (c >= 0 && c < 9.0e18 && c == std::floor(c)) p.simulation.cycle = int64_t(c);
     }
   }
   return p;
@@ -347,6 +354,7 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   }
   progress.finish();
   set.world.origin = o.params.left;
+  set.simulation = o.params.simulation;
   set.world.scale = finest;
   logInfo(strCat("read ", set.cells.size(), " leaf cells of ", o.grids.size(), " grids from ", path));
   return set;

@@ -40,4 +40,26 @@ void Camera::ray(double u, double v, double aspect, vec3d& org, vec3d& dir) cons
   dir = normalize(forward + right * (x * t * aspect) + trueUp * (y * t));
 }
 
+bool Camera::project(const vec3d& point, double aspect, double& u, double& v) const {
+  const vec3d forward = normalize(lookAt - position);
+  const vec3d right = normalize(cross(forward, up));
+  const vec3d trueUp = cross(right, forward);
+  const vec3d d = point - position;
+  double x, y;
+  if (orthographic) {
+    const double h = 0.5 * orthoHeight;
+    x = dot(d, right) / (h * aspect);
+    y = dot(d, trueUp) / h;
+  } else {
+    const double z = dot(d, forward);
+    if (!(z > 0.0)) return false;
+    const double t = std::tan(0.5 * fovy * M_PI / 180.0);
+    x = dot(d, right) / (z * t * aspect);
+    y = dot(d, trueUp) / (z * t);
+  }
+  u = 0.5 * (x + 1.0);
+  v = 0.5 * (1.0 - y);
+  return true;
+}
+
 } // namespace exa

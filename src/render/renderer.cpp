@@ -15,8 +15,9 @@
 namespace exa {
 namespace {
 
-/// Colours for levels 0..7, cycling: distinct hues, finest warm.
-vec3f levelColor(int level) {
+} // namespace
+
+vec3f debugLevelColor(int level) {
   switch (level & 7) {
   case 0: return {0.90f, 0.10f, 0.10f};
   case 1: return {0.95f, 0.55f, 0.05f};
@@ -28,6 +29,8 @@ vec3f levelColor(int level) {
   default: return {0.55f, 0.55f, 0.55f};
   }
 }
+
+namespace {
 
 /// Default iso-surface colours (linear RGB), cycled over the iso-values.
 vec3f defaultIsoColor(int index) {
@@ -674,7 +677,7 @@ struct Renderer::Impl {
             break;
           }
         }
-        color = view == DebugView::Level ? levelColor(model.bricks[brickId].level) : hashColor(brickId);
+        color = view == DebugView::Level ? debugLevelColor(model.bricks[brickId].level) : hashColor(brickId);
       }
       acc = {color.x, color.y, color.z, 1.f};
       ++c.regions;

@@ -5,6 +5,7 @@
 #include "exabricks/core/math.h"
 
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -33,10 +34,20 @@ struct Field {
 };
 
 /// A set of leaf cells with fields and world placement.
+/// When the data was written, as the simulation counts: its time and step (cycle), where the
+/// file says.
+struct SimulationState {
+  double time = std::numeric_limits<double>::quiet_NaN(); ///< NaN: unknown
+  int64_t cycle = -1;                                     ///< -1: unknown
+  bool hasTime() const { return time == time; }
+  bool hasCycle() const { return cycle >= 0; }
+};
+
 struct CellSet {
   std::vector<Cell> cells;
   std::vector<Field> fields;
   WorldTransform world;
+  SimulationState simulation;
 
   size_t size() const { return cells.size(); }
   /// Index of the field with this name, or -1.

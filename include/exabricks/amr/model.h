@@ -22,6 +22,7 @@ struct BuildStats {
 
 struct Model {
   WorldTransform world;
+  SimulationState simulation; ///< from the reader (not stored in model files)
   std::vector<Brick> bricks;
   std::vector<std::string> fieldNames;
   std::vector<std::vector<float>> fieldValues; ///< per field, brick-ordered values

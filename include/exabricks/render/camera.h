@@ -20,6 +20,9 @@ struct Camera {
 
   /// World-space ray through the image point (u, v) in [0, 1]^2, v = 0 at the top.
   void ray(double u, double v, double aspect, vec3d& org, vec3d& dir) const;
+  /// The image point (u, v) of a world point, the inverse of ray(); false for points behind a
+  /// perspective camera.
+  bool project(const vec3d& point, double aspect, double& u, double& v) const;
 };
 
 } // namespace exa

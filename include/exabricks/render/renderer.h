@@ -41,6 +41,9 @@ struct DatasetInfo {
   static DatasetInfo of(const Model& model);
 };
 
+/// The colour of a level in the level debug view (levels 0..7, cycling): distinct hues, finest warm.
+vec3f debugLevelColor(int level);
+
 /// The nearest surface along a ray.
 struct SurfaceHit {
   enum Kind { Mesh, Iso } kind = Mesh;

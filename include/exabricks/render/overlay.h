@@ -1,0 +1,39 @@
+// Annotations drawn into a rendered image: a labelled colour bar, text lines, the outline of a
+// box and a legend of the level colours. Opaque, in linear RGB, after rendering (the image's
+// alpha becomes 1 where they draw); text is stb's easy font, scaled with the image.
+#pragma once
+
+#include "exabricks/core/image.h"
+#include "exabricks/render/camera.h"
+#include "exabricks/render/transfer_function.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// Pixels per font unit for an image of this size (1 up to 400 rows, then one more per 400).
+int overlayScale(const Image& image);
+
+/// Draws `text` with its top-left corner at pixel (x, y); returns the width drawn.
+int drawText(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale);
+int textWidth(const std::string& text, int scale);
+
+/// Ticks in data values for a colour bar over `range`: 1-2-5 steps (about five ticks), or the
+/// decades (every n-th when there are many) for logarithmic mapping.
+std::vector<double> colorBarTicks(const range1f& range, bool logScale);
+
+/// A vertical colour bar at the right edge: the colour map over the transfer function's value
+/// range (which must be set), ticks with their values, and `title` above it (the field name).
+void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor);
+
+/// Lines of text at the top-left corner.
+void drawLines(Image& image, const std::vector<std::string>& lines, const vec3f& color);
+
+/// The edges of a world box as seen by the camera.
+void drawBoxOutline(Image& image, const Camera& camera, const box3d& box, const vec3f& color);
+
+/// Swatches of the debug view's level colours with each level's cell width, at the bottom left.
+void drawLevelLegend(Image& image, const std::vector<int>& levels, const vec3f& textColor);
+
+} // namespace exa

@@ -1,0 +1,145 @@
+#include "exabricks/render/overlay.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/render/renderer.h"
+
+#include <stb/stb_easy_font.h>
+
+#include <cmath>
+#include <cstdio>
+
+namespace exa {
+namespace {
+
+void fillRect(Image& image, int x0, int y0, int x1, int y1, const vec3f& c) {
+  x0 = std::max(x0, 0), y0 = std::max(y0, 0);
+  x1 = std::min(x1, image.width), y1 = std::min(y1, image.height);
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) image.at(x, y) = {c.x, c.y, c.z, 1.f};
+}
+
+void drawLine(Image& image, double x0, double y0, double x1, double y1, const vec3f& c) {
+  const int steps = int(std::ceil(std::max(std::abs(x1 - x0), std::abs(y1 - y0)))) + 1;
+  if (steps > 1 << 20) return;
+  for (int i = 0; i <= steps; ++i) {
+    const double t = double(i) / steps;
+    const int x = int(std::floor(x0 + (x1 - x0) * t)), y = int(std::floor(y0 + (y1 - y0) * t));
+    if (x >= 0 && y >= 0 && x < image.width && y < image.height) image.at(x, y) = {c.x, c.y, c.z, 1.f};
+  }
+}
+
+std::string label(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+} // namespace
+
+int overlayScale(const Image& image) { return 1 + std::max(0, (std::min(image.width, image.height) - 1) / 400); }
+
+int textWidth(const std::string& text, int scale) {
+  std::string copy = text;
+  return stb_easy_font_width(copy.data()) * scale;
+}
+
+int drawText(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale) {
+  // stb's easy font: quads of four vertices (x, y, z, colour) per glyph stroke.
+  std::vector<char> buffer(text.size() * 270 + 64);
+  std::string copy = text;
+  const int quads = stb_easy_font_print(0.f, 0.f, copy.data(), nullptr, buffer.data(), int(buffer.size()));
+  for (int q = 0; q < quads; ++q) {
+    const float* v = reinterpret_cast<const float*>(buffer.data() + size_t(q) * 4 * 16);
+    const float qx0 = v[0], qy0 = v[1], qx1 = v[8], qy1 = v[9]; // vertices 0 and 2 (16 bytes each)
+    fillRect(image, x + int(qx0 * scale), y + int(qy0 * scale), x + int(qx1 * scale), y + int(qy1 * scale), color);
+  }
+  return textWidth(text, scale);
+}
+
+std::vector<double> colorBarTicks(const range1f& range, bool logScale) {
+  std::vector<double> ticks;
+  if (range.empty() || !(range.upper >= range.lower)) return ticks;
+  double lo = range.lower, hi = range.upper;
+  if (logScale) {
+    if (!(hi > 0.0)) return ticks;
+    if (!(lo > 0.0)) lo = hi * 1e-6;
+    // (float ranges: 1e-3f is 1.0000000475e-3, a decade within 1e-6 of an end counts)
+    const int d0 = int(std::ceil(std::log10(lo) - 1e-6)), d1 = int(std::floor(std::log10(hi) + 1e-6));
+    const int every = std::max(1, (d1 - d0 + 1 + 5) / 6);
+    for (int d = d0; d <= d1; d += every) ticks.push_back(std::pow(10.0, d));
+    if (ticks.empty()) ticks = {lo, hi};
+    return ticks;
+  }
+  if (!(hi > lo)) return {lo};
+  const double rough = (hi - lo) / 5.0;
+  const double mag = std::pow(10.0, std::floor(std::log10(rough)));
+  double step = mag;
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * mag >= rough) {
+      step = m * mag;
+      break;
+    }
+  const int64_t k0 = int64_t(std::ceil(lo / step - 1e-6)), k1 = int64_t(std::floor(hi / step + 1e-6));
+  for (int64_t k = k0; k <= k1 && ticks.size() < 64; ++k) ticks.push_back(double(k) * step);
+  return ticks;
+}
+
+void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor) {
+  if (tf.valueRange.empty()) fail("a colour bar needs the transfer function's value range");
+  const int s = overlayScale(image);
+  const int barW = std::max(6, image.width / 40), barH = std::max(20, image.height * 3 / 5);
+  const std::vector<double> ticks = colorBarTicks(tf.valueRange, tf.logScale);
+  int labelW = 0;
+  for (double t : ticks) labelW = std::max(labelW, textWidth(label(t), s));
+  const int x1 = image.width - labelW - 6 * s - 4, x0 = x1 - barW;
+  const int y0 = (image.height - barH) / 2, y1 = y0 + barH;
+  for (int y = y0; y < y1; ++y) {
+    const float t = 1.f - (float(y - y0) + 0.5f) / float(barH);
+    fillRect(image, x0, y, x1, y + 1, tf.colorMap.at(t));
+  }
+  // Frame and ticks.
+  drawLine(image, x0 - 1, y0 - 1, x1, y0 - 1, textColor);
+  drawLine(image, x0 - 1, y1, x1, y1, textColor);
+  drawLine(image, x0 - 1, y0 - 1, x0 - 1, y1, textColor);
+  drawLine(image, x1, y0 - 1, x1, y1, textColor);
+  for (double t : ticks) {
+    const float n = tf.normalize(float(t));
+    const int y = y1 - int(std::lround(double(n) * barH));
+    drawLine(image, x1, y, x1 + 3 * s, y, textColor);
+    drawText(image, x1 + 5 * s, y - 4 * s, label(t), textColor, s);
+  }
+  const std::string head = tf.logScale ? title + " (log)" : title;
+  drawText(image, std::max(0, x1 - textWidth(head, s)), y0 - 14 * s, head, textColor, s);
+}
+
+void drawLines(Image& image, const std::vector<std::string>& lines, const vec3f& color) {
+  const int s = overlayScale(image);
+  for (size_t i = 0; i < lines.size(); ++i) drawText(image, 6 * s, 6 * s + int(i) * 12 * s, lines[i], color, s);
+}
+
+void drawBoxOutline(Image& image, const Camera& camera, const box3d& box, const vec3f& color) {
+  if (box.empty()) return;
+  const double aspect = double(image.width) / double(image.height);
+  auto corner = [&](int i) {
+    return vec3d(i & 1 ? box.upper.x : box.lower.x, i & 2 ? box.upper.y : box.lower.y, i & 4 ? box.upper.z : box.lower.z);
+  };
+  for (int a = 0; a < 8; ++a)
+    for (int bit : {1, 2, 4}) {
+      if (a & bit) continue;
+      double u0, v0, u1, v1;
+      if (!camera.project(corner(a), aspect, u0, v0) || !camera.project(corner(a | bit), aspect, u1, v1)) continue;
+      drawLine(image, u0 * image.width, v0 * image.height, u1 * image.width, v1 * image.height, color);
+    }
+}
+
+void drawLevelLegend(Image& image, const std::vector<int>& levels, const vec3f& textColor) {
+  const int s = overlayScale(image);
+  int y = image.height - 6 * s - int(levels.size()) * 12 * s;
+  for (int level : levels) {
+    fillRect(image, 6 * s, y, 14 * s, y + 8 * s, debugLevelColor(level));
+    drawText(image, 18 * s, y, strCat("level ", level, ": cells ", int64_t(1) << level, " wide"), textColor, s);
+    y += 12 * s;
+  }
+}
+
+} // namespace exa
