@@ -88,8 +88,8 @@ struct FlashFixture {
     w.doubles("block size", {n, 3}, size, float32);
     w.doubles("coordinates", {n, 3}, coord, float32);
     w.strings("unknown names", {2, 1}, {"dens", "pres"}, 4);
-    w.nameValueTable("integer scalars", {"nxb", "nyb", "nzb", "dimensionality", "globalnumblocks"},
-                     {double(nxb), double(nyb), double(nzb), double(dimensionality), double(n)}, true);
+    w.nameValueTable("integer scalars", {"nxb", "nyb", "nzb", "dimensionality", "globalnumblocks", "nstep"},
+                     {double(nxb), double(nyb), double(nzb), double(dimensionality), double(n), 42.0}, true);
     w.nameValueTable("real scalars", {"time"}, {0.5}, false);
     for (int var = 0; var < 2; ++var) {
       std::vector<double> v;
@@ -123,6 +123,8 @@ TEST(Flash, LeafBlocksBothPrecisions) {
     EXPECT_EQ(detectInput(f.file.string()), InputKind::Flash);
     EXPECT_EQ(listFields(f.file.string()), (std::vector<std::string>{"dens", "pres"}));
     const CellSet s = loadCells(f.file.string());
+    EXPECT_EQ(s.simulation.time, 0.5); // from "real scalars"
+    EXPECT_EQ(s.simulation.cycle, 42); // from "integer scalars"
     // Finest cells: a level-3 block is a quarter of a root block.
     const vec3d finest(0.25 / 4, 0.5 / 4, 2.0 / 4);
     EXPECT_EQ(s.world.scale, finest);

@@ -174,6 +174,16 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
 
   CellSet set;
   for (size_t c : comps) set.fields.push_back({h.names[c], {}});
+  // The simulation's time and step, where the coarsest level's attributes hold them.
+  if (f.hasAttribute("/level_0", "time")) {
+    const std::vector<double> t = f.attrNumbers("/level_0", "time");
+    if (t.size() == 1 && std::isfinite(t[0])) set.simulation.time = t[0];
+  }
+  for (const char* stepName : {"step", "iteration"})
+    if (set.simulation.cycle < 0 && f.hasAttribute("/level_0", stepName)) {
+      const std::vector<double> c = f.attrNumbers("/level_0", stepName);
+      if (c.size() == 1 && c[0] >= 0 && c[0] < 9.0e18 && c[0] == std::floor(c[0])) set.simulation.cycle = int64_t(c[0]);
+    }
   Progress progress("reading " + path, patches.size());
   for (size_t i = 0; i < patches.size(); ++i) {
     const auto [l, b] = owner[i];

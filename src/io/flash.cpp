@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
+#include <limits>
 
 namespace exa {
 namespace {
@@ -27,6 +28,18 @@ int64_t tableInt(const h5::CompoundTable& t, const std::string& name) {
       return std::abs(v) < 1e9 ? int64_t(v) : -2;
     }
   return -1;
+}
+
+/// A number from a (name, value) table such as "real scalars", or NaN when absent.
+double tableReal(const h5::CompoundTable& t, const std::string& name) {
+  const auto nameAt = std::find(t.members.begin(), t.members.end(), "name");
+  const auto valueAt = std::find(t.members.begin(), t.members.end(), "value");
+  if (nameAt == t.members.end() || valueAt == t.members.end()) return std::numeric_limits<double>::quiet_NaN();
+  const size_t m = t.members.size();
+  const size_t vi = size_t(valueAt - t.members.begin());
+  for (size_t r = 0; r < t.records; ++r)
+    if (r < t.strings.size() && t.strings[r] == name) return t.values[r * m + vi];
+  return std::numeric_limits<double>::quiet_NaN();
 }
 
 struct FlashHeader {
@@ -145,6 +158,15 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
 
   CellSet set;
   for (size_t v : vars) set.fields.push_back({h.names[v], {}});
+  // The simulation's time and step, where the scalars hold them.
+  if (f.isDataset("real scalars")) {
+    const double t = tableReal(f.readCompound("real scalars"), "time");
+    if (std::isfinite(t)) set.simulation.time = t;
+  }
+  if (f.isDataset("integer scalars")) {
+    const int64_t step = tableInt(f.readCompound("integer scalars"), "nstep");
+    if (step >= 0) set.simulation.cycle = step;
+  }
   const int64_t perBlock = h.blockCells.x * h.blockCells.y * h.blockCells.z;
   for (const io::Patch& p : patches) {
     const int level = io::log2Exact(p.width);
