@@ -211,6 +211,30 @@ class TransferFunction:
                    range=tuple(d["range"]) if d.get("range") is not None else None, log=bool(d.get("log", False)),
                    opacity_scale=d.get("opacity_scale", 1.0))
 
+    @classmethod
+    def from_yt(cls, tf, log=True, points=64):
+        """A yt ColorTransferFunction (its red, green, blue and alpha channels over its x bounds),
+        sampled at `points` values. yt's x is log10 of the value when its source maps the field
+        logarithmically (log=True, yt's default for densities) and the value itself otherwise.
+        yt's alpha scales its own ray integration; here it becomes the opacity per finest cell,
+        with the dataset's default scale."""
+        channels = [np.asarray(f.y, dtype=np.float64) for f in tf.funcs[:4]]
+        x = np.asarray(tf.funcs[0].x, dtype=np.float64)
+        x0, x1 = float(x[0]), float(x[-1])
+        if not x1 > x0:
+            raise ValueError("the yt transfer function spans no range")
+        idx = np.unique(np.linspace(0, len(x) - 1, max(2, int(points))).round().astype(int))
+        t = (x[idx] - x0) / (x1 - x0)
+        rgb = np.clip(np.stack([c[idx] for c in channels[:3]], axis=1), 0.0, 1.0)
+        alpha = np.clip(channels[3][idx], 0.0, None)
+        if alpha.max() > 0:
+            alpha = alpha / alpha.max()
+        t[0], t[-1] = 0.0, 1.0
+        colormap = [(float(ti), float(r), float(g), float(b)) for ti, (r, g, b) in zip(t, rgb)]
+        opacity = [(float(ti), float(a)) for ti, a in zip(t, alpha)]
+        value_range = (10.0 ** x0, 10.0 ** x1) if log else (x0, x1)
+        return cls(colormap=colormap, opacity=opacity, range=value_range, log=bool(log), opacity_scale="auto")
+
     def to_dict(self):
         d = {}
         if isinstance(self.colormap, str):

@@ -290,11 +290,20 @@ def test_yt_camera_converts():
                                bbox=np.array([[0, 16], [0, 16], [0, 16]]))
     sc = yt.create_scene(stream, ("stream", "density"))
     cam = eb.Camera.from_yt(sc.camera)
+    # A yt ColorTransferFunction: its colours and alpha over its x bounds (log10 of the value).
+    ctf = yt.ColorTransferFunction((-1.0, 1.0))
+    ctf.add_layers(3, w=0.02, colormap="viridis")
+    tf = eb.TransferFunction.from_yt(ctf)
+    assert tf.log and tf.range == pytest.approx((0.1, 10.0))
+    assert max(a for _, a in tf.opacity) == pytest.approx(1.0)
+    assert tf.colormap[0][0] == 0.0 and tf.colormap[-1][0] == 1.0
     assert np.allclose(cam.look_at, sc.camera.focus.d)
     ds = eb.from_yt(stream, [("stream", "density")])
     s = eb.Scene(ds, width=24, height=24)
     s.camera = cam
     assert s.render()[..., 3].max() > 0
+    s.transfer_function = eb.TransferFunction.from_yt(ctf, log=False)
+    s.render()
 
 
 def test_widget_renders_a_preview_then_refines():
