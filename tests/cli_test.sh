@@ -71,6 +71,7 @@ if [ -n "${EXABRICKS_WRITE_FIXTURE:-}" ]; then
   check "render a Chombo file" "$exe" render chombo.3d.hdf5 -f energy -o chombo.png --size 48x48
   check "convert a Chombo file" "$exe" -q convert chombo.3d.hdf5 -o chombo.cells
   check "the converted file keeps every cell" test "$(cells_of chombo.cells)" = "$(cells_of chombo.3d.hdf5)"
+  check "the default render of a Chombo file shows its data" bash -c "'$exe' render chombo.3d.hdf5 -o chombo-default.png --size 48x48 2>err.txt && ! grep -q 'image is empty' err.txt && grep -q \"field 'density' (the default\" err.txt"
   head -c 3000 chombo.3d.hdf5 > cut.3d.hdf5
   fails_with "truncated HDF5 file" "cut.3d.hdf5" "$exe" info cut.3d.hdf5
 fi
