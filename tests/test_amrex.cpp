@@ -281,4 +281,18 @@ TEST(Amrex, BadPlotfilesAreRejectedClearly) {
   m = errorOf(f.dir.string());
   EXPECT_NE(m.find("Header"), std::string::npos) << m;
   EXPECT_NE(m.find("end of file"), std::string::npos) << m;
+  // An unknown header version is refused by name, not read as if it were V1.1.
+  {
+    Fixture v;
+    v.dir = fs::path(EXABRICKS_TEST_TMP) / "amrex-version";
+    v.write();
+    std::ifstream in(v.dir / "Header");
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    in.close();
+    text.replace(0, text.find('\n'), "HyperCLaw-V9.9");
+    std::ofstream(v.dir / "Header") << text;
+    const std::string e = errorOf(v.dir.string());
+    EXPECT_NE(e.find("HyperCLaw-V9.9"), std::string::npos) << e;
+    EXPECT_NE(e.find("not supported"), std::string::npos) << e;
+  }
 }

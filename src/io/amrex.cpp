@@ -108,6 +108,11 @@ Plotfile readHeader(const std::string& dir) {
   TextReader r((fs::path(dir) / "Header").string());
   const std::string version = r.line();
   if (version.rfind("HyperCLaw", 0) != 0) r.bad("not an AMReX plotfile header ('" + version + "')");
+  {
+    std::string v = version;
+    while (!v.empty() && std::isspace((unsigned char)v.back())) v.pop_back();
+    if (v != "HyperCLaw-V1.1") r.bad("plotfile version '" + v + "' is not supported (HyperCLaw-V1.1 is)");
+  }
   const int nvars = int(numbers(r, r.line(), 1, "the variable count")[0]);
   if (nvars < 1 || nvars > 100000) r.bad("absurd variable count");
   for (int i = 0; i < nvars; ++i) {

@@ -95,11 +95,12 @@ std::string resolveTarget(const std::string& path) {
   return p.string();
 }
 
-void writeWhole(const std::string& path, const std::string& target, const void* data, size_t size) {
+void writeWhole(const std::string& path, const std::string& target, const void* data, size_t size, bool sync) {
   std::FILE* f = std::fopen(target.c_str(), "wb");
   if (!f) fail(path, ": cannot write: ", std::strerror(errno));
   const bool ok = std::fwrite(data, 1, size, f) == size;
-  const bool flushed = std::fflush(f) == 0;
+  // A file renamed into place is on disk first: a crash leaves the old file or the new one.
+  const bool flushed = std::fflush(f) == 0 && (!sync || ::fsync(::fileno(f)) == 0);
   const int err = errno;
   const bool closed = std::fclose(f) == 0;
   if (!ok || !flushed || !closed) fail(path, ": write failed: ", std::strerror(err ? err : EIO));
@@ -119,7 +120,7 @@ void AtomicFiles::write(const std::string& path, const void* data, size_t size) 
   if (!ec && fs::exists(st) && !fs::is_regular_file(st)) {
     // A device, a FIFO or another special file: written through, never replaced.
     if (fs::is_directory(st)) fail(path, ": cannot write: is a directory");
-    writeWhole(path, target, data, size);
+    writeWhole(path, target, data, size, false);
     return;
   }
   Pending p;
@@ -129,7 +130,7 @@ void AtomicFiles::write(const std::string& path, const void* data, size_t size) 
   p.slot = claimPending(p.temporary);
   pending_.push_back(p);
   try {
-    writeWhole(path, p.temporary, data, size);
+    writeWhole(path, p.temporary, data, size, true);
   } catch (...) {
     discard();
     throw;
