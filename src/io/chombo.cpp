@@ -186,7 +186,7 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
     }
   Progress progress("reading " + path, patches.size());
   for (size_t i = 0; i < patches.size(); ++i) {
-    const auto [l, b] = owner[i];
+    const size_t l = owner[i].first, b = owner[i].second; // (named variables: lambdas below capture them)
     const ChomboLevel& lv = h.levels[l];
     const std::vector<uint8_t> covered = coverage.covered(i);
     if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {

@@ -40,9 +40,11 @@ template <typename... Args> [[noreturn]] void fail(Args&&... args) {
 
 } // namespace exa
 
-/// Internal invariant check that prints both operands; failing it is a bug, not bad input.
-#define EXA_CHECK(cond, ...)                                                                       \
+/// Internal invariant check; failing it is a bug, not bad input. Extra arguments describe the
+/// values involved.
+#define EXA_CHECK(...)                                                                             \
   do {                                                                                             \
-    if (!(cond))                                                                                   \
-      ::exa::fail("internal check failed: " #cond " at " __FILE__ ":", __LINE__, " ", ##__VA_ARGS__); \
+    if (!(EXA_CHECK_CONDITION(__VA_ARGS__, 0)))                                                    \
+      ::exa::fail("internal check failed at " __FILE__ ":", __LINE__, ": " #__VA_ARGS__);          \
   } while (0)
+#define EXA_CHECK_CONDITION(cond, ...) (cond)
