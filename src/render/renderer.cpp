@@ -752,8 +752,11 @@ size_t Renderer::visibleRegions() const { return impl_->traversal ? impl_->trave
 box3d Renderer::visibleBounds() const {
   const Impl& im = *impl_;
   box3f lattice;
-  for (size_t i = 0; i < im.visible.size(); ++i)
-    if (im.visible[i]) lattice.extend(im.model.regions.regions[i].bounds());
+  if (im.scene.volume)
+    for (size_t i = 0; i < im.visible.size(); ++i)
+      if (im.visible[i]) lattice.extend(im.model.regions.regions[i].bounds());
+  for (size_t i = 0; i < im.isoVisible.size(); ++i)
+    if (im.isoVisible[i]) lattice.extend(im.model.regions.regions[i].bounds());
   if (lattice.empty()) return box3d();
   return box3d(im.model.world.toWorld(vec3d(lattice.lower)), im.model.world.toWorld(vec3d(lattice.upper)));
 }

@@ -154,7 +154,8 @@ public:
   bool pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const;
   /// Regions that may be visible under the current transfer functions.
   size_t visibleRegions() const;
-  /// World box of those regions (empty when none may be visible): what a first view frames.
+  /// World box of the regions that may show the volume (when it is on) or hold an iso-surface
+  /// (empty when there are none): what a first view frames.
   box3d visibleBounds() const;
   /// Regions that may hold an iso-surface.
   size_t isoRegions() const;
