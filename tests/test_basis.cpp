@@ -166,7 +166,7 @@ TEST(Basis, LinearFieldIsReproducedInsideOneLevel) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> u(2.0, 22.0);
   for (int i = 0; i < 200; ++i) {
-    const vec3d p(u(rng), u(rng), u(rng));
+    const vec3d p = test::draw3(u, rng);
     double v;
     vec3d g;
     ASSERT_TRUE(sampleField(m.view(0), p, v, &g));

@@ -1,6 +1,7 @@
 // Surfaces and effects against analytic truth: iso-surfaces of linear and radial fields, meshes
 // hiding the volume, clipping removing exactly a half-space, ambient occlusion in a corner and
 // on an open plane, colouring by a second field, and the multi-field combination rule.
+#include "datasets.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "reference.h"
@@ -138,7 +139,7 @@ TEST(Surfaces, LinearFieldIsoSurfaceIsThePlane) {
   for (int i = 0; i < 400; ++i) {
     // Rays from outside towards random interior points.
     const vec3d target = m.world.toWorld(vec3d(16.0 + 10 * u(rng), 16.0 + 10 * u(rng), 16.0 + 10 * u(rng)));
-    const vec3d dir = normalize(vec3d(u(rng), u(rng), u(rng)) + vec3d(0.01));
+    const vec3d dir = normalize(test::draw3(u, rng) + vec3d(0.01));
     const vec3d org = target - dir * 200.0;
     SurfaceHit hit;
     if (!r.pick(org, dir, hit)) continue;
@@ -171,9 +172,9 @@ TEST(Surfaces, RadialFieldIsoSurfaceIsASphere) {
   double worstRadius = 0, worstAngle = 0;
   int hits = 0;
   for (int i = 0; i < 300; ++i) {
-    const vec3d dir = normalize(vec3d(g(rng), g(rng), g(rng)));
+    const vec3d dir = normalize(test::draw3(g, rng));
     // Aim at points within 15 units of the centre: the ray crosses the sphere.
-    const vec3d aim = centre + vec3d(g(rng), g(rng), g(rng)) * 5.0;
+    const vec3d aim = centre + test::draw3(g, rng) * 5.0;
     const vec3d org = aim - dir * 60.0; // well outside the sphere
     SurfaceHit hit;
     if (!r.pick(org, dir, hit)) continue;
@@ -473,8 +474,8 @@ TEST(Surfaces, IsoHitsAreTheFirstRootsOfTheBruteForceReconstruction) {
   std::normal_distribution<double> g;
   int rays = 0, agree = 0, hits = 0, grazing = 0;
   for (int i = 0; i < 60; ++i) {
-    const vec3d dir = normalize(vec3d(g(rng), g(rng), g(rng)));
-    const vec3d aim = centre + vec3d(g(rng), g(rng), g(rng)) * (0.15 * length(hi - lo));
+    const vec3d dir = normalize(test::draw3(g, rng));
+    const vec3d aim = centre + test::draw3(g, rng) * (0.15 * length(hi - lo));
     const vec3d org = aim - dir * length(hi - lo);
     SurfaceHit hit;
     const bool found = r.pick(org, dir, hit);
