@@ -30,6 +30,7 @@ namespace {
 /// A built model, shared by every renderer made from it (they keep it alive).
 struct Dataset {
   std::shared_ptr<const Model> model;
+  DatasetInfo info; ///< computed once, shared by its renderers, defaults and warnings
   std::string name;
   double loadSeconds = 0;
 };
@@ -42,6 +43,7 @@ struct Mesh {
 std::shared_ptr<Dataset> makeDataset(Model&& m, std::string name, double seconds) {
   auto d = std::make_shared<Dataset>();
   d->model = std::make_shared<const Model>(std::move(m));
+  d->info = DatasetInfo::of(*d->model);
   d->name = std::move(name);
   d->loadSeconds = seconds;
   return d;
@@ -203,7 +205,7 @@ std::shared_ptr<Mesh> makeMesh(py::array_t<float, py::array::c_style | py::array
 /// accumulate in the renderer's own buffer until the scene or the frame changes.
 class PyRenderer {
 public:
-  explicit PyRenderer(std::shared_ptr<Dataset> d) : dataset_(std::move(d)), renderer_(*dataset_->model) {}
+  explicit PyRenderer(std::shared_ptr<Dataset> d) : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info) {}
 
   py::dict setScene(const std::string& json, const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
     SceneDocument doc = readSceneJson(json, "scene");
@@ -252,11 +254,7 @@ public:
         try {
           PassControl control;
           control.cancel = &cancel;
-          Frame pass = f;
-          while (int(buffer_.passes()) < target && !cancel) {
-            pass.frameIndex = int(buffer_.passes());
-            if (!renderer_.renderPass(pass, buffer_, control)) break;
-          }
+          renderer_.renderPasses(f, buffer_, target, control);
         } catch (...) {
           error = std::current_exception();
         }
@@ -382,13 +380,13 @@ PYBIND11_MODULE(_core, m) {
                              })
       .def("default_field", [](const Dataset& d) { return d.model->fieldNames[size_t(d.model->requireField(""))]; })
       .def_property_readonly("default_opacity_scale",
-                             [](const Dataset& d) { return DatasetInfo::of(*d.model).defaultOpacityScale; })
+                             [](const Dataset& d) { return d.info.defaultOpacityScale; })
       .def("info_json", [](const Dataset& d) { return modelInfoJson(*d.model, d.name, d.loadSeconds); })
       .def("sample", &sample, py::arg("points"), py::arg("field") = "")
       .def("adapt_transfer_function",
            [](const Dataset& d, const std::string& field, const std::string& tfJson, bool autoLog, bool autoOpacity) {
              const int f = d.model->requireField(field);
-             const DefaultChoices c = adaptTransferFunction(*d.model, DatasetInfo::of(*d.model), f,
+             const DefaultChoices c = adaptTransferFunction(*d.model, d.info, f,
                                                             parseTransferFunction(tfJson, "transfer function"), autoLog,
                                                             autoOpacity);
              return py::make_tuple(transferFunctionJson(c.tf), c.notes);
@@ -397,7 +395,7 @@ PYBIND11_MODULE(_core, m) {
       .def("warnings",
            [](const Dataset& d, const std::string& sceneJson) {
              const SceneDocument doc = readSceneJson(sceneJson, "scene");
-             return sceneWarnings(doc.scene, *d.model, DatasetInfo::of(*d.model));
+             return sceneWarnings(doc.scene, *d.model, d.info);
            },
            py::arg("scene_json"));
 

@@ -460,11 +460,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     if (!showProgress) progress.finish();
     PassControl control;
     control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
-    Frame pass = frame;
-    for (int s = 0; s < frame.samplesPerPixel; ++s) {
-      pass.frameIndex = s;
-      renderer.renderPass(pass, buffer, control);
-    }
+    renderer.renderPasses(frame, buffer, frame.samplesPerPixel, control);
     progress.finish();
     stats = buffer.stats();
   };

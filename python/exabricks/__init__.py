@@ -372,10 +372,7 @@ class Scene:
     def warnings(self):
         """What in the scene can never show anything (iso-values outside the data, a range that
         excludes it, ...), as the command line warns."""
-        d = self.to_dict()
-        for key in ("camera", "frame", "input"):
-            d.pop(key, None)
-        return list(self.dataset._core.warnings(json.dumps(d)))
+        return list(self.dataset._core.warnings(self._scene_json()))
 
     # -- convenience ------------------------------------------------------------------------
     @property
@@ -513,11 +510,15 @@ class Scene:
                            "frame": {"width": int(width), "height": int(height), "samples_per_pixel": int(spp),
                                      "rate": float(rate), "jitter": bool(self.jitter), "seed": int(self.seed)}})
 
-    def _update(self):
+    def _scene_json(self):
+        """The scene without camera, frame and input: what the renderer takes."""
         d = self.to_dict()
         for key in ("camera", "frame", "input"):
             d.pop(key, None)
-        return self._renderer.set_scene(json.dumps(d), [(m, c) for m, c in self.meshes])
+        return json.dumps(d)
+
+    def _update(self):
+        return self._renderer.set_scene(self._scene_json(), [(m, c) for m, c in self.meshes])
 
     def render(self, width=None, height=None, spp=None, rate=None):
         """Renders the scene: an (H, W, 4) float32 array of linear RGB premultiplied by alpha (row 0

@@ -72,7 +72,7 @@ int claimPending(const std::string& path) {
   if (path.size() >= sizeof(PendingSlot::path)) return -1;
   for (int i = 0; i < kPendingSlots; ++i) {
     bool expected = false;
-    if (gPending[i].used.load() || !gPending[i].used.compare_exchange_strong(expected, true)) continue;
+    if (!gPending[i].used.compare_exchange_strong(expected, true)) continue;
     std::memcpy(gPending[i].path, path.c_str(), path.size() + 1);
     return i;
   }

@@ -94,8 +94,6 @@ void orthonormalBasis(const vec3f& n, vec3f& u, vec3f& v) {
   v = cross(n, u);
 }
 
-/// Field index of a layer's field name (empty: the dataset's default field).
-int resolveField(const Model& model, const std::string& name) { return model.requireField(name); }
 
 } // namespace
 
@@ -772,12 +770,12 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     if (!s.meshes[m].mesh) fail("mesh ", m, " (", s.meshes[m].source, ") has not been read");
   // Resolve every field name first: an unknown one leaves the current scene as it is.
   std::vector<int> fields;
-  for (const VolumeLayer& layer : s.layers) fields.push_back(resolveField(im.model, layer.field));
+  for (const VolumeLayer& layer : s.layers) fields.push_back(im.model.requireField(layer.field));
   int isoField = -1, isoColorField = -1;
   if (!s.iso.values.empty()) {
-    isoField = !s.iso.field.empty() ? resolveField(im.model, s.iso.field)
-                                    : (fields.empty() ? resolveField(im.model, "") : fields[0]);
-    if (!s.iso.colorField.empty()) isoColorField = resolveField(im.model, s.iso.colorField);
+    isoField = !s.iso.field.empty() ? im.model.requireField(s.iso.field)
+                                    : (fields.empty() ? im.model.requireField("") : fields[0]);
+    if (!s.iso.colorField.empty()) isoColorField = im.model.requireField(s.iso.colorField);
   }
 
   const Scene& cur = im.scene;
@@ -878,14 +876,20 @@ bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassCon
   return !cancelled.load();
 }
 
+bool Renderer::renderPasses(const Frame& frame, FrameBuffer& buffer, int passes, const PassControl& control) const {
+  Frame pass = frame;
+  while (int(buffer.passes()) < passes) {
+    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) return false;
+    pass.frameIndex = int(buffer.passes());
+    if (!renderPass(pass, buffer, control)) return false;
+  }
+  return true;
+}
+
 Image Renderer::render(const Frame& frame, RenderStats* stats) const {
   frame.validate();
   FrameBuffer buffer(frame.width, frame.height);
-  Frame pass = frame;
-  for (int s = 0; s < frame.samplesPerPixel; ++s) {
-    pass.frameIndex = s;
-    renderPass(pass, buffer);
-  }
+  renderPasses(frame, buffer, frame.samplesPerPixel);
   if (stats) *stats = buffer.stats();
   return buffer.resolve();
 }

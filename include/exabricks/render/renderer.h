@@ -147,6 +147,9 @@ public:
   /// Adds pass `frame.frameIndex` (one sample per pixel) to the buffer, which must have the
   /// frame's size. Returns false when cancelled (only whole tiles were added).
   bool renderPass(const Frame& frame, FrameBuffer& buffer, const PassControl& control = {}) const;
+  /// Adds passes (frame index = the passes the buffer holds) until the buffer holds `passes`;
+  /// false when cancelled.
+  bool renderPasses(const Frame& frame, FrameBuffer& buffer, int passes, const PassControl& control = {}) const;
   /// A whole frame: passes 0..samplesPerPixel-1 into a fresh buffer, resolved.
   Image render(const Frame& frame, RenderStats* stats = nullptr) const;
 
