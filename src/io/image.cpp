@@ -60,27 +60,36 @@ void appendLittleEndian(std::vector<char>& out, float f) {
 
 } // namespace
 
+std::vector<unsigned char> toSrgb8(const Image& image, const vec3f& background) {
+  std::vector<unsigned char> bytes(image.pixels.size() * 3);
+  for (size_t i = 0; i < image.pixels.size(); ++i) {
+    const vec3f c = over(image.pixels[i], background);
+    bytes[3 * i] = toByte(linearToSrgb(c.x));
+    bytes[3 * i + 1] = toByte(linearToSrgb(c.y));
+    bytes[3 * i + 2] = toByte(linearToSrgb(c.z));
+  }
+  return bytes;
+}
+
 std::vector<unsigned char> encodePng(const Image& image, bool keepAlpha, const vec3f& background) {
   checkImage("PNG image", image);
   const int channels = keepAlpha ? 4 : 3;
-  std::vector<unsigned char> bytes(image.pixels.size() * size_t(channels));
-  for (size_t i = 0; i < image.pixels.size(); ++i) {
-    const vec4f& p = image.pixels[i];
-    unsigned char* out = bytes.data() + i * size_t(channels);
-    if (keepAlpha) {
+  std::vector<unsigned char> bytes;
+  if (keepAlpha) {
+    bytes.resize(image.pixels.size() * 4);
+    for (size_t i = 0; i < image.pixels.size(); ++i) {
       // PNG alpha is straight (not premultiplied); a transparent pixel has no colour to keep.
+      const vec4f& p = image.pixels[i];
+      unsigned char* out = bytes.data() + i * 4;
       const float a = std::isnan(p.w) ? 0.f : std::clamp(p.w, 0.f, 1.f);
       const float inv = a > 0.f ? 1.f / a : 0.f;
       out[0] = toByte(linearToSrgb(p.x * inv));
       out[1] = toByte(linearToSrgb(p.y * inv));
       out[2] = toByte(linearToSrgb(p.z * inv));
       out[3] = toByte(a);
-    } else {
-      const vec3f c = over(p, background);
-      out[0] = toByte(linearToSrgb(c.x));
-      out[1] = toByte(linearToSrgb(c.y));
-      out[2] = toByte(linearToSrgb(c.z));
     }
+  } else {
+    bytes = toSrgb8(image, background);
   }
   std::vector<unsigned char> png;
   if (!stbi_write_png_to_func(appendBytes, &png, image.width, image.height, channels, bytes.data(),
@@ -98,13 +107,7 @@ void writePng(const std::string& path, const Image& image, bool keepAlpha, const
 void writeJpeg(const std::string& path, const Image& image, const vec3f& background, int quality) {
   checkImage(path, image);
   if (quality < 1 || quality > 100) fail(path, ": JPEG quality ", quality, " is outside 1..100");
-  std::vector<unsigned char> bytes(image.pixels.size() * 3);
-  for (size_t i = 0; i < image.pixels.size(); ++i) {
-    const vec3f c = over(image.pixels[i], background);
-    bytes[3 * i] = toByte(linearToSrgb(c.x));
-    bytes[3 * i + 1] = toByte(linearToSrgb(c.y));
-    bytes[3 * i + 2] = toByte(linearToSrgb(c.z));
-  }
+  const std::vector<unsigned char> bytes = toSrgb8(image, background);
   std::vector<unsigned char> jpeg;
   if (!stbi_write_jpg_to_func(appendBytes, &jpeg, image.width, image.height, 3, bytes.data(), quality))
     fail(path, ": JPEG encoding failed");

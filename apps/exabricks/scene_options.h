@@ -1,0 +1,98 @@
+// The scene options of the rendering commands (render, view): what is drawn and how, the
+// camera, and the defaults that adapt to the data. Options given override a --scene file.
+#pragma once
+
+#include "common.h"
+
+#include "exabricks/core/image.h"
+#include "exabricks/render/renderer.h"
+#include "exabricks/render/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace exa {
+struct Model;
+}
+
+namespace exa::cli {
+
+struct SceneOptions {
+  InputOptions in;
+  std::string size = "800x800";
+  int spp = 1;
+  float rate = 1.f;
+  uint64_t seed = 0;
+  bool noJitter = false;
+  std::string colormap = "viridis";
+  std::string tfFile;
+  std::vector<float> opacity;       ///< x0 a0 x1 a1 ... in normalised value
+  float opacityScale = 0.f;         ///< 0: chosen from the dataset's size
+  std::vector<float> range;
+  bool logScale = false;
+  bool linear = false;
+  bool frameAll = false;
+  bool colorbar = false;
+  bool annotate = false;
+  std::vector<double> position, lookAt, up;
+  double fov = 40.0;
+  bool ortho = false;
+  double azimuth = 30.0, elevation = 25.0;
+  std::vector<float> background{0.f, 0.f, 0.f};
+  bool alpha = false;
+  std::string shading = "analytic";
+  std::string light = "headlight";
+  std::string traversal = "auto";
+  bool noSkip = false;
+  bool noEarlyTermination = false;
+  std::string sampling = "adaptive";
+  std::string reconstruction = "regions";
+  std::string debug = "none";
+  // Surfaces and effects.
+  bool noVolume = false;
+  std::vector<std::string> layers;   ///< FIELD=COLORMAP or FIELD=TF_FILE
+  std::vector<float> iso;
+  std::string isoField;
+  std::vector<float> isoColor;       ///< sRGB triples, one per iso-value (cycled)
+  std::string isoColorField;
+  std::string isoColormap = "cool-to-warm";
+  std::vector<float> isoColorRange;
+  bool isoColorLog = false;
+  std::vector<std::string> meshes;
+  std::vector<float> meshColor;      ///< sRGB triples, one per mesh (cycled)
+  std::vector<std::string> clipPlanes; ///< px,py,pz,nx,ny,nz each
+  std::vector<double> clipBox;
+  bool clipMeshes = false;
+  int aoRays = 0;
+  float aoLength = 0.f;
+  bool aoVolume = false;
+  std::string sceneFile;
+
+  /// Registers every option above on a command.
+  void add(CLI::App& cmd);
+};
+
+/// The scene and frame the options describe, over the scene file when one is given: without a
+/// file every option applies (defaults included); with one, only the options given.
+SceneDocument sceneFromOptions(const SceneOptions& o, const CLI::App& cmd);
+/// Fields the scene needs; empty means all (a layer names the default field).
+std::vector<std::string> neededFields(const Scene& s);
+/// The first picture: names the default field, adapts the first layer's transfer function to the
+/// data unless a file or the options chose it, applies --linear and logs the scene's warnings.
+/// Returns the first layer's field index.
+int applyDataDefaults(const SceneOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
+                      const DatasetInfo& dataset);
+/// The camera: the scene file's, or framing from azimuth and elevation the part of the data the
+/// transfer function shows (all of it with --frame-all, or when nothing is visible); explicit
+/// position, look-at and up override either.
+Camera cameraFromOptions(const SceneOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
+                         const box3d& visible);
+/// The scene document as a file records it: paths made absolute, so that it reads the same from
+/// any folder.
+SceneDocument withAbsolutePaths(SceneDocument doc);
+/// The colour bar, annotations and level legend the options ask for, drawn into the image in a
+/// colour that stands out against the background.
+void drawOverlays(const SceneOptions& o, const Scene& scene, const Frame& frame, const Model& model,
+                  const DatasetInfo& dataset, int field, Image& image);
+
+} // namespace exa::cli
