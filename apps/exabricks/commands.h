@@ -12,5 +12,6 @@ void addGenerate(CLI::App& app);
 void addConvert(CLI::App& app);
 void addRender(CLI::App& app);
 void addBench(CLI::App& app);
+void addView(CLI::App& app);
 
 } // namespace exa::cli

@@ -70,6 +70,7 @@ int main(int argc, char** argv) {
   exa::cli::addConvert(app);
   exa::cli::addRender(app);
   exa::cli::addBench(app);
+  exa::cli::addView(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <initializer_list>
 #include <numbers>
 
@@ -487,23 +488,19 @@ TransferFunction readTransferFunction(const std::string& path, bool* isPreset) {
   if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot open: is a directory");
   std::ifstream in(path, std::ios::binary);
   if (!in) fail(path, ": cannot open: ", std::strerror(errno));
-  json j;
-  try {
-    j = json::parse(in);
-  } catch (const json::exception& e) {
-    fail(path, ": invalid JSON: ", jsonMessage(e));
-  }
-  if (isPreset) *isPreset = j.is_array() || (j.is_object() && isParaViewPreset(j));
-  return transferFunctionFromJson(j, path);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (in.bad()) fail(path, ": cannot read: ", std::strerror(errno));
+  return parseTransferFunction(text, path, isPreset);
 }
 
-TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source) {
+TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source, bool* isPreset) {
   json j;
   try {
     j = json::parse(jsonText);
   } catch (const json::exception& e) {
     fail(source, ": invalid JSON: ", jsonMessage(e));
   }
+  if (isPreset) *isPreset = j.is_array() || (j.is_object() && isParaViewPreset(j));
   return transferFunctionFromJson(j, source);
 }
 

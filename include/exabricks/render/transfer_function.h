@@ -64,7 +64,8 @@ TransferFunction defaultTransferFunction(const std::string& colorMap = "viridis"
 TransferFunction readTransferFunction(const std::string& path, bool* isPreset = nullptr);
 
 /// The same from JSON text; errors name `source`.
-TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source);
+TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source,
+                                       bool* isPreset = nullptr);
 /// The exabricks JSON form of a transfer function (built-in colour maps by name, others as
 /// points; an opacity scale of 0 as "auto").
 std::string transferFunctionJson(const TransferFunction& tf);

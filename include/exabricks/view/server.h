@@ -1,0 +1,94 @@
+// The interactive viewer: an HTTP server that renders one dataset where it lives and streams
+// progressive frames to a page in the user's browser.
+//
+// One view per server. A request (POST /api/render) carries a whole scene document (the JSON of
+// `exabricks render --scene`) and whether the user is still dragging. The render thread answers
+// with a draft (reduced resolution and rate) and then, unless the user is still dragging, refines
+// the full-resolution image pass by pass up to the frame's samples per pixel. A newer request
+// cancels the one in flight between tiles; frames of a superseded request are never sent after
+// the newer request was accepted. Frames travel as JPEG over one streaming response per page
+// (GET /api/stream); the refined image is available losslessly (GET /api/snapshot.png).
+//
+// Safe by default: it binds to 127.0.0.1, every request needs the token printed with the URL
+// (query `token=`, header `X-Exabricks-Token` or the cookie the page receives), it opens no file
+// a request names (scenes and presets are uploaded; meshes must have been given at start),
+// request bodies and image sizes are bounded, and malformed requests get a 4xx with a message.
+#pragma once
+
+#include "exabricks/render/renderer.h"
+#include "exabricks/render/scene.h"
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace exa {
+
+struct Model;
+
+namespace view {
+
+struct ServerOptions {
+  std::string host = "127.0.0.1";
+  int port = 8080;                      ///< 0: any free port
+  std::string token;                    ///< empty: a random token
+  int maxImageSide = 4096;              ///< largest width or height a request may ask for
+  int maxSamplesPerPixel = 1024;
+  size_t maxRequestBytes = 8u << 20;    ///< largest request body
+  int maxStreams = 8;                   ///< concurrent frame streams (pages)
+  int jpegQuality = 90;                 ///< drafts and refining frames
+  int finalJpegQuality = 95;            ///< the frame that completes the refinement
+};
+
+/// What the viewer shows: the dataset, its name, and the first scene (defaults already adapted
+/// to the data, camera set). Meshes of the first scene, by their file name, are the only meshes
+/// a request may name.
+struct ViewContent {
+  std::shared_ptr<const Model> model;
+  DatasetInfo dataset;
+  std::string input;          ///< the dataset's path as scene files record it (absolute), or empty
+  std::string name;           ///< shown on the page
+  SceneDocument initial;
+};
+
+/// Statistics of a published frame (also sent to the page with each frame).
+struct FrameInfo {
+  uint64_t request = 0;       ///< the request it answers
+  uint64_t sequence = 0;      ///< increases with every published frame
+  bool draft = false;
+  bool final = false;         ///< the last frame of the request (target passes reached)
+  int width = 0, height = 0;
+  int passes = 0, targetPasses = 0;
+  double renderSeconds = 0;   ///< this frame's pass (or draft)
+  double sinceRequest = 0;    ///< seconds from accepting the request to publishing this frame
+  double samplesPerSecond = 0;
+  uint64_t samples = 0;
+  size_t visibleRegions = 0, regions = 0;
+};
+
+class Server {
+public:
+  Server(ViewContent content, ServerOptions options);
+  ~Server();
+  Server(const Server&) = delete;
+  Server& operator=(const Server&) = delete;
+
+  /// Binds the socket (throws exa::Error when it cannot) and starts the render thread.
+  void bind();
+  int port() const;
+  const std::string& token() const;
+  /// The address to open, token included.
+  std::string url() const;
+  /// Serves until stop() (from any thread, e.g. a signal handler's thread).
+  void run();
+  void stop();
+
+private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+} // namespace view
+} // namespace exa

@@ -1,0 +1,456 @@
+#include "exabricks/view/server.h"
+
+#include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+#include "exabricks/io/image.h"
+#include "exabricks/render/transfer_function.h"
+
+#include "session.h"
+#include "web_assets.h"
+
+#include <httplib.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+#include <random>
+
+namespace exa::view {
+
+using json = nlohmann::json;
+
+namespace {
+
+std::string randomToken() {
+  std::random_device device;
+  std::string token;
+  static const char* hex = "0123456789abcdef";
+  for (int i = 0; i < 48; ++i) token += hex[device() & 15u];
+  return token;
+}
+
+/// Compares in time independent of where the strings differ.
+bool sameToken(const std::string& a, const std::string& b) {
+  if (a.size() != b.size()) return false;
+  unsigned char diff = 0;
+  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
+  return diff == 0;
+}
+
+/// A client error: the status and the message the page shows.
+struct RequestError {
+  int status;
+  std::string message;
+};
+
+[[noreturn]] void reject(int status, const std::string& message) { throw RequestError{status, message}; }
+
+void sendJson(httplib::Response& res, const json& j, int status = 200) {
+  res.status = status;
+  res.set_content(j.dump(), "application/json");
+}
+
+void sendError(httplib::Response& res, int status, const std::string& message) {
+  sendJson(res, json{{"error", message}}, status);
+}
+
+json parseBody(const httplib::Request& req) {
+  try {
+    return json::parse(req.body);
+  } catch (const json::exception& e) {
+    reject(400, std::string("the request body is not valid JSON: ") + e.what());
+  }
+}
+
+double numberParam(const httplib::Request& req, const char* name, double fallback) {
+  if (!req.has_param(name)) return fallback;
+  const std::string text = req.get_param_value(name);
+  size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (...) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(v)) reject(400, strCat("parameter '", name, "' is not a number"));
+  return v;
+}
+
+json rangeJson(const range1f& r) {
+  if (r.empty()) return json::array({nullptr, nullptr});
+  return json::array({r.lower, r.upper});
+}
+
+} // namespace
+
+struct Server::Impl {
+  ViewContent content;
+  ServerOptions options;
+  std::string token;
+  httplib::Server http;
+  std::unique_ptr<Session> session;
+  std::atomic<int> streams{0};
+  std::atomic<bool> stopping{false};
+  int port = 0;
+
+  /// A scene document from a request: parsed, its meshes resolved to the meshes loaded at start,
+  /// its settings and fields checked, sizes bounded. Throws RequestError.
+  SceneDocument documentFrom(const std::string& text, const char* what, bool* hasCamera = nullptr) {
+    SceneDocument doc;
+    try {
+      doc = readSceneJson(text, what);
+    } catch (const Error& e) {
+      reject(400, e.what());
+    }
+    if (hasCamera) *hasCamera = doc.hasCamera;
+    if (!doc.hasCamera) doc.frame.camera = content.initial.frame.camera;
+    doc.input = content.input;
+    for (SceneMesh& m : doc.scene.meshes) {
+      if (m.mesh) continue; // given inline
+      const auto& known = content.initial.scene.meshes;
+      const auto it = std::find_if(known.begin(), known.end(), [&](const SceneMesh& k) { return k.source == m.source; });
+      if (it == known.end())
+        reject(400, strCat(what, ": mesh '", m.source,
+                           "' was not given when the viewer started (the viewer reads no file a request names; "
+                           "start it with --mesh ", m.source, ")"));
+      m.mesh = it->mesh;
+    }
+    const Frame& f = doc.frame;
+    if (f.width < 1 || f.height < 1 || f.width > options.maxImageSide || f.height > options.maxImageSide)
+      reject(400, strCat(what, ": image size ", f.width, "x", f.height, " is outside 1..", options.maxImageSide,
+                         " per side"));
+    if (f.samplesPerPixel < 1 || f.samplesPerPixel > options.maxSamplesPerPixel)
+      reject(400, strCat(what, ": samples per pixel ", f.samplesPerPixel, " is outside 1..",
+                         options.maxSamplesPerPixel));
+    try {
+      doc.scene.validate();
+      f.validate();
+      const Model& model = *content.model;
+      auto check = [&](const std::string& field) {
+        if (!field.empty()) model.requireField(field);
+      };
+      for (const VolumeLayer& l : doc.scene.layers) check(l.field);
+      check(doc.scene.iso.field);
+      check(doc.scene.iso.colorField);
+    } catch (const Error& e) {
+      reject(400, strCat(what, ": ", e.what()));
+    }
+    return doc;
+  }
+
+  json info() const {
+    const Model& model = *content.model;
+    json j;
+    j["name"] = content.name;
+    j["input"] = content.input;
+    json fields = json::array();
+    for (size_t i = 0; i < model.fieldNames.size(); ++i)
+      fields.push_back({{"name", model.fieldNames[i]}, {"range", rangeJson(content.dataset.valueRanges.at(i))}});
+    j["fields"] = fields;
+    j["default_field"] = model.fieldNames.at(size_t(model.requireField("")));
+    const box3i cb = model.cellBounds();
+    const vec3d lo = model.world.toWorld(vec3d(cb.lower)), hi = model.world.toWorld(vec3d(cb.upper));
+    j["bounds"] = {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z};
+    const ModelSummary summary = summarize(model);
+    j["cells"] = summary.cells;
+    j["regions"] = summary.regions;
+    json levels = json::array();
+    for (const ModelSummary::Level& l : summary.levels) {
+      const vec3d w = model.world.scale * double(1u << l.level);
+      levels.push_back(json{{"level", l.level}, {"cell_width", {w.x, w.y, w.z}}, {"cells", l.cells}});
+    }
+    j["levels"] = levels;
+    json maps = json::object();
+    for (const std::string& name : builtinColorMapNames()) {
+      const ColorMap map = builtinColorMap(name);
+      json samples = json::array();
+      for (int i = 0; i < 32; ++i) {
+        const vec3f c = linearToSrgb(map.at(float(i) / 31.f));
+        samples.push_back({c.x, c.y, c.z});
+      }
+      maps[name] = samples;
+    }
+    j["colormaps"] = maps;
+    j["document"] = json::parse(writeSceneJson(content.initial));
+    j["default_opacity_scale"] = content.dataset.defaultOpacityScale;
+    j["limits"] = {{"max_image_side", options.maxImageSide},
+                   {"max_samples_per_pixel", options.maxSamplesPerPixel},
+                   {"max_request_bytes", options.maxRequestBytes}};
+    return j;
+  }
+
+  /// Counts of the field's values over `bins` equal steps of the normalised value.
+  json histogram(const httplib::Request& req) const {
+    const Model& model = *content.model;
+    if (!req.has_param("field")) reject(400, "histogram: parameter 'field' is missing");
+    const std::string name = req.get_param_value("field");
+    const int field = model.fieldIndex(name);
+    if (field < 0) reject(400, strCat("histogram: unknown field '", name, "'"));
+    const double bins = numberParam(req, "bins", 128);
+    if (!(bins >= 1 && bins <= 4096) || bins != std::floor(bins)) reject(400, "histogram: bins must be in 1..4096");
+    const range1f data = content.dataset.valueRanges.at(size_t(field));
+    const double lo = numberParam(req, "lo", data.empty() ? 0.0 : data.lower);
+    const double hi = numberParam(req, "hi", data.empty() ? 1.0 : data.upper);
+    const bool logScale = req.has_param("log") && req.get_param_value("log") == "1";
+    if (!(lo < hi)) reject(400, "histogram: lo must be below hi");
+    if (logScale && !(lo > 0)) reject(400, "histogram: a log histogram needs lo > 0");
+    TransferFunction tf;
+    tf.valueRange = range1f{float(lo), float(hi)};
+    tf.logScale = logScale;
+    std::vector<uint64_t> counts(size_t(bins), 0);
+    uint64_t below = 0, above = 0, none = 0;
+    const float flo = float(lo), fhi = float(hi);
+    for (float v : model.fieldValues[size_t(field)]) {
+      if (!std::isfinite(v) || (logScale && !(v > 0.f))) {
+        ++none;
+        continue;
+      }
+      if (v < flo) {
+        ++below;
+        continue;
+      }
+      if (v > fhi) {
+        ++above;
+        continue;
+      }
+      const float t = tf.normalize(v);
+      counts[std::min(size_t(t * float(bins)), counts.size() - 1)]++;
+    }
+    return {{"counts", counts}, {"below", below}, {"above", above}, {"excluded", none}, {"lo", lo}, {"hi", hi},
+            {"log", logScale}};
+  }
+
+  bool authorised(const httplib::Request& req) const {
+    if (req.has_param("token") && sameToken(req.get_param_value("token"), token)) return true;
+    if (req.has_header("X-Exabricks-Token") && sameToken(req.get_header_value("X-Exabricks-Token"), token))
+      return true;
+    const std::string cookies = req.get_header_value("Cookie");
+    const std::string key = strCat(cookieName(), "=");
+    for (size_t at = cookies.find(key); at != std::string::npos; at = cookies.find(key, at + 1)) {
+      if (at > 0 && cookies[at - 1] != ' ' && cookies[at - 1] != ';') continue;
+      const size_t begin = at + key.size();
+      const size_t end = cookies.find(';', begin);
+      if (sameToken(cookies.substr(begin, end == std::string::npos ? std::string::npos : end - begin), token))
+        return true;
+    }
+    return false;
+  }
+
+  /// One cookie per port: viewers on other ports of the same host keep their own.
+  std::string cookieName() const { return strCat("exabricks_token_", port); }
+
+  void routes();
+};
+
+void Server::Impl::routes() {
+  // Every request needs the token; the page's own request sets the cookie its assets and API
+  // calls then carry.
+  http.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
+    if (authorised(req)) return httplib::Server::HandlerResponse::Unhandled;
+    sendError(res, 403, "a valid token is required: open the address the viewer printed (it ends in ?token=...)");
+    return httplib::Server::HandlerResponse::Handled;
+  });
+  http.set_exception_handler([](const httplib::Request&, httplib::Response& res, std::exception_ptr ep) {
+    try {
+      std::rethrow_exception(ep);
+    } catch (const RequestError& e) {
+      sendError(res, e.status, e.message);
+    } catch (const std::bad_alloc&) {
+      sendError(res, 503, "out of memory");
+    } catch (const std::exception& e) {
+      sendError(res, 500, e.what());
+    } catch (...) {
+      sendError(res, 500, "internal error");
+    }
+  });
+  http.set_error_handler([](const httplib::Request&, httplib::Response& res) {
+    if (!res.body.empty()) return;
+    const char* what = res.status == 404   ? "no such resource"
+                       : res.status == 413 ? "the request is too large"
+                       : res.status == 400 ? "malformed request"
+                                           : "request refused";
+    sendError(res, res.status, what);
+  });
+
+  auto asset = [this](const WebAsset& a) {
+    return [this, &a](const httplib::Request& req, httplib::Response& res) {
+      if (req.has_param("token"))
+        res.set_header("Set-Cookie", strCat(cookieName(), "=", token, "; Path=/; HttpOnly; SameSite=Strict"));
+      res.set_header("Cache-Control", "no-store");
+      res.set_content(std::string(a.data, a.size), a.mime);
+    };
+  };
+  for (const WebAsset& a : webAssets()) {
+    http.Get(a.path, asset(a));
+    if (std::strcmp(a.path, "/index.html") == 0) http.Get("/", asset(a));
+  }
+
+  http.Get("/api/info", [this](const httplib::Request&, httplib::Response& res) { sendJson(res, info()); });
+  http.Get("/api/histogram",
+           [this](const httplib::Request& req, httplib::Response& res) { sendJson(res, histogram(req)); });
+
+  http.Post("/api/render", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = parseBody(req);
+    if (!body.is_object() || !body.contains("scene") || !body["scene"].is_object())
+      reject(400, "render: the body must be an object with a \"scene\" object (and optionally \"interactive\")");
+    for (const auto& [key, value] : body.items())
+      if (key != "scene" && key != "interactive") reject(400, strCat("render: unknown key '", key, "'"));
+    bool interactive = false;
+    if (body.contains("interactive")) {
+      if (!body["interactive"].is_boolean()) reject(400, "render: \"interactive\" must be true or false");
+      interactive = body["interactive"].get<bool>();
+    }
+    const SceneDocument doc = documentFrom(body["scene"].dump(), "render scene");
+    const uint64_t id = session->submit(doc, interactive);
+    sendJson(res, {{"request", id}});
+  });
+
+  // Frames as a stream of records: u32 header length, header JSON, u32 JPEG length, JPEG
+  // (lengths little-endian). Only the newest frame is sent: a slow page skips frames.
+  http.Get("/api/stream", [this](const httplib::Request& req, httplib::Response& res) {
+    if (streams.fetch_add(1) >= options.maxStreams) {
+      streams.fetch_sub(1);
+      reject(429, strCat("too many open frame streams (at most ", options.maxStreams, ")"));
+    }
+    uint64_t after = 0;
+    if (req.has_param("after")) after = uint64_t(std::max(0.0, numberParam(req, "after", 0)));
+    res.set_header("Cache-Control", "no-store");
+    res.set_chunked_content_provider(
+        "application/octet-stream",
+        [this, after](size_t, httplib::DataSink& sink) mutable {
+          auto frame = session->waitFrame(after, 2000);
+          if (stopping) {
+            sink.done();
+            return true;
+          }
+          if (!sink.is_writable()) return false;
+          json header;
+          std::string image;
+          if (frame) {
+            const FrameInfo& i = frame->info;
+            after = i.sequence;
+            header = {{"request", i.request}, {"sequence", i.sequence}, {"draft", i.draft},
+                      {"final", i.final}, {"width", i.width}, {"height", i.height},
+                      {"passes", i.passes}, {"target_passes", i.targetPasses},
+                      {"render_seconds", i.renderSeconds}, {"since_request", i.sinceRequest},
+                      {"samples", i.samples}, {"samples_per_second", i.samplesPerSecond},
+                      {"visible_regions", i.visibleRegions}, {"regions", i.regions}};
+            if (!frame->error.empty()) header["error"] = frame->error;
+            image = frame->jpeg;
+          } else {
+            header = {{"keepalive", true}}; // lets a closed page be noticed
+          }
+          const std::string text = header.dump();
+          auto u32 = [](size_t n) {
+            const uint32_t v = uint32_t(n);
+            return std::string{char(v & 255u), char((v >> 8) & 255u), char((v >> 16) & 255u), char((v >> 24) & 255u)};
+          };
+          const std::string record = u32(text.size()) + text + u32(image.size()) + image;
+          return sink.write(record.data(), record.size());
+        },
+        [this](bool) { streams.fetch_sub(1); });
+  });
+
+  http.Get("/api/snapshot.png", [this](const httplib::Request&, httplib::Response& res) {
+    const Session::Snapshot s = session->snapshot();
+    if (!s.image) reject(404, "no full-resolution image yet");
+    const std::vector<unsigned char> png = encodePng(*s.image, s.keepAlpha, s.background);
+    res.set_header("X-Exabricks-Request", std::to_string(s.request));
+    res.set_header("X-Exabricks-Passes", std::to_string(s.passes));
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(std::string(png.begin(), png.end()), "image/png");
+  });
+
+  // The scene in effect, in the form `exabricks render --scene` reads.
+  http.Get("/api/scene", [this](const httplib::Request&, httplib::Response& res) {
+    const std::optional<SceneDocument> doc = session->current();
+    SceneDocument d = doc ? *doc : content.initial;
+    d.hasCamera = true;
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(writeSceneJson(d), "application/json");
+  });
+  // An uploaded scene file: checked and returned in full, for the page to adopt.
+  http.Post("/api/scene", [this](const httplib::Request& req, httplib::Response& res) {
+    bool hasCamera = false;
+    SceneDocument doc = documentFrom(req.body, "uploaded scene", &hasCamera);
+    doc.hasCamera = true;
+    sendJson(res, {{"document", json::parse(writeSceneJson(doc))}, {"has_camera", hasCamera}});
+  });
+  // An uploaded transfer function (ParaView preset or exabricks JSON), returned in exabricks
+  // form; a preset's points are rescaled to the data's range as ParaView applies presets.
+  http.Post("/api/transfer-function", [](const httplib::Request& req, httplib::Response& res) {
+    bool preset = false;
+    TransferFunction tf;
+    try {
+      tf = parseTransferFunction(req.body, "uploaded transfer function", &preset);
+    } catch (const Error& e) {
+      reject(400, e.what());
+    }
+    if (preset) {
+      tf.valueRange = range1f();
+      tf.opacityScale = 0.f;
+    }
+    sendJson(res, {{"transfer_function", json::parse(transferFunctionJson(tf))}, {"preset", preset},
+                   {"name", tf.colorMap.name}});
+  });
+}
+
+Server::Server(ViewContent content, ServerOptions options) : impl_(std::make_unique<Impl>()) {
+  impl_->content = std::move(content);
+  impl_->options = std::move(options);
+  impl_->token = impl_->options.token.empty() ? randomToken() : impl_->options.token;
+}
+
+Server::~Server() {
+  stop();
+}
+
+void Server::bind() {
+  Impl& s = *impl_;
+  if (!s.content.model) fail("viewer: no dataset");
+  s.http.set_payload_max_length(s.options.maxRequestBytes);
+  s.http.set_read_timeout(10, 0);
+  s.http.set_write_timeout(10, 0);
+  s.http.set_tcp_nodelay(true);
+  // Streams hold a worker each; leave room for the API requests beside them.
+  const size_t workers = size_t(std::max(4, s.options.maxStreams + 4));
+  s.http.new_task_queue = [workers] { return new httplib::ThreadPool(workers); };
+  s.routes();
+  if (s.options.port == 0) {
+    s.port = s.http.bind_to_any_port(s.options.host);
+    if (s.port < 0) fail("viewer: cannot listen on ", s.options.host, " (any port)");
+  } else {
+    if (!s.http.bind_to_port(s.options.host, s.options.port))
+      fail("viewer: cannot listen on ", s.options.host, " port ", s.options.port,
+           " (in use, or not an address of this machine; --port 0 picks a free port)");
+    s.port = s.options.port;
+  }
+  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options);
+  s.session->submit(s.content.initial, false); // the first picture renders while the page loads
+}
+
+int Server::port() const { return impl_->port; }
+const std::string& Server::token() const { return impl_->token; }
+
+std::string Server::url() const {
+  const std::string& host = impl_->options.host;
+  const std::string shown = host == "0.0.0.0" || host.empty() ? "127.0.0.1" : host;
+  const bool v6 = shown.find(':') != std::string::npos;
+  return strCat("http://", v6 ? "[" : "", shown, v6 ? "]" : "", ":", impl_->port, "/?token=", impl_->token);
+}
+
+void Server::run() {
+  if (!impl_->session) bind();
+  impl_->http.listen_after_bind();
+}
+
+void Server::stop() {
+  if (impl_->stopping.exchange(true)) return;
+  if (impl_->session) impl_->session->stop();
+  impl_->http.stop();
+}
+
+} // namespace exa::view

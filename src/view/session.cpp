@@ -1,0 +1,209 @@
+#include "session.h"
+
+#include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
+#include "exabricks/io/image.h"
+
+#include <turbojpeg.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace exa::view {
+
+namespace {
+
+/// Drafts aim at this render time, so that a draft reaches the screen within ~100 ms.
+constexpr double kDraftSeconds = 0.035;
+/// Drafts sample at this rate (samples per half finest cell width).
+constexpr float kDraftRate = 0.5f;
+
+double secondsSince(std::chrono::steady_clock::time_point t) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
+}
+
+std::string encodeJpeg(const Image& image, const vec3f& background, int quality, bool fullChroma) {
+  const std::vector<unsigned char> rgb = toSrgb8(image, background);
+  tjhandle handle = tjInitCompress();
+  if (!handle) fail("JPEG encoder: cannot initialise libturbojpeg");
+  unsigned char* out = nullptr;
+  unsigned long size = 0;
+  const int rc = tjCompress2(handle, rgb.data(), image.width, 0, image.height, TJPF_RGB, &out, &size,
+                             fullChroma ? TJSAMP_444 : TJSAMP_420, quality, TJFLAG_FASTDCT);
+  std::string bytes;
+  if (rc == 0) bytes.assign(reinterpret_cast<const char*>(out), size);
+  const std::string message = rc == 0 ? std::string() : std::string(tjGetErrorStr2(handle));
+  tjFree(out);
+  tjDestroy(handle);
+  if (rc != 0) fail("JPEG encoding failed: ", message);
+  return bytes;
+}
+
+} // namespace
+
+Session::Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options)
+    : model_(std::move(model)), renderer_(*model_, dataset), options_(options) {
+  thread_ = std::thread([this] { loop(); });
+}
+
+Session::~Session() { stop(); }
+
+void Session::stop() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+    cancel_ = true;
+  }
+  requestReady_.notify_all();
+  frameReady_.notify_all();
+  if (thread_.joinable() && thread_.get_id() != std::this_thread::get_id()) thread_.join();
+}
+
+uint64_t Session::submit(const SceneDocument& doc, bool interactive) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  Request r;
+  r.id = ++newest_;
+  r.doc = doc;
+  r.interactive = interactive;
+  r.accepted = std::chrono::steady_clock::now();
+  currentDoc_ = doc;
+  pending_ = std::move(r);
+  cancel_ = true; // the pass in flight stops before its next tile
+  requestReady_.notify_all();
+  return newest_;
+}
+
+bool Session::superseded(uint64_t id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return stopping_ || id != newest_;
+}
+
+std::shared_ptr<const PublishedFrame> Session::waitFrame(uint64_t afterSequence, int timeoutMs) {
+  std::unique_lock<std::mutex> lock(mutex_);
+  frameReady_.wait_for(lock, std::chrono::milliseconds(timeoutMs),
+                       [&] { return stopping_ || (latest_ && latest_->info.sequence > afterSequence); });
+  if (latest_ && latest_->info.sequence > afterSequence) return latest_;
+  return nullptr;
+}
+
+Session::Snapshot Session::snapshot() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return snapshot_;
+}
+
+std::optional<SceneDocument> Session::current() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return currentDoc_;
+}
+
+void Session::loop() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (true) {
+    requestReady_.wait(lock, [&] { return stopping_ || pending_.has_value(); });
+    if (stopping_) return;
+    const Request request = std::move(*pending_);
+    pending_.reset();
+    cancel_ = false;
+    lock.unlock();
+    try {
+      serve(request);
+    } catch (const std::exception& e) {
+      publishError(request, e.what());
+    }
+    lock.lock();
+  }
+}
+
+void Session::serve(const Request& request) {
+  const Frame& frame = request.doc.frame;
+  const Scene& scene = request.doc.scene;
+  renderer_.setScene(scene);
+  PassControl control;
+  control.cancel = &cancel_;
+
+  FrameInfo info;
+  info.request = request.id;
+  info.targetPasses = frame.samplesPerPixel;
+  info.visibleRegions = renderer_.visibleRegions();
+  info.regions = model_->regions.regions.size();
+
+  // A draft first: reduced resolution and rate, sized to answer quickly.
+  {
+    Frame draft = frame.preview(draftDivisor_, kDraftRate);
+    draft.frameIndex = 0;
+    draftBuffer_.resize(draft.width, draft.height);
+    if (!renderer_.renderPass(draft, draftBuffer_, control) || superseded(request.id)) return;
+    const RenderStats& s = draftBuffer_.stats();
+    info.draft = true;
+    info.width = draft.width;
+    info.height = draft.height;
+    info.passes = 1;
+    info.renderSeconds = s.seconds;
+    info.samples = s.samples;
+    info.samplesPerSecond = s.samplesPerSecond();
+    publish(request, draftBuffer_.resolve(), info, false, options_.jpegQuality);
+    // The next draft's divisor: render time scales with the pixel count.
+    const double ratio = std::max(s.seconds, 1e-4) / kDraftSeconds;
+    if (ratio > 1.4 || ratio < 0.5)
+      draftDivisor_ = std::clamp(int(std::lround(draftDivisor_ * std::sqrt(ratio))), 1, 16);
+  }
+  if (request.interactive) return;
+
+  // Then the full-resolution image, refined pass by pass (pass k uses frame index k, so the
+  // result equals an N-sample render of the frame).
+  buffer_.resize(frame.width, frame.height);
+  info.draft = false;
+  info.width = frame.width;
+  info.height = frame.height;
+  Image image;
+  for (int pass = 0; pass < frame.samplesPerPixel; ++pass) {
+    Frame f = frame;
+    f.frameIndex = pass;
+    const RenderStats before = buffer_.stats();
+    if (!renderer_.renderPass(f, buffer_, control) || superseded(request.id)) return;
+    const RenderStats& after = buffer_.stats();
+    info.passes = pass + 1;
+    info.final = pass + 1 == frame.samplesPerPixel;
+    info.renderSeconds = after.seconds - before.seconds;
+    info.samples = after.samples - before.samples;
+    info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
+    buffer_.resolve(image);
+    publish(request, image, info, true, info.final ? options_.finalJpegQuality : options_.jpegQuality);
+  }
+}
+
+void Session::publish(const Request& request, const Image& image, FrameInfo info, bool keepImage, int quality) {
+  const Scene& scene = request.doc.scene;
+  auto frame = std::make_shared<PublishedFrame>();
+  frame->jpeg = encodeJpeg(image, scene.background, quality, info.final);
+  std::shared_ptr<const Image> kept = keepImage ? std::make_shared<const Image>(image) : nullptr;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stopping_ || request.id != newest_) return; // superseded: never sent after the newer request
+  info.sequence = ++sequence_;
+  info.sinceRequest = secondsSince(request.accepted);
+  frame->info = info;
+  latest_ = std::move(frame);
+  if (kept) {
+    snapshot_.image = std::move(kept);
+    snapshot_.request = request.id;
+    snapshot_.passes = info.passes;
+    snapshot_.targetPasses = info.targetPasses;
+    snapshot_.background = scene.background;
+    snapshot_.keepAlpha = scene.keepAlpha;
+  }
+  frameReady_.notify_all();
+}
+
+void Session::publishError(const Request& request, const std::string& message) {
+  auto frame = std::make_shared<PublishedFrame>();
+  frame->error = message;
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (stopping_ || request.id != newest_) return;
+  frame->info.request = request.id;
+  frame->info.sequence = ++sequence_;
+  frame->info.sinceRequest = secondsSince(request.accepted);
+  latest_ = std::move(frame);
+  frameReady_.notify_all();
+}
+
+} // namespace exa::view

@@ -1,0 +1,82 @@
+// The render side of the viewer: one render thread, one request in flight, the newest request
+// wins. Independent of HTTP.
+#pragma once
+
+#include "exabricks/core/image.h"
+#include "exabricks/render/renderer.h"
+#include "exabricks/view/server.h"
+
+#include <atomic>
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <thread>
+#include <vector>
+
+namespace exa::view {
+
+/// A frame ready to send: its statistics and JPEG bytes, or an error message for the request.
+struct PublishedFrame {
+  FrameInfo info;
+  std::string jpeg;
+  std::string error;
+};
+
+class Session {
+public:
+  Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options);
+  ~Session();
+
+  /// Accepts a validated scene document; returns its request number. Cancels the request in
+  /// flight: from now on no frame of an older request is published.
+  uint64_t submit(const SceneDocument& doc, bool interactive);
+  /// Waits until a frame newer than `afterSequence` is published, or `timeoutMs` passes, or the
+  /// session stops; null when none.
+  std::shared_ptr<const PublishedFrame> waitFrame(uint64_t afterSequence, int timeoutMs);
+  /// The latest refined (full-resolution) image, the request it belongs to and its passes.
+  struct Snapshot {
+    std::shared_ptr<const Image> image;
+    uint64_t request = 0;
+    int passes = 0, targetPasses = 0;
+    vec3f background{0.f};
+    bool keepAlpha = false;
+  };
+  Snapshot snapshot() const;
+  /// The document of the newest request (empty before the first).
+  std::optional<SceneDocument> current() const;
+  void stop();
+
+private:
+  struct Request {
+    uint64_t id = 0;
+    SceneDocument doc;
+    bool interactive = false;
+    std::chrono::steady_clock::time_point accepted;
+  };
+  void loop();
+  void serve(const Request& request);
+  bool superseded(uint64_t id) const;
+  void publish(const Request& request, const Image& image, FrameInfo info, bool keepImage, int quality);
+  void publishError(const Request& request, const std::string& message);
+
+  std::shared_ptr<const Model> model_;
+  Renderer renderer_;
+  ServerOptions options_;
+  mutable std::mutex mutex_;
+  std::condition_variable requestReady_, frameReady_;
+  std::optional<Request> pending_;      ///< newest request not yet taken by the render thread
+  uint64_t newest_ = 0;                 ///< number of the newest accepted request
+  std::optional<SceneDocument> currentDoc_;
+  std::atomic<bool> cancel_{false};
+  bool stopping_ = false;
+  uint64_t sequence_ = 0;
+  std::shared_ptr<const PublishedFrame> latest_;
+  Snapshot snapshot_;
+  int draftDivisor_ = 4;                ///< adapted so that drafts take about kDraftSeconds
+  FrameBuffer buffer_, draftBuffer_;
+  std::thread thread_;
+};
+
+} // namespace exa::view
