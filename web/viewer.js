@@ -529,28 +529,27 @@ function iso() {
   return s;
 }
 
-function isoFieldRange() {
+/// The values an iso slider spans: the transfer function's range and scale when the iso-surfaces
+/// show the volume's field (what the user sees), else the field's range (logarithmic for positive
+/// data over more than three decades).
+function isoScale() {
   const name = iso().field || layerField();
+  if (name === layerField()) return { range: normalisedRange(), log: !!tf().log };
   const r = fieldInfo(name).range;
-  return [r[0] ?? 0, r[1] ?? 1];
-}
-
-/// Iso sliders are logarithmic for positive data over more than three decades.
-function isoSliderLog() {
-  const [lo, hi] = isoFieldRange();
-  return lo > 0 && hi / lo > 1e3;
+  const lo = r[0] ?? 0, hi = r[1] ?? 1;
+  return { range: [lo, hi], log: lo > 0 && hi / lo > 1e3 };
 }
 
 function isoToSlider(v) {
-  const [lo, hi] = isoFieldRange();
+  const { range: [lo, hi], log } = isoScale();
   if (!(hi > lo)) return 0.5;
-  if (isoSliderLog()) return (Math.log10(Math.max(v, lo)) - Math.log10(lo)) / (Math.log10(hi) - Math.log10(lo));
+  if (log) return (Math.log10(Math.max(v, lo)) - Math.log10(lo)) / (Math.log10(hi) - Math.log10(lo));
   return (v - lo) / (hi - lo);
 }
 
 function sliderToIso(t) {
-  const [lo, hi] = isoFieldRange();
-  if (isoSliderLog()) return 10 ** (Math.log10(lo) + t * (Math.log10(hi) - Math.log10(lo)));
+  const { range: [lo, hi], log } = isoScale();
+  if (log) return 10 ** (Math.log10(lo) + t * (Math.log10(hi) - Math.log10(lo)));
   return lo + t * (hi - lo);
 }
 
@@ -780,6 +779,7 @@ function setupControls() {
     }
     tf().range = [lo, hi];
     refreshHistogram();
+    renderIsoList();
     requestRender(false);
   };
   on('range-lo', 'change', setRange);
@@ -792,6 +792,7 @@ function setupControls() {
   on('log-scale', 'change', () => {
     tf().log = $('log-scale').checked;
     refreshHistogram();
+    renderIsoList();
     requestRender(false);
   });
   on('opacity-scale', 'input', () => {
@@ -805,8 +806,7 @@ function setupControls() {
   on('opacity-scale', 'change', () => requestRender(false));
   on('iso-add', 'click', () => {
     const s = iso();
-    const [lo, hi] = isoFieldRange();
-    s.values.push(isoSliderLog() ? Math.sqrt(lo * hi) : (lo + hi) / 2);
+    s.values.push(sliderToIso(0.5));
     if (s.colors.length < s.values.length) s.colors.push(isoPalette[(s.values.length - 1) % isoPalette.length]);
     renderIsoList();
     requestRender(false);

@@ -414,6 +414,7 @@ void Server::bind() {
   s.http.set_payload_max_length(s.options.maxRequestBytes);
   s.http.set_read_timeout(10, 0);
   s.http.set_write_timeout(10, 0);
+  s.http.set_keep_alive_timeout(1); // idle connections close soon, so that stopping is quick
   s.http.set_tcp_nodelay(true);
   // Streams hold a worker each; leave room for the API requests beside them.
   const size_t workers = size_t(std::max(4, s.options.maxStreams + 4));

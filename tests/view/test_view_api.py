@@ -1,0 +1,229 @@
+"""The viewer's HTTP API over loopback: rendering equals the command line, access needs the token,
+bad requests get a 4xx and leave the server serving, newer requests supersede older ones."""
+import json
+import signal
+import socket
+import subprocess
+import time
+
+import pytest
+
+
+def small_scene(viewer, **frame):
+    doc = viewer.info()["document"]
+    doc["frame"].update({"width": 72, "height": 56, "samples_per_pixel": 3})
+    doc["frame"].update(frame)
+    return doc
+
+
+def cli_png(cli, tmp_path, doc, name="cli"):
+    scene = tmp_path / (name + ".json")
+    scene.write_text(json.dumps(doc))
+    out = tmp_path / (name + ".png")
+    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
+    return out.read_bytes()
+
+
+def test_binds_to_localhost_and_prints_the_address(start_viewer):
+    v = start_viewer()
+    assert v.host == "127.0.0.1"
+    assert len(v.token) >= 32
+    assert v.alive()
+
+
+def test_rendering_through_the_api_equals_the_command_line(start_viewer, cli, tmp_path):
+    v = start_viewer()
+    doc = small_scene(v)
+    values = [f["range"] for f in v.info()["fields"] if f["name"] == "scalar"][0]
+    doc["iso"] = {"values": [values[0] + 0.4 * (values[1] - values[0])], "colors": [[0.9, 0.6, 0.3]]}
+    doc["clip"] = {"planes": [{"point": [48, 48, 40], "normal": [0, 0, 1]}]}
+    doc["layers"][0]["transfer_function"]["opacity"] = [[0, 0], [0.5, 0.1], [1, 0.9]]
+    request = v.render(doc)
+    frames, jpeg = v.wait_final(request)
+    assert jpeg[:2] == b"\xff\xd8"
+    final = frames[-1]
+    assert final["passes"] == 3 and final["target_passes"] == 3 and not final["draft"]
+    assert (final["width"], final["height"]) == (72, 56)
+    status, png, headers = v.request("GET", "/api/snapshot.png")
+    assert status == 200 and headers["X-Exabricks-Request"] == str(request)
+    # The same scene given to `render --scene`: the same bytes.
+    assert png == cli_png(cli, tmp_path, doc)
+    # The scene the server reports (what the page saves) renders the same image too.
+    status, saved, _ = v.request("GET", "/api/scene")
+    assert status == 200
+    saved_doc = json.loads(saved)
+    assert saved_doc["iso"]["values"] == pytest.approx(doc["iso"]["values"])
+    assert png == cli_png(cli, tmp_path, saved_doc, "saved")
+
+
+def test_drafts_come_first_and_refinement_adds_passes(start_viewer):
+    v = start_viewer()
+    request = v.render(small_scene(v, width=128, height=128, samples_per_pixel=4))
+    frames, _ = v.wait_final(request)
+    mine = [f for f in frames if f["request"] == request]
+    assert mine[0]["draft"] and mine[0]["width"] <= 128
+    refined = [f["passes"] for f in mine if not f["draft"]]
+    assert refined == [1, 2, 3, 4]
+    sequences = [f["sequence"] for f in frames]
+    assert sequences == sorted(sequences)
+    # An interactive request gets its draft only.
+    request = v.render(small_scene(v, width=128, height=128), interactive=True)
+    for header, _ in v.stream(30):
+        if header.get("request") == request:
+            assert header["draft"]
+            break
+    time.sleep(0.5)
+    status, _, headers = v.request("GET", "/api/snapshot.png")
+    assert headers.get("X-Exabricks-Request") != str(request)
+
+
+def test_a_newer_request_supersedes_the_one_in_flight(start_viewer):
+    v = start_viewer()
+    slow = v.render(small_scene(v, width=256, height=256, samples_per_pixel=200))
+    frames = v.stream(60)
+    # Wait until the slow request is refining, then replace it.
+    for header, _ in frames:
+        if header.get("request") == slow and not header["draft"]:
+            break
+    fast = v.render(small_scene(v, width=64, height=64, samples_per_pixel=2))
+    seen_fast = False
+    for header, _ in frames:
+        if header.get("keepalive"):
+            continue
+        if header["request"] == fast:
+            seen_fast = True
+            if header["final"]:
+                break
+        else:
+            # Frames of the old request may still be in the pipe before the new one's first frame,
+            # never after it.
+            assert not seen_fast, "a frame of the superseded request arrived after the newer one"
+            assert header["passes"] < 200
+    # The superseded request never completes.
+    time.sleep(0.3)
+    status, _, headers = v.request("GET", "/api/snapshot.png")
+    assert headers["X-Exabricks-Request"] == str(fast)
+
+
+def test_requests_without_the_token_are_refused(start_viewer):
+    v = start_viewer()
+    for path in ["/", "/index.html", "/viewer.js", "/api/info", "/api/stream", "/api/snapshot.png", "/api/scene"]:
+        status, body, _ = v.request("GET", path, token=False)
+        assert status == 403, path
+        assert b"token" in body
+        status, _, _ = v.request("GET", path, token="0" * len(v.token))
+        assert status == 403, path
+    status, _, _ = v.request("POST", "/api/render", {"scene": {}}, token="wrong")
+    assert status == 403
+    # The page itself, with the token in its address, sets a cookie its other requests carry.
+    status, body, headers = v.request("GET", "/?token=" + v.token, token=False)
+    assert status == 200 and b"viewer.js" in body
+    cookie = headers["Set-Cookie"].split(";")[0]
+    assert "HttpOnly" in headers["Set-Cookie"]
+    status, _, _ = v.request("GET", "/viewer.js", token=False, headers={"Cookie": cookie})
+    assert status == 200
+
+
+def test_bad_requests_get_4xx_and_the_server_keeps_serving(start_viewer):
+    v = start_viewer()
+    doc = v.info()["document"]
+    cases = [
+        ("POST", "/api/render", b"{not json", 400, b"not valid JSON"),
+        ("POST", "/api/render", json.dumps([1, 2]), 400, b"scene"),
+        ("POST", "/api/render", json.dumps({"scene": doc, "extra": 1}), 400, b"unknown key"),
+        ("POST", "/api/render", json.dumps({"scene": doc, "interactive": "yes"}), 400, b"interactive"),
+        ("POST", "/api/render", json.dumps({"scene": dict(doc, frame=dict(doc["frame"], width=100000))}), 400,
+         b"image size"),
+        ("POST", "/api/render", json.dumps({"scene": dict(doc, frame=dict(doc["frame"], samples_per_pixel=0))}),
+         400, b"samples per pixel"),
+        ("POST", "/api/render", json.dumps({"scene": dict(doc, layers=[{"field": "nosuchfield"}])}), 400,
+         b"nosuchfield"),
+        ("POST", "/api/render", json.dumps({"scene": dict(doc, light={"ambiant": 1})}), 400, b"ambiant"),
+        ("POST", "/api/render", json.dumps({"scene": dict(doc, meshes=[{"file": "/etc/passwd"}])}), 400,
+         b"reads no file"),
+        ("POST", "/api/scene", b"[]", 400, b"uploaded scene"),
+        ("POST", "/api/transfer-function", b"{\"colormap\": \"nosuchmap\"}", 400, b"nosuchmap"),
+        ("GET", "/api/histogram?field=scalar&bins=0", None, 400, b"bins"),
+        ("GET", "/api/histogram?field=nosuch", None, 400, b"unknown field"),
+        ("GET", "/api/histogram?field=scalar&lo=abc", None, 400, b"not a number"),
+        ("GET", "/api/histogram?field=scalar&lo=2&hi=1", None, 400, b"below"),
+        ("GET", "/api/nothing", None, 404, b"no such"),
+        ("GET", "/../../etc/passwd", None, 404, b""),
+    ]
+    for method, path, body, expect, message in cases:
+        status, data, _ = v.request(method, path, body)
+        assert status == expect, (path, body, status, data)
+        assert message in data, (path, data)
+        assert json.loads(data)["error"]
+    # Oversized body: refused before it is read whole.
+    status, _, _ = v.request("POST", "/api/render", b"x" * (9 << 20))
+    assert status == 413
+    # Garbage on the socket.
+    with socket.create_connection((v.host, v.port), timeout=10) as s:
+        s.sendall(b"\x00\x01GARBAGE\r\n\r\n")
+        reply = s.recv(100)
+        assert reply.startswith(b"HTTP/1.1 4"), reply
+    # A client that connects and says nothing does not stall the others.
+    idle = socket.create_connection((v.host, v.port), timeout=10)
+    assert v.alive()
+    idle.close()
+    request = v.render(small_scene(v))
+    v.wait_final(request)
+
+
+def test_uploads_scene_and_preset(start_viewer):
+    v = start_viewer()
+    doc = v.info()["document"]
+    doc.pop("camera")
+    r = v.json("POST", "/api/scene", json.dumps(doc))
+    assert r["has_camera"] is False and "camera" in r["document"]
+    preset = [{"Name": "Two", "ColorSpace": "RGB", "RGBPoints": [0, 0, 0, 1, 1, 1, 0, 0]}]
+    r = v.json("POST", "/api/transfer-function", json.dumps(preset))
+    assert r["preset"] is True
+    points = r["transfer_function"]["colormap"]["points"]
+    assert points[0][:4] == [0, 0, 0, 1] and points[-1][0] == 1
+    # A preset's colours in a scene render like any other.
+    doc = small_scene(v)
+    doc["layers"][0]["transfer_function"]["colormap"] = r["transfer_function"]["colormap"]
+    v.wait_final(v.render(doc))
+
+
+def test_histogram_counts_every_value_once(start_viewer):
+    v = start_viewer()
+    info = v.info()
+    lo, hi = [f["range"] for f in info["fields"] if f["name"] == "scalar"][0]
+    h = v.json("GET", "/api/histogram?field=scalar&bins=64&lo=%r&hi=%r" % (lo, hi))
+    assert len(h["counts"]) == 64
+    assert sum(h["counts"]) + h["below"] + h["above"] + h["excluded"] == info["cells"]
+    mid = (lo + hi) / 2
+    upper = v.json("GET", "/api/histogram?field=scalar&bins=8&lo=%r&hi=%r" % (mid, hi))
+    assert upper["below"] == sum(h["counts"][:32]) + h["below"] or upper["below"] > 0
+
+
+def test_ctrl_c_stops_cleanly(start_viewer):
+    v = start_viewer()
+    frames = v.stream(30)
+    next(frames)  # a page is connected and streaming
+    t = time.time()
+    v.proc.send_signal(signal.SIGINT)
+    assert v.proc.wait(10) == 0
+    assert time.time() - t < 5
+    assert "stopped" in v.stderr_path.read_text()
+
+
+def test_scene_options_set_the_first_view(start_viewer):
+    v = start_viewer("--colormap", "inferno", "--iso", "0.5", "--spp", "2", "--size", "100x80")
+    doc = v.info()["document"]
+    assert doc["layers"][0]["transfer_function"]["colormap"] == "inferno"
+    assert doc["iso"]["values"] == [0.5]
+    assert (doc["frame"]["width"], doc["frame"]["samples_per_pixel"]) == (100, 2)
+
+
+def test_port_in_use_is_a_clear_error(cli):
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen(1)
+        port = s.getsockname()[1]
+        r = subprocess.run([cli, "view", "--port", str(port)], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1
+    assert "cannot listen" in r.stderr and str(port) in r.stderr
