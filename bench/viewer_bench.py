@@ -1,0 +1,164 @@
+#!/usr/bin/python3
+"""Interactive figures of `exabricks view`, measured through a real browser (headless Chromium):
+
+- latency: from a transfer-function edit or a camera drag (the input event in the page) to the
+  first draft frame drawn on the page;
+- draft frames per second drawn while the user orbits continuously;
+- time from the end of an interaction to the refined full-resolution image on the page, against
+  the command line's frame time for the same scene (`render --scene ... --stats`).
+
+    /usr/bin/python3 bench/viewer_bench.py build/exabricks DATASET [--size 1024] [--spp 1]
+"""
+import argparse
+import json
+import os
+import pathlib
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import urllib.parse
+
+from selenium import webdriver
+from selenium.webdriver.chrome.service import Service
+from selenium.webdriver.common.action_chains import ActionChains
+from selenium.webdriver.common.by import By
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("exabricks")
+    ap.add_argument("input", nargs="?", default="")
+    ap.add_argument("--size", type=int, default=1024)
+    ap.add_argument("--spp", type=int, default=1)
+    ap.add_argument("--orbit-seconds", type=float, default=4.0)
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args()
+
+    args = [a.exabricks, "view", "--port", "0", "--spp", str(a.spp), "--size", "%dx%d" % (a.size, a.size)]
+    if a.input:
+        args.insert(2, a.input)
+    server = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    url = server.stdout.readline().strip()
+    options = webdriver.ChromeOptions()
+    options.binary_location = "/usr/bin/chromium"
+    for o in ["--headless=new", "--no-sandbox", "--disable-gpu", "--window-size=1500,1200"]:
+        options.add_argument(o)
+    driver = webdriver.Chrome(service=Service("/usr/bin/chromedriver"), options=options)
+    driver.set_script_timeout(120)
+    results = {}
+    try:
+        driver.get(url + "&size=%d" % a.size)
+        js = lambda s: driver.execute_script(s)  # noqa: E731
+
+        def latest():
+            return js("return window.exabricksViewer.latest") or {}
+
+        def wait_final(after_request, timeout=300):
+            deadline = time.time() + timeout
+            while time.time() < deadline:
+                h = latest()
+                if h.get("final") and h["request"] > after_request:
+                    return h
+                time.sleep(0.02)
+            raise SystemExit("no refined frame")
+
+        first = wait_final(0)
+        canvas = driver.find_element(By.ID, "image")
+        editor = driver.find_element(By.ID, "tf-editor")
+
+        # Transfer-function edits: drag the last opacity point a little, then release; repeat.
+        tf_latency, tf_final = [], []
+        request = first["request"]
+        for i in range(a.repeats):
+            n0 = len(js("return window.exabricksViewer.metrics.latencies"))
+            pts = js("return window.exabricksViewer.doc.layers[0].transfer_function.opacity")
+            x, y = pts[-1][0], pts[-1][1]
+            w, h = editor.size["width"], editor.size["height"]
+            px = (4 + x * 292) * w / 300 - w / 2
+            py = (4 + (1 - y) * 110) * h / 130 - h / 2
+            ActionChains(driver).move_to_element_with_offset(editor, px, py).click_and_hold() \
+                .move_by_offset(0, 6 if i % 2 == 0 else -6).pause(0.3).release().perform()
+            done = wait_final(request)
+            request = done["request"]
+            lat = js("return window.exabricksViewer.metrics.latencies")
+            tf_latency.extend(lat[n0:n0 + 1])
+            tf_final.append(js("return window.exabricksViewer.metrics.finals")[-1]["ms"])
+
+        # Orbit continuously for a few seconds: drafts drawn per second, latency of the first.
+        n0 = len(js("return window.exabricksViewer.metrics.latencies"))
+        d0 = len(js("return window.exabricksViewer.metrics.draftFrames"))
+        # The drag is synthesised inside the page at 60 events per second (the WebDriver's own
+        # actions arrive far slower), through the same pointer handlers a mouse uses.
+        t0 = time.time()
+        driver.execute_async_script("""
+            const [seconds, done] = arguments;
+            const c = document.getElementById('image');
+            const r = c.getBoundingClientRect();
+            let x = r.left + r.width / 2, y = r.top + r.height / 2;
+            const ev = (type) => c.dispatchEvent(new PointerEvent(type, {clientX: x, clientY: y, button: 0,
+                                                                            pointerId: 1, bubbles: true}));
+            ev('pointerdown');
+            const start = performance.now();
+            const timer = setInterval(() => {
+              x += 2;
+              ev('pointermove');
+              if (performance.now() - start > seconds * 1000) {
+                clearInterval(timer);
+                ev('pointerup');
+                done();
+              }
+            }, 16);
+        """, a.orbit_seconds)
+        orbit_seconds = time.time() - t0
+        drafts = js("return window.exabricksViewer.metrics.draftFrames")[d0:]
+        span = (drafts[-1] - drafts[0]) / 1000 if len(drafts) > 1 else 0
+        orbit_fps = (len(drafts) - 1) / span if span > 0 else 0
+        orbit_latency = js("return window.exabricksViewer.metrics.latencies")[n0:n0 + 1]
+        done = wait_final(request)
+        orbit_final = js("return window.exabricksViewer.metrics.finals")[-1]["ms"]
+        draft_res = js("return window.exabricksViewer.latest")
+
+        # The command line's frame time for the scene on the page.
+        status_scene = subprocess.run(["curl", "-s", "-H", "X-Exabricks-Token: " +
+                                       urllib.parse.parse_qs(urllib.parse.urlparse(url).query)["token"][0],
+                                       url.split("/?")[0] + "/api/scene"], capture_output=True, text=True).stdout
+        with tempfile.TemporaryDirectory() as tmp:
+            scene = pathlib.Path(tmp) / "scene.json"
+            scene.write_text(status_scene)
+            out = subprocess.run([a.exabricks, "render", "--scene", str(scene), "-o", str(pathlib.Path(tmp) / "x.png"),
+                                  "--stats", "--json", "--frames", "3"], capture_output=True, text=True, check=True)
+            cli = json.loads(out.stdout)
+        cli_frame = cli["frame_seconds"] * a.spp if a.spp > 1 else cli["frame_seconds"]
+        results = {
+            "size": a.size, "samples_per_pixel": a.spp,
+            "tf_edit_to_first_draft_ms": tf_latency,
+            "tf_edit_to_refined_ms": tf_final,
+            "orbit_to_first_draft_ms": orbit_latency,
+            "orbit_drafts_per_second": orbit_fps, "orbit_drafts": len(drafts), "orbit_seconds": orbit_seconds,
+            "orbit_end_to_refined_ms": orbit_final,
+            "cli_frame_seconds": cli["frame_seconds"],
+            "refined_over_cli": (statistics.median(tf_final + [orbit_final]) / 1000) / cli_frame,
+            "last_frame": draft_res,
+        }
+    finally:
+        driver.quit()
+        server.terminate()
+        server.wait()
+    if a.json:
+        print(json.dumps(results, indent=2))
+    else:
+        print("viewer at %d^2, %d sample(s) per pixel" % (a.size, a.spp))
+        print("  TF edit -> first draft on the page   %s ms" % ", ".join("%.0f" % v for v in results["tf_edit_to_first_draft_ms"]))
+        print("  orbit start -> first draft           %s ms" % ", ".join("%.0f" % v for v in results["orbit_to_first_draft_ms"]))
+        print("  drafts per second while orbiting     %.1f (%d drafts)" % (results["orbit_drafts_per_second"], results["orbit_drafts"]))
+        print("  end of edit -> refined image         %s ms" % ", ".join("%.0f" % v for v in results["tf_edit_to_refined_ms"] + [results["orbit_end_to_refined_ms"]]))
+        print("  command line frame (render --stats)  %.0f ms" % (results["cli_frame_seconds"] * 1000))
+        print("  refined / command line               %.3f" % results["refined_over_cli"])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
