@@ -6,7 +6,9 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/native.h"
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 
 namespace exa::cli {
@@ -14,6 +16,9 @@ namespace {
 
 struct GenerateOptions {
   SceneOptions scene;
+  int steps = 0;     ///< 0: one dataset; N: a time series of N steps
+  int regrid = 1;    ///< steps between two changes of the hierarchy
+  double dt = 1.0;   ///< time between steps
   std::string output;
   bool list = false;
   bool json = false;
@@ -25,21 +30,50 @@ void run(const GenerateOptions& o) {
     return;
   }
   if (o.output.empty()) fail("generate: an output NAME.cells is required (-o)");
+  if (o.steps < 0 || o.steps > 100000) failUsage("--steps must be in 0..100000");
+  if (o.regrid < 1) failUsage("--regrid must be at least 1");
+  if (!(o.dt > 0 && std::isfinite(o.dt))) failUsage("--dt must be a positive number");
   Timer timer;
-  const CellSet cells = generateScene(o.scene);
-  validateCells(cells, o.scene.name);
-  const double genSeconds = timer.seconds();
-  writeNative(cells, o.output);
-  logInfo(strCat("generated ", cells.size(), " cells in ", genSeconds, " s; wrote ", o.output));
+  std::vector<std::string> outputs;
+  uint64_t cellCount = 0;
+  if (o.steps == 0) {
+    const CellSet cells = generateScene(o.scene);
+    validateCells(cells, o.scene.name);
+    writeNative(cells, o.output);
+    cellCount = cells.size();
+    outputs.push_back(o.output);
+  } else {
+    // NAME.cells -> NAME_0000.cells, NAME_0001.cells, ...: one dataset per step, on one lattice.
+    std::string stem = o.output;
+    if (stem.size() > 6 && stem.compare(stem.size() - 6, 6, ".cells") == 0) stem.resize(stem.size() - 6);
+    const std::filesystem::path folder = std::filesystem::path(stem).parent_path();
+    std::error_code ec;
+    if (!folder.empty()) std::filesystem::create_directories(folder, ec);
+    if (ec) fail(folder.string(), ": cannot create the folder: ", ec.message());
+    const SceneOptions resolved = resolveSceneSize(o.scene);
+    Progress progress("generating " + std::to_string(o.steps) + " steps", uint64_t(o.steps));
+    for (int step = 0; step < o.steps; ++step) {
+      SceneOptions so = resolved;
+      so.time = step * o.dt;
+      so.gridTime = (step / o.regrid) * o.regrid * o.dt;
+      const CellSet cells = generateScene(so);
+      validateCells(cells, o.scene.name);
+      char suffix[32];
+      std::snprintf(suffix, sizeof suffix, "_%04d.cells", step);
+      outputs.push_back(stem + suffix);
+      writeNative(cells, outputs.back());
+      cellCount += cells.size();
+      progress.advance(1);
+    }
+    progress.finish();
+  }
+  logInfo(strCat("generated ", cellCount, " cells in ", timer.seconds(), " s; wrote ", outputs.size(), " dataset(s)"));
   if (o.json) {
-    std::vector<std::string> fields;
-    for (const Field& f : cells.fields) fields.push_back(f.name);
-    std::cout << nlohmann::json{{"output", o.output},      {"scene", o.scene.name},
-                                {"cells", cells.size()},   {"fields", fields},
-                                {"seed", o.scene.seed},    {"levels", o.scene.levels},
-                                {"seconds", timer.seconds()}}
-                     .dump(2)
-              << "\n";
+    nlohmann::json j{{"output", o.steps ? nlohmann::json(outputs) : nlohmann::json(o.output)},
+                     {"scene", o.scene.name}, {"cells", cellCount}, {"seed", o.scene.seed},
+                     {"levels", o.scene.levels}, {"seconds", timer.seconds()}};
+    if (o.steps) j["steps"] = o.steps;
+    std::cout << j.dump(2) << "\n";
   }
 }
 
@@ -56,6 +90,9 @@ void addGenerate(CLI::App& app) {
       ->check(CLI::Range(1, 12))
       ->capture_default_str();
   cmd->add_option("-o,--output", opts->output, "Output NAME.cells");
+  cmd->add_option("--steps", opts->steps, "Write a time series of N steps NAME_0000.cells, ... (blobs move)");
+  cmd->add_option("--regrid", opts->regrid, "Steps between changes of the hierarchy in a series")->capture_default_str();
+  cmd->add_option("--dt", opts->dt, "Time between steps of a series")->capture_default_str();
   cmd->add_flag("--list", opts->list, "List the scenes");
   cmd->add_flag("--json", opts->json, "Print a JSON summary on stdout");
   cmd->callback([opts] { run(*opts); });

@@ -20,7 +20,7 @@ namespace exa::cli {
 namespace {
 
 struct RenderCmdOptions {
-  SceneOptions scene;
+  RenderOptions scene;
   std::string output;
   std::string floatOutput;
   bool stats = false;

@@ -20,7 +20,7 @@ namespace exa::cli {
 namespace {
 
 struct ViewCmdOptions {
-  SceneOptions scene;
+  RenderOptions scene;
   std::string host = "127.0.0.1";
   int port = 8765;
   std::string token;

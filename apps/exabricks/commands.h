@@ -13,5 +13,6 @@ void addConvert(CLI::App& app);
 void addRender(CLI::App& app);
 void addBench(CLI::App& app);
 void addView(CLI::App& app);
+void addMovie(CLI::App& app);
 
 } // namespace exa::cli

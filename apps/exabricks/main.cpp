@@ -71,6 +71,7 @@ int main(int argc, char** argv) {
   exa::cli::addRender(app);
   exa::cli::addBench(app);
   exa::cli::addView(app);
+  exa::cli::addMovie(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

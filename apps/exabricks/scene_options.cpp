@@ -61,7 +61,7 @@ std::vector<vec3f> colorList(const std::vector<float>& v, const char* what) {
 
 /// The options of one volume layer's transfer function, applied over `tf`: a file replaces
 /// it, then every option that was given overrides its part.
-TransferFunction applyTransferFunctionOptions(TransferFunction tf, const SceneOptions& o, const std::string& tfFile,
+TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderOptions& o, const std::string& tfFile,
                                               const std::string* colormap, bool withRange) {
   if (!tfFile.empty()) {
     bool preset = false;
@@ -86,8 +86,11 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const SceneOp
     }
   }
   if (withRange && !o.range.empty()) {
-    if (o.range.size() != 2 || !(o.range[0] < o.range[1])) failUsage("--range expects LOW,HIGH with LOW < HIGH");
-    tf.valueRange = range1f{o.range[0], o.range[1]};
+    std::vector<double> r;
+    for (const std::string& part : o.range)
+      for (double v : parseNumbers(part, "--range")) r.push_back(v);
+    if (r.size() != 2 || !(r[0] < r[1])) failUsage("--range expects LOW,HIGH with LOW < HIGH");
+    tf.valueRange = range1f{float(r[0]), float(r[1])};
   }
   if (o.logScale) tf.logScale = true;
   if (o.opacityScale > 0.f) tf.opacityScale = o.opacityScale;
@@ -96,7 +99,7 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const SceneOp
 
 } // namespace
 
-void SceneOptions::add(CLI::App& cmd) {
+void RenderOptions::add(CLI::App& cmd) {
   in.add(cmd);
   cmd.add_option("--size", size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd.add_option("--spp", spp, "Jittered samples per pixel, accumulated")->capture_default_str();
@@ -160,7 +163,7 @@ void SceneOptions::add(CLI::App& cmd) {
                   "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
 }
 
-SceneDocument sceneFromOptions(const SceneOptions& o, const CLI::App& cmd) {
+SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   const bool fromFile = !o.sceneFile.empty();
   SceneDocument doc = fromFile ? readSceneFile(o.sceneFile) : SceneDocument();
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
@@ -334,7 +337,7 @@ std::vector<std::string> neededFields(const Scene& s) {
   return all ? std::vector<std::string>() : names;
 }
 
-Camera cameraFromOptions(const SceneOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
+Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
                          const box3d& visible) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
   if (!(o.fov > 0 && o.fov < 180)) failUsage("--fov must be in (0, 180) degrees");
@@ -350,7 +353,7 @@ Camera cameraFromOptions(const SceneOptions& o, const CLI::App& cmd, const Scene
   return camera;
 }
 
-int applyDataDefaults(const SceneOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
+int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
                       const DatasetInfo& dataset) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
   VolumeLayer& first = scene.layers.at(0);
@@ -378,7 +381,7 @@ SceneDocument withAbsolutePaths(SceneDocument doc) {
   return doc;
 }
 
-void drawOverlays(const SceneOptions& o, const Scene& scene, const Frame& frame, const Model& model,
+void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,
                   const DatasetInfo& dataset, int field, Image& image) {
   const vec3f bg = scene.background;
   const float luminance = 0.2126f * bg.x + 0.7152f * bg.y + 0.0722f * bg.z;

@@ -17,7 +17,7 @@ struct Model;
 
 namespace exa::cli {
 
-struct SceneOptions {
+struct RenderOptions {
   InputOptions in;
   std::string size = "800x800";
   int spp = 1;
@@ -28,7 +28,7 @@ struct SceneOptions {
   std::string tfFile;
   std::vector<float> opacity;       ///< x0 a0 x1 a1 ... in normalised value
   float opacityScale = 0.f;         ///< 0: chosen from the dataset's size
-  std::vector<float> range;
+  std::vector<std::string> range;  ///< LOW,HIGH (movies also: global or per-step)
   bool logScale = false;
   bool linear = false;
   bool frameAll = false;
@@ -74,25 +74,25 @@ struct SceneOptions {
 
 /// The scene and frame the options describe, over the scene file when one is given: without a
 /// file every option applies (defaults included); with one, only the options given.
-SceneDocument sceneFromOptions(const SceneOptions& o, const CLI::App& cmd);
+SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd);
 /// Fields the scene needs; empty means all (a layer names the default field).
 std::vector<std::string> neededFields(const Scene& s);
 /// The first picture: names the default field, adapts the first layer's transfer function to the
 /// data unless a file or the options chose it, applies --linear and logs the scene's warnings.
 /// Returns the first layer's field index.
-int applyDataDefaults(const SceneOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
+int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
                       const DatasetInfo& dataset);
 /// The camera: the scene file's, or framing from azimuth and elevation the part of the data the
 /// transfer function shows (all of it with --frame-all, or when nothing is visible); explicit
 /// position, look-at and up override either.
-Camera cameraFromOptions(const SceneOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
+Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
                          const box3d& visible);
 /// The scene document as a file records it: paths made absolute, so that it reads the same from
 /// any folder.
 SceneDocument withAbsolutePaths(SceneDocument doc);
 /// The colour bar, annotations and level legend the options ask for, drawn into the image in a
 /// colour that stands out against the background.
-void drawOverlays(const SceneOptions& o, const Scene& scene, const Frame& frame, const Model& model,
+void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,
                   const DatasetInfo& dataset, int field, Image& image);
 
 } // namespace exa::cli

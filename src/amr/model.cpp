@@ -104,7 +104,9 @@ void buildRegionsOf(Model& model) {
   model.stats.rangeSeconds = timer.seconds();
 }
 
-Model buildModel(CellSet&& cells, const BuildOptions& options) {
+namespace {
+
+Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* keep) {
   Model model;
   model.world = cells.world;
   model.simulation = cells.simulation;
@@ -112,6 +114,11 @@ Model buildModel(CellSet&& cells, const BuildOptions& options) {
   Progress progress("building bricks and regions", 3);
   BrickBuild bricks = buildBricks(cells.cells, options.bricks);
   progress.advance(1);
+  if (keep) {
+    keep->cells = std::move(cells.cells);
+    keep->world = cells.world;
+    keep->bricks = options.bricks;
+  }
   std::vector<Cell>().swap(cells.cells);
   model.bricks = std::move(bricks.bricks);
   for (Field& f : cells.fields) {
@@ -119,6 +126,7 @@ Model buildModel(CellSet&& cells, const BuildOptions& options) {
     model.fieldValues.push_back(toBrickOrder(f.values, bricks.cellOfSlot));
     std::vector<float>().swap(f.values);
   }
+  if (keep) keep->cellOfSlot = std::move(bricks.cellOfSlot);
   model.stats.brickSeconds = timer.seconds();
   logInfo(strCat("built ", model.bricks.size(), " bricks in ", model.stats.brickSeconds, " s"));
   progress.advance(1);
@@ -126,6 +134,46 @@ Model buildModel(CellSet&& cells, const BuildOptions& options) {
   progress.finish();
   logInfo(strCat("built ", model.regions.regions.size(), " regions in ",
                  model.stats.regionSeconds + model.stats.rangeSeconds, " s"));
+  return model;
+}
+
+} // namespace
+
+Model buildModel(CellSet&& cells, const BuildOptions& options) { return buildWith(std::move(cells), options, nullptr); }
+
+Model buildModel(CellSet&& cells, const BuildOptions& options, ModelStructure& structure) {
+  return buildWith(std::move(cells), options, &structure);
+}
+
+bool ModelStructure::matches(const CellSet& other, const BuildOptions& options) const {
+  return other.world == world && options.bricks.maxBrickWidth == bricks.maxBrickWidth &&
+         other.cells.size() == cells.size() &&
+         std::equal(other.cells.begin(), other.cells.end(), cells.begin());
+}
+
+Model rebuildValues(const Model& like, const ModelStructure& structure, CellSet&& cells) {
+  if (!structure.matches(cells, BuildOptions{structure.bricks}))
+    fail("rebuilding values: the cells differ from the structure's (another hierarchy)");
+  Timer timer;
+  Model model;
+  model.world = cells.world;
+  model.simulation = cells.simulation;
+  model.bricks = like.bricks;
+  for (Field& f : cells.fields) {
+    model.fieldNames.push_back(f.name);
+    model.fieldValues.push_back(toBrickOrder(f.values, structure.cellOfSlot));
+    std::vector<float>().swap(f.values);
+  }
+  model.stats.brickSeconds = timer.seconds();
+  timer.reset();
+  RegionSet& regions = model.regions;
+  regions = like.regions;
+  regions.valueRanges.clear();
+  model.stats.regionSeconds = timer.seconds();
+  timer.reset();
+  for (const auto& values : model.fieldValues)
+    regions.valueRanges.push_back(computeValueRanges(regions, model.bricks, values));
+  model.stats.rangeSeconds = timer.seconds();
   return model;
 }
 

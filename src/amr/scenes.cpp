@@ -35,7 +35,7 @@ struct Scene {
   int block = 4;
 };
 
-Scene makeBlobs(uint64_t seed, int maxLevel) {
+Scene makeBlobs(uint64_t seed, int maxLevel, double time, double gridTime) {
   struct Blob {
     vec3d centre;
     double sigma, amplitude;
@@ -53,6 +53,20 @@ Scene makeBlobs(uint64_t seed, int maxLevel) {
     b.amplitude = 0.4 + 0.6 * uniform(s);
     blobs.push_back(b);
   }
+  // Motion for time series, from its own random stream (time 0 is the scene above). Each blob
+  // drifts at 0.008 to 0.016 of the domain per unit of time.
+  uint64_t m = mix64(seed ^ 0x7e10c17ull);
+  std::vector<vec3d> velocity;
+  for (size_t i = 0; i < blobs.size(); ++i) {
+    const double vz = uniform(m) - 0.5, vy = uniform(m) - 0.5, vx = uniform(m) - 0.5;
+    const double speed = 0.008 + 0.008 * uniform(m);
+    velocity.push_back(normalize(vec3d(vx, vy, vz)) * speed);
+  }
+  std::vector<Blob> gridBlobs = blobs;
+  for (size_t i = 0; i < blobs.size(); ++i) {
+    blobs[i].centre = blobs[i].centre + velocity[i] * time;
+    gridBlobs[i].centre = gridBlobs[i].centre + velocity[i] * (gridTime < 0 ? time : gridTime);
+  }
   Scene scene;
   scene.fieldNames = {"scalar", "radius"};
   scene.evaluate = [blobs](const vec3d& p, float* v) {
@@ -64,10 +78,10 @@ Scene makeBlobs(uint64_t seed, int maxLevel) {
     v[0] = float(f);
     v[1] = float(length(p - vec3d(0.5)));
   };
-  auto levelAt = [blobs, maxLevel](const vec3d& p) {
+  auto levelAt = [gridBlobs, maxLevel](const vec3d& p) {
     // Refine where the field varies: the gradient magnitude relative to a typical maximum.
     vec3d g(0.0);
-    for (const Blob& b : blobs) {
+    for (const Blob& b : gridBlobs) {
       const vec3d d = p - b.centre;
       const double e = b.amplitude * std::exp(-dot(d, d) / (2 * b.sigma * b.sigma));
       g += d * (-e / (b.sigma * b.sigma));
@@ -139,7 +153,8 @@ Scene makeRamp(uint64_t seed, int maxLevel) {
 
 Scene makeScene(const SceneOptions& o) {
   const int maxLevel = o.levels - 1;
-  if (o.name == "blobs") return makeBlobs(o.seed, maxLevel);
+  if (o.name == "blobs") return makeBlobs(o.seed, maxLevel, o.time, o.gridTime);
+  if (o.time != 0 || o.gridTime >= 0) fail("scene '", o.name, "' does not change with time (only blobs moves)");
   if (o.name == "shells") return makeShells(o.seed, maxLevel);
   if (o.name == "ramp") return makeRamp(o.seed, maxLevel);
   std::string known;
@@ -211,7 +226,7 @@ const std::vector<SceneInfo>& sceneList() {
   return list;
 }
 
-CellSet generateScene(const SceneOptions& o) {
+SceneOptions resolveSceneSize(const SceneOptions& o) {
   if (o.levels < 1 || o.levels > 12) fail("levels must be between 1 and 12, got ", o.levels);
   if (o.targetCells < 1 || o.targetCells > (uint64_t(1) << 32) - 1)
     fail("cell count must be between 1 and 2^32-1, got ", o.targetCells);
@@ -220,7 +235,9 @@ CellSet generateScene(const SceneOptions& o) {
   // A request smaller than one refined base cell gets fewer levels.
   while (maxLevel > 0 && double(countCells(scene, 1, maxLevel)) > 2.0 * double(o.targetCells)) {
     --maxLevel;
-    scene = makeScene(SceneOptions{o.name, o.targetCells, o.seed, maxLevel + 1});
+    SceneOptions fewer = o;
+    fewer.levels = maxLevel + 1;
+    scene = makeScene(fewer);
     logInfo(strCat("scene ", o.name, ": using ", maxLevel + 1, " levels for ", o.targetCells, " cells"));
   }
   const int w = 1 << maxLevel;
@@ -249,6 +266,20 @@ CellSet generateScene(const SceneOptions& o) {
     }
   }
   base = std::clamp(base, 1, 2048);
+  SceneOptions resolved = o;
+  resolved.levels = maxLevel + 1;
+  resolved.base = base;
+  return resolved;
+}
+
+CellSet generateScene(const SceneOptions& options) {
+  const SceneOptions o = options.base > 0 ? options : resolveSceneSize(options);
+  if (o.levels < 1 || o.levels > 12) fail("levels must be between 1 and 12, got ", o.levels);
+  if (o.base < 1 || o.base > 2048) fail("base resolution must be between 1 and 2048, got ", o.base);
+  const Scene scene = makeScene(o);
+  const int maxLevel = o.levels - 1;
+  const int w = 1 << maxLevel;
+  const int base = o.base;
   if (uint64_t(base) * w > uint64_t(kLatticeLimit)) fail("requested size is too large");
 
   const double unit = 1.0 / (double(base) * w);

@@ -210,6 +210,23 @@ private:
   std::string source_, path_;
 };
 
+json cameraJson(const Camera& c) {
+  return {{"position", vec(c.position)}, {"look_at", vec(c.lookAt)}, {"up", vec(c.up)},
+          {"fov", c.fovy},           {"orthographic", c.orthographic}, {"ortho_height", c.orthoHeight}};
+}
+
+/// A camera object; false when it has no position. Errors name the key.
+bool readCamera(const Reader& c, Camera& cam) {
+  c.only({"position", "look_at", "up", "fov", "orthographic", "ortho_height"});
+  const bool hasPosition = c.vec3("position", cam.position);
+  c.vec3("look_at", cam.lookAt);
+  c.vec3("up", cam.up);
+  c.number("fov", cam.fovy);
+  c.boolean("orthographic", cam.orthographic);
+  c.number("ortho_height", cam.orthoHeight);
+  return hasPosition;
+}
+
 TransferFunction readTf(const Reader& r, const char* k, const TransferFunction& fallback) {
   const json* v = r.find(k);
   if (!v) return fallback;
@@ -223,9 +240,7 @@ std::string writeSceneJson(const SceneDocument& doc) {
   const Frame& f = doc.frame;
   json j = json::object();
   if (!doc.input.empty()) j["input"] = doc.input;
-  const Camera& c = f.camera;
-  j["camera"] = {{"position", vec(c.position)}, {"look_at", vec(c.lookAt)}, {"up", vec(c.up)},
-                 {"fov", c.fovy},           {"orthographic", c.orthographic}, {"ortho_height", c.orthoHeight}};
+  j["camera"] = cameraJson(f.camera);
   j["frame"] = {{"width", f.width}, {"height", f.height}, {"samples_per_pixel", f.samplesPerPixel},
                 {"rate", f.rate},   {"jitter", f.jitter}, {"seed", f.seed}};
   json layers = json::array();
@@ -278,6 +293,17 @@ std::string writeSceneJson(const SceneDocument& doc) {
   j["debug"] = debugName(s.debug);
   j["background"] = srgb(s.background);
   j["alpha"] = s.keepAlpha;
+  if (!doc.path.empty()) {
+    json keys = json::array();
+    for (const CameraKeyframe& k : doc.path.keyframes) {
+      json jk = {{"time", k.time}, {"camera", cameraJson(k.camera)}};
+      if (k.range) jk["range"] = {k.range->lower, k.range->upper};
+      if (k.opacityScale) jk["opacity_scale"] = *k.opacityScale;
+      if (k.isoValues) jk["iso_values"] = *k.isoValues;
+      keys.push_back(jk);
+    }
+    j["camera_path"] = {{"keyframes", keys}, {"constant_speed", doc.path.constantSpeed}};
+  }
   return j.dump(2) + "\n";
 }
 
@@ -294,20 +320,45 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   Scene& s = doc.scene;
   Frame& f = doc.frame;
   const Reader r(j, source, "");
-  r.only({"input", "camera", "frame", "layers", "volume", "iso", "meshes", "clip", "light", "shading",
+  r.only({"input", "camera", "camera_path", "frame", "layers", "volume", "iso", "meshes", "clip", "light", "shading",
           "ambient_occlusion", "integration", "debug", "background", "alpha"});
   r.string("input", doc.input);
   if (r.find("camera")) {
-    const Reader c = r.child("camera");
-    c.only({"position", "look_at", "up", "fov", "orthographic", "ortho_height"});
-    Camera& cam = f.camera;
-    doc.hasCamera = c.vec3("position", cam.position);
-    c.vec3("look_at", cam.lookAt);
-    c.vec3("up", cam.up);
-    c.number("fov", cam.fovy);
-    c.boolean("orthographic", cam.orthographic);
-    c.number("ortho_height", cam.orthoHeight);
+    doc.hasCamera = readCamera(r.child("camera"), f.camera);
     if (!doc.hasCamera) fail(source, ": \"camera\" needs a \"position\"");
+  }
+  if (r.find("camera_path")) {
+    const Reader p = r.child("camera_path");
+    p.only({"keyframes", "constant_speed"});
+    p.boolean("constant_speed", doc.path.constantSpeed);
+    const json* keys = p.find("keyframes");
+    if (!keys || !keys->is_array() || keys->empty())
+      fail(source, ": \"camera_path.keyframes\" must be a non-empty array of {\"time\", \"camera\", ...}");
+    for (size_t i = 0; i < keys->size(); ++i) {
+      const Reader k((*keys)[i], source, "camera_path.keyframes[" + std::to_string(i) + "]");
+      k.only({"time", "camera", "range", "opacity_scale", "iso_values"});
+      CameraKeyframe key;
+      if (!k.number("time", key.time)) fail(source, ": \"", k.key("time"), "\" is required");
+      if (!k.find("camera") || !readCamera(k.child("camera"), key.camera))
+        fail(source, ": \"", k.key("camera"), "\" with a \"position\" is required");
+      if (const json* v = k.find("range")) {
+        const std::vector<double> n = k.numbers(*v, k.key("range"), 2);
+        key.range = range1f{float(n[0]), float(n[1])};
+      }
+      float scale = 0.f;
+      if (k.number("opacity_scale", scale)) key.opacityScale = scale;
+      if (const json* v = k.find("iso_values")) {
+        std::vector<float> values;
+        for (double d : k.numbers(*v, k.key("iso_values"), 0)) values.push_back(float(d));
+        key.isoValues = values;
+      }
+      doc.path.keyframes.push_back(key);
+    }
+    try {
+      doc.path.validate();
+    } catch (const Error& e) {
+      fail(source, ": ", e.what());
+    }
   }
   if (r.find("frame")) {
     const Reader c = r.child("frame");

@@ -61,6 +61,26 @@ ModelSummary summarize(const Model& model);
 /// Builds bricks and regions from validated cells; moves the field values into brick order.
 Model buildModel(CellSet&& cells, const BuildOptions& options = {});
 
+/// What a model's structure was built from, kept to give the next data of a time series the same
+/// bricks and regions when its hierarchy (cells, levels, world transform, brick options) is
+/// unchanged: then only the values are reordered and the region value ranges recomputed.
+struct ModelStructure {
+  std::vector<Cell> cells;
+  std::vector<uint32_t> cellOfSlot;
+  WorldTransform world;
+  BrickBuildOptions bricks;
+  /// Whether `cells` have exactly this structure's hierarchy.
+  bool matches(const CellSet& cells, const BuildOptions& options) const;
+};
+
+/// buildModel that also returns the structure it built from.
+Model buildModel(CellSet&& cells, const BuildOptions& options, ModelStructure& structure);
+
+/// A model over `like`'s bricks and regions with the values of `cells`, which must match
+/// `structure` (the structure `like` was built from); equal to buildModel(cells) but without
+/// building bricks or regions. Throws exa::Error when the cells do not match.
+Model rebuildValues(const Model& like, const ModelStructure& structure, CellSet&& cells);
+
 /// Builds the regions (and value ranges) of a model whose bricks and fields are set.
 void buildRegionsOf(Model& model);
 

@@ -14,6 +14,11 @@ struct SceneOptions {
   uint64_t targetCells = 200000; ///< approximate number of cells to produce
   uint64_t seed = 1;
   int levels = 4;               ///< number of levels (finest 0 .. coarsest levels-1)
+  /// Time series (blobs): the blobs move with time; the refinement follows them as they were at
+  /// gridTime (negative: at `time`), so steps between two regrids share one hierarchy.
+  double time = 0;
+  double gridTime = -1;
+  int base = 0;                 ///< base cells per axis (0: chosen to approach targetCells)
 };
 
 struct SceneInfo {
@@ -25,6 +30,10 @@ const std::vector<SceneInfo>& sceneList();
 
 /// Generates the scene; cells are ordered by base cell (z, y, x), then depth first.
 CellSet generateScene(const SceneOptions& options);
+
+/// The options with the levels and base resolution generateScene would choose made explicit, so
+/// that every step of a series has the same lattice.
+SceneOptions resolveSceneSize(const SceneOptions& options);
 
 /// The dataset commands use when given no input.
 CellSet defaultDataset();

@@ -6,6 +6,7 @@
 #include "exabricks/accel/traversal.h"
 #include "exabricks/core/mesh.h"
 #include "exabricks/render/camera.h"
+#include "exabricks/render/camera_path.h"
 #include "exabricks/render/sample_math.h"
 #include "exabricks/render/transfer_function.h"
 
@@ -147,6 +148,7 @@ struct SceneDocument {
   Scene scene;
   Frame frame;
   bool hasCamera = false; ///< the document set a camera (else the caller frames the data)
+  CameraPath path;        ///< movies: camera keyframes (empty: the camera stays)
 };
 
 /// Writes a scene document as JSON (every setting, colours in sRGB).
