@@ -2,6 +2,7 @@
 // numbered PNGs and encoded with ffmpeg (see docs/movies.md).
 #include "commands.h"
 #include "common.h"
+#include "parallel.h"
 #include "scene_options.h"
 
 #include "exabricks/core/log.h"
@@ -200,7 +201,16 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   // of the movie, whichever frames this process renders.
   Timer total;
   const bool reuse = !o.noReuse;
-  Step firstStep = loadStep(paths[0], lo, nullptr, reuse);
+  Step firstStep;
+  std::string loadError;
+  try {
+    firstStep = loadStep(paths[0], lo, nullptr, reuse);
+  } catch (const std::exception& e) {
+    loadError = e.what();
+  }
+  if (!parallel::everyone(loadError.empty()))
+    fail(loadError.empty() ? "another process could not read the first step (its message names the problem)" : loadError);
+  const parallel::Processes& procs = parallel::processes();
   const Model& model0 = *firstStep.model;
   applyDataDefaults(ro, cmd, doc.scene, model0, firstStep.info);
   if (rangeMode == RangeMode::Global && steps > 1) {
@@ -253,15 +263,22 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
       }
     }
   }
-  const std::string manifestText = manifest.dump(2) + "\n";
-  writeFileAtomic(manifestPath, manifestText.data(), manifestText.size());
-  {
-    SceneDocument sceneFile = withAbsolutePaths(doc);
-    writeSceneFile((fs::path(framesDir) / "scene.json").string(), sceneFile);
-  }
   std::vector<int> todo;
   for (int i = first; i <= last; ++i)
     if (!(sameMovie && fs::exists(framePath(framesDir, i)))) todo.push_back(i);
+  // Under MPI the processes take interleaved frames; the first one records the movie.
+  parallel::barrier();
+  if (procs.root()) {
+    const std::string manifestText = manifest.dump(2) + "\n";
+    writeFileAtomic(manifestPath, manifestText.data(), manifestText.size());
+    writeSceneFile((fs::path(framesDir) / "scene.json").string(), withAbsolutePaths(doc));
+  }
+  if (procs.size > 1) {
+    std::vector<int> mine;
+    for (size_t n = 0; n < todo.size(); ++n)
+      if (int(n % size_t(procs.size)) == procs.rank) mine.push_back(todo[n]);
+    todo = std::move(mine);
+  }
 
   // Render, loading step k+1 while step k renders (at most two steps resident).
   const bool showProgress = logLevel() >= LogLevel::Warning;
@@ -281,61 +298,74 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   std::unique_ptr<Renderer> renderer;
   int done = 0;
   Timer loop;
-  for (size_t n = 0; n < todo.size(); ++n) {
-    const int i = todo[n];
-    const int step = stepOf(i);
-    if (step != currentStep) {
-      Timer wait;
-      if (nextStep == step) {
-        Step loaded = next.get();
-        nextStep = -1;
-        renderer.reset();
-        current = std::move(loaded);
-      } else {
-        if (next.valid()) next.get();
-        nextStep = -1;
-        renderer.reset();
-        current = loadStep(paths[size_t(step)], lo, &current, reuse);
-      }
-      waitSeconds += wait.seconds();
-      loadSeconds += current.seconds;
-      reusedSteps += current.reused ? 1 : 0;
-      ++loadedSteps;
-      currentStep = step;
-    }
-    if (!renderer) renderer = std::make_unique<Renderer>(*current.model, current.info);
-    // The next step this process needs, loaded beside the render.
-    if (!o.noPrefetch)
-      for (size_t m = n + 1; m < todo.size(); ++m)
-        if (stepOf(todo[m]) != step) {
-          startPrefetch(stepOf(todo[m]));
-          break;
+  std::string renderError;
+  try {
+    for (size_t n = 0; n < todo.size(); ++n) {
+      const int i = todo[n];
+      const int step = stepOf(i);
+      if (step != currentStep) {
+        Timer wait;
+        if (nextStep == step) {
+          Step loaded = next.get();
+          nextStep = -1;
+          renderer.reset();
+          current = std::move(loaded);
+        } else {
+          if (next.valid()) next.get();
+          nextStep = -1;
+          renderer.reset();
+          current = loadStep(paths[size_t(step)], lo, &current, reuse);
         }
-    Scene scene;
-    Frame frame;
-    frameSetup(i, scene, frame);
-    renderer->setScene(scene);
-    Timer t;
-    Image image = renderer->render(frame);
-    renderSeconds += t.seconds();
-    drawOverlays(ro, scene, frame, *current.model, current.info, current.model->requireField(scene.layers[0].field), image);
-    writePng(framePath(framesDir, i), image, scene.keepAlpha, scene.background);
-    ++done;
-    if (showProgress) {
-      const double per = loop.seconds() / done;
-      const std::string line = strCat("frame ", i, " (", done, " of ", todo.size(), ", step ", step + 1, " of ",
-                                      steps, "): ", std::round(per * 100) / 100, " s per frame, ETA ",
-                                      formatSeconds(per * double(todo.size() - size_t(done))));
-      if (tty)
-        std::fprintf(stderr, "\r\033[K%s", line.c_str());
-      else
-        std::fprintf(stderr, "%s\n", line.c_str());
+        waitSeconds += wait.seconds();
+        loadSeconds += current.seconds;
+        reusedSteps += current.reused ? 1 : 0;
+        ++loadedSteps;
+        currentStep = step;
+      }
+      if (!renderer) renderer = std::make_unique<Renderer>(*current.model, current.info);
+      // The next step this process needs, loaded beside the render.
+      if (!o.noPrefetch)
+        for (size_t m = n + 1; m < todo.size(); ++m)
+          if (stepOf(todo[m]) != step) {
+            startPrefetch(stepOf(todo[m]));
+            break;
+          }
+      Scene scene;
+      Frame frame;
+      frameSetup(i, scene, frame);
+      renderer->setScene(scene);
+      Timer t;
+      Image image = renderer->render(frame);
+      renderSeconds += t.seconds();
+      drawOverlays(ro, scene, frame, *current.model, current.info, current.model->requireField(scene.layers[0].field), image);
+      writePng(framePath(framesDir, i), image, scene.keepAlpha, scene.background);
+      ++done;
+      if (showProgress) {
+        const double per = loop.seconds() / done;
+        const std::string line = strCat("frame ", i, " (", done, " of ", todo.size(), ", step ", step + 1, " of ",
+                                        steps, "): ", std::round(per * 100) / 100, " s per frame, ETA ",
+                                        formatSeconds(per * double(todo.size() - size_t(done))));
+        if (tty)
+          std::fprintf(stderr, "\r\033[K%s", line.c_str());
+        else
+          std::fprintf(stderr, "%s\n", line.c_str());
+      }
+    }
+    if (next.valid()) next.get();
+  } catch (const std::exception& e) {
+    renderError = e.what();
+    try {
+      if (next.valid()) next.get();
+    } catch (...) {
     }
   }
-  if (next.valid()) next.get();
   if (showProgress && tty && done) std::fprintf(stderr, "\n");
 
-  // Encode when every frame of the movie is there.
+  // Encode when every frame of the movie is there (under MPI, once every process is done; a
+  // process that failed stops all of them).
+  if (!parallel::everyone(renderError.empty()))
+    fail(renderError.empty() ? "another process failed (its message names the problem)" : renderError);
+  if (!procs.root()) return;
   int missing = 0;
   for (int i = 0; i < frames; ++i) missing += fs::exists(framePath(framesDir, i)) ? 0 : 1;
   std::string encoded;

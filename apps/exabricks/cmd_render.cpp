@@ -1,6 +1,7 @@
 // exabricks render: volume rendering of an AMR field to PNG or JPEG (and optionally PFM).
 #include "commands.h"
 #include "common.h"
+#include "parallel.h"
 #include "scene_options.h"
 
 #include "exabricks/core/log.h"
@@ -14,6 +15,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <unistd.h>
 
 namespace exa::cli {
@@ -50,7 +52,19 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields = neededFields(scene);
-  const Model model = loadModel(doc.input, lo);
+  // Under MPI every process holds the whole model (image-parallel); if one cannot read it, all
+  // of them stop with an error instead of waiting for it.
+  std::optional<Model> loaded;
+  std::string loadError;
+  try {
+    loaded.emplace(loadModel(doc.input, lo));
+  } catch (const std::exception& e) {
+    loadError = e.what();
+  }
+  if (!parallel::everyone(loadError.empty()))
+    fail(loadError.empty() ? "another process could not read the input (its message names the problem)" : loadError);
+  const Model& model = *loaded;
+  const bool root = parallel::processes().root();
   const double loadSeconds = loadTimer.seconds();
   const DatasetInfo dataset = DatasetInfo::of(model);
   const int field = applyDataDefaults(o.scene, cmd, scene, model, dataset);
@@ -63,18 +77,19 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   frame.camera = cameraFromOptions(o.scene, cmd, doc, model, renderer.visibleBounds());
   frame.validate();
   doc.hasCamera = true;
-  if (!o.writeScene.empty()) writeSceneFile(o.writeScene, withAbsolutePaths(doc));
+  if (!o.writeScene.empty() && root) writeSceneFile(o.writeScene, withAbsolutePaths(doc));
 
   // A frame is samplesPerPixel passes into one buffer; a progress line on a terminal.
   FrameBuffer buffer(frame.width, frame.height);
   const bool showProgress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
   auto renderFrame = [&](RenderStats& stats) {
     buffer.clear();
-    Progress progress("rendering", uint64_t(buffer.tileCount()) * uint64_t(frame.samplesPerPixel));
+    const uint64_t share = uint64_t(parallel::processes().size);
+    Progress progress("rendering", (uint64_t(buffer.tileCount()) + share - 1) / share * uint64_t(frame.samplesPerPixel));
     if (!showProgress) progress.finish();
     PassControl control;
     control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
-    renderer.renderPasses(frame, buffer, frame.samplesPerPixel, control);
+    parallel::renderFrame(renderer, frame, buffer, control);
     progress.finish();
     stats = buffer.stats();
   };
@@ -91,6 +106,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   } else {
     renderFrame(stats);
   }
+  if (!root) return; // the first process writes the image and the statistics
   Image image = buffer.resolve();
   drawOverlays(o.scene, scene, frame, model, dataset, field, image);
   if (imageIsEmpty(image))

@@ -4,6 +4,7 @@
 // write that failed, including standard output); 2 a usage error (unknown option, bad option
 // value, missing argument); 130 / 143 interrupted by SIGINT / SIGTERM (no temporary file is left).
 #include "commands.h"
+#include "parallel.h"
 
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
@@ -46,6 +47,9 @@ bool flushStandardOutput() {
 } // namespace
 
 int main(int argc, char** argv) {
+  exa::cli::parallel::Session processes(argc, argv);
+  const bool root = exa::cli::parallel::processes().root();
+  const std::string who = root ? "exabricks" : "exabricks[" + std::to_string(exa::cli::parallel::processes().rank) + "]";
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   CLI::App app{"exabricks: fast, faithful rendering of structured AMR data (ExaBricks method)"};
@@ -58,8 +62,11 @@ int main(int argc, char** argv) {
   app.add_flag("-v,--verbose", verbose, "Log build steps and timings on stderr");
   app.add_option("--threads", threads, "Worker threads (default: every core)")->check(CLI::Range(1, 4096));
   app.parse_complete_callback([&] {
-    exa::setLogLevel(quiet ? exa::LogLevel::Quiet
-                           : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
+    // Under MPI only the first process logs; every process reports its own errors.
+    exa::setLogLevel(quiet || !root ? exa::LogLevel::Quiet
+                                    : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
+    for (const char* command : {"info", "sample", "build", "generate", "convert", "bench", "view"})
+      if (app.got_subcommand(command)) exa::cli::parallel::requireOneProcess(command);
     if (threads > 0)
       threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
   });
@@ -77,16 +84,16 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     return app.exit(e); // usage errors: 2 (help and version: 0)
   } catch (const exa::UsageError& e) {
-    std::fprintf(stderr, "exabricks: error: %s\n", e.what());
+    std::fprintf(stderr, "%s: error: %s\n", who.c_str(), e.what());
     return 2;
   } catch (const exa::Error& e) {
-    std::fprintf(stderr, "exabricks: error: %s\n", e.what());
+    std::fprintf(stderr, "%s: error: %s\n", who.c_str(), e.what());
     return 1;
   } catch (const std::bad_alloc&) {
-    std::fprintf(stderr, "exabricks: error: out of memory\n");
+    std::fprintf(stderr, "%s: error: out of memory\n", who.c_str());
     return 1;
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "exabricks: error: %s\n", e.what());
+    std::fprintf(stderr, "%s: error: %s\n", who.c_str(), e.what());
     return 1;
   }
   return flushStandardOutput() ? 0 : 1;

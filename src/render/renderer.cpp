@@ -145,6 +145,12 @@ void FrameBuffer::clear() {
   stats_ = RenderStats();
 }
 
+FrameBuffer::Sums FrameBuffer::sums() {
+  static_assert(sizeof(vec4f) == 4 * sizeof(float), "vec4f must be four packed floats");
+  return {reinterpret_cast<float*>(sum_.data()), steps_.data(), sum_.size(), tilePasses_.data(), tilePasses_.size(),
+          &stats_};
+}
+
 uint32_t FrameBuffer::passes() const {
   if (tilePasses_.empty()) return 0;
   return *std::min_element(tilePasses_.begin(), tilePasses_.end());

@@ -107,6 +107,19 @@ public:
   /// Statistics summed over the passes since the last clear.
   const RenderStats& stats() const { return stats_; }
 
+  /// The buffer's sums as plain arrays, for combining the tile shares that several processes
+  /// rendered into buffers of one size: adding the arrays element by element (tiles a process did
+  /// not render hold zeros) gives the buffer of all the shares, bit for bit.
+  struct Sums {
+    float* colors;           ///< 4 per pixel (premultiplied RGBA)
+    float* steps;            ///< 1 per pixel (steps debug view)
+    size_t pixels;
+    uint32_t* tilePasses;    ///< 1 per tile
+    size_t tiles;
+    RenderStats* stats;
+  };
+  Sums sums();
+
 private:
   friend class Renderer;
   int width_ = 0, height_ = 0, tilesX_ = 0, tilesY_ = 0;

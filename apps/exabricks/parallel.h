@@ -1,0 +1,45 @@
+// Processes of an MPI run (`mpirun -np N exabricks render|movie ...`), or one process. Built with
+// MPI only when EXABRICKS_MPI finds it; MPI starts only when the program was launched by an MPI
+// launcher, so a plain run never initialises it.
+#pragma once
+
+#include "exabricks/render/renderer.h"
+
+#include <string>
+
+namespace exa::cli::parallel {
+
+struct Processes {
+  int rank = 0, size = 1;
+  bool root() const { return rank == 0; }
+};
+
+/// Starts MPI when launched by mpirun (and built with MPI); ends it when destroyed.
+class Session {
+public:
+  Session(int& argc, char**& argv);
+  ~Session();
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+};
+
+const Processes& processes();
+
+/// True when every process passes true. Every process must call it (a collective), so that a
+/// process that failed makes all of them stop instead of waiting for it.
+bool everyone(bool ok);
+
+/// Adds every process's share of the tiles into the root's buffer (the root then holds the
+/// whole image's sums; statistics summed, seconds the slowest process's).
+void combineOnRoot(FrameBuffer& buffer);
+
+/// A frame's samplesPerPixel passes into a cleared buffer: in one process all of them; under MPI
+/// each process renders an interleaved share of the tiles and the root receives the whole image.
+bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control = {});
+
+void barrier();
+
+/// Refuses to run a command that has no parallel mode under more than one process.
+void requireOneProcess(const char* command);
+
+} // namespace exa::cli::parallel

@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# `mpirun -np N exabricks render|movie`: image-parallel images equal the serial image bit for bit;
+# a failure in the processes stops all of them (no hang); commands without a parallel mode refuse.
+set -u
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+exe=${EXABRICKS:?set EXABRICKS to the exabricks binary}
+dir=${1:?usage: mpi_test.sh TMPDIR}
+rm -rf "$dir" && mkdir -p "$dir" && cd "$dir" || exit 1
+source "$here/cli_checks.sh"
+# Tests run as root in containers; Open MPI refuses that unless told.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_btl_vader_single_copy_mechanism=none
+run() { timeout 120 mpirun --oversubscribe -np "$@"; }
+
+"$exe" generate -n 40000 -s shells -o s.cells >/dev/null 2>&1
+scene=(s.cells --size 150x110 --spp 2 --iso 0.3 --clip-plane 40,40,40,1,0.2,0 --ao 2)
+check "serial render" "$exe" -q render "${scene[@]}" -o serial.png
+for n in 1 2 3 4; do
+  check "mpirun -np $n render equals the serial image" bash -c "$(declare -f run); run $n '$exe' -q render ${scene[*]} -o np$n.png && cmp serial.png np$n.png"
+done
+check "statistics add up over the processes" bash -c "[ \"\$('$exe' -q render ${scene[*]} -o a.png --json | grep '\"samples\"')\" = \"\$($(declare -f run); run 2 '$exe' -q render ${scene[*]} -o b.png --json | grep '\"samples\"')\" ]"
+check "only the first process writes" bash -c "$(declare -f run); run 3 '$exe' -q render ${scene[*]} -o only.png --json | grep -c '\"samples\"' | grep -qx 1"
+
+"$exe" generate -n 20000 --steps 3 -o series/b.cells >/dev/null 2>&1
+check "serial movie" "$exe" -q movie series -o serial_frames --size 48x40
+check "mpirun -np 2 movie: the same frames" bash -c "$(declare -f run); run 2 '$exe' -q movie series -o mpi_frames --size 48x40 && for k in 0 1 2; do cmp serial_frames/frame_0000\$k.png mpi_frames/frame_0000\$k.png || exit 1; done"
+if command -v ffmpeg >/dev/null; then
+  check "mpirun -np 3 movie encodes once" bash -c "$(declare -f run); run 3 '$exe' -q movie series -o m.mp4 --size 48x40 && [ -s m.mp4 ]"
+fi
+
+check "a process that cannot read its data stops every process" bash -c "$(declare -f run); run 2 '$exe' render missing.cells -o x.png > out.txt 2>&1; rc=\$?; [ \$rc -ne 0 ] && [ \$rc -ne 124 ] && grep -q 'missing.cells' out.txt"
+check "commands without a parallel mode refuse" bash -c "$(declare -f run); run 2 '$exe' info s.cells > info.txt 2>&1; [ \$? -ne 0 ] && grep -q 'runs in one process' info.txt"
+
+if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
+echo "all MPI checks passed"
