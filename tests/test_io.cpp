@@ -10,6 +10,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sys/wait.h>
+#include <unistd.h>
 
 using namespace exa;
 using namespace exa::test;
@@ -250,4 +252,38 @@ TEST_F(IoTest, FilesArePublishedTogetherOrNotAtAll) {
   EXPECT_EQ(leftovers(), 1);
   removePendingTemporaries();
   EXPECT_EQ(leftovers(), 0);
+}
+
+TEST_F(IoTest, ModelHeadersWithReservedBytesSetAreRejected) {
+  CellSet s = generateScene({"blobs", 500, 1, 2});
+  writeModel(buildModel(std::move(s)), path("m.exa"));
+  std::vector<char> bytes = readFile(path("m.exa"));
+  bytes[40] = 1; // the second reserved word of the 48-byte header
+  writeBytes("reserved.exa", bytes.data(), bytes.size());
+  EXPECT_MESSAGE(loadError(path("reserved.exa")), "reserved.exa", "reserved bytes", "not zero");
+}
+
+TEST_F(IoTest, TemporariesOfKilledWritesAreRemovedByTheNextWrite) {
+  // A write killed before it could clean up leaves TARGET.tmpPID.INDEX; a process that no longer
+  // runs cannot own it. Temporaries of running processes and other files stay.
+  const pid_t child = fork();
+  if (child == 0) _exit(0);
+  ASSERT_GT(child, 0);
+  ASSERT_EQ(waitpid(child, nullptr, 0), child);
+  const std::string dead = std::to_string(child), alive = std::to_string(getppid());
+  for (const std::string& name : std::vector<std::string>{"m.exa.tmp" + dead + ".0", "m.exa.tmp" + dead, "d.cells.tmp" + dead + ".0",
+                                  "d.scalars.tmp" + dead + ".1", "m.exa.tmp" + alive + ".0", "m.exa.tmpx.0"})
+    writeText(name, "partial");
+  CellSet s = generateScene({"blobs", 500, 1, 2});
+  writeNative(s, path("d.cells"));
+  writeModel(buildModel(std::move(s)), path("m.exa"));
+  for (const std::string& gone : std::vector<std::string>{"m.exa.tmp" + dead + ".0", "m.exa.tmp" + dead, "d.cells.tmp" + dead + ".0",
+                                  "d.scalars.tmp" + dead + ".1"})
+    EXPECT_FALSE(fs::exists(path(gone))) << gone;
+  for (const std::string& kept : std::vector<std::string>{"m.exa.tmp" + alive + ".0", "m.exa.tmpx.0"}) EXPECT_TRUE(fs::exists(path(kept))) << kept;
+}
+
+TEST_F(IoTest, GridsFixturesAreBoundedBeforeExpanding) {
+  writeText("big.grids", "0 0 0 1000 1000 1000 0 1.0\n");
+  EXPECT_MESSAGE(loadError(path("big.grids")), "big.grids", "line 1", "1000x1000x1000", "at most");
 }

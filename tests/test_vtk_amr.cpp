@@ -51,6 +51,7 @@ struct VtkFixture {
   bool header64 = false;
   bool zlib = false;
   size_t zlibBlock = 64; ///< nominal block size; VTK writes 32768, larger than small arrays
+  bool lastZero = false; ///< a last block of whole size written as 0, as VTK does
   bool float32 = false;
   int ratio2 = 4;
   std::string gridDescription = "XYZ";
@@ -87,7 +88,8 @@ struct VtkFixture {
     if (!zlib) return {number(data.size(), hb), data};
     const size_t bs = zlibBlock;
     const size_t nb = (data.size() + bs - 1) / bs;
-    std::string header = number(nb, hb) + number(bs, hb) + number(data.size() - (nb - 1) * bs, hb), packed;
+    const size_t last = data.size() - (nb - 1) * bs;
+    std::string header = number(nb, hb) + number(bs, hb) + number(lastZero && last == bs ? 0 : last, hb), packed;
     for (size_t b = 0; b < nb; ++b) {
       const std::string part = data.substr(b * bs, bs);
       uLongf size = compressBound(uLong(part.size()));
@@ -191,13 +193,18 @@ TEST(VtkAmr, LeafCellsInEveryEncoding) {
     const char* format;
     bool bigEndian, header64, zlib, float32;
     size_t zlibBlock = 64;
+    bool lastZero = false;
   };
   const Variant variants[] = {{"ascii", false, false, false, false},   {"binary", false, false, false, true},
                               {"binary", true, true, false, false},    {"appended", false, true, false, false},
                               {"appended", true, false, false, true},  {"appended", false, false, true, true},
                               {"binary", true, true, true, false},     {"appended", true, true, true, false},
                               // As VTK writes small arrays: one block, smaller than the nominal 32768.
-                              {"appended", false, false, true, true, 32768}, {"binary", false, true, true, false, 32768}};
+                              {"appended", false, false, true, true, 32768}, {"binary", false, true, true, false, 32768},
+                              // Several blocks with a short last one, UInt32 and UInt64 headers.
+                              {"appended", false, false, true, false, 100}, {"binary", true, true, true, true, 100},
+                              // Whole blocks only: the last block's size written as 0.
+                              {"appended", false, false, true, false, 64, true}, {"binary", false, true, true, true, 64, true}};
   int vi = 0;
   for (const Variant& v : variants) {
     SCOPED_TRACE(vi);
@@ -208,6 +215,7 @@ TEST(VtkAmr, LeafCellsInEveryEncoding) {
     f.header64 = v.header64;
     f.zlib = v.zlib;
     f.zlibBlock = v.zlibBlock;
+    f.lastZero = v.lastZero;
     f.float32 = v.float32;
     f.write();
     const std::string path = f.file().string();
@@ -312,4 +320,48 @@ TEST(VtkAmr, CorruptedPiecesGiveErrorsNotCrashes) {
     }
     std::ofstream(target, std::ios::binary) << original;
   }
+}
+
+TEST(VtkAmr, CompressionHeadersAsVtkWritesThem) {
+  // One piece of 3x2x2 = 12 Float64 cells (96 bytes), hand-made: "1 32768 96 N" (one block
+  // shorter than the nominal size), then corrupt headers that must be refused by name.
+  const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "vtk-zlib-header";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::string plain;
+  for (int i = 0; i < 12; ++i) {
+    const double d = i;
+    plain.append(reinterpret_cast<const char*>(&d), 8);
+  }
+  uLongf size = compressBound(uLong(plain.size()));
+  std::string packed(size, '\0');
+  compress2(reinterpret_cast<Bytef*>(packed.data()), &size, reinterpret_cast<const Bytef*>(plain.data()), uLong(plain.size()), 6);
+  packed.resize(size);
+  auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+  auto write = [&](const std::string& header, const std::string& data) {
+    std::ofstream(dir / "data.vthb") << "<VTKFile type=\"vtkOverlappingAMR\" version=\"1.1\">\n"
+                                        "<vtkOverlappingAMR origin=\"0 0 0\" grid_description=\"XYZ\">\n"
+                                        "<Block level=\"0\" spacing=\"1 1 1\">\n"
+                                        "<DataSet index=\"0\" amr_box=\"0 2 0 1 0 1\" file=\"p.vti\"/>\n"
+                                        "</Block>\n</vtkOverlappingAMR>\n</VTKFile>\n";
+    std::ofstream(dir / "p.vti", std::ios::binary)
+        << "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt32\" "
+           "compressor=\"vtkZLibDataCompressor\">\n<ImageData WholeExtent=\"0 3 0 2 0 2\">\n<Piece Extent=\"0 3 0 2 0 2\">\n"
+           "<CellData>\n<DataArray type=\"Float64\" Name=\"rho\" format=\"appended\" offset=\"0\"/>\n</CellData>\n"
+           "</Piece>\n</ImageData>\n<AppendedData encoding=\"raw\">\n_"
+        << header << data << "\n</AppendedData>\n</VTKFile>\n";
+    return (dir / "data.vthb").string();
+  };
+  const CellSet s = loadCells(write(u32(1) + u32(32768) + u32(96) + u32(uint32_t(packed.size())), packed));
+  ASSERT_EQ(s.size(), 12u);
+  for (size_t i = 0; i < 12; ++i) EXPECT_EQ(s.fields[0].values[i], float(i));
+  expectIn(loadError(write(u32(1) + u32(32768) + u32(40000) + u32(uint32_t(packed.size())), packed)),
+           {"p.vti", "array 'rho'", "corrupt compression header", "last block of 40000 bytes"});
+  expectIn(loadError(write(u32(1) + u32(0) + u32(0) + u32(uint32_t(packed.size())), packed)),
+           {"p.vti", "array 'rho'", "block size 0"});
+  expectIn(loadError(write(u32(1) + u32(32768) + u32(96) + u32(1u << 30), packed)),
+           {"p.vti", "array 'rho'", "compressed block", "bytes are present"});
+  expectIn(loadError(write(u32(4000000) + u32(1) + u32(1), "")), {"p.vti", "array 'rho'", "corrupt compression header"});
+  expectIn(loadError(write(u32(3) + u32(32) + u32(32) + u32(10) + u32(10) + u32(10), std::string(30, 'x'))),
+           {"p.vti", "array 'rho'", "zlib block 0", "corrupt data"});
 }

@@ -4,6 +4,7 @@
 #include "exabricks/core/log.h"
 
 #include "byte_order.h"
+#include "checked.h"
 #include "patches.h"
 
 #include <tbb/parallel_for.h>
@@ -43,6 +44,10 @@ public:
   }
   size_t lineNo() const { return lineNo_; }
   [[noreturn]] void bad(const std::string& what) const { fail(path_, ": line ", lineNo_, ": ", what); }
+  /// An integer within [lo, hi] from a number of the current line; `what` names it.
+  int64_t integer(double v, int64_t lo, int64_t hi, const char* what) const {
+    return io::checkedInteger(v, lo, hi, [&] { return strCat(path_, ": line ", lineNo_, ": ", what); });
+  }
 
 private:
   std::string path_, text_;
@@ -60,10 +65,9 @@ std::vector<double> numbers(TextReader& r, const std::string& line, size_t expec
   return v;
 }
 
-/// An index-space box "((lo) (hi) (type))", inclusive bounds.
+/// An index-space box "((lo) (hi) (type))", inclusive bounds, each within the lattice range.
 struct IndexBox {
   vec3l lo, hi;
-  int64_t cells() const { return (hi.x - lo.x + 1) * (hi.y - lo.y + 1) * (hi.z - lo.z + 1); }
 };
 
 /// Parses every "((a,b,c) (d,e,f) (g,h,i))" box on a line.
@@ -74,7 +78,11 @@ std::vector<IndexBox> parseBoxes(TextReader& r, const std::string& line) {
     const size_t end = line.find("))", pos);
     if (end == std::string::npos) r.bad("unterminated box");
     const std::vector<double> v = numbers(r, line.substr(pos, end - pos + 2), 9, "a box");
-    IndexBox b{vec3l(int64_t(v[0]), int64_t(v[1]), int64_t(v[2])), vec3l(int64_t(v[3]), int64_t(v[4]), int64_t(v[5]))};
+    IndexBox b;
+    for (int a = 0; a < 3; ++a) {
+      b.lo[a] = r.integer(v[size_t(a)], -kLatticeLimit, kLatticeLimit, "a box corner");
+      b.hi[a] = r.integer(v[size_t(a) + 3], -kLatticeLimit, kLatticeLimit, "a box corner");
+    }
     if (b.hi.x < b.lo.x || b.hi.y < b.lo.y || b.hi.z < b.lo.z) r.bad("empty box");
     boxes.push_back(b);
     pos = end + 2;
@@ -113,22 +121,20 @@ Plotfile readHeader(const std::string& dir) {
     while (!v.empty() && std::isspace((unsigned char)v.back())) v.pop_back();
     if (v != "HyperCLaw-V1.1") r.bad("plotfile version '" + v + "' is not supported (HyperCLaw-V1.1 is)");
   }
-  const int nvars = int(numbers(r, r.line(), 1, "the variable count")[0]);
-  if (nvars < 1 || nvars > 100000) r.bad("absurd variable count");
+  const int nvars = int(r.integer(numbers(r, r.line(), 1, "the variable count")[0], 1, 100000, "the variable count"));
   for (int i = 0; i < nvars; ++i) {
     std::string name = r.line();
     while (!name.empty() && std::isspace((unsigned char)name.back())) name.pop_back();
     if (name.empty()) r.bad("empty variable name");
     pf.names.push_back(name);
   }
-  const int dim = int(numbers(r, r.line(), 1, "the dimension")[0]);
+  const int dim = int(r.integer(numbers(r, r.line(), 1, "the dimension")[0], 1, 3, "the dimension"));
   if (dim != 3) r.bad(strCat("a ", dim, "-D plotfile; only 3-D AMR data can be read"));
   {
     const auto t = numbers(r, r.line(), 1, "the time");
     if (std::isfinite(t[0])) pf.time = t[0];
   }
-  pf.finestLevel = int(numbers(r, r.line(), 1, "the finest level")[0]);
-  if (pf.finestLevel < 0 || pf.finestLevel > 20) r.bad("absurd finest level");
+  pf.finestLevel = int(r.integer(numbers(r, r.line(), 1, "the finest level")[0], 0, kMaxLevel, "the finest level"));
   const auto lo = numbers(r, r.line(), 3, "prob_lo");
   const auto hi = numbers(r, r.line(), 3, "prob_hi");
   pf.probLo = vec3d(lo[0], lo[1], lo[2]);
@@ -142,12 +148,19 @@ Plotfile readHeader(const std::string& dir) {
                             : 1;
   for (int l = 0; l < pf.finestLevel; ++l) {
     const double rv = ratios[size_t(l) * stride];
-    const int ri = int(rv);
-    if (double(ri) != rv || ri < 2 || (ri & (ri - 1)) != 0)
-      r.bad(strCat("refinement ratio ", rv, " between levels ", l, " and ", l + 1, " is not a power of two"));
+    int64_t ri = 0;
+    if (!io::integerIn(rv, 2, int64_t(1) << kMaxLevel, ri) || (ri & (ri - 1)) != 0)
+      r.bad(strCat("refinement ratio ", rv, " between levels ", l, " and ", l + 1, " is not a power of two up to 2^",
+                   kMaxLevel));
     if (stride == 3 && (ratios[size_t(l) * 3 + 1] != rv || ratios[size_t(l) * 3 + 2] != rv))
       r.bad("anisotropic refinement ratios are not supported");
-    pf.ratios.push_back(ri);
+    pf.ratios.push_back(int(ri));
+  }
+  {
+    int64_t width = 1;
+    for (int ratio : pf.ratios)
+      if ((width *= ratio) > (int64_t(1) << kMaxLevel))
+        r.bad(strCat("the refinement ratios multiply to more than 2^", kMaxLevel));
   }
   pf.domains = parseBoxes(r, r.line());
   if (int(pf.domains.size()) < pf.finestLevel + 1) r.bad("fewer level domains than levels");
@@ -161,14 +174,13 @@ Plotfile readHeader(const std::string& dir) {
     pf.dx.push_back(vec3d(d[0], d[1], d[2]));
     if (!(d[0] > 0 && d[1] > 0 && d[2] > 0)) r.bad("cell sizes must be positive");
   }
-  const int coord = int(numbers(r, r.line(), 1, "the coordinate system")[0]);
+  const double coord = numbers(r, r.line(), 1, "the coordinate system")[0];
   if (coord != 0) r.bad(strCat("coordinate system ", coord, " is not Cartesian"));
   r.line(); // boundary width
   for (int l = 0; l <= pf.finestLevel; ++l) {
     const auto head = numbers(r, r.line(), 2, "the level line");
-    if (int(head[0]) != l) r.bad(strCat("expected level ", l));
-    const int64_t ngrids = int64_t(head[1]);
-    if (ngrids < 0 || ngrids > 100000000) r.bad("absurd grid count");
+    if (head[0] != double(l)) r.bad(strCat("expected level ", l));
+    const int64_t ngrids = r.integer(head[1], 0, 100000000, "the grid count");
     r.line(); // level step
     for (int64_t g = 0; g < ngrids * 3; ++g) r.line();
     std::string prefix = r.line();
@@ -182,25 +194,22 @@ LevelData readCellHeader(const Plotfile& pf, int level) {
   const fs::path prefix = fs::path(pf.dir) / pf.levelPrefixes[size_t(level)];
   TextReader r(prefix.string() + "_H");
   LevelData ld;
-  const int version = int(numbers(r, r.line(), 1, "the VisMF version")[0]);
+  const double version = numbers(r, r.line(), 1, "the VisMF version")[0];
   if (version != 1)
     r.bad(strCat("VisMF version ", version, " is not supported (version 1 is: re-write the plotfile with ",
                  "AMReX's default 'VisMF::Header::Version_v1', or convert it)"));
   r.line(); // how
-  const int ncomp = int(numbers(r, r.line(), 1, "the component count")[0]);
-  if (ncomp != int(pf.names.size())) r.bad(strCat(ncomp, " components, but the Header names ", pf.names.size()));
-  ld.nghost = int(numbers(r, r.line(), 1, "the ghost width")[0]);
-  if (ld.nghost < 0 || ld.nghost > 64) r.bad("absurd ghost width");
-  const auto count = numbers(r, r.line(), 1, "the box count");
-  const int64_t nboxes = int64_t(count[0]);
-  if (nboxes < 0 || nboxes > 100000000) r.bad("absurd box count");
+  const double ncomp = numbers(r, r.line(), 1, "the component count")[0];
+  if (ncomp != double(pf.names.size())) r.bad(strCat(ncomp, " components, but the Header names ", pf.names.size()));
+  ld.nghost = int(r.integer(numbers(r, r.line(), 1, "the ghost width")[0], 0, 64, "the ghost width"));
+  const int64_t nboxes = r.integer(numbers(r, r.line(), 1, "the box count")[0], 0, 100000000, "the box count");
   for (int64_t b = 0; b < nboxes; ++b) {
     const std::vector<IndexBox> box = parseBoxes(r, r.line());
     if (box.size() != 1) r.bad("expected one box");
     ld.boxes.push_back(box[0]);
   }
   r.line(); // ")"
-  const int64_t nfabs = int64_t(numbers(r, r.line(), 1, "the FAB count")[0]);
+  const int64_t nfabs = r.integer(numbers(r, r.line(), 1, "the FAB count")[0], 0, 100000000, "the FAB count");
   if (nfabs != nboxes) r.bad(strCat(nfabs, " FabOnDisk entries for ", nboxes, " boxes"));
   for (int64_t b = 0; b < nfabs; ++b) {
     std::istringstream in(r.line());
@@ -219,6 +228,10 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
              const std::vector<std::string>& names) {
   std::ifstream in(file, std::ios::binary);
   if (!in) fail(file, ": cannot open: ", std::strerror(errno), " (missing file of the plotfile?)");
+  std::error_code ec;
+  const uint64_t fileBytes = fs::file_size(file, ec);
+  if (ec) fail(file, ": cannot read: ", ec.message());
+  if (offset >= fileBytes) fail(file, ": offset ", offset, ": past the end of the file (", fileBytes, " bytes)");
   in.seekg(std::streamoff(offset));
   std::string header;
   if (!in || !std::getline(in, header)) fail(file, ": offset ", offset, ": no FAB record (truncated file?)");
@@ -230,7 +243,8 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
   std::istringstream hs(cleaned);
   std::vector<int64_t> v;
   for (int64_t x; hs >> x;) v.push_back(x);
-  if (v.size() < 2 || v.size() < size_t(2 + v[0] + 1)) fail(file, ": offset ", offset, ": corrupt FAB header");
+  if (v.size() < 2 || v[0] < 1 || v[0] > 64 || v.size() < size_t(2 + v[0] + 1))
+    fail(file, ": offset ", offset, ": corrupt FAB header");
   const int64_t bits = v[1];
   const size_t orderAt = size_t(1 + v[0]);
   const int64_t bytes = v[orderAt];
@@ -246,10 +260,17 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
   if (!(stored.lo == valid.lo - g) || !(stored.hi == valid.hi + g))
     fail(file, ": offset ", offset, ": FAB box does not match the level's box grown by ", nghost, " ghost cells");
   if (ncomp != int64_t(names.size())) fail(file, ": offset ", offset, ": FAB holds ", ncomp, " components, expected ", names.size());
+  // The stored box equals the valid one (within the lattice range) grown by at most 64 cells.
   const vec3l n = stored.hi - stored.lo + vec3l(1);
   const int64_t count = n.x * n.y * n.z;
   const std::streamoff dataStart = in.tellg();
-  std::vector<char> raw(size_t(count * bytes));
+  if (dataStart < 0) fail(file, ": offset ", offset, ": no FAB data");
+  const std::string where = strCat(file, ": offset ", offset, ": FAB of ", n.x, "x", n.y, "x", n.z, " cells");
+  uint64_t values = 0;
+  if (!io::productWithin(uint64_t(count), uint64_t(ncomp), UINT64_MAX / 8, values))
+    fail(where, ": too many values");
+  io::requireBytes(values, uint64_t(bytes), fileBytes - uint64_t(dataStart), where);
+  std::vector<char> raw = io::allocate<char>(uint64_t(count * bytes), [&] { return where; });
   for (size_t k = 0; k < components.size(); ++k) {
     const int c = components[k];
     in.seekg(dataStart + std::streamoff(int64_t(c) * count * bytes));

@@ -1,5 +1,6 @@
 #include "exabricks/io/enzo.h"
 
+#include "checked.h"
 #include "hdf5_file.h"
 #include "patches.h"
 
@@ -57,9 +58,10 @@ std::vector<double> numbersOf(const std::string& path, const KeyLine& k, size_t 
 /// One integer value of a key (checked before conversion).
 int64_t integerOf(const std::string& path, const KeyLine& k) {
   const std::vector<double> v = numbersOf(path, k, 1);
-  if (v.size() != 1 || v[0] != std::floor(v[0]) || std::abs(v[0]) > 1e15)
+  int64_t out = 0;
+  if (v.size() != 1 || !io::integerIn(v[0], -int64_t(1e15), int64_t(1e15), out))
     fail(path, ": line ", k.line, ": ", k.key, " must be one integer, got '", k.value, "'");
-  return int64_t(v[0]);
+  return out;
 }
 
 std::vector<double> numbersOf(const std::string& path, const KeyLine& k, size_t expected) {
@@ -106,9 +108,10 @@ Parameters readParameters(const std::string& path) {
       if (p.rank != 3) fail(path, ": line ", k.line, ": TopGridRank is ", p.rank, ": a ", p.rank, "-D output; only 3-D AMR data can be read");
     } else if (k.key == "RefineBy") {
       const double r = numbersOf(path, k, 1)[0];
-      if (r != std::floor(r) || r < 2 || r > 1024 || io::log2Exact(int64_t(r)) < 0)
-        fail(path, ": line ", k.line, ": RefineBy ", r, " is not a power of two");
-      p.refineBy = int64_t(r);
+      int64_t ri = 0;
+      if (!io::integerIn(r, 2, 1024, ri) || io::log2Exact(ri) < 0)
+        fail(path, ": line ", k.line, ": RefineBy ", r, " is not a power of two up to 1024");
+      p.refineBy = ri;
     } else if (k.key == "DomainLeftEdge") {
       const auto v = numbersOf(path, k, 3);
       p.left = vec3d(v[0], v[1], v[2]);
@@ -119,8 +122,8 @@ Parameters readParameters(const std::string& path) {
       const double t = numbersOf(path, k, 1)[0];
       if (std::isfinite(t)) p.simulation.time = t;
     } else if (k.key == "InitialCycleNumber") {
-      const double c = numbersOf(path, k, 1)[0];
-      if (c >= 0 && c < 9.0e18 && c == std::floor(c)) p.simulation.cycle = int64_t(c);
+      int64_t c = 0;
+      if (io::integerIn(numbersOf(path, k, 1)[0], 0, INT64_MAX, c)) p.simulation.cycle = c;
     }
   }
   return p;
@@ -160,9 +163,11 @@ Output readOutput(const std::string& path) {
     };
     auto l3 = [&](unsigned bit) {
       const auto v = v3(bit);
-      for (double d : v)
-        if (d != std::floor(d) || std::abs(d) > 1e9) fail(h, ": line ", k.line, ": ", k.key, " must be integers");
-      return vec3l(int64_t(v[0]), int64_t(v[1]), int64_t(v[2]));
+      vec3l out;
+      for (int a = 0; a < 3; ++a)
+        if (!io::integerIn(v[size_t(a)], -int64_t(1e9), int64_t(1e9), out[a]))
+          fail(h, ": line ", k.line, ": ", k.key, " must be integers within +-10^9");
+      return out;
     };
     if (k.key == "GridRank") {
       g.rank = int(std::clamp<int64_t>(integerOf(h, k), -1, 1000));
@@ -202,6 +207,7 @@ Output readOutput(const std::string& path) {
              g.dimension[a]);
       if (!(g.right[a] > g.left[a])) fail(h, ": grid ", g.id, ": GridRightEdge is not above GridLeftEdge on axis ", a);
     }
+    io::checkPatchCells(g.dimension, strCat(h, ": grid ", g.id, ": GridDimension"));
   }
   return o;
 }
@@ -222,6 +228,24 @@ public:
 private:
   std::map<std::string, std::unique_ptr<h5::File>> files_;
 };
+
+/// Checks a field dataset's shape (z, y, x) against its grid: false when it holds the active
+/// zones only, true when it holds the whole grid with ghost zones.
+bool storedShape(const h5::File& f, const std::string& name, const Grid& g) {
+  const std::vector<uint64_t> d = f.dims(name);
+  const vec3l n = g.active();
+  if (d.size() == 3 && d[0] == uint64_t(n.z) && d[1] == uint64_t(n.y) && d[2] == uint64_t(n.x)) return false;
+  if (d.size() == 3 && d[0] == uint64_t(g.dimension.z) && d[1] == uint64_t(g.dimension.y) &&
+      d[2] == uint64_t(g.dimension.x))
+    return true;
+  std::string shape;
+  for (uint64_t x : d) {
+    if (!shape.empty()) shape += 'x';
+    shape += std::to_string(x);
+  }
+  f.bad(name, strCat("grid ", g.id, ": shape ", shape, " is neither the active zones ", n.z, "x", n.y, "x", n.x,
+                     " nor GridDimension ", g.dimension.z, "x", g.dimension.y, "x", g.dimension.x, " (z, y, x)"));
+}
 
 std::string groupOf(int64_t id) {
   char name[32];
@@ -299,6 +323,22 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
     patches.push_back(p);
   }
   auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[i].id); };
+  // Every dataset's shape is checked (and its storage against the file, by the reads) before
+  // per-cell memory is reserved for its grid; a grid without fields must be covered by finer ones.
+  std::vector<uint8_t> backed(o.grids.size(), 0);
+  for (size_t i = 0; i < o.grids.size(); ++i) {
+    const Grid& g = o.grids[i];
+    if (g.fields == 0) continue;
+    const h5::File& f = files.get(g.file);
+    const std::string group = groupOf(g.id);
+    if (!f.exists(group)) f.bad(group, strCat("missing group of grid ", g.id, " (named by ", h, ")"));
+    for (size_t k : picked) {
+      storedShape(f, group + "/" + available[k], g);
+      f.requireStorage(group + "/" + available[k]);
+    }
+    backed[i] = 1;
+  }
+  io::checkUnbackedPatches(patches, backed, gridName);
   const io::Coverage coverage(patches, gridName);
 
   CellSet set;
@@ -319,25 +359,8 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
     std::vector<std::vector<float>> values(picked.size());
     for (size_t k = 0; k < picked.size(); ++k) {
       const std::string name = group + "/" + available[picked[k]];
-      const std::vector<uint64_t> d = f.dims(name);
-      // Arrays are stored (z, y, x): active zones only, or the whole grid with ghost zones.
-      vec3l stored, offset;
-      if (d.size() == 3 && int64_t(d[0]) == n.z && int64_t(d[1]) == n.y && int64_t(d[2]) == n.x) {
-        stored = n;
-        offset = vec3l(0);
-      } else if (d.size() == 3 && int64_t(d[0]) == g.dimension.z && int64_t(d[1]) == g.dimension.y &&
-                 int64_t(d[2]) == g.dimension.x) {
-        stored = g.dimension;
-        offset = g.start;
-      } else {
-        std::string shape;
-        for (uint64_t x : d) {
-          if (!shape.empty()) shape += 'x';
-          shape += std::to_string(x);
-        }
-        f.bad(name, strCat("grid ", g.id, ": shape ", shape, " is neither the active zones ", n.z, "x", n.y, "x", n.x,
-                           " nor GridDimension ", g.dimension.z, "x", g.dimension.y, "x", g.dimension.x, " (z, y, x)"));
-      }
+      const bool whole = storedShape(f, name, g);
+      const vec3l stored = whole ? g.dimension : n, offset = whole ? g.start : vec3l(0);
       const std::vector<double> raw = f.readDoubles(name);
       values[k].reserve(size_t(n.x * n.y * n.z));
       for (int64_t z = 0; z < n.z; ++z)

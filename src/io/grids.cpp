@@ -18,6 +18,7 @@ CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<st
     for (int a = 0; a < 3; ++a) {
       if (p.cells[a] < 1 || p.cells[a] > (int64_t(1) << 30))
         fail(source, ": grid ", g, ": ", p.cells[a], " cells along axis ", a);
+      if (a == 2) io::checkPatchCells(p.cells, strCat(source, ": grid ", g));
       const double d = (p.upper[a] - p.lower[a]) / double(p.cells[a]);
       if (!(d > 0.0) || !std::isfinite(d) || !std::isfinite(p.lower[a]))
         fail(source, ": grid ", g, ": its box [", p.lower[a], ", ", p.upper[a], "] along axis ", a,

@@ -4,6 +4,8 @@
 
 #include "exabricks/core/error.h"
 
+#include "checked.h"
+
 #include <algorithm>
 #include <cstring>
 #include <fstream>
@@ -13,6 +15,18 @@ namespace {
 
 // Nothing the readers ask for is larger; a corrupt header must not make us allocate terabytes.
 constexpr uint64_t kMaxElements = uint64_t(1) << 33;
+// Longest fixed-length string (dataset element, attribute or compound member) that is read.
+constexpr size_t kMaxStringBytes = size_t(1) << 16;
+
+/// Variable-length strings read by libhdf5, released however the reading ends.
+struct VlenStrings {
+  hid_t memType, space;
+  std::vector<char*> ptrs;
+  ~VlenStrings() {
+    if (std::any_of(ptrs.begin(), ptrs.end(), [](char* p) { return p != nullptr; }))
+      H5Dvlen_reclaim(memType, space, H5P_DEFAULT, ptrs.data());
+  }
+};
 
 void silence() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
@@ -52,6 +66,10 @@ bool compoundLayout(hid_t fileType, CompoundLayout& out, std::string& problem) {
       out.stringSizes.push_back(0);
       out.size += sizeof(double);
     } else if (H5Tget_class(mt.get()) == H5T_STRING && !H5Tis_variable_str(mt.get())) {
+      if (H5Tget_size(mt.get()) > kMaxStringBytes) {
+        problem = "compound member '" + out.names.back() + "' is a string of more than 65536 bytes";
+        return false;
+      }
       const size_t s = H5Tget_size(mt.get()) + 1;
       out.stringSizes.push_back(s);
       out.size += s;
@@ -79,6 +97,32 @@ uint64_t elementCount(hid_t space) {
   return n < 0 ? 0 : uint64_t(n);
 }
 
+/// Checks what a dataset declares against what it stores before anything is allocated for it:
+/// its storage must lie within the file, and hold every element (uncompressed) or at least
+/// 1/kMaxInflate of their bytes (filtered).
+void checkStorage(const File& f, hid_t file, hid_t d, uint64_t elements, const std::string& name) {
+  Id type(H5Dget_type(d), H5Tclose);
+  const size_t elementBytes = H5Tget_size(type.get());
+  if (elementBytes == 0) f.bad(name, "cannot read the element type");
+  hsize_t fileBytes = 0;
+  if (H5Fget_filesize(file, &fileBytes) < 0) f.bad(name, "cannot read the file size");
+  const uint64_t stored = H5Dget_storage_size(d);
+  if (stored > fileBytes)
+    f.bad(name, strCat("declares ", stored, " bytes of storage in a file of ", fileBytes, " bytes (corrupt file?)"));
+  Id plist(H5Dget_create_plist(d), H5Pclose);
+  const int filters = plist ? H5Pget_nfilters(plist.get()) : 0;
+  const std::string where = strCat(f.path(), ": ", name);
+  if (filters <= 0) {
+    io::requireBytes(elements, elementBytes, stored, where);
+  } else {
+    uint64_t bytes = 0, bound = 0;
+    if (!io::productWithin(elements, elementBytes, UINT64_MAX, bytes) ||
+        !io::productWithin(stored + 1, io::kMaxInflate, UINT64_MAX, bound) || bytes > bound)
+      f.bad(name, strCat("declares ", elements, " values of ", elementBytes, " bytes, more than its ", stored,
+                         " compressed bytes can hold"));
+  }
+}
+
 } // namespace
 
 bool hasSignature(const std::string& path) {
@@ -103,7 +147,10 @@ File::File(const std::string& path) : path_(path) {
     if (!probe) fail(path, ": cannot open (missing file?)");
     fail(path, ": not an HDF5 file (no HDF5 signature)");
   }
-  file_ = Id(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  // Closing the file closes whatever objects an error path might have left open.
+  Id access(H5Pcreate(H5P_FILE_ACCESS), H5Pclose);
+  if (access) H5Pset_fclose_degree(access.get(), H5F_CLOSE_STRONG);
+  file_ = Id(H5Fopen(path.c_str(), H5F_ACC_RDONLY, access ? access.get() : H5P_DEFAULT), H5Fclose);
   if (!file_) fail(path, ": cannot open as HDF5 (corrupt or truncated file?)");
 }
 
@@ -174,6 +221,12 @@ std::vector<uint64_t> File::dims(const std::string& dataset) const {
   return std::vector<uint64_t>(dims.begin(), dims.end());
 }
 
+void File::requireStorage(const std::string& dataset) const {
+  const Id d = openDataset(dataset);
+  Id space(H5Dget_space(d.get()), H5Sclose);
+  checkStorage(*this, file_.get(), d.get(), elementCount(space.get()), dataset);
+}
+
 bool File::isDouble(const std::string& dataset) const {
   const Id d = openDataset(dataset);
   Id type(H5Dget_type(d.get()), H5Tclose);
@@ -182,13 +235,14 @@ bool File::isDouble(const std::string& dataset) const {
 
 namespace {
 template <typename T>
-std::vector<T> readNumeric(const File& f, hid_t d, hid_t memType, const std::string& name) {
+std::vector<T> readNumeric(const File& f, hid_t file, hid_t d, hid_t memType, const std::string& name) {
   Id type(H5Dget_type(d), H5Tclose);
   if (!isNumeric(type.get())) f.bad(name, "not a numeric dataset");
   Id space(H5Dget_space(d), H5Sclose);
   const uint64_t n = elementCount(space.get());
   if (n > kMaxElements) f.bad(name, "dataset too large");
-  std::vector<T> out(static_cast<size_t>(n));
+  checkStorage(f, file, d, n, name);
+  std::vector<T> out = io::allocate<T>(n, [&] { return strCat(f.path(), ": ", name); });
   if (n && H5Dread(d, memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, out.data()) < 0)
     f.bad(name, "cannot read (truncated or corrupt file?)");
   return out;
@@ -197,12 +251,12 @@ std::vector<T> readNumeric(const File& f, hid_t d, hid_t memType, const std::str
 
 std::vector<double> File::readDoubles(const std::string& dataset) const {
   const Id d = openDataset(dataset);
-  return readNumeric<double>(*this, d.get(), H5T_NATIVE_DOUBLE, dataset);
+  return readNumeric<double>(*this, file_.get(), d.get(), H5T_NATIVE_DOUBLE, dataset);
 }
 
 std::vector<int64_t> File::readInts(const std::string& dataset) const {
   const Id d = openDataset(dataset);
-  return readNumeric<int64_t>(*this, d.get(), H5T_NATIVE_INT64, dataset);
+  return readNumeric<int64_t>(*this, file_.get(), d.get(), H5T_NATIVE_INT64, dataset);
 }
 
 std::vector<double> File::readRows(const std::string& dataset, uint64_t first, uint64_t count) const {
@@ -222,7 +276,8 @@ std::vector<double> File::readRows(const std::string& dataset, uint64_t first, u
   uint64_t n = 1;
   for (hsize_t c : cnt) n *= c;
   if (n > kMaxElements) bad(dataset, "dataset too large");
-  std::vector<double> out(static_cast<size_t>(n));
+  checkStorage(*this, file_.get(), d.get(), elementCount(space.get()), dataset);
+  std::vector<double> out = io::allocate<double>(n, [&] { return strCat(path_, ": ", dataset); });
   if (n == 0) return out;
   if (H5Sselect_hyperslab(space.get(), H5S_SELECT_SET, start.data(), nullptr, cnt.data(), nullptr) < 0)
     bad(dataset, "cannot select rows");
@@ -239,19 +294,19 @@ std::vector<std::string> File::readStrings(const std::string& dataset) const {
   Id space(H5Dget_space(d.get()), H5Sclose);
   const uint64_t n = elementCount(space.get());
   if (n > (uint64_t(1) << 24)) bad(dataset, "too many strings");
+  checkStorage(*this, file_.get(), d.get(), n, dataset);
   std::vector<std::string> out;
   if (H5Tis_variable_str(type.get())) {
-    std::vector<char*> ptrs(static_cast<size_t>(n), nullptr);
     Id mt(H5Tcopy(H5T_C_S1), H5Tclose);
     H5Tset_size(mt.get(), H5T_VARIABLE);
-    if (n && H5Dread(d.get(), mt.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, ptrs.data()) < 0) bad(dataset, "cannot read");
-    for (char* p : ptrs) {
-      out.push_back(trimmed(p ? p : ""));
-      H5free_memory(p);
-    }
+    VlenStrings strings{mt.get(), space.get(), std::vector<char*>(static_cast<size_t>(n), nullptr)};
+    if (n && H5Dread(d.get(), mt.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, strings.ptrs.data()) < 0)
+      bad(dataset, "cannot read");
+    for (char* p : strings.ptrs) out.push_back(trimmed(p ? std::string(p, strnlen(p, kMaxStringBytes)) : ""));
     return out;
   }
   const size_t size = H5Tget_size(type.get());
+  if (size > kMaxStringBytes) bad(dataset, strCat("strings of ", size, " bytes (at most 65536 are read)"));
   Id mt(H5Tcopy(H5T_C_S1), H5Tclose);
   H5Tset_size(mt.get(), size + 1);
   H5Tset_strpad(mt.get(), H5T_STR_NULLTERM);
@@ -270,8 +325,9 @@ CompoundTable File::readCompound(const std::string& dataset) const {
   if (!compoundLayout(type.get(), layout, problem)) bad(dataset, problem);
   Id space(H5Dget_space(d.get()), H5Sclose);
   const uint64_t n = elementCount(space.get());
-  if (n * layout.size > (uint64_t(1) << 34)) bad(dataset, "dataset too large");
-  std::vector<unsigned char> buf(size_t(n) * layout.size);
+  if (n > kMaxElements || n * layout.size > (uint64_t(1) << 34)) bad(dataset, "dataset too large");
+  checkStorage(*this, file_.get(), d.get(), n, dataset);
+  std::vector<unsigned char> buf = io::allocate<unsigned char>(n * layout.size, [&] { return strCat(path_, ": ", dataset); });
   if (n && H5Dread(d.get(), layout.type.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0)
     bad(dataset, "cannot read (truncated or corrupt file?)");
   CompoundTable t;
@@ -344,19 +400,19 @@ std::string File::attrString(const std::string& object, const std::string& name)
   Id type(H5Aget_type(a.get()), H5Tclose);
   if (H5Tget_class(type.get()) != H5T_STRING) bad(object, "attribute '" + name + "' is not a string");
   Id mt(H5Tcopy(H5T_C_S1), H5Tclose);
-  if (H5Tis_variable_str(type.get())) {
-    H5Tset_size(mt.get(), H5T_VARIABLE);
-    char* p = nullptr;
-    if (H5Aread(a.get(), mt.get(), &p) < 0) bad(object, "cannot read attribute '" + name + "'");
-    std::string s = trimmed(p ? p : "");
-    H5free_memory(p);
-    return s;
-  }
-  const size_t size = H5Tget_size(type.get());
-  H5Tset_size(mt.get(), size + 1);
-  H5Tset_strpad(mt.get(), H5T_STR_NULLTERM);
   Id space(H5Aget_space(a.get()), H5Sclose);
   if (elementCount(space.get()) != 1) bad(object, "attribute '" + name + "' is not a single string");
+  if (H5Tis_variable_str(type.get())) {
+    H5Tset_size(mt.get(), H5T_VARIABLE);
+    VlenStrings strings{mt.get(), space.get(), std::vector<char*>(1, nullptr)};
+    if (H5Aread(a.get(), mt.get(), strings.ptrs.data()) < 0) bad(object, "cannot read attribute '" + name + "'");
+    const char* p = strings.ptrs[0];
+    return trimmed(p ? std::string(p, strnlen(p, kMaxStringBytes)) : "");
+  }
+  const size_t size = H5Tget_size(type.get());
+  if (size > kMaxStringBytes) bad(object, strCat("attribute '", name, "' is a string of ", size, " bytes (at most 65536 are read)"));
+  H5Tset_size(mt.get(), size + 1);
+  H5Tset_strpad(mt.get(), H5T_STR_NULLTERM);
   std::string buf(size + 1, '\0');
   if (H5Aread(a.get(), mt.get(), buf.data()) < 0) bad(object, "cannot read attribute '" + name + "'");
   return trimmed(std::string(buf.c_str()));

@@ -67,6 +67,9 @@ public:
 
   /// Dimensions of a dataset (outermost first).
   std::vector<uint64_t> dims(const std::string& dataset) const;
+  /// Fails unless the dataset's storage lies within the file and can hold every element it
+  /// declares (the reads check this too; readers call it before reserving memory by the shape).
+  void requireStorage(const std::string& dataset) const;
   /// True when the dataset stores floating-point values of more than 4 bytes.
   bool isDouble(const std::string& dataset) const;
   /// The whole dataset, converted.

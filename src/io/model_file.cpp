@@ -1,6 +1,7 @@
 #include "exabricks/io/model_file.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/io/native.h"
 
 #include <cerrno>
 #include <cstdio>
@@ -174,7 +175,8 @@ bool isModelFile(const std::string& path) {
 }
 
 void writeModel(const Model& m, const std::string& path) {
-  const std::string tmp = path + ".tmp" + std::to_string(::getpid());
+  removeStaleTemporaries(path);
+  const std::string tmp = temporaryPath(path, 0);
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) fail(path, ": cannot write: ", std::strerror(errno));
   try {
@@ -203,6 +205,8 @@ void writeModel(const Model& m, const std::string& path) {
     h.checksum = w.checksum();
     if (std::fseek(f, 0, SEEK_SET) != 0 || std::fwrite(&h, sizeof h, 1, f) != 1)
       fail(path, ": write failed");
+    // On disk before the rename: a crash leaves the old file or the new one.
+    if (std::fflush(f) != 0 || ::fsync(::fileno(f)) != 0) fail(path, ": write failed: ", std::strerror(errno));
     closer.f = nullptr;
     if (std::fclose(f) != 0) fail(path, ": write failed (disk full?)");
   } catch (...) {
@@ -227,6 +231,8 @@ Model readModel(const std::string& path) {
     fail(path, ": model file version ", h.version, " is not supported (this build reads version ",
          kModelVersion, "); rebuild it with 'exabricks build'");
   if (h.headerBytes != sizeof(Header)) fail(path, ": corrupt model file header");
+  if (h.reserved[0] != 0 || h.reserved[1] != 0)
+    fail(path, ": corrupt model file header: its reserved bytes (32..47) are not zero");
   std::fseek(f, 0, SEEK_END);
   const long total = std::ftell(f);
   std::fseek(f, sizeof(Header), SEEK_SET);

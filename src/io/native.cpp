@@ -11,6 +11,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include <fcntl.h>
+#include <signal.h>
 #include <unistd.h>
 
 static_assert(std::endian::native == std::endian::little,
@@ -106,7 +109,43 @@ void writeWhole(const std::string& path, const std::string& target, const void* 
   if (!ok || !flushed || !closed) fail(path, ": write failed: ", std::strerror(err ? err : EIO));
 }
 
+/// Flushes a directory's entries (a rename into it) to disk; best effort.
+void syncDirectory(const std::string& target) {
+  const fs::path parent = fs::path(target).parent_path();
+  const int fd = ::open(parent.empty() ? "." : parent.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
 } // namespace
+
+std::string temporaryPath(const std::string& target, size_t index) {
+  return target + ".tmp" + std::to_string(::getpid()) + "." + std::to_string(index);
+}
+
+void removeStaleTemporaries(const std::string& target) {
+  const fs::path t(target);
+  const fs::path dir = t.has_parent_path() ? t.parent_path() : fs::path(".");
+  const std::string prefix = t.filename().string() + ".tmp";
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    // NAME.tmpPID.INDEX (or NAME.tmpPID): only when process PID no longer runs.
+    const std::string rest = name.substr(prefix.size());
+    const size_t dot = rest.find('.');
+    const std::string pid = rest.substr(0, dot), index = dot == std::string::npos ? "1" : rest.substr(dot + 1);
+    auto digits = [](const std::string& x) {
+      return !x.empty() && x.size() < 10 && x.find_first_not_of("0123456789") == std::string::npos;
+    };
+    if (!digits(pid) || !digits(index)) continue;
+    const long id = std::stol(pid);
+    if (id <= 0 || id == long(::getpid()) || ::kill(pid_t(id), 0) == 0 || errno != ESRCH) continue;
+    std::error_code rec;
+    fs::remove(it->path(), rec);
+  }
+}
 
 void removePendingTemporaries() {
   for (PendingSlot& s : gPending)
@@ -123,10 +162,11 @@ void AtomicFiles::write(const std::string& path, const void* data, size_t size) 
     writeWhole(path, target, data, size, false);
     return;
   }
+  removeStaleTemporaries(target);
   Pending p;
   p.path = path;
   p.target = target;
-  p.temporary = target + ".tmp" + std::to_string(::getpid()) + "." + std::to_string(pending_.size());
+  p.temporary = temporaryPath(target, pending_.size());
   p.slot = claimPending(p.temporary);
   pending_.push_back(p);
   try {
@@ -147,6 +187,7 @@ void AtomicFiles::commit() {
       fail(p.path, ": cannot rename the temporary file into place: ", why);
     }
     releasePending(p.slot);
+    syncDirectory(p.target);
   }
   pending_.clear();
 }
@@ -291,8 +332,10 @@ CellSet readGrids(const std::string& path) {
     for (int a = 0; a < 3; ++a)
       if (ints[a] + n[a] * w > kLatticeLimit)
         fail(path, ": line ", lineNo, ": box reaches outside the supported lattice range");
-    if (double(n.x) * double(n.y) * double(n.z) + double(set.cells.size()) > 4e9)
-      fail(path, ": line ", lineNo, ": absurd box size ", n.x, "x", n.y, "x", n.z);
+    // A fixture line expands to its cells: bound the total before reserving memory for them.
+    if (double(n.x) * double(n.y) * double(n.z) + double(set.cells.size()) > double(kMaxGridsCells))
+      fail(path, ": line ", lineNo, ": box of ", n.x, "x", n.y, "x", n.z, " cells: a .grids fixture describes at most ",
+           kMaxGridsCells, " cells (store larger data as NAME.cells)");
     for (int64_t k = 0; k < n.z; ++k)
       for (int64_t j = 0; j < n.y; ++j)
         for (int64_t i = 0; i < n.x; ++i) {

@@ -1,11 +1,31 @@
 #include "patches.h"
 
+#include "checked.h"
+
 #include "exabricks/core/error.h"
 
 #include <algorithm>
 #include <cmath>
 
 namespace exa::io {
+
+void checkPatchCells(const vec3l& cells, const std::string& where) {
+  uint64_t n = 0;
+  if (cells.x < 1 || cells.y < 1 || cells.z < 1) fail(where, ": empty or inverted box");
+  if (!cellCountWithin(cells.x, cells.y, cells.z, uint64_t(1) << 40, n))
+    fail(where, ": box of ", cells.x, "x", cells.y, "x", cells.z, " cells is too large (at most 2^40 cells)");
+}
+
+void checkUnbackedPatches(const std::vector<Patch>& patches, const std::vector<uint8_t>& backed,
+                          const std::function<std::string(size_t)>& name) {
+  uint64_t withData = 0;
+  for (size_t i = 0; i < patches.size(); ++i)
+    if (backed[i]) withData += uint64_t(patches[i].cellCount());
+  for (size_t i = 0; i < patches.size(); ++i)
+    if (!backed[i] && uint64_t(patches[i].cellCount()) > withData)
+      fail(name(i), ": has no data and ", patches[i].cellCount(), " cells, more than all boxes with data hold (",
+           withData, "), so finer boxes cannot cover it");
+}
 
 int log2Exact(int64_t width) {
   if (width < 1 || (width & (width - 1)) != 0) return -1;
@@ -59,7 +79,7 @@ void Coverage::build(uint32_t node, uint32_t begin, uint32_t end) {
 
 std::vector<uint8_t> Coverage::covered(size_t i) const {
   const Patch& p = patches_[i];
-  std::vector<uint8_t> mask(size_t(p.cellCount()), 0);
+  std::vector<uint8_t> mask = allocate<uint8_t>(uint64_t(p.cellCount()), [&] { return name_(i); });
   // Only the next finer width decides: the formats nest each level inside the one above, so a
   // deeper patch lies under next-finer patches and may legitimately cut coarse cells.
   const auto next = std::lower_bound(widths_.begin(), widths_.end(), p.width);

@@ -20,8 +20,19 @@ struct Patch {
   vec3l cells;
   int64_t width = 1;
   vec3l upper() const { return lower + cells * width; }
+  /// Cells of the patch; readers bound `cells` (checkPatchCells) before anything uses this.
   int64_t cellCount() const { return cells.x * cells.y * cells.z; }
 };
+
+/// Fails unless every axis of `cells` is positive and the patch holds at most 2^40 cells, so
+/// that cellCount() and every index into the patch stay in range.
+void checkPatchCells(const vec3l& cells, const std::string& where);
+
+/// A patch without data of its own (`backed[i]` false) is valid only when finer patches cover
+/// it, and those hold at least as many cells: one holding more cells than all patches with data
+/// together fails, before any per-cell memory is reserved for it.
+void checkUnbackedPatches(const std::vector<Patch>& patches, const std::vector<uint8_t>& backed,
+                          const std::function<std::string(size_t)>& name);
 
 /// log2 of a width that is a power of two, or -1.
 int log2Exact(int64_t width);

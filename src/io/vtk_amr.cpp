@@ -6,6 +6,7 @@
 #include "exabricks/core/log.h"
 
 #include "byte_order.h"
+#include "checked.h"
 
 #include <zlib.h>
 
@@ -175,6 +176,9 @@ public:
   virtual ~BlockSource() = default;
   /// The next `n` bytes (throws when there are fewer).
   virtual std::string take(size_t n) = 0;
+  /// An upper bound of the bytes left: declared sizes are checked against it before anything
+  /// is allocated for them.
+  virtual uint64_t left() const = 0;
 };
 
 class RawSource : public BlockSource {
@@ -187,6 +191,7 @@ public:
     at_ += n;
     return s;
   }
+  uint64_t left() const override { return at_ > data_.size() ? 0 : data_.size() - at_; }
 
 private:
   const std::string &path_, &what_, &data_;
@@ -209,6 +214,9 @@ public:
     buffer_.erase(0, n);
     return s;
   }
+  uint64_t left() const override {
+    return buffer_.size() + (consumed_ >= text_.size() ? 0 : (text_.size() - consumed_) / 4 * 3 + 3);
+  }
 
 private:
   const std::string &path_, &what_, &text_;
@@ -225,20 +233,36 @@ std::string readBlock(const std::string& path, const std::string& what, BlockSou
   if (!e.zlib) {
     const uint64_t n = header();
     if (n != expectedBytes) fail(path, ": ", what, ": block holds ", n, " bytes, expected ", expectedBytes);
+    io::requireBytes(n, 1, src.left(), strCat(path, ": ", what));
     return src.take(size_t(n));
   }
+  // The compression header: block count, nominal block size, size of the last block (0 when it
+  // is a whole block), then the compressed size of each block. The nominal size may exceed a
+  // small array (VTK writes 32768 for every array), so a single block may be shorter than it.
   const uint64_t blocks = header(), blockSize = header(), lastSize = header();
-  // Bound the header by the expected size before anything is allocated from it. The nominal
-  // block size may exceed a small array (VTK writes 32768 for every array): the blocks' total
-  // (checked next) bounds every block that is allocated.
-  if (lastSize > blockSize || (blocks > 0 && (blockSize == 0 || blocks > expectedBytes / blockSize + 1)))
-    fail(path, ": ", what, ": corrupt compression header");
+  const std::string where = strCat(path, ": ", what);
+  if (blocks > 0 && blockSize == 0) fail(where, ": corrupt compression header (block size 0)");
+  if (lastSize > blockSize) fail(where, ": corrupt compression header (last block of ", lastSize, " bytes, block size ", blockSize, ")");
+  if (blocks > expectedBytes / std::max<uint64_t>(blockSize, 1) + 1)
+    fail(where, ": corrupt compression header (", blocks, " blocks of ", blockSize, " bytes for ", expectedBytes, " bytes)");
   const uint64_t total = blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize == 0 ? blockSize : lastSize);
-  if (total != expectedBytes) fail(path, ": ", what, ": compressed data holds ", total, " bytes, expected ", expectedBytes);
-  std::vector<uint64_t> sizes(static_cast<size_t>(blocks));
-  for (uint64_t& s : sizes) s = header();
+  if (total != expectedBytes) fail(where, ": compressed data holds ", total, " bytes, expected ", expectedBytes);
+  io::requireBytes(blocks, e.headerBytes, src.left(), where + ": compressed block sizes");
+  std::vector<uint64_t> sizes = io::allocate<uint64_t>(blocks, [&] { return where; });
+  uint64_t packedTotal = 0;
+  for (uint64_t& s : sizes) {
+    s = header();
+    if (s > src.left()) io::requireBytes(s, 1, src.left(), where + ": compressed block");
+    packedTotal += s;
+  }
+  io::requireBytes(packedTotal, 1, src.left(), where + ": compressed blocks");
+  // Inflating never grows a block by more than kMaxInflate: bound the declared size by the
+  // bytes present before reserving it.
+  uint64_t inflatable = 0;
+  if (io::productWithin(packedTotal + 1, io::kMaxInflate, UINT64_MAX, inflatable) && total > inflatable)
+    fail(where, ": declares ", total, " bytes, more than its ", packedTotal, " compressed bytes can hold");
   std::string out;
-  out.reserve(size_t(total));
+  io::reserveMore(out, total, [&] { return where; });
   for (uint64_t b = 0; b < blocks; ++b) {
     const std::string packed = src.take(size_t(sizes[size_t(b)]));
     uLongf size = uLongf(b + 1 == blocks && lastSize != 0 ? lastSize : blockSize);
@@ -308,9 +332,10 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
       if (sawPiece) fail(path, ": more than one <Piece> (one is expected per AMR box)");
       sawPiece = true;
       const auto e = numbers(path, t.attr("Extent"), 6, "Piece Extent");
-      for (double v : e)
-        if (!(std::abs(v) <= double(kLatticeLimit))) fail(path, ": Piece Extent is out of range");
-      piece.cells = vec3l(int64_t(e[1] - e[0]), int64_t(e[3] - e[2]), int64_t(e[5] - e[4]));
+      int64_t ext[6];
+      for (int k = 0; k < 6; ++k)
+        ext[k] = io::checkedInteger(e[size_t(k)], -kLatticeLimit, kLatticeLimit, [&] { return strCat(path, ": Piece Extent"); });
+      piece.cells = vec3l(ext[1] - ext[0], ext[3] - ext[2], ext[5] - ext[4]);
       if (piece.cells.x < 0 || piece.cells.y < 0 || piece.cells.z < 0) fail(path, ": Piece Extent is inverted");
       if (piece.cells.x == 0 || piece.cells.y == 0 || piece.cells.z == 0)
         fail(path, ": Piece Extent is flat (2-D data); only 3-D AMR data can be read");
@@ -327,9 +352,9 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
       const std::string what = "array '" + name + "'";
       const std::string type = t.attr("type");
       if (typeSize(type) == 0) fail(path, ": ", what, ": unsupported type '", type, "'");
-      if (double(piece.cells.x) * double(piece.cells.y) * double(piece.cells.z) > double(uint64_t(1) << 32))
-        fail(path, ": Piece Extent is too large");
-      const uint64_t count = uint64_t(piece.cells.x * piece.cells.y * piece.cells.z);
+      uint64_t count = 0;
+      if (!io::cellCountWithin(piece.cells.x, piece.cells.y, piece.cells.z, uint64_t(1) << 40, count))
+        fail(path, ": Piece Extent of ", piece.cells.x, "x", piece.cells.y, "x", piece.cells.z, " cells is too large");
       std::vector<double> values;
       const std::string format = t.attr("format");
       if (format == "ascii") {
@@ -352,6 +377,7 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
           bytes = readBlock(path, what, src, enc, expected);
         }
         const size_t ts = typeSize(type);
+        io::reserveMore(values, bytes.size() / ts, [&] { return strCat(path, ": ", what); });
         for (size_t i = 0; i + ts <= bytes.size(); i += ts)
           values.push_back(toDouble(reinterpret_cast<const unsigned char*>(bytes.data() + i), type, enc.bigEndian));
       } else {
@@ -414,10 +440,9 @@ Hierarchy readHierarchy(const std::string& path) {
       d.index = size_t(index);
       const auto b = numbers(path, t.attr("amr_box"), 6, strCat("level ", level, " DataSet ", d.index, " amr_box"));
       for (int a = 0; a < 3; ++a) {
-        if (std::abs(b[size_t(2 * a)]) > double(kLatticeLimit) || std::abs(b[size_t(2 * a + 1)]) > double(kLatticeLimit))
-          fail(path, ": level ", level, " DataSet ", d.index, ": amr_box out of range");
-        d.lo[a] = int64_t(b[size_t(2 * a)]);
-        d.hi[a] = int64_t(b[size_t(2 * a + 1)]);
+        auto where = [&] { return strCat(path, ": level ", level, " DataSet ", d.index, ": amr_box"); };
+        d.lo[a] = io::checkedInteger(b[size_t(2 * a)], -kLatticeLimit, kLatticeLimit, where);
+        d.hi[a] = io::checkedInteger(b[size_t(2 * a + 1)], -kLatticeLimit, kLatticeLimit, where);
         if (d.hi[a] < d.lo[a]) fail(path, ": level ", level, " DataSet ", d.index, ": empty amr_box");
       }
       const std::string file = t.attr("file");
@@ -479,6 +504,21 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
     patches.push_back({d.lo * width, d.hi - d.lo + vec3l(1), width});
   }
   auto name = [&](size_t i) { return strCat(path, ": level ", h.sets[i].level, " DataSet ", h.sets[i].index); };
+  // Every box is bounded by the bytes of its piece before per-cell memory is reserved for it:
+  // a cell takes at least one byte, or 1/kMaxInflate of a byte compressed. A box whose piece is
+  // missing can only be fully covered by finer boxes.
+  std::vector<uint8_t> backed(patches.size(), 0);
+  for (size_t i = 0; i < patches.size(); ++i) {
+    io::checkPatchCells(patches[i].cells, name(i));
+    std::error_code ec;
+    const auto bytes = fs::file_size(h.sets[i].file, ec);
+    if (ec) continue;
+    backed[i] = 1;
+    if (uint64_t(patches[i].cellCount()) / io::kMaxInflate > bytes)
+      fail(h.sets[i].file, ": the piece of ", name(i), " (", patches[i].cells.x, "x", patches[i].cells.y, "x",
+           patches[i].cells.z, " cells) holds only ", bytes, " bytes, too few for its cells");
+  }
+  io::checkUnbackedPatches(patches, backed, name);
   const io::Coverage coverage(patches, name);
 
   CellSet set;

@@ -23,6 +23,9 @@ std::vector<std::string> listNativeFields(const std::string& cellsPath);
 /// Every file is written to a temporary name first; they are renamed into place together.
 void writeNative(const CellSet& cells, const std::string& cellsPath);
 
+/// Most cells a .grids fixture may describe (2^26): each line expands to a box of cells.
+constexpr uint64_t kMaxGridsCells = uint64_t(1) << 26;
+
 /// Reads a .grids text fixture (field "scalar").
 CellSet readGrids(const std::string& path);
 
@@ -50,6 +53,14 @@ private:
 
 /// Writes `size` bytes to `path` atomically (AtomicFiles with one file).
 void writeFileAtomic(const std::string& path, const void* data, size_t size);
+
+/// The temporary file beside `target` that the index-th write of this process goes to first
+/// (TARGET.tmpPID.INDEX).
+std::string temporaryPath(const std::string& target, size_t index);
+
+/// Removes temporaries of `target` left by processes that no longer run (a write killed before
+/// it could clean up); every write calls it first.
+void removeStaleTemporaries(const std::string& target);
 
 /// Removes every temporary file not yet published; async-signal-safe, for an interrupt handler.
 void removePendingTemporaries();

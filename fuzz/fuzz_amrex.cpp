@@ -1,0 +1,22 @@
+// libFuzzer entry for the AMReX plotfile reader: the input holds the Header, a level's Cell_H
+// and its FAB data file (Level_0/Cell_D_00000), cut at "--8<--" lines; the plotfile is read
+// whole and by field list.
+#include "fuzz_files.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/io/amrex.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::vector<std::string> p = fuzz::parts(data, size, 3);
+  const std::string dir = (fuzz::folder() / "plt").string();
+  fuzz::write("plt/Header", p[0]);
+  fuzz::write("plt/Level_0/Cell_H", p[1]);
+  fuzz::write("plt/Level_0/Cell_D_00000", p[2]);
+  try {
+    exa::listAmrexFields(dir);
+    const exa::CellSet s = exa::readAmrex(dir);
+    if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  return 0;
+}

@@ -1,0 +1,150 @@
+// libFuzzer entry for the Chombo reader over hostile but well-formed HDF5: the input picks the
+// layout of the test fixture (levels, ratios, ghost width, space dimension, box corners) and
+// then rewrites attributes and datasets of the written file with values from the input
+// (level and component counts, ratios, cell sizes, box tables, offsets). Bytes that make a
+// corrupt HDF5 file exercise libhdf5's own parser, outside this project (docs/reliability.md).
+#include "fuzz_files.h"
+
+#include "../tests/chombo_fixture.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/io/chombo.h"
+
+#include <hdf5.h>
+
+#include <cstring>
+
+namespace {
+
+class Bytes {
+public:
+  Bytes(const uint8_t* data, size_t size) : p_(data), n_(size) {}
+  bool empty() const { return i_ >= n_; }
+  uint8_t byte() { return i_ < n_ ? p_[i_++] : 0; }
+  template <typename T> T value() {
+    T v{};
+    unsigned char b[sizeof(T)] = {};
+    for (unsigned char& c : b) c = byte();
+    std::memcpy(&v, b, sizeof(T));
+    return v;
+  }
+
+private:
+  const uint8_t* p_;
+  size_t n_, i_ = 0;
+};
+
+void setAttr(hid_t file, const std::string& object, const std::string& name, hid_t type, const void* value, hsize_t n) {
+  const hid_t o = H5Oopen(file, object.c_str(), H5P_DEFAULT);
+  if (o < 0) return;
+  H5Adelete(o, name.c_str());
+  const hid_t space = H5Screate_simple(1, &n, nullptr);
+  const hid_t a = H5Acreate2(o, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT);
+  if (a >= 0) {
+    H5Awrite(a, type, value);
+    H5Aclose(a);
+  }
+  H5Sclose(space);
+  H5Oclose(o);
+}
+
+void setDataset(hid_t file, const std::string& path, hid_t type, const void* values, hsize_t n) {
+  H5Ldelete(file, path.c_str(), H5P_DEFAULT);
+  const hid_t space = H5Screate_simple(1, &n, nullptr);
+  const hid_t d = H5Dcreate2(file, path.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  if (d >= 0) {
+    if (n) H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values);
+    H5Dclose(d);
+  }
+  H5Sclose(space);
+}
+
+} // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  Bytes in(data, size);
+  chombo_fixture::ChomboFixture f;
+  f.file = fuzz::folder() / "c.hdf5";
+  const uint8_t flags = in.byte();
+  f.float32 = flags & 1;
+  f.nanValue = flags & 2;
+  f.shortData = flags & 4;
+  f.badDx = flags & 8;
+  f.ghost = (flags >> 4) & 3;
+  f.ratio1 = 1 + in.byte() % 8;
+  f.numLevels = in.byte() % 5;
+  f.spaceDim = 1 + in.byte() % 3;
+  // Box corners within a small range keep the written data small.
+  const uint8_t moves = in.byte() % 8;
+  for (uint8_t m = 0; m < moves; ++m) {
+    const uint8_t which = in.byte();
+    auto& level = f.levels[which % 3];
+    if (level.empty()) continue;
+    chombo_fixture::Box& b = level[(which >> 2) % level.size()];
+    const int axis = (which >> 4) % 3;
+    const int v = int(int8_t(in.byte())) % 20;
+    (which & 0x80 ? b.hi : b.lo)[axis] = v;
+  }
+  try {
+    f.write();
+  } catch (const std::exception&) {
+    return 0; // a layout the fixture writer cannot write
+  }
+  const hid_t file = H5Fopen(f.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  if (file < 0) return 0;
+  while (!in.empty()) {
+    const uint8_t op = in.byte();
+    const std::string level = "/level_" + std::to_string((op >> 4) % 3);
+    switch (op % 8) {
+    case 0: {
+      const int v = in.value<int32_t>();
+      setAttr(file, "/", "num_levels", H5T_NATIVE_INT, &v, 1);
+      break;
+    }
+    case 1: {
+      const int v = in.value<int32_t>();
+      setAttr(file, "/", "num_components", H5T_NATIVE_INT, &v, 1);
+      break;
+    }
+    case 2: {
+      const int v = in.value<int32_t>();
+      setAttr(file, level, "ref_ratio", H5T_NATIVE_INT, &v, 1);
+      break;
+    }
+    case 3: {
+      const double v = in.value<double>();
+      setAttr(file, level, "dx", H5T_NATIVE_DOUBLE, &v, 1);
+      break;
+    }
+    case 4: {
+      std::vector<long long> v(in.byte() % 6);
+      for (long long& x : v) x = in.value<int32_t>();
+      setDataset(file, level + "/data:offsets=0", H5T_NATIVE_LLONG, v.data(), v.size());
+      break;
+    }
+    case 5: {
+      std::vector<int> v((in.byte() % 4) * 6);
+      for (int& x : v) x = int(int8_t(in.byte()));
+      setDataset(file, level + "/boxes", H5T_NATIVE_INT, v.data(), v.size());
+      break;
+    }
+    case 6: {
+      std::vector<double> v(in.byte());
+      for (double& x : v) x = double(int8_t(in.byte()));
+      setDataset(file, level + "/data:datatype=0", H5T_NATIVE_DOUBLE, v.data(), v.size());
+      break;
+    }
+    default:
+      H5Ldelete(file, (level + (op & 0x80 ? "/boxes" : "/data_attributes")).c_str(), H5P_DEFAULT);
+      break;
+    }
+  }
+  H5Fclose(file);
+  try {
+    exa::listChomboFields(f.file.string());
+    const exa::CellSet s = exa::readChombo(f.file.string());
+    if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  return 0;
+}

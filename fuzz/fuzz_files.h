@@ -1,0 +1,56 @@
+// Shared by the fuzz targets of readers that take paths: the input is cut into the files of one
+// dataset (at lines "--8<--"), which are written into a folder of this process and read from
+// there. Only exa::Error may escape a reader.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+namespace fuzz {
+
+/// A folder of this process, removed at exit.
+inline const std::filesystem::path& folder() {
+  static const std::filesystem::path dir = [] {
+    std::string pattern = (std::filesystem::temp_directory_path() / "exabricks-fuzz-XXXXXX").string();
+    if (!::mkdtemp(pattern.data())) std::abort();
+    std::atexit([] {
+      std::error_code ec;
+      std::filesystem::remove_all(folder(), ec);
+    });
+    return std::filesystem::path(pattern);
+  }();
+  return dir;
+}
+
+/// The input cut at "\n--8<--\n" into exactly `count` parts (missing ones empty, the last one
+/// takes the rest).
+inline std::vector<std::string> parts(const uint8_t* data, size_t size, size_t count) {
+  static const std::string cut = "\n--8<--\n";
+  const std::string text(reinterpret_cast<const char*>(data), size);
+  std::vector<std::string> out;
+  size_t at = 0;
+  while (out.size() + 1 < count) {
+    const size_t next = text.find(cut, at);
+    if (next == std::string::npos) break;
+    out.push_back(text.substr(at, next - at));
+    at = next + cut.size();
+  }
+  out.push_back(at <= text.size() ? text.substr(at) : std::string());
+  out.resize(count);
+  return out;
+}
+
+/// Writes `bytes` to `name` inside folder() (creating sub-folders) and returns its path.
+inline std::string write(const std::string& name, const std::string& bytes) {
+  const std::filesystem::path p = folder() / name;
+  std::filesystem::create_directories(p.parent_path());
+  std::ofstream(p, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
+  return p.string();
+}
+
+} // namespace fuzz

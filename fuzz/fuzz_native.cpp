@@ -1,0 +1,24 @@
+// libFuzzer entry for the native readers: the input holds d.cells, d.scalars and a .grids text,
+// cut at "--8<--" lines; the dataset and the fixture are read.
+#include "fuzz_files.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/io/native.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  const std::vector<std::string> p = fuzz::parts(data, size, 3);
+  const std::string cells = fuzz::write("d.cells", p[0]);
+  fuzz::write("d.scalars", p[1]);
+  const std::string grids = fuzz::write("g.grids", p[2]);
+  try {
+    const exa::CellSet s = exa::readNative(cells);
+    if (s.fields.size() != 1 || s.fields[0].values.size() != s.cells.size()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  try {
+    const exa::CellSet s = exa::readGrids(grids);
+    if (s.fields.size() != 1 || s.fields[0].values.size() != s.cells.size()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  return 0;
+}

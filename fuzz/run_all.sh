@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Builds every libFuzzer target (Clang) and runs each for SECONDS on a copy of its seed corpus
+# (libFuzzer adds what it finds to the folder it is given), with its dictionary where there is
+# one. Prints one summary line per target (executions, coverage, features, corpus size) and
+# exits non-zero when any target finds a crash, a leak, a timeout or an out-of-memory input;
+# the reproducer is left in WORK/NAME/ (crash-*, leak-*, timeout-*, oom-*).
+#   fuzz/run_all.sh SECONDS [BUILD_DIR] [WORK_DIR]
+set -uo pipefail
+seconds=${1:?usage: fuzz/run_all.sh SECONDS [BUILD_DIR] [WORK_DIR]}
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${2:-$root/build-fuzz}
+work=${3:-$build/fuzz-runs}
+targets=(fuzz_amrex fuzz_vtk fuzz_enzo fuzz_chombo fuzz_native fuzz_raw fuzz_model fuzz_scene fuzz_mesh)
+
+cxx=$(command -v clang++ || command -v clang++-14) || { echo "fuzz/run_all.sh needs clang++ (clang-14)" >&2; exit 1; }
+cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER="$cxx" -DEXABRICKS_BUILD_FUZZERS=ON \
+  -DEXABRICKS_BUILD_TESTS=OFF -DEXABRICKS_PYTHON=OFF >/dev/null || exit 1
+nice -n 10 cmake --build "$build" -j2 --target "${targets[@]}" || exit 1
+
+status=0
+for t in "${targets[@]}"; do
+  name=${t#fuzz_}
+  dir=$work/$name
+  rm -rf "$dir"
+  mkdir -p "$dir/corpus"
+  [ -d "$root/fuzz/corpus/$name" ] && cp "$root/fuzz/corpus/$name"/* "$dir/corpus/"
+  args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=1024 -max_len=65536
+        -print_final_stats=1 -artifact_prefix="$dir/")
+  [ -f "$root/fuzz/$name.dict" ] && args+=(-dict="$root/fuzz/$name.dict")
+  (cd "$dir" && "$build/fuzz/$t" "${args[@]}" corpus >"$dir/log.txt" 2>&1)
+  rc=$?
+  runs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$dir/log.txt" | grep -o '[0-9]*$')
+  cov=$(grep -oE '(#[0-9]+|DONE).*cov: [0-9]+ ft: [0-9]+ corp: [0-9]+' "$dir/log.txt" | tail -1 |
+        grep -oE 'cov: [0-9]+ ft: [0-9]+ corp: [0-9]+')
+  findings=$(ls "$dir" | grep -E '^(crash|leak|timeout|oom|slow-unit)-' | tr '\n' ' ')
+  echo "$t: ${runs:-?} executions, ${cov:-no coverage line}, exit $rc${findings:+, findings: $findings}"
+  if [ "$rc" -ne 0 ] || [ -n "$findings" ]; then
+    status=1
+    grep -m1 -A12 -E 'ERROR: |runtime error|==ERROR' "$dir/log.txt" | head -20
+  fi
+done
+exit $status

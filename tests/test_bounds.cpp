@@ -1,0 +1,206 @@
+// Files that declare huge sizes but hold almost nothing must be refused quickly and without
+// reserving memory for what they declare. Each case loads its fixture in a forked child under
+// an address-space limit (RLIMIT_AS, 100 MB above what the child already maps), so that a
+// regression fails here instead of swapping; the parent checks the message, the time and the
+// child's peak memory. This binary starts no threads of its own before forking.
+#include "exabricks/core/error.h"
+#include "exabricks/io/load.h"
+
+#include "h5_writer.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <initializer_list>
+#include <string>
+#include <sys/resource.h>
+#include <sys/time.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+using namespace exa;
+namespace fs = std::filesystem;
+
+#if defined(__SANITIZE_ADDRESS__)
+#define EXABRICKS_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define EXABRICKS_ASAN 1
+#endif
+#endif
+
+namespace {
+
+constexpr long kLimitBytes = 100L << 20;
+
+long mappedBytes() {
+  std::ifstream in("/proc/self/statm");
+  long pages = 0;
+  in >> pages;
+  return pages * sysconf(_SC_PAGESIZE);
+}
+
+struct Outcome {
+  std::string message;
+  int status = -1;
+  double seconds = 0;
+  long peakKiB = 0;
+};
+
+/// Loads `path` in a child process under the memory limit; the child reports the exa::Error
+/// message through a pipe and exits 0, or exits 2 when the load succeeded, 3 on any other
+/// exception.
+Outcome refuseInChild(const std::string& path) {
+  int fds[2];
+  EXPECT_EQ(pipe(fds), 0);
+  const auto start = std::chrono::steady_clock::now();
+  const pid_t pid = fork();
+  if (pid == 0) {
+    close(fds[0]);
+#ifndef EXABRICKS_ASAN
+    const rlimit lim{rlim_t(mappedBytes() + kLimitBytes), rlim_t(mappedBytes() + kLimitBytes)};
+    setrlimit(RLIMIT_AS, &lim);
+#endif
+    int code = 2;
+    std::string message = "loaded without error";
+    try {
+      loadCells(path);
+    } catch (const Error& e) {
+      message = e.what();
+      code = 0;
+    } catch (const std::exception& e) {
+      message = std::string("not an exa::Error: ") + e.what();
+      code = 3;
+    }
+    [[maybe_unused]] const ssize_t written = write(fds[1], message.data(), message.size());
+    close(fds[1]);
+    _exit(code);
+  }
+  close(fds[1]);
+  Outcome out;
+  char buf[4096];
+  for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;) out.message.append(buf, size_t(n));
+  close(fds[0]);
+  int status = 0;
+  rusage usage{};
+  wait4(pid, &status, 0, &usage);
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  out.peakKiB = usage.ru_maxrss;
+  return out;
+}
+
+/// The fixture is refused in under a second, within the memory limit, with every part named.
+void expectRefused(const fs::path& path, std::initializer_list<const char*> parts) {
+  const long before = mappedBytes();
+  const Outcome o = refuseInChild(path.string());
+  EXPECT_EQ(o.status, 0) << o.message;
+  for (const char* p : parts) EXPECT_NE(o.message.find(p), std::string::npos) << "'" << p << "' not in: " << o.message;
+  EXPECT_LT(o.seconds, 1.0) << o.message;
+  EXPECT_LT(o.peakKiB * 1024L, before + kLimitBytes) << o.message;
+  std::printf("%s: refused in %.3f s, peak %ld KiB: %s\n", path.filename().c_str(), o.seconds, o.peakKiB,
+              o.message.c_str());
+}
+
+fs::path fresh(const std::string& name) {
+  const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "bounds" / name;
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  return dir;
+}
+
+/// An AMReX plotfile with one level-0 box (`box`, e.g. "((0,0,0) (1023,1023,1023) (0,0,0))")
+/// and `dataBytes` bytes of FAB data after the FAB header.
+fs::path amrexPlotfile(const std::string& name, const std::string& box, const std::string& nvars = "1",
+                       size_t dataBytes = 80) {
+  const fs::path dir = fresh(name) / "plt";
+  fs::create_directories(dir / "Level_0");
+  std::ofstream(dir / "Header") << "HyperCLaw-V1.1\n" << nvars << "\nrho\n3\n0\n0\n0 0 0\n1 1 1\n\n" << box
+                                << "\n0\n1 1 1\n0\n0\n0 1 0\n0\n0 1\n0 1\n0 1\nLevel_0/Cell\n";
+  std::ofstream(dir / "Level_0" / "Cell_H") << "1\n0\n1\n0\n(1 0\n" << box << "\n)\n1\nFabOnDisk: Cell_D_00000 0\n";
+  std::ofstream d(dir / "Level_0" / "Cell_D_00000", std::ios::binary);
+  d << "FAB ((8, (64 11 52 0 1 12 0 1023)),(8, (8 7 6 5 4 3 2 1)))" << box << " 1\n" << std::string(dataBytes, '\0');
+  return dir;
+}
+
+/// A vtkOverlappingAMR file with one level-0 DataSet of cells 0..n-1 per axis and a tiny piece.
+fs::path vtkHierarchy(const std::string& name, long n) {
+  const fs::path dir = fresh(name);
+  std::ofstream(dir / "data.vthb") << "<VTKFile type=\"vtkOverlappingAMR\" version=\"1.1\">\n"
+                                   << "<vtkOverlappingAMR origin=\"0 0 0\" grid_description=\"XYZ\">\n"
+                                   << "<Block level=\"0\" spacing=\"1 1 1\">\n<DataSet index=\"0\" amr_box=\"0 " << n - 1
+                                   << " 0 " << n - 1 << " 0 " << n - 1 << "\" file=\"p.vti\"/>\n"
+                                   << "</Block>\n</vtkOverlappingAMR>\n</VTKFile>\n";
+  std::ofstream(dir / "p.vti") << "<VTKFile type=\"ImageData\" version=\"1.0\" header_type=\"UInt32\">\n"
+                               << "<ImageData WholeExtent=\"0 " << n << " 0 " << n << " 0 " << n << "\">\n"
+                               << "<Piece Extent=\"0 " << n << " 0 " << n << " 0 " << n << "\">\n<CellData>\n"
+                               << "<DataArray type=\"Float32\" Name=\"rho\" format=\"binary\">AAAAAA==</DataArray>\n"
+                               << "</CellData>\n</Piece>\n</ImageData>\n</VTKFile>\n";
+  return dir / "data.vthb";
+}
+
+/// An Enzo output whose one grid holds `n`^3 active cells; its Density dataset is `stored`^3
+/// and written only when `write` (otherwise it is declared without storage).
+fs::path enzoOutput(const std::string& name, int n, hsize_t stored, bool write) {
+  const fs::path dir = fresh(name);
+  std::ofstream(dir / "DD0001") << "TopGridRank = 3\nDomainLeftEdge = 0 0 0\nDomainRightEdge = 1 1 1\n";
+  std::ofstream(dir / "DD0001.hierarchy") << "Grid = 1\nGridRank = 3\nGridDimension = " << n << " " << n << " " << n
+                                          << "\nGridStartIndex = 0 0 0\nGridEndIndex = " << n - 1 << " " << n - 1 << " "
+                                          << n - 1 << "\nGridLeftEdge = 0 0 0\nGridRightEdge = 1 1 1\n"
+                                          << "NumberOfBaryonFields = 1\nBaryonFileName = DD0001.cpu0000\n";
+  const std::string data = (dir / "DD0001.cpu0000").string();
+  const std::vector<hsize_t> dims{stored, stored, stored};
+  {
+    h5w::Writer w(data);
+    w.group("/Grid00000001");
+    if (write) w.doubles("/Grid00000001/Density", dims, std::vector<double>(size_t(stored * stored * stored), 1.0));
+  }
+  if (!write) {
+    // Declared, chunked, never written: libhdf5 would return fill values for all of it.
+    const hid_t file = H5Fopen(data.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    const hid_t space = H5Screate_simple(3, dims.data(), nullptr);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    const hsize_t chunk[3] = {64, 64, 64};
+    H5Pset_chunk(dcpl, 3, chunk);
+    H5Dclose(H5Dcreate2(file, "/Grid00000001/Density", H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT));
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Fclose(file);
+  }
+  return dir / "DD0001";
+}
+
+} // namespace
+
+TEST(Bounds, AmrexBoxOfTwoToThe30CellsWithoutData) {
+  expectRefused(amrexPlotfile("amrex-huge", "((0,0,0) (1023,1023,1023) (0,0,0))"),
+                {"Cell_D_00000", "FAB of 1024x1024x1024 cells", "bytes are present"});
+}
+
+TEST(Bounds, AmrexNumbersOutOfRangeBeforeConversion) {
+  expectRefused(amrexPlotfile("amrex-corner", "((0,0,0) (3e102,3,3) (0,0,0))"),
+                {"Header", "line 10", "box corner is 3e+102", "not an integer"});
+  expectRefused(amrexPlotfile("amrex-nvars", "((0,0,0) (3,3,3) (0,0,0))", "1.3e15"),
+                {"Header", "line 2", "variable count is 1.3e+15"});
+}
+
+TEST(Bounds, VtkExtentsOf1600And100000CubedWithoutData) {
+  expectRefused(vtkHierarchy("vtk-1600", 1600), {"p.vti", "1600x1600x1600 cells", "too few"});
+  expectRefused(vtkHierarchy("vtk-100000", 100000), {"data.vthb", "level 0 DataSet 0", "too large"});
+}
+
+TEST(Bounds, EnzoGridOf2048CubedWithoutData) {
+  expectRefused(enzoOutput("enzo-shape", 2048, 4, true), {"DD0001.cpu0000", "Grid00000001/Density", "shape 4x4x4"});
+  expectRefused(enzoOutput("enzo-unwritten", 2048, 2048, false),
+                {"DD0001.cpu0000", "Grid00000001/Density", "declares 8589934592 values", "bytes are present"});
+}
+
+TEST(Bounds, GridsLineOf1000CubedCells) {
+  const fs::path path = fresh("grids") / "big.grids";
+  std::ofstream(path) << "0 0 0 1000 1000 1000 0 1.0\n";
+  expectRefused(path, {"big.grids", "line 1", "1000x1000x1000", "at most"});
+}
