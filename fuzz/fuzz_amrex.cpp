@@ -1,6 +1,6 @@
 // libFuzzer entry for the AMReX plotfile reader: the input holds the Header, a level's Cell_H
 // and its FAB data file (Level_0/Cell_D_00000), cut at "--8<--" lines; the plotfile is read
-// whole and by field list.
+// whole and by field list, and its fields' ranges from the Cell_H min/max tables.
 #include "fuzz_files.h"
 
 #include "exabricks/core/error.h"
@@ -13,7 +13,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::write("plt/Level_0/Cell_H", p[1]);
   fuzz::write("plt/Level_0/Cell_D_00000", p[2]);
   try {
-    exa::listAmrexFields(dir);
+    for (const std::string& name : exa::listAmrexFields(dir)) exa::amrexFieldRange(dir, name);
     const exa::CellSet s = exa::readAmrex(dir);
     if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
   } catch (const exa::Error&) {

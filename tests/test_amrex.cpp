@@ -296,3 +296,25 @@ TEST(Amrex, BadPlotfilesAreRejectedClearly) {
     EXPECT_NE(e.find("not supported"), std::string::npos) << e;
   }
 }
+
+TEST(Amrex, FieldRangesFromMetadataHoldTheData) {
+  for (const char* sub : {"amrex/advection_3d/plt_small", "amrex/advection_3d/plt_drop", "amrex/pelelm_3lev_3d/example_plt_3d"}) {
+    const fs::path dir = sharedData() / sub;
+    if (!fs::exists(dir)) continue;
+    for (const std::string& name : listAmrexFields(dir.string())) {
+      const std::optional<range1f> meta = fieldRangeFromMetadata(dir.string(), name);
+      ASSERT_TRUE(meta.has_value()) << sub << " " << name;
+      const CellSet cells = readAmrex(dir.string(), {name});
+      range1f data;
+      for (float v : cells.fields[0].values) data.extend(v);
+      // The tables cover the boxes finer levels cover too (averages of the finer values), so the
+      // range holds the leaves' range and, for these files, equals it to float precision.
+      const float tol = 1e-6f * std::max(std::abs(data.lower), std::abs(data.upper)) + 1e-30f;
+      EXPECT_LE(meta->lower, data.lower + tol) << sub << " " << name;
+      EXPECT_GE(meta->upper, data.upper - tol) << sub << " " << name;
+      EXPECT_NEAR(meta->lower, data.lower, 1e-3 * (data.upper - data.lower) + tol) << sub << " " << name;
+      EXPECT_NEAR(meta->upper, data.upper, 1e-3 * (data.upper - data.lower) + tol) << sub << " " << name;
+    }
+  }
+  EXPECT_FALSE(fieldRangeFromMetadata(sharedData().string() + "/amrex/advection_3d/plt_drop", "no-such-field").has_value());
+}

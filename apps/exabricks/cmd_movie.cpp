@@ -80,10 +80,18 @@ Step loadStep(const std::string& path, const LoadOptions& lo, const Step* previo
   return step;
 }
 
-/// The first layer's field range over every step, reading only that field.
-range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const std::string& field) {
+/// The first layer's field range over every step: from metadata where the format records ranges,
+/// else reading only that field.
+range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const std::string& field,
+                    const std::string& defaultField, int& fromMetadata) {
   range1f all;
+  fromMetadata = 0;
   for (const std::string& path : paths) {
+    if (const std::optional<range1f> r = fieldRangeFromMetadata(path, field.empty() ? defaultField : field)) {
+      all.extend(*r);
+      ++fromMetadata;
+      continue;
+    }
     if (detectInput(path) == InputKind::Model) {
       const Model m = loadModel(path, lo);
       for (float v : m.fieldValues.at(size_t(m.requireField(field)))) all.extend(v);
@@ -214,9 +222,13 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   const Model& model0 = *firstStep.model;
   applyDataDefaults(ro, cmd, doc.scene, model0, firstStep.info);
   if (rangeMode == RangeMode::Global && steps > 1) {
-    const range1f r = seriesRange(paths, lo, doc.scene.layers[0].field);
+    int fromMetadata = 0;
+    const std::string& name = doc.scene.layers[0].field;
+    const range1f r = seriesRange(paths, lo, name, model0.fieldNames[size_t(model0.requireField(name))], fromMetadata);
     doc.scene.layers[0].tf.valueRange = r;
-    logNote(strCat("colour range over all ", steps, " steps: [", r.lower, ", ", r.upper, "] (--range per-step or LOW,HIGH to choose)"));
+    logNote(strCat("colour range over all ", steps, " steps: [", r.lower, ", ", r.upper, "]",
+                   fromMetadata ? strCat(" (", fromMetadata, " from metadata)") : std::string(),
+                   "; --range per-step or LOW,HIGH to choose"));
   } else if (rangeMode == RangeMode::PerStep && !given("--range")) {
     doc.scene.layers[0].tf.valueRange = range1f();
   }

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace exa {
@@ -43,6 +44,7 @@ public:
     return l;
   }
   size_t lineNo() const { return lineNo_; }
+  bool atEnd() const { return pos_ >= text_.size(); }
   [[noreturn]] void bad(const std::string& what) const { fail(path_, ": line ", lineNo_, ": ", what); }
   /// An integer within [lo, hi] from a number of the current line; `what` names it.
   int64_t integer(double v, int64_t lo, int64_t hi, const char* what) const {
@@ -190,7 +192,9 @@ Plotfile readHeader(const std::string& dir) {
   return pf;
 }
 
-LevelData readCellHeader(const Plotfile& pf, int level) {
+/// Reads a level's Cell_H; with `ranges`, also the per-FAB minima and maxima of every component
+/// that follow the FAB list (one range per component; empty when the file has none).
+LevelData readCellHeader(const Plotfile& pf, int level, std::vector<range1f>* ranges = nullptr) {
   const fs::path prefix = fs::path(pf.dir) / pf.levelPrefixes[size_t(level)];
   TextReader r(prefix.string() + "_H");
   LevelData ld;
@@ -218,6 +222,26 @@ LevelData readCellHeader(const Plotfile& pf, int level) {
     if (!(in >> tag >> file >> offset) || tag != "FabOnDisk:") r.bad("expected 'FabOnDisk: FILE OFFSET'");
     ld.files.push_back((prefix.parent_path() / file).string());
     ld.offsets.push_back(offset);
+  }
+  if (ranges) {
+    // A table that is absent or malformed only means that the data must be read for the range.
+    try {
+      ranges->assign(size_t(ncomp), range1f());
+      for (int pass = 0; pass < 2; ++pass) { // minima, then maxima
+        std::string line;
+        while (!r.atEnd() && line.empty()) line = r.line();
+        if (line.empty()) throw Error("no min/max table");
+        const std::vector<double> counts = numbers(r, line, 2, "the FAB and component counts");
+        if (counts[0] != double(nfabs) || counts[1] != ncomp) r.bad("the min/max table does not match the FABs");
+        for (int64_t b = 0; b < nfabs; ++b) {
+          const std::vector<double> v = numbers(r, r.line(), size_t(ncomp), "per-FAB extremes");
+          for (size_t k = 0; k < ranges->size(); ++k)
+            if (std::isfinite(v[k])) (*ranges)[k].extend(float(v[k]));
+        }
+      }
+    } catch (const Error&) {
+      ranges->clear();
+    }
   }
   return ld;
 }
@@ -301,6 +325,21 @@ bool isAmrexPlotfile(const std::string& path) {
 }
 
 std::vector<std::string> listAmrexFields(const std::string& path) { return readHeader(path).names; }
+
+std::optional<range1f> amrexFieldRange(const std::string& path, const std::string& field) {
+  const Plotfile pf = readHeader(path);
+  const auto it = std::find(pf.names.begin(), pf.names.end(), field);
+  if (it == pf.names.end()) return std::nullopt;
+  const size_t component = size_t(it - pf.names.begin());
+  range1f all;
+  for (int l = 0; l <= pf.finestLevel; ++l) {
+    std::vector<range1f> ranges;
+    readCellHeader(pf, l, &ranges);
+    if (ranges.size() <= component) return std::nullopt; // no table: the data must be read
+    if (!ranges[component].empty()) all.extend(ranges[component]);
+  }
+  return all;
+}
 
 CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted, const box3i& box) {
   const Plotfile pf = readHeader(path);

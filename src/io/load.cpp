@@ -47,7 +47,7 @@ bool probesByName(const FormatReader& r) { return r.kind == InputKind::Native ||
 const std::vector<FormatReader>& formatReaders() {
   static const std::vector<FormatReader> readers = {
       {InputKind::Amrex, "AMReX plotfile", isAmrexPlotfile, listAmrexFields,
-       [](const std::string& p, const ReadRequest& r) { return readAmrex(p, r.fields, r.box); }},
+       [](const std::string& p, const ReadRequest& r) { return readAmrex(p, r.fields, r.box); }, amrexFieldRange},
       {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
        [](const std::string& p, const ReadRequest& r) { return readChombo(p, r.fields); }},
       {InputKind::Flash, "FLASH HDF5 file", isFlashFile, listFlashFields,
@@ -141,6 +141,12 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
   } catch (const Error& e) {
     throw Error(strCat(path.empty() ? kDefaultDatasetName : path, ": ", e.what()));
   }
+}
+
+std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std::string& field) {
+  const FormatReader* reader = findReader(path);
+  if (!reader || !reader->fieldRange) return std::nullopt;
+  return reader->fieldRange(path, field);
 }
 
 std::vector<std::string> listFields(const std::string& path) {

@@ -5,6 +5,7 @@
 
 #include "exabricks/amr/cells.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -15,6 +16,11 @@ bool isAmrexPlotfile(const std::string& path);
 
 /// Names of the plotfile's variables.
 std::vector<std::string> listAmrexFields(const std::string& path);
+
+/// The range of a field from the plotfile's metadata alone (the per-FAB minima and maxima of the
+/// Cell_H files, which cover every box including the ones finer levels cover); none when a level
+/// has no such table or the field is unknown.
+std::optional<range1f> amrexFieldRange(const std::string& path, const std::string& field);
 
 /// Reads the leaf cells of a plotfile with the requested fields (all when empty). The world
 /// transform maps the finest level's index space onto the physical domain. With a box (finest

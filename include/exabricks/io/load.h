@@ -5,6 +5,7 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/io/reader.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,10 @@ CellSet loadCells(const std::string& path, const LoadOptions& options = {});
 
 /// Reads a model file, or reads cells and builds the model. Errors name the input.
 Model loadModel(const std::string& path, const LoadOptions& options = {});
+
+/// A field's value range from the input's metadata alone, where its format records one (AMReX
+/// plotfiles: the per-box minima and maxima); none otherwise.
+std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std::string& field);
 
 /// Names of the fields an input holds, without building anything.
 std::vector<std::string> listFields(const std::string& path);

@@ -6,6 +6,7 @@
 #include "exabricks/amr/cells.h"
 #include "exabricks/io/raw.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -28,6 +29,9 @@ struct FormatReader {
   bool (*probe)(const std::string& path);                     ///< by content first, by name last
   std::vector<std::string> (*listFields)(const std::string& path);
   CellSet (*read)(const std::string& path, const ReadRequest& request);
+  /// A field's value range from metadata alone, where the format records one (else null, or
+  /// none returned: the data must be read).
+  std::optional<range1f> (*fieldRange)(const std::string& path, const std::string& field) = nullptr;
 };
 
 /// The registered readers, in the order in which inputs are probed.
