@@ -55,3 +55,13 @@ void integrateRaysHost(const DeviceRayInputs& in, const Ray* rays, int count, ve
 }
 
 } // namespace exa
+
+namespace exa {
+
+int integrateRaysDevice(const DeviceRayInputs& in, const Ray* rays, int count, vec4f* colors, float* isoT) {
+  const int block = 128;
+  integrateRaysKernel<<<(count + block - 1) / block, block>>>(in, rays, count, colors, isoT);
+  return int(cudaDeviceSynchronize());
+}
+
+} // namespace exa

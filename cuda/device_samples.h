@@ -23,3 +23,11 @@ struct DeviceRayInputs {
 void integrateRaysHost(const DeviceRayInputs& in, const Ray* rays, int count, vec4f* colors, float* isoT);
 
 } // namespace exa
+
+namespace exa {
+
+/// The same rays on the device: `in` and the arrays point to device memory; launches the kernel
+/// and waits for it. Returns the CUDA error code (0 for success).
+int integrateRaysDevice(const DeviceRayInputs& in, const Ray* rays, int count, vec4f* colors, float* isoT);
+
+} // namespace exa

@@ -58,11 +58,7 @@ struct LayerTable {
     if (tf.valueRange.empty() && size_t(field) < dataset.valueRanges.size())
       tf.valueRange = dataset.valueRanges[size_t(field)];
     if (tf.opacityScale == 0.f) tf.opacityScale = dataset.defaultOpacityScale;
-    table.resize(kTfTableSize);
-    for (int i = 0; i < kTfTableSize; ++i) {
-      const vec4f c = tf.atNormalized(float(i) / float(kTfTableSize - 1));
-      table[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
-    }
+    table = tabulateTransferFunction(tf);
     const range1f r = tf.valueRange;
     t.entries = table.data();
     t.range = r;

@@ -483,6 +483,15 @@ TransferFunction defaultTransferFunction(const std::string& colorMap) {
   return tf;
 }
 
+std::vector<vec4f> tabulateTransferFunction(const TransferFunction& tf) {
+  std::vector<vec4f> table(kTfTableSize);
+  for (int i = 0; i < kTfTableSize; ++i) {
+    const vec4f c = tf.atNormalized(float(i) / float(kTfTableSize - 1));
+    table[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
+  }
+  return table;
+}
+
 TransferFunction readTransferFunction(const std::string& path, bool* isPreset) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot open: is a directory");

@@ -51,6 +51,11 @@ public:
   friend bool operator==(const TransferFunction&, const TransferFunction&) = default;
 };
 
+/// The table the ray marcher looks opacity and colour up in (render/sample_math.h): kTfTableSize
+/// entries over the normalised value, colour in xyz and log2(1 - alpha) in w (so that opacity
+/// correction is one exp2), alpha capped just below one.
+std::vector<vec4f> tabulateTransferFunction(const TransferFunction& tf);
+
 /// The default of a scene: the named built-in colour map, a linear opacity ramp, the field's
 /// range and the dataset's default opacity scale (opacityScale 0).
 TransferFunction defaultTransferFunction(const std::string& colorMap = "viridis");
