@@ -1,6 +1,7 @@
 #include "scene_options.h"
 
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 #include "exabricks/io/mesh.h"
 #include "exabricks/io/scene_file.h"
 #include "exabricks/render/defaults.h"
@@ -34,14 +35,8 @@ std::vector<double> parseNumbers(const std::string& text, const char* what) {
   std::vector<double> out;
   std::istringstream in(text);
   for (std::string part; std::getline(in, part, ',');) {
-    size_t used = 0;
     double v = 0;
-    try {
-      v = std::stod(part, &used);
-    } catch (...) {
-      used = 0;
-    }
-    if (used == 0 || used != part.size() || !std::isfinite(v)) failUsage(what, ": '", part, "' is not a number");
+    if (!parseFiniteNumber(part, v)) failUsage(what, ": '", part, "' is not a number");
     out.push_back(v);
   }
   return out;

@@ -3,6 +3,7 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 #include "exabricks/io/image.h"
 #include "exabricks/render/transfer_function.h"
 
@@ -67,15 +68,8 @@ json parseBody(const httplib::Request& req) {
 
 double numberParam(const httplib::Request& req, const char* name, double fallback) {
   if (!req.has_param(name)) return fallback;
-  const std::string text = req.get_param_value(name);
-  size_t used = 0;
   double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (...) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size() || !std::isfinite(v)) reject(400, strCat("parameter '", name, "' is not a number"));
+  if (!parseFiniteNumber(req.get_param_value(name), v)) reject(400, strCat("parameter '", name, "' is not a number"));
   return v;
 }
 
