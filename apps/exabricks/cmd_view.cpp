@@ -7,7 +7,7 @@
 #include "exabricks/render/renderer.h"
 
 #ifdef EXABRICKS_HAVE_VIEWER
-#include "exabricks/view/server.h"
+#include "view/server.h"
 
 #include <csignal>
 #include <cstdio>

@@ -1,4 +1,4 @@
-#include "exabricks/view/server.h"
+#include "server.h"
 
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"

@@ -4,7 +4,7 @@
 
 #include "exabricks/core/image.h"
 #include "exabricks/render/renderer.h"
-#include "exabricks/view/server.h"
+#include "server.h"
 
 #include <atomic>
 #include <condition_variable>
