@@ -89,3 +89,24 @@ TEST(Flash, BadFilesAreRejectedClearly) {
   fs::resize_file(f.file, fs::file_size(f.file) * 2 / 3);
   expectIn(loadError(f.file.string()), {"cut", "HDF5"});
 }
+
+TEST(Flash, HugeFixedLengthStringsAreRefusedBeforeReading) {
+  // "unknown names" as two strings of 100000 bytes each: refused by the declared string size.
+  FlashFixture f;
+  f.file = fs::path(EXABRICKS_TEST_TMP) / "flash-strings" / "strings.hdf5";
+  f.write();
+  const hid_t file = H5Fopen(f.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  H5Ldelete(file, "unknown names", H5P_DEFAULT);
+  const hid_t type = H5Tcopy(H5T_C_S1);
+  H5Tset_size(type, 100000);
+  const hsize_t dims[2] = {2, 1};
+  const hid_t space = H5Screate_simple(2, dims, nullptr);
+  const hid_t d = H5Dcreate2(file, "unknown names", type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+  const std::string text(200000, 'd');
+  H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, text.data());
+  H5Dclose(d);
+  H5Sclose(space);
+  H5Tclose(type);
+  H5Fclose(file);
+  expectIn(loadError(f.file.string()), {"strings.hdf5", "unknown names", "strings of 100000 bytes", "at most 65536"});
+}
