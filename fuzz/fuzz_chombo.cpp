@@ -4,65 +4,15 @@
 // (level and component counts, ratios, cell sizes, box tables, offsets). Bytes that make a
 // corrupt HDF5 file exercise libhdf5's own parser, outside this project (docs/reliability.md).
 #include "fuzz_files.h"
+#include "fuzz_hdf5_edit.h"
 
 #include "../tests/chombo_fixture.h"
 
 #include "exabricks/core/error.h"
 #include "exabricks/io/chombo.h"
 
-#include <hdf5.h>
-
-#include <cstring>
-
-namespace {
-
-class Bytes {
-public:
-  Bytes(const uint8_t* data, size_t size) : p_(data), n_(size) {}
-  bool empty() const { return i_ >= n_; }
-  uint8_t byte() { return i_ < n_ ? p_[i_++] : 0; }
-  template <typename T> T value() {
-    T v{};
-    unsigned char b[sizeof(T)] = {};
-    for (unsigned char& c : b) c = byte();
-    std::memcpy(&v, b, sizeof(T));
-    return v;
-  }
-
-private:
-  const uint8_t* p_;
-  size_t n_, i_ = 0;
-};
-
-void setAttr(hid_t file, const std::string& object, const std::string& name, hid_t type, const void* value, hsize_t n) {
-  const hid_t o = H5Oopen(file, object.c_str(), H5P_DEFAULT);
-  if (o < 0) return;
-  H5Adelete(o, name.c_str());
-  const hid_t space = H5Screate_simple(1, &n, nullptr);
-  const hid_t a = H5Acreate2(o, name.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT);
-  if (a >= 0) {
-    H5Awrite(a, type, value);
-    H5Aclose(a);
-  }
-  H5Sclose(space);
-  H5Oclose(o);
-}
-
-void setDataset(hid_t file, const std::string& path, hid_t type, const void* values, hsize_t n) {
-  H5Ldelete(file, path.c_str(), H5P_DEFAULT);
-  const hid_t space = H5Screate_simple(1, &n, nullptr);
-  const hid_t d = H5Dcreate2(file, path.c_str(), type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
-  if (d >= 0) {
-    if (n) H5Dwrite(d, type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values);
-    H5Dclose(d);
-  }
-  H5Sclose(space);
-}
-
-} // namespace
-
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  Bytes in(data, size);
+  fuzz::Bytes in(data, size);
   chombo_fixture::ChomboFixture f;
   f.file = fuzz::folder() / "c.hdf5";
   const uint8_t flags = in.byte();
@@ -98,40 +48,40 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     switch (op % 8) {
     case 0: {
       const int v = in.value<int32_t>();
-      setAttr(file, "/", "num_levels", H5T_NATIVE_INT, &v, 1);
+      fuzz::setAttr(file, "/", "num_levels", H5T_NATIVE_INT, &v, 1);
       break;
     }
     case 1: {
       const int v = in.value<int32_t>();
-      setAttr(file, "/", "num_components", H5T_NATIVE_INT, &v, 1);
+      fuzz::setAttr(file, "/", "num_components", H5T_NATIVE_INT, &v, 1);
       break;
     }
     case 2: {
       const int v = in.value<int32_t>();
-      setAttr(file, level, "ref_ratio", H5T_NATIVE_INT, &v, 1);
+      fuzz::setAttr(file, level, "ref_ratio", H5T_NATIVE_INT, &v, 1);
       break;
     }
     case 3: {
       const double v = in.value<double>();
-      setAttr(file, level, "dx", H5T_NATIVE_DOUBLE, &v, 1);
+      fuzz::setAttr(file, level, "dx", H5T_NATIVE_DOUBLE, &v, 1);
       break;
     }
     case 4: {
       std::vector<long long> v(in.byte() % 6);
       for (long long& x : v) x = in.value<int32_t>();
-      setDataset(file, level + "/data:offsets=0", H5T_NATIVE_LLONG, v.data(), v.size());
+      fuzz::setDataset(file, level + "/data:offsets=0", H5T_NATIVE_LLONG, v.data(), v.size());
       break;
     }
     case 5: {
       std::vector<int> v((in.byte() % 4) * 6);
       for (int& x : v) x = int(int8_t(in.byte()));
-      setDataset(file, level + "/boxes", H5T_NATIVE_INT, v.data(), v.size());
+      fuzz::setDataset(file, level + "/boxes", H5T_NATIVE_INT, v.data(), v.size());
       break;
     }
     case 6: {
       std::vector<double> v(in.byte());
       for (double& x : v) x = double(int8_t(in.byte()));
-      setDataset(file, level + "/data:datatype=0", H5T_NATIVE_DOUBLE, v.data(), v.size());
+      fuzz::setDataset(file, level + "/data:datatype=0", H5T_NATIVE_DOUBLE, v.data(), v.size());
       break;
     }
     default:

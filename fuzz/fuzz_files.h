@@ -6,6 +6,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -52,5 +53,24 @@ inline std::string write(const std::string& name, const std::string& bytes) {
   std::ofstream(p, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
   return p.string();
 }
+
+/// The input as a stream of values for structure-aware targets (zeros past its end).
+class Bytes {
+public:
+  Bytes(const uint8_t* data, size_t size) : p_(data), n_(size) {}
+  bool empty() const { return i_ >= n_; }
+  uint8_t byte() { return i_ < n_ ? p_[i_++] : 0; }
+  template <typename T> T value() {
+    T v{};
+    unsigned char b[sizeof(T)] = {};
+    for (unsigned char& c : b) c = byte();
+    std::memcpy(&v, b, sizeof(T));
+    return v;
+  }
+
+private:
+  const uint8_t* p_;
+  size_t n_, i_ = 0;
+};
 
 } // namespace fuzz

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Builds every libFuzzer target (Clang) and runs each for SECONDS on a copy of its seed corpus
-# (libFuzzer adds what it finds to the folder it is given), with its dictionary where there is
-# one. Prints one summary line per target (executions, coverage, features, corpus size) and
+# Builds every libFuzzer target (Clang) and runs each for SECONDS on WORK/NAME/corpus: a copy of
+# its seed corpus, plus what earlier runs into the same WORK found (libFuzzer adds to the folder
+# it is given, never to fuzz/corpus), with its dictionary where there is one. Prints one summary line per target (executions, coverage, features, corpus size) and
 # exits non-zero when any target finds a crash, a leak, a timeout or an out-of-memory input;
 # the reproducer is left in WORK/NAME/ (crash-*, leak-*, timeout-*, oom-*).
 #   fuzz/run_all.sh SECONDS [BUILD_DIR] [WORK_DIR]
@@ -10,7 +10,7 @@ seconds=${1:?usage: fuzz/run_all.sh SECONDS [BUILD_DIR] [WORK_DIR]}
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${2:-$root/build-fuzz}
 work=${3:-$build/fuzz-runs}
-targets=(fuzz_amrex fuzz_vtk fuzz_enzo fuzz_chombo fuzz_native fuzz_raw fuzz_model fuzz_scene fuzz_mesh)
+targets=(fuzz_amrex fuzz_vtk fuzz_enzo fuzz_chombo fuzz_flash fuzz_native fuzz_raw fuzz_model fuzz_scene fuzz_mesh)
 
 cxx=$(command -v clang++ || command -v clang++-14) || { echo "fuzz/run_all.sh needs clang++ (clang-14)" >&2; exit 1; }
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER="$cxx" -DEXABRICKS_BUILD_FUZZERS=ON \
@@ -21,8 +21,8 @@ status=0
 for t in "${targets[@]}"; do
   name=${t#fuzz_}
   dir=$work/$name
-  rm -rf "$dir"
   mkdir -p "$dir/corpus"
+  rm -f "$dir"/log.txt "$dir"/crash-* "$dir"/leak-* "$dir"/timeout-* "$dir"/oom-* "$dir"/slow-unit-*
   [ -d "$root/fuzz/corpus/$name" ] && cp "$root/fuzz/corpus/$name"/* "$dir/corpus/"
   args=(-max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -malloc_limit_mb=1024 -max_len=65536
         -print_final_stats=1 -artifact_prefix="$dir/")

@@ -78,8 +78,8 @@ struct ChomboFixture {
               }
         offsets.push_back((long long)data.size());
       }
-      if (nanValue && l == 2) data[5] = std::nan("");
-      if (shortData && l == 1) data.resize(data.size() - 10);
+      if (nanValue && l == 2 && data.size() > 5) data[5] = std::nan("");
+      if (shortData && l == 1 && data.size() >= 10) data.resize(data.size() - 10);
       w.intCompound(g + "/boxes", {"lo_i", "lo_j", "lo_k", "hi_i", "hi_j", "hi_k"}, boxes);
       w.int64s(g + "/data:offsets=0", {offsets.size()}, offsets);
       w.doubles(g + "/data:datatype=0", {data.size()}, data, float32);

@@ -96,3 +96,26 @@ TEST(Chombo, BadFilesAreRejectedClearly) {
   fs::resize_file(f.file, fs::file_size(f.file) / 2);
   expectIn(loadError(f.file.string()), {"cut.3d.hdf5"});
 }
+
+TEST(Chombo, UnwrittenDatasetsAreRefusedBeforeReading) {
+  const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "chombo-sizes";
+  ChomboFixture f;
+  f.file = dir / "unwritten.3d.hdf5";
+  f.write();
+  {
+    // level_2's data declared 2^30 values long, chunked and never written.
+    const hid_t file = H5Fopen(f.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    H5Ldelete(file, "/level_2/data:datatype=0", H5P_DEFAULT);
+    const hsize_t n = hsize_t(1) << 30, chunk = 4096;
+    const hid_t space = H5Screate_simple(1, &n, nullptr);
+    const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_chunk(dcpl, 1, &chunk);
+    H5Dclose(H5Dcreate2(file, "/level_2/data:datatype=0", H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT));
+    H5Pclose(dcpl);
+    H5Sclose(space);
+    H5Fclose(file);
+  }
+  const std::string m = loadError(f.file.string());
+  EXPECT_TRUE(m.find("bytes are present") != std::string::npos || m.find("values") != std::string::npos) << m;
+  expectIn(m, {"unwritten.3d.hdf5", "level_2"});
+}

@@ -360,7 +360,7 @@ TEST(VtkAmr, CompressionHeadersAsVtkWritesThem) {
   expectIn(loadError(write(u32(1) + u32(0) + u32(0) + u32(uint32_t(packed.size())), packed)),
            {"p.vti", "array 'rho'", "block size 0"});
   expectIn(loadError(write(u32(1) + u32(32768) + u32(96) + u32(1u << 30), packed)),
-           {"p.vti", "array 'rho'", "compressed block", "bytes are present"});
+           {"p.vti", "array 'rho'", "compressed blocks", "bytes are present"});
   expectIn(loadError(write(u32(4000000) + u32(1) + u32(1), "")), {"p.vti", "array 'rho'", "corrupt compression header"});
   expectIn(loadError(write(u32(3) + u32(32) + u32(32) + u32(10) + u32(10) + u32(10), std::string(30, 'x'))),
            {"p.vti", "array 'rho'", "zlib block 0", "corrupt data"});

@@ -1,5 +1,6 @@
 #include "exabricks/io/chombo.h"
 
+#include "checked.h"
 #include "hdf5_file.h"
 #include "patches.h"
 
@@ -96,10 +97,9 @@ ChomboHeader readHeader(const h5::File& f) {
       const double* v = boxes.values.data() + b * 6;
       vec3l lo, hi;
       for (int a = 0; a < 3; ++a) {
-        if (!(std::abs(v[order[a]]) <= double(kLatticeLimit)) || !(std::abs(v[order[a + 3]]) <= double(kLatticeLimit)))
-          f.bad(lv.group + "/boxes", strCat("box ", b, " lies outside the supported index range"));
-        lo[a] = int64_t(v[order[a]]);
-        hi[a] = int64_t(v[order[a + 3]]);
+        if (!io::integerIn(v[order[a]], -kLatticeLimit, kLatticeLimit, lo[a]) ||
+            !io::integerIn(v[order[a + 3]], -kLatticeLimit, kLatticeLimit, hi[a]))
+          f.bad(lv.group + "/boxes", strCat("box ", b, " has corners that are not integers in the supported index range"));
       }
       if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z) f.bad(lv.group + "/boxes", strCat("box ", b, " is empty"));
       lv.boxes.push_back({lo, hi - lo + vec3l(1), 1});

@@ -177,6 +177,7 @@ bool isModelFile(const std::string& path) {
 void writeModel(const Model& m, const std::string& path) {
   removeStaleTemporaries(path);
   const std::string tmp = temporaryPath(path, 0);
+  const PendingTemporary pending(tmp); // removed by an interrupt before the rename
   std::FILE* f = std::fopen(tmp.c_str(), "wb");
   if (!f) fail(path, ": cannot write: ", std::strerror(errno));
   try {

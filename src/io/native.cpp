@@ -147,6 +147,9 @@ void removeStaleTemporaries(const std::string& target) {
   }
 }
 
+PendingTemporary::PendingTemporary(const std::string& path) : slot_(claimPending(path)) {}
+PendingTemporary::~PendingTemporary() { releasePending(slot_); }
+
 void removePendingTemporaries() {
   for (PendingSlot& s : gPending)
     if (s.used.load()) ::unlink(s.path);

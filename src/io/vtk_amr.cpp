@@ -242,9 +242,11 @@ std::string readBlock(const std::string& path, const std::string& what, BlockSou
   const uint64_t blocks = header(), blockSize = header(), lastSize = header();
   const std::string where = strCat(path, ": ", what);
   if (blocks > 0 && blockSize == 0) fail(where, ": corrupt compression header (block size 0)");
-  if (lastSize > blockSize) fail(where, ": corrupt compression header (last block of ", lastSize, " bytes, block size ", blockSize, ")");
+  if (lastSize > blockSize)
+    fail(where, ": corrupt compression header (last block of ", lastSize, " bytes, block size ", blockSize, ")");
   if (blocks > expectedBytes / std::max<uint64_t>(blockSize, 1) + 1)
-    fail(where, ": corrupt compression header (", blocks, " blocks of ", blockSize, " bytes for ", expectedBytes, " bytes)");
+    fail(where, ": corrupt compression header (", blocks, " blocks of ", blockSize, " bytes for ", expectedBytes,
+         " bytes)");
   const uint64_t total = blocks == 0 ? 0 : (blocks - 1) * blockSize + (lastSize == 0 ? blockSize : lastSize);
   if (total != expectedBytes) fail(where, ": compressed data holds ", total, " bytes, expected ", expectedBytes);
   io::requireBytes(blocks, e.headerBytes, src.left(), where + ": compressed block sizes");
@@ -252,10 +254,10 @@ std::string readBlock(const std::string& path, const std::string& what, BlockSou
   uint64_t packedTotal = 0;
   for (uint64_t& s : sizes) {
     s = header();
-    if (s > src.left()) io::requireBytes(s, 1, src.left(), where + ": compressed block");
+    if (s > src.left() - std::min(src.left(), packedTotal)) // packedTotal stays within the bytes left
+      io::requireBytes(packedTotal + std::min(s, UINT64_MAX - packedTotal), 1, src.left(), where + ": compressed blocks");
     packedTotal += s;
   }
-  io::requireBytes(packedTotal, 1, src.left(), where + ": compressed blocks");
   // Inflating never grows a block by more than kMaxInflate: bound the declared size by the
   // bytes present before reserving it.
   uint64_t inflatable = 0;

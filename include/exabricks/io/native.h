@@ -62,6 +62,19 @@ std::string temporaryPath(const std::string& target, size_t index);
 /// it could clean up); every write calls it first.
 void removeStaleTemporaries(const std::string& target);
 
+/// Registers a temporary file for removePendingTemporaries() while it lives, for writes that
+/// stream into their own temporary (model files).
+class PendingTemporary {
+public:
+  explicit PendingTemporary(const std::string& path);
+  ~PendingTemporary();
+  PendingTemporary(const PendingTemporary&) = delete;
+  PendingTemporary& operator=(const PendingTemporary&) = delete;
+
+private:
+  int slot_;
+};
+
 /// Removes every temporary file not yet published; async-signal-safe, for an interrupt handler.
 void removePendingTemporaries();
 
