@@ -5,7 +5,10 @@
 
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <cmath>
+#include <limits>
+#include <random>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -268,4 +271,32 @@ TEST(Image, BadFilesAreNamed) {
   const std::string none = tmpPath("no-such.png");
   EXPECT_NE(errorOf([&] { readPng(none); }).find(none), std::string::npos);
   EXPECT_NE(errorOf([&] { readPfm(none); }).find(none), std::string::npos);
+}
+
+TEST(Image, SrgbBytesWithoutPowEqualTheDirectConversion) {
+  auto direct = [](float c) -> int {
+    const float v = exa::linearToSrgb(c);
+    if (!(v > 0.f)) return 0;
+    if (v >= 1.f) return 255;
+    return int(std::lround(v * 255.f));
+  };
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-0.1f, 1.2f);
+  for (int i = 0; i < 1000000; ++i) {
+    const float c = u(rng);
+    ASSERT_EQ(int(exa::srgbByte(c)), direct(c)) << c;
+  }
+  // At every step of the output: the floats just below and above each boundary.
+  for (int k = 1; k < 256; ++k) {
+    uint32_t lo = 0, hi = std::bit_cast<uint32_t>(1.f);
+    while (hi - lo > 1) {
+      const uint32_t mid = lo + (hi - lo) / 2;
+      (direct(std::bit_cast<float>(mid)) >= k ? hi : lo) = mid;
+    }
+    for (uint32_t b = hi - 3; b <= hi + 3; ++b)
+      ASSERT_EQ(int(exa::srgbByte(std::bit_cast<float>(b))), direct(std::bit_cast<float>(b))) << k;
+  }
+  for (float c : {0.f, -0.f, 1.f, 2.f, std::numeric_limits<float>::infinity(), -1.f,
+                  std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::denorm_min()})
+    EXPECT_EQ(int(exa::srgbByte(c)), direct(c)) << c;
 }

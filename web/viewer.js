@@ -173,6 +173,8 @@ function frameDrawn(header) {
   if (header.request > viewer.drawnRequest) viewer.drawnRequest = header.request;
   $('progress-bar').style.width = header.final || header.draft ? '0' : `${(100 * header.passes) / header.target_passes}%`;
   showStats(header, now);
+  // For scripts that drive the page (tests, benchmarks): one event per frame on screen.
+  window.dispatchEvent(new CustomEvent('exabricks-frame', { detail: header }));
   if (pump.want) sendPending();
 }
 

@@ -10,7 +10,12 @@
 #include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
+#include <array>
+#include <limits>
 #include <bit>
 #include <cctype>
 #include <cmath>
@@ -60,14 +65,38 @@ void appendLittleEndian(std::vector<char>& out, float f) {
 
 } // namespace
 
+unsigned char srgbByte(float linear) {
+  // The byte toByte(linearToSrgb(c)) would give, without a pow per channel: the function is
+  // non-decreasing in c, so the byte is the number of thresholds at or below c, where threshold k
+  // is the smallest float whose byte is k (found once by bisection over the float bit patterns).
+  static const std::array<float, 256> thresholds = [] {
+    std::array<float, 256> t{};
+    t[0] = -std::numeric_limits<float>::infinity();
+    for (int k = 1; k < 256; ++k) {
+      uint32_t lo = 0, hi = std::bit_cast<uint32_t>(1.f); // byte(lo) < k <= byte(hi) = 255
+      while (hi - lo > 1) {
+        const uint32_t mid = lo + (hi - lo) / 2;
+        if (toByte(linearToSrgb(std::bit_cast<float>(mid))) >= k) hi = mid;
+        else lo = mid;
+      }
+      t[size_t(k)] = std::bit_cast<float>(hi);
+    }
+    return t;
+  }();
+  if (!(linear > 0.f)) return 0; // also NaN
+  return (unsigned char)(std::upper_bound(thresholds.begin() + 1, thresholds.end(), linear) - thresholds.begin() - 1);
+}
+
 std::vector<unsigned char> toSrgb8(const Image& image, const vec3f& background) {
   std::vector<unsigned char> bytes(image.pixels.size() * 3);
-  for (size_t i = 0; i < image.pixels.size(); ++i) {
-    const vec3f c = over(image.pixels[i], background);
-    bytes[3 * i] = toByte(linearToSrgb(c.x));
-    bytes[3 * i + 1] = toByte(linearToSrgb(c.y));
-    bytes[3 * i + 2] = toByte(linearToSrgb(c.z));
-  }
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, image.pixels.size(), 4096), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const vec3f c = over(image.pixels[i], background);
+      bytes[3 * i] = srgbByte(c.x);
+      bytes[3 * i + 1] = srgbByte(c.y);
+      bytes[3 * i + 2] = srgbByte(c.z);
+    }
+  });
   return bytes;
 }
 
@@ -83,9 +112,9 @@ std::vector<unsigned char> encodePng(const Image& image, bool keepAlpha, const v
       unsigned char* out = bytes.data() + i * 4;
       const float a = std::isnan(p.w) ? 0.f : std::clamp(p.w, 0.f, 1.f);
       const float inv = a > 0.f ? 1.f / a : 0.f;
-      out[0] = toByte(linearToSrgb(p.x * inv));
-      out[1] = toByte(linearToSrgb(p.y * inv));
-      out[2] = toByte(linearToSrgb(p.z * inv));
+      out[0] = srgbByte(p.x * inv);
+      out[1] = srgbByte(p.y * inv);
+      out[2] = srgbByte(p.z * inv);
       out[3] = toByte(a);
     }
   } else {

@@ -127,8 +127,10 @@ void Session::serve(const Request& request) {
   info.visibleRegions = renderer_.visibleRegions();
   info.regions = model_->regions.regions.size();
 
-  // A draft first: reduced resolution and rate, sized to answer quickly.
-  {
+  // A draft first: reduced resolution and rate, sized to answer quickly; not when the draft on
+  // screen already shows this very scene (the request that ends a drag).
+  const std::string key = writeSceneJson(request.doc);
+  if (request.interactive || key != lastDraft_) {
     Frame draft = frame.preview(draftDivisor_, kDraftRate);
     draft.frameIndex = 0;
     draftBuffer_.resize(draft.width, draft.height);
@@ -142,6 +144,7 @@ void Session::serve(const Request& request) {
     info.samples = s.samples;
     info.samplesPerSecond = s.samplesPerSecond();
     publish(request, draftBuffer_.resolve(), info, false, options_.jpegQuality);
+    lastDraft_ = key;
     // The next draft's divisor: render time scales with the pixel count.
     const double ratio = std::max(s.seconds, 1e-4) / kDraftSeconds;
     if (ratio > 1.4 || ratio < 0.5)

@@ -75,6 +75,7 @@ private:
   std::shared_ptr<const PublishedFrame> latest_;
   Snapshot snapshot_;
   int draftDivisor_ = 4;                ///< adapted so that drafts take about kDraftSeconds
+  std::string lastDraft_;               ///< the scene (JSON) of the last draft published
   FrameBuffer buffer_, draftBuffer_;
   std::thread thread_;
 };

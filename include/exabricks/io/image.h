@@ -12,6 +12,8 @@ namespace exa {
 /// 8-bit sRGB RGB bytes of an image composited over `background` (linear RGB), row by row from
 /// the top: what PNG (without alpha) and JPEG files hold.
 std::vector<unsigned char> toSrgb8(const Image& image, const vec3f& background = vec3f(0.f));
+/// One channel's 8-bit sRGB value, equal to rounding linearToSrgb(linear) * 255 (clamped; NaN 0).
+unsigned char srgbByte(float linear);
 
 /// An 8-bit sRGB PNG in memory, as writePng writes it.
 std::vector<unsigned char> encodePng(const Image& image, bool keepAlpha, const vec3f& background = vec3f(0.f));
