@@ -143,6 +143,10 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     j["iso_regions"] = renderer.isoRegions();
     j["iso_update_seconds"] = update.isoSeconds;
     j["meshes"] = renderer.meshCount();
+    if (parallel::processes().size > 1) {
+      j["processes"] = parallel::processes().size;
+      j["composite_seconds"] = parallel::lastCombineSeconds();
+    }
     std::cout << j.dump(2) << "\n";
   } else if (o.stats) {
     std::printf("frame time       %.4f s (median of %d after one warm-up)\n", stats.seconds, o.frames);

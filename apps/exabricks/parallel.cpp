@@ -3,6 +3,7 @@
 #include "exabricks/core/error.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdlib>
 
 #ifdef EXABRICKS_HAVE_MPI
@@ -112,8 +113,15 @@ bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buff
     pass.frameIndex = k;
     complete = renderer.renderPass(pass, buffer, control);
   }
+  const auto start = std::chrono::steady_clock::now();
   combineOnRoot(buffer);
+  lastCombineSeconds() = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return complete;
+}
+
+double& lastCombineSeconds() {
+  static double seconds = 0;
+  return seconds;
 }
 
 void barrier() {

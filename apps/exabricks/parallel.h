@@ -37,6 +37,9 @@ void combineOnRoot(FrameBuffer& buffer);
 /// each process renders an interleaved share of the tiles and the root receives the whole image.
 bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control = {});
 
+/// Seconds the last renderFrame spent adding the shares on the root (0 in one process).
+double& lastCombineSeconds();
+
 void barrier();
 
 /// Refuses to run a command that has no parallel mode under more than one process.
