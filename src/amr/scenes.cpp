@@ -240,7 +240,6 @@ SceneOptions resolveSceneSize(const SceneOptions& o) {
     scene = makeScene(fewer);
     logInfo(strCat("scene ", o.name, ": using ", maxLevel + 1, " levels for ", o.targetCells, " cells"));
   }
-  const int w = 1 << maxLevel;
 
   // The level map is fixed in unit-cube coordinates, so once blocks are small against the
   // features the count grows with the cube of the base resolution. Measure small bases
