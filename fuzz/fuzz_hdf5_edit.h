@@ -2,6 +2,9 @@
 // stays well-formed HDF5 while its content becomes hostile.
 #pragma once
 
+#include "exabricks/amr/cells.h"
+#include "exabricks/core/error.h"
+
 #include <hdf5.h>
 
 #include <string>
@@ -33,6 +36,18 @@ inline void setDataset(hid_t file, const std::string& path, hid_t type, const vo
     H5Dclose(d);
   }
   H5Sclose(space);
+}
+
+/// Closes the edited file and reads it as the reader does: field list, then every cell; a reader
+/// may refuse it (exa::Error) but never crash, and what it returns is consistent.
+template <typename List, typename Read> void closeAndRead(hid_t file, const std::string& path, List list, Read read) {
+  H5Fclose(file);
+  try {
+    list(path);
+    const exa::CellSet s = read(path);
+    if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
 }
 
 } // namespace fuzz
