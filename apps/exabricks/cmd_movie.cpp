@@ -80,14 +80,14 @@ Step loadStep(const std::string& path, const LoadOptions& lo, const Step* previo
   return step;
 }
 
-/// The first layer's field range over every step: from metadata where the format records ranges,
+/// The range of the named field over every step: from metadata where the format records ranges,
 /// else reading only that field.
-range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const std::string& field,
-                    const std::string& defaultField, int& fromMetadata) {
+range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const std::string& field, int& fromMetadata) {
   range1f all;
   fromMetadata = 0;
+  lo.fields = {field};
   for (const std::string& path : paths) {
-    if (const std::optional<range1f> r = fieldRangeFromMetadata(path, field.empty() ? defaultField : field)) {
+    if (const std::optional<range1f> r = fieldRangeFromMetadata(path, field)) {
       all.extend(*r);
       ++fromMetadata;
       continue;
@@ -97,16 +97,10 @@ range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const
       for (float v : m.fieldValues.at(size_t(m.requireField(field)))) all.extend(v);
       continue;
     }
-    if (!field.empty()) lo.fields = {field};
     const CellSet cells = loadCells(path, lo);
-    int f = field.empty() ? -1 : cells.fieldIndex(field);
-    if (f < 0) {
-      // The default field, chosen as Model::requireField chooses it.
-      Model probe;
-      for (const Field& x : cells.fields) probe.fieldNames.push_back(x.name);
-      f = probe.requireField(field);
-    }
-    for (float v : cells.fields.at(size_t(f)).values) all.extend(v);
+    const int f = cells.fieldIndex(field);
+    if (f < 0) fail(path, ": no field '", field, "' (the series' first step has it)");
+    for (float v : cells.fields[size_t(f)].values) all.extend(v);
   }
   return all;
 }
@@ -223,8 +217,8 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   applyDataDefaults(ro, cmd, doc.scene, model0, firstStep.info);
   if (rangeMode == RangeMode::Global && steps > 1) {
     int fromMetadata = 0;
-    const std::string& name = doc.scene.layers[0].field;
-    const range1f r = seriesRange(paths, lo, name, model0.fieldNames[size_t(model0.requireField(name))], fromMetadata);
+    const std::string& name = model0.fieldNames[size_t(model0.requireField(doc.scene.layers[0].field))];
+    const range1f r = seriesRange(paths, lo, name, fromMetadata);
     doc.scene.layers[0].tf.valueRange = r;
     logNote(strCat("colour range over all ", steps, " steps: [", r.lower, ", ", r.upper, "]",
                    fromMetadata ? strCat(" (", fromMetadata, " from metadata)") : std::string(),
