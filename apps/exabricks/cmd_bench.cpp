@@ -54,14 +54,6 @@ double loadAverage() {
   return l;
 }
 
-/// Peak resident set size of this process so far (VmHWM), bytes; 0 where unknown.
-uint64_t peakRssBytes() {
-  std::ifstream in("/proc/self/status");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("VmHWM:", 0) == 0) return uint64_t(std::stoull(line.substr(6))) * 1024u;
-  return 0;
-}
-
 /// The same colours, transparent over the lower 80 % of the value range.
 TransferFunction hiding80(TransferFunction tf) {
   tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {0.9f, 0.5f}, {1.f, 1.f}};

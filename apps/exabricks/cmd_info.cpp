@@ -1,6 +1,8 @@
 // exabricks info: what a dataset holds and what its bricks and regions look like.
 #include "commands.h"
 #include "common.h"
+#include "distributed.h"
+#include "parallel.h"
 
 #include "exabricks/io/model_info.h"
 
@@ -27,8 +29,80 @@ void printFields(const InfoOptions& o) {
   for (const std::string& n : names) std::printf("%s\n", n.c_str());
 }
 
+/// Under MPI: the data-parallel split, each process's part and what it holds (its box, the cells
+/// it holds with its halo, those it owns, bricks, regions, memory).
+void runParts(const InfoOptions& o) {
+  Timer total;
+  const DataPart part = loadDataPart(o.in.input, o.in.loadOptions(true));
+  const double loadSeconds = total.seconds();
+  const ModelSummary s = summarize(part.model);
+  const uint64_t owned = part.ownedCells();
+  auto gather = [](double v) { return parallel::allGather(v); };
+  const std::vector<double> resident = gather(double(s.cells)), own = gather(double(owned)),
+                            bricks = gather(double(s.bricks)), regions = gather(double(s.regions)),
+                            rss = gather(double(peakRssBytes())), seconds = gather(loadSeconds);
+  std::vector<std::vector<double>> box(6);
+  for (int a = 0; a < 3; ++a) {
+    box[size_t(a)] = gather(double(part.box.lower[a]));
+    box[size_t(a) + 3] = gather(double(part.box.upper[a]));
+  }
+  if (!parallel::processes().root()) return;
+  const int n = parallel::processes().size;
+  const box3i cb = part.whole.cellBounds;
+  // A face on the outside of the data is unbounded: null in JSON, "-" in text.
+  auto face = [](double v) -> nlohmann::json {
+    if (std::abs(v) >= double(kUnboundedLattice)) return nullptr;
+    return int64_t(v);
+  };
+  uint64_t totalOwned = 0;
+  for (double v : own) totalOwned += uint64_t(v);
+  if (o.json) {
+    nlohmann::json ranks = nlohmann::json::array();
+    for (int r = 0; r < n; ++r) {
+      const size_t i = size_t(r);
+      ranks.push_back({{"rank", r},
+                       {"box", {{"lower", {face(box[0][i]), face(box[1][i]), face(box[2][i])}},
+                                {"upper", {face(box[3][i]), face(box[4][i]), face(box[5][i])}}}},
+                       {"resident_cells", uint64_t(resident[i])},
+                       {"owned_cells", uint64_t(own[i])},
+                       {"halo_cells", uint64_t(resident[i]) - uint64_t(own[i])},
+                       {"bricks", uint64_t(bricks[i])},
+                       {"regions", uint64_t(regions[i])},
+                       {"peak_rss_bytes", uint64_t(rss[i])},
+                       {"load_seconds", seconds[i]}});
+    }
+    nlohmann::json j;
+    j["input"] = o.in.name();
+    j["processes"] = n;
+    j["distribute"] = "data";
+    j["cells"] = totalOwned;
+    j["coarsest_level"] = part.coarsestLevel;
+    j["lattice_bounds"] = {{"lower", {cb.lower.x, cb.lower.y, cb.lower.z}}, {"upper", {cb.upper.x, cb.upper.y, cb.upper.z}}};
+    j["ranks"] = ranks;
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("input            %s\n", o.in.name().c_str());
+  std::printf("processes        %d (data-parallel parts: k-d split balanced by cells)\n", n);
+  std::printf("cells            %llu\n", (unsigned long long)totalOwned);
+  std::printf("  %-5s %-44s %12s %12s %12s %10s\n", "rank", "box (lattice, - = unbounded)", "owned", "halo", "bricks",
+              "peak MB");
+  for (int r = 0; r < n; ++r) {
+    const size_t i = size_t(r);
+    auto txt = [&](double v) { return std::abs(v) >= double(kUnboundedLattice) ? std::string("-") : strCat(int64_t(v)); };
+    const std::string b = strCat("[", txt(box[0][i]), " ", txt(box[1][i]), " ", txt(box[2][i]), "] - [", txt(box[3][i]),
+                                 " ", txt(box[4][i]), " ", txt(box[5][i]), "]");
+    std::printf("  %-5d %-44s %12llu %12llu %12llu %10.1f\n", r, b.c_str(), (unsigned long long)own[i],
+                (unsigned long long)(resident[i] - own[i]), (unsigned long long)bricks[i], rss[i] / 1e6);
+  }
+}
+
 void run(const InfoOptions& o) {
-  if (o.fieldsOnly) return printFields(o);
+  if (o.fieldsOnly) {
+    parallel::requireOneProcess("info --fields");
+    return printFields(o);
+  }
+  if (parallel::processes().size > 1) return runParts(o);
   Timer total;
   const Model model = loadModel(o.in.input, o.in.loadOptions(true));
   const double loadSeconds = total.seconds();

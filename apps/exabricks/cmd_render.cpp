@@ -1,6 +1,7 @@
 // exabricks render: volume rendering of an AMR field to PNG or JPEG (and optionally PFM).
 #include "commands.h"
 #include "common.h"
+#include "distributed.h"
 #include "parallel.h"
 #include "scene_options.h"
 
@@ -29,6 +30,7 @@ struct RenderCmdOptions {
   bool json = false;
   int frames = 1;
   std::string writeScene;
+  std::string distribute = "image";
 };
 
 /// The image format the output's extension names: PNG (also without an extension, as for a
@@ -49,33 +51,46 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   Scene& scene = doc.scene;
   Frame& frame = doc.frame;
 
+  if (o.distribute != "image" && o.distribute != "data")
+    failUsage("--distribute must be image or data, not '", o.distribute, "'");
+  const bool dataParallel = o.distribute == "data";
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields = neededFields(scene);
-  // Under MPI every process holds the whole model (image-parallel); if one cannot read it, all
-  // of them stop with an error instead of waiting for it.
+  // Image-parallel (and one process): every process holds the whole model. Data-parallel: each
+  // holds its part and the halo. If one process cannot read its data, all of them stop with an
+  // error instead of waiting for it.
   std::optional<Model> loaded;
-  std::string loadError;
-  try {
-    loaded.emplace(loadModel(doc.input, lo));
-  } catch (const std::exception& e) {
-    loadError = e.what();
+  std::optional<DataPart> part;
+  if (dataParallel) {
+    part.emplace(loadDataPart(doc.input, lo));
+  } else {
+    std::string loadError;
+    try {
+      loaded.emplace(loadModel(doc.input, lo));
+    } catch (const std::exception& e) {
+      loadError = e.what();
+    }
+    if (!parallel::everyone(loadError.empty()))
+      fail(loadError.empty() ? "another process could not read the input (its message names the problem)" : loadError);
   }
-  if (!parallel::everyone(loadError.empty()))
-    fail(loadError.empty() ? "another process could not read the input (its message names the problem)" : loadError);
-  const Model& model = *loaded;
+  const Model& model = part ? part->model : *loaded;
+  const WholeData* whole = part ? &part->whole : nullptr;
   const bool root = parallel::processes().root();
   const double loadSeconds = loadTimer.seconds();
-  const DatasetInfo dataset = DatasetInfo::of(model);
-  const int field = applyDataDefaults(o.scene, cmd, scene, model, dataset);
+  const DatasetInfo dataset = part ? part->dataset : DatasetInfo::of(model);
+  const int field = applyDataDefaults(o.scene, cmd, scene, model, dataset, whole);
 
   Renderer renderer(model, dataset);
+  if (part) renderer.setDomain(part->worldBox());
   const SceneUpdate update = renderer.setScene(scene);
   if (!scene.iso.values.empty())
     logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(),
                    ", built in ", update.isoSeconds, " s"));
-  frame.camera = cameraFromOptions(o.scene, cmd, doc, model, renderer.visibleBounds());
+  frame.camera = cameraFromOptions(o.scene, cmd, doc, model,
+                                   part ? agreedVisibleBounds(renderer, *part) : renderer.visibleBounds(), whole);
   frame.validate();
+  const std::vector<int> order = part ? part->order(frame.camera) : std::vector<int>();
   doc.hasCamera = true;
   if (!o.writeScene.empty() && root) writeSceneFile(o.writeScene, withAbsolutePaths(doc));
 
@@ -84,12 +99,15 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   const bool showProgress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
   auto renderFrame = [&](RenderStats& stats) {
     buffer.clear();
-    const uint64_t share = uint64_t(parallel::processes().size);
+    const uint64_t share = dataParallel ? 1 : uint64_t(parallel::processes().size);
     Progress progress("rendering", (uint64_t(buffer.tileCount()) + share - 1) / share * uint64_t(frame.samplesPerPixel));
     if (!showProgress) progress.finish();
     PassControl control;
     control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
-    parallel::renderFrame(renderer, frame, buffer, control);
+    if (dataParallel)
+      parallel::renderFrameComposited(&renderer, frame, buffer, order, control);
+    else
+      parallel::renderFrame(renderer, frame, buffer, control);
     progress.finish();
     stats = buffer.stats();
   };
@@ -106,9 +124,15 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   } else {
     renderFrame(stats);
   }
+  // Each process's part, for the statistics (collectives: every process takes part).
+  std::vector<double> partCells, partRss;
+  if (part) {
+    partCells = parallel::allGather(double(model.cellCount()));
+    partRss = parallel::allGather(double(peakRssBytes()));
+  }
   if (!root) return; // the first process writes the image and the statistics
   Image image = buffer.resolve();
-  drawOverlays(o.scene, scene, frame, model, dataset, field, image);
+  drawOverlays(o.scene, scene, frame, model, dataset, field, image, whole);
   if (imageIsEmpty(image))
     logWarning(strCat("the image is empty: nothing in view is visible (", renderer.visibleRegions(), " of ",
                       model.regions.regions.size(), " regions may be; check --range, --opacity and the camera)"));
@@ -143,9 +167,16 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     j["iso_regions"] = renderer.isoRegions();
     j["iso_update_seconds"] = update.isoSeconds;
     j["meshes"] = renderer.meshCount();
-    if (parallel::processes().size > 1) {
+    if (parallel::processes().size > 1 || part) {
       j["processes"] = parallel::processes().size;
+      j["distribute"] = o.distribute;
       j["composite_seconds"] = parallel::lastCombineSeconds();
+    }
+    if (part) {
+      nlohmann::json ranks = nlohmann::json::array();
+      for (size_t r = 0; r < partCells.size(); ++r)
+        ranks.push_back({{"rank", r}, {"resident_cells", uint64_t(partCells[r])}, {"peak_rss_bytes", uint64_t(partRss[r])}});
+      j["ranks"] = ranks;
     }
     std::cout << j.dump(2) << "\n";
   } else if (o.stats) {
@@ -181,6 +212,10 @@ void addRender(CLI::App& app) {
   cmd->add_option("--frames", o->frames, "Frames to time with --stats (median)")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print statistics as one JSON object on stdout");
   cmd->add_option("--write-scene", o->writeScene, "Write the scene and frame in effect as a JSON scene file");
+  cmd->add_option("--distribute", o->distribute,
+                  "Under MPI: image (every process holds the data and renders a share of the tiles) or data "
+                  "(each holds a part of the domain with its halo; images composited)")
+      ->capture_default_str();
   cmd->callback([o, cmd] { run(*o, *cmd); });
 }
 

@@ -65,7 +65,7 @@ int main(int argc, char** argv) {
     // Under MPI only the first process logs; every process reports its own errors.
     exa::setLogLevel(quiet || !root ? exa::LogLevel::Quiet
                                     : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
-    for (const char* command : {"info", "sample", "build", "generate", "convert", "bench", "view"})
+    for (const char* command : {"sample", "build", "generate", "convert", "bench", "view"})
       if (app.got_subcommand(command)) exa::cli::parallel::requireOneProcess(command);
     if (threads > 0)
       threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));

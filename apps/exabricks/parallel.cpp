@@ -1,9 +1,11 @@
 #include "parallel.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/render/composite.h"
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdlib>
 
 #ifdef EXABRICKS_HAVE_MPI
@@ -117,6 +119,137 @@ bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buff
   combineOnRoot(buffer);
   lastCombineSeconds() = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return complete;
+}
+
+namespace {
+
+/// Sums the statistics over the processes onto the root (seconds: the slowest process's).
+void reduceStats(RenderStats& st) {
+#ifdef EXABRICKS_HAVE_MPI
+  if (state().size <= 1) return;
+  const bool root = state().root();
+  uint64_t counts[7] = {st.rays, st.samples, st.regionsVisited, st.surfaceHits, st.isoSamples, st.aoRays, st.tiles};
+  MPI_Reduce(root ? MPI_IN_PLACE : counts, counts, 7, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
+  MPI_Reduce(root ? MPI_IN_PLACE : &st.seconds, &st.seconds, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
+  if (root) {
+    st.rays = counts[0];
+    st.samples = counts[1];
+    st.regionsVisited = counts[2];
+    st.surfaceHits = counts[3];
+    st.isoSamples = counts[4];
+    st.aoRays = counts[5];
+    st.tiles = counts[6];
+  }
+#else
+  (void)st;
+#endif
+}
+
+} // namespace
+
+bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBuffer& buffer,
+                           const std::vector<int>& order, PassControl control) {
+  const int n = state().size;
+  if (int(order.size()) != n) fail("compositing order names ", order.size(), " parts for ", n, " processes");
+  const auto start = std::chrono::steady_clock::now();
+  const size_t pixels = size_t(frame.width) * size_t(frame.height);
+  if (pixels * kCompositeChannels > size_t(INT32_MAX))
+    fail("data-parallel images hold at most ", size_t(INT32_MAX) / kCompositeChannels, " pixels");
+  FrameBuffer pass(frame.width, frame.height);
+  // This process's slice of the image, and everyone's.
+  auto sliceBegin = [&](int j) { return pixels * size_t(j) / size_t(n); };
+  const size_t mine = sliceBegin(state().rank + 1) - sliceBegin(state().rank);
+  std::vector<float> local(pixels * kCompositeChannels), received(size_t(n) * mine * kCompositeChannels),
+      composited(mine * kCompositeChannels), whole(state().root() ? pixels * kCompositeChannels : 0);
+  RenderStats stats;
+  bool complete = true, stepsView = false;
+  double compositeSeconds = 0;
+  Frame f = frame;
+  for (int k = 0; k < frame.samplesPerPixel; ++k) {
+    f.frameIndex = k;
+    pass.clear();
+    if (renderer && complete) complete = renderer->renderPass(f, pass, control);
+    const FrameBuffer::Sums s = pass.sums();
+    stepsView = *s.stepsView;
+    stats += *s.stats;
+    for (size_t p = 0; p < pixels; ++p) {
+      float* o = local.data() + p * kCompositeChannels;
+      for (int c = 0; c < 4; ++c) o[c] = s.colors[4 * p + size_t(c)];
+      o[4] = s.steps[p];
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    const float* result = local.data();
+#ifdef EXABRICKS_HAVE_MPI
+    if (n > 1) {
+      const size_t procs = size_t(n);
+      std::vector<int> sendCounts(procs), sendDispl(procs), recvCounts(procs), recvDispl(procs);
+      for (int j = 0; j < n; ++j) {
+        sendCounts[size_t(j)] = int((sliceBegin(j + 1) - sliceBegin(j)) * kCompositeChannels);
+        sendDispl[size_t(j)] = int(sliceBegin(j) * kCompositeChannels);
+        recvCounts[size_t(j)] = int(mine * kCompositeChannels);
+        recvDispl[size_t(j)] = int(size_t(j) * mine * kCompositeChannels);
+      }
+      MPI_Alltoallv(local.data(), sendCounts.data(), sendDispl.data(), MPI_FLOAT, received.data(), recvCounts.data(),
+                    recvDispl.data(), MPI_FLOAT, MPI_COMM_WORLD);
+      std::vector<const float*> parts;
+      for (int r : order) parts.push_back(received.data() + size_t(r) * mine * kCompositeChannels);
+      compositeFrontToBack(parts.data(), parts.size(), mine, composited.data());
+      MPI_Gatherv(composited.data(), int(mine * kCompositeChannels), MPI_FLOAT, whole.data(), sendCounts.data(),
+                  sendDispl.data(), MPI_FLOAT, 0, MPI_COMM_WORLD);
+      result = whole.data();
+    }
+#endif
+    compositeSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!state().root()) continue;
+    const FrameBuffer::Sums out = buffer.sums();
+    for (size_t p = 0; p < pixels; ++p) {
+      const float* c = result + p * kCompositeChannels;
+      for (int ch = 0; ch < 4; ++ch) out.colors[4 * p + size_t(ch)] += c[ch];
+      out.steps[p] += c[4];
+    }
+    for (size_t t = 0; t < out.tiles; ++t) ++out.tilePasses[t];
+  }
+  reduceStats(stats);
+  complete = everyone(complete);
+  if (state().root()) {
+    const FrameBuffer::Sums out = buffer.sums();
+    *out.stepsView = stepsView;
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    *out.stats += stats;
+  }
+  lastCombineSeconds() = compositeSeconds;
+  return complete;
+}
+
+void allReduce(std::vector<double>& values, Reduce op) {
+#ifdef EXABRICKS_HAVE_MPI
+  if (state().size <= 1 || values.empty()) return;
+  MPI_Op mop = op == Reduce::Sum ? MPI_SUM : op == Reduce::Min ? MPI_MIN : MPI_MAX;
+  MPI_Allreduce(MPI_IN_PLACE, values.data(), int(values.size()), MPI_DOUBLE, mop, MPI_COMM_WORLD);
+#else
+  (void)values;
+  (void)op;
+#endif
+}
+
+void broadcast(std::vector<int64_t>& values) {
+#ifdef EXABRICKS_HAVE_MPI
+  if (state().size <= 1) return;
+  int64_t count = int64_t(values.size());
+  MPI_Bcast(&count, 1, MPI_INT64_T, 0, MPI_COMM_WORLD);
+  values.resize(size_t(count));
+  MPI_Bcast(values.data(), int(count), MPI_INT64_T, 0, MPI_COMM_WORLD);
+#else
+  (void)values;
+#endif
+}
+
+std::vector<double> allGather(double value) {
+  std::vector<double> out(size_t(state().size), value);
+#ifdef EXABRICKS_HAVE_MPI
+  if (state().size > 1) MPI_Allgather(&value, 1, MPI_DOUBLE, out.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
+#endif
+  return out;
 }
 
 double& lastCombineSeconds() {

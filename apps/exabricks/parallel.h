@@ -6,6 +6,7 @@
 #include "exabricks/render/renderer.h"
 
 #include <string>
+#include <vector>
 
 namespace exa::cli::parallel {
 
@@ -36,6 +37,23 @@ void combineOnRoot(FrameBuffer& buffer);
 /// A frame's samplesPerPixel passes into a cleared buffer: in one process all of them; under MPI
 /// each process renders an interleaved share of the tiles and the root receives the whole image.
 bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control = {});
+
+/// Data-parallel rendering: every process holds one part of the data and its renderer is
+/// restricted to the part's box (null: the process holds nothing). Each pass is rendered by every
+/// process and the parts' images are composited front to back in `order` (parts front first, one
+/// per process) by direct send: process j receives every process's pixels of the j-th slice of the
+/// image, composites them and sends the slice to the root, whose buffer adds the composited
+/// passes (statistics summed over the processes, seconds the frame's wall time on the root).
+bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBuffer& buffer,
+                           const std::vector<int>& order, PassControl control = {});
+
+enum class Reduce { Sum, Min, Max };
+/// Combines every process's values element by element; every process receives the result.
+void allReduce(std::vector<double>& values, Reduce op);
+/// The root's values on every process (sizes may differ before the call).
+void broadcast(std::vector<int64_t>& values);
+/// One value per process, on every process (rank order).
+std::vector<double> allGather(double value);
 
 /// Seconds the last renderFrame spent adding the shares on the root (0 in one process).
 double& lastCombineSeconds();

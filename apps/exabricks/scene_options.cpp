@@ -333,10 +333,10 @@ std::vector<std::string> neededFields(const Scene& s) {
 }
 
 Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
-                         const box3d& visible) {
+                         const box3d& visible, const WholeData* whole) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
   if (!(o.fov > 0 && o.fov < 180)) failUsage("--fov must be in (0, 180) degrees");
-  const box3i cb = model.cellBounds();
+  const box3i cb = whole ? whole->cellBounds : model.cellBounds();
   const box3d all(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
   const box3d target = o.frameAll || visible.empty() ? all : visible;
   const bool reframe = given("--azimuth") || given("--elevation") || given("--fov") || given("--ortho");
@@ -349,7 +349,7 @@ Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const Scen
 }
 
 int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
-                      const DatasetInfo& dataset) {
+                      const DatasetInfo& dataset, const WholeData* whole) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
   VolumeLayer& first = scene.layers.at(0);
   const int field = model.requireField(first.field);
@@ -358,7 +358,7 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
                    model.fieldNames.size(), ")"));
   if (o.sceneFile.empty() && o.tfFile.empty()) {
     const DefaultChoices c = adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
-                                                   !given("--opacity"));
+                                                   !given("--opacity"), whole ? &whole->histogram : nullptr);
     first.tf = c.tf;
     for (const std::string& note : c.notes) logNote(note);
   }
@@ -377,14 +377,17 @@ SceneDocument withAbsolutePaths(SceneDocument doc) {
 }
 
 void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,
-                  const DatasetInfo& dataset, int field, Image& image) {
+                  const DatasetInfo& dataset, int field, Image& image, const WholeData* whole) {
   const vec3f bg = scene.background;
   const float luminance = 0.2126f * bg.x + 0.7152f * bg.y + 0.0722f * bg.z;
   const vec3f ink = luminance > 0.3f ? vec3f(0.f) : vec3f(1.f);
   const std::string name = model.fieldNames[size_t(field)];
   if (scene.debug == DebugView::Level) {
     std::vector<int> levels;
-    for (const ModelSummary::Level& l : summarize(model).levels) levels.push_back(l.level);
+    if (whole)
+      levels = whole->levels;
+    else
+      for (const ModelSummary::Level& l : summarize(model).levels) levels.push_back(l.level);
     drawLevelLegend(image, levels, ink);
   }
   if (o.colorbar && scene.debug == DebugView::None && scene.volume) {
@@ -393,7 +396,7 @@ void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame
     drawColorBar(image, tf, name, ink);
   }
   if (o.annotate) {
-    const box3i cb = model.cellBounds();
+    const box3i cb = whole ? whole->cellBounds : model.cellBounds();
     drawBoxOutline(image, frame.camera,
                    box3d(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper))), ink * 0.6f);
     std::vector<std::string> lines{o.in.name(), "field " + name};

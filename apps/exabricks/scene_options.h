@@ -5,6 +5,7 @@
 #include "common.h"
 
 #include "exabricks/core/image.h"
+#include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
 
@@ -77,22 +78,30 @@ struct RenderOptions {
 SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd);
 /// Fields the scene needs; empty means all (a layer names the default field).
 std::vector<std::string> neededFields(const Scene& s);
+/// What a process that holds one part of the data (data-parallel rendering) knows of the whole,
+/// agreed by every process: the first picture, the camera and the overlays are the whole data's.
+struct WholeData {
+  box3i cellBounds;          ///< lattice bounds of all cells
+  std::vector<int> levels;   ///< levels that hold cells
+  PartialData histogram;     ///< the part's cells and the sum over the parts
+};
+
 /// The first picture: names the default field, adapts the first layer's transfer function to the
 /// data unless a file or the options chose it, applies --linear and logs the scene's warnings.
 /// Returns the first layer's field index.
 int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
-                      const DatasetInfo& dataset);
+                      const DatasetInfo& dataset, const WholeData* whole = nullptr);
 /// The camera: the scene file's, or framing from azimuth and elevation the part of the data the
 /// transfer function shows (all of it with --frame-all, or when nothing is visible); explicit
 /// position, look-at and up override either.
 Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
-                         const box3d& visible);
+                         const box3d& visible, const WholeData* whole = nullptr);
 /// The scene document as a file records it: paths made absolute, so that it reads the same from
 /// any folder.
 SceneDocument withAbsolutePaths(SceneDocument doc);
 /// The colour bar, annotations and level legend the options ask for, drawn into the image in a
 /// colour that stands out against the background.
 void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,
-                  const DatasetInfo& dataset, int field, Image& image);
+                  const DatasetInfo& dataset, int field, Image& image, const WholeData* whole = nullptr);
 
 } // namespace exa::cli

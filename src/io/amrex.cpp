@@ -406,4 +406,30 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
   return set;
 }
 
+Census amrexCensus(const std::string& path) {
+  const Plotfile pf = readHeader(path);
+  std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
+  for (int l = pf.finestLevel - 1; l >= 0; --l) width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
+  std::vector<io::Patch> patches;
+  std::vector<std::pair<int, size_t>> origin;
+  for (int l = 0; l <= pf.finestLevel; ++l) {
+    const LevelData ld = readCellHeader(pf, l);
+    for (size_t bi = 0; bi < ld.boxes.size(); ++bi) {
+      const IndexBox& b = ld.boxes[bi];
+      patches.push_back({b.lo * width[size_t(l)], b.hi - b.lo + vec3l(1), width[size_t(l)]});
+      origin.push_back({l, bi});
+    }
+  }
+  // Leaf cells per box from the boxes alone: its cells less those the next finer level covers.
+  const io::Coverage coverage(patches, [&](size_t i) { return strCat("level ", origin[i].first, " box ", origin[i].second); });
+  Census census;
+  census.coarsestLevel = std::max(0, io::log2Exact(width[0]));
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const std::vector<uint8_t> covered = coverage.covered(i);
+    const auto leaves = std::count(covered.begin(), covered.end(), uint8_t(0));
+    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
+  }
+  return census;
+}
+
 } // namespace exa

@@ -47,7 +47,8 @@ bool probesByName(const FormatReader& r) { return r.kind == InputKind::Native ||
 const std::vector<FormatReader>& formatReaders() {
   static const std::vector<FormatReader> readers = {
       {InputKind::Amrex, "AMReX plotfile", isAmrexPlotfile, listAmrexFields,
-       [](const std::string& p, const ReadRequest& r) { return readAmrex(p, r.fields, r.box); }, amrexFieldRange},
+       [](const std::string& p, const ReadRequest& r) { return readAmrex(p, r.fields, r.box); }, amrexFieldRange,
+       amrexCensus},
       {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
        [](const std::string& p, const ReadRequest& r) { return readChombo(p, r.fields); }},
       {InputKind::Flash, "FLASH HDF5 file", isFlashFile, listFlashFields,
@@ -59,7 +60,7 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
        [](const std::string& p, const ReadRequest& r) { return readRaw(p, r.raw); }},
       {InputKind::Native, "exabricks cells", isNativeName, listNativeFields,
-       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields); }},
+       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields, r.box); }, nullptr, nativeCensus},
       {InputKind::Grids, ".grids fixture", isGridsName, scalarOnly,
        [](const std::string& p, const ReadRequest&) { return readGrids(p); }},
   };
@@ -156,6 +157,83 @@ std::vector<std::string> listFields(const std::string& path) {
   std::vector<std::string> names;
   for (const Field& f : defaultDataset().fields) names.push_back(f.name);
   return names;
+}
+
+Census loadCensus(const std::string& path, const LoadOptions& options) {
+  const InputKind kind = detectInput(path);
+  if (kind == InputKind::Model) return censusOfBricks(readModel(path).bricks);
+  if (kind != InputKind::Default) {
+    const FormatReader* reader = findReader(path);
+    if (reader->census) return reader->census(path);
+  }
+  LoadOptions cellsOnly = options;
+  cellsOnly.box = box3i();
+  const CellSet set = loadCells(path, cellsOnly);
+  CellCensus census;
+  census.add(set.cells.data(), set.cells.size());
+  return census.finish();
+}
+
+namespace {
+
+/// Whether the supports of a brick's cells (the brick grown by half a cell) reach into `part`.
+bool brickSupportReaches(const Brick& b, const box3l& part) {
+  const box3i bb = b.bounds();
+  const int64_t w = b.cellWidth();
+  for (int a = 0; a < 3; ++a)
+    if (!(2 * int64_t(bb.lower[a]) - w < 2 * part.upper[a] && 2 * int64_t(bb.upper[a]) + w > 2 * part.lower[a]))
+      return false;
+  return true;
+}
+
+} // namespace
+
+std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& options, const box3l& part,
+                                   int coarsestLevel) {
+  const std::string source = path.empty() ? kDefaultDatasetName : path;
+  if (detectInput(path) == InputKind::Model) {
+    // A model file is read whole; its bricks whose supports reach into the part are kept.
+    Model all = loadModel(path, options);
+    Model m;
+    m.world = all.world;
+    m.simulation = all.simulation;
+    m.fieldNames = all.fieldNames;
+    m.fieldValues.resize(all.fieldValues.size());
+    uint64_t offset = 0;
+    for (const Brick& b : all.bricks) {
+      if (!brickSupportReaches(b, part)) continue;
+      Brick kept = b;
+      kept.valueOffset = uint32_t(offset);
+      for (size_t f = 0; f < all.fieldValues.size(); ++f)
+        m.fieldValues[f].insert(m.fieldValues[f].end(), all.fieldValues[f].begin() + b.valueOffset,
+                                all.fieldValues[f].begin() + b.valueOffset + b.cellCount());
+      offset += b.cellCount();
+      m.bricks.push_back(kept);
+    }
+    if (m.bricks.empty()) return std::nullopt;
+    buildRegionsOf(m);
+    return m;
+  }
+  CellSet set;
+  const box3i readBox = haloReadBox(part, coarsestLevel);
+  if (detectInput(path) == InputKind::Default) {
+    set = defaultDataset();
+  } else {
+    ReadRequest request;
+    request.fields = options.fields;
+    request.box = readBox;
+    request.raw = options.raw;
+    set = findReader(path)->read(path, request);
+  }
+  selectFields(set, options.fields, source);
+  keepSupportOf(set, part);
+  if (set.cells.empty()) return std::nullopt;
+  validateCells(set, source);
+  try {
+    return buildModel(std::move(set), options.build);
+  } catch (const Error& e) {
+    throw Error(strCat(source, ": ", e.what()));
+  }
 }
 
 } // namespace exa

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 
 #include <fcntl.h>
@@ -232,8 +233,108 @@ std::vector<std::string> listNativeFields(const std::string& cellsPath) {
   return fields;
 }
 
-CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& wanted) {
+namespace {
+
+/// Reads NAME.cells in pieces of a million records, each validated, and hands them to `use`
+/// with the index of their first record.
+template <typename Use> void streamCells(const std::string& cellsPath, Use&& use) {
+  const uint64_t bytes = fileSize(cellsPath);
+  if (bytes == 0) fail(cellsPath, ": no cells (empty file)");
+  if (bytes % sizeof(Cell) != 0)
+    fail(cellsPath, ": truncated record ", bytes / sizeof(Cell), ": file size ", bytes,
+         " is not a multiple of the 16-byte cell record");
+  std::FILE* f = std::fopen(cellsPath.c_str(), "rb");
+  if (!f) fail(cellsPath, ": cannot open: ", std::strerror(errno));
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, std::fclose);
+  const uint64_t count = bytes / sizeof(Cell);
+  std::vector<Cell> chunk(size_t(std::min<uint64_t>(count, uint64_t(1) << 20)));
+  for (uint64_t at = 0; at < count; at += chunk.size()) {
+    const size_t n = size_t(std::min<uint64_t>(chunk.size(), count - at));
+    if (std::fread(chunk.data(), sizeof(Cell), n, f) != n) fail(cellsPath, ": read error (file changed while reading?)");
+    for (size_t i = 0; i < n; ++i) {
+      const std::string problem = cellProblem(chunk[i]);
+      if (!problem.empty()) fail(cellsPath, ": record ", at + i, ": ", problem);
+    }
+    use(chunk.data(), n, at);
+  }
+}
+
+/// The values of the records `keep` (ascending) of a .scalars file of `count` values.
+std::vector<float> readSelectedValues(const std::string& path, const std::string& name, uint64_t count,
+                                      const std::vector<uint64_t>& keep) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) fail(path, ": cannot open: ", std::strerror(errno));
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, std::fclose);
+  std::vector<float> out;
+  out.reserve(keep.size());
+  std::vector<float> chunk(size_t(std::min<uint64_t>(count, uint64_t(1) << 20)));
+  size_t next = 0;
+  for (uint64_t at = 0; at < count && next < keep.size(); at += chunk.size()) {
+    const size_t n = size_t(std::min<uint64_t>(chunk.size(), count - at));
+    if (keep[next] >= at + n) { // nothing wanted in this piece
+      if (std::fseek(f, long(n * sizeof(float)), SEEK_CUR) != 0) fail(path, ": seek failed");
+      continue;
+    }
+    if (std::fread(chunk.data(), sizeof(float), n, f) != n) fail(path, ": read error (file changed while reading?)");
+    for (; next < keep.size() && keep[next] < at + n; ++next) {
+      const float v = chunk[size_t(keep[next] - at)];
+      if (!std::isfinite(v)) fail(path, ": record ", keep[next], ": value ", v, " of field '", name, "' is not finite");
+      out.push_back(v);
+    }
+  }
+  return out;
+}
+
+} // namespace
+
+Census nativeCensus(const std::string& cellsPath) {
+  stemOf(cellsPath);
+  CellCensus census;
+  streamCells(cellsPath, [&](const Cell* cells, size_t n, uint64_t) { census.add(cells, n); });
+  return census.finish();
+}
+
+CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& wanted, const box3i& box) {
   const std::string stem = stemOf(cellsPath);
+  if (!box.empty()) {
+    // Only the cells overlapping the box are kept, read in pieces: memory for those alone.
+    CellSet set;
+    std::vector<uint64_t> keep;
+    uint64_t count = 0;
+    streamCells(cellsPath, [&](const Cell* cells, size_t n, uint64_t at) {
+      for (size_t i = 0; i < n; ++i) {
+        const Cell& c = cells[i];
+        const int64_t w = int64_t(1) << c.level;
+        bool inside = true;
+        for (int a = 0; a < 3; ++a)
+          inside = inside && int64_t(c.lower[a]) + w > box.lower[a] && c.lower[a] < box.upper[a];
+        if (!inside) continue;
+        keep.push_back(at + i);
+        set.cells.push_back(c);
+      }
+      count = at + n;
+    });
+    std::vector<std::string> names = wanted;
+    if (names.empty()) names = listNativeFields(cellsPath);
+    if (names.empty())
+      fail(cellsPath, ": no field files (expected ", stem, ".scalars or ", stem, ".FIELD.scalars)");
+    for (const std::string& name : names) {
+      const std::string path = scalarsPath(stem, name);
+      std::error_code ec;
+      if (!fs::exists(path, ec)) {
+        std::string known;
+        for (const std::string& f : listNativeFields(cellsPath)) known += (known.empty() ? "" : ", ") + f;
+        fail(cellsPath, ": unknown field '", name, "' (no file ", path, "; fields: ", known, ")");
+      }
+      const uint64_t bytes = fileSize(path);
+      if (bytes % sizeof(float) != 0)
+        fail(path, ": truncated record ", bytes / sizeof(float), ": file size ", bytes, " is not a multiple of 4");
+      if (bytes / sizeof(float) != count)
+        fail(path, ": size mismatch: ", bytes / sizeof(float), " values for ", count, " cells in ", cellsPath);
+      set.fields.push_back(Field{name, readSelectedValues(path, name, count, keep)});
+    }
+    return set;
+  }
   CellSet set;
   {
     const uint64_t bytes = fileSize(cellsPath);

@@ -1,6 +1,7 @@
 #include "exabricks/render/defaults.h"
 
 #include "exabricks/amr/model.h"
+#include "exabricks/amr/partition.h"
 #include "exabricks/core/error.h"
 
 #include <cmath>
@@ -11,19 +12,42 @@ namespace {
 
 constexpr int kBins = 256;
 
-/// Volume-weighted histogram of the normalised value; returns the total volume.
-double histogram(const Model& model, int field, const TransferFunction& tf, std::vector<double>& hist) {
+/// Volume-weighted histogram of the normalised value; returns the total volume. For a model
+/// that holds part of the data, only the cells the part owns count, and the parts' histograms
+/// are summed.
+double histogram(const Model& model, int field, const TransferFunction& tf, std::vector<double>& hist,
+                 const PartialData* part) {
   hist.assign(kBins, 0.0);
   const std::vector<float>& values = model.fieldValues.at(size_t(field));
   double total = 0.0;
   for (const Brick& b : model.bricks) {
     const double volume = std::ldexp(1.0, 3 * b.level);
     const size_t n = size_t(b.cellCount());
+    if (part) {
+      const int w = b.cellWidth();
+      size_t i = 0, owned = 0;
+      for (int z = 0; z < b.size.z; ++z)
+        for (int y = 0; y < b.size.y; ++y)
+          for (int x = 0; x < b.size.x; ++x, ++i) {
+            if (!centreInside(b.lower + vec3i(x, y, z) * w, b.level, part->owned)) continue;
+            const float t = tf.normalize(values[b.valueOffset + i]);
+            hist[size_t(std::clamp(int(t * kBins), 0, kBins - 1))] += volume;
+            ++owned;
+          }
+      total += volume * double(owned);
+      continue;
+    }
     for (size_t i = 0; i < n; ++i) {
       const float t = tf.normalize(values[b.valueOffset + i]);
       hist[size_t(std::clamp(int(t * kBins), 0, kBins - 1))] += volume;
     }
     total += volume * double(n);
+  }
+  if (part && part->sumOverParts) {
+    hist.push_back(total);
+    part->sumOverParts(hist);
+    total = hist.back();
+    hist.pop_back();
   }
   return total;
 }
@@ -42,7 +66,8 @@ int medianBin(const std::vector<double>& hist, double total, bool fromHigh) {
 } // namespace
 
 DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
-                                     const TransferFunction& tfIn, bool autoLog, bool autoOpacity) {
+                                     const TransferFunction& tfIn, bool autoLog, bool autoOpacity,
+                                     const PartialData* part) {
   DefaultChoices out;
   out.tf = tfIn;
   TransferFunction& tf = out.tf;
@@ -52,7 +77,7 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
   TransferFunction norm = tf;
   norm.valueRange = range;
   std::vector<double> hist;
-  double total = histogram(model, field, norm, hist);
+  double total = histogram(model, field, norm, hist, part);
   if (!(total > 0.0)) return out;
   // Logarithmic mapping where a linear one would crowd most of the volume into the lowest
   // percent of the colour map: positive values over more than three decades, half the volume
@@ -60,7 +85,7 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
   if (autoLog && !tf.logScale && range.lower > 0.f && range.upper > 1e3f * range.lower &&
       medianBin(hist, total, false) < kBins / 100) {
     tf.logScale = norm.logScale = true;
-    total = histogram(model, field, norm, hist);
+    total = histogram(model, field, norm, hist, part);
     out.notes.push_back(strCat("'", name, "' is positive, spans ",
                                std::lround(std::log10(double(range.upper) / double(range.lower))),
                                " decades and half its volume lies in the lowest percent of the range: ",

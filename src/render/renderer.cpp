@@ -81,6 +81,8 @@ struct DualRay {
   Ray lattice;
   double kappa = 1.0;
   double sMin = 0.0, sMax = std::numeric_limits<double>::infinity(); ///< clipped world interval
+  /// The interval inside the renderer's domain (meshes are limited to it even when not clipped).
+  double domainMin = 0.0, domainMax = std::numeric_limits<double>::infinity();
 };
 
 /// Unit vectors perpendicular to n (and to each other).
@@ -94,15 +96,20 @@ void orthonormalBasis(const vec3f& n, vec3f& u, vec3f& v) {
 } // namespace
 
 DatasetInfo DatasetInfo::of(const Model& m) {
-  DatasetInfo d;
   int finest = kMaxLevel;
   for (const Brick& b : m.bricks) finest = std::min(finest, b.level);
-  d.referenceWidth = float(1 << finest);
-  const box3i cb = m.cellBounds();
-  if (!cb.empty()) d.worldDiagonal = length(vec3d(cb.size()) * m.world.scale);
-  d.valueRanges.resize(m.fieldValues.size());
+  std::vector<range1f> ranges(m.fieldValues.size());
   for (size_t f = 0; f < m.fieldValues.size() && f < m.regions.valueRanges.size(); ++f)
-    for (const range1f& r : m.regions.valueRanges[f]) d.valueRanges[f].extend(r);
+    for (const range1f& r : m.regions.valueRanges[f]) ranges[f].extend(r);
+  return from(finest, m.cellBounds(), m.world.scale, std::move(ranges));
+}
+
+DatasetInfo DatasetInfo::from(int finestLevel, const box3i& cb, const vec3d& worldScale,
+                              std::vector<range1f> valueRanges) {
+  DatasetInfo d;
+  d.referenceWidth = float(1 << std::clamp(finestLevel, 0, kMaxLevel));
+  if (!cb.empty()) d.worldDiagonal = length(vec3d(cb.size()) * worldScale);
+  d.valueRanges = std::move(valueRanges);
   const float extentCells = cb.empty() ? 1.f : float(reduceMax(cb.size())) / d.referenceWidth;
   d.defaultOpacityScale = std::min(1.f, 8.f / std::max(1.f, extentCells));
   return d;
@@ -144,7 +151,7 @@ void FrameBuffer::clear() {
 FrameBuffer::Sums FrameBuffer::sums() {
   static_assert(sizeof(vec4f) == 4 * sizeof(float), "vec4f must be four packed floats");
   return {reinterpret_cast<float*>(sum_.data()), steps_.data(), sum_.size(), tilePasses_.data(), tilePasses_.size(),
-          &stats_};
+          &stats_, &stepsView_};
 }
 
 uint32_t FrameBuffer::passes() const {
@@ -205,6 +212,8 @@ struct Renderer::Impl {
   vec3f invScale{1.f};         ///< world units per lattice unit, inverted (for gradients)
   double minScale = 1.0;
   float meanScale = 1.f;       ///< world units per lattice unit, averaged over the axes
+  bool hasDomain = false;      ///< primary rays see only the inside of `domain` (world)
+  box3d domain;
 
   // Iso-surfaces: their own set of regions (value range holds an iso-value) and traversal.
   std::vector<float> isoValues;
@@ -371,10 +380,32 @@ struct Renderer::Impl {
         }
       }
     }
+    setLatticeInterval(r);
+    return r;
+  }
+
+  static void setLatticeInterval(DualRay& r) {
     r.lattice.tmin = float(r.sMin * r.kappa);
     r.lattice.tmax = std::isinf(r.sMax) ? std::numeric_limits<float>::infinity() : float(r.sMax * r.kappa);
     if (!(r.lattice.tmax >= r.lattice.tmin)) r.lattice.tmax = r.lattice.tmin = 0.f, r.sMax = -1.0;
-    return r;
+  }
+
+  /// Restricts a primary ray to the domain box (volume, iso-surfaces and meshes alike).
+  void restrictToDomain(DualRay& r) const {
+    if (!hasDomain) return;
+    for (int a = 0; a < 3; ++a) {
+      if (r.dirW[a] == 0.0) {
+        if (r.orgW[a] < domain.lower[a] || r.orgW[a] >= domain.upper[a]) r.sMax = -1.0;
+        continue;
+      }
+      const double ta = (domain.lower[a] - r.orgW[a]) / r.dirW[a];
+      const double tb = (domain.upper[a] - r.orgW[a]) / r.dirW[a];
+      r.sMin = std::max(r.sMin, std::min(ta, tb));
+      r.sMax = std::min(r.sMax, std::max(ta, tb));
+    }
+    r.domainMin = std::max(r.domainMin, r.sMin);
+    r.domainMax = std::min(r.domainMax, r.sMax);
+    setLatticeInterval(r);
   }
 
   bool clippedAway(const DualRay& r) const { return r.sMax < r.sMin; }
@@ -468,8 +499,8 @@ struct Renderer::Impl {
     bool have = false;
     const bool clipMeshes = scene.clip.meshes;
     if (meshScene) {
-      const double s0 = clipMeshes ? r.sMin : 0.0;
-      const double s1 = clipMeshes ? r.sMax : std::numeric_limits<double>::infinity();
+      const double s0 = clipMeshes ? r.sMin : r.domainMin;
+      const double s1 = clipMeshes ? r.sMax : r.domainMax;
       have = traceMesh(r, s0, s1, hit);
     }
     if (isoTraversal && !clippedAway(r)) {
@@ -704,7 +735,8 @@ struct Renderer::Impl {
     frame.camera.ray((x + jx) / frame.width, (y + jy) / frame.height, ps.aspect, orgW, dirW);
     // March in lattice space with a unit-length lattice direction: t is in finest-level lattice
     // units.
-    const DualRay dr = makeRay(orgW, dirW, ps.clipping && scene.debug == DebugView::None);
+    DualRay dr = makeRay(orgW, dirW, ps.clipping && scene.debug == DebugView::None);
+    restrictToDomain(dr);
     const Ray& ray = dr.lattice;
     const vec3f viewW = vec3f(dr.dirW);
     const vec3f light = scene.light.headlight ? viewW : ps.lightWorld;
@@ -806,6 +838,13 @@ SceneUpdate Renderer::setScene(const Scene& s) {
   }
   return u;
 }
+
+void Renderer::setDomain(const box3d& world) {
+  impl_->hasDomain = !(world == box3d());
+  impl_->domain = world;
+}
+
+const box3d& Renderer::domain() const { return impl_->domain; }
 
 bool Renderer::pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const {
   if (!(length(direction) > 0.0) || !impl_->haveScene) return false;

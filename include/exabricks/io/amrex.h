@@ -4,6 +4,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
 
 #include <optional>
 #include <string>
@@ -26,5 +27,8 @@ std::optional<range1f> amrexFieldRange(const std::string& path, const std::strin
 /// transform maps the finest level's index space onto the physical domain. With a box (finest
 /// lattice units), the data of boxes that do not overlap it is not read.
 CellSet readAmrex(const std::string& path, const std::vector<std::string>& fields = {}, const box3i& box = {});
+
+/// Where the plotfile's leaf cells lie, from its headers alone (no cell data is read).
+Census amrexCensus(const std::string& path);
 
 } // namespace exa

@@ -34,4 +34,16 @@ std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std
 /// Names of the fields an input holds, without building anything.
 std::vector<std::string> listFields(const std::string& path);
 
+/// Where an input's cells lie, for splitting it among processes: from the headers alone (AMReX
+/// plotfiles), by reading only the cell records in pieces (NAME.cells), from a model file's
+/// bricks, or else by reading the cells.
+Census loadCensus(const std::string& path, const LoadOptions& options = {});
+
+/// The share of a dataset one process renders in data-parallel mode: every cell whose basis
+/// support reaches into the lattice box `part` (the part and its halo; readers that take a box
+/// read little more), built into a model; none when no cell reaches it. Model files are read
+/// whole and their bricks that reach the part kept.
+std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& options, const box3l& part,
+                                   int coarsestLevel);
+
 } // namespace exa

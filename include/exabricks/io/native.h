@@ -5,6 +5,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
 
 #include <cstdint>
 #include <string>
@@ -13,8 +14,11 @@
 namespace exa {
 
 /// Reads NAME.cells and its fields. `fields` selects fields by name (all when empty). Validates
-/// everything but overlaps; errors name the file, the record and the problem.
-CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& fields = {});
+/// everything but overlaps; errors name the file, the record and the problem. With a box, only
+/// the cells overlapping it are kept, read in pieces.
+CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& fields = {}, const box3i& box = {});
+/// Where the cells of NAME.cells lie, read in pieces (values are not read).
+Census nativeCensus(const std::string& cellsPath);
 
 /// Names of the fields stored beside a .cells file.
 std::vector<std::string> listNativeFields(const std::string& cellsPath);

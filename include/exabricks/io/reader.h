@@ -4,6 +4,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
 #include "exabricks/io/raw.h"
 
 #include <optional>
@@ -32,6 +33,9 @@ struct FormatReader {
   /// A field's value range from metadata alone, where the format records one (else null, or
   /// none returned: the data must be read).
   std::optional<range1f> (*fieldRange)(const std::string& path, const std::string& field) = nullptr;
+  /// Where the cells lie without reading their values, where the format allows (else null: the
+  /// cells are read to count them).
+  Census (*census)(const std::string& path) = nullptr;
 };
 
 /// The registered readers, in the order in which inputs are probed.

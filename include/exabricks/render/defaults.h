@@ -5,10 +5,19 @@
 
 #include "exabricks/render/renderer.h"
 
+#include <functional>
 #include <string>
 #include <vector>
 
 namespace exa {
+
+/// A model that holds one part of a dataset (with its halo): the defaults count only the cells
+/// whose centres lie in `owned` (lattice), and `sumOverParts` adds the histograms of every part
+/// element by element (an all-reduce), so that every part chooses what the whole data would.
+struct PartialData {
+  box3l owned;
+  std::function<void(std::vector<double>&)> sumOverParts;
+};
 
 struct DefaultChoices {
   TransferFunction tf;
@@ -25,7 +34,8 @@ struct DefaultChoices {
 ///   the background (towards high values unless a dominant background, a fifth of the volume or
 ///   more, sits in the upper third, then towards low values).
 DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
-                                     const TransferFunction& tf, bool autoLog, bool autoOpacity);
+                                     const TransferFunction& tf, bool autoLog, bool autoOpacity,
+                                     const PartialData* part = nullptr);
 
 /// What in a scene can never show anything, said before rendering: nothing to draw at all (no
 /// volume, iso-surface or mesh), iso-values outside their field's range, a value range that

@@ -39,6 +39,10 @@ struct DatasetInfo {
   float defaultOpacityScale = 1.f;   ///< a ray through the whole data gathers an optical depth of ~8
 
   static DatasetInfo of(const Model& model);
+  /// The values of a dataset whose finest level, lattice bounds of the cells, world scale and
+  /// per-field value ranges are known (for example agreed by the processes that hold its parts).
+  static DatasetInfo from(int finestLevel, const box3i& cellBounds, const vec3d& worldScale,
+                          std::vector<range1f> valueRanges);
 };
 
 /// The colour of a level in the level debug view (levels 0..7, cycling): distinct hues, finest warm.
@@ -117,6 +121,7 @@ public:
     uint32_t* tilePasses;    ///< 1 per tile
     size_t tiles;
     RenderStats* stats;
+    bool* stepsView;         ///< whether the sums are of the steps debug view
   };
   Sums sums();
 
@@ -165,6 +170,14 @@ public:
   bool renderPasses(const Frame& frame, FrameBuffer& buffer, int passes, const PassControl& control = {}) const;
   /// A whole frame: passes 0..samplesPerPixel-1 into a fresh buffer, resolved.
   Image render(const Frame& frame, RenderStats* stats = nullptr) const;
+
+  /// Restricts primary rays to the inside of a world box, for a renderer that holds one part of
+  /// a dataset (data-parallel rendering: the parts' images composite front to back into the
+  /// whole image); faces may lie at infinity. Volume, iso-surfaces and meshes are all limited to
+  /// the box; ambient-occlusion rays are not (they see the data the renderer holds). The default
+  /// box (box3d()) restricts nothing; an empty box that is not the default one shows nothing.
+  void setDomain(const box3d& world);
+  const box3d& domain() const;
 
   /// The nearest (clipped) mesh or iso-surface hit along a world ray; false when there is none.
   bool pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const;

@@ -1,0 +1,133 @@
+#include "distributed.h"
+
+#include "parallel.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/amr/scenes.h"
+#include "exabricks/core/log.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace exa::cli {
+
+box3d DataPart::worldBox() const {
+  return box3d(model.world.toWorld(vec3d(box.lower)), model.world.toWorld(vec3d(box.upper)));
+}
+
+uint64_t DataPart::ownedCells() const {
+  uint64_t n = 0;
+  for (const Brick& b : model.bricks) {
+    const int w = b.cellWidth();
+    for (int z = 0; z < b.size.z; ++z)
+      for (int y = 0; y < b.size.y; ++y)
+        for (int x = 0; x < b.size.x; ++x) n += centreInside(b.lower + vec3i(x, y, z) * w, b.level, box);
+  }
+  return n;
+}
+
+std::vector<int> DataPart::order(const Camera& camera) const {
+  if (camera.orthographic) return partition.orderAlong((camera.lookAt - camera.position) / model.world.scale);
+  return partition.orderFrom(model.world.toLattice(camera.position));
+}
+
+namespace {
+
+/// Throws on every process when any process failed (its own message where it failed).
+void agreeOrFail(const std::string& error, const char* what) {
+  if (!parallel::everyone(error.empty()))
+    fail(error.empty() ? strCat("another process could not ", what, " (its message names the problem)") : error);
+}
+
+} // namespace
+
+DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
+  const parallel::Processes& procs = parallel::processes();
+  DataPart part;
+  // The census and the partition: on the first process, sent to all.
+  std::vector<int64_t> encoded;
+  std::string error;
+  if (procs.root()) {
+    try {
+      Timer t;
+      const Census census = loadCensus(input, options);
+      part.partition = KdPartition::balance(census, procs.size);
+      encoded = part.partition.encode();
+      encoded.push_back(census.coarsestLevel);
+      logInfo(strCat("split ", census.cells(), " cells into ", procs.size, " parts in ", t.seconds(), " s"));
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+  }
+  agreeOrFail(error, "read the input");
+  parallel::broadcast(encoded);
+  part.coarsestLevel = int(encoded.back());
+  encoded.pop_back();
+  part.partition = KdPartition::decode(encoded);
+  part.box = part.partition.box(procs.rank);
+
+  std::optional<Model> loaded;
+  try {
+    loaded = loadModelPart(input, options, part.box, part.coarsestLevel);
+    if (!loaded)
+      error = strCat("process ", procs.rank, ": its part of ", input.empty() ? kDefaultDatasetName : input,
+                     " holds no cells (more processes than the data can be split into; use fewer)");
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  agreeOrFail(error, "read its part of the input");
+  part.model = std::move(*loaded);
+  const Model& m = part.model;
+
+  // The whole dataset's values: finest level, cell bounds, value ranges and levels agreed.
+  const DatasetInfo local = DatasetInfo::of(m);
+  const box3i cb = m.cellBounds();
+  const size_t fields = local.valueRanges.size();
+  std::vector<double> low{std::log2(double(local.referenceWidth)), double(cb.lower.x), double(cb.lower.y),
+                          double(cb.lower.z)};
+  std::vector<double> high{double(cb.upper.x), double(cb.upper.y), double(cb.upper.z)};
+  for (const range1f& r : local.valueRanges) {
+    low.push_back(r.empty() ? std::numeric_limits<double>::infinity() : double(r.lower));
+    high.push_back(r.empty() ? -std::numeric_limits<double>::infinity() : double(r.upper));
+  }
+  std::vector<bool> levelHere(kMaxLevel + 1, false);
+  for (const Brick& b : m.bricks) levelHere[size_t(b.level)] = true;
+  for (int l = 0; l <= kMaxLevel; ++l) high.push_back(levelHere[size_t(l)] ? 1.0 : 0.0);
+  std::vector<double> counts{double(fields)};
+  parallel::allReduce(counts, parallel::Reduce::Max);
+  if (counts[0] != double(fields)) fail("the processes' parts hold different fields");
+  parallel::allReduce(low, parallel::Reduce::Min);
+  parallel::allReduce(high, parallel::Reduce::Max);
+  part.whole.cellBounds = box3i(vec3i(int(low[1]), int(low[2]), int(low[3])),
+                                vec3i(int(high[0]), int(high[1]), int(high[2])));
+  std::vector<range1f> ranges(fields);
+  for (size_t f = 0; f < fields; ++f)
+    if (low[4 + f] <= high[3 + f]) ranges[f] = range1f{float(low[4 + f]), float(high[3 + f])};
+  part.dataset = DatasetInfo::from(int(low[0]), part.whole.cellBounds, m.world.scale, std::move(ranges));
+  for (int l = 0; l <= kMaxLevel; ++l)
+    if (high[3 + fields + size_t(l)] > 0.0) part.whole.levels.push_back(l);
+  part.whole.histogram.owned = part.box;
+  part.whole.histogram.sumOverParts = [](std::vector<double>& h) { parallel::allReduce(h, parallel::Reduce::Sum); };
+  return part;
+}
+
+box3d agreedVisibleBounds(const Renderer& renderer, const DataPart& part) {
+  const box3d local = renderer.visibleBounds();
+  const box3d mine = part.worldBox();
+  std::vector<double> low(3, std::numeric_limits<double>::infinity()), high(3, -std::numeric_limits<double>::infinity());
+  box3d clipped;
+  for (int a = 0; a < 3; ++a) {
+    clipped.lower[a] = std::max(local.lower[a], mine.lower[a]);
+    clipped.upper[a] = std::min(local.upper[a], mine.upper[a]);
+  }
+  if (!local.empty() && clipped.lower.x <= clipped.upper.x && clipped.lower.y <= clipped.upper.y &&
+      clipped.lower.z <= clipped.upper.z)
+    for (int a = 0; a < 3; ++a) low[size_t(a)] = clipped.lower[a], high[size_t(a)] = clipped.upper[a];
+  parallel::allReduce(low, parallel::Reduce::Min);
+  parallel::allReduce(high, parallel::Reduce::Max);
+  for (int a = 0; a < 3; ++a)
+    if (!(low[size_t(a)] <= high[size_t(a)])) return box3d();
+  return box3d(vec3d(low[0], low[1], low[2]), vec3d(high[0], high[1], high[2]));
+}
+
+} // namespace exa::cli

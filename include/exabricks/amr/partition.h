@@ -1,0 +1,123 @@
+// Splitting a dataset among processes for data-parallel rendering: where the cells lie (a
+// census of counted boxes), a k-d partition of the finest lattice balanced by cell count, the
+// halo a part needs (every cell whose basis support reaches into it, so that samples inside the
+// part equal the whole dataset's), and the order in which a camera sees the parts.
+#pragma once
+
+#include "exabricks/amr/bricks.h"
+#include "exabricks/amr/cells.h"
+
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace exa {
+
+/// A face of a part on the outside of the data lies this far out: the part reaches to infinity
+/// there (rays in the margin of the outermost supports still belong to it).
+constexpr int64_t kUnboundedLattice = int64_t(1) << 40;
+
+/// A lattice box holding `cells` cells, assumed spread evenly over it.
+struct CensusBox {
+  box3l box;
+  double cells = 0;
+};
+
+/// Where a dataset's cells lie, without their values.
+struct Census {
+  std::vector<CensusBox> boxes;
+  int coarsestLevel = 0; ///< the widest cell, 2^coarsestLevel: how far a halo reaches
+  box3l bounds() const;
+  double cells() const;
+};
+
+/// Counts cells into blocks of at most 8^3 cells of one level (the census of a cell list that is
+/// read in pieces).
+class CellCensus {
+public:
+  void add(const Cell& cell);
+  void add(const Cell* cells, size_t count) {
+    for (size_t i = 0; i < count; ++i) add(cells[i]);
+  }
+  Census finish() const;
+
+private:
+  struct Key {
+    int64_t x, y, z;
+    int32_t level;
+    friend bool operator==(const Key&, const Key&) = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const;
+  };
+  std::unordered_map<Key, uint64_t, KeyHash> blocks_;
+  int coarsest_ = 0;
+};
+
+/// The census of built bricks.
+Census censusOfBricks(const std::vector<Brick>& bricks);
+
+/// Whether the basis support of a cell (its centre +- its width, open) reaches into the lattice
+/// box [lower, upper).
+inline bool supportReaches(const vec3i& lower, int level, const box3l& box) {
+  const int64_t w = int64_t(1) << level;
+  for (int a = 0; a < 3; ++a) {
+    const int64_t c2 = 2 * int64_t(lower[a]); // doubled units: the support is (2c - w, 2c + 3w)
+    if (!(c2 - w < 2 * box.upper[a] && c2 + 3 * w > 2 * box.lower[a])) return false;
+  }
+  return true;
+}
+
+/// Whether a cell's centre lies in [lower, upper): each cell belongs to exactly one part.
+inline bool centreInside(const vec3i& lower, int level, const box3l& box) {
+  const int64_t w = int64_t(1) << level;
+  for (int a = 0; a < 3; ++a) {
+    const int64_t c2 = 2 * int64_t(lower[a]) + w;
+    if (!(c2 >= 2 * box.lower[a] && c2 < 2 * box.upper[a])) return false;
+  }
+  return true;
+}
+
+/// The box a reader must return cells of for a part: every cell whose support reaches into the
+/// part overlaps it (the part grown by the coarsest width, clamped to the lattice range).
+box3i haloReadBox(const box3l& part, int coarsestLevel);
+
+/// Keeps the cells whose support reaches into `part`, with their values.
+void keepSupportOf(CellSet& set, const box3l& part);
+
+/// A k-d partition of the finest lattice into parts of about equal cell counts.
+class KdPartition {
+public:
+  struct Node {
+    int axis = -1;         ///< -1: a leaf
+    int64_t split = 0;     ///< lattice plane: the low child holds x[axis] < split
+    int child[2] = {-1, -1};
+    int part = -1;         ///< leaves: the part
+  };
+
+  /// Splits the census's bounds into `parts` parts: each split halves the parts (the larger half
+  /// high) along the longest axis of the data in the box, at the lattice plane that gives each
+  /// side its share of the cells. Faces outside the data are unbounded.
+  static KdPartition balance(const Census& census, int parts);
+  /// The whole lattice as one part.
+  static KdPartition whole();
+
+  int parts() const { return int(boxes_.size()); }
+  /// A part's lattice box, upper exclusive; faces on the outside are +-kUnboundedLattice.
+  const box3l& box(int part) const { return boxes_[size_t(part)]; }
+  /// Parts front to back as seen from a point (perspective), lattice coordinates.
+  std::vector<int> orderFrom(const vec3d& eye) const;
+  /// Parts front to back along a direction (orthographic), lattice directions.
+  std::vector<int> orderAlong(const vec3d& direction) const;
+
+  /// A flat form of the partition for sending between processes, and back (checked).
+  std::vector<int64_t> encode() const;
+  static KdPartition decode(const std::vector<int64_t>& data);
+
+private:
+  template <typename NearLow> std::vector<int> order(NearLow&& nearLow) const;
+  std::vector<Node> nodes_;
+  std::vector<box3l> boxes_;
+};
+
+} // namespace exa

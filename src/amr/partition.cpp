@@ -1,0 +1,261 @@
+#include "exabricks/amr/partition.h"
+
+#include "exabricks/core/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+
+namespace exa {
+
+box3l Census::bounds() const {
+  box3l b;
+  for (const CensusBox& c : boxes) b.extend(c.box);
+  return b;
+}
+
+double Census::cells() const {
+  double n = 0;
+  for (const CensusBox& c : boxes) n += c.cells;
+  return n;
+}
+
+size_t CellCensus::KeyHash::operator()(const Key& k) const {
+  uint64_t h = 0xcbf29ce484222325ull;
+  for (uint64_t v : {uint64_t(k.x), uint64_t(k.y), uint64_t(k.z), uint64_t(uint32_t(k.level))})
+    h = (h ^ v) * 0x100000001b3ull;
+  return size_t(h ^ (h >> 29));
+}
+
+void CellCensus::add(const Cell& c) {
+  const int shift = c.level + 3; // blocks of 8 cells of the cell's level per axis
+  ++blocks_[Key{int64_t(c.lower.x) >> shift, int64_t(c.lower.y) >> shift, int64_t(c.lower.z) >> shift, c.level}];
+  coarsest_ = std::max(coarsest_, c.level);
+}
+
+Census CellCensus::finish() const {
+  Census census;
+  census.coarsestLevel = coarsest_;
+  census.boxes.reserve(blocks_.size());
+  for (const auto& [key, count] : blocks_) {
+    const int64_t side = int64_t(8) << key.level;
+    const vec3l lower(key.x * side, key.y * side, key.z * side);
+    census.boxes.push_back({box3l(lower, lower + vec3l(side)), double(count)});
+  }
+  // The map's order is arbitrary; a fixed order keeps the partition's sums reproducible.
+  std::sort(census.boxes.begin(), census.boxes.end(), [](const CensusBox& a, const CensusBox& b) {
+    const vec3l& p = a.box.lower;
+    const vec3l& q = b.box.lower;
+    if (p.z != q.z) return p.z < q.z;
+    if (p.y != q.y) return p.y < q.y;
+    if (p.x != q.x) return p.x < q.x;
+    return a.box.upper.x < b.box.upper.x;
+  });
+  return census;
+}
+
+Census censusOfBricks(const std::vector<Brick>& bricks) {
+  Census census;
+  census.boxes.reserve(bricks.size());
+  for (const Brick& b : bricks) {
+    const box3i bb = b.bounds();
+    census.boxes.push_back({box3l(vec3l(bb.lower), vec3l(bb.upper)), double(b.cellCount())});
+    census.coarsestLevel = std::max(census.coarsestLevel, b.level);
+  }
+  return census;
+}
+
+box3i haloReadBox(const box3l& part, int coarsestLevel) {
+  const int64_t w = int64_t(1) << coarsestLevel;
+  box3i out;
+  for (int a = 0; a < 3; ++a) {
+    out.lower[a] = int32_t(std::clamp(part.lower[a] - w, -kLatticeLimit, kLatticeLimit));
+    out.upper[a] = int32_t(std::clamp(part.upper[a] + w, -kLatticeLimit, kLatticeLimit));
+  }
+  return out;
+}
+
+void keepSupportOf(CellSet& set, const box3l& part) {
+  size_t kept = 0;
+  for (size_t i = 0; i < set.cells.size(); ++i) {
+    const Cell& c = set.cells[i];
+    if (!supportReaches(c.lower, c.level, part)) continue;
+    set.cells[kept] = c;
+    for (Field& f : set.fields) f.values[kept] = f.values[i];
+    ++kept;
+  }
+  set.cells.resize(kept);
+  for (Field& f : set.fields) f.values.resize(kept);
+}
+
+namespace {
+
+/// Cells of the item on the low side of the plane x[axis] = s (even spread over the item).
+double cellsBelow(const CensusBox& item, int axis, int64_t s) {
+  const int64_t lo = item.box.lower[axis], hi = item.box.upper[axis];
+  if (s <= lo) return 0.0;
+  if (s >= hi) return item.cells;
+  return item.cells * double(s - lo) / double(hi - lo);
+}
+
+struct Builder {
+  std::vector<KdPartition::Node>& nodes;
+  std::vector<box3l>& boxes;
+
+  int build(std::vector<CensusBox> items, int parts, const box3l& region) {
+    const int index = int(nodes.size());
+    nodes.emplace_back();
+    if (parts == 1) {
+      nodes[size_t(index)].part = int(boxes.size());
+      boxes.push_back(region);
+      return index;
+    }
+    box3l data;
+    double total = 0;
+    for (const CensusBox& c : items) {
+      data.extend(c.box);
+      total += c.cells;
+    }
+    const int lowParts = parts / 2;
+    int axis = 0;
+    int64_t split = 0;
+    if (data.empty()) {
+      // Nothing left to divide: the parts split the region's middle (or the origin when
+      // unbounded); they render nothing.
+      axis = argMax(region.size());
+      const int64_t lo = std::max(region.lower[axis], -kUnboundedLattice / 2);
+      const int64_t hi = std::min(region.upper[axis], kUnboundedLattice / 2);
+      split = lo + (hi - lo) / 2;
+    } else {
+      const vec3l extent = data.size();
+      axis = argMax(extent);
+      const int64_t lo = data.lower[axis], hi = data.upper[axis];
+      if (extent[axis] < 2) {
+        split = hi; // one lattice unit wide: the high parts hold none of it
+      } else {
+        // The smallest plane inside the data with at least the low parts' share below it, or the
+        // plane before it when that is closer to the share.
+        const double target = total * double(lowParts) / double(parts);
+        auto below = [&](int64_t s) {
+          double n = 0;
+          for (const CensusBox& c : items) n += cellsBelow(c, axis, s);
+          return n;
+        };
+        int64_t a = lo + 1, b = hi - 1;
+        while (a < b) {
+          const int64_t m = a + (b - a) / 2;
+          if (below(m) >= target) b = m;
+          else a = m + 1;
+        }
+        split = a;
+        if (split > lo + 1 && std::abs(below(split - 1) - target) <= std::abs(below(split) - target)) --split;
+      }
+    }
+    std::vector<CensusBox> low, high;
+    for (const CensusBox& c : items) {
+      if (c.box.lower[axis] < split) {
+        CensusBox part = c;
+        part.box.upper[axis] = std::min(c.box.upper[axis], split);
+        part.cells = cellsBelow(c, axis, split);
+        low.push_back(part);
+      }
+      if (c.box.upper[axis] > split) {
+        CensusBox part = c;
+        part.box.lower[axis] = std::max(c.box.lower[axis], split);
+        part.cells = c.cells - cellsBelow(c, axis, split);
+        high.push_back(part);
+      }
+    }
+    items.clear();
+    items.shrink_to_fit();
+    box3l lowRegion = region, highRegion = region;
+    lowRegion.upper[axis] = split;
+    highRegion.lower[axis] = split;
+    const int c0 = build(std::move(low), lowParts, lowRegion);
+    const int c1 = build(std::move(high), parts - lowParts, highRegion);
+    KdPartition::Node& n = nodes[size_t(index)];
+    n.axis = axis;
+    n.split = split;
+    n.child[0] = c0;
+    n.child[1] = c1;
+    return index;
+  }
+};
+
+} // namespace
+
+KdPartition KdPartition::balance(const Census& census, int parts) {
+  if (parts < 1 || parts > 1 << 20) fail("a partition needs 1 to 2^20 parts, not ", parts);
+  KdPartition p;
+  Builder b{p.nodes_, p.boxes_};
+  std::vector<CensusBox> items;
+  items.reserve(census.boxes.size());
+  for (const CensusBox& c : census.boxes)
+    if (!c.box.empty() && c.cells > 0) items.push_back(c);
+  b.build(std::move(items), parts, box3l(vec3l(-kUnboundedLattice), vec3l(kUnboundedLattice)));
+  return p;
+}
+
+KdPartition KdPartition::whole() { return balance(Census{}, 1); }
+
+template <typename NearLow> std::vector<int> KdPartition::order(NearLow&& nearLow) const {
+  std::vector<int> out;
+  out.reserve(boxes_.size());
+  std::function<void(int)> visit = [&](int i) {
+    const Node& n = nodes_[size_t(i)];
+    if (n.axis < 0) {
+      out.push_back(n.part);
+      return;
+    }
+    const int first = nearLow(n) ? 0 : 1;
+    visit(n.child[first]);
+    visit(n.child[1 - first]);
+  };
+  if (!nodes_.empty()) visit(0);
+  return out;
+}
+
+std::vector<int> KdPartition::orderFrom(const vec3d& eye) const {
+  return order([&](const Node& n) { return eye[n.axis] < double(n.split); });
+}
+
+std::vector<int> KdPartition::orderAlong(const vec3d& direction) const {
+  return order([&](const Node& n) { return direction[n.axis] >= 0.0; });
+}
+
+std::vector<int64_t> KdPartition::encode() const {
+  std::vector<int64_t> out{int64_t(nodes_.size()), int64_t(boxes_.size())};
+  for (const Node& n : nodes_) out.insert(out.end(), {n.axis, n.split, n.child[0], n.child[1], n.part});
+  for (const box3l& b : boxes_)
+    out.insert(out.end(), {b.lower.x, b.lower.y, b.lower.z, b.upper.x, b.upper.y, b.upper.z});
+  return out;
+}
+
+KdPartition KdPartition::decode(const std::vector<int64_t>& d) {
+  auto bad = [](const char* what) { fail("corrupt partition: ", what); };
+  if (d.size() < 2) bad("too short");
+  const int64_t nodeCount = d[0], partCount = d[1];
+  if (nodeCount < 1 || partCount < 1 || nodeCount != 2 * partCount - 1 ||
+      d.size() != size_t(2 + 5 * nodeCount + 6 * partCount))
+    bad("sizes");
+  KdPartition p;
+  size_t at = 2;
+  for (int64_t i = 0; i < nodeCount; ++i, at += 5) {
+    Node n;
+    n.axis = int(d[at]);
+    n.split = d[at + 1];
+    n.child[0] = int(d[at + 2]);
+    n.child[1] = int(d[at + 3]);
+    n.part = int(d[at + 4]);
+    if (n.axis < -1 || n.axis > 2) bad("axis");
+    if (n.axis < 0 ? (n.part < 0 || n.part >= partCount)
+                   : (n.child[0] <= i || n.child[1] <= i || n.child[0] >= nodeCount || n.child[1] >= nodeCount))
+      bad("links");
+    p.nodes_.push_back(n);
+  }
+  for (int64_t i = 0; i < partCount; ++i, at += 6)
+    p.boxes_.push_back(box3l(vec3l(d[at], d[at + 1], d[at + 2]), vec3l(d[at + 3], d[at + 4], d[at + 5])));
+  return p;
+}
+
+} // namespace exa
