@@ -226,6 +226,33 @@ TEST(Amrex, ABoxReadsOnlyTheCellsThatOverlapIt) {
   for (const Cell& c : coarseOnly.cells) EXPECT_EQ(c.level, 2);
 }
 
+TEST(Amrex, TheCensusCountsTheLeafCellsFromTheHeadersAlone) {
+  Fixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "amrex-census";
+  f.write();
+  const CellSet all = readAmrex(f.dir.string());
+  const Census census = amrexCensus(f.dir.string());
+  EXPECT_DOUBLE_EQ(census.cells(), double(all.size()));
+  int coarsest = 0;
+  for (const Cell& c : all.cells) coarsest = std::max(coarsest, c.level);
+  EXPECT_EQ(census.coarsestLevel, coarsest);
+  // Every leaf cell lies in a census box of its level's count.
+  for (const Cell& c : all.cells) {
+    bool in = false;
+    for (const CensusBox& b : census.boxes)
+      in = in || (c.lower.x >= b.box.lower.x && c.lower.x < b.box.upper.x && c.lower.y >= b.box.lower.y &&
+                  c.lower.y < b.box.upper.y && c.lower.z >= b.box.lower.z && c.lower.z < b.box.upper.z);
+    EXPECT_TRUE(in);
+  }
+}
+
+TEST(Amrex, SharedSampleCensusMatchesTheLeafCount) {
+  REQUIRE_DATA("amrex/advection_3d/plt_small");
+  const Census census = loadCensus(data.string());
+  EXPECT_DOUBLE_EQ(census.cells(), 1036288.0);
+  EXPECT_EQ(census.coarsestLevel, 3);
+}
+
 TEST(Amrex, TheRegistryNamesEveryFormatOnce) {
   std::vector<InputKind> kinds;
   for (const FormatReader& r : formatReaders()) {
