@@ -1,5 +1,6 @@
 // libFuzzer entry for the native readers: the input holds d.cells, d.scalars and a .grids text,
-// cut at "--8<--" lines; the dataset and the fixture are read.
+// cut at "--8<--" lines; the dataset (whole, its census, and the part inside a box, read in
+// pieces) and the fixture are read.
 #include "fuzz_files.h"
 
 #include "exabricks/core/error.h"
@@ -12,6 +13,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const std::string grids = fuzz::write("g.grids", p[2]);
   try {
     const exa::CellSet s = exa::readNative(cells);
+    if (s.fields.size() != 1 || s.fields[0].values.size() != s.cells.size()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  try {
+    const exa::Census census = exa::nativeCensus(cells);
+    if (census.cells() < 1) __builtin_trap();
+    const exa::CellSet s = exa::readNative(cells, {}, exa::box3i(exa::vec3i(-2), exa::vec3i(3)));
     if (s.fields.size() != 1 || s.fields[0].values.size() != s.cells.size()) __builtin_trap();
   } catch (const exa::Error&) {
   }

@@ -124,9 +124,9 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   } else {
     renderFrame(stats);
   }
-  // Each process's part, for the statistics (collectives: every process takes part).
+  // What each process holds, for the statistics (collectives: every process takes part).
   std::vector<double> partCells, partRss;
-  if (part) {
+  if (part || parallel::processes().size > 1) {
     partCells = parallel::allGather(double(model.cellCount()));
     partRss = parallel::allGather(double(peakRssBytes()));
   }
@@ -172,7 +172,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
       j["distribute"] = o.distribute;
       j["composite_seconds"] = parallel::lastCombineSeconds();
     }
-    if (part) {
+    if (!partCells.empty()) {
       nlohmann::json ranks = nlohmann::json::array();
       for (size_t r = 0; r < partCells.size(); ++r)
         ranks.push_back({{"rank", r}, {"resident_cells", uint64_t(partCells[r])}, {"peak_rss_bytes", uint64_t(partRss[r])}});
