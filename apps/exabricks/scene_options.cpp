@@ -125,6 +125,9 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--traversal", traversal, "Region traversal: auto, kd or embree")->capture_default_str();
   cmd.add_flag("--no-skip", noSkip, "Disable space skipping");
   cmd.add_flag("--no-early-termination", noEarlyTermination, "Integrate every ray to its end");
+  cmd.add_flag("--scalar", scalar, "Reconstruct one sample after another (no SIMD batches; the reference path)");
+  cmd.add_flag("--no-lazy-gradients", noLazyGradients,
+               "Reconstruct gradients with every batch, also after samples the transfer function hides");
   cmd.add_option("--sampling", sampling, "adaptive (per region) or fixed (finest width everywhere)")
       ->capture_default_str();
   cmd.add_option("--reconstruction", reconstruction,
@@ -224,6 +227,8 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
                                               {"cells", Reconstruction::CellLocation}});
   if (apply("--no-skip")) in.spaceSkipping = !o.noSkip;
   if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
+  if (apply("--scalar")) in.vectorized = !o.scalar;
+  if (apply("--no-lazy-gradients")) in.lazyGradients = !o.noLazyGradients;
   if (apply("--debug"))
     s.debug = pick<DebugView>("debug view", o.debug,
                               {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},

@@ -46,6 +46,8 @@ struct RenderOptions {
   std::string traversal = "auto";
   bool noSkip = false;
   bool noEarlyTermination = false;
+  bool scalar = false;
+  bool noLazyGradients = false;
   std::string sampling = "adaptive";
   std::string reconstruction = "regions";
   std::string debug = "none";

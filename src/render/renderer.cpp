@@ -1,5 +1,6 @@
 #include "exabricks/render/renderer.h"
 
+#include "exabricks/amr/basis_batch.h"
 #include "exabricks/amr/cell_locator.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
@@ -591,6 +592,9 @@ struct Renderer::Impl {
     const ShadingTerms& terms = scene.light.terms;
     const Integration& in = scene.integration;
     const bool wantGrad = !OpacityOnly && shading == Shading::Analytic;
+    // Batches: one layer reconstructed from its regions (the common case).
+    const bool batched = in.vectorized && layerCount == 1 && in.reconstruction == Reconstruction::Regions;
+    bool lastHidden = true; // the last batch showed nothing: reconstruct values first
     traversal->traverse(ray, [&](const Segment& seg) {
       ++regionCount;
       const Region& region = model.regions.regions[seg.region];
@@ -600,6 +604,65 @@ struct Renderer::Impl {
       // midpoint and weighted by its length.
       float a = std::max(seg.t0, ray.tmin);
       float k = std::floor(a / dt - rho) + 1.f;
+      if (batched) {
+        const LayerTable& layer = layers[0];
+        SampleBatch batch;
+        float lengths[kSampleBatch];
+        while (a < segEnd) {
+          // The next samples of the segment, exactly as the scalar loop below places them.
+          int n = 0;
+          while (n < kSampleBatch && a < segEnd) {
+            float b = std::min((k + rho) * dt, segEnd);
+            if (!(b > a)) b = std::min(a + dt, segEnd);
+            if (!(b > a)) break;
+            k += 1.f;
+            lengths[n] = b - a;
+            const vec3f p = ray.org + ray.dir * (0.5f * (a + b));
+            batch.x[n] = p.x, batch.y[n] = p.y, batch.z[n] = p.z;
+            ++n;
+            a = b;
+          }
+          if (n == 0) break;
+          batch.count = n;
+          bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
+          sampleRegionBatch(layer.view, seg.region, batch, withGrad);
+          bool anyShown = false;
+          for (int i = 0; i < n && !anyShown; ++i) anyShown = batch.valid[i] && layer.lookup(batch.value[i]).w < 0.f;
+          lastHidden = !anyShown;
+          if (!anyShown) {
+            raySamples += uint64_t(n);
+            continue;
+          }
+          if (wantGrad && !withGrad) {
+            sampleRegionBatch(layer.view, seg.region, batch, true);
+            withGrad = true;
+          }
+          for (int i = 0; i < n; ++i) {
+            ++raySamples;
+            if (!batch.valid[i]) continue;
+            const float value = batch.value[i];
+            const vec4f rgba = layer.lookup(value);
+            if (rgba.w >= 0.f) continue;
+            const float alpha = correctedOpacity(rgba.w, lengths[i], invReferenceWidth);
+            if (OpacityOnly) {
+              acc.w += (1.f - acc.w) * alpha;
+            } else {
+              vec3f c = rgba.rgb();
+              if (shading != Shading::None) {
+                const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
+                const vec3f grad = shading == Shading::Analytic
+                                       ? vec3f(batch.gx[i], batch.gy[i], batch.gz[i])
+                                       : centralGradient(layer, seg.region, region, p, value,
+                                                         shading == Shading::ClampedCentral);
+                c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
+              }
+              compositeBehind(acc, c, alpha);
+            }
+            if (in.earlyTermination && acc.w >= in.terminationOpacity) return false;
+          }
+        }
+        return true;
+      }
       while (a < segEnd) {
         float b = std::min((k + rho) * dt, segEnd);
         if (!(b > a)) b = std::min(a + dt, segEnd); // guards float round-off
@@ -629,12 +692,7 @@ struct Renderer::Impl {
           if (shading != Shading::None) {
             if (shading == Shading::Central || shading == Shading::ClampedCentral)
               grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
-            // Cell width (world) over the scale of the field's changes.
-            const float cellWidth = region.finestWidth() * meanScale;
-            const float fadeScale = layer.tf.logScale || !(layer.span > 0.f)
-                                        ? (value != 0.f ? cellWidth / std::abs(value) : 0.f)
-                                        : cellWidth * layer.invSpan;
-            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, fadeScale);
+            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
           }
           if (layerCount == 1) {
             alpha = layerAlpha;
@@ -655,6 +713,14 @@ struct Renderer::Impl {
       }
       return true;
     });
+  }
+
+  /// Cell width (world) over the scale of the field's changes: how much of the gradient shading
+  /// a sample gets (shadeVolumeSample).
+  float volumeFade(const LayerTable& layer, const Region& region, float value) const {
+    const float cellWidth = region.finestWidth() * meanScale;
+    return layer.tf.logScale || !(layer.span > 0.f) ? (value != 0.f ? cellWidth / std::abs(value) : 0.f)
+                                                    : cellWidth * layer.invSpan;
   }
 
   /// Central differences over half the region's finest width (the shading baselines); clamped

@@ -289,7 +289,9 @@ std::string writeSceneJson(const SceneDocument& doc) {
       {"embree_below_visible_fraction", in.embreeBelowVisibleFraction},
       {"space_skipping", in.spaceSkipping},
       {"early_termination", in.earlyTermination},
-      {"termination_opacity", in.terminationOpacity}};
+      {"termination_opacity", in.terminationOpacity},
+      {"vectorized", in.vectorized},
+      {"lazy_gradients", in.lazyGradients}};
   j["debug"] = debugName(s.debug);
   j["background"] = srgb(s.background);
   j["alpha"] = s.keepAlpha;
@@ -473,7 +475,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   if (r.find("integration")) {
     const Reader c = r.child("integration");
     c.only({"sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
-            "early_termination", "termination_opacity"});
+            "early_termination", "termination_opacity", "vectorized", "lazy_gradients"});
     Integration& in = s.integration;
     c.choice<Sampling>("sampling", in.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
     c.choice<Reconstruction>("reconstruction", in.reconstruction,
@@ -488,6 +490,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.boolean("space_skipping", in.spaceSkipping);
     c.boolean("early_termination", in.earlyTermination);
     c.number("termination_opacity", in.terminationOpacity);
+    c.boolean("vectorized", in.vectorized);
+    c.boolean("lazy_gradients", in.lazyGradients);
   }
   r.choice<DebugView>("debug", s.debug,
                       {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},

@@ -96,6 +96,12 @@ struct Integration {
   bool spaceSkipping = true;
   bool earlyTermination = true;
   float terminationOpacity = 0.98f;
+  /// Reconstruct consecutive samples of a region segment together with SIMD (amr/basis_batch.h),
+  /// then shade and composite them in order; off: one sample after another (the reference).
+  bool vectorized = true;
+  /// With vectorized: after samples that the transfer function hides, reconstruct the next batch's
+  /// values first and their gradients only if one of them shows.
+  bool lazyGradients = true;
   friend bool operator==(const Integration&, const Integration&) = default;
 };
 

@@ -1,0 +1,48 @@
+// Reconstruction of several samples at once: the vectorised form of sampleRegion (basis.h) for
+// samples that share one region, as consecutive samples along a ray inside an active brick region
+// do. Every lane runs basis.h's arithmetic (the same cells in the same order, the same reference
+// value), so the results equal the scalar ones to float round-off. The library is compiled for
+// several instruction sets (SSE4, AVX2, AVX-512 where the compiler has them; Highway) and picks
+// the widest the CPU supports at run time; without Highway the batch runs the scalar code.
+#pragma once
+
+#include "exabricks/amr/basis.h"
+
+#include <cstdint>
+
+namespace exa {
+
+/// Samples per batch (the lanes of AVX-512 floats; narrower vectors take several steps).
+constexpr int kSampleBatch = 16;
+
+/// Positions in (lattice units) and results out; entries at and beyond `count` are ignored.
+struct SampleBatch {
+  int count = 0;
+  alignas(64) float x[kSampleBatch], y[kSampleBatch], z[kSampleBatch];
+  alignas(64) float value[kSampleBatch];
+  alignas(64) float gx[kSampleBatch], gy[kSampleBatch], gz[kSampleBatch]; ///< per lattice unit
+  alignas(64) int32_t valid[kSampleBatch]; ///< nonzero where some cell has weight
+};
+
+/// Reconstructs every sample of the batch from the bricks of region `regionIndex` (value, and the
+/// gradient when asked).
+void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient);
+
+/// The same through basis.h's scalar sampleRegion, one sample after another (the reference).
+inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
+  for (int i = 0; i < batch.count; ++i) {
+    float v = 0.f;
+    vec3f g(0.f);
+    const bool ok = sampleRegion(view, regionIndex, vec3f(batch.x[i], batch.y[i], batch.z[i]), v,
+                                 gradient ? &g : nullptr);
+    batch.valid[i] = ok;
+    batch.value[i] = ok ? v : 0.f;
+    batch.gx[i] = g.x, batch.gy[i] = g.y, batch.gz[i] = g.z;
+  }
+}
+
+/// The instruction set sampleRegionBatch runs with on this CPU ("AVX2", "AVX3", "SSE4", ...;
+/// "scalar" when built without Highway).
+const char* batchTargetName();
+
+} // namespace exa
