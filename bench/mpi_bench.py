@@ -26,7 +26,7 @@ w, h = map(int, a.size.split("x"))
 pixels = w * h
 out = tempfile.mkdtemp()
 print(f"input {a.input}, {a.size}; one thread per process (2 cores: more than 2 processes share them)")
-print(f"{'mode':6} {'N':>2} {'frame s':>8} {'comp. s':>8} {'cells/proc (max)':>17} {'peak MB/proc (max)':>19} "
+print(f"{'mode':6} {'N':>2} {'frame s':>8} {'comp. s':>8} {'wait s':>7} {'cells/proc (max)':>17} {'peak MB/proc (max)':>19} "
       f"{'model: MB sent/proc':>20}")
 for mode in a.modes.split(","):
     for n in range(1, a.max_processes + 1):
@@ -51,5 +51,6 @@ for mode in a.modes.split(","):
             sent = 20 * pixels
         else:
             sent = spp * 20 * pixels * ((n - 1) / n + 1 / n)
-        print(f"{mode:6} {n:>2} {j['frame_seconds']:8.3f} {j.get('composite_seconds', 0):8.3f} {cells:17d} "
+        print(f"{mode:6} {n:>2} {j['frame_seconds']:8.3f} {j.get('composite_seconds', 0):8.3f} "
+              f"{j.get('composite_wait_seconds', 0):7.3f} {cells:17d} "
               f"{rss:19.1f} {sent / 1e6:20.1f}")

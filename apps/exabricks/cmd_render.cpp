@@ -5,6 +5,7 @@
 #include "parallel.h"
 #include "scene_options.h"
 
+#include "exabricks/amr/basis_batch.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/image.h"
 #include "exabricks/io/scene_file.h"
@@ -161,6 +162,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     j["transfer_function_update_seconds"] = update.volumeSeconds;
     j["load_seconds"] = loadSeconds;
     j["traversal"] = traversal;
+    j["simd"] = scene.integration.vectorized ? batchTargetName() : "off";
     j["surface_hits"] = stats.surfaceHits;
     j["iso_samples"] = stats.isoSamples;
     j["ao_rays"] = stats.aoRays;
@@ -171,6 +173,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
       j["processes"] = parallel::processes().size;
       j["distribute"] = o.distribute;
       j["composite_seconds"] = parallel::lastCombineSeconds();
+      if (dataParallel) j["composite_wait_seconds"] = parallel::lastWaitSeconds();
     }
     if (!partCells.empty()) {
       nlohmann::json ranks = nlohmann::json::array();

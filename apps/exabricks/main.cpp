@@ -6,6 +6,8 @@
 #include "commands.h"
 #include "parallel.h"
 
+#include "exabricks/amr/basis_batch.h"
+
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/native.h"
@@ -57,16 +59,23 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", std::string("exabricks ") + EXABRICKS_VERSION);
   bool quiet = false, verbose = false;
   int threads = 0;
+  std::string simd;
   std::unique_ptr<tbb::global_control> threadLimit;
   app.add_flag("-q,--quiet", quiet, "Print nothing but results and errors");
   app.add_flag("-v,--verbose", verbose, "Log build steps and timings on stderr");
   app.add_option("--threads", threads, "Worker threads (default: every core)")->check(CLI::Range(1, 4096));
+  app.add_option("--simd", simd, "Instruction set of the sampling batches (default: the best this CPU has)");
   app.parse_complete_callback([&] {
     // Under MPI only the first process logs; every process reports its own errors.
     exa::setLogLevel(quiet || !root ? exa::LogLevel::Quiet
                                     : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
     for (const char* command : {"sample", "build", "generate", "convert", "bench", "view"})
       if (app.got_subcommand(command)) exa::cli::parallel::requireOneProcess(command);
+    if (!simd.empty() && !exa::useBatchTarget(simd)) {
+      std::string known;
+      for (const std::string& t : exa::batchTargets()) known += (known.empty() ? "" : ", ") + t;
+      exa::failUsage("--simd ", simd, ": not an instruction set of this CPU (", known, ")");
+    }
     if (threads > 0)
       threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
   });

@@ -163,7 +163,7 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
       composited(mine * kCompositeChannels), whole(state().root() ? pixels * kCompositeChannels : 0);
   RenderStats stats;
   bool complete = true, stepsView = false;
-  double compositeSeconds = 0;
+  double compositeSeconds = 0, waitSeconds = 0;
   Frame f = frame;
   for (int k = 0; k < frame.samplesPerPixel; ++k) {
     f.frameIndex = k;
@@ -177,8 +177,16 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
       for (int c = 0; c < 4; ++c) o[c] = s.colors[4 * p + size_t(c)];
       o[4] = s.steps[p];
     }
-    const auto t0 = std::chrono::steady_clock::now();
     const float* result = local.data();
+#ifdef EXABRICKS_HAVE_MPI
+    if (n > 1) {
+      // Waiting for the slowest process is timed apart from the exchange.
+      const auto w0 = std::chrono::steady_clock::now();
+      MPI_Barrier(MPI_COMM_WORLD);
+      waitSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
+    }
+#endif
+    const auto t0 = std::chrono::steady_clock::now();
 #ifdef EXABRICKS_HAVE_MPI
     if (n > 1) {
       const size_t procs = size_t(n);
@@ -218,6 +226,7 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
     *out.stats += stats;
   }
   lastCombineSeconds() = compositeSeconds;
+  lastWaitSeconds() = waitSeconds;
   return complete;
 }
 
@@ -250,6 +259,11 @@ std::vector<double> allGather(double value) {
   if (state().size > 1) MPI_Allgather(&value, 1, MPI_DOUBLE, out.data(), 1, MPI_DOUBLE, MPI_COMM_WORLD);
 #endif
   return out;
+}
+
+double& lastWaitSeconds() {
+  static double seconds = 0;
+  return seconds;
 }
 
 double& lastCombineSeconds() {

@@ -55,6 +55,9 @@ void broadcast(std::vector<int64_t>& values);
 /// One value per process, on every process (rank order).
 std::vector<double> allGather(double value);
 
+/// Seconds the last renderFrameComposited waited for the slowest process before its exchanges.
+double& lastWaitSeconds();
+
 /// Seconds the last renderFrame spent adding the shares on the root (0 in one process).
 double& lastCombineSeconds();
 

@@ -11,6 +11,8 @@ void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch&
   sampleRegionBatchScalar(view, regionIndex, batch, gradient);
 }
 const char* batchTargetName() { return "scalar"; }
+std::vector<std::string> batchTargets() { return {"scalar"}; }
+bool useBatchTarget(const std::string& name) { return name.empty() || name == "scalar"; }
 } // namespace exa
 
 #else
@@ -144,6 +146,24 @@ void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch&
 }
 
 const char* batchTargetName() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
+
+std::vector<std::string> batchTargets() {
+  static const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets(); // before any mock
+  std::vector<std::string> names;
+  for (int64_t t : targets) names.push_back(hwy::TargetName(t));
+  return names;
+}
+
+bool useBatchTarget(const std::string& name) {
+  static const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets();
+  int64_t chosen = 0;
+  for (int64_t t : targets)
+    if (name == hwy::TargetName(t)) chosen = t;
+  if (!name.empty() && chosen == 0) return false;
+  hwy::SetSupportedTargetsForTest(chosen); // 0: every target the CPU has
+  hwy::GetChosenTarget().Update(hwy::SupportedTargets());
+  return true;
+}
 } // namespace exa
 #endif
 

@@ -9,6 +9,8 @@
 #include "exabricks/amr/basis.h"
 
 #include <cstdint>
+#include <string>
+#include <vector>
 
 namespace exa {
 
@@ -44,5 +46,11 @@ inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex,
 /// The instruction set sampleRegionBatch runs with on this CPU ("AVX2", "AVX3", "SSE4", ...;
 /// "scalar" when built without Highway).
 const char* batchTargetName();
+/// The instruction sets this CPU can run sampleRegionBatch with, best first.
+std::vector<std::string> batchTargets();
+/// Runs sampleRegionBatch with the named instruction set (one of batchTargets()); an empty name
+/// returns to the best. False for a name not in the list. For tests and benchmarks; not
+/// thread-safe with batches in flight.
+bool useBatchTarget(const std::string& name);
 
 } // namespace exa
