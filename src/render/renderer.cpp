@@ -626,8 +626,13 @@ struct Renderer::Impl {
           batch.count = n;
           bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
           sampleRegionBatch(layer.view, seg.region, batch, withGrad);
+          // The transfer function at every sample (log2 transmittance 0: transparent).
+          vec4f rgbas[kSampleBatch];
           bool anyShown = false;
-          for (int i = 0; i < n && !anyShown; ++i) anyShown = batch.valid[i] && layer.lookup(batch.value[i]).w < 0.f;
+          for (int i = 0; i < n; ++i) {
+            rgbas[i] = batch.valid[i] ? layer.lookup(batch.value[i]) : vec4f();
+            anyShown = anyShown || rgbas[i].w < 0.f;
+          }
           lastHidden = !anyShown;
           if (!anyShown) {
             raySamples += uint64_t(n);
@@ -639,10 +644,9 @@ struct Renderer::Impl {
           }
           for (int i = 0; i < n; ++i) {
             ++raySamples;
-            if (!batch.valid[i]) continue;
-            const float value = batch.value[i];
-            const vec4f rgba = layer.lookup(value);
+            const vec4f& rgba = rgbas[i];
             if (rgba.w >= 0.f) continue;
+            const float value = batch.value[i];
             const float alpha = correctedOpacity(rgba.w, lengths[i], invReferenceWidth);
             if (OpacityOnly) {
               acc.w += (1.f - acc.w) * alpha;
