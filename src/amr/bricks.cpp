@@ -12,23 +12,16 @@
 namespace exa {
 namespace {
 
-/// A cell as seen by the builder: position, level and its index in the input.
-struct Item {
-  vec3i lower;
-  int32_t level;
-  uint32_t id;
-};
-
 struct NodeInfo {
   box3i bounds; // upper exclusive
   int32_t minLevel = kMaxLevel + 1;
   int32_t maxLevel = -1;
 
-  void add(const Item& it) {
-    bounds.extend(it.lower);
-    bounds.extend(it.lower + vec3i(int32_t(1) << it.level));
-    minLevel = std::min(minLevel, it.level);
-    maxLevel = std::max(maxLevel, it.level);
+  void add(const Cell& c) {
+    bounds.extend(c.lower);
+    bounds.extend(c.lower + vec3i(int32_t(1) << c.level));
+    minLevel = std::min(minLevel, c.level);
+    maxLevel = std::max(maxLevel, c.level);
   }
   void add(const NodeInfo& o) {
     bounds.extend(o.bounds);
@@ -41,14 +34,16 @@ constexpr size_t kParallelGrain = 8192;
 
 int64_t floorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
 
-std::string describe(const Item& it) {
-  return strCat("(", it.lower.x, ",", it.lower.y, ",", it.lower.z, ") level ", it.level);
+std::string describe(const Cell& c) {
+  return strCat("(", c.lower.x, ",", c.lower.y, ",", c.lower.z, ") level ", c.level);
 }
 
+/// Builds bricks by permuting the cells and their input indices together in place (the indices
+/// end in brick-slot order: they become cellOfSlot), so that the build needs 4 bytes per cell
+/// beyond the cells themselves.
 class Builder {
 public:
-  Builder(std::vector<Item>& items, std::vector<uint32_t>& cellOfSlot, int maxWidth)
-      : items_(items), cellOfSlot_(cellOfSlot), maxWidth_(maxWidth) {}
+  Builder(Cell* cells, uint32_t* ids, int maxWidth) : cells_(cells), ids_(ids), maxWidth_(maxWidth) {}
 
   void build(size_t begin, size_t end) {
     const NodeInfo info = analyze(begin, end);
@@ -76,9 +71,7 @@ public:
         break;
       }
     }
-    Item* mid = std::partition(items_.data() + begin, items_.data() + end,
-                               [&](const Item& it) { return it.lower[axis] < split; });
-    const size_t m = size_t(mid - items_.data());
+    const size_t m = partition(begin, end, axis, split);
     EXA_CHECK(m > begin && m < end, "brick split produced an empty side");
     if (end - begin > kParallelGrain)
       tbb::parallel_invoke([&] { build(begin, m); }, [&] { build(m, end); });
@@ -91,16 +84,30 @@ public:
   tbb::concurrent_vector<Brick> bricks;
 
 private:
+  /// Moves the cells below the plane x[axis] = split before the others (cells and indices
+  /// alike); returns the first of the others.
+  size_t partition(size_t begin, size_t end, int axis, int32_t split) {
+    size_t i = begin, j = end;
+    for (;;) {
+      while (i < j && cells_[i].lower[axis] < split) ++i;
+      while (i < j && !(cells_[j - 1].lower[axis] < split)) --j;
+      if (i >= j) return i;
+      std::swap(cells_[i], cells_[j - 1]);
+      std::swap(ids_[i], ids_[j - 1]);
+      ++i, --j;
+    }
+  }
+
   NodeInfo analyze(size_t begin, size_t end) const {
     if (end - begin <= kParallelGrain) {
       NodeInfo info;
-      for (size_t i = begin; i < end; ++i) info.add(items_[i]);
+      for (size_t i = begin; i < end; ++i) info.add(cells_[i]);
       return info;
     }
     return tbb::parallel_reduce(
         tbb::blocked_range<size_t>(begin, end, kParallelGrain), NodeInfo{},
         [&](const tbb::blocked_range<size_t>& r, NodeInfo info) {
-          for (size_t i = r.begin(); i < r.end(); ++i) info.add(items_[i]);
+          for (size_t i = r.begin(); i < r.end(); ++i) info.add(cells_[i]);
           return info;
         },
         [](NodeInfo a, const NodeInfo& b) {
@@ -116,61 +123,63 @@ private:
     if (reduceMax(dims) > maxWidth_) return false;
     const uint64_t volume = uint64_t(dims.x) * uint64_t(dims.y) * uint64_t(dims.z);
     if (volume != end - begin) return false;
-    for (size_t i = begin; i < end; ++i) cellOfSlot_[i] = UINT32_MAX;
+    // The indices into slot order (x fastest) through a buffer of the brick's size.
+    std::vector<uint32_t> slots(end - begin, UINT32_MAX);
     for (size_t i = begin; i < end; ++i) {
-      const vec3i c = (items_[i].lower - info.bounds.lower) / w;
-      const size_t slot = begin + size_t(c.x) + size_t(dims.x) * (size_t(c.y) + size_t(dims.y) * c.z);
-      if (cellOfSlot_[slot] != UINT32_MAX)
-        fail("cells ", cellOfSlot_[slot], " and ", items_[i].id, " are duplicates: both at ",
-             describe(items_[i]));
-      cellOfSlot_[slot] = items_[i].id;
+      const vec3i c = (cells_[i].lower - info.bounds.lower) / w;
+      const size_t slot = size_t(c.x) + size_t(dims.x) * (size_t(c.y) + size_t(dims.y) * c.z);
+      if (slots[slot] != UINT32_MAX)
+        fail("cells ", std::min(slots[slot], ids_[i]), " and ", std::max(slots[slot], ids_[i]),
+             " are duplicates: both at ", describe(cells_[i]));
+      slots[slot] = ids_[i];
     }
+    std::copy(slots.begin(), slots.end(), ids_ + begin);
     bricks.push_back(Brick{info.bounds.lower, info.minLevel, dims, uint32_t(begin)});
     return true;
   }
 
   /// All cells lie inside one cell of the coarsest level: that cell overlaps the others.
   [[noreturn]] void reportOverlap(size_t begin, size_t end, const NodeInfo& info) const {
-    const Item* coarse = nullptr;
-    const Item* other = nullptr;
+    size_t coarse = end, other = end;
     for (size_t i = begin; i < end; ++i) {
-      const Item& it = items_[i];
-      if (!coarse && it.level == info.maxLevel)
-        coarse = &it;
-      else if (!other)
-        other = &it;
+      if (coarse == end && cells_[i].level == info.maxLevel)
+        coarse = i;
+      else if (other == end)
+        other = i;
     }
-    EXA_CHECK(coarse && other);
-    if (coarse->level == other->level)
-      fail("cells ", std::min(coarse->id, other->id), " and ", std::max(coarse->id, other->id),
-           " are duplicates: both at ", describe(*coarse));
-    fail("cells ", coarse->id, " ", describe(*coarse), " and ", other->id, " ", describe(*other),
+    EXA_CHECK(coarse != end && other != end);
+    if (cells_[coarse].level == cells_[other].level)
+      fail("cells ", std::min(ids_[coarse], ids_[other]), " and ", std::max(ids_[coarse], ids_[other]),
+           " are duplicates: both at ", describe(cells_[coarse]));
+    fail("cells ", ids_[coarse], " ", describe(cells_[coarse]), " and ", ids_[other], " ", describe(cells_[other]),
          " overlap");
   }
 
-  std::vector<Item>& items_;
-  std::vector<uint32_t>& cellOfSlot_;
+  Cell* cells_;
+  uint32_t* ids_;
   int maxWidth_;
 };
 
 } // namespace
 
-BrickBuild buildBricks(const std::vector<Cell>& cells, const BrickBuildOptions& options) {
+BrickBuild buildBricksInPlace(std::vector<Cell>& cells, const BrickBuildOptions& options) {
   if (options.maxBrickWidth < 1) fail("maximum brick width must be at least 1");
   if (cells.size() >= size_t(UINT32_MAX)) fail("too many cells: ", cells.size(), " (limit 2^32-1)");
-  std::vector<Item> items(cells.size());
-  tbb::parallel_for(size_t(0), cells.size(), [&](size_t i) {
-    items[i] = Item{cells[i].lower, cells[i].level, uint32_t(i)};
-  });
   BrickBuild result;
   result.cellOfSlot.resize(cells.size());
+  tbb::parallel_for(size_t(0), cells.size(), [&](size_t i) { result.cellOfSlot[i] = uint32_t(i); });
   if (cells.empty()) return result;
-  Builder builder(items, result.cellOfSlot, options.maxBrickWidth);
-  builder.build(0, items.size());
+  Builder builder(cells.data(), result.cellOfSlot.data(), options.maxBrickWidth);
+  builder.build(0, cells.size());
   result.bricks.assign(builder.bricks.begin(), builder.bricks.end());
   std::sort(result.bricks.begin(), result.bricks.end(),
             [](const Brick& a, const Brick& b) { return a.valueOffset < b.valueOffset; });
   return result;
+}
+
+BrickBuild buildBricks(const std::vector<Cell>& cells, const BrickBuildOptions& options) {
+  std::vector<Cell> copy = cells;
+  return buildBricksInPlace(copy, options);
 }
 
 std::vector<float> toBrickOrder(const std::vector<float>& cellValues,

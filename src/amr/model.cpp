@@ -112,7 +112,8 @@ Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* ke
   model.simulation = cells.simulation;
   Timer timer;
   Progress progress("building bricks and regions", 3);
-  BrickBuild bricks = buildBricks(cells.cells, options.bricks);
+  // A kept structure needs the cells in input order; otherwise the build permutes them in place.
+  BrickBuild bricks = keep ? buildBricks(cells.cells, options.bricks) : buildBricksInPlace(cells.cells, options.bricks);
   progress.advance(1);
   if (keep) {
     keep->cells = std::move(cells.cells);

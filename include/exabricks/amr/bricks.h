@@ -35,6 +35,9 @@ struct BrickBuild {
 /// Builds bricks over the cells (which must have passed validateCells). Deterministic for any
 /// thread count. Throws exa::Error naming the cells when two cells overlap or are duplicates.
 BrickBuild buildBricks(const std::vector<Cell>& cells, const BrickBuildOptions& options = {});
+/// The same, permuting `cells` in place (their order afterwards is unspecified): the build then
+/// needs 4 bytes per cell beyond the cells (cellOfSlot) instead of a copy.
+BrickBuild buildBricksInPlace(std::vector<Cell>& cells, const BrickBuildOptions& options = {});
 
 /// Reorders values given per input cell into brick order.
 std::vector<float> toBrickOrder(const std::vector<float>& cellValues,
