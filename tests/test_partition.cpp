@@ -316,9 +316,15 @@ TEST(Partition, PartsCompositedEqualTheWholeRender) {
   frame.camera = Camera::frame(wb, 35, 25, 40, false);
   Renderer serial(whole, dataset);
   for (int variant = 0; variant < 3; ++variant) {
-    if (variant == 1) { // iso-surfaces and a clip plane
+    if (variant == 1) { // iso-surfaces, a clip plane, and a mesh in the clipped half (meshes are not clipped)
       scene.iso.values = {0.3f};
       scene.clip.planes = {ClipPlane{(wb.lower + wb.upper) * 0.5, normalize(vec3d(1, 0.2, 0))}};
+      auto quad = std::make_shared<TriangleMesh>();
+      const vec3d lo = wb.lower, size = wb.size();
+      quad->vertices = {vec3f(lo + size * vec3d(0.6, 0.1, 0.2)), vec3f(lo + size * vec3d(0.9, 0.1, 0.8)),
+                        vec3f(lo + size * vec3d(0.9, 0.9, 0.8)), vec3f(lo + size * vec3d(0.6, 0.9, 0.2))};
+      quad->triangles = {vec3i(0, 1, 2), vec3i(0, 2, 3)};
+      scene.meshes = {SceneMesh{quad, vec3f(0.8f, 0.3f, 0.2f), {}}};
     }
     if (variant == 2) frame.camera.orthographic = true, frame.camera.orthoHeight = reduceMax(wb.size());
     serial.setScene(scene);

@@ -394,18 +394,21 @@ struct Renderer::Impl {
   /// Restricts a primary ray to the domain box (volume, iso-surfaces and meshes alike).
   void restrictToDomain(DualRay& r) const {
     if (!hasDomain) return;
+    // The domain's interval on its own (meshes that clipping leaves use it), then with the clip.
     for (int a = 0; a < 3; ++a) {
       if (r.dirW[a] == 0.0) {
-        if (r.orgW[a] < domain.lower[a] || r.orgW[a] >= domain.upper[a]) r.sMax = -1.0;
+        if (r.orgW[a] < domain.lower[a] || r.orgW[a] >= domain.upper[a]) r.domainMax = -1.0;
         continue;
       }
       const double ta = (domain.lower[a] - r.orgW[a]) / r.dirW[a];
       const double tb = (domain.upper[a] - r.orgW[a]) / r.dirW[a];
-      r.sMin = std::max(r.sMin, std::min(ta, tb));
-      r.sMax = std::min(r.sMax, std::max(ta, tb));
+      r.domainMin = std::max(r.domainMin, std::min(ta, tb));
+      r.domainMax = std::min(r.domainMax, std::max(ta, tb));
     }
-    r.domainMin = std::max(r.domainMin, r.sMin);
-    r.domainMax = std::min(r.domainMax, r.sMax);
+    if (r.sMax >= r.sMin) { // not clipped away already
+      r.sMin = std::max(r.sMin, r.domainMin);
+      r.sMax = std::min(r.sMax, r.domainMax);
+    }
     setLatticeInterval(r);
   }
 
