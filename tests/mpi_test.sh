@@ -35,8 +35,8 @@ fi
 # composited. A two-level dataset whose refined block and hole straddle the split planes.
 "$py" "$here/write_hole_dataset.py" h.cells
 hscene=(h.cells --size 160x128 --spp 2 --frame-all --range -1,2.3 --opacity 0,0,1,0.6)
-# A mesh (a quad through the middle of the domain) crosses the split planes too.
-printf 'v 4 8 30\nv 60 8 30\nv 60 56 34\nv 4 56 34\nf 1 2 3\nf 1 3 4\n' > quad.obj
+# A mesh (a quad above the clip plane, where only meshes remain) crosses the split planes too.
+printf 'v 10 20 56\nv 54 20 60\nv 54 44 60\nv 10 44 56\nf 1 2 3\nf 1 3 4\n' > quad.obj
 hsurf=("${hscene[@]}" --iso 0.5 --clip-plane 32,32,50,0,0.3,1 --mesh quad.obj)
 check "serial renders of the hole dataset" bash -c "'$exe' -q render ${hscene[*]} -o hv.png --float hv.pfm && '$exe' -q render ${hsurf[*]} -o hs.png --float hs.pfm"
 check "mpirun -np 1 --distribute data equals the serial image bit for bit" bash -c "$(declare -f run); run 1 '$exe' -q render ${hsurf[*]} --distribute data -o d1.png && cmp hs.png d1.png"
