@@ -162,7 +162,7 @@ TEST(Partition, SupportTestMatchesTheBasis) {
         axis = axis || std::abs(x - centre) < double(w);
       reaches = reaches && axis;
     }
-    EXPECT_EQ(supportReaches(lower, level, box), reaches);
+    EXPECT_EQ(supportReaches(Cell{lower, level}.bounds(), level, box), reaches);
   }
 }
 

@@ -67,60 +67,6 @@ bool everyone(bool ok) {
   return ok;
 }
 
-void combineOnRoot(FrameBuffer& buffer) {
-#ifdef EXABRICKS_HAVE_MPI
-  if (state().size <= 1) return;
-  const FrameBuffer::Sums s = buffer.sums();
-  const bool root = state().root();
-  auto reduce = [&](void* data, size_t count, MPI_Datatype type, MPI_Op op) {
-    // In pieces, so that counts stay within int.
-    const size_t chunk = size_t(1) << 28;
-    const size_t bytes = type == MPI_FLOAT ? sizeof(float) : type == MPI_UINT32_T ? 4 : 8;
-    for (size_t at = 0; at < count; at += chunk) {
-      const int n = int(std::min(chunk, count - at));
-      char* p = static_cast<char*>(data) + at * bytes;
-      MPI_Reduce(root ? MPI_IN_PLACE : p, p, n, type, op, 0, MPI_COMM_WORLD);
-    }
-  };
-  reduce(s.colors, 4 * s.pixels, MPI_FLOAT, MPI_SUM);
-  reduce(s.steps, s.pixels, MPI_FLOAT, MPI_SUM);
-  reduce(s.tilePasses, s.tiles, MPI_UINT32_T, MPI_SUM);
-  RenderStats& st = *s.stats;
-  uint64_t counts[7] = {st.rays, st.samples, st.regionsVisited, st.surfaceHits, st.isoSamples, st.aoRays, st.tiles};
-  reduce(counts, 7, MPI_UINT64_T, MPI_SUM);
-  reduce(&st.seconds, 1, MPI_DOUBLE, MPI_MAX);
-  if (root) {
-    st.rays = counts[0];
-    st.samples = counts[1];
-    st.regionsVisited = counts[2];
-    st.surfaceHits = counts[3];
-    st.isoSamples = counts[4];
-    st.aoRays = counts[5];
-    st.tiles = counts[6];
-  }
-#else
-  (void)buffer;
-#endif
-}
-
-bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control) {
-  if (state().size <= 1) return renderer.renderPasses(frame, buffer, frame.samplesPerPixel, control);
-  // Image-parallel: process r renders tiles r, r + N, r + 2N, ... of every pass; the root adds
-  // the shares (random numbers depend on pixel, pass and seed only, so the image is the serial one).
-  control.tileBegin = state().rank;
-  control.tileStride = state().size;
-  Frame pass = frame;
-  bool complete = true;
-  for (int k = 0; k < frame.samplesPerPixel && complete; ++k) {
-    pass.frameIndex = k;
-    complete = renderer.renderPass(pass, buffer, control);
-  }
-  const auto start = std::chrono::steady_clock::now();
-  combineOnRoot(buffer);
-  lastCombineSeconds() = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  return complete;
-}
-
 namespace {
 
 /// Sums the statistics over the processes onto the root (seconds: the slowest process's).
@@ -146,6 +92,49 @@ void reduceStats(RenderStats& st) {
 }
 
 } // namespace
+
+void combineOnRoot(FrameBuffer& buffer) {
+#ifdef EXABRICKS_HAVE_MPI
+  if (state().size <= 1) return;
+  const FrameBuffer::Sums s = buffer.sums();
+  const bool root = state().root();
+  auto reduce = [&](void* data, size_t count, MPI_Datatype type, MPI_Op op) {
+    // In pieces, so that counts stay within int.
+    const size_t chunk = size_t(1) << 28;
+    const size_t bytes = type == MPI_FLOAT ? sizeof(float) : type == MPI_UINT32_T ? 4 : 8;
+    for (size_t at = 0; at < count; at += chunk) {
+      const int n = int(std::min(chunk, count - at));
+      char* p = static_cast<char*>(data) + at * bytes;
+      MPI_Reduce(root ? MPI_IN_PLACE : p, p, n, type, op, 0, MPI_COMM_WORLD);
+    }
+  };
+  reduce(s.colors, 4 * s.pixels, MPI_FLOAT, MPI_SUM);
+  reduce(s.steps, s.pixels, MPI_FLOAT, MPI_SUM);
+  reduce(s.tilePasses, s.tiles, MPI_UINT32_T, MPI_SUM);
+  reduceStats(*s.stats);
+#else
+  (void)buffer;
+#endif
+}
+
+bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control) {
+  if (state().size <= 1) return renderer.renderPasses(frame, buffer, frame.samplesPerPixel, control);
+  // Image-parallel: process r renders tiles r, r + N, r + 2N, ... of every pass; the root adds
+  // the shares (random numbers depend on pixel, pass and seed only, so the image is the serial one).
+  control.tileBegin = state().rank;
+  control.tileStride = state().size;
+  Frame pass = frame;
+  bool complete = true;
+  for (int k = 0; k < frame.samplesPerPixel && complete; ++k) {
+    pass.frameIndex = k;
+    complete = renderer.renderPass(pass, buffer, control);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  combineOnRoot(buffer);
+  lastCombineSeconds() = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return complete;
+}
+
 
 bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBuffer& buffer,
                            const std::vector<int>& order, PassControl control) {

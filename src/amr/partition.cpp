@@ -79,7 +79,7 @@ void keepSupportOf(CellSet& set, const box3l& part) {
   size_t kept = 0;
   for (size_t i = 0; i < set.cells.size(); ++i) {
     const Cell& c = set.cells[i];
-    if (!supportReaches(c.lower, c.level, part)) continue;
+    if (!supportReaches(c.bounds(), c.level, part)) continue;
     set.cells[kept] = c;
     for (Field& f : set.fields) f.values[kept] = f.values[i];
     ++kept;

@@ -82,11 +82,7 @@ void cropCells(CellSet& set, const box3i& box) {
   size_t kept = 0;
   for (size_t i = 0; i < set.cells.size(); ++i) {
     const Cell& c = set.cells[i];
-    const int64_t w = int64_t(1) << c.level;
-    bool inside = true;
-    for (int a = 0; a < 3; ++a)
-      inside = inside && int64_t(c.lower[a]) + w > box.lower[a] && c.lower[a] < box.upper[a];
-    if (!inside) continue;
+    if (!cellOverlaps(c, box)) continue;
     set.cells[kept] = c;
     for (Field& f : set.fields) f.values[kept] = f.values[i];
     ++kept;
@@ -174,20 +170,6 @@ Census loadCensus(const std::string& path, const LoadOptions& options) {
   return census.finish();
 }
 
-namespace {
-
-/// Whether the supports of a brick's cells (the brick grown by half a cell) reach into `part`.
-bool brickSupportReaches(const Brick& b, const box3l& part) {
-  const box3i bb = b.bounds();
-  const int64_t w = b.cellWidth();
-  for (int a = 0; a < 3; ++a)
-    if (!(2 * int64_t(bb.lower[a]) - w < 2 * part.upper[a] && 2 * int64_t(bb.upper[a]) + w > 2 * part.lower[a]))
-      return false;
-  return true;
-}
-
-} // namespace
-
 std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& options, const box3l& part,
                                    int coarsestLevel) {
   const std::string source = path.empty() ? kDefaultDatasetName : path;
@@ -201,7 +183,7 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     m.fieldValues.resize(all.fieldValues.size());
     uint64_t offset = 0;
     for (const Brick& b : all.bricks) {
-      if (!brickSupportReaches(b, part)) continue;
+      if (!supportReaches(b.bounds(), b.level, part)) continue;
       Brick kept = b;
       kept.valueOffset = uint32_t(offset);
       for (size_t f = 0; f < all.fieldValues.size(); ++f)

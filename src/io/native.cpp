@@ -285,6 +285,34 @@ std::vector<float> readSelectedValues(const std::string& path, const std::string
   return out;
 }
 
+/// The fields to read: those asked for, else every NAME[.FIELD].scalars beside the cells.
+std::vector<std::string> fieldNamesToRead(const std::string& cellsPath, const std::string& stem,
+                                          const std::vector<std::string>& wanted) {
+  std::vector<std::string> names = wanted;
+  if (names.empty()) names = listNativeFields(cellsPath);
+  if (names.empty())
+    fail(cellsPath, ": no field files (expected ", stem, ".scalars or ", stem, ".FIELD.scalars)");
+  return names;
+}
+
+/// The values file of a field, checked to exist and to hold one float32 per cell.
+std::string checkedScalarsPath(const std::string& cellsPath, const std::string& stem, const std::string& name,
+                               uint64_t cellCount) {
+  const std::string path = scalarsPath(stem, name);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) {
+    std::string known;
+    for (const std::string& f : listNativeFields(cellsPath)) known += (known.empty() ? "" : ", ") + f;
+    fail(cellsPath, ": unknown field '", name, "' (no file ", path, "; fields: ", known, ")");
+  }
+  const uint64_t bytes = fileSize(path);
+  if (bytes % sizeof(float) != 0)
+    fail(path, ": truncated record ", bytes / sizeof(float), ": file size ", bytes, " is not a multiple of 4");
+  if (bytes / sizeof(float) != cellCount)
+    fail(path, ": size mismatch: ", bytes / sizeof(float), " values for ", cellCount, " cells in ", cellsPath);
+  return path;
+}
+
 } // namespace
 
 Census nativeCensus(const std::string& cellsPath) {
@@ -303,34 +331,14 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
     uint64_t count = 0;
     streamCells(cellsPath, [&](const Cell* cells, size_t n, uint64_t at) {
       for (size_t i = 0; i < n; ++i) {
-        const Cell& c = cells[i];
-        const int64_t w = int64_t(1) << c.level;
-        bool inside = true;
-        for (int a = 0; a < 3; ++a)
-          inside = inside && int64_t(c.lower[a]) + w > box.lower[a] && c.lower[a] < box.upper[a];
-        if (!inside) continue;
+        if (!cellOverlaps(cells[i], box)) continue;
         keep.push_back(at + i);
-        set.cells.push_back(c);
+        set.cells.push_back(cells[i]);
       }
       count = at + n;
     });
-    std::vector<std::string> names = wanted;
-    if (names.empty()) names = listNativeFields(cellsPath);
-    if (names.empty())
-      fail(cellsPath, ": no field files (expected ", stem, ".scalars or ", stem, ".FIELD.scalars)");
-    for (const std::string& name : names) {
-      const std::string path = scalarsPath(stem, name);
-      std::error_code ec;
-      if (!fs::exists(path, ec)) {
-        std::string known;
-        for (const std::string& f : listNativeFields(cellsPath)) known += (known.empty() ? "" : ", ") + f;
-        fail(cellsPath, ": unknown field '", name, "' (no file ", path, "; fields: ", known, ")");
-      }
-      const uint64_t bytes = fileSize(path);
-      if (bytes % sizeof(float) != 0)
-        fail(path, ": truncated record ", bytes / sizeof(float), ": file size ", bytes, " is not a multiple of 4");
-      if (bytes / sizeof(float) != count)
-        fail(path, ": size mismatch: ", bytes / sizeof(float), " values for ", count, " cells in ", cellsPath);
+    for (const std::string& name : fieldNamesToRead(cellsPath, stem, wanted)) {
+      const std::string path = checkedScalarsPath(cellsPath, stem, name, count);
       set.fields.push_back(Field{name, readSelectedValues(path, name, count, keep)});
     }
     return set;
@@ -347,26 +355,9 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
   }
   validateCellRecords(set.cells, cellsPath);
 
-  std::vector<std::string> names = wanted;
-  if (names.empty()) names = listNativeFields(cellsPath);
-  if (names.empty())
-    fail(cellsPath, ": no field files (expected ", stem, ".scalars or ", stem,
-         ".FIELD.scalars)");
-  for (const std::string& name : names) {
-    const std::string path = scalarsPath(stem, name);
-    std::error_code ec;
-    if (!fs::exists(path, ec)) {
-      std::string known;
-      for (const std::string& f : listNativeFields(cellsPath)) known += (known.empty() ? "" : ", ") + f;
-      fail(cellsPath, ": unknown field '", name, "' (no file ", path, "; fields: ", known, ")");
-    }
-    const uint64_t bytes = fileSize(path);
-    if (bytes % sizeof(float) != 0)
-      fail(path, ": truncated record ", bytes / sizeof(float), ": file size ", bytes,
-           " is not a multiple of 4");
-    if (bytes / sizeof(float) != set.cells.size())
-      fail(path, ": size mismatch: ", bytes / sizeof(float), " values for ", set.cells.size(),
-           " cells in ", cellsPath);
+  for (const std::string& name : fieldNamesToRead(cellsPath, stem, wanted)) {
+    const std::string path = checkedScalarsPath(cellsPath, stem, name, set.cells.size());
+    const uint64_t bytes = set.cells.size() * sizeof(float);
     Field field{name, std::vector<float>(set.cells.size())};
     readInto(path, field.values.data(), bytes);
     validateFieldValues(field, set.cells.size(), path);

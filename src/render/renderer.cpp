@@ -607,6 +607,12 @@ struct Renderer::Impl {
       // midpoint and weighted by its length.
       float a = std::max(seg.t0, ray.tmin);
       float k = std::floor(a / dt - rho) + 1.f;
+      // The end of the interval that starts at a: the next sample position, or one step on where
+      // float round-off put that at or before a; not beyond a when float resolution runs out.
+      auto intervalEnd = [&] {
+        const float b = std::min((k + rho) * dt, segEnd);
+        return b > a ? b : std::min(a + dt, segEnd);
+      };
       if (batched) {
         const LayerTable& layer = layers[0];
         SampleBatch batch;
@@ -615,8 +621,7 @@ struct Renderer::Impl {
           // The next samples of the segment, exactly as the scalar loop below places them.
           int n = 0;
           while (n < kSampleBatch && a < segEnd) {
-            float b = std::min((k + rho) * dt, segEnd);
-            if (!(b > a)) b = std::min(a + dt, segEnd);
+            const float b = intervalEnd();
             if (!(b > a)) break;
             k += 1.f;
             lengths[n] = b - a;
@@ -671,8 +676,7 @@ struct Renderer::Impl {
         return true;
       }
       while (a < segEnd) {
-        float b = std::min((k + rho) * dt, segEnd);
-        if (!(b > a)) b = std::min(a + dt, segEnd); // guards float round-off
+        const float b = intervalEnd();
         if (!(b > a)) break;
         k += 1.f;
         const float len = b - a;

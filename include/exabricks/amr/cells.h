@@ -27,6 +27,14 @@ struct Cell {
 };
 static_assert(sizeof(Cell) == 16, "Cell must match the 16-byte native record");
 
+/// Whether a cell overlaps the lattice box [lower, upper).
+inline bool cellOverlaps(const Cell& c, const box3i& box) {
+  const int64_t w = int64_t(1) << c.level;
+  for (int a = 0; a < 3; ++a)
+    if (!(int64_t(c.lower[a]) + w > box.lower[a] && c.lower[a] < box.upper[a])) return false;
+  return true;
+}
+
 /// A named scalar field with one value per cell, in cell order.
 struct Field {
   std::string name;

@@ -57,14 +57,14 @@ private:
 /// The census of built bricks.
 Census censusOfBricks(const std::vector<Brick>& bricks);
 
-/// Whether the basis support of a cell (its centre +- its width, open) reaches into the lattice
-/// box [lower, upper).
-inline bool supportReaches(const vec3i& lower, int level, const box3l& box) {
+/// Whether the basis supports of same-level cells of width 2^level that fill the lattice box
+/// `cells` (one cell, or a brick) reach into the lattice box [lower, upper): each support is
+/// the cell's centre +- its width (open), so together they are `cells` grown by half a width.
+inline bool supportReaches(const box3i& cells, int level, const box3l& box) {
   const int64_t w = int64_t(1) << level;
-  for (int a = 0; a < 3; ++a) {
-    const int64_t c2 = 2 * int64_t(lower[a]); // doubled units: the support is (2c - w, 2c + 3w)
-    if (!(c2 - w < 2 * box.upper[a] && c2 + 3 * w > 2 * box.lower[a])) return false;
-  }
+  for (int a = 0; a < 3; ++a) // doubled units: (2 lower - w, 2 upper + w)
+    if (!(2 * int64_t(cells.lower[a]) - w < 2 * box.upper[a] && 2 * int64_t(cells.upper[a]) + w > 2 * box.lower[a]))
+      return false;
   return true;
 }
 
