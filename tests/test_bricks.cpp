@@ -126,3 +126,57 @@ TEST(Bricks, OverlapsAndDuplicatesAreReported) {
     EXPECT_NE(m.find("1234"), std::string::npos) << m;
   }
 }
+
+TEST(Bricks, ReorderingInPlaceEqualsIndexedBuild) {
+  for (const auto& d : smallDatasets()) {
+    SCOPED_TRACE(d.name);
+    for (int width : {32, 3}) {
+      const BrickBuild indexed = buildBricks(d.cells.cells, {width});
+      std::vector<Cell> cells = d.cells.cells;
+      std::vector<std::vector<float>> values;
+      std::vector<std::vector<float>*> arrays;
+      for (const Field& f : d.cells.fields) values.push_back(f.values);
+      for (auto& v : values) arrays.push_back(&v);
+      const std::vector<Brick> bricks = buildBricksReordering(cells, arrays, {width});
+      ASSERT_EQ(bricks.size(), indexed.bricks.size());
+      for (size_t i = 0; i < bricks.size(); ++i) {
+        EXPECT_EQ(bricks[i].lower, indexed.bricks[i].lower);
+        EXPECT_EQ(bricks[i].level, indexed.bricks[i].level);
+        EXPECT_EQ(bricks[i].size, indexed.bricks[i].size);
+        EXPECT_EQ(bricks[i].valueOffset, indexed.bricks[i].valueOffset);
+      }
+      for (size_t f = 0; f < values.size(); ++f)
+        EXPECT_EQ(values[f], toBrickOrder(d.cells.fields[f].values, indexed.cellOfSlot)) << "field " << f;
+    }
+  }
+}
+
+TEST(Bricks, ReorderingConflictsAreLocatedInTheInput) {
+  // Each case: the in-place build throws CellConflict; located in the input it reads exactly as
+  // the indexed build's message.
+  auto check = [](const std::vector<Cell>& input) {
+    std::string indexed = "no error";
+    try {
+      buildBricks(input);
+    } catch (const Error& e) {
+      indexed = e.what();
+    }
+    std::vector<Cell> cells = input;
+    std::vector<float> values(cells.size(), 1.0f);
+    try {
+      buildBricksReordering(cells, {&values});
+      ADD_FAILURE() << "no conflict reported";
+    } catch (const CellConflict& c) {
+      EXPECT_EQ(locateConflict(c, input), indexed);
+    }
+  };
+  check({{vec3i(0, 0, 0), 0}, {vec3i(4, 4, 4), 2}, {vec3i(5, 6, 7), 0}});
+  check({{vec3i(0, 0, 0), 1}, {vec3i(2, 0, 0), 1}, {vec3i(0, 0, 0), 1}});
+  check({{vec3i(0, 0, 0), 0}, {vec3i(0, 0, 0), 0}, {vec3i(2, 0, 0), 0}});
+  CellSet s = generateScene({"blobs", 5000, 1, 3});
+  s.cells.push_back(s.cells[1234]);
+  check(s.cells);
+  s.cells.back() = Cell{s.cells[77].lower, s.cells[77].level + 1};
+  s.cells.back().lower = s.cells.back().lower / 2 * 2;
+  check(s.cells);
+}

@@ -38,12 +38,19 @@ std::string describe(const Cell& c) {
   return strCat("(", c.lower.x, ",", c.lower.y, ",", c.lower.z, ") level ", c.level);
 }
 
-/// Builds bricks by permuting the cells and their input indices together in place (the indices
-/// end in brick-slot order: they become cellOfSlot), so that the build needs 4 bytes per cell
-/// beyond the cells themselves.
+/// The message for two conflicting input cells, `a` (index ia) and `b` (index ib).
+std::string conflictText(uint64_t ia, const Cell& a, uint64_t ib, const Cell& b, bool duplicate) {
+  if (duplicate) return strCat("cells ", std::min(ia, ib), " and ", std::max(ia, ib), " are duplicates: both at ", describe(a));
+  return strCat("cells ", ia, " ", describe(a), " and ", ib, " ", describe(b), " overlap");
+}
+
+/// Builds bricks by permuting the cells in place together with what travels with them: their
+/// input indices (which end in brick-slot order and become cellOfSlot) and/or the field values
+/// (which end in brick order).
 class Builder {
 public:
-  Builder(Cell* cells, uint32_t* ids, int maxWidth) : cells_(cells), ids_(ids), maxWidth_(maxWidth) {}
+  Builder(Cell* cells, uint32_t* ids, std::vector<float*> values, int maxWidth)
+      : cells_(cells), ids_(ids), values_(std::move(values)), maxWidth_(maxWidth) {}
 
   void build(size_t begin, size_t end) {
     const NodeInfo info = analyze(begin, end);
@@ -93,7 +100,8 @@ private:
       while (i < j && !(cells_[j - 1].lower[axis] < split)) --j;
       if (i >= j) return i;
       std::swap(cells_[i], cells_[j - 1]);
-      std::swap(ids_[i], ids_[j - 1]);
+      if (ids_) std::swap(ids_[i], ids_[j - 1]);
+      for (float* v : values_) std::swap(v[i], v[j - 1]);
       ++i, --j;
     }
   }
@@ -123,17 +131,25 @@ private:
     if (reduceMax(dims) > maxWidth_) return false;
     const uint64_t volume = uint64_t(dims.x) * uint64_t(dims.y) * uint64_t(dims.z);
     if (volume != end - begin) return false;
-    // The indices into slot order (x fastest) through a buffer of the brick's size.
-    std::vector<uint32_t> slots(end - begin, UINT32_MAX);
+    // What travels with the cells goes into slot order (x fastest) through buffers of the
+    // brick's size: `local` holds the cell (from begin) at each slot.
+    std::vector<uint32_t> local(end - begin, UINT32_MAX);
     for (size_t i = begin; i < end; ++i) {
       const vec3i c = (cells_[i].lower - info.bounds.lower) / w;
       const size_t slot = size_t(c.x) + size_t(dims.x) * (size_t(c.y) + size_t(dims.y) * c.z);
-      if (slots[slot] != UINT32_MAX)
-        fail("cells ", std::min(slots[slot], ids_[i]), " and ", std::max(slots[slot], ids_[i]),
-             " are duplicates: both at ", describe(cells_[i]));
-      slots[slot] = ids_[i];
+      if (local[slot] != UINT32_MAX) conflict(begin + local[slot], i, true);
+      local[slot] = uint32_t(i - begin);
     }
-    std::copy(slots.begin(), slots.end(), ids_ + begin);
+    if (ids_) {
+      std::vector<uint32_t> ordered(local.size());
+      for (size_t s = 0; s < local.size(); ++s) ordered[s] = ids_[begin + local[s]];
+      std::copy(ordered.begin(), ordered.end(), ids_ + begin);
+    }
+    std::vector<float> ordered(values_.empty() ? 0 : local.size());
+    for (float* v : values_) {
+      for (size_t s = 0; s < local.size(); ++s) ordered[s] = v[begin + local[s]];
+      std::copy(ordered.begin(), ordered.end(), v + begin);
+    }
     bricks.push_back(Brick{info.bounds.lower, info.minLevel, dims, uint32_t(begin)});
     return true;
   }
@@ -148,33 +164,78 @@ private:
         other = i;
     }
     EXA_CHECK(coarse != end && other != end);
-    if (cells_[coarse].level == cells_[other].level)
-      fail("cells ", std::min(ids_[coarse], ids_[other]), " and ", std::max(ids_[coarse], ids_[other]),
-           " are duplicates: both at ", describe(cells_[coarse]));
-    fail("cells ", ids_[coarse], " ", describe(cells_[coarse]), " and ", ids_[other], " ", describe(cells_[other]),
-         " overlap");
+    conflict(coarse, other, cells_[coarse].level == cells_[other].level);
+  }
+
+  /// Cells i and j (positions in the work arrays) conflict: named by their input indices where
+  /// those travel with the cells, else by position only.
+  [[noreturn]] void conflict(size_t i, size_t j, bool duplicate) const {
+    if (ids_) throw Error(conflictText(ids_[i], cells_[i], ids_[j], cells_[j], duplicate));
+    throw CellConflict(cells_[i], cells_[j], duplicate);
   }
 
   Cell* cells_;
   uint32_t* ids_;
+  std::vector<float*> values_;
   int maxWidth_;
 };
 
+/// Runs the builder; returns the bricks in value order.
+std::vector<Brick> runBuilder(std::vector<Cell>& cells, uint32_t* ids, std::vector<float*> values,
+                              const BrickBuildOptions& options) {
+  std::vector<Brick> bricks;
+  if (cells.empty()) return bricks;
+  Builder builder(cells.data(), ids, std::move(values), options.maxBrickWidth);
+  builder.build(0, cells.size());
+  bricks.assign(builder.bricks.begin(), builder.bricks.end());
+  std::sort(bricks.begin(), bricks.end(), [](const Brick& a, const Brick& b) { return a.valueOffset < b.valueOffset; });
+  return bricks;
+}
+
+void checkBuildInput(size_t cellCount, const BrickBuildOptions& options) {
+  if (options.maxBrickWidth < 1) fail("maximum brick width must be at least 1");
+  if (cellCount >= size_t(UINT32_MAX)) fail("too many cells: ", cellCount, " (limit 2^32-1)");
+}
+
 } // namespace
 
+CellConflict::CellConflict(const Cell& a, const Cell& b, bool isDuplicate)
+    : Error(isDuplicate ? strCat("two cells are duplicates: both at ", describe(a))
+                        : strCat("cell ", describe(a), " and cell ", describe(b), " overlap")),
+      first(a), second(b), duplicate(isDuplicate) {}
+
+std::string locateConflict(const CellConflict& c, const std::vector<Cell>& cells) {
+  // The first occurrence of each cell; for duplicates, the first two.
+  const size_t none = cells.size();
+  size_t ia = none, ib = none;
+  for (size_t i = 0; i < cells.size() && (ia == none || ib == none); ++i) {
+    if (ia == none && cells[i] == c.first)
+      ia = i;
+    else if (ib == none && cells[i] == c.second)
+      ib = i;
+  }
+  if (ia == none || ib == none) return c.what();
+  return conflictText(ia, c.first, ib, c.second, c.duplicate);
+}
+
 BrickBuild buildBricksInPlace(std::vector<Cell>& cells, const BrickBuildOptions& options) {
-  if (options.maxBrickWidth < 1) fail("maximum brick width must be at least 1");
-  if (cells.size() >= size_t(UINT32_MAX)) fail("too many cells: ", cells.size(), " (limit 2^32-1)");
+  checkBuildInput(cells.size(), options);
   BrickBuild result;
   result.cellOfSlot.resize(cells.size());
   tbb::parallel_for(size_t(0), cells.size(), [&](size_t i) { result.cellOfSlot[i] = uint32_t(i); });
-  if (cells.empty()) return result;
-  Builder builder(cells.data(), result.cellOfSlot.data(), options.maxBrickWidth);
-  builder.build(0, cells.size());
-  result.bricks.assign(builder.bricks.begin(), builder.bricks.end());
-  std::sort(result.bricks.begin(), result.bricks.end(),
-            [](const Brick& a, const Brick& b) { return a.valueOffset < b.valueOffset; });
+  result.bricks = runBuilder(cells, result.cellOfSlot.data(), {}, options);
   return result;
+}
+
+std::vector<Brick> buildBricksReordering(std::vector<Cell>& cells, const std::vector<std::vector<float>*>& values,
+                                         const BrickBuildOptions& options) {
+  checkBuildInput(cells.size(), options);
+  std::vector<float*> arrays;
+  for (std::vector<float>* v : values) {
+    EXA_CHECK(v->size() == cells.size(), "one value per cell");
+    arrays.push_back(v->data());
+  }
+  return runBuilder(cells, nullptr, std::move(arrays), options);
 }
 
 BrickBuild buildBricks(const std::vector<Cell>& cells, const BrickBuildOptions& options) {

@@ -112,22 +112,32 @@ Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* ke
   model.simulation = cells.simulation;
   Timer timer;
   Progress progress("building bricks and regions", 3);
-  // A kept structure needs the cells in input order; otherwise the build permutes them in place.
-  BrickBuild bricks = keep ? buildBricks(cells.cells, options.bricks) : buildBricksInPlace(cells.cells, options.bricks);
-  progress.advance(1);
   if (keep) {
+    // A kept structure needs the cells in input order and their slots for the next values.
+    BrickBuild bricks = buildBricks(cells.cells, options.bricks);
+    progress.advance(1);
     keep->cells = std::move(cells.cells);
     keep->world = cells.world;
     keep->bricks = options.bricks;
+    model.bricks = std::move(bricks.bricks);
+    for (Field& f : cells.fields) {
+      model.fieldNames.push_back(f.name);
+      model.fieldValues.push_back(toBrickOrder(f.values, bricks.cellOfSlot));
+      std::vector<float>().swap(f.values);
+    }
+    keep->cellOfSlot = std::move(bricks.cellOfSlot);
+  } else {
+    // Otherwise the cells and values are permuted in place: no memory beyond them.
+    std::vector<std::vector<float>*> values;
+    for (Field& f : cells.fields) values.push_back(&f.values);
+    model.bricks = buildBricksReordering(cells.cells, values, options.bricks);
+    progress.advance(1);
+    std::vector<Cell>().swap(cells.cells);
+    for (Field& f : cells.fields) {
+      model.fieldNames.push_back(f.name);
+      model.fieldValues.push_back(std::move(f.values));
+    }
   }
-  std::vector<Cell>().swap(cells.cells);
-  model.bricks = std::move(bricks.bricks);
-  for (Field& f : cells.fields) {
-    model.fieldNames.push_back(f.name);
-    model.fieldValues.push_back(toBrickOrder(f.values, bricks.cellOfSlot));
-    std::vector<float>().swap(f.values);
-  }
-  if (keep) keep->cellOfSlot = std::move(bricks.cellOfSlot);
   model.stats.brickSeconds = timer.seconds();
   logInfo(strCat("built ", model.bricks.size(), " bricks in ", model.stats.brickSeconds, " s"));
   progress.advance(1);

@@ -133,10 +133,14 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
   }
   CellSet cells = loadCells(path, options);
   logInfo(strCat("read ", cells.size(), " cells in ", timer.seconds(), " s"));
+  const std::string source = path.empty() ? kDefaultDatasetName : path;
   try {
     return buildModel(std::move(cells), options.build);
+  } catch (const CellConflict& c) {
+    // The build permuted the cells; the input, read again, names the two by index.
+    throw Error(strCat(source, ": ", locateConflict(c, loadCells(path, options).cells)));
   } catch (const Error& e) {
-    throw Error(strCat(path.empty() ? kDefaultDatasetName : path, ": ", e.what()));
+    throw Error(strCat(source, ": ", e.what()));
   }
 }
 

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/core/error.h"
 
 #include <cstdint>
 #include <vector>
@@ -38,6 +39,26 @@ BrickBuild buildBricks(const std::vector<Cell>& cells, const BrickBuildOptions& 
 /// The same, permuting `cells` in place (their order afterwards is unspecified): the build then
 /// needs 4 bytes per cell beyond the cells (cellOfSlot) instead of a copy.
 BrickBuild buildBricksInPlace(std::vector<Cell>& cells, const BrickBuildOptions& options = {});
+
+/// Two input cells that cannot both be leaves: duplicates, or one overlapping the other. Thrown by
+/// buildBricksReordering, whose cells no longer know their input indices: the message names
+/// their positions, and locateConflict names their indices given the input cells.
+class CellConflict : public Error {
+public:
+  CellConflict(const Cell& first, const Cell& second, bool duplicate);
+  Cell first, second;
+  bool duplicate;
+};
+
+/// The message buildBricks would give for the conflict: the two cells with their indices in
+/// `cells` (the input as it was before the build).
+std::string locateConflict(const CellConflict& conflict, const std::vector<Cell>& cells);
+
+/// Builds bricks permuting `cells` and every array in `values` (one value per cell each) in
+/// place: afterwards the values are in brick order and the cells' order is unspecified. Needs no
+/// memory per cell beyond its arguments. Throws CellConflict when two cells overlap.
+std::vector<Brick> buildBricksReordering(std::vector<Cell>& cells, const std::vector<std::vector<float>*>& values,
+                                         const BrickBuildOptions& options = {});
 
 /// Reorders values given per input cell into brick order.
 std::vector<float> toBrickOrder(const std::vector<float>& cellValues,
