@@ -76,6 +76,35 @@ TEST_F(IoTest, NativeRoundTripWithSeveralFields) {
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "temporary file left";
 }
 
+TEST_F(IoTest, NativeWriterInPiecesEqualsWholeWrite) {
+  const CellSet s = generateScene({"blobs", 3000, 2, 3});
+  writeNative(s, path("whole.cells"));
+  {
+    NativeWriter writer(path("pieces.cells"), {"scalar", "radius"});
+    for (size_t begin = 0; begin < s.cells.size(); begin += 777) {
+      const size_t end = std::min(s.cells.size(), begin + 777);
+      CellSet piece;
+      piece.cells.assign(s.cells.begin() + long(begin), s.cells.begin() + long(end));
+      for (const Field& f : s.fields)
+        piece.fields.push_back({f.name, std::vector<float>(f.values.begin() + long(begin), f.values.begin() + long(end))});
+      writer.append(piece);
+      EXPECT_FALSE(fs::exists(path("pieces.cells"))) << "nothing is published before finish";
+    }
+    writer.finish();
+  }
+  for (const char* suffix : {".cells", ".scalars", ".radius.scalars"})
+    EXPECT_EQ(readFile(path(std::string("whole") + suffix)), readFile(path(std::string("pieces") + suffix))) << suffix;
+  {
+    // A writer dropped before finish() leaves nothing behind.
+    NativeWriter writer(path("dropped.cells"), {"scalar", "radius"});
+    writer.append(s);
+  }
+  for (const auto& entry : fs::directory_iterator(dir)) {
+    EXPECT_EQ(entry.path().string().find("dropped"), std::string::npos) << entry.path();
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << "temporary file left";
+  }
+}
+
 TEST_F(IoTest, GridsFixtureConstantAndTrilinear) {
   writeText("g.grids", "# a comment\n0 0 0 2 1 1 1 5.0\n\n4 0 0 2 2 2 0 0 1 0 1 0 1 0 1  # x ramp\n");
   const CellSet s = readGrids(path("g.grids"));

@@ -58,3 +58,32 @@ TEST(Scenes, BadOptionsAreRejected) {
   EXPECT_THROW(generateScene({"blobs", 0, 1, 4}), Error);
   EXPECT_THROW(generateScene({"blobs", 100, 1, 0}), Error);
 }
+
+TEST(Scenes, PiecesConcatenateToTheWholeScene) {
+  for (const SceneInfo& info : sceneList()) {
+    SCOPED_TRACE(info.name);
+    const CellSet whole = generateScene({info.name, 20000, 2, 4});
+    for (int slabs : {1, 3}) {
+      CellSet joined;
+      int pieces = 0;
+      const uint64_t n = generateScenePieces({info.name, 20000, 2, 4}, slabs, [&](CellSet& piece) {
+        ++pieces;
+        joined.cells.insert(joined.cells.end(), piece.cells.begin(), piece.cells.end());
+        joined.fields.resize(piece.fields.size());
+        for (size_t f = 0; f < piece.fields.size(); ++f) {
+          joined.fields[f].name = piece.fields[f].name;
+          joined.fields[f].values.insert(joined.fields[f].values.end(), piece.fields[f].values.begin(),
+                                         piece.fields[f].values.end());
+        }
+      });
+      EXPECT_GT(pieces, 1);
+      EXPECT_EQ(n, whole.cells.size());
+      EXPECT_EQ(joined.cells, whole.cells);
+      ASSERT_EQ(joined.fields.size(), whole.fields.size());
+      for (size_t f = 0; f < whole.fields.size(); ++f) {
+        EXPECT_EQ(joined.fields[f].name, whole.fields[f].name);
+        EXPECT_EQ(joined.fields[f].values, whole.fields[f].values);
+      }
+    }
+  }
+}

@@ -6,7 +6,11 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/native.h"
 
+#include <tbb/task_arena.h>
+
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -24,6 +28,9 @@ struct GenerateOptions {
   bool json = false;
 };
 
+/// Slabs generated at once when streaming to disk: enough to keep every thread busy.
+int slabsPerPiece() { return 4 * int(std::max<size_t>(1, tbb::this_task_arena::max_concurrency())); }
+
 void run(const GenerateOptions& o) {
   if (o.list) {
     for (const SceneInfo& s : sceneList()) std::printf("%-8s %s\n", s.name.c_str(), s.description.c_str());
@@ -37,10 +44,19 @@ void run(const GenerateOptions& o) {
   std::vector<std::string> outputs;
   uint64_t cellCount = 0;
   if (o.steps == 0) {
-    const CellSet cells = generateScene(o.scene);
-    validateCells(cells, o.scene.name);
-    writeNative(cells, o.output);
-    cellCount = cells.size();
+    // Written as it is generated, a few slabs at a time: memory for those alone.
+    std::unique_ptr<NativeWriter> writer;
+    cellCount = generateScenePieces(o.scene, slabsPerPiece(), [&](CellSet& piece) {
+      validateCellRecords(piece.cells, o.scene.name);
+      for (const Field& f : piece.fields) validateFieldValues(f, piece.cells.size(), o.scene.name);
+      if (!writer) {
+        std::vector<std::string> names;
+        for (const Field& f : piece.fields) names.push_back(f.name);
+        writer = std::make_unique<NativeWriter>(o.output, names);
+      }
+      writer->append(piece);
+    });
+    writer->finish();
     outputs.push_back(o.output);
   } else {
     // NAME.cells -> NAME_0000.cells, NAME_0001.cells, ...: one dataset per step, on one lattice.

@@ -271,7 +271,8 @@ SceneOptions resolveSceneSize(const SceneOptions& o) {
   return resolved;
 }
 
-CellSet generateScene(const SceneOptions& options) {
+uint64_t generateScenePieces(const SceneOptions& options, int slabsPerPiece,
+                             const std::function<void(CellSet&)>& consume) {
   const SceneOptions o = options.base > 0 ? options : resolveSceneSize(options);
   if (o.levels < 1 || o.levels > 12) fail("levels must be between 1 and 12, got ", o.levels);
   if (o.base < 1 || o.base > 2048) fail("base resolution must be between 1 and 2048, got ", o.base);
@@ -282,36 +283,50 @@ CellSet generateScene(const SceneOptions& options) {
   if (uint64_t(base) * w > uint64_t(kLatticeLimit)) fail("requested size is too large");
 
   const double unit = 1.0 / (double(base) * w);
-  std::vector<Output> slabs(static_cast<size_t>(base));
+  const int batch = std::clamp(slabsPerPiece, 1, base);
   Progress progress("generating " + o.name, uint64_t(base));
-  tbb::parallel_for(0, base, [&](int z) {
-    Output& out = slabs[size_t(z)];
-    out.values.resize(scene.fieldNames.size());
-    for (int y = 0; y < base; ++y)
-      for (int x = 0; x < base; ++x) refine(scene, vec3i(x, y, z) * w, maxLevel, unit, &out);
-    progress.advance(1);
-  });
-  progress.finish();
-
-  CellSet set;
-  size_t total = 0;
-  for (const Output& s : slabs) total += s.cells.size();
-  if (total == 0) fail("scene '", o.name, "' produced no cells at this size");
-  if (total >= (uint64_t(1) << 32) - 1) fail("scene produced too many cells: ", total);
-  set.cells.reserve(total);
-  set.fields.resize(scene.fieldNames.size());
-  for (size_t f = 0; f < scene.fieldNames.size(); ++f) {
-    set.fields[f].name = scene.fieldNames[f];
-    set.fields[f].values.reserve(total);
-  }
-  for (Output& s : slabs) {
-    set.cells.insert(set.cells.end(), s.cells.begin(), s.cells.end());
-    std::vector<Cell>().swap(s.cells);
-    for (size_t f = 0; f < s.values.size(); ++f) {
-      set.fields[f].values.insert(set.fields[f].values.end(), s.values[f].begin(), s.values[f].end());
-      std::vector<float>().swap(s.values[f]);
+  uint64_t total = 0;
+  for (int z0 = 0; z0 < base; z0 += batch) {
+    const int n = std::min(batch, base - z0);
+    std::vector<Output> slabs(static_cast<size_t>(n));
+    tbb::parallel_for(0, n, [&](int i) {
+      Output& out = slabs[size_t(i)];
+      out.values.resize(scene.fieldNames.size());
+      for (int y = 0; y < base; ++y)
+        for (int x = 0; x < base; ++x) refine(scene, vec3i(x, y, z0 + i) * w, maxLevel, unit, &out);
+      progress.advance(1);
+    });
+    // The piece: the slabs in z order, each freed as it is appended.
+    CellSet piece;
+    size_t cells = 0;
+    for (const Output& slab : slabs) cells += slab.cells.size();
+    total += cells;
+    if (total >= (uint64_t(1) << 32) - 1) fail("scene produced too many cells: more than ", total - 1);
+    piece.cells.reserve(cells);
+    piece.fields.resize(scene.fieldNames.size());
+    for (size_t f = 0; f < scene.fieldNames.size(); ++f) {
+      piece.fields[f].name = scene.fieldNames[f];
+      piece.fields[f].values.reserve(cells);
     }
+    for (Output& slab : slabs) {
+      piece.cells.insert(piece.cells.end(), slab.cells.begin(), slab.cells.end());
+      std::vector<Cell>().swap(slab.cells);
+      for (size_t f = 0; f < slab.values.size(); ++f) {
+        piece.fields[f].values.insert(piece.fields[f].values.end(), slab.values[f].begin(), slab.values[f].end());
+        std::vector<float>().swap(slab.values[f]);
+      }
+    }
+    consume(piece);
   }
+  progress.finish();
+  if (total == 0) fail("scene '", o.name, "' produced no cells at this size");
+  return total;
+}
+
+CellSet generateScene(const SceneOptions& options) {
+  // One piece holding every slab.
+  CellSet set;
+  generateScenePieces(options, 2048, [&](CellSet& piece) { set = std::move(piece); });
   return set;
 }
 

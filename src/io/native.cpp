@@ -99,15 +99,15 @@ std::string resolveTarget(const std::string& path) {
   return p.string();
 }
 
-void writeWhole(const std::string& path, const std::string& target, const void* data, size_t size, bool sync) {
-  std::FILE* f = std::fopen(target.c_str(), "wb");
-  if (!f) fail(path, ": cannot write: ", std::strerror(errno));
-  const bool ok = std::fwrite(data, 1, size, f) == size;
+/// Flushes and closes a file being written; false (errno set) when any of it failed.
+bool closeWritten(std::FILE* f, bool sync) {
   // A file renamed into place is on disk first: a crash leaves the old file or the new one.
   const bool flushed = std::fflush(f) == 0 && (!sync || ::fsync(::fileno(f)) == 0);
   const int err = errno;
   const bool closed = std::fclose(f) == 0;
-  if (!ok || !flushed || !closed) fail(path, ": write failed: ", std::strerror(err ? err : EIO));
+  if (!closed && flushed) return false;
+  errno = err;
+  return flushed;
 }
 
 /// Flushes a directory's entries (a rename into it) to disk; best effort.
@@ -156,34 +156,61 @@ void removePendingTemporaries() {
     if (s.used.load()) ::unlink(s.path);
 }
 
-void AtomicFiles::write(const std::string& path, const void* data, size_t size) {
-  const std::string target = resolveTarget(path);
+size_t AtomicFiles::begin(const std::string& path) {
+  Pending p;
+  p.path = path;
+  p.target = resolveTarget(path);
   std::error_code ec;
-  const fs::file_status st = fs::status(target, ec);
+  const fs::file_status st = fs::status(p.target, ec);
   if (!ec && fs::exists(st) && !fs::is_regular_file(st)) {
     // A device, a FIFO or another special file: written through, never replaced.
     if (fs::is_directory(st)) fail(path, ": cannot write: is a directory");
-    writeWhole(path, target, data, size, false);
-    return;
+    p.stream = std::fopen(p.target.c_str(), "wb");
+    if (!p.stream) fail(path, ": cannot write: ", std::strerror(errno));
+    pending_.push_back(p);
+    return pending_.size() - 1;
   }
-  removeStaleTemporaries(target);
-  Pending p;
-  p.path = path;
-  p.target = target;
-  p.temporary = temporaryPath(target, pending_.size());
+  removeStaleTemporaries(p.target);
+  p.temporary = temporaryPath(p.target, pending_.size());
   p.slot = claimPending(p.temporary);
-  pending_.push_back(p);
-  try {
-    writeWhole(path, p.temporary, data, size, true);
-  } catch (...) {
+  p.stream = std::fopen(p.temporary.c_str(), "wb");
+  if (!p.stream) {
+    const std::string why = std::strerror(errno);
+    releasePending(p.slot);
     discard();
-    throw;
+    fail(path, ": cannot write: ", why);
+  }
+  pending_.push_back(p);
+  return pending_.size() - 1;
+}
+
+void AtomicFiles::append(size_t file, const void* data, size_t size) {
+  Pending& p = pending_.at(file);
+  EXA_CHECK(p.stream != nullptr, "appending to a finished file");
+  if (size > 0 && std::fwrite(data, 1, size, p.stream) != size) {
+    const std::string why = std::strerror(errno ? errno : EIO), path = p.path;
+    discard();
+    fail(path, ": write failed: ", why);
   }
 }
 
+void AtomicFiles::write(const std::string& path, const void* data, size_t size) { append(begin(path), data, size); }
+
 void AtomicFiles::commit() {
+  // Everything is on disk before anything is renamed into place.
+  for (Pending& p : pending_) {
+    errno = 0;
+    const bool ok = closeWritten(p.stream, !p.temporary.empty());
+    p.stream = nullptr;
+    if (!ok) {
+      const std::string why = std::strerror(errno ? errno : EIO), path = p.path;
+      discard();
+      fail(path, ": write failed: ", why);
+    }
+  }
   for (size_t i = 0; i < pending_.size(); ++i) {
     Pending& p = pending_[i];
+    if (p.temporary.empty()) continue; // written through
     if (std::rename(p.temporary.c_str(), p.target.c_str()) != 0) {
       const std::string why = std::strerror(errno);
       pending_.erase(pending_.begin(), pending_.begin() + long(i)); // those are published
@@ -198,6 +225,8 @@ void AtomicFiles::commit() {
 
 void AtomicFiles::discard() {
   for (const Pending& p : pending_) {
+    if (p.stream) std::fclose(p.stream);
+    if (p.temporary.empty()) continue;
     std::remove(p.temporary.c_str());
     releasePending(p.slot);
   }
@@ -366,18 +395,36 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
   return set;
 }
 
-void writeNative(const CellSet& set, const std::string& cellsPath) {
+NativeWriter::NativeWriter(const std::string& cellsPath, const std::vector<std::string>& fieldNames)
+    : cellsPath_(cellsPath), fieldNames_(fieldNames) {
   const std::string stem = stemOf(cellsPath);
-  if (set.fields.empty()) fail(cellsPath, ": nothing to write: no fields");
-  for (const Field& f : set.fields)
-    if (f.name.empty() || f.name.find_first_of("./\\") != std::string::npos)
-      fail(cellsPath, ": field name '", f.name, "' cannot be stored in a file name");
+  if (fieldNames.empty()) fail(cellsPath, ": nothing to write: no fields");
+  for (const std::string& name : fieldNames)
+    if (name.empty() || name.find_first_of("./\\") != std::string::npos)
+      fail(cellsPath, ": field name '", name, "' cannot be stored in a file name");
   // Every file to a temporary first; the dataset appears only when all are written.
-  AtomicFiles files;
-  files.write(cellsPath, set.cells.data(), set.cells.size() * sizeof(Cell));
-  for (const Field& f : set.fields)
-    files.write(scalarsPath(stem, f.name), f.values.data(), f.values.size() * sizeof(float));
-  files.commit();
+  files_.begin(cellsPath);
+  for (const std::string& name : fieldNames) files_.begin(scalarsPath(stem, name));
+}
+
+void NativeWriter::append(const CellSet& piece) {
+  EXA_CHECK(piece.fields.size() == fieldNames_.size(), "one value array per field");
+  files_.append(0, piece.cells.data(), piece.cells.size() * sizeof(Cell));
+  for (size_t f = 0; f < piece.fields.size(); ++f) {
+    EXA_CHECK(piece.fields[f].name == fieldNames_[f] && piece.fields[f].values.size() == piece.cells.size());
+    files_.append(1 + f, piece.fields[f].values.data(), piece.fields[f].values.size() * sizeof(float));
+  }
+  cells_ += piece.cells.size();
+}
+
+void NativeWriter::finish() { files_.commit(); }
+
+void writeNative(const CellSet& set, const std::string& cellsPath) {
+  std::vector<std::string> names;
+  for (const Field& f : set.fields) names.push_back(f.name);
+  NativeWriter writer(cellsPath, names);
+  writer.append(set);
+  writer.finish();
 }
 
 CellSet readGrids(const std::string& path) {

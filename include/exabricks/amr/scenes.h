@@ -4,6 +4,8 @@
 
 #include "exabricks/amr/cells.h"
 
+#include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,6 +32,12 @@ const std::vector<SceneInfo>& sceneList();
 
 /// Generates the scene; cells are ordered by base cell (z, y, x), then depth first.
 CellSet generateScene(const SceneOptions& options);
+
+/// The same cells and values in pieces, in order: each piece holds `slabsPerPiece` z-slabs of
+/// base cells (the last fewer) and goes to `consume`, which may take its contents. Memory is one
+/// piece's. Returns the number of cells; throws when there are none (after the last piece).
+uint64_t generateScenePieces(const SceneOptions& options, int slabsPerPiece,
+                             const std::function<void(CellSet&)>& consume);
 
 /// The options with the levels and base resolution generateScene would choose made explicit, so
 /// that every step of a series has the same lattice.

@@ -8,6 +8,7 @@
 #include "exabricks/amr/partition.h"
 
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -43,16 +44,38 @@ public:
   AtomicFiles(const AtomicFiles&) = delete;
   AtomicFiles& operator=(const AtomicFiles&) = delete;
   ~AtomicFiles();
+  /// Starts a file written in pieces; returns its handle for append().
+  size_t begin(const std::string& path);
+  void append(size_t file, const void* data, size_t size);
+  /// A whole file: begin() and one append().
   void write(const std::string& path, const void* data, size_t size);
   void commit();
   void discard();
 
 private:
   struct Pending {
-    std::string path, target, temporary;
+    std::string path, target, temporary; ///< temporary empty: written through
     int slot = -1;
+    std::FILE* stream = nullptr;
   };
   std::vector<Pending> pending_;
+};
+
+/// Writes NAME.cells and its field files in pieces, in order; finish() publishes them together
+/// (nothing appears when it is not called).
+class NativeWriter {
+public:
+  NativeWriter(const std::string& cellsPath, const std::vector<std::string>& fieldNames);
+  /// Appends cells with one value per cell of every field, fields in the constructor's order.
+  void append(const CellSet& piece);
+  void finish();
+  uint64_t cellCount() const { return cells_; }
+
+private:
+  std::string cellsPath_;
+  std::vector<std::string> fieldNames_;
+  AtomicFiles files_;
+  uint64_t cells_ = 0;
 };
 
 /// Writes `size` bytes to `path` atomically (AtomicFiles with one file).
