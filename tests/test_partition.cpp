@@ -75,6 +75,39 @@ TEST(Partition, PartsTileTheLatticeAndBalanceTheCells) {
   }
 }
 
+TEST(Partition, GrainedPlanesCutNoCell) {
+  for (const test::NamedCells& d : test::smallDatasets()) {
+    const Census census = censusOf(d.cells);
+    const int64_t grain = int64_t(1) << census.coarsestLevel;
+    for (int parts : {2, 3, 5, 8}) {
+      const KdPartition p = KdPartition::balance(census, parts, grain);
+      ASSERT_EQ(p.parts(), parts);
+      for (int k = 0; k < parts; ++k)
+        for (int a = 0; a < 3; ++a) {
+          EXPECT_EQ(p.box(k).lower[a] % grain, 0) << d.name;
+          EXPECT_EQ(p.box(k).upper[a] % grain, 0) << d.name;
+        }
+      // Every cell lies wholly inside the one part that owns it.
+      for (const Cell& c : d.cells.cells) {
+        int inside = 0;
+        const box3i cb = c.bounds();
+        for (int k = 0; k < parts; ++k) {
+          const box3l& b = p.box(k);
+          bool in = true;
+          for (int a = 0; a < 3; ++a) in = in && cb.lower[a] >= b.lower[a] && cb.upper[a] <= b.upper[a];
+          inside += in;
+        }
+        ASSERT_EQ(inside, 1) << d.name << " parts " << parts;
+      }
+      if (d.cells.size() >= 2500 && parts <= 2) {
+        const std::vector<uint64_t> owned = ownedPerPart(d.cells, p);
+        for (uint64_t n : owned) EXPECT_GT(double(n), 0.25 * double(d.cells.size()) / parts) << d.name;
+      }
+    }
+  }
+  EXPECT_THROW(KdPartition::balance(Census{}, 2, 0), Error);
+}
+
 TEST(Partition, VisibilityOrderIsTheOrderRaysMeetTheParts) {
   const CellSet s = generateScene({"blobs", 5000, 3, 4});
   const KdPartition p = KdPartition::balance(censusOf(s), 7);
@@ -231,6 +264,73 @@ TEST(Partition, NativeBoxReadsAndCensusStreamTheRecords) {
     const std::optional<Model> m = loadModelPart(path, {}, p.box(k), loadCensus(path).coarsestLevel);
     ASSERT_TRUE(m.has_value());
     EXPECT_EQ(m->cellCount(), partOf(s, p.box(k)).size());
+  }
+}
+
+TEST(Partition, BuildInPartsEqualsTheWholeBuild) {
+  const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "partition-build";
+  fs::create_directories(dir);
+  for (const test::NamedCells& d : test::smallDatasets()) {
+    if (d.cells.size() < 1000) continue;
+    SCOPED_TRACE(d.name);
+    const std::string path = (dir / (d.name + ".cells")).string();
+    writeNative(d.cells, path);
+    LoadOptions inParts;
+    inParts.partCells = d.cells.size() / 5;
+    LoadOptions whole;
+    whole.partCells = 0;
+    const Model a = loadModel(path, whole), b = loadModel(path, inParts);
+    EXPECT_EQ(a.stats.parts, 1);
+    EXPECT_GE(b.stats.parts, 5);
+    ASSERT_EQ(a.cellCount(), b.cellCount());
+    ASSERT_EQ(a.fieldNames, b.fieldNames);
+    // The same values (in another order), and bricks that tile the values without overlapping.
+    for (size_t f = 0; f < a.fieldValues.size(); ++f) {
+      std::vector<float> va = a.fieldValues[f], vb = b.fieldValues[f];
+      std::sort(va.begin(), va.end());
+      std::sort(vb.begin(), vb.end());
+      EXPECT_EQ(va, vb);
+    }
+    uint64_t next = 0;
+    for (const Brick& br : b.bricks) {
+      EXPECT_EQ(br.valueOffset, next);
+      next += br.cellCount();
+    }
+    // The reconstruction agrees everywhere (the brick order within a region may differ).
+    const box3i cb = a.cellBounds();
+    std::mt19937 rng{7};
+    std::uniform_real_distribution<double> u(-0.1, 1.1);
+    for (int i = 0; i < 3000; ++i) {
+      vec3d q;
+      for (int k = 0; k < 3; ++k) q[k] = double(cb.lower[k]) + u(rng) * double(cb.upper[k] - cb.lower[k]);
+      for (int f = 0; f < int(a.fieldNames.size()); ++f) {
+        double v0 = 0, v1 = 0;
+        vec3d g0, g1;
+        const bool h0 = a.sampleWorld(f, a.world.toWorld(q), v0, g0);
+        const bool h1 = b.sampleWorld(f, b.world.toWorld(q), v1, g1);
+        ASSERT_EQ(h0, h1);
+        if (!h0) continue;
+        EXPECT_NEAR(v0, v1, 1e-5 * (1.0 + std::abs(v0)));
+        for (int k = 0; k < 3; ++k) EXPECT_NEAR(g0[k], g1[k], 1e-4 * (1.0 + std::abs(g0[k])));
+      }
+    }
+  }
+  // Overlapping cells are found when built in parts too (they lie in one part).
+  CellSet bad = generateScene({"blobs", 5000, 1, 3});
+  const Cell twin = bad.cells[bad.cells.size() / 2];
+  bad.cells.push_back(twin);
+  for (Field& f : bad.fields) f.values.push_back(1.0f);
+  const std::string path = (dir / "bad.cells").string();
+  writeNative(bad, path);
+  LoadOptions inParts;
+  inParts.partCells = 1000;
+  try {
+    loadModel(path, inParts);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("bad.cells"), std::string::npos) << m;
+    EXPECT_NE(m.find("duplicates"), std::string::npos) << m;
   }
 }
 

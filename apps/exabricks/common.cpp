@@ -23,6 +23,10 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
   if (fieldOption) cmd.add_option("-f,--field", field, "Field to use (default: the first)");
   cmd.add_option("--max-brick-width", maxBrickWidth, "Most cells per axis in one brick")
       ->check(CLI::Range(1, 1024));
+  cmd.add_option("--part-cells", partCells,
+                 "Build NAME.cells and AMReX inputs of more cells in parts of about this many, each read "
+                 "alone (less memory; 0: in one piece)")
+      ->capture_default_str();
   cmd.add_option("--raw-dims", rawDims, "Raw volume: voxels per axis as NXxNYxNZ (default: from NAME_NXxNYxNZ_TYPE.raw)");
   cmd.add_option("--raw-type", rawType, "Raw volume: uint8, uint16, float32 or float64");
   cmd.add_option("--raw-threshold", rawThreshold, "Raw volume: largest value spread merged into one cell")
@@ -35,6 +39,7 @@ LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
   LoadOptions o;
   if (onlySelectedField && !field.empty()) o.fields = {field};
   o.build.bricks.maxBrickWidth = maxBrickWidth;
+  o.partCells = partCells;
   if (!rawDims.empty()) {
     long long x = 0, y = 0, z = 0;
     char extra = 0;

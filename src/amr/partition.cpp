@@ -98,9 +98,12 @@ double cellsBelow(const CensusBox& item, int axis, int64_t s) {
   return item.cells * double(s - lo) / double(hi - lo);
 }
 
+int64_t floorDiv64(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
+
 struct Builder {
   std::vector<KdPartition::Node>& nodes;
   std::vector<box3l>& boxes;
+  int64_t grain = 1; ///< split planes are multiples of this
 
   int build(std::vector<CensusBox> items, int parts, const box3l& region) {
     const int index = int(nodes.size());
@@ -125,30 +128,32 @@ struct Builder {
       axis = argMax(region.size());
       const int64_t lo = std::max(region.lower[axis], -kUnboundedLattice / 2);
       const int64_t hi = std::min(region.upper[axis], kUnboundedLattice / 2);
-      split = lo + (hi - lo) / 2;
+      split = floorDiv64(lo + (hi - lo) / 2, grain) * grain;
     } else {
       const vec3l extent = data.size();
       axis = argMax(extent);
       const int64_t lo = data.lower[axis], hi = data.upper[axis];
-      if (extent[axis] < 2) {
-        split = hi; // one lattice unit wide: the high parts hold none of it
+      // Candidate planes k * grain strictly inside the data, k in [ka, kb].
+      const int64_t ka = floorDiv64(lo, grain) + 1, kb = -floorDiv64(-hi, grain) - 1;
+      if (ka > kb) {
+        split = -floorDiv64(-hi, grain) * grain; // no plane inside: the high parts hold none of it
       } else {
         // The smallest plane inside the data with at least the low parts' share below it, or the
         // plane before it when that is closer to the share.
         const double target = total * double(lowParts) / double(parts);
-        auto below = [&](int64_t s) {
+        auto below = [&](int64_t k) {
           double n = 0;
-          for (const CensusBox& c : items) n += cellsBelow(c, axis, s);
+          for (const CensusBox& c : items) n += cellsBelow(c, axis, k * grain);
           return n;
         };
-        int64_t a = lo + 1, b = hi - 1;
+        int64_t a = ka, b = kb;
         while (a < b) {
           const int64_t m = a + (b - a) / 2;
           if (below(m) >= target) b = m;
           else a = m + 1;
         }
-        split = a;
-        if (split > lo + 1 && std::abs(below(split - 1) - target) <= std::abs(below(split) - target)) --split;
+        if (a > ka && std::abs(below(a - 1) - target) <= std::abs(below(a) - target)) --a;
+        split = a * grain;
       }
     }
     std::vector<CensusBox> low, high;
@@ -184,10 +189,11 @@ struct Builder {
 
 } // namespace
 
-KdPartition KdPartition::balance(const Census& census, int parts) {
+KdPartition KdPartition::balance(const Census& census, int parts, int64_t grain) {
   if (parts < 1 || parts > 1 << 20) fail("a partition needs 1 to 2^20 parts, not ", parts);
+  if (grain < 1 || grain > kLatticeLimit) fail("a partition's planes need a grain of 1 to 2^29, not ", grain);
   KdPartition p;
-  Builder b{p.nodes_, p.boxes_};
+  Builder b{p.nodes_, p.boxes_, grain};
   std::vector<CensusBox> items;
   items.reserve(census.boxes.size());
   for (const CensusBox& c : census.boxes)

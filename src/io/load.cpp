@@ -12,6 +12,7 @@
 #include "exabricks/io/native.h"
 #include "exabricks/io/vtk_amr.h"
 
+#include <cmath>
 #include <filesystem>
 
 namespace exa {
@@ -23,6 +24,7 @@ bool endsWith(const std::string& s, const std::string& suffix) {
 void selectFields(CellSet& set, const std::vector<std::string>& wanted, const std::string& source) {
   if (wanted.empty()) return;
   std::vector<Field> chosen;
+  std::vector<bool> taken(set.fields.size(), false);
   for (const std::string& name : wanted) {
     const int i = set.fieldIndex(name);
     if (i < 0) {
@@ -30,7 +32,17 @@ void selectFields(CellSet& set, const std::vector<std::string>& wanted, const st
       for (const Field& f : set.fields) known += (known.empty() ? "" : ", ") + f.name;
       fail(source, ": unknown field '", name, "' (fields: ", known, ")");
     }
-    chosen.push_back(set.fields[size_t(i)]);
+    if (taken[size_t(i)]) { // named twice: a copy of the one chosen
+      for (size_t c = 0; c < chosen.size(); ++c)
+        if (chosen[c].name == name) {
+          Field copy = chosen[c];
+          chosen.push_back(std::move(copy));
+          break;
+        }
+      continue;
+    }
+    taken[size_t(i)] = true;
+    chosen.push_back(std::move(set.fields[size_t(i)])); // moved: no second copy of the values
   }
   set.fields = std::move(chosen);
 }
@@ -122,6 +134,102 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
   return set;
 }
 
+namespace {
+
+/// The lattice box a part reads: its box within the 32-bit lattice.
+box3i readBoxOf(const box3l& part) {
+  box3i out;
+  for (int a = 0; a < 3; ++a) {
+    out.lower[a] = int32_t(std::max<int64_t>(part.lower[a], INT32_MIN));
+    out.upper[a] = int32_t(std::min<int64_t>(part.upper[a], INT32_MAX));
+  }
+  return out;
+}
+
+/// The number of cells an input holds when its reader can count them cheaply (without reading
+/// the cells): by the size of NAME.cells, or from a census taken from the headers; none else.
+std::optional<Census> cheapCensus(const std::string& path, InputKind kind, const FormatReader& reader,
+                                  uint64_t partCells, uint64_t& cells) {
+  if (kind == InputKind::Native) {
+    cells = fileSize(path) / sizeof(Cell);
+    if (cells <= partCells) return std::nullopt;
+  }
+  if (kind != InputKind::Native && kind != InputKind::Amrex) return std::nullopt;
+  Census census = reader.census(path);
+  cells = uint64_t(std::llround(census.cells()));
+  return census;
+}
+
+/// Builds a model in parts, for data larger than one build should hold: a k-d partition of the
+/// census into parts of about `partCells` cells, split only at multiples of the coarsest cell
+/// width so that no cell is cut; each part is read through the reader's box, keeps the cells
+/// inside it and is built into bricks (cells and values permuted in place), its values appended
+/// to the model's. Memory: the values of the whole data plus one part's cells.
+Model buildInParts(const std::string& path, const FormatReader& reader, const LoadOptions& options,
+                   const Census& census, uint64_t cells) {
+  const uint64_t partCells = std::max<uint64_t>(options.partCells, 1);
+  const int parts = int(std::min<uint64_t>((cells + partCells - 1) / partCells, uint64_t(1) << 16));
+  const KdPartition partition = KdPartition::balance(census, parts, int64_t(1) << census.coarsestLevel);
+  logInfo(strCat("building ", cells, " cells in ", parts, " parts"));
+  Timer timer;
+  Model model;
+  Progress progress("building bricks by parts", uint64_t(parts) + 1);
+  uint64_t offset = 0;
+  for (int p = 0; p < parts; ++p) {
+    const box3l& box = partition.box(p);
+    ReadRequest request;
+    request.fields = options.fields;
+    request.box = readBoxOf(box);
+    request.raw = options.raw;
+    CellSet set = reader.read(path, request);
+    selectFields(set, options.fields, path);
+    // Keep the cells inside the part: each cell lies in exactly one.
+    size_t kept = 0;
+    for (size_t i = 0; i < set.cells.size(); ++i) {
+      if (!centreInside(set.cells[i].lower, set.cells[i].level, box)) continue;
+      set.cells[kept] = set.cells[i];
+      for (Field& f : set.fields) f.values[kept] = f.values[i];
+      ++kept;
+    }
+    set.cells.resize(kept);
+    for (Field& f : set.fields) f.values.resize(kept);
+    progress.advance(1);
+    if (kept == 0) continue;
+    validateCells(set, path);
+    if (model.fieldNames.empty()) {
+      model.world = set.world;
+      model.simulation = set.simulation;
+      for (const Field& f : set.fields) model.fieldNames.push_back(f.name);
+      model.fieldValues.resize(set.fields.size());
+      for (auto& v : model.fieldValues) v.reserve(cells);
+    }
+    if (offset + kept >= uint64_t(UINT32_MAX)) fail("too many cells: more than ", offset + kept - 1, " (limit 2^32-1)");
+    std::vector<std::vector<float>*> values;
+    for (Field& f : set.fields) values.push_back(&f.values);
+    std::vector<Brick> bricks = buildBricksReordering(set.cells, values, options.build.bricks);
+    for (Brick& b : bricks) {
+      b.valueOffset += uint32_t(offset);
+      model.bricks.push_back(b);
+    }
+    std::vector<Cell>().swap(set.cells);
+    for (size_t f = 0; f < set.fields.size(); ++f) {
+      model.fieldValues[f].insert(model.fieldValues[f].end(), set.fields[f].values.begin(), set.fields[f].values.end());
+      std::vector<float>().swap(set.fields[f].values);
+    }
+    offset += kept;
+  }
+  if (model.bricks.empty()) fail("no cells");
+  model.stats.brickSeconds = timer.seconds();
+  model.stats.parts = parts;
+  buildRegionsOf(model);
+  progress.finish();
+  logInfo(strCat("built ", model.bricks.size(), " bricks and ", model.regions.regions.size(), " regions in ",
+                 timer.seconds(), " s"));
+  return model;
+}
+
+} // namespace
+
 Model loadModel(const std::string& path, const LoadOptions& options) {
   Timer timer;
   if (detectInput(path) == InputKind::Model) {
@@ -131,9 +239,23 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
     logInfo(strCat("read model ", path, " in ", timer.seconds(), " s"));
     return m;
   }
+  const std::string source = path.empty() ? kDefaultDatasetName : path;
+  const InputKind kind = detectInput(path);
+  if (options.partCells > 0 && options.box.empty() && kind != InputKind::Default) {
+    const FormatReader* reader = findReader(path);
+    uint64_t count = 0;
+    if (reader->census)
+      if (const std::optional<Census> census = cheapCensus(path, kind, *reader, options.partCells, count);
+          census && count > options.partCells) {
+        try {
+          return buildInParts(path, *reader, options, *census, count);
+        } catch (const Error& e) {
+          throw Error(strCat(source, ": ", e.what()));
+        }
+      }
+  }
   CellSet cells = loadCells(path, options);
   logInfo(strCat("read ", cells.size(), " cells in ", timer.seconds(), " s"));
-  const std::string source = path.empty() ? kDefaultDatasetName : path;
   try {
     return buildModel(std::move(cells), options.build);
   } catch (const CellConflict& c) {

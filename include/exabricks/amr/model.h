@@ -18,6 +18,7 @@ struct BuildStats {
   double brickSeconds = 0;
   double regionSeconds = 0;
   double rangeSeconds = 0;
+  int parts = 1; ///< the bricks were built in this many parts, each read alone
 };
 
 struct Model {

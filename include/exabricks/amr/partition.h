@@ -97,8 +97,9 @@ public:
 
   /// Splits the census's bounds into `parts` parts: each split halves the parts (the larger half
   /// high) along the longest axis of the data in the box, at the lattice plane that gives each
-  /// side its share of the cells. Faces outside the data are unbounded.
-  static KdPartition balance(const Census& census, int parts);
+  /// side its share of the cells. Faces outside the data are unbounded. With a grain, every plane
+  /// is a multiple of it: a grain of the coarsest cell width cuts no cell.
+  static KdPartition balance(const Census& census, int parts, int64_t grain = 1);
   /// The whole lattice as one part.
   static KdPartition whole();
 

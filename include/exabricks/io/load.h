@@ -16,6 +16,11 @@ struct LoadOptions {
   BuildOptions build;
   RawOptions raw; ///< dimensions, type and merging of raw volumes
   box3i box;      ///< finest-lattice box: only cells that overlap it (empty: all)
+  /// Inputs with more cells than this whose reader takes a census without reading the cells
+  /// (NAME.cells, AMReX plotfiles) are built in parts of about this many cells, each read
+  /// through the reader's box: the build then holds the values of all cells but the records of
+  /// one part only. 0: always in one piece.
+  uint64_t partCells = uint64_t(1) << 27;
 };
 
 /// Determines the kind of input; throws with the path when it is not recognised.
