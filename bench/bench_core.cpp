@@ -40,7 +40,7 @@ void BM_BuildRegions(benchmark::State& state, const std::string& name) {
   const Model& m = model(name, uint64_t(state.range(0)));
   for (auto _ : state) {
     const RegionSet r = buildRegions(m.bricks);
-    benchmark::DoNotOptimize(computeValueRanges(r, m.bricks, m.fieldValues[0]).size());
+    benchmark::DoNotOptimize(computeValueRanges(r, m.bricks, m.fieldValues[0].data()).size());
   }
   const ModelSummary sum = summarize(m);
   state.counters["cells/s"] = benchmark::Counter(double(sum.cells), benchmark::Counter::kIsIterationInvariantRate);

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
 
   DeviceInputs d;
   d.bricks = model.bricks;
-  d.values = model.fieldValues[size_t(field)];
+  d.values = model.fieldValues[size_t(field)].toVector();
   d.regions = model.regions.regions;
   d.brickIds = model.regions.brickIds;
   d.nodes = model.regions.nodes;

@@ -286,7 +286,7 @@ TEST(Partition, BuildInPartsEqualsTheWholeBuild) {
     ASSERT_EQ(a.fieldNames, b.fieldNames);
     // The same values (in another order), and bricks that tile the values without overlapping.
     for (size_t f = 0; f < a.fieldValues.size(); ++f) {
-      std::vector<float> va = a.fieldValues[f], vb = b.fieldValues[f];
+      std::vector<float> va = a.fieldValues[f].toVector(), vb = b.fieldValues[f].toVector();
       std::sort(va.begin(), va.end());
       std::sort(vb.begin(), vb.end());
       EXPECT_EQ(va, vb);

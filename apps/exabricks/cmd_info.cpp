@@ -148,6 +148,7 @@ void run(const InfoOptions& o) {
   std::printf("build time       bricks %.3f s, regions %.3f s, value ranges %.3f s (load total %.3f s)\n",
               model.stats.brickSeconds, model.stats.regionSeconds, model.stats.rangeSeconds,
               loadSeconds);
+  if (model.stats.parts > 1) std::printf("built in parts   %d, each read alone\n", model.stats.parts);
 }
 
 } // namespace

@@ -3,9 +3,21 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace exa {
+
+ValueArray::ValueArray(std::vector<float>&& values) {
+  auto owned = std::make_shared<const std::vector<float>>(std::move(values));
+  data_ = owned->data();
+  size_ = owned->size();
+  keep_ = std::move(owned);
+}
+
+bool operator==(const ValueArray& a, const ValueArray& b) {
+  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin());
+}
 
 uint64_t Model::cellCount() const {
   uint64_t n = 0;
@@ -100,7 +112,7 @@ void buildRegionsOf(Model& model) {
   timer.reset();
   model.regions.valueRanges.clear();
   for (const auto& values : model.fieldValues)
-    model.regions.valueRanges.push_back(computeValueRanges(model.regions, model.bricks, values));
+    model.regions.valueRanges.push_back(computeValueRanges(model.regions, model.bricks, values.data()));
   model.stats.rangeSeconds = timer.seconds();
 }
 
@@ -183,7 +195,7 @@ Model rebuildValues(const Model& like, const ModelStructure& structure, CellSet&
   model.stats.regionSeconds = timer.seconds();
   timer.reset();
   for (const auto& values : model.fieldValues)
-    regions.valueRanges.push_back(computeValueRanges(regions, model.bricks, values));
+    regions.valueRanges.push_back(computeValueRanges(regions, model.bricks, values.data()));
   model.stats.rangeSeconds = timer.seconds();
   return model;
 }

@@ -209,7 +209,7 @@ RegionSet buildRegions(const std::vector<Brick>& bricks) {
 }
 
 std::vector<range1f> computeValueRanges(const RegionSet& set, const std::vector<Brick>& bricks,
-                                        const std::vector<float>& values) {
+                                        const float* values) {
   std::vector<range1f> ranges(set.regions.size());
   tbb::parallel_for(size_t(0), set.regions.size(), [&](size_t ri) {
     const Region& region = set.regions[ri];
@@ -230,7 +230,7 @@ std::vector<range1f> computeValueRanges(const RegionSet& set, const std::vector<
       for (int z = lo.z; z <= hi.z; ++z)
         for (int y = lo.y; y <= hi.y; ++y) {
           const float* row =
-              values.data() + brick.valueOffset + size_t(brick.size.x) * (y + size_t(brick.size.y) * z);
+              values + brick.valueOffset + size_t(brick.size.x) * (y + size_t(brick.size.y) * z);
           for (int x = lo.x; x <= hi.x; ++x) range.extend(row[x]);
         }
     }

@@ -173,6 +173,7 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
   logInfo(strCat("building ", cells, " cells in ", parts, " parts"));
   Timer timer;
   Model model;
+  std::vector<std::vector<float>> values; // per field, brick order
   Progress progress("building bricks by parts", uint64_t(parts) + 1);
   uint64_t offset = 0;
   for (int p = 0; p < parts; ++p) {
@@ -200,25 +201,26 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
       model.world = set.world;
       model.simulation = set.simulation;
       for (const Field& f : set.fields) model.fieldNames.push_back(f.name);
-      model.fieldValues.resize(set.fields.size());
-      for (auto& v : model.fieldValues) v.reserve(cells);
+      values.resize(set.fields.size());
+      for (auto& v : values) v.reserve(cells);
     }
     if (offset + kept >= uint64_t(UINT32_MAX)) fail("too many cells: more than ", offset + kept - 1, " (limit 2^32-1)");
-    std::vector<std::vector<float>*> values;
-    for (Field& f : set.fields) values.push_back(&f.values);
-    std::vector<Brick> bricks = buildBricksReordering(set.cells, values, options.build.bricks);
+    std::vector<std::vector<float>*> arrays;
+    for (Field& f : set.fields) arrays.push_back(&f.values);
+    std::vector<Brick> bricks = buildBricksReordering(set.cells, arrays, options.build.bricks);
     for (Brick& b : bricks) {
       b.valueOffset += uint32_t(offset);
       model.bricks.push_back(b);
     }
     std::vector<Cell>().swap(set.cells);
     for (size_t f = 0; f < set.fields.size(); ++f) {
-      model.fieldValues[f].insert(model.fieldValues[f].end(), set.fields[f].values.begin(), set.fields[f].values.end());
+      values[f].insert(values[f].end(), set.fields[f].values.begin(), set.fields[f].values.end());
       std::vector<float>().swap(set.fields[f].values);
     }
     offset += kept;
   }
   if (model.bricks.empty()) fail("no cells");
+  for (auto& v : values) model.fieldValues.push_back(std::move(v));
   model.stats.brickSeconds = timer.seconds();
   model.stats.parts = parts;
   buildRegionsOf(model);
@@ -306,19 +308,20 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     m.world = all.world;
     m.simulation = all.simulation;
     m.fieldNames = all.fieldNames;
-    m.fieldValues.resize(all.fieldValues.size());
+    std::vector<std::vector<float>> values(all.fieldValues.size());
     uint64_t offset = 0;
     for (const Brick& b : all.bricks) {
       if (!supportReaches(b.bounds(), b.level, part)) continue;
       Brick kept = b;
       kept.valueOffset = uint32_t(offset);
       for (size_t f = 0; f < all.fieldValues.size(); ++f)
-        m.fieldValues[f].insert(m.fieldValues[f].end(), all.fieldValues[f].begin() + b.valueOffset,
-                                all.fieldValues[f].begin() + b.valueOffset + b.cellCount());
+        values[f].insert(values[f].end(), all.fieldValues[f].begin() + b.valueOffset,
+                         all.fieldValues[f].begin() + b.valueOffset + b.cellCount());
       offset += b.cellCount();
       m.bricks.push_back(kept);
     }
     if (m.bricks.empty()) return std::nullopt;
+    for (auto& v : values) m.fieldValues.push_back(std::move(v));
     buildRegionsOf(m);
     return m;
   }

@@ -3,10 +3,15 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/native.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
-#include <unistd.h>
+#include <memory>
+#include <type_traits>
 
 namespace exa {
 namespace {
@@ -61,6 +66,9 @@ struct Header {
 };
 static_assert(sizeof(Header) == 48);
 
+/// Zero bytes that bring a file offset to a multiple of 8.
+size_t padding(uint64_t offset) { return size_t((8 - offset % 8) % 8); }
+
 class Writer {
 public:
   Writer(const std::string& path, std::FILE* f) : path_(path), f_(f) {}
@@ -71,8 +79,13 @@ public:
     bytes_ += size;
   }
   template <typename T> void value(const T& v) { raw(&v, sizeof(T)); }
-  template <typename T> void array(const std::vector<T>& v) {
+  /// Any contiguous array (a std::vector, a ValueArray): its length, zeros up to the next
+  /// multiple of 8 bytes in the file (so that a mapped file can be used in place), its data.
+  template <typename A> void array(const A& v) {
+    using T = std::remove_cv_t<std::remove_pointer_t<decltype(v.data())>>;
     value(uint64_t(v.size()));
+    static const char zeros[8] = {};
+    raw(zeros, padding(sizeof(Header) + bytes_));
     raw(v.data(), v.size() * sizeof(T));
   }
   uint64_t bytes() const { return bytes_; }
@@ -85,39 +98,84 @@ private:
   uint64_t bytes_ = 0;
 };
 
+/// Reads the payload from the file's bytes in memory (mapped or read), verifying sizes and the
+/// checksum as it goes.
 class Reader {
 public:
-  Reader(const std::string& path, std::FILE* f, uint64_t payloadBytes)
-      : path_(path), f_(f), left_(payloadBytes) {}
-  void raw(void* data, size_t size, const char* what) {
-    if (size > left_) fail(path_, ": corrupt model file: ", what, " runs past the end of the data");
-    if (size && std::fread(data, 1, size, f_) != size)
-      fail(path_, ": truncated model file while reading ", what);
-    sum_.update(data, size);
-    left_ -= size;
-  }
+  Reader(const std::string& path, const char* payload, uint64_t payloadBytes, uint32_t version,
+         std::shared_ptr<const void> keep)
+      : path_(path), start_(payload - sizeof(Header)), at_(payload), left_(payloadBytes), version_(version),
+        keep_(std::move(keep)) {}
+  void raw(void* data, size_t size, const char* what) { std::memcpy(data, take(size, what), size); }
   template <typename T> T value(const char* what) {
     T v;
     raw(&v, sizeof(T), what);
     return v;
   }
   template <typename T> std::vector<T> array(const char* what) {
-    const uint64_t n = value<uint64_t>(what);
-    if (n > left_ / sizeof(T))
-      fail(path_, ": corrupt model file: ", what, " claims ", n, " entries, more than the file holds");
+    const uint64_t n = arrayLength<T>(what);
     std::vector<T> v(n);
     raw(v.data(), n * sizeof(T), what);
     return v;
+  }
+  /// Field values: in place when the file's layout aligns them (version 2), else copied.
+  ValueArray values(const char* what) {
+    const uint64_t n = arrayLength<float>(what);
+    const char* data = take(n * sizeof(float), what);
+    if (reinterpret_cast<uintptr_t>(data) % alignof(float) == 0)
+      return ValueArray(keep_, reinterpret_cast<const float*>(data), n);
+    std::vector<float> v(n);
+    std::memcpy(v.data(), data, n * sizeof(float));
+    return ValueArray(std::move(v));
   }
   uint64_t left() const { return left_; }
   uint64_t checksum() const { return sum_.value(); }
 
 private:
+  const char* take(uint64_t size, const char* what) {
+    if (size > left_) fail(path_, ": corrupt model file: ", what, " runs past the end of the data");
+    const char* p = at_;
+    sum_.update(p, size_t(size));
+    at_ += size;
+    left_ -= size;
+    return p;
+  }
+  template <typename T> uint64_t arrayLength(const char* what) {
+    const uint64_t n = value<uint64_t>(what);
+    if (version_ >= 2) { // zeros up to a multiple of 8 bytes in the file
+      const size_t pad = padding(uint64_t(at_ - start_));
+      const char* zeros = take(pad, what);
+      for (size_t i = 0; i < pad; ++i)
+        if (zeros[i] != 0) fail(path_, ": corrupt model file: padding before ", what, " is not zero");
+    }
+    if (n > left_ / sizeof(T))
+      fail(path_, ": corrupt model file: ", what, " claims ", n, " entries, more than the file holds");
+    return n;
+  }
   const std::string& path_;
-  std::FILE* f_;
-  Checksum sum_;
+  const char* start_; ///< the file's first byte (the payload follows the header)
+  const char* at_;
   uint64_t left_;
+  uint32_t version_;
+  std::shared_ptr<const void> keep_;
+  Checksum sum_;
 };
+
+/// A whole file in memory: mapped read-only where the platform allows, else read.
+std::shared_ptr<const void> mapFile(const std::string& path, uint64_t size) {
+  if (size == 0) return nullptr;
+  const int fd = ::open(path.c_str(), O_RDONLY);
+  if (fd < 0) fail(path, ": cannot open: ", std::strerror(errno));
+  void* p = ::mmap(nullptr, size_t(size), PROT_READ, MAP_PRIVATE, fd, 0);
+  ::close(fd);
+  if (p != MAP_FAILED) {
+    ::madvise(p, size_t(size), MADV_SEQUENTIAL); // read once through by the checksum
+    return std::shared_ptr<const void>(p, [size](const void* q) { ::munmap(const_cast<void*>(q), size_t(size)); });
+  }
+  auto bytes = std::make_shared<std::vector<char>>(size_t(size));
+  readInto(path, bytes->data(), size);
+  return std::shared_ptr<const void>(bytes, bytes->data());
+}
 
 struct FileCloser {
   std::FILE* f;
@@ -201,7 +259,7 @@ void writeModel(const Model& m, const std::string& path) {
     w.array(m.regions.nodes);
     w.value(m.regions.bounds);
     for (const auto& r : m.regions.valueRanges) w.array(r);
-    w.value(m.stats);
+    for (double seconds : {m.stats.brickSeconds, m.stats.regionSeconds, m.stats.rangeSeconds}) w.value(seconds);
     h.payloadBytes = w.bytes();
     h.checksum = w.checksum();
     if (std::fseek(f, 0, SEEK_SET) != 0 || std::fwrite(&h, sizeof h, 1, f) != 1)
@@ -222,26 +280,24 @@ void writeModel(const Model& m, const std::string& path) {
 }
 
 Model readModel(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) fail(path, ": cannot open: ", std::strerror(errno));
-  FileCloser closer{f};
   Header h{};
-  if (std::fread(&h, sizeof h, 1, f) != 1) fail(path, ": truncated model file (no header)");
+  const uint64_t total = fileSize(path);
+  if (total < sizeof(Header)) fail(path, ": truncated model file (no header)");
+  readInto(path, &h, sizeof h);
   if (std::memcmp(h.magic, kModelMagic, 8) != 0) fail(path, ": not an exabricks model file");
-  if (h.version != kModelVersion)
-    fail(path, ": model file version ", h.version, " is not supported (this build reads version ",
+  if (h.version != kModelVersion && h.version != 1)
+    fail(path, ": model file version ", h.version, " is not supported (this build reads versions 1 and ",
          kModelVersion, "); rebuild it with 'exabricks build'");
   if (h.headerBytes != sizeof(Header)) fail(path, ": corrupt model file header");
   if (h.reserved[0] != 0 || h.reserved[1] != 0)
     fail(path, ": corrupt model file header: its reserved bytes (32..47) are not zero");
-  std::fseek(f, 0, SEEK_END);
-  const long total = std::ftell(f);
-  std::fseek(f, sizeof(Header), SEEK_SET);
-  if (total < 0 || uint64_t(total) - sizeof(Header) != h.payloadBytes)
+  if (total - sizeof(Header) != h.payloadBytes)
     fail(path, ": truncated or padded model file: header says ", h.payloadBytes,
-         " payload bytes, file holds ", total - long(sizeof(Header)));
+         " payload bytes, file holds ", total - sizeof(Header));
 
-  Reader r(path, f, h.payloadBytes);
+  // The field values stay in the mapped file (version 2 aligns them); the rest is copied.
+  const std::shared_ptr<const void> file = mapFile(path, total);
+  Reader r(path, static_cast<const char*>(file.get()) + sizeof(Header), h.payloadBytes, h.version, file);
   Model m;
   m.world = r.value<WorldTransform>("world transform");
   m.bricks = r.array<Brick>("bricks");
@@ -253,14 +309,16 @@ Model readModel(const std::string& path) {
     std::string name(len, '\0');
     r.raw(name.data(), len, "field name");
     m.fieldNames.push_back(name);
-    m.fieldValues.push_back(r.array<float>("field values"));
+    m.fieldValues.push_back(r.values("field values"));
   }
   m.regions.regions = r.array<Region>("regions");
   m.regions.brickIds = r.array<uint32_t>("region brick ids");
   m.regions.nodes = r.array<RegionKdNode>("k-d tree");
   m.regions.bounds = r.value<box3f>("bounds");
   for (uint64_t i = 0; i < fields; ++i) m.regions.valueRanges.push_back(r.array<range1f>("value ranges"));
-  m.stats = r.value<BuildStats>("build times");
+  m.stats.brickSeconds = r.value<double>("build times");
+  m.stats.regionSeconds = r.value<double>("build times");
+  m.stats.rangeSeconds = r.value<double>("build times");
   if (r.left() != 0) fail(path, ": corrupt model file: ", r.left(), " unexpected trailing bytes");
   if (r.checksum() != h.checksum) fail(path, ": corrupt model file: checksum mismatch");
   checkConsistency(m, path);

@@ -46,6 +46,7 @@ std::string modelInfoJson(const Model& model, const std::string& input, double l
                         {"regions", model.stats.regionSeconds},
                         {"value_ranges", model.stats.rangeSeconds},
                         {"load_total", loadSeconds}};
+  j["build_parts"] = model.stats.parts;
   return j.dump(2);
 }
 

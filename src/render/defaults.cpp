@@ -18,7 +18,7 @@ constexpr int kBins = 256;
 double histogram(const Model& model, int field, const TransferFunction& tf, std::vector<double>& hist,
                  const PartialData* part) {
   hist.assign(kBins, 0.0);
-  const std::vector<float>& values = model.fieldValues.at(size_t(field));
+  const ValueArray& values = model.fieldValues.at(size_t(field));
   double total = 0.0;
   for (const Brick& b : model.bricks) {
     const double volume = std::ldexp(1.0, 3 * b.level);

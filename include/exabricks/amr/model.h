@@ -5,10 +5,40 @@
 #include "exabricks/amr/basis.h"
 #include "exabricks/amr/cells.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
 namespace exa {
+
+/// One field's brick-ordered values, read-only: owned, or a view into a mapped model file that
+/// the array keeps mapped while any copy of it lives. Copies share the values.
+class ValueArray {
+public:
+  using value_type = float;
+  using const_iterator = const float*;
+  using iterator = const float*;
+
+  ValueArray() = default;
+  ValueArray(std::vector<float>&& values); // NOLINT: implicit, takes the values over
+  /// A view of `size` values at `data`, which `keep` keeps valid.
+  ValueArray(std::shared_ptr<const void> keep, const float* data, size_t size)
+      : keep_(std::move(keep)), data_(data), size_(size) {}
+
+  const float* data() const { return data_; }
+  size_t size() const { return size_; }
+  bool empty() const { return size_ == 0; }
+  const float* begin() const { return data_; }
+  const float* end() const { return data_ + size_; }
+  float operator[](size_t i) const { return data_[i]; }
+  std::vector<float> toVector() const { return {begin(), end()}; }
+  friend bool operator==(const ValueArray& a, const ValueArray& b);
+
+private:
+  std::shared_ptr<const void> keep_;
+  const float* data_ = nullptr;
+  size_t size_ = 0;
+};
 
 struct BuildOptions {
   BrickBuildOptions bricks;
@@ -26,7 +56,7 @@ struct Model {
   SimulationState simulation; ///< from the reader (not stored in model files)
   std::vector<Brick> bricks;
   std::vector<std::string> fieldNames;
-  std::vector<std::vector<float>> fieldValues; ///< per field, brick-ordered values
+  std::vector<ValueArray> fieldValues; ///< per field, brick-ordered values
   RegionSet regions;
   BuildStats stats;
 

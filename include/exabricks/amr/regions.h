@@ -50,6 +50,6 @@ RegionSet buildRegions(const std::vector<Brick>& bricks);
 
 /// Computes the per-region value range of one field given in brick order.
 std::vector<range1f> computeValueRanges(const RegionSet& regions, const std::vector<Brick>& bricks,
-                                        const std::vector<float>& brickValues);
+                                        const float* brickValues);
 
 } // namespace exa
