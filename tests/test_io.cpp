@@ -209,6 +209,38 @@ TEST_F(IoTest, ModelFileRoundTrip) {
   EXPECT_EQ(sampleField(m.view(0), p, a), sampleField(r.view(0), p, b));
 }
 
+TEST_F(IoTest, ModelFileValuesAreUsedInPlaceAndVersion1IsStillRead) {
+  const Model m = buildModel(generateScene({"blobs", 400, 1, 4}));
+  writeModel(m, path("m.exa"));
+  const Model r = readModel(path("m.exa"));
+  // Version 2 aligns the values: they are a view into the mapped file (not a heap copy).
+  const std::vector<char> bytes = readFile(path("m.exa"));
+  ASSERT_FALSE(r.fieldValues.empty());
+  for (size_t f = 0; f < r.fieldValues.size(); ++f) {
+    EXPECT_EQ(reinterpret_cast<uintptr_t>(r.fieldValues[f].data()) % alignof(float), 0u);
+    EXPECT_EQ(r.fieldValues[f], m.fieldValues[f]);
+  }
+  // The mapping outlives the model it came from for as long as a copy of the values lives.
+  ValueArray kept;
+  {
+    const Model again = readModel(path("m.exa"));
+    kept = again.fieldValues[0];
+  }
+  EXPECT_EQ(kept, m.fieldValues[0]);
+  // A version 1 file (the layout earlier releases wrote: no padding) of `exabricks build` over
+  // `exabricks generate -n 400` reads to the model built from the same cells.
+  writeNative(generateScene({"blobs", 400, 1, 4}), path("b.cells"));
+  const Model built = loadModel(path("b.cells"));
+  const Model v1 = readModel(std::string(EXABRICKS_REFERENCE_DIR) + "/blobs400-v1.model");
+  EXPECT_EQ(v1.world, built.world);
+  EXPECT_EQ(v1.fieldNames, built.fieldNames);
+  EXPECT_EQ(v1.fieldValues, built.fieldValues);
+  ASSERT_EQ(v1.bricks.size(), built.bricks.size());
+  EXPECT_EQ(std::memcmp(v1.bricks.data(), built.bricks.data(), built.bricks.size() * sizeof(Brick)), 0);
+  EXPECT_EQ(v1.regions.brickIds, built.regions.brickIds);
+  EXPECT_EQ(v1.regions.valueRanges, built.regions.valueRanges);
+}
+
 TEST_F(IoTest, CorruptTruncatedAndForeignModelsAreRejected) {
   CellSet s = generateScene({"blobs", 1000, 1, 3});
   const Model m = buildModel(std::move(s));
