@@ -9,6 +9,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <algorithm>
 #include <cstring>
 #include <memory>
 #include <type_traits>
@@ -102,10 +103,12 @@ private:
 /// checksum as it goes.
 class Reader {
 public:
+  /// `mapped`: the bytes are a mapping of the file, whose pages are released from this process
+  /// once read (a later access reads them back from the page cache).
   Reader(const std::string& path, const char* payload, uint64_t payloadBytes, uint32_t version,
-         std::shared_ptr<const void> keep)
+         std::shared_ptr<const void> keep, bool mapped)
       : path_(path), start_(payload - sizeof(Header)), at_(payload), left_(payloadBytes), version_(version),
-        keep_(std::move(keep)) {}
+        keep_(std::move(keep)), mapped_(mapped) {}
   void raw(void* data, size_t size, const char* what) { std::memcpy(data, take(size, what), size); }
   template <typename T> T value(const char* what) {
     T v;
@@ -130,13 +133,31 @@ public:
   }
   uint64_t left() const { return left_; }
   uint64_t checksum() const { return sum_.value(); }
+  /// Releases every page read so far (mapped files): the checksum touched them all, and the
+  /// copies made of bricks and regions must not count twice.
+  void releaseRead(uint64_t atLeast = 0) {
+    if (!mapped_) return;
+    const uint64_t page = uint64_t(::sysconf(_SC_PAGESIZE));
+    const uint64_t end = uint64_t(at_ - start_) / page * page;
+    if (end <= released_ + atLeast) return;
+    ::madvise(const_cast<char*>(start_ + released_), size_t(end - released_), MADV_DONTNEED);
+    released_ = end;
+  }
 
 private:
   const char* take(uint64_t size, const char* what) {
     if (size > left_) fail(path_, ": corrupt model file: ", what, " runs past the end of the data");
     const char* p = at_;
-    sum_.update(p, size_t(size));
-    at_ += size;
+    // The checksum in pieces, each released once summed: reading a model never holds more of the
+    // file than one piece beyond what it copies.
+    constexpr uint64_t kPiece = uint64_t(32) << 20;
+    for (uint64_t done = 0; done < size; done += kPiece) {
+      const uint64_t n = std::min(kPiece, size - done);
+      sum_.update(p + done, size_t(n));
+      at_ = p + done + n;
+      releaseRead(kPiece);
+    }
+    at_ = p + size;
     left_ -= size;
     return p;
   }
@@ -158,18 +179,27 @@ private:
   uint64_t left_;
   uint32_t version_;
   std::shared_ptr<const void> keep_;
+  bool mapped_;
+  uint64_t released_ = 0; ///< bytes from the file's start whose pages were released
   Checksum sum_;
 };
 
-/// A whole file in memory: mapped read-only where the platform allows, else read.
-std::shared_ptr<const void> mapFile(const std::string& path, uint64_t size) {
+/// An open file descriptor, closed when it goes.
+struct Descriptor {
+  int fd = -1;
+  ~Descriptor() {
+    if (fd >= 0) ::close(fd);
+  }
+};
+
+/// The whole file read-only in memory: mapped where the platform allows, else read.
+std::shared_ptr<const void> mapFile(const std::string& path, int fd, uint64_t size, bool& mapped) {
+  mapped = false;
   if (size == 0) return nullptr;
-  const int fd = ::open(path.c_str(), O_RDONLY);
-  if (fd < 0) fail(path, ": cannot open: ", std::strerror(errno));
   void* p = ::mmap(nullptr, size_t(size), PROT_READ, MAP_PRIVATE, fd, 0);
-  ::close(fd);
   if (p != MAP_FAILED) {
     ::madvise(p, size_t(size), MADV_SEQUENTIAL); // read once through by the checksum
+    mapped = true;
     return std::shared_ptr<const void>(p, [size](const void* q) { ::munmap(const_cast<void*>(q), size_t(size)); });
   }
   auto bytes = std::make_shared<std::vector<char>>(size_t(size));
@@ -296,8 +326,13 @@ Model readModel(const std::string& path) {
          " payload bytes, file holds ", total - sizeof(Header));
 
   // The field values stay in the mapped file (version 2 aligns them); the rest is copied.
-  const std::shared_ptr<const void> file = mapFile(path, total);
-  Reader r(path, static_cast<const char*>(file.get()) + sizeof(Header), h.payloadBytes, h.version, file);
+  Descriptor file;
+  file.fd = ::open(path.c_str(), O_RDONLY);
+  if (file.fd < 0) fail(path, ": cannot open: ", std::strerror(errno));
+  bool mapped = false;
+  std::shared_ptr<const void> bytes = mapFile(path, file.fd, total, mapped);
+  const char* base = static_cast<const char*>(bytes.get());
+  Reader r(path, base + sizeof(Header), h.payloadBytes, h.version, bytes, mapped);
   Model m;
   m.world = r.value<WorldTransform>("world transform");
   m.bricks = r.array<Brick>("bricks");
@@ -321,7 +356,22 @@ Model readModel(const std::string& path) {
   m.stats.rangeSeconds = r.value<double>("build times");
   if (r.left() != 0) fail(path, ": corrupt model file: ", r.left(), " unexpected trailing bytes");
   if (r.checksum() != h.checksum) fail(path, ": corrupt model file: checksum mismatch");
+  r.releaseRead();
   checkConsistency(m, path);
+  if (mapped) {
+    // The values move to a fresh mapping of the same file: the verification touched every page
+    // of the first, which goes with it, and the new one holds only what the renderer reads.
+    bool again = false;
+    const std::shared_ptr<const void> fresh = mapFile(path, file.fd, total, again);
+    if (again) {
+      const char* freshBase = static_cast<const char*>(fresh.get());
+      for (ValueArray& v : m.fieldValues) {
+        const char* at = reinterpret_cast<const char*>(v.data());
+        if (at >= base && at < base + total)
+          v = ValueArray(fresh, reinterpret_cast<const float*>(freshBase + (at - base)), v.size());
+      }
+    }
+  }
   return m;
 }
 
