@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <random>
 
@@ -330,7 +331,21 @@ TEST(Partition, BuildInPartsEqualsTheWholeBuild) {
   } catch (const Error& e) {
     const std::string m = e.what();
     EXPECT_NE(m.find("bad.cells"), std::string::npos) << m;
+    EXPECT_EQ(m.find("bad.cells"), m.rfind("bad.cells")) << "the file is named once: " << m;
     EXPECT_NE(m.find("duplicates"), std::string::npos) << m;
+  }
+  // A bad value is named by its record in the file.
+  CellSet nan = generateScene({"blobs", 5000, 1, 3});
+  nan.fields[0].values[777] = std::nanf("");
+  const std::string nanPath = (dir / "nan.cells").string();
+  writeNative(nan, nanPath);
+  try {
+    loadModel(nanPath, inParts);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("record 777"), std::string::npos) << m;
+    EXPECT_NE(m.find("not finite"), std::string::npos) << m;
   }
 }
 

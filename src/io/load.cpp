@@ -204,10 +204,16 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
       values.resize(set.fields.size());
       for (auto& v : values) v.reserve(cells);
     }
-    if (offset + kept >= uint64_t(UINT32_MAX)) fail("too many cells: more than ", offset + kept - 1, " (limit 2^32-1)");
+    if (offset + kept >= uint64_t(UINT32_MAX))
+      fail(path, ": too many cells: more than ", offset + kept - 1, " (limit 2^32-1)");
     std::vector<std::vector<float>*> arrays;
     for (Field& f : set.fields) arrays.push_back(&f.values);
-    std::vector<Brick> bricks = buildBricksReordering(set.cells, arrays, options.build.bricks);
+    std::vector<Brick> bricks;
+    try {
+      bricks = buildBricksReordering(set.cells, arrays, options.build.bricks);
+    } catch (const Error& e) { // a conflict names the two cells by position: this read's order is not the file's
+      throw Error(strCat(path, ": ", e.what()));
+    }
     for (Brick& b : bricks) {
       b.valueOffset += uint32_t(offset);
       model.bricks.push_back(b);
@@ -219,7 +225,7 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
     }
     offset += kept;
   }
-  if (model.bricks.empty()) fail("no cells");
+  if (model.bricks.empty()) fail(path, ": no cells");
   for (auto& v : values) model.fieldValues.push_back(std::move(v));
   model.stats.brickSeconds = timer.seconds();
   model.stats.parts = parts;
@@ -248,13 +254,8 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
     uint64_t count = 0;
     if (reader->census)
       if (const std::optional<Census> census = cheapCensus(path, kind, *reader, options.partCells, count);
-          census && count > options.partCells) {
-        try {
-          return buildInParts(path, *reader, options, *census, count);
-        } catch (const Error& e) {
-          throw Error(strCat(source, ": ", e.what()));
-        }
-      }
+          census && count > options.partCells)
+        return buildInParts(path, *reader, options, *census, count);
   }
   CellSet cells = loadCells(path, options);
   logInfo(strCat("read ", cells.size(), " cells in ", timer.seconds(), " s"));
