@@ -76,16 +76,7 @@ box3i haloReadBox(const box3l& part, int coarsestLevel) {
 }
 
 void keepSupportOf(CellSet& set, const box3l& part) {
-  size_t kept = 0;
-  for (size_t i = 0; i < set.cells.size(); ++i) {
-    const Cell& c = set.cells[i];
-    if (!supportReaches(c.bounds(), c.level, part)) continue;
-    set.cells[kept] = c;
-    for (Field& f : set.fields) f.values[kept] = f.values[i];
-    ++kept;
-  }
-  set.cells.resize(kept);
-  for (Field& f : set.fields) f.values.resize(kept);
+  keepCells(set, [&](const Cell& c) { return supportReaches(c.bounds(), c.level, part); });
 }
 
 namespace {

@@ -91,16 +91,7 @@ const FormatReader* findReader(const std::string& path) {
 }
 
 void cropCells(CellSet& set, const box3i& box) {
-  size_t kept = 0;
-  for (size_t i = 0; i < set.cells.size(); ++i) {
-    const Cell& c = set.cells[i];
-    if (!cellOverlaps(c, box)) continue;
-    set.cells[kept] = c;
-    for (Field& f : set.fields) f.values[kept] = f.values[i];
-    ++kept;
-  }
-  set.cells.resize(kept);
-  for (Field& f : set.fields) f.values.resize(kept);
+  keepCells(set, [&](const Cell& c) { return cellOverlaps(c, box); });
 }
 
 InputKind detectInput(const std::string& path) {
@@ -185,15 +176,8 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
     CellSet set = reader.read(path, request);
     selectFields(set, options.fields, path);
     // Keep the cells inside the part: each cell lies in exactly one.
-    size_t kept = 0;
-    for (size_t i = 0; i < set.cells.size(); ++i) {
-      if (!centreInside(set.cells[i].lower, set.cells[i].level, box)) continue;
-      set.cells[kept] = set.cells[i];
-      for (Field& f : set.fields) f.values[kept] = f.values[i];
-      ++kept;
-    }
-    set.cells.resize(kept);
-    for (Field& f : set.fields) f.values.resize(kept);
+    keepCells(set, [&](const Cell& c) { return centreInside(c.lower, c.level, box); });
+    const size_t kept = set.cells.size();
     progress.advance(1);
     if (kept == 0) continue;
     validateCells(set, path);

@@ -64,6 +64,19 @@ struct CellSet {
   box3l bounds() const;
 };
 
+/// Keeps the cells for which `keep(cell)` holds, with their values, in order.
+template <typename Keep> void keepCells(CellSet& set, Keep&& keep) {
+  size_t kept = 0;
+  for (size_t i = 0; i < set.cells.size(); ++i) {
+    if (!keep(set.cells[i])) continue;
+    set.cells[kept] = set.cells[i];
+    for (Field& f : set.fields) f.values[kept] = f.values[i];
+    ++kept;
+  }
+  set.cells.resize(kept);
+  for (Field& f : set.fields) f.values.resize(kept);
+}
+
 /// Validates cells and fields independently of where they came from: levels in range, corners
 /// aligned to the cell width, coordinates within the lattice limit, one value per cell and
 /// field, no NaN or infinite values, at least one cell and one field. Overlaps are detected by
