@@ -210,8 +210,7 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   } catch (const std::exception& e) {
     loadError = e.what();
   }
-  if (!parallel::everyone(loadError.empty()))
-    fail(loadError.empty() ? "another process could not read the first step (its message names the problem)" : loadError);
+  parallel::agreeOrFail(loadError, "read the first step");
   const parallel::Processes& procs = parallel::processes();
   const Model& model0 = *firstStep.model;
   applyDataDefaults(ro, cmd, doc.scene, model0, firstStep.info);
@@ -369,8 +368,7 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
 
   // Encode when every frame of the movie is there (under MPI, once every process is done; a
   // process that failed stops all of them).
-  if (!parallel::everyone(renderError.empty()))
-    fail(renderError.empty() ? "another process failed (its message names the problem)" : renderError);
+  parallel::agreeOrFail(renderError, "render its frames");
   if (!procs.root()) return;
   int missing = 0;
   for (int i = 0; i < frames; ++i) missing += fs::exists(framePath(framesDir, i)) ? 0 : 1;

@@ -72,8 +72,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     } catch (const std::exception& e) {
       loadError = e.what();
     }
-    if (!parallel::everyone(loadError.empty()))
-      fail(loadError.empty() ? "another process could not read the input (its message names the problem)" : loadError);
+    parallel::agreeOrFail(loadError, "read the input");
   }
   const Model& model = part ? part->model : *loaded;
   const WholeData* whole = part ? &part->whole : nullptr;

@@ -17,12 +17,7 @@ box3d DataPart::worldBox() const {
 
 uint64_t DataPart::ownedCells() const {
   uint64_t n = 0;
-  for (const Brick& b : model.bricks) {
-    const int w = b.cellWidth();
-    for (int z = 0; z < b.size.z; ++z)
-      for (int y = 0; y < b.size.y; ++y)
-        for (int x = 0; x < b.size.x; ++x) n += centreInside(b.lower + vec3i(x, y, z) * w, b.level, box);
-  }
+  for (const Brick& b : model.bricks) forCellsCentredIn(b, box, [&](uint32_t) { ++n; });
   return n;
 }
 
@@ -30,16 +25,6 @@ std::vector<int> DataPart::order(const Camera& camera) const {
   if (camera.orthographic) return partition.orderAlong((camera.lookAt - camera.position) / model.world.scale);
   return partition.orderFrom(model.world.toLattice(camera.position));
 }
-
-namespace {
-
-/// Throws on every process when any process failed (its own message where it failed).
-void agreeOrFail(const std::string& error, const char* what) {
-  if (!parallel::everyone(error.empty()))
-    fail(error.empty() ? strCat("another process could not ", what, " (its message names the problem)") : error);
-}
-
-} // namespace
 
 DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
   const parallel::Processes& procs = parallel::processes();
@@ -59,7 +44,7 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
       error = e.what();
     }
   }
-  agreeOrFail(error, "read the input");
+  parallel::agreeOrFail(error, "read the input");
   parallel::broadcast(encoded);
   part.coarsestLevel = int(encoded.back());
   encoded.pop_back();
@@ -75,7 +60,7 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
   } catch (const std::exception& e) {
     error = e.what();
   }
-  agreeOrFail(error, "read its part of the input");
+  parallel::agreeOrFail(error, "read its part of the input");
   part.model = std::move(*loaded);
   const Model& m = part.model;
 

@@ -67,6 +67,11 @@ bool everyone(bool ok) {
   return ok;
 }
 
+void agreeOrFail(const std::string& error, const std::string& what) {
+  if (!everyone(error.empty()))
+    fail(error.empty() ? strCat("another process could not ", what, " (its message names the problem)") : error);
+}
+
 namespace {
 
 /// Sums the statistics over the processes onto the root (seconds: the slowest process's).

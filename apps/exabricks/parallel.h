@@ -30,6 +30,10 @@ const Processes& processes();
 /// process that failed makes all of them stop instead of waiting for it.
 bool everyone(bool ok);
 
+/// A collective like everyone(): returns when every process's `error` is empty; else fails with
+/// this process's error, or on the others with "another process could not WHAT".
+void agreeOrFail(const std::string& error, const std::string& what);
+
 /// Adds every process's share of the tiles into the root's buffer (the root then holds the
 /// whole image's sums; statistics summed, seconds the slowest process's).
 void combineOnRoot(FrameBuffer& buffer);

@@ -22,26 +22,15 @@ double histogram(const Model& model, int field, const TransferFunction& tf, std:
   double total = 0.0;
   for (const Brick& b : model.bricks) {
     const double volume = std::ldexp(1.0, 3 * b.level);
-    const size_t n = size_t(b.cellCount());
-    if (part) {
-      const int w = b.cellWidth();
-      size_t i = 0, owned = 0;
-      for (int z = 0; z < b.size.z; ++z)
-        for (int y = 0; y < b.size.y; ++y)
-          for (int x = 0; x < b.size.x; ++x, ++i) {
-            if (!centreInside(b.lower + vec3i(x, y, z) * w, b.level, part->owned)) continue;
-            const float t = tf.normalize(values[b.valueOffset + i]);
-            hist[size_t(std::clamp(int(t * kBins), 0, kBins - 1))] += volume;
-            ++owned;
-          }
-      total += volume * double(owned);
-      continue;
-    }
-    for (size_t i = 0; i < n; ++i) {
-      const float t = tf.normalize(values[b.valueOffset + i]);
+    auto add = [&](uint32_t slot) { // one cell, weighted by its volume
+      const float t = tf.normalize(values[b.valueOffset + slot]);
       hist[size_t(std::clamp(int(t * kBins), 0, kBins - 1))] += volume;
-    }
-    total += volume * double(n);
+      total += volume;
+    };
+    if (part)
+      forCellsCentredIn(b, part->owned, add); // a part counts only the cells it owns
+    else
+      for (uint32_t slot = 0; slot < b.cellCount(); ++slot) add(slot);
   }
   if (part && part->sumOverParts) {
     hist.push_back(total);

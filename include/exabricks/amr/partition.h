@@ -78,6 +78,17 @@ inline bool centreInside(const vec3i& lower, int level, const box3l& box) {
   return true;
 }
 
+/// Calls visit(slot) for every cell of the brick whose centre lies in `box` (the cells a part
+/// owns), with the cell's slot in the brick (x fastest).
+template <typename Visit> void forCellsCentredIn(const Brick& b, const box3l& box, Visit&& visit) {
+  const int w = b.cellWidth();
+  uint32_t slot = 0;
+  for (int z = 0; z < b.size.z; ++z)
+    for (int y = 0; y < b.size.y; ++y)
+      for (int x = 0; x < b.size.x; ++x, ++slot)
+        if (centreInside(b.lower + vec3i(x, y, z) * w, b.level, box)) visit(slot);
+}
+
 /// The box a reader must return cells of for a part: every cell whose support reaches into the
 /// part overlaps it (the part grown by the coarsest width, clamped to the lattice range).
 box3i haloReadBox(const box3l& part, int coarsestLevel);
