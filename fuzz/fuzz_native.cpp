@@ -1,9 +1,10 @@
 // libFuzzer entry for the native readers: the input holds d.cells, d.scalars and a .grids text,
-// cut at "--8<--" lines; the dataset (whole, its census, and the part inside a box, read in
-// pieces) and the fixture are read.
+// cut at "--8<--" lines; the dataset (whole, its census, the part inside a box, read in pieces,
+// and the model built in parts of 16 cells) and the fixture are read.
 #include "fuzz_files.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/io/load.h"
 #include "exabricks/io/native.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -21,6 +22,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (census.cells() < 1) __builtin_trap();
     const exa::CellSet s = exa::readNative(cells, {}, exa::box3i(exa::vec3i(-2), exa::vec3i(3)));
     if (s.fields.size() != 1 || s.fields[0].values.size() != s.cells.size()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  try {
+    // Built in parts: each part read through a box; whatever is built holds every cell once.
+    exa::LoadOptions o;
+    o.partCells = 16;
+    const exa::Model m = exa::loadModel(cells, o);
+    if (m.fieldValues.size() != 1 || m.fieldValues[0].size() != m.cellCount()) __builtin_trap();
   } catch (const exa::Error&) {
   }
   try {
