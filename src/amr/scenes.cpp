@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <functional>
+#include <limits>
 
 namespace exa {
 namespace {
@@ -326,7 +327,7 @@ uint64_t generateScenePieces(const SceneOptions& options, int slabsPerPiece,
 CellSet generateScene(const SceneOptions& options) {
   // One piece holding every slab.
   CellSet set;
-  generateScenePieces(options, 2048, [&](CellSet& piece) { set = std::move(piece); });
+  generateScenePieces(options, std::numeric_limits<int>::max(), [&](CellSet& piece) { set = std::move(piece); });
   return set;
 }
 

@@ -137,17 +137,16 @@ box3i readBoxOf(const box3l& part) {
   return out;
 }
 
-/// The number of cells an input holds when its reader can count them cheaply (without reading
-/// the cells): by the size of NAME.cells, or from a census taken from the headers; none else.
-std::optional<Census> cheapCensus(const std::string& path, InputKind kind, const FormatReader& reader,
-                                  uint64_t partCells, uint64_t& cells) {
-  if (kind == InputKind::Native) {
-    cells = fileSize(path) / sizeof(Cell);
-    if (cells <= partCells) return std::nullopt;
-  }
-  if (kind != InputKind::Native && kind != InputKind::Amrex) return std::nullopt;
+/// The census of an input with more than `partCells` cells, when its reader counts them without
+/// reading the cells (NAME.cells by its size, then a streamed census; AMReX from its headers),
+/// and its cell count; none otherwise.
+std::optional<Census> censusIfLarger(const std::string& path, InputKind kind, const FormatReader& reader,
+                                     uint64_t partCells, uint64_t& cells) {
+  if (!reader.census || (kind != InputKind::Native && kind != InputKind::Amrex)) return std::nullopt;
+  if (kind == InputKind::Native && fileSize(path) / sizeof(Cell) <= partCells) return std::nullopt;
   Census census = reader.census(path);
   cells = uint64_t(std::llround(census.cells()));
+  if (cells <= partCells) return std::nullopt;
   return census;
 }
 
@@ -236,10 +235,8 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
   if (options.partCells > 0 && options.box.empty() && kind != InputKind::Default) {
     const FormatReader* reader = findReader(path);
     uint64_t count = 0;
-    if (reader->census)
-      if (const std::optional<Census> census = cheapCensus(path, kind, *reader, options.partCells, count);
-          census && count > options.partCells)
-        return buildInParts(path, *reader, options, *census, count);
+    if (const std::optional<Census> census = censusIfLarger(path, kind, *reader, options.partCells, count))
+      return buildInParts(path, *reader, options, *census, count);
   }
   CellSet cells = loadCells(path, options);
   logInfo(strCat("read ", cells.size(), " cells in ", timer.seconds(), " s"));

@@ -5,6 +5,7 @@
 
 #include <fcntl.h>
 #include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -192,7 +193,17 @@ struct Descriptor {
   }
 };
 
-/// The whole file read-only in memory: mapped where the platform allows, else read.
+/// Reads `size` bytes at `offset` of the open file.
+void readAt(const std::string& path, int fd, void* data, uint64_t size, uint64_t offset) {
+  auto* out = static_cast<char*>(data);
+  while (size > 0) {
+    const ssize_t n = ::pread(fd, out, size_t(std::min<uint64_t>(size, uint64_t(1) << 30)), off_t(offset));
+    if (n <= 0) fail(path, ": read error (file changed while reading?)");
+    out += n, offset += uint64_t(n), size -= uint64_t(n);
+  }
+}
+
+/// The whole open file read-only in memory: mapped where the platform allows, else read.
 std::shared_ptr<const void> mapFile(const std::string& path, int fd, uint64_t size, bool& mapped) {
   mapped = false;
   if (size == 0) return nullptr;
@@ -203,7 +214,7 @@ std::shared_ptr<const void> mapFile(const std::string& path, int fd, uint64_t si
     return std::shared_ptr<const void>(p, [size](const void* q) { ::munmap(const_cast<void*>(q), size_t(size)); });
   }
   auto bytes = std::make_shared<std::vector<char>>(size_t(size));
-  readInto(path, bytes->data(), size);
+  readAt(path, fd, bytes->data(), size, 0);
   return std::shared_ptr<const void>(bytes, bytes->data());
 }
 
@@ -310,10 +321,16 @@ void writeModel(const Model& m, const std::string& path) {
 }
 
 Model readModel(const std::string& path) {
-  Header h{};
-  const uint64_t total = fileSize(path);
+  // One descriptor for the header, the checks and every mapping: all of one file.
+  Descriptor file;
+  file.fd = ::open(path.c_str(), O_RDONLY);
+  if (file.fd < 0) fail(path, ": cannot open: ", std::strerror(errno));
+  struct stat st {};
+  if (::fstat(file.fd, &st) != 0 || !S_ISREG(st.st_mode)) fail(path, ": not a regular file");
+  const uint64_t total = uint64_t(st.st_size);
   if (total < sizeof(Header)) fail(path, ": truncated model file (no header)");
-  readInto(path, &h, sizeof h);
+  Header h{};
+  readAt(path, file.fd, &h, sizeof h, 0);
   if (std::memcmp(h.magic, kModelMagic, 8) != 0) fail(path, ": not an exabricks model file");
   if (h.version != kModelVersion && h.version != 1)
     fail(path, ": model file version ", h.version, " is not supported (this build reads versions 1 and ",
@@ -326,9 +343,6 @@ Model readModel(const std::string& path) {
          " payload bytes, file holds ", total - sizeof(Header));
 
   // The field values stay in the mapped file (version 2 aligns them); the rest is copied.
-  Descriptor file;
-  file.fd = ::open(path.c_str(), O_RDONLY);
-  if (file.fd < 0) fail(path, ": cannot open: ", std::strerror(errno));
   bool mapped = false;
   std::shared_ptr<const void> bytes = mapFile(path, file.fd, total, mapped);
   const char* base = static_cast<const char*>(bytes.get());
