@@ -27,7 +27,10 @@ namespace exa {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
-void SampleBatchImpl(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
+// Compiled once with and once without gradients: their six accumulators would otherwise stay live
+// (and spill) in the values-only batches too.
+template <bool gradient>
+void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& batch) {
   const hn::CappedTag<float, kSampleBatch> d;
   const hn::RebindToSigned<decltype(d)> di;
   using V = hn::Vec<decltype(d)>;
@@ -49,84 +52,98 @@ void SampleBatchImpl(const FieldView& view, uint32_t regionIndex, SampleBatch& b
     M haveRef = one < zero; // all false
     for (uint32_t k = 0; k < region.brickCount; ++k) {
       const Brick& brick = view.bricks[view.brickIds[region.brickBegin + k]];
-      const float invWs = inverseWidth(brick.level);
-      const V invW = hn::Set(d, invWs);
-      VI i0[3];
-      V h0[3], h1[3];
-      M valid0[3], valid1[3];
+      const V invW = hn::Set(d, inverseWidth(brick.level));
+      // Per axis, as basis.h: position in cell-centre units, the lower of the two nearest
+      // centres, and the hat factors and derivatives of both, zero where that cell lies outside
+      // the brick. A corner's weight is the product of its three factors, so a missing cell
+      // weighs nothing; its index is clamped into the brick so that every load stays inside.
+      VI lo[3], step[3];
+      V h0[3], h1[3], dh0[3], dh1[3];
+      M any = hn::Not(hn::Lt(one, zero)); // all true
       for (int a = 0; a < 3; ++a) {
-        // As basis.h: position in cell-centre units, the lower of the two nearest centres and
-        // the hat factors of both.
         const V q = hn::Sub(hn::Mul(hn::Sub(p[a], hn::Set(d, float(brick.lower[a]))), invW), half);
         const V fl = hn::Floor(q);
-        i0[a] = hn::ConvertTo(di, fl);
+        const VI i0 = hn::ConvertTo(di, fl);
         const V f = hn::Sub(q, fl);
-        h0[a] = hn::Sub(one, f);
-        h1[a] = f;
-        const VI size = hn::Set(di, brick.size[a]);
-        const VI i1 = hn::Add(i0[a], ione);
-        valid0[a] = hn::RebindMask(d, hn::And(i0[a] > iminus1, i0[a] < size));
-        valid1[a] = hn::RebindMask(d, hn::And(i1 > iminus1, i1 < size));
+        const VI last = hn::Set(di, brick.size[a] - 1);
+        const VI i1 = hn::Add(i0, ione);
+        const M valid0 = hn::RebindMask(d, hn::And(i0 > iminus1, i0 < hn::Add(last, ione)));
+        const M valid1 = hn::RebindMask(d, hn::And(i1 > iminus1, i1 < hn::Add(last, ione)));
+        any = hn::And(any, hn::Or(valid0, valid1));
+        h0[a] = hn::IfThenElseZero(valid0, hn::Sub(one, f));
+        h1[a] = hn::IfThenElseZero(valid1, f);
+        dh0[a] = hn::IfThenElseZero(valid0, hn::Neg(invW));
+        dh1[a] = hn::IfThenElseZero(valid1, invW);
+        lo[a] = hn::Min(hn::Max(i0, hn::Zero(di)), last);
+        step[a] = hn::Sub(hn::Min(hn::Max(i1, hn::Zero(di)), last), lo[a]);
       }
+      if (hn::AllFalse(d, any)) continue; // no lane lies in this brick's support
       const float* values = view.values + brick.valueOffset;
-      const VI sx = hn::Set(di, brick.size.x), sy = hn::Set(di, brick.size.y);
-      auto index = [&](const VI& x, const VI& y, const VI& z) { return hn::Add(x, hn::Mul(sx, hn::Add(y, hn::Mul(sy, z)))); };
-      // The reference value: the first brick that has cells on every axis gives its first cell.
-      const M any = hn::And(hn::Or(valid0[0], valid1[0]), hn::And(hn::Or(valid0[1], valid1[1]), hn::Or(valid0[2], valid1[2])));
-      if (hn::AllFalse(d, any)) continue;
+      const VI sx = hn::Set(di, brick.size.x), sxy = hn::Set(di, brick.size.x * brick.size.y);
+      const VI at = hn::Add(lo[0], hn::Add(hn::Mul(sx, lo[1]), hn::Mul(sxy, lo[2])));
+      const VI offset[3] = {step[0], hn::Mul(sx, step[1]), hn::Mul(sxy, step[2])};
+      // The corners' values, two neighbours along x per (y, z) row.
+      auto fetchRow = [&](const VI& row, V& c0, V& c1) {
+        c0 = hn::GatherIndex(d, values, row);
+        c1 = hn::GatherIndex(d, values, hn::Add(row, offset[0]));
+      };
+      V c0[2][2], c1[2][2];
+      fetchRow(at, c0[0][0], c1[0][0]);
+      // The reference value: the first brick that has cells on every axis gives its first cell
+      // (the lower one where it exists), which is the corner at `at`.
       const M newRef = hn::AndNot(haveRef, any);
-      if (!hn::AllFalse(d, newRef)) {
-        VI first[3];
-        for (int a = 0; a < 3; ++a)
-          first[a] = hn::IfThenElse(hn::RebindMask(di, valid0[a]), i0[a], hn::Add(i0[a], ione));
-        const VI at = hn::IfThenElseZero(hn::RebindMask(di, newRef), index(first[0], first[1], first[2]));
-        v0 = hn::IfThenElse(newRef, hn::GatherIndex(d, values, at), v0);
-        haveRef = hn::Or(haveRef, newRef);
-      }
-      const V dh0 = hn::Neg(invW), dh1 = invW;
-      for (int cz = 0; cz < 2; ++cz) {
-        const M mz = cz ? valid1[2] : valid0[2];
-        const V hz = cz ? h1[2] : h0[2], dhz = cz ? dh1 : dh0;
-        const VI iz = cz ? hn::Add(i0[2], ione) : i0[2];
+      v0 = hn::IfThenElse(newRef, c0[0][0], v0);
+      haveRef = hn::Or(haveRef, newRef);
+      fetchRow(hn::Add(at, offset[1]), c0[0][1], c1[0][1]);
+      fetchRow(hn::Add(at, offset[2]), c0[1][0], c1[1][0]);
+      fetchRow(hn::Add(hn::Add(at, offset[1]), offset[2]), c0[1][1], c1[1][1]);
+      // The eight corners summed axis by axis: along x per (y, z) row, then y, then z. The same
+      // sums as basis.h's cell-by-cell loop, factored.
+      V ex[2][2], gxx[2][2];
+      for (int cz = 0; cz < 2; ++cz)
         for (int cy = 0; cy < 2; ++cy) {
-          const M myz = hn::And(mz, cy ? valid1[1] : valid0[1]);
-          if (hn::AllFalse(d, myz)) continue;
-          const V hy = cy ? h1[1] : h0[1], dhy = cy ? dh1 : dh0;
-          const VI iy = cy ? hn::Add(i0[1], ione) : i0[1];
-          const V hyz = hn::Mul(hy, hz);
-          for (int cx = 0; cx < 2; ++cx) {
-            const M m = hn::And(myz, cx ? valid1[0] : valid0[0]);
-            if (hn::AllFalse(d, m)) continue;
-            const V hx = cx ? h1[0] : h0[0], dhx = cx ? dh1 : dh0;
-            const VI ix = cx ? hn::Add(i0[0], ione) : i0[0];
-            const VI at = hn::IfThenElseZero(hn::RebindMask(di, m), index(ix, iy, iz));
-            const V v = hn::Sub(hn::GatherIndex(d, values, at), v0);
-            const V weight = hn::IfThenElseZero(m, hn::Mul(hx, hyz));
-            sumW = hn::Add(sumW, weight);
-            sumWV = hn::Add(sumWV, hn::Mul(weight, v));
-            if (gradient) {
-              const V g[3] = {hn::IfThenElseZero(m, hn::Mul(dhx, hyz)), hn::IfThenElseZero(m, hn::Mul(hn::Mul(hx, dhy), hz)),
-                              hn::IfThenElseZero(m, hn::Mul(hn::Mul(hx, hy), dhz))};
-              for (int a = 0; a < 3; ++a) {
-                dW[a] = hn::Add(dW[a], g[a]);
-                dWV[a] = hn::Add(dWV[a], hn::Mul(g[a], v));
-              }
-            }
-          }
+          const V a0 = hn::Sub(c0[cz][cy], v0), a1 = hn::Sub(c1[cz][cy], v0);
+          ex[cz][cy] = hn::MulAdd(h1[0], a1, hn::Mul(h0[0], a0));
+          if constexpr (gradient) gxx[cz][cy] = hn::MulAdd(dh1[0], a1, hn::Mul(dh0[0], a0));
         }
+      const V wx = hn::Add(h0[0], h1[0]), wy = hn::Add(h0[1], h1[1]), wz = hn::Add(h0[2], h1[2]);
+      V eyz[2], gxyz[2], gyyz[2];
+      for (int cz = 0; cz < 2; ++cz) {
+        eyz[cz] = hn::MulAdd(h1[1], ex[cz][1], hn::Mul(h0[1], ex[cz][0]));
+        if constexpr (gradient) {
+          gxyz[cz] = hn::MulAdd(h1[1], gxx[cz][1], hn::Mul(h0[1], gxx[cz][0]));
+          gyyz[cz] = hn::MulAdd(dh1[1], ex[cz][1], hn::Mul(dh0[1], ex[cz][0]));
+        }
+      }
+      sumW = hn::MulAdd(wx, hn::Mul(wy, wz), sumW);
+      sumWV = hn::Add(sumWV, hn::MulAdd(h1[2], eyz[1], hn::Mul(h0[2], eyz[0])));
+      if constexpr (gradient) {
+        dW[0] = hn::MulAdd(hn::Add(dh0[0], dh1[0]), hn::Mul(wy, wz), dW[0]);
+        dW[1] = hn::MulAdd(hn::Add(dh0[1], dh1[1]), hn::Mul(wx, wz), dW[1]);
+        dW[2] = hn::MulAdd(hn::Add(dh0[2], dh1[2]), hn::Mul(wx, wy), dW[2]);
+        dWV[0] = hn::Add(dWV[0], hn::MulAdd(h1[2], gxyz[1], hn::Mul(h0[2], gxyz[0])));
+        dWV[1] = hn::Add(dWV[1], hn::MulAdd(h1[2], gyyz[1], hn::Mul(h0[2], gyyz[0])));
+        dWV[2] = hn::Add(dWV[2], hn::MulAdd(dh1[2], eyz[1], hn::Mul(dh0[2], eyz[0])));
       }
     }
     const M ok = sumW > zero;
     const V safeW = hn::IfThenElse(ok, sumW, one);
     hn::StoreU(hn::IfThenElseZero(ok, hn::Add(v0, hn::Div(sumWV, safeW))), d, batch.value + base);
     hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, ok)), di, batch.valid + base);
-    if (gradient) {
+    if constexpr (gradient) {
       const V w2 = hn::Mul(safeW, safeW);
       float* out[3] = {batch.gx + base, batch.gy + base, batch.gz + base};
       for (int a = 0; a < 3; ++a)
         hn::StoreU(hn::IfThenElseZero(ok, hn::Div(hn::Sub(hn::Mul(dWV[a], safeW), hn::Mul(dW[a], sumWV)), w2)), d, out[a]);
     }
   }
+}
+
+void SampleBatchImpl(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
+  if (gradient)
+    SampleBatchFor<true>(view, regionIndex, batch);
+  else
+    SampleBatchFor<false>(view, regionIndex, batch);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }

@@ -1,9 +1,10 @@
 // Reconstruction of several samples at once: the vectorised form of sampleRegion (basis.h) for
 // samples that share one region, as consecutive samples along a ray inside an active brick region
-// do. Every lane runs basis.h's arithmetic (the same cells in the same order, the same reference
-// value), so the results equal the scalar ones to float round-off. The library is compiled for
-// several instruction sets (SSE4, AVX2, AVX-512 where the compiler has them; Highway) and picks
-// the widest the CPU supports at run time; without Highway the batch runs the scalar code.
+// do. Every lane sums the same cells with the same reference value as basis.h; the trilinear sums
+// are factored axis by axis (missing cells get a zero hat factor), so the results equal the scalar
+// ones to float round-off. The library is compiled for several instruction sets (SSE4, AVX2,
+// AVX-512 where the compiler has them; Highway) and picks the widest the CPU supports at run time;
+// without Highway the batch runs the scalar code.
 #pragma once
 
 #include "exabricks/amr/basis.h"
