@@ -126,3 +126,39 @@ TEST(Traversal, HiddenRegionsAreSkipped) {
       for (const Segment& s : collect(t, ray)) EXPECT_TRUE(visible[s.region]);
   }
 }
+
+TEST(Traversal, HiddenSubtreesGiveTheVisibleSegmentsOfTheFullWalk) {
+  const Model m = buildModel(generateScene({"blobs", 5000, 2, 3}));
+  // Whole subtrees hidden (the lower half in x), and a scattering of hidden regions elsewhere.
+  const float mid = 0.5f * (m.regions.bounds.lower.x + m.regions.bounds.upper.x);
+  std::vector<uint8_t> visible(m.regions.regions.size(), 0);
+  size_t shown = 0;
+  for (size_t i = 0; i < visible.size(); ++i) {
+    const box3f b = m.regions.regions[i].bounds();
+    visible[i] = (b.lower.x >= mid) != (i % 7 == 0);
+    shown += visible[i];
+  }
+  ASSERT_GT(shown, 0u);
+  ASSERT_LT(shown, visible.size());
+  RegionTraversal all(m, TraversalKind::KdTree), some(m, TraversalKind::KdTree), embree(m, TraversalKind::Embree);
+  some.setVisible(visible);
+  embree.setVisible(visible);
+  std::mt19937 rng(9);
+  size_t segments = 0;
+  for (const Ray& ray : testRays(m, rng)) {
+    std::vector<Segment> expected;
+    for (const Segment& s : collect(all, ray))
+      if (visible[s.region]) expected.push_back(s);
+    const std::vector<Segment> got = collect(some, ray), viaEmbree = collect(embree, ray);
+    ASSERT_EQ(got.size(), expected.size());
+    ASSERT_EQ(viaEmbree.size(), expected.size());
+    for (size_t i = 0; i < got.size(); ++i) {
+      EXPECT_EQ(got[i].region, expected[i].region);
+      EXPECT_EQ(viaEmbree[i].region, expected[i].region);
+      EXPECT_NEAR(got[i].t0, expected[i].t0, 1e-4f * (1.f + std::abs(expected[i].t0)));
+      EXPECT_EQ(got[i].t1, expected[i].t1);
+    }
+    segments += got.size();
+  }
+  EXPECT_GT(segments, 0u);
+}

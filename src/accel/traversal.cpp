@@ -79,7 +79,10 @@ double RegionTraversal::setVisible(const std::vector<uint8_t>& visible) {
   visible_ = visible;
   visibleCount_ = 0;
   for (uint8_t v : visible_) visibleCount_ += v != 0;
-  if (kind_ != TraversalKind::Embree) return timer.seconds();
+  if (kind_ != TraversalKind::Embree) {
+    markVisibleSubtrees();
+    return timer.seconds();
+  }
 
   if (!embree_) {
     embree_ = std::make_unique<EmbreeScene>();
@@ -106,6 +109,28 @@ double RegionTraversal::setVisible(const std::vector<uint8_t>& visible) {
   }
   rtcCommitScene(es->scene);
   return timer.seconds();
+}
+
+void RegionTraversal::markVisibleSubtrees() {
+  const std::vector<RegionKdNode>& nodes = model_.regions.nodes;
+  subtreeVisible_.assign(nodes.size(), 0);
+  if (nodes.empty()) return;
+  // Post-order with an explicit stack: a node is done once both children are.
+  std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};
+  while (!stack.empty()) {
+    const auto [node, childrenDone] = stack.back();
+    stack.pop_back();
+    const RegionKdNode& n = nodes[node];
+    if (n.axis == kLeafAxis) {
+      subtreeVisible_[node] = n.index != kNoRegion && visible_[n.index];
+    } else if (childrenDone) {
+      subtreeVisible_[node] = subtreeVisible_[n.index] | subtreeVisible_[n.index + 1];
+    } else {
+      stack.push_back({node, true});
+      stack.push_back({n.index, false});
+      stack.push_back({n.index + 1, false});
+    }
+  }
 }
 
 bool RegionTraversal::nextEmbree(const Ray& ray, float tnear, Segment& seg) const {

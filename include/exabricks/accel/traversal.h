@@ -57,12 +57,16 @@ struct RegionTreeView {
   const RegionKdNode* nodes = nullptr; ///< null when there are no regions
   const Region* regions = nullptr;
   const uint8_t* visible = nullptr;
+  /// Per node, whether any visible region lies below it (the walk skips the others); null: not
+  /// known, every subtree is entered.
+  const uint8_t* subtreeVisible = nullptr;
   box3f bounds;                        ///< box of the root
 };
 
 /// Front-to-back walk of the k-d tree with an explicit stack: calls `emit(const Segment&)` for
 /// every visible region the ray passes through, in order, until it returns false. Each leaf's
-/// segment comes from its region's box, clipped to the previous exit.
+/// segment comes from its region's box, clipped to the previous exit. Subtrees without visible
+/// regions are not entered.
 template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const RegionTreeView& tree, const Ray& ray, Emit&& emit) {
   if (!tree.nodes) return;
   const vec3f inv = safeInverse(ray.dir);
@@ -79,9 +83,10 @@ template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const Region
   int top = 0;
   stack[top++] = {0, t0, t1};
   float last = ray.tmin;
+  auto skipped = [&](uint32_t node) { return tree.subtreeVisible && !tree.subtreeVisible[node]; };
   while (top > 0) {
     Entry e = stack[--top];
-    while (tree.nodes[e.node].axis != kLeafAxis) {
+    while (tree.nodes[e.node].axis != kLeafAxis && !skipped(e.node)) {
       const RegionKdNode& n = tree.nodes[e.node];
       const int a = int(n.axis);
       const float o = ray.org[a], d = ray.dir[a];
@@ -98,11 +103,12 @@ template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const Region
       } else if (ts <= e.t0) {
         e.node = farChild;
       } else {
-        if (top < 128) stack[top++] = {farChild, ts, e.t1};
+        if (top < 128 && !skipped(farChild)) stack[top++] = {farChild, ts, e.t1};
         e.node = nearChild;
         e.t1 = ts;
       }
     }
+    if (tree.nodes[e.node].axis != kLeafAxis) continue; // a subtree without visible regions
     const uint32_t r = tree.nodes[e.node].index;
     if (r == kNoRegion || !tree.visible[r]) continue;
     float b0, b1;
@@ -134,12 +140,15 @@ public:
   template <typename Emit> void traverse(const Ray& ray, Emit&& emit) const;
 
 private:
+  /// Fills subtreeVisible_ from visible_.
+  void markVisibleSubtrees();
   /// Next visible region whose exit lies beyond tnear, via Embree; false when there is none.
   bool nextEmbree(const Ray& ray, float tnear, Segment& seg) const;
 
   const Model& model_;
   TraversalKind kind_;
   std::vector<uint8_t> visible_;
+  std::vector<uint8_t> subtreeVisible_; ///< per k-d node: any visible region below
   size_t visibleCount_ = 0;
   struct EmbreeScene;
   std::unique_ptr<EmbreeScene> embree_;
@@ -159,6 +168,7 @@ template <typename Emit> void RegionTraversal::traverse(const Ray& ray, Emit&& e
   tree.nodes = model_.regions.nodes.empty() ? nullptr : model_.regions.nodes.data();
   tree.regions = model_.regions.regions.data();
   tree.visible = visible_.data();
+  tree.subtreeVisible = subtreeVisible_.empty() ? nullptr : subtreeVisible_.data();
   tree.bounds = model_.regions.bounds;
   walkRegionTree(tree, ray, emit);
 }
