@@ -65,10 +65,10 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
         const V fl = hn::Floor(q);
         const VI i0 = hn::ConvertTo(di, fl);
         const V f = hn::Sub(q, fl);
-        const VI last = hn::Set(di, brick.size[a] - 1);
+        const VI size = hn::Set(di, brick.size[a]), last = hn::Sub(size, ione);
         const VI i1 = hn::Add(i0, ione);
-        const M valid0 = hn::RebindMask(d, hn::And(i0 > iminus1, i0 < hn::Add(last, ione)));
-        const M valid1 = hn::RebindMask(d, hn::And(i1 > iminus1, i1 < hn::Add(last, ione)));
+        const M valid0 = hn::RebindMask(d, hn::And(i0 > iminus1, i0 < size));
+        const M valid1 = hn::RebindMask(d, hn::And(i1 > iminus1, i1 < size));
         any = hn::And(any, hn::Or(valid0, valid1));
         h0[a] = hn::IfThenElseZero(valid0, hn::Sub(one, f));
         h1[a] = hn::IfThenElseZero(valid1, f);
