@@ -1,16 +1,19 @@
 // What one region segment costs, piece by piece, on the rays of one view: the k-d walk alone,
 // then the walk with a batch reconstruction (value and gradient) of every segment's samples,
 // placed as the marcher places them at rate 1 (half the region's finest width apart). Every
-// region counts as visible; one thread. Not a test: run by hand, e.g.
+// region counts as visible; one thread. It also counts the batches by their number of samples and
+// the bricks they visit. Not a test: run by hand, e.g.
 //   build-bench/bench/exabricks_bench_segments drop.model 512
 #include "exabricks/accel/traversal.h"
 #include "exabricks/amr/basis_batch.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/render/camera.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <iterator>
 #include <vector>
 
 using namespace exa;
@@ -40,10 +43,12 @@ int main(int argc, char** argv) {
   std::printf("%s, %dx%d rays, one thread, best of 3\n", argv[1], size, size);
   for (const bool sample : {false, true}) {
     double best = 1e30;
-    uint64_t segments = 0, samples = 0;
+    uint64_t segments = 0, samples = 0, batches = 0, brickVisits = 0;
+    uint64_t bySize[kSampleBatch + 1] = {};
     float sink = 0.f;
     for (int round = 0; round < 3; ++round) {
-      segments = samples = 0;
+      segments = samples = batches = brickVisits = 0;
+      std::fill(std::begin(bySize), std::end(bySize), uint64_t(0));
       const auto start = std::chrono::steady_clock::now();
       for (const Ray& ray : rays)
         traversal.traverse(ray, [&](const Segment& s) {
@@ -58,6 +63,8 @@ int main(int argc, char** argv) {
               batch.x[batch.count] = p.x, batch.y[batch.count] = p.y, batch.z[batch.count] = p.z;
             }
             samples += uint64_t(batch.count);
+            ++batches, ++bySize[batch.count];
+            brickVisits += model.regions.regions[s.region].brickCount;
             sampleRegionBatch(view, s.region, batch, true);
             sink += batch.value[0];
           }
@@ -71,6 +78,14 @@ int main(int argc, char** argv) {
       std::printf("  %10llu samples  %5.1f ns/sample (%g)", static_cast<unsigned long long>(samples),
                   best / double(samples) * 1e9, double(sink));
     std::printf("\n");
+    if (sample) {
+      std::printf("batches %llu, %.2f samples and %.2f bricks each; batches by samples:",
+                  static_cast<unsigned long long>(batches), double(samples) / double(batches),
+                  double(brickVisits) / double(batches));
+      for (int n = 1; n <= kSampleBatch; ++n)
+        std::printf(" %d: %.1f%%", n, 100.0 * double(bySize[n]) / double(batches));
+      std::printf("\n");
+    }
   }
   return 0;
 }

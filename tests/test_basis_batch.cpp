@@ -7,9 +7,12 @@
 #include "exabricks/amr/basis_batch.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/render/shade_batch.h"
+#include "exabricks/render/transfer_function.h"
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 namespace exa {
@@ -79,6 +82,81 @@ TEST(BasisBatch, EqualsTheScalarReconstruction) {
   });
 }
 
+TEST(ShadeBatch, EqualsTheScalarFunctions) {
+  // Tables over a linear range, a logarithmic one reaching below zero and a single value (the
+  // last two take normalizeValue lane by lane).
+  struct Case {
+    range1f range;
+    bool logScale;
+  };
+  const Case cases[] = {{{-2.f, 3.f}, false}, {{-1.f, 100.f}, true}, {{0.5f, 0.5f}, false}};
+  forEveryTarget([&] {
+    for (const Case& tc : cases) {
+      TransferFunction tf;
+      tf.colorMap = builtinColorMap(builtinColorMapNames().front());
+      tf.opacity = {{0.f, 0.f}, {0.3f, 0.f}, {0.6f, 0.8f}, {1.f, 0.2f}}; // a transparent band
+      tf.valueRange = tc.range;
+      tf.logScale = tc.logScale;
+      tf.opacityScale = 3.f;
+      const std::vector<vec4f> table = tabulateTransferFunction(tf);
+      TfTableView view;
+      view.entries = table.data();
+      view.range = tc.range;
+      view.logScale = tc.logScale;
+      view.fastLinear = !tc.logScale && tc.range.upper > tc.range.lower;
+      view.lower = tc.range.lower;
+      view.scale = view.fastLinear ? 1.f / (tc.range.upper - tc.range.lower) : 0.f;
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<float> u(0.f, 1.f);
+      for (int trial = 0; trial < 400; ++trial) {
+        SCOPED_TRACE("trial " + std::to_string(trial));
+        SampleBatch batch;
+        batch.count = 1 + trial % kSampleBatch;
+        float lengths[kSampleBatch];
+        for (int i = 0; i < batch.count; ++i) {
+          // Values beyond both ends of the range, gradients from zero through the fade band
+          // (relative change 1e-5..1e-4 per cell) to strong.
+          batch.value[i] = -4.f + 110.f * u(rng) * u(rng);
+          if (i % 7 == 3) batch.value[i] = 0.f;
+          batch.valid[i] = (trial + i) % 5 != 0;
+          const float magnitude = std::pow(10.f, -8.f + 9.f * u(rng));
+          batch.gx[i] = magnitude * (u(rng) - 0.5f), batch.gy[i] = magnitude * (u(rng) - 0.5f);
+          batch.gz[i] = i % 6 == 1 ? 0.f : magnitude * (u(rng) - 0.5f);
+          if (i % 9 == 4) batch.gx[i] = batch.gy[i] = batch.gz[i] = 0.f;
+          lengths[i] = 0.01f + 2.f * u(rng);
+        }
+        TfBatch vectors, reference;
+        const bool anyVector = tfLookupBatch(view, batch, vectors);
+        const bool anyReference = tfLookupBatchScalar(view, batch, reference);
+        EXPECT_EQ(anyVector, anyReference);
+        for (int i = 0; i < batch.count; ++i) {
+          EXPECT_NEAR(vectors.r[i], reference.r[i], 1e-6f) << i;
+          EXPECT_NEAR(vectors.g[i], reference.g[i], 1e-6f) << i;
+          EXPECT_NEAR(vectors.b[i], reference.b[i], 1e-6f) << i;
+          EXPECT_NEAR(vectors.logT[i], reference.logT[i], 1e-5f * (1.f + std::abs(reference.logT[i]))) << i;
+        }
+        VolumeShadeParams p;
+        p.invReferenceWidth = 0.5f + u(rng);
+        p.shade = trial % 4 != 0;
+        p.gradientScale = vec3f(1.f, 0.5f, 2.f);
+        p.light = normalize(vec3f(0.3f, -0.5f, 0.8f));
+        p.halfVector = normalize(vec3f(0.1f, 0.2f, 1.f));
+        p.fadeByValue = trial % 3 == 0;
+        p.fadeWidth = p.fadeByValue ? 2.f : 0.4f;
+        ShadedBatch shaded, expected;
+        shadeVolumeBatch(batch, reference, lengths, p, shaded);
+        shadeVolumeBatchScalar(batch, reference, lengths, p, expected);
+        for (int i = 0; i < batch.count; ++i) {
+          EXPECT_NEAR(shaded.alpha[i], expected.alpha[i], 1e-6f) << i;
+          EXPECT_NEAR(shaded.r[i], expected.r[i], 2e-6f * (1.f + std::abs(expected.r[i]))) << i;
+          EXPECT_NEAR(shaded.g[i], expected.g[i], 2e-6f * (1.f + std::abs(expected.g[i]))) << i;
+          EXPECT_NEAR(shaded.b[i], expected.b[i], 2e-6f * (1.f + std::abs(expected.b[i]))) << i;
+        }
+      }
+    }
+  });
+}
+
 TEST(BasisBatch, RendersEqualTheScalarPath) {
   const Model m = buildModel(generateScene({"shells", 20000, 3, 4}));
   const DatasetInfo info = DatasetInfo::of(m);
@@ -90,9 +168,10 @@ TEST(BasisBatch, RendersEqualTheScalarPath) {
   const box3i cb = m.cellBounds();
   frame.camera = Camera::frame(box3d(m.world.toWorld(vec3d(cb.lower)), m.world.toWorld(vec3d(cb.upper))), 30, 20, 40,
                                false);
-  for (int variant = 0; variant < 5; ++variant) {
+  for (int variant = 0; variant < 6; ++variant) {
     Scene scene;
     scene.layers[0].tf.valueRange = info.valueRanges[0];
+    if (variant == 5) scene.layers[0].tf.logScale = true; // the table's normalisation lane by lane
     if (variant == 1) scene.shading = Shading::None;
     if (variant == 2) scene.shading = Shading::ClampedCentral;
     if (variant == 3) { // surfaces with volume-attenuated ambient occlusion (opacity-only batches)

@@ -29,9 +29,9 @@ namespace hn = hwy::HWY_NAMESPACE;
 
 // Compiled once with and once without gradients: their six accumulators would otherwise stay live
 // (and spill) in the values-only batches too.
-template <bool gradient>
+template <bool gradient, size_t kLanes>
 void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& batch) {
-  const hn::CappedTag<float, kSampleBatch> d;
+  const hn::CappedTag<float, kLanes> d;
   const hn::RebindToSigned<decltype(d)> di;
   using V = hn::Vec<decltype(d)>;
   using VI = hn::Vec<decltype(di)>;
@@ -41,7 +41,7 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
   const V one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f), zero = hn::Zero(d);
   const VI ione = hn::Set(di, 1), iminus1 = hn::Set(di, -1);
   // Positions beyond count repeat the last one, so that whole vectors are loaded.
-  for (int i = batch.count; i < kSampleBatch; ++i) {
+  for (int i = batch.count; i < int(kLanes); ++i) {
     const int last = batch.count > 0 ? batch.count - 1 : 0;
     batch.x[i] = batch.x[last], batch.y[i] = batch.y[last], batch.z[i] = batch.z[last];
   }
@@ -140,10 +140,15 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
 }
 
 void SampleBatchImpl(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
-  if (gradient)
-    SampleBatchFor<true>(view, regionIndex, batch);
+  if (batch.count <= 4) {
+    if (gradient)
+      SampleBatchFor<true, 4>(view, regionIndex, batch);
+    else
+      SampleBatchFor<false, 4>(view, regionIndex, batch);
+  } else if (gradient)
+    SampleBatchFor<true, kSampleBatch>(view, regionIndex, batch);
   else
-    SampleBatchFor<false>(view, regionIndex, batch);
+    SampleBatchFor<false, kSampleBatch>(view, regionIndex, batch);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }

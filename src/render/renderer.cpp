@@ -6,6 +6,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/random.h"
+#include "exabricks/render/shade_batch.h"
 
 #include "../accel/embree_util.h"
 
@@ -635,12 +636,8 @@ struct Renderer::Impl {
           bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
           sampleRegionBatch(layer.view, seg.region, batch, withGrad);
           // The transfer function at every sample (log2 transmittance 0: transparent).
-          vec4f rgbas[kSampleBatch];
-          bool anyShown = false;
-          for (int i = 0; i < n; ++i) {
-            rgbas[i] = batch.valid[i] ? layer.lookup(batch.value[i]) : vec4f();
-            anyShown = anyShown || rgbas[i].w < 0.f;
-          }
+          TfBatch looked;
+          const bool anyShown = tfLookupBatch(layer.t, batch, looked);
           lastHidden = !anyShown;
           if (!anyShown) {
             raySamples += uint64_t(n);
@@ -650,23 +647,31 @@ struct Renderer::Impl {
             sampleRegionBatch(layer.view, seg.region, batch, true);
             withGrad = true;
           }
+          // Opacity and colour of every sample at once, then the in-order compositing.
+          ShadedBatch shaded;
+          const bool central = shading == Shading::Central || shading == Shading::ClampedCentral;
+          VolumeShadeParams params;
+          params.invReferenceWidth = invReferenceWidth;
+          params.shade = !OpacityOnly && shading == Shading::Analytic;
+          params.gradientScale = invScale;
+          params.light = light, params.halfVector = halfVector, params.terms = terms;
+          params.fadeByValue = fadeByValue(layer);
+          params.fadeWidth = fadeWidth(layer, region);
+          shadeVolumeBatch(batch, looked, lengths, params, shaded);
           for (int i = 0; i < n; ++i) {
             ++raySamples;
-            const vec4f& rgba = rgbas[i];
-            if (rgba.w >= 0.f) continue;
-            const float value = batch.value[i];
-            const float alpha = correctedOpacity(rgba.w, lengths[i], invReferenceWidth);
+            const float alpha = shaded.alpha[i];
+            if (!(looked.logT[i] < 0.f)) continue;
             if (OpacityOnly) {
               acc.w += (1.f - acc.w) * alpha;
             } else {
-              vec3f c = rgba.rgb();
-              if (shading != Shading::None) {
+              vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
+              if (central) {
+                const float value = batch.value[i];
                 const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
-                const vec3f grad = shading == Shading::Analytic
-                                       ? vec3f(batch.gx[i], batch.gy[i], batch.gz[i])
-                                       : centralGradient(layer, seg.region, region, p, value,
-                                                         shading == Shading::ClampedCentral);
-                c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
+                const vec3f grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
+                c = shadeVolumeSample(vec3f(looked.r[i], looked.g[i], looked.b[i]), grad * invScale, light, halfVector,
+                                      terms, volumeFade(layer, region, value));
               }
               compositeBehind(acc, c, alpha);
             }
@@ -727,11 +732,15 @@ struct Renderer::Impl {
   }
 
   /// Cell width (world) over the scale of the field's changes: how much of the gradient shading
-  /// a sample gets (shadeVolumeSample).
-  float volumeFade(const LayerTable& layer, const Region& region, float value) const {
+  /// a sample gets (shadeVolumeSample). The scale is the transfer function's value range, or for
+  /// logarithmic mapping (or an empty range) the value itself.
+  bool fadeByValue(const LayerTable& layer) const { return layer.tf.logScale || !(layer.span > 0.f); }
+  float fadeWidth(const LayerTable& layer, const Region& region) const {
     const float cellWidth = region.finestWidth() * meanScale;
-    return layer.tf.logScale || !(layer.span > 0.f) ? (value != 0.f ? cellWidth / std::abs(value) : 0.f)
-                                                    : cellWidth * layer.invSpan;
+    return fadeByValue(layer) ? cellWidth : cellWidth * layer.invSpan;
+  }
+  float volumeFade(const LayerTable& layer, const Region& region, float value) const {
+    return fadeScaleAt(fadeWidth(layer, region), fadeByValue(layer), value);
   }
 
   /// Central differences over half the region's finest width (the shading baselines); clamped

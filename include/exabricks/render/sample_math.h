@@ -128,6 +128,13 @@ EXA_HOST_DEVICE inline float shadingWeight(float relative) {
   return (relative - kShadingFadeLow) / (kShadingFadeHigh - kShadingFadeLow);
 }
 
+/// shadeVolumeSample's fade scale at `value`: the cell width over the scale of the field's changes,
+/// that is fadeWidth (cell width / value range) for a linear transfer function, or
+/// fadeWidth / |value| (fadeWidth the cell width; 0 at 0) where the value itself is the scale.
+EXA_HOST_DEVICE inline float fadeScaleAt(float fadeWidth, bool byValue, float value) {
+  return byValue ? (value != 0.f ? fadeWidth / std::abs(value) : 0.f) : fadeWidth;
+}
+
 /// A volume sample's colour lit two-sided by the normal along its gradient (any units); the
 /// shaded term is weighted by shadingWeight(|gradient| x fadeScale) (fadeScale = cell width /
 /// scale, in the gradient's units), so where the gradient is round-off the sample is lit as if

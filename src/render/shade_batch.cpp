@@ -1,0 +1,167 @@
+// Vectorised transfer function and volume shading of sampling batches (see shade_batch.h).
+// Highway compiles the code between HWY_BEFORE_NAMESPACE and HWY_AFTER_NAMESPACE once per target
+// instruction set (this file includes itself through foreach_target.h) and dispatches at run time.
+#include "exabricks/render/shade_batch.h"
+
+#ifndef EXABRICKS_HAVE_HWY
+
+namespace exa {
+
+bool tfLookupBatch(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
+  return tfLookupBatchScalar(tf, batch, out);
+}
+
+void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
+                      ShadedBatch& out) {
+  shadeVolumeBatchScalar(batch, tf, lengths, p, out);
+}
+
+} // namespace exa
+
+#else
+
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "render/shade_batch.cpp"
+#include <hwy/foreach_target.h> // IWYU pragma: keep
+#include <hwy/highway.h>
+
+HWY_BEFORE_NAMESPACE();
+namespace exa {
+namespace HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
+  const hn::CappedTag<float, kSampleBatch> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  using V = hn::Vec<decltype(d)>;
+  const size_t lanes = hn::Lanes(d);
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.f);
+  const float* entries = reinterpret_cast<const float*>(tf.entries);
+  // Normalised values: linear ranges in the vector code, the others (logarithmic, degenerate)
+  // through normalizeValue lane by lane.
+  alignas(64) float normalized[kSampleBatch];
+  if (!tf.fastLinear)
+    for (int i = 0; i < batch.count; ++i) normalized[i] = normalizeValue(tf.range, tf.logScale, batch.value[i]);
+  auto anyShown = hn::Lt(one, zero); // all false
+  for (size_t base = 0; base < size_t(batch.count); base += lanes) {
+    const auto live = hn::And(hn::FirstN(d, size_t(batch.count) - base),
+                              hn::RebindMask(d, hn::Ne(hn::LoadU(di, batch.valid + base), hn::Zero(di))));
+    V n;
+    if (tf.fastLinear)
+      n = hn::Min(hn::Max(hn::Mul(hn::Sub(hn::LoadU(d, batch.value + base), hn::Set(d, tf.lower)),
+                                  hn::Set(d, tf.scale)),
+                          zero),
+                  one);
+    else
+      n = hn::LoadU(d, normalized + base);
+    // tfTableAt: the entry below x and the one above, blended by x's fraction.
+    const V x = hn::Mul(n, hn::Set(d, float(kTfTableSize - 1)));
+    auto i = hn::ConvertTo(di, x);
+    i = hn::Min(hn::Max(i, hn::Zero(di)), hn::Set(di, kTfTableSize - 2));
+    const V f = hn::Min(hn::Max(hn::Sub(x, hn::ConvertTo(d, i)), zero), one);
+    const auto at = hn::ShiftLeft<2>(i); // four floats per entry
+    float* outs[4] = {out.r + base, out.g + base, out.b + base, out.logT + base};
+    for (int c = 0; c < 4; ++c) {
+      const auto ac = hn::Add(at, hn::Set(di, c));
+      const V a = hn::GatherIndex(d, entries, ac);
+      const V b = hn::GatherIndex(d, entries, hn::Add(ac, hn::Set(di, 4)));
+      const V v = hn::IfThenElseZero(live, hn::MulAdd(hn::Sub(b, a), f, a));
+      hn::StoreU(v, d, outs[c]);
+      if (c == 3) anyShown = hn::Or(anyShown, hn::And(live, hn::Lt(v, zero)));
+    }
+  }
+  return !hn::AllFalse(d, anyShown);
+}
+
+void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const float* lengths,
+                          const VolumeShadeParams& p, ShadedBatch& out) {
+  const hn::CappedTag<float, kSampleBatch> d;
+  const hn::RebindToSigned<decltype(d)> di;
+  using V = hn::Vec<decltype(d)>;
+  const size_t lanes = hn::Lanes(d);
+  const V zero = hn::Zero(d), one = hn::Set(d, 1.f);
+  const ShadingTerms& s = p.terms;
+  for (size_t base = 0; base < size_t(batch.count); base += lanes) {
+    const V logT = hn::LoadU(d, tf.logT + base);
+    // correctedOpacity: 1 - 2^(logT length / reference), 2^x as exp2Negative computes it.
+    const V e = hn::Mul(hn::Mul(logT, hn::LoadU(d, lengths + base)), hn::Set(d, p.invReferenceWidth));
+    const V ei = hn::Round(e);
+    const V fr = hn::Sub(e, ei);
+    V poly = hn::Set(d, 0.00015403530393381606f);
+    poly = hn::MulAdd(poly, fr, hn::Set(d, 0.0013333558146428443f));
+    poly = hn::MulAdd(poly, fr, hn::Set(d, 0.009618129107628477f));
+    poly = hn::MulAdd(poly, fr, hn::Set(d, 0.05550410866482158f));
+    poly = hn::MulAdd(poly, fr, hn::Set(d, 0.2402265069591007f));
+    poly = hn::MulAdd(poly, fr, hn::Set(d, 0.6931471805599453f));
+    poly = hn::MulAdd(poly, fr, one);
+    const auto clampedI = hn::ConvertTo(di, hn::Max(ei, hn::Set(d, -126.f)));
+    const V scale = hn::BitCast(d, hn::ShiftLeft<23>(hn::Add(clampedI, hn::Set(di, 127))));
+    const V transmitted = hn::IfThenZeroElse(hn::Lt(e, hn::Set(d, -126.f)), hn::Mul(poly, scale));
+    hn::StoreU(hn::IfThenElseZero(hn::Lt(logT, zero), hn::Sub(one, transmitted)), d, out.alpha + base);
+    V r = hn::LoadU(d, tf.r + base), g = hn::LoadU(d, tf.g + base), b = hn::LoadU(d, tf.b + base);
+    if (p.shade) {
+      // shadeVolumeSample, with its branches as selections.
+      const V gx = hn::Mul(hn::LoadU(d, batch.gx + base), hn::Set(d, p.gradientScale.x));
+      const V gy = hn::Mul(hn::LoadU(d, batch.gy + base), hn::Set(d, p.gradientScale.y));
+      const V gz = hn::Mul(hn::LoadU(d, batch.gz + base), hn::Set(d, p.gradientScale.z));
+      const V gl = hn::Sqrt(hn::MulAdd(gz, gz, hn::MulAdd(gy, gy, hn::Mul(gx, gx))));
+      V fade = hn::Set(d, p.fadeWidth);
+      if (p.fadeByValue) {
+        const V av = hn::Abs(hn::LoadU(d, batch.value + base));
+        const auto nonzero = hn::Gt(av, zero);
+        fade = hn::IfThenElseZero(nonzero, hn::Div(fade, hn::IfThenElse(nonzero, av, one)));
+      }
+      const V rel = hn::Mul(gl, fade);
+      const V low = hn::Set(d, kShadingFadeLow), high = hn::Set(d, kShadingFadeHigh);
+      const auto full = hn::Ge(rel, high);
+      const V weight = hn::IfThenElse(full, one,
+                                      hn::IfThenElseZero(hn::Gt(rel, low), hn::Div(hn::Sub(rel, low), hn::Sub(high, low))));
+      const auto lit = hn::And(hn::Gt(gl, hn::Set(d, 1e-20f)), hn::Gt(weight, zero));
+      const V inv = hn::Div(one, hn::IfThenElse(lit, gl, one));
+      const V nx = hn::Mul(gx, inv), ny = hn::Mul(gy, inv), nz = hn::Mul(gz, inv);
+      auto dotWith = [&](const vec3f& v) {
+        return hn::MulAdd(nz, hn::Set(d, v.z), hn::MulAdd(ny, hn::Set(d, v.y), hn::Mul(nx, hn::Set(d, v.x))));
+      };
+      const V ambient = hn::Set(d, s.ambient), diffuse = hn::Set(d, s.diffuse);
+      const V litShade = hn::MulAdd(diffuse, hn::Abs(dotWith(p.light)), ambient);
+      const V nh = hn::Abs(dotWith(p.halfVector));
+      const V exponent = hn::Set(d, s.shininess);
+      const V highlight = hn::Mul(hn::Set(d, s.specular),
+                                  hn::Div(nh, hn::NegMulAdd(hn::Sub(exponent, one), nh, exponent)));
+      const V flat = hn::Add(ambient, diffuse);
+      const V shadeValue = hn::IfThenElse(
+          lit, hn::IfThenElse(full, litShade, hn::MulAdd(hn::Sub(litShade, flat), weight, flat)), flat);
+      const V spec = hn::IfThenElseZero(lit, hn::IfThenElse(full, highlight, hn::Mul(highlight, weight)));
+      r = hn::MulAdd(r, shadeValue, spec);
+      g = hn::MulAdd(g, shadeValue, spec);
+      b = hn::MulAdd(b, shadeValue, spec);
+    }
+    hn::StoreU(r, d, out.r + base);
+    hn::StoreU(g, d, out.g + base);
+    hn::StoreU(b, d, out.b + base);
+  }
+}
+
+} // namespace HWY_NAMESPACE
+} // namespace exa
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+namespace exa {
+
+HWY_EXPORT(TfLookupBatchImpl);
+HWY_EXPORT(ShadeVolumeBatchImpl);
+
+bool tfLookupBatch(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
+  return HWY_DYNAMIC_DISPATCH(TfLookupBatchImpl)(tf, batch, out);
+}
+
+void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
+                      ShadedBatch& out) {
+  HWY_DYNAMIC_DISPATCH(ShadeVolumeBatchImpl)(batch, tf, lengths, p, out);
+}
+
+} // namespace exa
+#endif
+
+#endif
