@@ -2,14 +2,17 @@
 """Two or more builds of exabricks side by side on one input: every round renders once with each
 binary in turn (--stats, median of --frames frames after a warm-up), so that all of them see the
 same machine load; the medians and minima over the rounds and the ratios to the first binary are
-printed.
+printed. With --build, INPUT is a dataset that each binary first builds into its own model (so a
+change of the brick or region build is measured with the models it makes), with --build-options.
 
     /usr/bin/python3 bench/compare_builds.py drop.model before/exabricks build/exabricks --rounds 5
+    /usr/bin/python3 bench/compare_builds.py --build plt_drop before/exabricks build/exabricks
 """
 import argparse
 import json
 import statistics
 import subprocess
+import tempfile
 
 ap = argparse.ArgumentParser()
 ap.add_argument("input")
@@ -19,14 +22,27 @@ ap.add_argument("--rounds", type=int, default=5)
 ap.add_argument("--frames", type=int, default=3)
 ap.add_argument("--threads", type=int, default=0, help="worker threads (0: every core)")
 ap.add_argument("--extra", default="", help="more render options, space separated")
+ap.add_argument("--build", action="store_true", help="INPUT is a dataset each binary builds first")
+ap.add_argument("--build-options", default="", help="more build options, space separated")
 a = ap.parse_args()
+
+scratch = tempfile.TemporaryDirectory()
+models = {}
+for i, b in enumerate(a.binaries):
+    models[b] = a.input
+    if a.build:
+        models[b] = f"{scratch.name}/{i}.model"
+        subprocess.run([b, "-q", "build", a.input, "-o", models[b]] + a.build_options.split(), check=True)
+        info = subprocess.run([b, "info", models[b]], capture_output=True, text=True, check=True).stdout
+        counts = [line.split()[1] for line in info.splitlines() if line.startswith(("bricks ", "regions "))]
+        print(f"{b}: {counts[0]} bricks, {counts[1]} regions")
 
 times = {b: [] for b in a.binaries}
 samples = {}
 for _ in range(a.rounds):
     for b in a.binaries:
         cmd = [b, "-q"] + (["--threads", str(a.threads)] if a.threads else []) + \
-              ["render", a.input, "--size", a.size, "-o", "/dev/null", "--json", "--stats", "--frames",
+              ["render", models[b], "--size", a.size, "-o", "/dev/null", "--json", "--stats", "--frames",
                str(a.frames)] + a.extra.split()
         j = json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
         times[b].append(j["frame_seconds"])

@@ -452,10 +452,12 @@ TEST(Partition, PartsCompositedEqualTheWholeRender) {
       const Image image = renderInParts(cells, p, scene, frame, dataset);
       const Difference d = compare(image, reference);
       // Samples inside a part equal the whole data's; what differs is where the rays' sample
-      // intervals are cut (the parts' regions end at the part's faces) and early termination
-      // counted per part: volume within 4/255, iso-surfaces may flip at isolated grazing pixels.
+      // intervals are cut (the parts' regions end at the part's faces, the whole's regions at
+      // its own bricks' faces) and early termination counted per part: volume within 4/255,
+      // iso-surfaces may flip at isolated grazing pixels (under 0.75 % of the channels more
+      // than 2/255 off).
       EXPECT_LT(d.mean, 0.5 / 255.0) << "variant " << variant << " parts " << parts;
-      EXPECT_LT(d.above, 0.005) << "variant " << variant << " parts " << parts;
+      EXPECT_LT(d.above, 0.0075) << "variant " << variant << " parts " << parts;
       if (variant == 0) {
         EXPECT_LE(d.max, 4.5f / 255.f) << "parts " << parts;
       }

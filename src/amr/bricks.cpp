@@ -3,11 +3,13 @@
 #include "exabricks/core/error.h"
 
 #include <tbb/concurrent_vector.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <utility>
 
 namespace exa {
 namespace {
@@ -60,24 +62,7 @@ public:
     const vec3i extent = info.bounds.size();
     if (int64_t(reduceMax(extent)) <= coarsest) reportOverlap(begin, end, info);
 
-    // Split the longest axis at the multiple of the coarsest width nearest the centre; such a
-    // plane never cuts a cell because every width divides the coarsest.
-    const int axis = argMax(extent);
-    const int64_t lo = info.bounds.lower[axis], hi = info.bounds.upper[axis];
-    const int64_t centre = floorDiv(lo + hi, 2);
-    const int64_t first = (floorDiv(lo, coarsest) + 1) * coarsest;
-    const int64_t last = -floorDiv(-hi, coarsest) * coarsest - coarsest;
-    int32_t split = int32_t(std::clamp(floorDiv(centre + coarsest / 2, coarsest) * coarsest, first, last));
-    // Among the planes in the middle half of the node, prefer the one aligned to the largest
-    // power of two: block-structured data then splits along its own block boundaries.
-    const int64_t quarter = (hi - lo) / 4;
-    for (int64_t align = int64_t(1) << 30; align > coarsest; align >>= 1) {
-      const int64_t p = floorDiv(centre + align / 2, align) * align;
-      if (p > lo + quarter && p < hi - quarter && p >= first && p <= last) {
-        split = int32_t(p);
-        break;
-      }
-    }
+    const auto [axis, split] = chooseSplit(begin, end, info);
     const size_t m = partition(begin, end, axis, split);
     EXA_CHECK(m > begin && m < end, "brick split produced an empty side");
     if (end - begin > kParallelGrain)
@@ -86,6 +71,76 @@ public:
       build(begin, m);
       build(m, end);
     }
+  }
+
+  /// The split plane of a node: a multiple of the coarsest width (such a plane never cuts a cell
+  /// because every width divides the coarsest) in the middle half of an axis, or anywhere when
+  /// the middle halves hold none. Among those, the plane that separates the fewest same-level
+  /// cells facing each other across it: per level, the cells in the slab just below the plane and
+  /// in the slab just above, the smaller count times the cells' face area. Block-structured data
+  /// then splits along its blocks' faces and keeps same-level blocks whole. Ties go to the plane
+  /// nearest the centre, on the longest axis first.
+  std::pair<int, int32_t> chooseSplit(size_t begin, size_t end, const NodeInfo& info) const {
+    const int levels = info.maxLevel - info.minLevel + 1;
+    const int32_t fine = int32_t(1) << info.minLevel;
+    const int64_t coarsest = int64_t(1) << info.maxLevel;
+    const vec3i extent = info.bounds.size();
+    // Per axis and level, the cells in each slab one finest width thick.
+    size_t offset[4] = {0, 0, 0, 0}, perLevel[3];
+    for (int a = 0; a < 3; ++a) {
+      perLevel[a] = size_t(extent[a] >> info.minLevel);
+      offset[a + 1] = offset[a] + size_t(levels) * perLevel[a];
+    }
+    auto count = [&](size_t from, size_t to, std::vector<uint32_t>& slabs) {
+      uint32_t* out = slabs.data();
+      for (size_t i = from; i < to; ++i) {
+        const Cell& c = cells_[i];
+        const size_t row = size_t(c.level - info.minLevel);
+        for (int a = 0; a < 3; ++a)
+          ++out[offset[a] + row * perLevel[a] + size_t(uint32_t(c.lower[a] - info.bounds.lower[a]) >> info.minLevel)];
+      }
+    };
+    std::vector<uint32_t> slabs(offset[3], 0u);
+    if (end - begin <= kParallelGrain) {
+      count(begin, end, slabs);
+    } else {
+      tbb::enumerable_thread_specific<std::vector<uint32_t>> parts([&] { return std::vector<uint32_t>(offset[3], 0u); });
+      tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, kParallelGrain),
+                        [&](const tbb::blocked_range<size_t>& r) { count(r.begin(), r.end(), parts.local()); });
+      for (const std::vector<uint32_t>& part : parts)
+        for (size_t i = 0; i < slabs.size(); ++i) slabs[i] += part[i];
+    }
+    const int longest = argMax(extent);
+    int bestAxis = -1;
+    int32_t bestPlane = 0;
+    double bestCost = 0.0, bestDistance = 0.0;
+    for (const bool middle : {true, false}) {
+      for (int k = 0; k < 3; ++k) {
+        const int a = (longest + k) % 3;
+        const int64_t lo = info.bounds.lower[a], hi = info.bounds.upper[a];
+        const int64_t margin = middle ? (hi - lo) / 4 : 0;
+        const int64_t first = (floorDiv(lo + margin, coarsest) + 1) * coarsest;
+        const int64_t last = -floorDiv(-(hi - margin), coarsest) * coarsest - coarsest;
+        for (int64_t p = first; p <= last; p += coarsest) {
+          double cost = 0.0;
+          for (int l = 0; l < levels; ++l) {
+            const int64_t w = int64_t(1) << (info.minLevel + l);
+            const uint32_t* row = slabs.data() + offset[a] + size_t(l) * perLevel[a];
+            const uint32_t below = p - w >= lo ? row[size_t((p - w - lo) / fine)] : 0u;
+            const uint32_t above = row[size_t((p - lo) / fine)];
+            cost += double(std::min(below, above)) * double(w) * double(w);
+          }
+          const double distance = std::abs(double(p) - 0.5 * double(lo + hi)) / double(hi - lo);
+          if (bestAxis < 0 || cost < bestCost || (cost == bestCost && distance < bestDistance)) {
+            bestAxis = a, bestPlane = int32_t(p);
+            bestCost = cost, bestDistance = distance;
+          }
+        }
+      }
+      if (bestAxis >= 0) break;
+    }
+    EXA_CHECK(bestAxis >= 0, "no brick split plane in a node wider than its coarsest cell");
+    return {bestAxis, bestPlane};
   }
 
   tbb::concurrent_vector<Brick> bricks;
