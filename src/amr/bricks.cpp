@@ -91,21 +91,25 @@ public:
       perLevel[a] = size_t(extent[a] >> info.minLevel);
       offset[a + 1] = offset[a] + size_t(levels) * perLevel[a];
     }
+    // Nodes of more than 2^22 cells count every stride-th cell: an empty slab stays empty, so
+    // the planes between blocks keep their zero cost.
+    const size_t stride = std::max<size_t>(1, (end - begin) >> 22);
     auto count = [&](size_t from, size_t to, std::vector<uint32_t>& slabs) {
       uint32_t* out = slabs.data();
-      for (size_t i = from; i < to; ++i) {
-        const Cell& c = cells_[i];
+      for (size_t k = from; k < to; ++k) {
+        const Cell& c = cells_[begin + k * stride];
         const size_t row = size_t(c.level - info.minLevel);
         for (int a = 0; a < 3; ++a)
           ++out[offset[a] + row * perLevel[a] + size_t(uint32_t(c.lower[a] - info.bounds.lower[a]) >> info.minLevel)];
       }
     };
+    const size_t counted = (end - begin + stride - 1) / stride;
     std::vector<uint32_t> slabs(offset[3], 0u);
-    if (end - begin <= kParallelGrain) {
-      count(begin, end, slabs);
+    if (counted <= kParallelGrain) {
+      count(0, counted, slabs);
     } else {
       tbb::enumerable_thread_specific<std::vector<uint32_t>> parts([&] { return std::vector<uint32_t>(offset[3], 0u); });
-      tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, kParallelGrain),
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, counted, kParallelGrain),
                         [&](const tbb::blocked_range<size_t>& r) { count(r.begin(), r.end(), parts.local()); });
       for (const std::vector<uint32_t>& part : parts)
         for (size_t i = 0; i < slabs.size(); ++i) slabs[i] += part[i];
