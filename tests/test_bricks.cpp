@@ -75,6 +75,34 @@ TEST(Bricks, FullBoxIsOneBrick) {
   EXPECT_GE(buildBricks(s.cells, {2}).bricks.size(), 12u);
 }
 
+TEST(Bricks, BlocksStayWholeAndFarApartCellsSplitQuickly) {
+  // Four same-level blocks of 4 x 4 x 4 cells in a row along x, each 16 units wide: the splits
+  // follow their faces (none is aligned to 32 or 64), so a limit of 8 cells per axis keeps two
+  // blocks per brick and never cuts one.
+  CellSet s;
+  for (int block = 0; block < 4; ++block)
+    for (int z = 0; z < 4; ++z)
+      for (int y = 0; y < 4; ++y)
+        for (int x = 0; x < 4; ++x) s.cells.push_back({vec3i(8 + 16 * block + 4 * x, 4 * y, 4 * z), 2});
+  // A coarser layer beside them makes the node mixed, so the first split is a choice.
+  for (int z = 0; z < 2; ++z)
+    for (int y = 0; y < 2; ++y)
+      for (int x = 0; x < 9; ++x) s.cells.push_back({vec3i(8 * x, 16 + 8 * y, 8 * z), 3});
+  const BrickBuild b = buildBricks(s.cells, {8});
+  int fine = 0;
+  for (const Brick& brick : b.bricks)
+    if (brick.level == 2) {
+      ++fine;
+      EXPECT_EQ((brick.lower.x - 8) % 16, 0) << "a block was cut";
+      EXPECT_EQ(brick.size.x % 4, 0) << "a block was cut";
+    }
+  EXPECT_EQ(fine, 2);
+  // Two cells 2^31 - 16 apart build without counters over the gap between them.
+  CellSet far;
+  far.cells = {{vec3i(-(1 << 30), 0, 0), 0}, {vec3i((1 << 30) - 16, 5, -7), 1}};
+  EXPECT_EQ(buildBricks(far.cells).bricks.size(), 2u);
+}
+
 TEST(Bricks, DeterministicForAnyThreadCount) {
   const CellSet s = generateScene({"blobs", 20000, 3, 4});
   BrickBuild one, many;

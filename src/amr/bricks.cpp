@@ -73,6 +73,28 @@ public:
     }
   }
 
+  /// The split of a sparse node: on its longest axis, the multiple of the coarsest width nearest
+  /// the centre, or among the planes in the middle half the one aligned to the largest power of
+  /// two.
+  static std::pair<int, int32_t> alignedSplit(const NodeInfo& info) {
+    const int64_t coarsest = int64_t(1) << info.maxLevel;
+    const int axis = argMax(info.bounds.size());
+    const int64_t lo = info.bounds.lower[axis], hi = info.bounds.upper[axis];
+    const int64_t centre = floorDiv(lo + hi, 2);
+    const int64_t first = (floorDiv(lo, coarsest) + 1) * coarsest;
+    const int64_t last = -floorDiv(-hi, coarsest) * coarsest - coarsest;
+    int64_t split = std::clamp(floorDiv(centre + coarsest / 2, coarsest) * coarsest, first, last);
+    const int64_t quarter = (hi - lo) / 4;
+    for (int64_t align = int64_t(1) << 30; align > coarsest; align >>= 1) {
+      const int64_t p = floorDiv(centre + align / 2, align) * align;
+      if (p > lo + quarter && p < hi - quarter && p >= first && p <= last) {
+        split = p;
+        break;
+      }
+    }
+    return {axis, int32_t(split)};
+  }
+
   /// The split plane of a node: a multiple of the coarsest width (such a plane never cuts a cell
   /// because every width divides the coarsest) in the middle half of an axis, or anywhere when
   /// the middle halves hold none. Among those, the plane that separates the fewest same-level
@@ -91,6 +113,9 @@ public:
       perLevel[a] = size_t(extent[a] >> info.minLevel);
       offset[a + 1] = offset[a] + size_t(levels) * perLevel[a];
     }
+    // Sparse nodes (cells far apart) would need counters by the extent, not by the cells: they
+    // split at the plane aligned to the largest power of two instead, which separates them.
+    if (offset[3] > std::max<size_t>(size_t(1) << 16, 4 * (end - begin))) return alignedSplit(info);
     // Nodes of more than 2^22 cells count every stride-th cell: an empty slab stays empty, so
     // the planes between blocks keep their zero cost.
     const size_t stride = std::max<size_t>(1, (end - begin) >> 22);
