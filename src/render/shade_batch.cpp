@@ -39,7 +39,7 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
   const float* entries = reinterpret_cast<const float*>(tf.entries);
   // Normalised values: linear ranges in the vector code, the others (logarithmic, degenerate)
   // through normalizeValue lane by lane.
-  alignas(64) float normalized[kSampleBatch];
+  alignas(64) float normalized[kSampleBatch] = {};
   if (!tf.fastLinear)
     for (int i = 0; i < batch.count; ++i) normalized[i] = normalizeValue(tf.range, tf.logScale, batch.value[i]);
   auto anyShown = hn::Lt(one, zero); // all false
