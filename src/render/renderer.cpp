@@ -599,6 +599,16 @@ struct Renderer::Impl {
     // Batches: one layer reconstructed from its regions (the common case).
     const bool batched = in.vectorized && layerCount == 1 && in.reconstruction == Reconstruction::Regions;
     bool lastHidden = true; // the last batch showed nothing: reconstruct values first
+    // What the batches' shading needs besides the samples; only the fade width varies by region.
+    VolumeShadeParams shadeParams;
+    if (batched) {
+      shadeParams.invReferenceWidth = invReferenceWidth;
+      shadeParams.shade = wantGrad;
+      shadeParams.gradientScale = invScale;
+      shadeParams.light = light, shadeParams.halfVector = halfVector, shadeParams.terms = terms;
+      shadeParams.fadeByValue = fadeByValue(layers[0]);
+    }
+    const bool central = shading == Shading::Central || shading == Shading::ClampedCentral;
     traversal->traverse(ray, [&](const Segment& seg) {
       ++regionCount;
       const Region& region = model.regions.regions[seg.region];
@@ -649,15 +659,8 @@ struct Renderer::Impl {
           }
           // Opacity and colour of every sample at once, then the in-order compositing.
           ShadedBatch shaded;
-          const bool central = shading == Shading::Central || shading == Shading::ClampedCentral;
-          VolumeShadeParams params;
-          params.invReferenceWidth = invReferenceWidth;
-          params.shade = !OpacityOnly && shading == Shading::Analytic;
-          params.gradientScale = invScale;
-          params.light = light, params.halfVector = halfVector, params.terms = terms;
-          params.fadeByValue = fadeByValue(layer);
-          params.fadeWidth = fadeWidth(layer, region);
-          shadeVolumeBatch(batch, looked, lengths, params, shaded);
+          shadeParams.fadeWidth = fadeWidth(layer, region);
+          shadeVolumeBatch(batch, looked, lengths, shadeParams, shaded);
           for (int i = 0; i < n; ++i) {
             ++raySamples;
             const float alpha = shaded.alpha[i];
@@ -666,12 +669,11 @@ struct Renderer::Impl {
               acc.w += (1.f - acc.w) * alpha;
             } else {
               vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
-              if (central) {
+              if (central) { // the batch left the table's colour unshaded
                 const float value = batch.value[i];
                 const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
                 const vec3f grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
-                c = shadeVolumeSample(vec3f(looked.r[i], looked.g[i], looked.b[i]), grad * invScale, light, halfVector,
-                                      terms, volumeFade(layer, region, value));
+                c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
               }
               compositeBehind(acc, c, alpha);
             }
@@ -706,7 +708,7 @@ struct Renderer::Impl {
           if (OpacityOnly) continue;
           vec3f c = rgba.rgb();
           if (shading != Shading::None) {
-            if (shading == Shading::Central || shading == Shading::ClampedCentral)
+            if (central)
               grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
             c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
           }

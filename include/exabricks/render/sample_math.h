@@ -81,6 +81,11 @@ EXA_HOST_DEVICE inline bool tfMayBeVisible(const TfTableView& t, const range1f& 
   return false;
 }
 
+/// The Taylor coefficients (ln 2)^k / k! of 2^f, k = 1..6 (exp2Negative and its vector form).
+constexpr float kExp2Taylor1 = 0.6931471805599453f, kExp2Taylor2 = 0.2402265069591007f,
+                kExp2Taylor3 = 0.05550410866482158f, kExp2Taylor4 = 0.009618129107628477f,
+                kExp2Taylor5 = 0.0013333558146428443f, kExp2Taylor6 = 0.00015403530393381606f;
+
 /// 2^x for x <= 0 to float precision (relative error below 2.5e-7): a degree-6 Taylor
 /// polynomial of 2^f on [-1/2, 1/2] times 2^i built from the exponent bits. Cheaper than a libm
 /// call on the hot path of every sample's opacity correction.
@@ -88,12 +93,12 @@ EXA_HOST_DEVICE inline float exp2Negative(float x) {
   if (x < -126.f) return 0.f;
   const float i = std::nearbyint(x);
   const float f = x - i;
-  float p = 0.00015403530393381606f;
-  p = p * f + 0.0013333558146428443f;
-  p = p * f + 0.009618129107628477f;
-  p = p * f + 0.05550410866482158f;
-  p = p * f + 0.2402265069591007f;
-  p = p * f + 0.6931471805599453f;
+  float p = kExp2Taylor6;
+  p = p * f + kExp2Taylor5;
+  p = p * f + kExp2Taylor4;
+  p = p * f + kExp2Taylor3;
+  p = p * f + kExp2Taylor2;
+  p = p * f + kExp2Taylor1;
   p = p * f + 1.f;
   const uint32_t bits = uint32_t(int32_t(i) + 127) << 23;
   float scale;
