@@ -175,3 +175,96 @@ TEST(Regions, DeterministicForAnyThreadCount) {
     EXPECT_EQ(one.regions.nodes[i].pos, many.regions.nodes[i].pos);
   }
 }
+
+namespace {
+
+/// Whether the open support of `brick` contains the closed half-unit box `b` entirely.
+bool supportCovers(const Brick& brick, const box3l& b) {
+  const box3l s = supportOf(brick);
+  for (int a = 0; a < 3; ++a)
+    if (!(s.lower[a] <= b.lower[a] && b.upper[a] <= s.upper[a])) return false;
+  return true;
+}
+
+Model buildWithSegmentCost(const CellSet& cells, double segmentCost) {
+  CellSet copy = cells;
+  BuildOptions o;
+  o.bricks.maxBrickWidth = 4; // many same-level bricks, so many thin overlap slabs
+  o.regions.segmentCost = segmentCost;
+  return buildModel(std::move(copy), o);
+}
+
+} // namespace
+
+namespace {
+
+void checkMergedRegions(const CellSet& cells) {
+  const Model exact = buildWithSegmentCost(cells, 0.0);
+  for (const Region& r : exact.regions.regions)
+    for (uint32_t k = 0; k < r.brickCount; ++k)
+      ASSERT_TRUE(supportCovers(exact.bricks[exact.regions.brickIds[r.brickBegin + k]], halfBox(r)));
+  for (double cost : {RegionBuildOptions().segmentCost, 1e12}) {
+    SCOPED_TRACE(cost);
+    const Model merged = buildWithSegmentCost(cells, cost);
+    checkRegions(cells, merged);
+    ASSERT_EQ(merged.bricks.size(), exact.bricks.size());
+    EXPECT_LT(merged.regions.regions.size(), exact.regions.regions.size() * 3 / 4);
+    const FieldView ev = exact.view(0), mv = merged.view(0);
+    for (const Region& r : exact.regions.regions) {
+      const box3f b = r.bounds();
+      const uint32_t m = locateRegion(mv, (b.lower + b.upper) * 0.5f);
+      ASSERT_NE(m, kNoRegion);
+      const Region& into = merged.regions.regions[m];
+      const box3l mb = halfBox(into), eb = halfBox(r);
+      for (int a = 0; a < 3; ++a) ASSERT_TRUE(mb.lower[a] <= eb.lower[a] && eb.upper[a] <= mb.upper[a]);
+      EXPECT_EQ(into.finestLevel, r.finestLevel);
+      const auto* ids = merged.regions.brickIds.data() + into.brickBegin;
+      for (uint32_t k = 0; k < r.brickCount; ++k)
+        EXPECT_TRUE(std::binary_search(ids, ids + into.brickCount, exact.regions.brickIds[r.brickBegin + k]));
+    }
+    // Random points, and points on the half-unit lattice (support faces, cell centres).
+    std::mt19937 rng(7);
+    const box3f bb = exact.regions.bounds;
+    for (int i = 0; i < 20000; ++i) {
+      vec3f p;
+      for (int a = 0; a < 3; ++a) {
+        p[a] = std::uniform_real_distribution<float>(bb.lower[a], bb.upper[a])(rng);
+        if (i % 2) p[a] = std::round(p[a] * 2.f) * 0.5f;
+      }
+      float ve = 0.f, vm = 0.f;
+      vec3f ge(0.f), gm(0.f);
+      const bool fe = sampleField(ev, p, ve, &ge), fm = sampleField(mv, p, vm, &gm);
+      ASSERT_EQ(fe, fm) << p.x << " " << p.y << " " << p.z;
+      if (!fe) continue;
+      ASSERT_EQ(ve, vm) << p.x << " " << p.y << " " << p.z;
+      ASSERT_TRUE(ge == gm) << p.x << " " << p.y << " " << p.z;
+    }
+  }
+}
+
+} // namespace
+
+// With a segment cost of 0 every region is one set of bricks, each covering all of it (the
+// paper's partition). With a cost, regions of one finest level merge: every exact region lies in
+// one merged region of its level that lists its bricks, and reconstruction is bit for bit the
+// same, since bricks that do not reach a point add nothing to its sums.
+TEST(Regions, MergedRegionsUniteRegionsOfOneLevelAndReconstructTheSame) {
+  // Cells of width 2 fill [0, 16)^3 but for a hole [4, 12)^3 of cells of width 1 (eight bricks
+  // of 4^3): no empty space between the levels' supports.
+  std::vector<std::pair<Cell, float>> blocks;
+  for (int z = 0; z < 16; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) {
+        const bool hole = x >= 4 && x < 12 && y >= 4 && y < 12 && z >= 4 && z < 12;
+        if (hole)
+          blocks.push_back({{vec3i(x, y, z), 0}, float(x * x + y - z)});
+        else if (x % 2 == 0 && y % 2 == 0 && z % 2 == 0)
+          blocks.push_back({{vec3i(x, y, z), 1}, float(y * z - x)});
+      }
+  const std::vector<NamedCells> sets = {{"shells", generateScene({"shells", 30000, 9, 4})},
+                                        {"two levels", makeCells(blocks)}};
+  for (const NamedCells& set : sets) {
+    SCOPED_TRACE(set.name);
+    checkMergedRegions(set.cells);
+  }
+}

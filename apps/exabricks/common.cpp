@@ -23,6 +23,11 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
   if (fieldOption) cmd.add_option("-f,--field", field, "Field to use (default: the first)");
   cmd.add_option("--max-brick-width", maxBrickWidth, "Most cells per axis in one brick")
       ->check(CLI::Range(1, 1024));
+  cmd.add_option("--segment-cost", segmentCost,
+                 "Regions: what one more segment costs a ray, in brick reconstructions of one sample; "
+                 "neighbouring regions of one level merge where that is cheaper (0: one region per set of bricks)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd.add_option("--part-cells", partCells,
                  "Build NAME.cells and AMReX inputs of more cells in parts of about this many, each read "
                  "alone (less memory; 0: in one piece)")
@@ -39,6 +44,7 @@ LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
   LoadOptions o;
   if (onlySelectedField && !field.empty()) o.fields = {field};
   o.build.bricks.maxBrickWidth = maxBrickWidth;
+  o.build.regions.segmentCost = segmentCost;
   o.partCells = partCells;
   if (!rawDims.empty()) {
     long long x = 0, y = 0, z = 0;

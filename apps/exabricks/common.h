@@ -17,6 +17,7 @@ struct InputOptions {
   std::string input; ///< empty: the embedded default dataset
   std::string field; ///< empty: the first field
   int maxBrickWidth = 32;
+  double segmentCost = RegionBuildOptions().segmentCost;
   uint64_t partCells = uint64_t(1) << 27; ///< larger inputs are built in parts of about this many cells
   std::string rawDims;       ///< raw volumes: NXxNYxNZ (default: from the file name)
   std::string rawType;       ///< raw volumes: uint8, uint16, float32 or float64

@@ -105,9 +105,9 @@ ModelSummary summarize(const Model& m) {
   return s;
 }
 
-void buildRegionsOf(Model& model) {
+void buildRegionsOf(Model& model, const RegionBuildOptions& options) {
   Timer timer;
-  model.regions = buildRegions(model.bricks);
+  model.regions = buildRegions(model.bricks, options);
   model.stats.regionSeconds = timer.seconds();
   timer.reset();
   model.regions.valueRanges.clear();
@@ -153,7 +153,7 @@ Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* ke
   model.stats.brickSeconds = timer.seconds();
   logInfo(strCat("built ", model.bricks.size(), " bricks in ", model.stats.brickSeconds, " s"));
   progress.advance(1);
-  buildRegionsOf(model);
+  buildRegionsOf(model, options.regions);
   progress.finish();
   logInfo(strCat("built ", model.regions.regions.size(), " regions in ",
                  model.stats.regionSeconds + model.stats.rangeSeconds, " s"));

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 
 namespace exa {
 namespace {
@@ -38,7 +39,10 @@ struct Task {
 
 class RegionBuilder {
 public:
-  explicit RegionBuilder(const std::vector<Brick>& bricks) : bricks_(bricks) {}
+  RegionBuilder(const std::vector<Brick>& bricks, double segmentCost) : bricks_(bricks), segmentCost_(segmentCost) {}
+
+  /// Regions of more bricks than this are never merged.
+  static constexpr size_t kMaxCollapsedBricks = 16;
 
   /// Picks the fragment face closest to the box centre, on the widest axis that has one.
   /// Returns false when no face lies strictly inside the box (the box is a leaf).
@@ -89,53 +93,100 @@ public:
     }
   }
 
+  /// What a subtree costs a ray, and whether it may become one region (see partition).
+  struct Cost {
+    double cost = 0;
+    int32_t level = 0;      ///< the finest level of every region in it
+    bool collapsible = false;
+  };
+
+  /// The cost of `box` as one region of `count` bricks whose finest level is `level`, summed over
+  /// uniformly distributed lines (a line meets a convex box in proportion to its surface area,
+  /// and the mean chord is 4 volume / area): per segment, segmentCost; per sample and brick, 1.
+  /// Samples are half the finest width apart (the rate only scales every leaf alike).
+  double leafCost(const box3l& box, size_t count, int32_t level) const {
+    const vec3d s = vec3d(box.size()) * 0.5; // lattice units
+    const double area = 2.0 * (s.x * s.y + s.y * s.z + s.z * s.x);
+    const double volume = s.x * s.y * s.z;
+    const double step = 0.5 * double(int64_t(1) << level);
+    return segmentCost_ * area + 4.0 * volume / step * double(count);
+  }
+
   /// Recursively partitions `box` into `out`, writing the subtree root at `nodeIndex`. With a
   /// task list, subtrees with few fragments are deferred as tasks instead of being built.
-  void partition(Subtree& out, uint32_t nodeIndex, const box3l& box, std::vector<Fragment> frags,
+  ///
+  /// Every box whose fragments leave no face inside it is a region. A subtree of such regions all
+  /// of one finest level (so with the same sampling step) becomes one region, listing all their
+  /// bricks, where that costs a ray less: fewer segments against more bricks per sample. Thin
+  /// slabs where the supports of neighbouring bricks overlap are where this pays.
+  Cost partition(Subtree& out, uint32_t nodeIndex, const box3l& box, std::vector<Fragment> frags,
                  std::vector<Task>* tasks, size_t taskSize) {
     if (frags.empty()) {
       out.nodes[nodeIndex] = RegionKdNode{0.f, kLeafAxis, kNoRegion};
-      return;
+      return {};
     }
     if (tasks && frags.size() <= taskSize) {
       out.nodes[nodeIndex] = RegionKdNode{0.f, kLeafAxis, uint32_t(tasks->size())};
       tasks->push_back(Task{box, std::move(frags), nodeIndex});
-      return;
+      return {};
     }
     int axis;
     int64_t pos;
     if (!choosePlane(box, frags, axis, pos)) {
-      Region r;
-      r.halfBounds = box3i(vec3i(box.lower), vec3i(box.upper));
-      r.brickBegin = uint32_t(out.brickIds.size());
-      r.brickCount = uint32_t(frags.size());
-      int32_t finest = INT32_MAX;
-      for (const Fragment& f : frags) {
-        out.brickIds.push_back(f.brick);
-        finest = std::min(finest, bricks_[f.brick].level);
-      }
-      std::sort(out.brickIds.begin() + r.brickBegin, out.brickIds.end());
-      r.finestLevel = finest;
-      out.nodes[nodeIndex] = RegionKdNode{0.f, kLeafAxis, uint32_t(out.regions.size())};
-      out.regions.push_back(r);
-      return;
+      const int32_t finest = emitRegion(out, nodeIndex, box, frags);
+      return {leafCost(box, frags.size(), finest), finest, true};
     }
+    // The bricks of a node that may become one region are kept (few; a fragment per brick).
+    const bool mayCollapse = segmentCost_ > 0.0 && frags.size() <= kMaxCollapsedBricks;
+    std::vector<Fragment> kept;
+    if (mayCollapse) kept = frags;
     std::vector<Fragment> left, right;
     split(frags, axis, pos, left, right);
     frags.clear();
     frags.shrink_to_fit();
     const uint32_t child = uint32_t(out.nodes.size());
+    const size_t regionsBefore = out.regions.size(), idsBefore = out.brickIds.size();
     out.nodes.resize(out.nodes.size() + 2);
     out.nodes[nodeIndex] = RegionKdNode{float(pos) * 0.5f, uint32_t(axis), child};
     box3l leftBox = box, rightBox = box;
     leftBox.upper[axis] = pos;
     rightBox.lower[axis] = pos;
-    partition(out, child, leftBox, std::move(left), tasks, taskSize);
-    partition(out, child + 1, rightBox, std::move(right), tasks, taskSize);
+    const Cost a = partition(out, child, leftBox, std::move(left), tasks, taskSize);
+    const Cost b = partition(out, child + 1, rightBox, std::move(right), tasks, taskSize);
+    if (!(a.collapsible && b.collapsible && a.level == b.level)) return {};
+    const double split = a.cost + b.cost;
+    if (!mayCollapse) return {split, a.level, true};
+    const double whole = leafCost(box, kept.size(), a.level);
+    if (whole > split) return {split, a.level, true};
+    // The children were built depth first: everything they added is at the ends of the arrays.
+    out.nodes.resize(child);
+    out.regions.resize(regionsBefore);
+    out.brickIds.resize(idsBefore);
+    emitRegion(out, nodeIndex, box, kept);
+    return {whole, a.level, true};
+  }
+
+  /// Writes `box` as a region of the fragments' bricks at `nodeIndex`; returns its finest level.
+  int32_t emitRegion(Subtree& out, uint32_t nodeIndex, const box3l& box, const std::vector<Fragment>& frags) const {
+    Region r;
+    r.halfBounds = box3i(vec3i(box.lower), vec3i(box.upper));
+    r.brickBegin = uint32_t(out.brickIds.size());
+    r.brickCount = uint32_t(frags.size());
+    int32_t finest = INT32_MAX;
+    for (const Fragment& f : frags) {
+      out.brickIds.push_back(f.brick);
+      finest = std::min(finest, bricks_[f.brick].level);
+    }
+    std::sort(out.brickIds.begin() + r.brickBegin, out.brickIds.end());
+    r.finestLevel = finest;
+    out.nodes[nodeIndex] = RegionKdNode{0.f, kLeafAxis, uint32_t(out.regions.size())};
+    out.regions.push_back(r);
+    return finest;
   }
 
 private:
   const std::vector<Brick>& bricks_;
+  double segmentCost_;
 };
 
 /// Appends subtree `sub` to `set`, replacing the placeholder leaf `node`.
@@ -168,7 +219,7 @@ size_t RegionSet::memoryBytes() const {
   return bytes;
 }
 
-RegionSet buildRegions(const std::vector<Brick>& bricks) {
+RegionSet buildRegions(const std::vector<Brick>& bricks, const RegionBuildOptions& options) {
   RegionSet set;
   if (bricks.empty()) return set;
   std::vector<Fragment> frags(bricks.size());
@@ -185,7 +236,9 @@ RegionSet buildRegions(const std::vector<Brick>& bricks) {
 
   // Top levels are expanded sequentially into deferred tasks, which are built in parallel and
   // grafted in task order, so the result does not depend on scheduling.
-  RegionBuilder builder(bricks);
+  if (!(options.segmentCost >= 0.0) || !std::isfinite(options.segmentCost))
+    fail("region segment cost must be a non-negative number");
+  RegionBuilder builder(bricks, options.segmentCost);
   Subtree top;
   top.nodes.resize(1);
   std::vector<Task> tasks;

@@ -212,7 +212,7 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
   for (auto& v : values) model.fieldValues.push_back(std::move(v));
   model.stats.brickSeconds = timer.seconds();
   model.stats.parts = parts;
-  buildRegionsOf(model);
+  buildRegionsOf(model, options.build.regions);
   progress.finish();
   logInfo(strCat("built ", model.bricks.size(), " bricks and ", model.regions.regions.size(), " regions in ",
                  timer.seconds(), " s"));
@@ -304,7 +304,7 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     }
     if (m.bricks.empty()) return std::nullopt;
     for (auto& v : values) m.fieldValues.push_back(std::move(v));
-    buildRegionsOf(m);
+    buildRegionsOf(m, options.build.regions);
     return m;
   }
   CellSet set;

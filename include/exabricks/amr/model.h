@@ -42,6 +42,7 @@ private:
 
 struct BuildOptions {
   BrickBuildOptions bricks;
+  RegionBuildOptions regions;
 };
 
 struct BuildStats {
@@ -113,6 +114,6 @@ Model buildModel(CellSet&& cells, const BuildOptions& options, ModelStructure& s
 Model rebuildValues(const Model& like, const ModelStructure& structure, CellSet&& cells);
 
 /// Builds the regions (and value ranges) of a model whose bricks and fields are set.
-void buildRegionsOf(Model& model);
+void buildRegionsOf(Model& model, const RegionBuildOptions& options = {});
 
 } // namespace exa

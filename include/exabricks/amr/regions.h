@@ -1,7 +1,10 @@
 // Active brick regions (paper §3.2): a partition of the union of all brick supports into boxes,
 // each listing exactly the bricks whose basis-function support overlaps it. The k-d tree that
 // produced the partition is kept: it locates the region of a point and gives a front-to-back
-// traversal order.
+// traversal order. Where the supports of same-level bricks overlap in thin slabs, the paper's
+// partition (one region per set of bricks) gives rays many short segments; there neighbouring
+// regions of one finest level are merged into one when that costs a ray less (a brick then need
+// not cover all of its region, only overlap it).
 #pragma once
 
 #include "exabricks/amr/bricks.h"
@@ -45,8 +48,15 @@ struct RegionSet {
   size_t memoryBytes() const;
 };
 
+struct RegionBuildOptions {
+  /// What one more segment costs a ray, in units of one brick's reconstruction at one sample:
+  /// a subtree of regions of one finest level becomes one region listing all their bricks where
+  /// that is cheaper for rays on average. 0 keeps the paper's partition.
+  double segmentCost = 64.0;
+};
+
 /// Builds the regions over the bricks. Deterministic for any thread count.
-RegionSet buildRegions(const std::vector<Brick>& bricks);
+RegionSet buildRegions(const std::vector<Brick>& bricks, const RegionBuildOptions& options = {});
 
 /// Computes the per-region value range of one field given in brick order.
 std::vector<range1f> computeValueRanges(const RegionSet& regions, const std::vector<Brick>& bricks,
