@@ -661,24 +661,38 @@ struct Renderer::Impl {
           ShadedBatch shaded;
           shadeParams.fadeWidth = fadeWidth(layer, region);
           shadeVolumeBatch(batch, looked, lengths, shadeParams, shaded);
-          for (int i = 0; i < n; ++i) {
-            ++raySamples;
+          // Front to back with the transmittance as a running product: one multiplication per
+          // sample on the dependency chain (compositeBehind's sums, reassociated). Samples that
+          // show nothing have alpha 0.
+          float transmittance = 1.f - acc.w, r = 0.f, g = 0.f, b = 0.f;
+          int i = 0;
+          bool done = false;
+          while (i < n) {
             const float alpha = shaded.alpha[i];
-            if (!(looked.logT[i] < 0.f)) continue;
-            if (OpacityOnly) {
-              acc.w += (1.f - acc.w) * alpha;
-            } else {
+            const float w = transmittance * alpha;
+            if (!OpacityOnly) {
               vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
-              if (central) { // the batch left the table's colour unshaded
+              if (central && looked.logT[i] < 0.f) { // the batch left the table's colour unshaded
                 const float value = batch.value[i];
                 const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
                 const vec3f grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
                 c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
               }
-              compositeBehind(acc, c, alpha);
+              r += w * c.x;
+              g += w * c.y;
+              b += w * c.z;
             }
-            if (in.earlyTermination && acc.w >= in.terminationOpacity) return false;
+            transmittance *= 1.f - alpha;
+            ++i;
+            if (in.earlyTermination && 1.f - transmittance >= in.terminationOpacity) {
+              done = true;
+              break;
+            }
           }
+          raySamples += uint64_t(i);
+          acc.x += r, acc.y += g, acc.z += b;
+          acc.w = 1.f - transmittance;
+          if (done) return false;
         }
         return true;
       }
