@@ -39,9 +39,13 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
   const float* entries = reinterpret_cast<const float*>(tf.entries);
   // Normalised values: linear ranges in the vector code, the others (logarithmic, degenerate)
   // through normalizeValue lane by lane.
-  alignas(64) float normalized[kSampleBatch] = {};
+  alignas(64) float normalized[kSampleBatch];
   if (!tf.fastLinear)
     for (int i = 0; i < batch.count; ++i) normalized[i] = normalizeValue(tf.range, tf.logScale, batch.value[i]);
+  // The opacity first: most batches that show nothing need no colour.
+  alignas(64) int32_t index[kSampleBatch];
+  alignas(64) float fraction[kSampleBatch];
+  alignas(64) int32_t liveLanes[kSampleBatch];
   auto anyShown = hn::Lt(one, zero); // all false
   for (size_t base = 0; base < size_t(batch.count); base += lanes) {
     const auto live = hn::And(hn::FirstN(d, size_t(batch.count) - base),
@@ -60,17 +64,30 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
     i = hn::Min(hn::Max(i, hn::Zero(di)), hn::Set(di, kTfTableSize - 2));
     const V f = hn::Min(hn::Max(hn::Sub(x, hn::ConvertTo(d, i)), zero), one);
     const auto at = hn::ShiftLeft<2>(i); // four floats per entry
-    float* outs[4] = {out.r + base, out.g + base, out.b + base, out.logT + base};
-    for (int c = 0; c < 4; ++c) {
+    const auto aw = hn::Add(at, hn::Set(di, 3));
+    const V a = hn::GatherIndex(d, entries, aw);
+    const V b = hn::GatherIndex(d, entries, hn::Add(aw, hn::Set(di, 4)));
+    const V logT = hn::IfThenElseZero(live, hn::MulAdd(hn::Sub(b, a), f, a));
+    hn::StoreU(logT, d, out.logT + base);
+    anyShown = hn::Or(anyShown, hn::And(live, hn::Lt(logT, zero)));
+    hn::StoreU(at, di, index + base);
+    hn::StoreU(f, d, fraction + base);
+    hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, live)), di, liveLanes + base);
+  }
+  if (hn::AllFalse(d, anyShown)) return false;
+  for (size_t base = 0; base < size_t(batch.count); base += lanes) {
+    const auto live = hn::RebindMask(d, hn::Ne(hn::LoadU(di, liveLanes + base), hn::Zero(di)));
+    const auto at = hn::LoadU(di, index + base);
+    const V f = hn::LoadU(d, fraction + base);
+    float* outs[3] = {out.r + base, out.g + base, out.b + base};
+    for (int c = 0; c < 3; ++c) {
       const auto ac = hn::Add(at, hn::Set(di, c));
       const V a = hn::GatherIndex(d, entries, ac);
       const V b = hn::GatherIndex(d, entries, hn::Add(ac, hn::Set(di, 4)));
-      const V v = hn::IfThenElseZero(live, hn::MulAdd(hn::Sub(b, a), f, a));
-      hn::StoreU(v, d, outs[c]);
-      if (c == 3) anyShown = hn::Or(anyShown, hn::And(live, hn::Lt(v, zero)));
+      hn::StoreU(hn::IfThenElseZero(live, hn::MulAdd(hn::Sub(b, a), f, a)), d, outs[c]);
     }
   }
-  return !hn::AllFalse(d, anyShown);
+  return true;
 }
 
 void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const float* lengths,
