@@ -140,11 +140,9 @@ TEST(ShadeBatch, EqualsTheScalarFunctions) {
         const bool anyReference = tfLookupBatchScalar(view, batch, reference);
         EXPECT_EQ(anyVector, anyReference);
         for (int i = 0; i < batch.count; ++i) {
-          if (anyReference) { // colours only where some sample shows
-            EXPECT_NEAR(vectors.r[i], reference.r[i], 1e-6f) << i;
-            EXPECT_NEAR(vectors.g[i], reference.g[i], 1e-6f) << i;
-            EXPECT_NEAR(vectors.b[i], reference.b[i], 1e-6f) << i;
-          }
+          EXPECT_NEAR(vectors.r[i], reference.r[i], 1e-6f) << i;
+          EXPECT_NEAR(vectors.g[i], reference.g[i], 1e-6f) << i;
+          EXPECT_NEAR(vectors.b[i], reference.b[i], 1e-6f) << i;
           EXPECT_NEAR(vectors.logT[i], reference.logT[i], 1e-5f * (1.f + std::abs(reference.logT[i]))) << i;
         }
         VolumeShadeParams p;

@@ -33,6 +33,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
   const hn::CappedTag<float, kSampleBatch> d;
   const hn::RebindToSigned<decltype(d)> di;
+  const hn::CappedTag<float, 4> d4; // one table entry: r, g, b, log2 transmittance
   using V = hn::Vec<decltype(d)>;
   const size_t lanes = hn::Lanes(d);
   const V zero = hn::Zero(d), one = hn::Set(d, 1.f);
@@ -42,14 +43,14 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
   alignas(64) float normalized[kSampleBatch];
   if (!tf.fastLinear)
     for (int i = 0; i < batch.count; ++i) normalized[i] = normalizeValue(tf.range, tf.logScale, batch.value[i]);
-  // The opacity first: most batches that show nothing need no colour.
+  // tfTableAt: the entry below x and the one above, blended by x's fraction. Both entries are
+  // one 32-byte load per sample, blended as four channels at once (cheaper than gathering each
+  // channel), then sorted into channels.
   alignas(64) int32_t index[kSampleBatch];
   alignas(64) float fraction[kSampleBatch];
-  alignas(64) int32_t liveLanes[kSampleBatch];
-  auto anyShown = hn::Lt(one, zero); // all false
-  for (size_t base = 0; base < size_t(batch.count); base += lanes) {
-    const auto live = hn::And(hn::FirstN(d, size_t(batch.count) - base),
-                              hn::RebindMask(d, hn::Ne(hn::LoadU(di, batch.valid + base), hn::Zero(di))));
+  alignas(64) float blended[4 * kSampleBatch];
+  const size_t count = size_t(batch.count);
+  for (size_t base = 0; base < count; base += lanes) {
     V n;
     if (tf.fastLinear)
       n = hn::Min(hn::Max(hn::Mul(hn::Sub(hn::LoadU(d, batch.value + base), hn::Set(d, tf.lower)),
@@ -58,36 +59,36 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
                   one);
     else
       n = hn::LoadU(d, normalized + base);
-    // tfTableAt: the entry below x and the one above, blended by x's fraction.
     const V x = hn::Mul(n, hn::Set(d, float(kTfTableSize - 1)));
     auto i = hn::ConvertTo(di, x);
     i = hn::Min(hn::Max(i, hn::Zero(di)), hn::Set(di, kTfTableSize - 2));
-    const V f = hn::Min(hn::Max(hn::Sub(x, hn::ConvertTo(d, i)), zero), one);
-    const auto at = hn::ShiftLeft<2>(i); // four floats per entry
-    const auto aw = hn::Add(at, hn::Set(di, 3));
-    const V a = hn::GatherIndex(d, entries, aw);
-    const V b = hn::GatherIndex(d, entries, hn::Add(aw, hn::Set(di, 4)));
-    const V logT = hn::IfThenElseZero(live, hn::MulAdd(hn::Sub(b, a), f, a));
-    hn::StoreU(logT, d, out.logT + base);
-    anyShown = hn::Or(anyShown, hn::And(live, hn::Lt(logT, zero)));
-    hn::StoreU(at, di, index + base);
-    hn::StoreU(f, d, fraction + base);
-    hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, live)), di, liveLanes + base);
+    hn::StoreU(hn::ShiftLeft<2>(i), di, index + base); // four floats per entry
+    hn::StoreU(hn::Min(hn::Max(hn::Sub(x, hn::ConvertTo(d, i)), zero), one), d, fraction + base);
   }
-  if (hn::AllFalse(d, anyShown)) return false;
-  for (size_t base = 0; base < size_t(batch.count); base += lanes) {
-    const auto live = hn::RebindMask(d, hn::Ne(hn::LoadU(di, liveLanes + base), hn::Zero(di)));
-    const auto at = hn::LoadU(di, index + base);
-    const V f = hn::LoadU(d, fraction + base);
-    float* outs[3] = {out.r + base, out.g + base, out.b + base};
-    for (int c = 0; c < 3; ++c) {
-      const auto ac = hn::Add(at, hn::Set(di, c));
-      const V a = hn::GatherIndex(d, entries, ac);
-      const V b = hn::GatherIndex(d, entries, hn::Add(ac, hn::Set(di, 4)));
-      hn::StoreU(hn::IfThenElseZero(live, hn::MulAdd(hn::Sub(b, a), f, a)), d, outs[c]);
+  const size_t channelStep = hn::Lanes(d4); // 4, or 1 without vectors
+  for (size_t j = 0; j < count; ++j) {
+    const auto f = hn::Set(d4, fraction[j]);
+    for (size_t c = 0; c < 4; c += channelStep) {
+      const float* e = entries + index[j] + c;
+      const auto a = hn::LoadU(d4, e);
+      const auto b = hn::LoadU(d4, e + 4);
+      hn::StoreU(hn::MulAdd(hn::Sub(b, a), f, a), d4, blended + 4 * j + c);
     }
   }
-  return true;
+  auto anyShown = hn::Lt(one, zero); // all false
+  for (size_t base = 0; base < count; base += lanes) {
+    const auto live = hn::And(hn::FirstN(d, count - base),
+                              hn::RebindMask(d, hn::Ne(hn::LoadU(di, batch.valid + base), hn::Zero(di))));
+    V r, g, b, logT;
+    hn::LoadInterleaved4(d, blended + 4 * base, r, g, b, logT);
+    logT = hn::IfThenElseZero(live, logT);
+    hn::StoreU(hn::IfThenElseZero(live, r), d, out.r + base);
+    hn::StoreU(hn::IfThenElseZero(live, g), d, out.g + base);
+    hn::StoreU(hn::IfThenElseZero(live, b), d, out.b + base);
+    hn::StoreU(logT, d, out.logT + base);
+    anyShown = hn::Or(anyShown, hn::And(live, hn::Lt(logT, zero)));
+  }
+  return !hn::AllFalse(d, anyShown);
 }
 
 void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const float* lengths,

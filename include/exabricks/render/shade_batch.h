@@ -17,8 +17,7 @@ struct TfBatch {
   alignas(64) float logT[kSampleBatch];
 };
 
-/// Looks up the first `batch.count` samples; returns whether any of them shows (logT < 0). When
-/// none does, only logT is filled.
+/// Looks up the first `batch.count` samples; returns whether any of them shows (logT < 0).
 bool tfLookupBatch(const TfTableView& tf, const SampleBatch& batch, TfBatch& out);
 
 /// What the volume shading of a batch needs besides the samples.
