@@ -39,9 +39,12 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
   const Region& region = view.regions[regionIndex];
   const size_t lanes = hn::Lanes(d);
   const V one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f), zero = hn::Zero(d);
-  const VI ione = hn::Set(di, 1), iminus1 = hn::Set(di, -1);
-  // Positions beyond count repeat the last one, so that whole vectors are loaded.
-  for (int i = batch.count; i < int(kLanes); ++i) {
+  const V minusOne = hn::Set(d, -1.f), magic = hn::Set(d, 8388608.f); // 2^23
+  const VI ione = hn::Set(di, 1), magicBits = hn::BitCast(di, magic);
+  // Positions beyond count, up to the end of the last vector, repeat the last one, so that whole
+  // vectors are loaded.
+  const int padded = int((size_t(batch.count) + lanes - 1) / lanes * lanes);
+  for (int i = batch.count; i < padded; ++i) {
     const int last = batch.count > 0 ? batch.count - 1 : 0;
     batch.x[i] = batch.x[last], batch.y[i] = batch.y[last], batch.z[i] = batch.z[last];
   }
@@ -57,31 +60,37 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
       // centres, and the hat factors and derivatives of both, zero where that cell lies outside
       // the brick. A corner's weight is the product of its three factors, so a missing cell
       // weighs nothing; its index is clamped into the brick so that every load stays inside.
-      VI lo[3], step[3];
+      // The tests and the clamping stay in floats (the floor is an exact small integer), so that
+      // only the clamped index is converted, and only for a brick that some lane reaches.
+      V loF[3];
+      M both[3]; // both cells present: the upper one is one stride on
       V h0[3], h1[3], dh0[3], dh1[3];
       M any = hn::Not(hn::Lt(one, zero)); // all true
       for (int a = 0; a < 3; ++a) {
         const V q = hn::Sub(hn::Mul(hn::Sub(p[a], hn::Set(d, float(brick.lower[a]))), invW), half);
         const V fl = hn::Floor(q);
-        const VI i0 = hn::ConvertTo(di, fl);
         const V f = hn::Sub(q, fl);
-        const VI size = hn::Set(di, brick.size[a]), last = hn::Sub(size, ione);
-        const VI i1 = hn::Add(i0, ione);
-        const M valid0 = hn::RebindMask(d, hn::And(i0 > iminus1, i0 < size));
-        const M valid1 = hn::RebindMask(d, hn::And(i1 > iminus1, i1 < size));
+        const V size = hn::Set(d, float(brick.size[a])), last = hn::Set(d, float(brick.size[a] - 1));
+        const M valid0 = hn::And(hn::Ge(fl, zero), hn::Lt(fl, size));
+        const M valid1 = hn::And(hn::Ge(fl, minusOne), hn::Lt(fl, last));
         any = hn::And(any, hn::Or(valid0, valid1));
+        both[a] = hn::And(valid0, valid1);
         h0[a] = hn::IfThenElseZero(valid0, hn::Sub(one, f));
         h1[a] = hn::IfThenElseZero(valid1, f);
         dh0[a] = hn::IfThenElseZero(valid0, hn::Neg(invW));
         dh1[a] = hn::IfThenElseZero(valid1, invW);
-        lo[a] = hn::Min(hn::Max(i0, hn::Zero(di)), last);
-        step[a] = hn::Sub(hn::Min(hn::Max(i1, hn::Zero(di)), last), lo[a]);
+        loF[a] = hn::Min(hn::Max(fl, zero), last);
       }
       if (hn::AllFalse(d, any)) continue; // no lane lies in this brick's support
+      // Clamped indices (0 <= i < 2^23) to integers: i + 2^23 holds i in its mantissa bits.
+      VI lo[3];
+      for (int a = 0; a < 3; ++a) lo[a] = hn::Sub(hn::BitCast(di, hn::Add(loF[a], magic)), magicBits);
       const float* values = view.values + brick.valueOffset;
       const VI sx = hn::Set(di, brick.size.x), sxy = hn::Set(di, brick.size.x * brick.size.y);
       const VI at = hn::Add(lo[0], hn::Add(hn::Mul(sx, lo[1]), hn::Mul(sxy, lo[2])));
-      const VI offset[3] = {step[0], hn::Mul(sx, step[1]), hn::Mul(sxy, step[2])};
+      const VI offset[3] = {hn::IfThenElseZero(hn::RebindMask(di, both[0]), ione),
+                            hn::IfThenElseZero(hn::RebindMask(di, both[1]), sx),
+                            hn::IfThenElseZero(hn::RebindMask(di, both[2]), sxy)};
       // The corners' values, two neighbours along x per (y, z) row.
       auto fetchRow = [&](const VI& row, V& c0, V& c1) {
         c0 = hn::GatherIndex(d, values, row);

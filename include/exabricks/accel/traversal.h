@@ -84,12 +84,15 @@ template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const Region
   stack[top++] = {0, t0, t1};
   float last = ray.tmin;
   auto skipped = [&](uint32_t node) { return tree.subtreeVisible && !tree.subtreeVisible[node]; };
+  // Per-axis lookups by index from arrays (vec3's operator[] selects among three members).
+  const float org[3] = {ray.org.x, ray.org.y, ray.org.z}, dir[3] = {ray.dir.x, ray.dir.y, ray.dir.z};
+  const float invDir[3] = {inv.x, inv.y, inv.z};
   while (top > 0) {
     Entry e = stack[--top];
     while (tree.nodes[e.node].axis != kLeafAxis && !skipped(e.node)) {
       const RegionKdNode& n = tree.nodes[e.node];
       const int a = int(n.axis);
-      const float o = ray.org[a], d = ray.dir[a];
+      const float o = org[a], d = dir[a];
       const bool lowerFirst = o < n.pos || (o == n.pos && d < 0.f);
       const uint32_t nearChild = n.index + (lowerFirst ? 0u : 1u);
       const uint32_t farChild = n.index + (lowerFirst ? 1u : 0u);
@@ -97,7 +100,7 @@ template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const Region
         e.node = nearChild;
         continue;
       }
-      const float ts = (n.pos - o) * inv[a];
+      const float ts = (n.pos - o) * invDir[a];
       if (ts >= e.t1 || ts <= 0.f) { // never crosses the plane ahead of the origin
         e.node = nearChild;
       } else if (ts <= e.t0) {
