@@ -62,26 +62,31 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
       // weighs nothing; its index is clamped into the brick so that every load stays inside.
       // The tests and the clamping stay in floats (the floor is an exact small integer), so that
       // only the clamped index is converted, and only for a brick that some lane reaches.
+      // First only whether any lane lies in the brick's support (most listed bricks of a merged
+      // region reach none of a batch's samples), then the rest.
+      V q[3], fl[3];
+      M any = hn::Not(hn::Lt(one, zero)); // all true
+      for (int a = 0; a < 3; ++a) {
+        q[a] = hn::Sub(hn::Mul(hn::Sub(p[a], hn::Set(d, float(brick.lower[a]))), invW), half);
+        fl[a] = hn::Floor(q[a]);
+        any = hn::And(any, hn::And(hn::Ge(fl[a], minusOne), hn::Lt(fl[a], hn::Set(d, float(brick.size[a])))));
+      }
+      if (hn::AllFalse(d, any)) continue; // no lane lies in this brick's support
       V loF[3];
       M both[3]; // both cells present: the upper one is one stride on
       V h0[3], h1[3], dh0[3], dh1[3];
-      M any = hn::Not(hn::Lt(one, zero)); // all true
       for (int a = 0; a < 3; ++a) {
-        const V q = hn::Sub(hn::Mul(hn::Sub(p[a], hn::Set(d, float(brick.lower[a]))), invW), half);
-        const V fl = hn::Floor(q);
-        const V f = hn::Sub(q, fl);
+        const V f = hn::Sub(q[a], fl[a]);
         const V size = hn::Set(d, float(brick.size[a])), last = hn::Set(d, float(brick.size[a] - 1));
-        const M valid0 = hn::And(hn::Ge(fl, zero), hn::Lt(fl, size));
-        const M valid1 = hn::And(hn::Ge(fl, minusOne), hn::Lt(fl, last));
-        any = hn::And(any, hn::Or(valid0, valid1));
+        const M valid0 = hn::And(hn::Ge(fl[a], zero), hn::Lt(fl[a], size));
+        const M valid1 = hn::And(hn::Ge(fl[a], minusOne), hn::Lt(fl[a], last));
         both[a] = hn::And(valid0, valid1);
         h0[a] = hn::IfThenElseZero(valid0, hn::Sub(one, f));
         h1[a] = hn::IfThenElseZero(valid1, f);
         dh0[a] = hn::IfThenElseZero(valid0, hn::Neg(invW));
         dh1[a] = hn::IfThenElseZero(valid1, invW);
-        loF[a] = hn::Min(hn::Max(fl, zero), last);
+        loF[a] = hn::Min(hn::Max(fl[a], zero), last);
       }
-      if (hn::AllFalse(d, any)) continue; // no lane lies in this brick's support
       // Clamped indices (0 <= i < 2^23) to integers: i + 2^23 holds i in its mantissa bits.
       VI lo[3];
       for (int a = 0; a < 3; ++a) lo[a] = hn::Sub(hn::BitCast(di, hn::Add(loF[a], magic)), magicBits);
