@@ -101,6 +101,10 @@ TEST(Bricks, BlocksStayWholeAndFarApartCellsSplitQuickly) {
   CellSet far;
   far.cells = {{vec3i(-(1 << 30), 0, 0), 0}, {vec3i((1 << 30) - 16, 5, -7), 1}};
   EXPECT_EQ(buildBricks(far.cells).bricks.size(), 2u);
+  // Brick widths stay within what model files hold and samplers index exactly.
+  EXPECT_THROW(buildBricks(far.cells, {0}), Error);
+  EXPECT_THROW(buildBricks(far.cells, {kMaxBrickWidth + 1}), Error);
+  EXPECT_EQ(buildBricks(far.cells, {kMaxBrickWidth}).bricks.size(), 2u);
 }
 
 TEST(Bricks, DeterministicForAnyThreadCount) {

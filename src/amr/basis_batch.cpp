@@ -25,6 +25,7 @@ bool useBatchTarget(const std::string& name) { return name.empty() || name == "s
 HWY_BEFORE_NAMESPACE();
 namespace exa {
 namespace HWY_NAMESPACE {
+static_assert(kMaxBrickWidth < (1 << 23), "brick indices convert exactly through floats");
 namespace hn = hwy::HWY_NAMESPACE;
 
 // Compiled once with and once without gradients: their six accumulators would otherwise stay live
@@ -60,10 +61,9 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
       // centres, and the hat factors and derivatives of both, zero where that cell lies outside
       // the brick. A corner's weight is the product of its three factors, so a missing cell
       // weighs nothing; its index is clamped into the brick so that every load stays inside.
-      // The tests and the clamping stay in floats (the floor is an exact small integer), so that
-      // only the clamped index is converted, and only for a brick that some lane reaches.
       // First only whether any lane lies in the brick's support (most listed bricks of a merged
-      // region reach none of a batch's samples), then the rest.
+      // region reach none of a batch's samples), then the rest. The tests and the clamping stay
+      // in floats (the floor is an exact small integer); only the clamped index is converted.
       V q[3], fl[3];
       M any = hn::Not(hn::Lt(one, zero)); // all true
       for (int a = 0; a < 3; ++a) {
@@ -72,7 +72,7 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
         any = hn::And(any, hn::And(hn::Ge(fl[a], minusOne), hn::Lt(fl[a], hn::Set(d, float(brick.size[a])))));
       }
       if (hn::AllFalse(d, any)) continue; // no lane lies in this brick's support
-      V loF[3];
+      VI lo[3];
       M both[3]; // both cells present: the upper one is one stride on
       V h0[3], h1[3], dh0[3], dh1[3];
       for (int a = 0; a < 3; ++a) {
@@ -85,11 +85,11 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
         h1[a] = hn::IfThenElseZero(valid1, f);
         dh0[a] = hn::IfThenElseZero(valid0, hn::Neg(invW));
         dh1[a] = hn::IfThenElseZero(valid1, invW);
-        loF[a] = hn::Min(hn::Max(fl[a], zero), last);
+        // The clamped index as an integer: below kMaxBrickWidth < 2^23, i + 2^23 holds i in
+        // its mantissa bits.
+        const V clamped = hn::Min(hn::Max(fl[a], zero), last);
+        lo[a] = hn::Sub(hn::BitCast(di, hn::Add(clamped, magic)), magicBits);
       }
-      // Clamped indices (0 <= i < 2^23) to integers: i + 2^23 holds i in its mantissa bits.
-      VI lo[3];
-      for (int a = 0; a < 3; ++a) lo[a] = hn::Sub(hn::BitCast(di, hn::Add(loF[a], magic)), magicBits);
       const float* values = view.values + brick.valueOffset;
       const VI sx = hn::Set(di, brick.size.x), sxy = hn::Set(di, brick.size.x * brick.size.y);
       const VI at = hn::Add(lo[0], hn::Add(hn::Mul(sx, lo[1]), hn::Mul(sxy, lo[2])));

@@ -278,6 +278,8 @@ std::vector<Brick> runBuilder(std::vector<Cell>& cells, uint32_t* ids, std::vect
 
 void checkBuildInput(size_t cellCount, const BrickBuildOptions& options) {
   if (options.maxBrickWidth < 1) fail("maximum brick width must be at least 1");
+  if (options.maxBrickWidth > kMaxBrickWidth)
+    fail("maximum brick width ", options.maxBrickWidth, " exceeds the limit of ", kMaxBrickWidth, " cells");
   if (cellCount >= size_t(UINT32_MAX)) fail("too many cells: ", cellCount, " (limit 2^32-1)");
 }
 

@@ -235,7 +235,7 @@ void checkConsistency(const Model& m, const std::string& path) {
   for (size_t i = 0; i < m.bricks.size(); ++i) {
     const Brick& b = m.bricks[i];
     if (b.level < 0 || b.level > kMaxLevel || b.size.x < 1 || b.size.y < 1 || b.size.z < 1 ||
-        b.size.x > 1 << 20 || b.size.y > 1 << 20 || b.size.z > 1 << 20 ||
+        b.size.x > kMaxBrickWidth || b.size.y > kMaxBrickWidth || b.size.z > kMaxBrickWidth ||
         uint64_t(b.valueOffset) + uint64_t(b.size.x) * b.size.y * b.size.z > values)
       bad("brick ", i, " is invalid");
   }

@@ -23,8 +23,12 @@ struct Brick {
 };
 static_assert(sizeof(Brick) == 32);
 
+/// The most cells along one axis of any brick, built or read (samplers convert indices below
+/// 2^23 exactly through floats).
+constexpr int kMaxBrickWidth = 1 << 20;
+
 struct BrickBuildOptions {
-  int maxBrickWidth = 32; ///< at most this many cells per axis in one brick
+  int maxBrickWidth = 32; ///< at most this many cells per axis in one brick (up to kMaxBrickWidth)
 };
 
 struct BrickBuild {
