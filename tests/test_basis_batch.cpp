@@ -167,6 +167,49 @@ TEST(ShadeBatch, EqualsTheScalarFunctions) {
   });
 }
 
+TEST(ShadeBatch, PlacementEqualsTheScalarMarch) {
+  // Segments from a fraction of a step to many batches long, near the origin and where t is so
+  // large that float resolution runs out (the scalar march's own steps take over there).
+  forEveryTarget([&] {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0.f, 1.f);
+    int placed = 0;
+    for (int trial = 0; trial < 3000; ++trial) {
+      SCOPED_TRACE("trial " + std::to_string(trial));
+      const float dt = std::pow(10.f, -2.f + 3.f * u(rng));
+      const float rho = u(rng);
+      const float scale = trial % 10 == 9 ? 1e7f : trial % 10 == 8 ? 1e4f : 10.f;
+      const float t0 = trial % 5 == 4 ? std::floor(scale * u(rng) / dt) * dt : scale * u(rng);
+      const float steps = trial % 3 == 0 ? 3.f * u(rng) : 60.f * u(rng);
+      const float t1 = trial % 17 == 0 ? t0 : t0 + steps * dt;
+      const vec3f org(u(rng) - 0.5f, 3.f * u(rng), -2.f), dir = normalize(vec3f(u(rng), u(rng) - 0.5f, 1.f));
+      SegmentMarch vector(t0, t1, rho, dt), scalar(t0, t1, rho, dt);
+      for (int round = 0; round < 100; ++round) {
+        SampleBatch a, b;
+        alignas(64) float la[kSampleBatch], lb[kSampleBatch];
+        const int n = placeSamples(org, dir, vector, a, la);
+        const int m = placeSamplesScalar(org, dir, scalar, b, lb);
+        ASSERT_EQ(n, m);
+        ASSERT_EQ(a.count, n);
+        ASSERT_EQ(vector.a, scalar.a);
+        ASSERT_EQ(vector.k, scalar.k);
+        for (int i = 0; i < n; ++i) {
+          EXPECT_EQ(la[i], lb[i]) << i;
+          // Exact where both contract org + dir t into one rounding; one more otherwise.
+          const float tol = 2.f * FLT_EPSILON * (1.f + std::abs(vector.a));
+          EXPECT_NEAR(a.x[i], b.x[i], tol) << i;
+          EXPECT_NEAR(a.y[i], b.y[i], tol) << i;
+          EXPECT_NEAR(a.z[i], b.z[i], tol) << i;
+        }
+        placed += n;
+        if (n == 0) break;
+      }
+      if (scale < 1e4f) EXPECT_FALSE(vector.a < vector.end) << "the march stopped before the segment's end";
+    }
+    EXPECT_GT(placed, 20000);
+  });
+}
+
 TEST(BasisBatch, RendersEqualTheScalarPath) {
   const Model m = buildModel(generateScene({"shells", 20000, 3, 4}));
   const DatasetInfo info = DatasetInfo::of(m);

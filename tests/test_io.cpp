@@ -302,6 +302,29 @@ TEST_F(IoTest, CorruptTruncatedAndForeignModelsAreRejected) {
   EXPECT_MESSAGE(loadError(path("foreign.cells")), "foreign.cells");
 }
 
+TEST_F(IoTest, ModelsWhoseTreeDoesNotMatchTheirRegionsAreRejected) {
+  // Valid checksums over inconsistent contents: the traversal relies on each k-d leaf's cell
+  // being its region's box, and on the tree being a tree.
+  Model m = buildModel(generateScene({"blobs", 5000, 2, 3}));
+  ASSERT_GT(m.regions.nodes.size(), 7u);
+  writeModel(m, path("good.exa"));
+  EXPECT_NO_THROW(readModel(path("good.exa")));
+
+  Model grown = m;
+  grown.regions.regions[0].halfBounds.upper.x += 2;
+  writeModel(grown, path("grown.exa"));
+  EXPECT_MESSAGE(loadError(path("grown.exa")), "grown.exa", "region 0 does not fill its k-d cell");
+
+  Model shared = m; // both children of the root lead to the same subtree
+  const uint32_t child = shared.regions.nodes[0].index;
+  ASSERT_NE(shared.regions.nodes[child].axis, kLeafAxis);
+  shared.regions.nodes[child + 1] = shared.regions.nodes[child];
+  writeModel(shared, path("shared.exa"));
+  // Whichever inconsistency the check meets first: a split outside its cell, a region beside
+  // its cell, or the shared node.
+  EXPECT_MESSAGE(loadError(path("shared.exa")), "shared.exa", "corrupt model file", "k-d");
+}
+
 TEST_F(IoTest, FailedWritesLeaveNoFile) {
   CellSet s = generateScene({"blobs", 500, 1, 2});
   const Model m = buildModel(std::move(s));

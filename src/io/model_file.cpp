@@ -257,6 +257,30 @@ void checkConsistency(const Model& m, const std::string& path) {
     }
   }
   if (nodes.empty() != m.regions.regions.empty()) bad("regions without a k-d tree");
+  // Each leaf's cell is its region's box: the traversal takes a region's ray interval from the
+  // split planes. Children follow their parent (checked above) and no node has two parents.
+  if (!nodes.empty()) {
+    std::vector<uint8_t> reached(nodes.size(), 0);
+    std::vector<std::pair<uint32_t, box3f>> stack{{0u, m.regions.bounds}};
+    while (!stack.empty()) {
+      const auto [i, cell] = stack.back();
+      stack.pop_back();
+      if (reached[i]++) bad("k-d node ", i, " has two parents");
+      const RegionKdNode& n = nodes[i];
+      if (n.axis == kLeafAxis) {
+        if (n.index != kNoRegion && !(m.regions.regions[n.index].bounds() == cell))
+          bad("region ", n.index, " does not fill its k-d cell");
+        continue;
+      }
+      if (!(n.pos >= cell.lower[int(n.axis)] && n.pos <= cell.upper[int(n.axis)]))
+        bad("k-d node ", i, " splits outside its cell");
+      box3f lower = cell, upper = cell;
+      lower.upper[int(n.axis)] = n.pos;
+      upper.lower[int(n.axis)] = n.pos;
+      stack.push_back({n.index, lower});
+      stack.push_back({n.index + 1, upper});
+    }
+  }
   if (m.regions.valueRanges.size() != m.fieldValues.size()) bad("missing value ranges");
   for (const auto& r : m.regions.valueRanges)
     if (r.size() != m.regions.regions.size()) bad("value ranges do not match the regions");

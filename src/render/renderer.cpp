@@ -613,36 +613,15 @@ struct Renderer::Impl {
       ++regionCount;
       const Region& region = model.regions.regions[seg.region];
       const float dt = stepOf(region, rate);
-      const float segEnd = std::min(seg.t1, ray.tmax);
-      // Sample positions (k + rho) dt delimit intervals; each interval is sampled at its
-      // midpoint and weighted by its length.
-      float a = std::max(seg.t0, ray.tmin);
-      float k = std::floor(a / dt - rho) + 1.f;
-      // The end of the interval that starts at a: the next sample position, or one step on where
-      // float round-off put that at or before a; not beyond a when float resolution runs out.
-      auto intervalEnd = [&] {
-        const float b = std::min((k + rho) * dt, segEnd);
-        return b > a ? b : std::min(a + dt, segEnd);
-      };
+      // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
+      SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
       if (batched) {
         const LayerTable& layer = layers[0];
         SampleBatch batch;
-        float lengths[kSampleBatch];
-        while (a < segEnd) {
-          // The next samples of the segment, exactly as the scalar loop below places them.
-          int n = 0;
-          while (n < kSampleBatch && a < segEnd) {
-            const float b = intervalEnd();
-            if (!(b > a)) break;
-            k += 1.f;
-            lengths[n] = b - a;
-            const vec3f p = ray.org + ray.dir * (0.5f * (a + b));
-            batch.x[n] = p.x, batch.y[n] = p.y, batch.z[n] = p.z;
-            ++n;
-            a = b;
-          }
+        alignas(64) float lengths[kSampleBatch];
+        while (march.a < march.end) {
+          const int n = placeSamples(ray.org, ray.dir, march, batch, lengths);
           if (n == 0) break;
-          batch.count = n;
           bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
           sampleRegionBatch(layer.view, seg.region, batch, withGrad);
           // The transfer function at every sample (log2 transmittance 0: transparent).
@@ -667,6 +646,26 @@ struct Renderer::Impl {
           float transmittance = 1.f - acc.w, r = 0.f, g = 0.f, b = 0.f;
           int i = 0;
           bool done = false;
+          if (!OpacityOnly && !central) {
+            // The whole batch without a per-sample test: the opacity only grows along the batch,
+            // so where it ends below the termination threshold no sample reached it, and only
+            // where it ends above is the batch composited again with the test, sample by sample.
+            float t = transmittance;
+            for (int j = 0; j < n; ++j) {
+              const float alpha = shaded.alpha[j];
+              const float w = t * alpha;
+              r += w * shaded.r[j];
+              g += w * shaded.g[j];
+              b += w * shaded.b[j];
+              t *= 1.f - alpha;
+            }
+            if (!(in.earlyTermination && 1.f - t >= in.terminationOpacity)) {
+              transmittance = t;
+              i = n;
+            } else {
+              r = g = b = 0.f;
+            }
+          }
           while (i < n) {
             const float alpha = shaded.alpha[i];
             const float w = transmittance * alpha;
@@ -696,13 +695,13 @@ struct Renderer::Impl {
         }
         return true;
       }
-      while (a < segEnd) {
-        const float b = intervalEnd();
-        if (!(b > a)) break;
-        k += 1.f;
-        const float len = b - a;
-        const float tm = 0.5f * (a + b);
-        a = b;
+      while (march.a < march.end) {
+        const float b = march.intervalEnd();
+        if (!(b > march.a)) break;
+        march.k += 1.f;
+        const float len = b - march.a;
+        const float tm = 0.5f * (march.a + b);
+        march.a = b;
         const vec3f p = ray.org + ray.dir * tm;
         ++raySamples;
         float logSum = 0.f, alphaSum = 0.f, alpha = 0.f;

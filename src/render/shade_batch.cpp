@@ -7,6 +7,10 @@
 
 namespace exa {
 
+int placeSamples(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch, float* lengths) {
+  return placeSamplesScalar(org, dir, m, batch, lengths);
+}
+
 bool tfLookupBatch(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
   return tfLookupBatchScalar(tf, batch, out);
 }
@@ -29,6 +33,47 @@ HWY_BEFORE_NAMESPACE();
 namespace exa {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
+
+int PlaceSamplesImpl(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch, float* lengths) {
+  // Lane i's interval runs from position k + i - 1 (lane 0: from a) to position k + i, both
+  // computed as the scalar march computes them. That is the scalar march's result unless
+  // round-off made an interval empty (then the scalar march's own step decides), or k + i is
+  // not exact in floats.
+  if (!(m.a < m.end && m.dt > 0.f && m.k >= -8388608.f && m.k + float(kSampleBatch) <= 8388608.f))
+    return placeSamplesScalar(org, dir, m, batch, lengths);
+  const hn::CappedTag<float, kSampleBatch> d;
+  using V = hn::Vec<decltype(d)>;
+  const size_t lanes = hn::Lanes(d);
+  const V one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f), rho = hn::Set(d, m.rho), dt = hn::Set(d, m.dt),
+          end = hn::Set(d, m.end);
+  const V ox = hn::Set(d, org.x), oy = hn::Set(d, org.y), oz = hn::Set(d, org.z);
+  const V dx = hn::Set(d, dir.x), dy = hn::Set(d, dir.y), dz = hn::Set(d, dir.z);
+  alignas(64) float ends[kSampleBatch];
+  size_t n = 0;
+  for (size_t base = 0; base < size_t(kSampleBatch); base += lanes) {
+    const V k = hn::Add(hn::Iota(d, float(base)), hn::Set(d, m.k));
+    const V b = hn::Min(hn::Mul(hn::Add(k, rho), dt), end);
+    V a = hn::Min(hn::Mul(hn::Add(hn::Sub(k, one), rho), dt), end);
+    if (base == 0) a = hn::IfThenElse(hn::FirstN(d, 1), hn::Set(d, m.a), a);
+    const auto live = hn::Lt(a, end);
+    if (!hn::AllTrue(d, hn::Or(hn::Not(live), hn::Gt(b, a)))) return placeSamplesScalar(org, dir, m, batch, lengths);
+    const V mid = hn::Mul(half, hn::Add(a, b));
+    hn::StoreU(hn::Sub(b, a), d, lengths + base);
+    hn::StoreU(hn::MulAdd(dx, mid, ox), d, batch.x + base);
+    hn::StoreU(hn::MulAdd(dy, mid, oy), d, batch.y + base);
+    hn::StoreU(hn::MulAdd(dz, mid, oz), d, batch.z + base);
+    hn::StoreU(b, d, ends + base);
+    const size_t count = hn::CountTrue(d, live);
+    n += count;
+    if (count < lanes) break;
+  }
+  if (n > 0) {
+    m.a = ends[n - 1];
+    m.k += float(n);
+  }
+  batch.count = int(n);
+  return int(n);
+}
 
 bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
   const hn::CappedTag<float, kSampleBatch> d;
@@ -167,7 +212,13 @@ HWY_AFTER_NAMESPACE();
 #if HWY_ONCE
 namespace exa {
 
+HWY_EXPORT(PlaceSamplesImpl);
 HWY_EXPORT(TfLookupBatchImpl);
+
+int placeSamples(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch, float* lengths) {
+  return HWY_DYNAMIC_DISPATCH(PlaceSamplesImpl)(org, dir, m, batch, lengths);
+}
+
 HWY_EXPORT(ShadeVolumeBatchImpl);
 
 bool tfLookupBatch(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {

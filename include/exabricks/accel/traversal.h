@@ -65,8 +65,8 @@ struct RegionTreeView {
 
 /// Front-to-back walk of the k-d tree with an explicit stack: calls `emit(const Segment&)` for
 /// every visible region the ray passes through, in order, until it returns false. Each leaf's
-/// segment comes from its region's box, clipped to the previous exit. Subtrees without visible
-/// regions are not entered.
+/// segment is the interval the split planes leave it, clipped to the previous exit. Subtrees
+/// without visible regions are not entered.
 template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const RegionTreeView& tree, const Ray& ray, Emit&& emit) {
   if (!tree.nodes) return;
   const vec3f inv = safeInverse(ray.dir);
@@ -114,10 +114,9 @@ template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const Region
     if (tree.nodes[e.node].axis != kLeafAxis) continue; // a subtree without visible regions
     const uint32_t r = tree.nodes[e.node].index;
     if (r == kNoRegion || !tree.visible[r]) continue;
-    float b0, b1;
-    if (!rayBoxInterval(ray, inv, tree.regions[r].bounds(), b0, b1)) continue;
-    b0 = std::max(b0, last);
-    b1 = std::min(b1, ray.tmax);
+    // A region's box is its leaf's cell, so the walk's interval is the region's slab interval:
+    // both are the extremes of the same plane crossings (computed alike), clipped to the ray's.
+    const float b0 = std::max(e.t0, last), b1 = e.t1;
     if (!(b1 > b0)) continue;
     if (!emit(Segment{b0, b1, r})) return;
     last = b1;

@@ -8,7 +8,54 @@
 #include "exabricks/amr/basis_batch.h"
 #include "exabricks/render/sample_math.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace exa {
+
+/// Where a segment's samples lie: the positions (k + rho) dt delimit intervals, each sampled at
+/// its midpoint and weighted by its length. The march's state between batches.
+struct SegmentMarch {
+  float a = 0.f;   ///< start of the next interval
+  float k = 0.f;   ///< index of the next position (a whole number)
+  float rho = 0.f; ///< offset of the positions, in steps
+  float dt = 1.f;  ///< step
+  float end = 0.f; ///< end of the segment
+
+  SegmentMarch(float t0, float t1, float rhoIn, float dtIn)
+      : a(t0), k(std::floor(t0 / dtIn - rhoIn) + 1.f), rho(rhoIn), dt(dtIn), end(t1) {}
+
+  /// End of the interval that starts at a: the next position, or one step on where float
+  /// round-off put that at or before a; not beyond a when float resolution runs out.
+  float intervalEnd() const {
+    const float b = std::min((k + rho) * dt, end);
+    return b > a ? b : std::min(a + dt, end);
+  }
+};
+
+/// Places the segment's next samples (at most kSampleBatch) on the ray org + t dir: their
+/// positions into `batch` (count included), their intervals' lengths into `lengths`; advances
+/// the march. Returns the count, 0 at the segment's end.
+int placeSamples(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch, float* lengths);
+
+/// The same interval after interval (the reference, and where the vector form cannot promise
+/// the same positions).
+inline int placeSamplesScalar(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch,
+                              float* lengths) {
+  int n = 0;
+  while (n < kSampleBatch && m.a < m.end) {
+    const float b = m.intervalEnd();
+    if (!(b > m.a)) break;
+    m.k += 1.f;
+    lengths[n] = b - m.a;
+    const vec3f p = org + dir * (0.5f * (m.a + b));
+    batch.x[n] = p.x, batch.y[n] = p.y, batch.z[n] = p.z;
+    ++n;
+    m.a = b;
+  }
+  batch.count = n;
+  return n;
+}
 
 /// The transfer function at every sample of a batch, one array per channel: linear RGB and log2
 /// of the transmittance of one reference width (0 where the sample has no value).
