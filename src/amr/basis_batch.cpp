@@ -10,6 +10,7 @@ namespace exa {
 void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
   sampleRegionBatchScalar(view, regionIndex, batch, gradient);
 }
+SampleRegionBatchFunction sampleRegionBatchFunction() { return &sampleRegionBatch; }
 const char* batchTargetName() { return "scalar"; }
 std::vector<std::string> batchTargets() { return {"scalar"}; }
 bool useBatchTarget(const std::string& name) { return name.empty() || name == "scalar"; }
@@ -172,6 +173,8 @@ const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include "batch_dispatch.h"
+
 namespace exa {
 
 HWY_EXPORT(SampleBatchImpl);
@@ -180,6 +183,8 @@ HWY_EXPORT(TargetName);
 void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
   HWY_DYNAMIC_DISPATCH(SampleBatchImpl)(view, regionIndex, batch, gradient);
 }
+
+SampleRegionBatchFunction sampleRegionBatchFunction() { return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBatchImpl)); }
 
 const char* batchTargetName() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
 

@@ -601,7 +601,9 @@ struct Renderer::Impl {
     bool lastHidden = true; // the last batch showed nothing: reconstruct values first
     // What the batches' shading needs besides the samples; only the fade width varies by region.
     VolumeShadeParams shadeParams;
+    BatchFunctions batchFn{};
     if (batched) {
+      batchFn = batchFunctions();
       shadeParams.invReferenceWidth = invReferenceWidth;
       shadeParams.shade = wantGrad;
       shadeParams.gradientScale = invScale;
@@ -620,26 +622,26 @@ struct Renderer::Impl {
         SampleBatch batch;
         alignas(64) float lengths[kSampleBatch];
         while (march.a < march.end) {
-          const int n = placeSamples(ray.org, ray.dir, march, batch, lengths);
+          const int n = batchFn.place(ray.org, ray.dir, march, batch, lengths);
           if (n == 0) break;
           bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
-          sampleRegionBatch(layer.view, seg.region, batch, withGrad);
+          batchFn.sample(layer.view, seg.region, batch, withGrad);
           // The transfer function at every sample (log2 transmittance 0: transparent).
           TfBatch looked;
-          const bool anyShown = tfLookupBatch(layer.t, batch, looked);
+          const bool anyShown = batchFn.tfLookup(layer.t, batch, looked);
           lastHidden = !anyShown;
           if (!anyShown) {
             raySamples += uint64_t(n);
             continue;
           }
           if (wantGrad && !withGrad) {
-            sampleRegionBatch(layer.view, seg.region, batch, true);
+            batchFn.sample(layer.view, seg.region, batch, true);
             withGrad = true;
           }
           // Opacity and colour of every sample at once, then the in-order compositing.
           ShadedBatch shaded;
           shadeParams.fadeWidth = fadeWidth(layer, region);
-          shadeVolumeBatch(batch, looked, lengths, shadeParams, shaded);
+          batchFn.shade(batch, looked, lengths, shadeParams, shaded);
           // Front to back with the transmittance as a running product: one multiplication per
           // sample on the dependency chain (compositeBehind's sums, reassociated). Samples that
           // show nothing have alpha 0.

@@ -20,6 +20,10 @@ void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* 
   shadeVolumeBatchScalar(batch, tf, lengths, p, out);
 }
 
+BatchFunctions batchFunctions() {
+  return {&placeSamples, sampleRegionBatchFunction(), &tfLookupBatch, &shadeVolumeBatch};
+}
+
 } // namespace exa
 
 #else
@@ -210,16 +214,17 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include "../amr/batch_dispatch.h"
+
 namespace exa {
 
 HWY_EXPORT(PlaceSamplesImpl);
 HWY_EXPORT(TfLookupBatchImpl);
+HWY_EXPORT(ShadeVolumeBatchImpl);
 
 int placeSamples(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch, float* lengths) {
   return HWY_DYNAMIC_DISPATCH(PlaceSamplesImpl)(org, dir, m, batch, lengths);
 }
-
-HWY_EXPORT(ShadeVolumeBatchImpl);
 
 bool tfLookupBatch(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
   return HWY_DYNAMIC_DISPATCH(TfLookupBatchImpl)(tf, batch, out);
@@ -228,6 +233,12 @@ bool tfLookupBatch(const TfTableView& tf, const SampleBatch& batch, TfBatch& out
 void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
                       ShadedBatch& out) {
   HWY_DYNAMIC_DISPATCH(ShadeVolumeBatchImpl)(batch, tf, lengths, p, out);
+}
+
+BatchFunctions batchFunctions() {
+  return {chosenBatchFunction(HWY_DISPATCH_TABLE(PlaceSamplesImpl)), sampleRegionBatchFunction(),
+          chosenBatchFunction(HWY_DISPATCH_TABLE(TfLookupBatchImpl)),
+          chosenBatchFunction(HWY_DISPATCH_TABLE(ShadeVolumeBatchImpl))};
 }
 
 } // namespace exa

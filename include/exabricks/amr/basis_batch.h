@@ -44,6 +44,12 @@ inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex,
   }
 }
 
+/// sampleRegionBatch's implementation for the instruction set chosen now: a caller that makes
+/// many batches looks it up once instead of dispatching at every call. Valid until
+/// useBatchTarget changes the choice.
+using SampleRegionBatchFunction = void (*)(const FieldView&, uint32_t, SampleBatch&, bool);
+SampleRegionBatchFunction sampleRegionBatchFunction();
+
 /// The instruction set sampleRegionBatch runs with on this CPU ("AVX2", "AVX3", "SSE4", ...;
 /// "scalar" when built without Highway).
 const char* batchTargetName();

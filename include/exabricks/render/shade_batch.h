@@ -89,6 +89,16 @@ struct ShadedBatch {
 void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
                       ShadedBatch& out);
 
+/// placeSamples, sampleRegionBatch, tfLookupBatch and shadeVolumeBatch for the instruction set
+/// chosen now, looked up once for the many batches of a ray (see sampleRegionBatchFunction).
+struct BatchFunctions {
+  int (*place)(const vec3f&, const vec3f&, SegmentMarch&, SampleBatch&, float*);
+  SampleRegionBatchFunction sample;
+  bool (*tfLookup)(const TfTableView&, const SampleBatch&, TfBatch&);
+  void (*shade)(const SampleBatch&, const TfBatch&, const float*, const VolumeShadeParams&, ShadedBatch&);
+};
+BatchFunctions batchFunctions();
+
 /// The same lane after lane through sample_math.h (the reference, and the path without Highway).
 inline bool tfLookupBatchScalar(const TfTableView& tf, const SampleBatch& batch, TfBatch& out) {
   bool any = false;
