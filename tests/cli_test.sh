@@ -130,11 +130,15 @@ check "the default field is named on stderr" bash -c "'$exe' render s.cells -o w
 check "a colour bar and annotations are drawn" bash -c "'$exe' render s.cells -o plain.png --size 160x120 && '$exe' render s.cells -o bar.png --size 160x120 --colorbar --annotate && ! cmp -s plain.png bar.png"
 check "info reports the simulation's time and cycle (null when unknown)" bash -c "'$exe' info s.cells --json | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"simulation\"] == {\"time\": None, \"cycle\": None}'"
 # An interrupted convert leaves no temporary file and either every file of the dataset or none.
+# Interrupts at several moments, so that some land while the files are renamed into place.
 "$exe" -q generate -s blobs -n 3000000 -o big.cells
-"$exe" -q convert big.cells -o copy.cells & pid=$!
-sleep 0.3; kill -INT $pid 2>/dev/null; wait $pid
-check "an interrupted convert leaves no temporary file" bash -c "! ls | grep -q tmp"
-check "an interrupted convert publishes all files or none" bash -c "n=\$(ls copy.* 2>/dev/null | wc -l); [ \$n -eq 0 ] || [ \$n -eq 3 ]"
+for delay in 0.1 0.25 0.4 0.55 0.7; do
+  rm -f copy.*
+  "$exe" -q convert big.cells -o copy.cells & pid=$!
+  sleep $delay; kill -INT $pid 2>/dev/null; wait $pid
+  check "an interrupted convert leaves no temporary file (after ${delay} s)" bash -c "! ls | grep -q tmp"
+  check "an interrupted convert publishes all files or none (after ${delay} s)" bash -c "n=\$(ls copy.* 2>/dev/null | wc -l); [ \$n -eq 0 ] || [ \$n -eq 3 ]"
+done
 
 if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
 echo "all command-line checks passed"

@@ -30,6 +30,7 @@
 namespace {
 
 extern "C" void onInterrupt(int signal) {
+  if (exa::deferInterrupt(signal)) return; // taken again when the files being published are in place
   exa::removePendingTemporaries();
   std::signal(signal, SIG_DFL);
   std::raise(signal);

@@ -6,6 +6,7 @@
 #include <bit>
 #include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -87,6 +88,22 @@ void releasePending(int slot) {
   if (slot >= 0) gPending[slot].used.store(false);
 }
 
+/// Commits renaming their files into place right now, and an interrupt that arrived meanwhile
+/// (deferInterrupt), raised again when the last of them ends.
+std::atomic<int> gPublishing{0};
+std::atomic<int> gDeferredSignal{0};
+
+/// Marks a commit's renames; the interrupt deferred during them is raised again at the end.
+struct Publishing {
+  Publishing() { gPublishing.fetch_add(1); }
+  ~Publishing() {
+    if (gPublishing.fetch_sub(1) == 1)
+      if (const int signal = gDeferredSignal.exchange(0)) std::raise(signal);
+  }
+  Publishing(const Publishing&) = delete;
+  Publishing& operator=(const Publishing&) = delete;
+};
+
 /// Where a write to `path` goes: symlinks are followed, so the link stays and its target changes.
 std::string resolveTarget(const std::string& path) {
   std::error_code ec;
@@ -151,6 +168,13 @@ void removeStaleTemporaries(const std::string& target) {
 PendingTemporary::PendingTemporary(const std::string& path) : slot_(claimPending(path)) {}
 PendingTemporary::~PendingTemporary() { releasePending(slot_); }
 
+bool deferInterrupt(int signal) {
+  // The signal is recorded before the count is read: a commit that ends after this read raises
+  // it, and one that ended before leaves the count at zero, so the caller goes on.
+  gDeferredSignal.store(signal);
+  return gPublishing.load() > 0;
+}
+
 void removePendingTemporaries() {
   for (PendingSlot& s : gPending)
     if (s.used.load()) ::unlink(s.path);
@@ -208,6 +232,8 @@ void AtomicFiles::commit() {
       fail(path, ": write failed: ", why);
     }
   }
+  // An interrupt during the renames waits for them, so that all files appear or none.
+  const Publishing publishing;
   for (size_t i = 0; i < pending_.size(); ++i) {
     Pending& p = pending_[i];
     if (p.temporary.empty()) continue; // written through

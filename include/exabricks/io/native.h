@@ -105,6 +105,11 @@ private:
 /// Removes every temporary file not yet published; async-signal-safe, for an interrupt handler.
 void removePendingTemporaries();
 
+/// For an interrupt handler, first: true while files are being published together (their
+/// renames have begun), and then the handler should return; `signal` is raised again once
+/// they all are in place. Async-signal-safe.
+bool deferInterrupt(int signal);
+
 /// Reads a whole binary file; fails with the path when it cannot.
 std::vector<char> readFile(const std::string& path);
 /// Size of a regular file; fails with the path when it cannot be read.
