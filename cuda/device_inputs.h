@@ -47,7 +47,6 @@ struct DeviceInputs {
     in.field.nodes = n;
     in.field.bounds = header.bounds;
     in.tree.nodes = n;
-    in.tree.regions = r;
     in.tree.visible = vis;
     in.tree.bounds = header.bounds;
     in.table.entries = t;

@@ -204,7 +204,9 @@ TEST(ShadeBatch, PlacementEqualsTheScalarMarch) {
         placed += n;
         if (n == 0) break;
       }
-      if (scale < 1e4f) EXPECT_FALSE(vector.a < vector.end) << "the march stopped before the segment's end";
+      if (scale < 1e4f) {
+        EXPECT_FALSE(vector.a < vector.end) << "the march stopped before the segment's end";
+      }
     }
     EXPECT_GT(placed, 20000);
   });

@@ -55,7 +55,6 @@ EXA_HOST_DEVICE inline vec3f safeInverse(const vec3f& d) {
 /// The regions' k-d tree as plain arrays, with one visibility flag per region.
 struct RegionTreeView {
   const RegionKdNode* nodes = nullptr; ///< null when there are no regions
-  const Region* regions = nullptr;
   const uint8_t* visible = nullptr;
   /// Per node, whether any visible region lies below it (the walk skips the others); null: not
   /// known, every subtree is entered.
@@ -168,7 +167,6 @@ template <typename Emit> void RegionTraversal::traverse(const Ray& ray, Emit&& e
   }
   RegionTreeView tree;
   tree.nodes = model_.regions.nodes.empty() ? nullptr : model_.regions.nodes.data();
-  tree.regions = model_.regions.regions.data();
   tree.visible = visible_.data();
   tree.subtreeVisible = subtreeVisible_.empty() ? nullptr : subtreeVisible_.data();
   tree.bounds = model_.regions.bounds;
