@@ -32,9 +32,9 @@ namespace hn = hwy::HWY_NAMESPACE;
 #undef EXA_PAIR_LOADS
 #if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4
 // A cell's value and its neighbour's along x are adjacent floats: one 64-bit load per lane fetches
-// both, where the hardware's gathers load every float on its own (on Zen 3, AVX2 frames take 1.06
-// to 1.2 times as long with gathers). Lane i gets values[row[i]] in r0 and values[row[i] + 1] in
-// r1. The AVX-512 target keeps gathers.
+// both, where a gather loads every float on its own (on Zen 3 frames with AVX2 gathers took 1.06 to
+// 1.25 times as long; docs/performance.md). Lane i gets values[row[i]] in r0 and
+// values[row[i] + 1] in r1. The AVX-512 target keeps gathers.
 #define EXA_PAIR_LOADS 1
 HWY_INLINE __m128d loadPair(const float* p) {
   return _mm_castsi128_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
