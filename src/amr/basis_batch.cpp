@@ -39,7 +39,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 HWY_INLINE __m128d loadPair(const float* p) {
   return _mm_castsi128_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
 }
-HWY_INLINE __m128d loadPairs2(const float* p, const float* q) {
+HWY_INLINE __m128d loadTwoPairs(const float* p, const float* q) {
   return _mm_loadh_pd(loadPair(p), reinterpret_cast<const double*>(q));
 }
 #if HWY_TARGET == HWY_AVX2
@@ -49,9 +49,9 @@ HWY_INLINE void loadPairs(hn::Full256<float>, const float* values, hn::Vec256<in
   _mm256_store_si256(reinterpret_cast<__m256i*>(i), row.raw);
   // Lanes 0, 1, 4, 5 and 2, 3, 6, 7, so that the in-lane shuffles below keep the order.
   const __m256 a = _mm256_castpd_ps(_mm256_insertf128_pd(
-      _mm256_castpd128_pd256(loadPairs2(values + i[0], values + i[1])), loadPairs2(values + i[4], values + i[5]), 1));
+      _mm256_castpd128_pd256(loadTwoPairs(values + i[0], values + i[1])), loadTwoPairs(values + i[4], values + i[5]), 1));
   const __m256 b = _mm256_castpd_ps(_mm256_insertf128_pd(
-      _mm256_castpd128_pd256(loadPairs2(values + i[2], values + i[3])), loadPairs2(values + i[6], values + i[7]), 1));
+      _mm256_castpd128_pd256(loadTwoPairs(values + i[2], values + i[3])), loadTwoPairs(values + i[6], values + i[7]), 1));
   r0.raw = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
   r1.raw = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
 }
@@ -60,8 +60,8 @@ HWY_INLINE void loadPairs(hn::Full128<float>, const float* values, hn::Vec128<in
                           hn::Vec128<float>& r1) {
   alignas(16) int32_t i[4];
   _mm_store_si128(reinterpret_cast<__m128i*>(i), row.raw);
-  const __m128 a = _mm_castpd_ps(loadPairs2(values + i[0], values + i[1]));
-  const __m128 b = _mm_castpd_ps(loadPairs2(values + i[2], values + i[3]));
+  const __m128 a = _mm_castpd_ps(loadTwoPairs(values + i[0], values + i[1]));
+  const __m128 b = _mm_castpd_ps(loadTwoPairs(values + i[2], values + i[3]));
   r0.raw = _mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
   r1.raw = _mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
 }
@@ -136,48 +136,45 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
       const VI offset[3] = {hn::IfThenElseZero(hn::RebindMask(di, both[0]), ione),
                             hn::IfThenElseZero(hn::RebindMask(di, both[1]), sx),
                             hn::IfThenElseZero(hn::RebindMask(di, both[2]), sxy)};
-      V c0[2][2], c1[2][2];
-      V first; // the corner at `at`, the lower existing cell (the reference value, see below)
+      // Each lane's first corner: its lower x cell plus the start of its (y, z) row.
+      const VI rowStart = hn::Add(hn::Mul(sx, lo[1]), hn::Mul(sxy, lo[2]));
+      VI at = hn::Add(lo[0], rowStart);
+      M above = hn::Lt(one, zero); // the pair's second cell is the lane's lower existing one
 #if EXA_PAIR_LOADS
-      if (brick.size.x >= 2) {
+      const bool pairs = brick.size.x >= 2;
+      if (pairs) {
         // Pairs along x start at cell b = clamp(floor, 0, size - 2), so that both lie in the
         // brick. Where the floor is -1 (left of the first centre) b is its upper cell; where it
         // is size - 1 (right of the last) b + 1 is its lower one. The hat factors move with the
         // cells; the missing cell's factor is zero either way, so the sums are the same.
         const V b = hn::Min(hn::Max(fl[0], zero), hn::Set(d, float(brick.size.x - 2)));
-        const M same = hn::Eq(b, fl[0]), below = hn::Lt(fl[0], b), above = hn::Gt(fl[0], b);
+        const M same = hn::Eq(b, fl[0]), below = hn::Lt(fl[0], b);
+        above = hn::Gt(fl[0], b);
         const V g0 = hn::IfThenElse(same, h0[0], hn::IfThenElseZero(below, h1[0]));
         const V g1 = hn::IfThenElse(same, h1[0], hn::IfThenElseZero(above, h0[0]));
         const V dg0 = hn::IfThenElse(same, dh0[0], hn::IfThenElseZero(below, dh1[0]));
         const V dg1 = hn::IfThenElse(same, dh1[0], hn::IfThenElseZero(above, dh0[0]));
         h0[0] = g0, h1[0] = g1, dh0[0] = dg0, dh1[0] = dg1;
-        const VI bx = hn::Sub(hn::BitCast(di, hn::Add(b, magic)), magicBits);
-        const VI at = hn::Add(bx, hn::Add(hn::Mul(sx, lo[1]), hn::Mul(sxy, lo[2])));
-        const auto fetchRow = [&](const VI& row, V& r0, V& r1) { loadPairs(d, values, row, r0, r1); };
-        fetchRow(at, c0[0][0], c1[0][0]);
-        first = hn::IfThenElse(above, c1[0][0], c0[0][0]);
-        fetchRow(hn::Add(at, offset[1]), c0[0][1], c1[0][1]);
-        fetchRow(hn::Add(at, offset[2]), c0[1][0], c1[1][0]);
-        fetchRow(hn::Add(hn::Add(at, offset[1]), offset[2]), c0[1][1], c1[1][1]);
-      } else
-#endif
-      {
-        const VI at = hn::Add(lo[0], hn::Add(hn::Mul(sx, lo[1]), hn::Mul(sxy, lo[2])));
-        // The corners' values, two neighbours along x per (y, z) row.
-        auto fetchRow = [&](const VI& row, V& r0, V& r1) {
-          r0 = hn::GatherIndex(d, values, row);
-          r1 = hn::GatherIndex(d, values, hn::Add(row, offset[0]));
-        };
-        fetchRow(at, c0[0][0], c1[0][0]);
-        first = c0[0][0];
-        fetchRow(hn::Add(at, offset[1]), c0[0][1], c1[0][1]);
-        fetchRow(hn::Add(at, offset[2]), c0[1][0], c1[1][0]);
-        fetchRow(hn::Add(hn::Add(at, offset[1]), offset[2]), c0[1][1], c1[1][1]);
+        at = hn::Add(hn::Sub(hn::BitCast(di, hn::Add(b, magic)), magicBits), rowStart);
       }
+#endif
+      // The corners' values, two neighbours along x per (y, z) row.
+      const auto fetchRow = [&](const VI& row, V& r0, V& r1) {
+#if EXA_PAIR_LOADS
+        if (pairs) return loadPairs(d, values, row, r0, r1);
+#endif
+        r0 = hn::GatherIndex(d, values, row);
+        r1 = hn::GatherIndex(d, values, hn::Add(row, offset[0]));
+      };
+      V c0[2][2], c1[2][2];
+      fetchRow(at, c0[0][0], c1[0][0]);
+      fetchRow(hn::Add(at, offset[1]), c0[0][1], c1[0][1]);
+      fetchRow(hn::Add(at, offset[2]), c0[1][0], c1[1][0]);
+      fetchRow(hn::Add(hn::Add(at, offset[1]), offset[2]), c0[1][1], c1[1][1]);
       // The reference value: the first brick that has cells on every axis gives its first cell
       // (the lower one where it exists).
       const M newRef = hn::AndNot(haveRef, any);
-      v0 = hn::IfThenElse(newRef, first, v0);
+      v0 = hn::IfThenElse(newRef, hn::IfThenElse(above, c1[0][0], c0[0][0]), v0);
       haveRef = hn::Or(haveRef, newRef);
       // The eight corners summed axis by axis: along x per (y, z) row, then y, then z. The same
       // sums as basis.h's cell-by-cell loop, factored.
