@@ -18,8 +18,9 @@ for v in j[\"variants\"]:
 r=j[\"ratios\"]
 for k in (\"cells_over_regions_time\",\"fixed_over_adaptive_samples\",\"fixed_over_adaptive_time\",\"skip_off_over_on_time\",\"embree_over_kd_time\"): assert r[k]>0, k
 assert r[\"fixed_over_adaptive_samples\"]>1
-# Variants that must give the same image do.
-assert r[\"skip_on_vs_off_image\"][\"max_abs\"]==0 and r[\"embree_vs_kd_image\"][\"max_abs\"]==0
+# Variants that must give the same image do (without skipping, the transparent samples join the
+# batches too and group the sums otherwise: round-off).
+assert r[\"skip_on_vs_off_image\"][\"max_abs\"]<1e-6 and r[\"embree_vs_kd_image\"][\"max_abs\"]==0
 assert r[\"cells_vs_regions_image\"][\"rmse\"]<1e-4
 assert j[\"memory\"][\"peak_rss_bytes\"]>0 and j[\"memory\"][\"model_bytes\"]>0
 assert j[\"build\"][\"cell_locator_nodes\"]==2*j[\"bricks\"]-1

@@ -13,8 +13,10 @@
 #include <gtest/gtest.h>
 
 #include <cfloat>
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 namespace exa {
 namespace {
@@ -98,6 +100,78 @@ TEST(BasisBatch, EqualsTheScalarReconstruction) {
   EXPECT_GT(wide, 0);
 }
 
+TEST(BasisBatch, UnionOfRegionListsEqualsEachSamplesOwnRegion) {
+  // A batch that joins the samples of several regions is reconstructed over the ascending union
+  // of their brick lists; every sample must get what its own region's list gives it in a batch
+  // of its own (the bricks of the other regions reach none of it), to float round-off. (The
+  // batch against the scalar reference is the test above.)
+  forEveryTarget([&] {
+    for (const test::NamedCells& d : test::smallDatasets()) {
+      const Model m = buildModel(CellSet(d.cells));
+      const FieldView view = m.view(0);
+      const auto& regions = m.regions.regions;
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<float> u(0.f, 1.f);
+      std::uniform_int_distribution<int> pickRegion(0, int(regions.size()) - 1);
+      int joined = 0, compared = 0;
+      for (int trial = 0; trial < 200; ++trial) {
+        // Up to four regions along a random line through the data, one to eight samples each.
+        SampleBatch batch;
+        uint32_t owner[kSampleBatch];
+        std::vector<uint32_t> ids;
+        batch.count = 0;
+        for (int part = 0; part < 4 && batch.count < kSampleBatch; ++part) {
+          const uint32_t r = uint32_t(pickRegion(rng));
+          const box3f b = regions[r].bounds();
+          const int n = std::min(1 + int(u(rng) * 8.f), kSampleBatch - batch.count);
+          for (int i = 0; i < n; ++i) {
+            vec3f p;
+            for (int a = 0; a < 3; ++a) p[a] = b.lower[a] + u(rng) * (b.upper[a] - b.lower[a]);
+            const int k = batch.count++;
+            batch.x[k] = p.x, batch.y[k] = p.y, batch.z[k] = p.z;
+            owner[k] = r;
+          }
+          ids.insert(ids.end(), m.regions.brickIds.begin() + regions[r].brickBegin,
+                     m.regions.brickIds.begin() + regions[r].brickBegin + regions[r].brickCount);
+          joined += part > 0;
+        }
+        std::sort(ids.begin(), ids.end());
+        ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+        for (bool gradient : {false, true}) {
+          SampleBatch out = batch;
+          sampleBricksBatch(view, ids.data(), uint32_t(ids.size()), out, gradient);
+          for (int i = 0; i < batch.count; ++i) {
+            // Only positions strictly inside their region. On a face a brick of the neighbour may
+            // have its support's edge: no weight, but the hat's one-sided slope there (the region
+            // takes the slope from its side). Float round-off puts positions on faces and beyond
+            // them where few bits of fraction are left (ramp-far).
+            const box3f b = regions[owner[i]].bounds();
+            const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
+            if (!(p.x > b.lower.x && p.y > b.lower.y && p.z > b.lower.z && p.x < b.upper.x && p.y < b.upper.y &&
+                  p.z < b.upper.z))
+              continue;
+            ++compared;
+            SampleBatch own = batch;
+            own.count = 1;
+            own.x[0] = batch.x[i], own.y[0] = batch.y[i], own.z[0] = batch.z[i];
+            sampleRegionBatch(view, owner[i], own, gradient);
+            ASSERT_EQ(out.valid[i] != 0, own.valid[0] != 0) << d.name << " sample " << i;
+            if (!own.valid[0]) continue;
+            EXPECT_NEAR(out.value[i], own.value[0], 2e-6f * (1.f + std::abs(own.value[0]))) << d.name;
+            if (!gradient) continue;
+            const float scale = 1.f + std::abs(own.gx[0]) + std::abs(own.gy[0]) + std::abs(own.gz[0]);
+            EXPECT_NEAR(out.gx[i], own.gx[0], 2e-5f * scale) << d.name;
+            EXPECT_NEAR(out.gy[i], own.gy[0], 2e-5f * scale) << d.name;
+            EXPECT_NEAR(out.gz[i], own.gz[0], 2e-5f * scale) << d.name;
+          }
+        }
+      }
+      EXPECT_GT(joined, 100) << d.name;
+      EXPECT_GT(compared, 1000) << d.name;
+    }
+  });
+}
+
 TEST(ShadeBatch, EqualsTheScalarFunctions) {
   // Tables over a linear range, a logarithmic one reaching below zero and a single value (the
   // last two take normalizeValue lane by lane).
@@ -158,7 +232,9 @@ TEST(ShadeBatch, EqualsTheScalarFunctions) {
         p.light = normalize(vec3f(0.3f, -0.5f, 0.8f));
         p.halfVector = normalize(vec3f(0.1f, 0.2f, 1.f));
         p.fadeByValue = trial % 3 == 0;
-        p.fadeWidth = p.fadeByValue ? 2.f : 0.4f;
+        float fades[kSampleBatch]; // per sample: a batch may join regions of several widths
+        for (int i = 0; i < kSampleBatch; ++i) fades[i] = (p.fadeByValue ? 2.f : 0.4f) * (1.f + 0.5f * float(i % 3));
+        p.fadeWidth = fades;
         ShadedBatch shaded, expected;
         shadeVolumeBatch(batch, reference, lengths, p, shaded);
         shadeVolumeBatchScalar(batch, reference, lengths, p, expected);
@@ -191,15 +267,26 @@ TEST(ShadeBatch, PlacementEqualsTheScalarMarch) {
       const vec3f org(u(rng) - 0.5f, 3.f * u(rng), -2.f), dir = normalize(vec3f(u(rng), u(rng) - 0.5f, 1.f));
       SegmentMarch vector(t0, t1, rho, dt), scalar(t0, t1, rho, dt);
       for (int round = 0; round < 100; ++round) {
+        // Every other batch already holds samples (of earlier segments): placement appends.
         SampleBatch a, b;
-        alignas(64) float la[kSampleBatch], lb[kSampleBatch];
+        alignas(64) float la[2 * kSampleBatch], lb[2 * kSampleBatch];
+        const int first = round % 2 == 1 ? std::min(int(u(rng) * kSampleBatch), kSampleBatch - 1) : 0;
+        a.count = b.count = first;
+        for (int i = 0; i < first; ++i) a.x[i] = a.y[i] = a.z[i] = la[i] = -7.f;
         const int n = placeSamples(org, dir, vector, a, la);
         const int m = placeSamplesScalar(org, dir, scalar, b, lb);
         ASSERT_EQ(n, m);
-        ASSERT_EQ(a.count, n);
+        ASSERT_EQ(a.count, first + n);
+        ASSERT_LE(a.count, kSampleBatch);
         ASSERT_EQ(vector.a, scalar.a);
         ASSERT_EQ(vector.k, scalar.k);
-        for (int i = 0; i < n; ++i) {
+        for (int i = 0; i < first; ++i) {
+          ASSERT_EQ(a.x[i], -7.f);
+          ASSERT_EQ(a.y[i], -7.f);
+          ASSERT_EQ(a.z[i], -7.f);
+          ASSERT_EQ(la[i], -7.f);
+        }
+        for (int i = first; i < first + n; ++i) {
           EXPECT_EQ(la[i], lb[i]) << i;
           // Exact where both contract org + dir t into one rounding; one more otherwise.
           const float tol = 2.f * FLT_EPSILON * (1.f + std::abs(vector.a));
@@ -229,7 +316,7 @@ TEST(BasisBatch, RendersEqualTheScalarPath) {
   const box3i cb = m.cellBounds();
   frame.camera = Camera::frame(box3d(m.world.toWorld(vec3d(cb.lower)), m.world.toWorld(vec3d(cb.upper))), 30, 20, 40,
                                false);
-  for (int variant = 0; variant < 6; ++variant) {
+  for (int variant = 0; variant < 7; ++variant) {
     Scene scene;
     scene.layers[0].tf.valueRange = info.valueRanges[0];
     if (variant == 5) scene.layers[0].tf.logScale = true; // the table's normalisation lane by lane
@@ -241,6 +328,7 @@ TEST(BasisBatch, RendersEqualTheScalarPath) {
       scene.ao.volume = true;
     }
     if (variant == 4) scene.integration.lazyGradients = false;
+    if (variant == 6) scene.integration.joinSegments = false; // one batch per region segment
     scene.integration.vectorized = false;
     renderer.setScene(scene);
     const Image reference = renderer.render(frame);

@@ -385,6 +385,7 @@ TEST(Library, SceneJsonRoundTripsEverySetting) {
   s.integration.autoTraversal = false;
   s.integration.traversal = TraversalKind::Embree;
   s.integration.earlyTermination = false;
+  s.integration.joinSegments = false;
   s.debug = DebugView::Region;
   s.background = vec3f(0.f, 0.f, 0.f);
   s.keepAlpha = true;

@@ -181,8 +181,12 @@ TEST(Render, SpaceSkippingAndTraversalsGiveTheSameImage) {
     if (variant == 0) {
       reference = img;
       visibleRegions = r.visibleRegions();
+    } else if (variant == 2) {
+      EXPECT_TRUE(identical(reference, img)) << "variant " << variant; // the same segments
     } else {
-      EXPECT_TRUE(identical(reference, img)) << "variant " << variant;
+      // Without skipping, the transparent regions' samples (alpha 0) also fill the batches that
+      // join consecutive segments, so the sums are grouped otherwise: equal to round-off.
+      EXPECT_LT(maxAbsDiff(reference, img), 1e-6) << "variant " << variant;
     }
     if (variant == 1) allRegions = r.visibleRegions();
   }

@@ -128,6 +128,8 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_flag("--scalar", scalar, "Reconstruct one sample after another (no SIMD batches; the reference path)");
   cmd.add_flag("--no-lazy-gradients", noLazyGradients,
                "Reconstruct gradients with every batch, also after samples the transfer function hides");
+  cmd.add_flag("--no-join-segments", noJoinSegments,
+               "One batch per region segment, instead of batches filled from consecutive segments");
   cmd.add_option("--sampling", sampling, "adaptive (per region) or fixed (finest width everywhere)")
       ->capture_default_str();
   cmd.add_option("--reconstruction", reconstruction,
@@ -229,6 +231,7 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
   if (apply("--scalar")) in.vectorized = !o.scalar;
   if (apply("--no-lazy-gradients")) in.lazyGradients = !o.noLazyGradients;
+  if (apply("--no-join-segments")) in.joinSegments = !o.noJoinSegments;
   if (apply("--debug"))
     s.debug = pick<DebugView>("debug view", o.debug,
                               {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},

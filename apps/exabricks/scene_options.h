@@ -48,6 +48,7 @@ struct RenderOptions {
   bool noEarlyTermination = false;
   bool scalar = false;
   bool noLazyGradients = false;
+  bool noJoinSegments = false;
   std::string sampling = "adaptive";
   std::string reconstruction = "regions";
   std::string debug = "none";

@@ -10,7 +10,12 @@ namespace exa {
 void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
   sampleRegionBatchScalar(view, regionIndex, batch, gradient);
 }
+void sampleBricksBatch(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch,
+                       bool gradient) {
+  sampleBricksBatchScalar(view, brickIds, brickCount, batch, gradient);
+}
 SampleRegionBatchFunction sampleRegionBatchFunction() { return &sampleRegionBatch; }
+SampleBricksBatchFunction sampleBricksBatchFunction() { return &sampleBricksBatch; }
 const char* batchTargetName() { return "scalar"; }
 std::vector<std::string> batchTargets() { return {"scalar"}; }
 bool useBatchTarget(const std::string& name) { return name.empty() || name == "scalar"; }
@@ -72,13 +77,12 @@ HWY_INLINE void loadPairs(hn::Full128<float>, const float* values, hn::Vec128<in
 // Compiled once with and once without gradients: their six accumulators would otherwise stay live
 // (and spill) in the values-only batches too.
 template <bool gradient, size_t kLanes>
-void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& batch) {
+void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch) {
   const hn::CappedTag<float, kLanes> d;
   const hn::RebindToSigned<decltype(d)> di;
   using V = hn::Vec<decltype(d)>;
   using VI = hn::Vec<decltype(di)>;
   using M = hn::Mask<decltype(d)>;
-  const Region& region = view.regions[regionIndex];
   const size_t lanes = hn::Lanes(d);
   const V one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f), zero = hn::Zero(d);
   const V minusOne = hn::Set(d, -1.f), magic = hn::Set(d, 8388608.f); // 2^23
@@ -95,8 +99,8 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
     V sumW = zero, sumWV = zero, v0 = zero;
     V dW[3] = {zero, zero, zero}, dWV[3] = {zero, zero, zero};
     M haveRef = one < zero; // all false
-    for (uint32_t k = 0; k < region.brickCount; ++k) {
-      const Brick& brick = view.bricks[view.brickIds[region.brickBegin + k]];
+    for (uint32_t k = 0; k < brickCount; ++k) {
+      const Brick& brick = view.bricks[brickIds[k]];
       const V invW = hn::Set(d, inverseWidth(brick.level));
       // Per axis, as basis.h: position in cell-centre units, the lower of the two nearest
       // centres, and the hat factors and derivatives of both, zero where that cell lies outside
@@ -218,16 +222,22 @@ void SampleBatchFor(const FieldView& view, uint32_t regionIndex, SampleBatch& ba
   }
 }
 
-void SampleBatchImpl(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
+void SampleBricksBatchImpl(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch,
+                           bool gradient) {
   if (batch.count <= 4) {
     if (gradient)
-      SampleBatchFor<true, 4>(view, regionIndex, batch);
+      SampleBatchFor<true, 4>(view, brickIds, brickCount, batch);
     else
-      SampleBatchFor<false, 4>(view, regionIndex, batch);
+      SampleBatchFor<false, 4>(view, brickIds, brickCount, batch);
   } else if (gradient)
-    SampleBatchFor<true, kSampleBatch>(view, regionIndex, batch);
+    SampleBatchFor<true, kSampleBatch>(view, brickIds, brickCount, batch);
   else
-    SampleBatchFor<false, kSampleBatch>(view, regionIndex, batch);
+    SampleBatchFor<false, kSampleBatch>(view, brickIds, brickCount, batch);
+}
+
+void SampleBatchImpl(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
+  const Region& region = view.regions[regionIndex];
+  SampleBricksBatchImpl(view, view.brickIds + region.brickBegin, region.brickCount, batch, gradient);
 }
 
 const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
@@ -242,13 +252,23 @@ HWY_AFTER_NAMESPACE();
 namespace exa {
 
 HWY_EXPORT(SampleBatchImpl);
+HWY_EXPORT(SampleBricksBatchImpl);
 HWY_EXPORT(TargetName);
 
 void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
   HWY_DYNAMIC_DISPATCH(SampleBatchImpl)(view, regionIndex, batch, gradient);
 }
 
+void sampleBricksBatch(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch,
+                       bool gradient) {
+  HWY_DYNAMIC_DISPATCH(SampleBricksBatchImpl)(view, brickIds, brickCount, batch, gradient);
+}
+
 SampleRegionBatchFunction sampleRegionBatchFunction() { return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBatchImpl)); }
+
+SampleBricksBatchFunction sampleBricksBatchFunction() {
+  return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBricksBatchImpl));
+}
 
 const char* batchTargetName() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
 

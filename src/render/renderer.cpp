@@ -15,6 +15,10 @@
 #include <cmath>
 
 namespace exa {
+
+/// At most this many bricks in the union list of a batch that joins several segments; a segment
+/// whose bricks would make it longer starts a new batch.
+constexpr uint32_t kMaxJoinedBricks = 16;
 namespace {
 
 } // namespace
@@ -611,6 +615,98 @@ struct Renderer::Impl {
       shadeParams.fadeByValue = fadeByValue(layers[0]);
     }
     const bool central = shading == Shading::Central || shading == Shading::ClampedCentral;
+    // The batch being filled: the samples of one segment, or with joinSegments of several
+    // consecutive ones, reconstructed over the union of their regions' brick lists (ascending, so
+    // every sample sums its own region's bricks in its region's order; basis_batch.h).
+    SampleBatch batch;
+    alignas(64) float lengths[2 * kSampleBatch], fades[kSampleBatch];
+    uint32_t regionOf[kSampleBatch];
+    uint32_t unionIds[2][kMaxJoinedBricks];
+    const uint32_t* brickIds = nullptr;
+    uint32_t brickCount = 0;
+    int unionSlot = 0;
+    batch.count = 0;
+    // Reconstructs, shades and composites the batch in order and empties it; true where the ray
+    // terminated.
+    const auto flush = [&]() {
+      const int n = batch.count;
+      const LayerTable& layer = layers[0];
+      bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
+      batchFn.sample(layer.view, brickIds, brickCount, batch, withGrad);
+      // The transfer function at every sample (log2 transmittance 0: transparent).
+      TfBatch looked;
+      const bool anyShown = batchFn.tfLookup(layer.t, batch, looked);
+      lastHidden = !anyShown;
+      if (!anyShown) {
+        raySamples += uint64_t(n);
+        batch.count = 0;
+        return false;
+      }
+      if (wantGrad && !withGrad) {
+        batchFn.sample(layer.view, brickIds, brickCount, batch, true);
+        withGrad = true;
+      }
+      // Opacity and colour of every sample at once, then the in-order compositing.
+      ShadedBatch shaded;
+      shadeParams.fadeWidth = fades;
+      batchFn.shade(batch, looked, lengths, shadeParams, shaded);
+      batch.count = 0;
+      // Front to back with the transmittance as a running product: one multiplication per
+      // sample on the dependency chain (compositeBehind's sums, reassociated). Samples that
+      // show nothing have alpha 0.
+      float transmittance = 1.f - acc.w, r = 0.f, g = 0.f, b = 0.f;
+      int i = 0;
+      bool done = false;
+      if (!OpacityOnly && !central) {
+        // The whole batch without a per-sample test: the opacity only grows along the batch,
+        // so where it ends below the termination threshold no sample reached it, and only
+        // where it ends above is the batch composited again with the test, sample by sample.
+        float t = transmittance;
+        for (int j = 0; j < n; ++j) {
+          const float alpha = shaded.alpha[j];
+          const float w = t * alpha;
+          r += w * shaded.r[j];
+          g += w * shaded.g[j];
+          b += w * shaded.b[j];
+          t *= 1.f - alpha;
+        }
+        if (!(in.earlyTermination && 1.f - t >= in.terminationOpacity)) {
+          transmittance = t;
+          i = n;
+        } else {
+          r = g = b = 0.f;
+        }
+      }
+      while (i < n) {
+        const float alpha = shaded.alpha[i];
+        const float w = transmittance * alpha;
+        if (!OpacityOnly) {
+          vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
+          if (central && looked.logT[i] < 0.f) { // the batch left the table's colour unshaded
+            const Region& region = model.regions.regions[regionOf[i]];
+            const float value = batch.value[i];
+            const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
+            const vec3f grad =
+                centralGradient(layer, regionOf[i], region, p, value, shading == Shading::ClampedCentral);
+            c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
+          }
+          r += w * c.x;
+          g += w * c.y;
+          b += w * c.z;
+        }
+        transmittance *= 1.f - alpha;
+        ++i;
+        if (in.earlyTermination && 1.f - transmittance >= in.terminationOpacity) {
+          done = true;
+          break;
+        }
+      }
+      raySamples += uint64_t(i);
+      acc.x += r, acc.y += g, acc.z += b;
+      acc.w = 1.f - transmittance;
+      return done;
+    };
+    bool terminated = false;
     traversal->traverse(ray, [&](const Segment& seg) {
       ++regionCount;
       const Region& region = model.regions.regions[seg.region];
@@ -618,82 +714,39 @@ struct Renderer::Impl {
       // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
       SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
       if (batched) {
-        const LayerTable& layer = layers[0];
-        SampleBatch batch;
-        alignas(64) float lengths[kSampleBatch];
+        const uint32_t* ids = layers[0].view.brickIds + region.brickBegin;
+        const float fade = fadeWidth(layers[0], region);
         while (march.a < march.end) {
-          const int n = batchFn.place(ray.org, ray.dir, march, batch, lengths);
-          if (n == 0) break;
-          bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
-          batchFn.sample(layer.view, seg.region, batch, withGrad);
-          // The transfer function at every sample (log2 transmittance 0: transparent).
-          TfBatch looked;
-          const bool anyShown = batchFn.tfLookup(layer.t, batch, looked);
-          lastHidden = !anyShown;
-          if (!anyShown) {
-            raySamples += uint64_t(n);
-            continue;
-          }
-          if (wantGrad && !withGrad) {
-            batchFn.sample(layer.view, seg.region, batch, true);
-            withGrad = true;
-          }
-          // Opacity and colour of every sample at once, then the in-order compositing.
-          ShadedBatch shaded;
-          shadeParams.fadeWidth = fadeWidth(layer, region);
-          batchFn.shade(batch, looked, lengths, shadeParams, shaded);
-          // Front to back with the transmittance as a running product: one multiplication per
-          // sample on the dependency chain (compositeBehind's sums, reassociated). Samples that
-          // show nothing have alpha 0.
-          float transmittance = 1.f - acc.w, r = 0.f, g = 0.f, b = 0.f;
-          int i = 0;
-          bool done = false;
-          if (!OpacityOnly && !central) {
-            // The whole batch without a per-sample test: the opacity only grows along the batch,
-            // so where it ends below the termination threshold no sample reached it, and only
-            // where it ends above is the batch composited again with the test, sample by sample.
-            float t = transmittance;
-            for (int j = 0; j < n; ++j) {
-              const float alpha = shaded.alpha[j];
-              const float w = t * alpha;
-              r += w * shaded.r[j];
-              g += w * shaded.g[j];
-              b += w * shaded.b[j];
-              t *= 1.f - alpha;
+          int m = batch.count;
+          if (m > 0 && (brickIds != ids || brickCount != region.brickCount)) {
+            // Join this segment's bricks to the batch's: a merge of two ascending lists, or a
+            // flush first where the union would be too long.
+            const uint32_t* a = brickIds;
+            const uint32_t *aEnd = brickIds + brickCount, *b = ids, *bEnd = ids + region.brickCount;
+            uint32_t* out = unionIds[unionSlot];
+            uint32_t u = 0;
+            while ((a < aEnd || b < bEnd) && u < kMaxJoinedBricks) {
+              if (b == bEnd || (a < aEnd && *a < *b))
+                out[u++] = *a++;
+              else if (a == aEnd || *b < *a)
+                out[u++] = *b++;
+              else
+                out[u++] = *a++, ++b;
             }
-            if (!(in.earlyTermination && 1.f - t >= in.terminationOpacity)) {
-              transmittance = t;
-              i = n;
+            if (a < aEnd || b < bEnd) {
+              if (flush()) return terminated = true, false;
+              m = 0;
             } else {
-              r = g = b = 0.f;
+              brickIds = out, brickCount = u;
+              unionSlot ^= 1;
             }
           }
-          while (i < n) {
-            const float alpha = shaded.alpha[i];
-            const float w = transmittance * alpha;
-            if (!OpacityOnly) {
-              vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
-              if (central && looked.logT[i] < 0.f) { // the batch left the table's colour unshaded
-                const float value = batch.value[i];
-                const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
-                const vec3f grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
-                c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
-              }
-              r += w * c.x;
-              g += w * c.y;
-              b += w * c.z;
-            }
-            transmittance *= 1.f - alpha;
-            ++i;
-            if (in.earlyTermination && 1.f - transmittance >= in.terminationOpacity) {
-              done = true;
-              break;
-            }
-          }
-          raySamples += uint64_t(i);
-          acc.x += r, acc.y += g, acc.z += b;
-          acc.w = 1.f - transmittance;
-          if (done) return false;
+          if (m == 0) brickIds = ids, brickCount = region.brickCount;
+          const int n = batchFn.place(ray.org, ray.dir, march, batch, lengths);
+          std::fill_n(fades + m, n, fade);
+          std::fill_n(regionOf + m, n, seg.region);
+          if (n == 0) break;
+          if ((batch.count == kSampleBatch || !in.joinSegments) && flush()) return terminated = true, false;
         }
         return true;
       }
@@ -746,6 +799,7 @@ struct Renderer::Impl {
       }
       return true;
     });
+    if (batched && !terminated && batch.count > 0) flush();
   }
 
   /// Cell width (world) over the scale of the field's changes: how much of the gradient shading

@@ -291,7 +291,8 @@ std::string writeSceneJson(const SceneDocument& doc) {
       {"early_termination", in.earlyTermination},
       {"termination_opacity", in.terminationOpacity},
       {"vectorized", in.vectorized},
-      {"lazy_gradients", in.lazyGradients}};
+      {"lazy_gradients", in.lazyGradients},
+      {"join_segments", in.joinSegments}};
   j["debug"] = debugName(s.debug);
   j["background"] = srgb(s.background);
   j["alpha"] = s.keepAlpha;
@@ -475,7 +476,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   if (r.find("integration")) {
     const Reader c = r.child("integration");
     c.only({"sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
-            "early_termination", "termination_opacity", "vectorized", "lazy_gradients"});
+            "early_termination", "termination_opacity", "vectorized", "lazy_gradients",
+            "join_segments"});
     Integration& in = s.integration;
     c.choice<Sampling>("sampling", in.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
     c.choice<Reconstruction>("reconstruction", in.reconstruction,
@@ -492,6 +494,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.number("termination_opacity", in.terminationOpacity);
     c.boolean("vectorized", in.vectorized);
     c.boolean("lazy_gradients", in.lazyGradients);
+    c.boolean("join_segments", in.joinSegments);
   }
   r.choice<DebugView>("debug", s.debug,
                       {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},

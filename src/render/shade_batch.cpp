@@ -21,7 +21,7 @@ void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* 
 }
 
 BatchFunctions batchFunctions() {
-  return {&placeSamples, sampleRegionBatchFunction(), &tfLookupBatch, &shadeVolumeBatch};
+  return {&placeSamples, sampleBricksBatchFunction(), &tfLookupBatch, &shadeVolumeBatch};
 }
 
 } // namespace exa
@@ -45,6 +45,7 @@ int PlaceSamplesImpl(const vec3f& org, const vec3f& dir, SegmentMarch& m, Sample
   // not exact in floats.
   if (!(m.a < m.end && m.dt > 0.f && m.k >= -8388608.f && m.k + float(kSampleBatch) <= 8388608.f))
     return placeSamplesScalar(org, dir, m, batch, lengths);
+  const int first = std::max(batch.count, 0), limit = kSampleBatch - first;
   const hn::CappedTag<float, kSampleBatch> d;
   using V = hn::Vec<decltype(d)>;
   const size_t lanes = hn::Lanes(d);
@@ -54,18 +55,19 @@ int PlaceSamplesImpl(const vec3f& org, const vec3f& dir, SegmentMarch& m, Sample
   const V dx = hn::Set(d, dir.x), dy = hn::Set(d, dir.y), dz = hn::Set(d, dir.z);
   alignas(64) float ends[kSampleBatch];
   size_t n = 0;
-  for (size_t base = 0; base < size_t(kSampleBatch); base += lanes) {
+  for (size_t base = 0; int(base) < limit; base += lanes) {
     const V k = hn::Add(hn::Iota(d, float(base)), hn::Set(d, m.k));
     const V b = hn::Min(hn::Mul(hn::Add(k, rho), dt), end);
     V a = hn::Min(hn::Mul(hn::Add(hn::Sub(k, one), rho), dt), end);
     if (base == 0) a = hn::IfThenElse(hn::FirstN(d, 1), hn::Set(d, m.a), a);
-    const auto live = hn::Lt(a, end);
-    if (!hn::AllTrue(d, hn::Or(hn::Not(live), hn::Gt(b, a)))) return placeSamplesScalar(org, dir, m, batch, lengths);
+    const auto live = hn::And(hn::Lt(a, end), hn::FirstN(d, size_t(limit) - base));
+    if (!hn::AllTrue(d, hn::Or(hn::Not(live), hn::Gt(b, a))))
+      return placeSamplesScalar(org, dir, m, batch, lengths);
     const V mid = hn::Mul(half, hn::Add(a, b));
-    hn::StoreU(hn::Sub(b, a), d, lengths + base);
-    hn::StoreU(hn::MulAdd(dx, mid, ox), d, batch.x + base);
-    hn::StoreU(hn::MulAdd(dy, mid, oy), d, batch.y + base);
-    hn::StoreU(hn::MulAdd(dz, mid, oz), d, batch.z + base);
+    hn::StoreU(hn::Sub(b, a), d, lengths + first + base);
+    hn::StoreU(hn::MulAdd(dx, mid, ox), d, batch.x + first + base);
+    hn::StoreU(hn::MulAdd(dy, mid, oy), d, batch.y + first + base);
+    hn::StoreU(hn::MulAdd(dz, mid, oz), d, batch.z + first + base);
     hn::StoreU(b, d, ends + base);
     const size_t count = hn::CountTrue(d, live);
     n += count;
@@ -75,7 +77,7 @@ int PlaceSamplesImpl(const vec3f& org, const vec3f& dir, SegmentMarch& m, Sample
     m.a = ends[n - 1];
     m.k += float(n);
   }
-  batch.count = int(n);
+  batch.count = first + int(n);
   return int(n);
 }
 
@@ -172,7 +174,7 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
       const V gy = hn::Mul(hn::LoadU(d, batch.gy + base), hn::Set(d, p.gradientScale.y));
       const V gz = hn::Mul(hn::LoadU(d, batch.gz + base), hn::Set(d, p.gradientScale.z));
       const V gl = hn::Sqrt(hn::MulAdd(gz, gz, hn::MulAdd(gy, gy, hn::Mul(gx, gx))));
-      V fade = hn::Set(d, p.fadeWidth);
+      V fade = hn::LoadU(d, p.fadeWidth + base);
       if (p.fadeByValue) {
         const V av = hn::Abs(hn::LoadU(d, batch.value + base));
         const auto nonzero = hn::Gt(av, zero);
@@ -236,7 +238,7 @@ void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* 
 }
 
 BatchFunctions batchFunctions() {
-  return {chosenBatchFunction(HWY_DISPATCH_TABLE(PlaceSamplesImpl)), sampleRegionBatchFunction(),
+  return {chosenBatchFunction(HWY_DISPATCH_TABLE(PlaceSamplesImpl)), sampleBricksBatchFunction(),
           chosenBatchFunction(HWY_DISPATCH_TABLE(TfLookupBatchImpl)),
           chosenBatchFunction(HWY_DISPATCH_TABLE(ShadeVolumeBatchImpl))};
 }

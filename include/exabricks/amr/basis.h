@@ -137,21 +137,28 @@ EXA_HOST_DEVICE inline uint32_t locateRegion(const FieldView& view, const vec3<R
   return view.nodes[n].index;
 }
 
-/// Reconstructs the field at p (lattice units) from the bricks of region `regionIndex`. Returns
-/// false where no cell has weight (no value); the gradient is per lattice unit.
+/// Reconstructs the field at p (lattice units) from the listed bricks (indices into view.bricks).
+/// Returns false where no cell has weight (no value); the gradient is per lattice unit.
+template <typename Real>
+EXA_HOST_DEVICE inline bool sampleBricks(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount,
+                                         const vec3<Real>& p, Real& value, vec3<Real>* gradient = nullptr) {
+  BasisAccumulator<Real> acc;
+  for (uint32_t k = 0; k < brickCount; ++k)
+    acc.addBrick(view.bricks[brickIds[k]], view.values, p, gradient != nullptr);
+  if (!acc.valid()) return false;
+  value = acc.value();
+  if (gradient) *gradient = acc.gradient();
+  return true;
+}
+
+/// Reconstructs the field at p (lattice units) from the bricks of region `regionIndex`: every
+/// brick whose support reaches p when p lies in the region.
 template <typename Real>
 EXA_HOST_DEVICE inline bool sampleRegion(const FieldView& view, uint32_t regionIndex,
                                          const vec3<Real>& p, Real& value,
                                          vec3<Real>* gradient = nullptr) {
   const Region& region = view.regions[regionIndex];
-  BasisAccumulator<Real> acc;
-  for (uint32_t k = 0; k < region.brickCount; ++k)
-    acc.addBrick(view.bricks[view.brickIds[region.brickBegin + k]], view.values, p,
-                 gradient != nullptr);
-  if (!acc.valid()) return false;
-  value = acc.value();
-  if (gradient) *gradient = acc.gradient();
-  return true;
+  return sampleBricks(view, view.brickIds + region.brickBegin, region.brickCount, p, value, gradient);
 }
 
 /// Locates p's region and reconstructs there; false outside every support.

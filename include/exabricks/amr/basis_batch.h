@@ -21,7 +21,9 @@ constexpr int kSampleBatch = 16;
 /// Positions in (lattice units) and results out; entries at and beyond `count` are ignored.
 struct SampleBatch {
   int count = 0;
-  alignas(64) float x[kSampleBatch], y[kSampleBatch], z[kSampleBatch];
+  /// Positions, with room past kSampleBatch for whole-vector stores of a placement that appends
+  /// to a partly filled batch (render/shade_batch.h).
+  alignas(64) float x[2 * kSampleBatch], y[2 * kSampleBatch], z[2 * kSampleBatch];
   alignas(64) float value[kSampleBatch];
   alignas(64) float gx[kSampleBatch], gy[kSampleBatch], gz[kSampleBatch]; ///< per lattice unit
   alignas(64) int32_t valid[kSampleBatch]; ///< nonzero where some cell has weight
@@ -31,12 +33,20 @@ struct SampleBatch {
 /// gradient when asked).
 void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient);
 
-/// The same through basis.h's scalar sampleRegion, one sample after another (the reference).
-inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
+/// The same over an explicit list of bricks (ascending indices into view.bricks) instead of one
+/// region's: samples of several neighbouring regions reconstructed at once over the union of their
+/// lists. A brick whose support holds none of a sample's neighbourhood weighs nothing there, and
+/// the union keeps every list's order, so each sample sums what its own region's list gives it.
+void sampleBricksBatch(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch,
+                       bool gradient);
+
+/// The same through basis.h's scalar sampleBricks, one sample after another (the reference).
+inline void sampleBricksBatchScalar(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount,
+                                    SampleBatch& batch, bool gradient) {
   for (int i = 0; i < batch.count; ++i) {
     float v = 0.f;
     vec3f g(0.f);
-    const bool ok = sampleRegion(view, regionIndex, vec3f(batch.x[i], batch.y[i], batch.z[i]), v,
+    const bool ok = sampleBricks(view, brickIds, brickCount, vec3f(batch.x[i], batch.y[i], batch.z[i]), v,
                                  gradient ? &g : nullptr);
     batch.valid[i] = ok;
     batch.value[i] = ok ? v : 0.f;
@@ -44,11 +54,20 @@ inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex,
   }
 }
 
+/// sampleRegionBatch through basis.h's scalar code (the reference).
+inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
+  const Region& region = view.regions[regionIndex];
+  sampleBricksBatchScalar(view, view.brickIds + region.brickBegin, region.brickCount, batch, gradient);
+}
+
 /// sampleRegionBatch's implementation for the instruction set chosen now: a caller that makes
 /// many batches looks it up once instead of dispatching at every call. Valid until
 /// useBatchTarget changes the choice.
 using SampleRegionBatchFunction = void (*)(const FieldView&, uint32_t, SampleBatch&, bool);
 SampleRegionBatchFunction sampleRegionBatchFunction();
+/// sampleBricksBatch's implementation for the instruction set chosen now (as above).
+using SampleBricksBatchFunction = void (*)(const FieldView&, const uint32_t*, uint32_t, SampleBatch&, bool);
+SampleBricksBatchFunction sampleBricksBatchFunction();
 
 /// The instruction set sampleRegionBatch runs with on this CPU ("AVX2", "AVX3", "SSE4", ...;
 /// "scalar" when built without Highway).

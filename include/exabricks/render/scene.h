@@ -102,6 +102,9 @@ struct Integration {
   /// With vectorized: after samples that the transfer function hides, reconstruct the next batch's
   /// values first and their gradients only if one of them shows.
   bool lazyGradients = true;
+  /// With vectorized: fill each batch with the samples of consecutive region segments (reconstructed
+  /// over the union of their regions' brick lists); off: one batch per segment.
+  bool joinSegments = true;
   friend bool operator==(const Integration&, const Integration&) = default;
 };
 

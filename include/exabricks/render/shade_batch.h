@@ -33,16 +33,18 @@ struct SegmentMarch {
   }
 };
 
-/// Places the segment's next samples (at most kSampleBatch) on the ray org + t dir: their
-/// positions into `batch` (count included), their intervals' lengths into `lengths`; advances
-/// the march. Returns the count, 0 at the segment's end.
+/// Appends the segment's next samples on the ray org + t dir to `batch`, as many as fit (up to
+/// kSampleBatch in all): their positions from index batch.count on (count updated), their
+/// intervals' lengths into `lengths` at the same indices (2 kSampleBatch entries: whole vectors
+/// are stored); advances the march. Returns how many it appended, 0 at the segment's end.
 int placeSamples(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch, float* lengths);
 
 /// The same interval after interval (the reference, and where the vector form cannot promise
 /// the same positions).
 inline int placeSamplesScalar(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch,
                               float* lengths) {
-  int n = 0;
+  const int first = batch.count;
+  int n = first;
   while (n < kSampleBatch && m.a < m.end) {
     const float b = m.intervalEnd();
     if (!(b > m.a)) break;
@@ -54,7 +56,7 @@ inline int placeSamplesScalar(const vec3f& org, const vec3f& dir, SegmentMarch& 
     m.a = b;
   }
   batch.count = n;
-  return n;
+  return n - first;
 }
 
 /// The transfer function at every sample of a batch, one array per channel: linear RGB and log2
@@ -74,8 +76,9 @@ struct VolumeShadeParams {
   vec3f gradientScale{1.f};      ///< lattice to world gradient units, per axis
   vec3f light{0.f}, halfVector{0.f};
   ShadingTerms terms;
-  /// shadeVolumeSample's fade scale, as fadeScaleAt(fadeWidth, fadeByValue, value).
-  float fadeWidth = 0.f;
+  /// shadeVolumeSample's fade scale, as fadeScaleAt(fadeWidth[i], fadeByValue, value), per sample
+  /// (kSampleBatch entries: the samples of one batch may come from regions of several widths).
+  const float* fadeWidth = nullptr;
   bool fadeByValue = false;
 };
 
@@ -89,11 +92,11 @@ struct ShadedBatch {
 void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
                       ShadedBatch& out);
 
-/// placeSamples, sampleRegionBatch, tfLookupBatch and shadeVolumeBatch for the instruction set
+/// placeSamples, sampleBricksBatch, tfLookupBatch and shadeVolumeBatch for the instruction set
 /// chosen now, looked up once for the many batches of a ray (see sampleRegionBatchFunction).
 struct BatchFunctions {
   int (*place)(const vec3f&, const vec3f&, SegmentMarch&, SampleBatch&, float*);
-  SampleRegionBatchFunction sample;
+  SampleBricksBatchFunction sample;
   bool (*tfLookup)(const TfTableView&, const SampleBatch&, TfBatch&);
   void (*shade)(const SampleBatch&, const TfBatch&, const float*, const VolumeShadeParams&, ShadedBatch&);
 };
@@ -116,7 +119,7 @@ inline void shadeVolumeBatchScalar(const SampleBatch& batch, const TfBatch& tf, 
     vec3f c(tf.r[i], tf.g[i], tf.b[i]);
     out.alpha[i] = tf.logT[i] < 0.f ? correctedOpacity(tf.logT[i], lengths[i], p.invReferenceWidth) : 0.f;
     if (p.shade) {
-      const float fade = fadeScaleAt(p.fadeWidth, p.fadeByValue, batch.value[i]);
+      const float fade = fadeScaleAt(p.fadeWidth[i], p.fadeByValue, batch.value[i]);
       const vec3f grad = vec3f(batch.gx[i], batch.gy[i], batch.gz[i]) * p.gradientScale;
       c = shadeVolumeSample(c, grad, p.light, p.halfVector, p.terms, fade);
     }
