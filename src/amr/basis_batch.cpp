@@ -35,11 +35,11 @@ static_assert(kMaxBrickWidth < (1 << 23), "brick indices convert exactly through
 namespace hn = hwy::HWY_NAMESPACE;
 
 #undef EXA_PAIR_LOADS
-#if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4
+#if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4 || HWY_TARGET == HWY_AVX3
 // A cell's value and its neighbour's along x are adjacent floats: one 64-bit load per lane fetches
 // both, where a gather loads every float on its own (on Zen 3 frames with AVX2 gathers took 1.06 to
 // 1.25 times as long; docs/performance.md). Lane i gets values[row[i]] in r0 and
-// values[row[i] + 1] in r1. The AVX-512 target keeps gathers.
+// values[row[i] + 1] in r1. AVX-512 gathers the pairs as 64-bit elements.
 #define EXA_PAIR_LOADS 1
 HWY_INLINE __m128d loadPair(const float* p) {
   return _mm_castsi128_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
@@ -47,6 +47,18 @@ HWY_INLINE __m128d loadPair(const float* p) {
 HWY_INLINE __m128d loadTwoPairs(const float* p, const float* q) {
   return _mm_loadh_pd(loadPair(p), reinterpret_cast<const double*>(q));
 }
+#if HWY_TARGET == HWY_AVX3
+// Sixteen lanes: two gathers of eight 64-bit pairs (half the elements of two float gathers), then
+// the lower and upper floats of the pairs sorted into two vectors.
+HWY_INLINE void loadPairs(hn::Full512<float>, const float* values, hn::Vec512<int32_t> row, hn::Vec512<float>& r0,
+                          hn::Vec512<float>& r1) {
+  const __m512 a = _mm512_castpd_ps(_mm512_i32gather_pd(_mm512_castsi512_si256(row.raw), values, 4));
+  const __m512 b = _mm512_castpd_ps(_mm512_i32gather_pd(_mm512_extracti64x4_epi64(row.raw, 1), values, 4));
+  const __m512i even = _mm512_set_epi32(30, 28, 26, 24, 22, 20, 18, 16, 14, 12, 10, 8, 6, 4, 2, 0);
+  r0.raw = _mm512_permutex2var_ps(a, even, b);
+  r1.raw = _mm512_permutex2var_ps(a, _mm512_add_epi32(even, _mm512_set1_epi32(1)), b);
+}
+#endif
 #if HWY_TARGET == HWY_AVX2
 HWY_INLINE void loadPairs(hn::Full256<float>, const float* values, hn::Vec256<int32_t> row, hn::Vec256<float>& r0,
                           hn::Vec256<float>& r1) {
