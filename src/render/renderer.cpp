@@ -619,8 +619,9 @@ struct Renderer::Impl {
     // consecutive ones, reconstructed over the union of their regions' brick lists (ascending, so
     // every sample sums its own region's bricks in its region's order; basis_batch.h).
     SampleBatch batch;
-    alignas(64) float lengths[2 * kSampleBatch], fades[kSampleBatch];
-    uint32_t regionOf[kSampleBatch];
+    // Per sample, with room for whole-vector stores past the batch's end (as its positions).
+    alignas(64) float lengths[2 * kSampleBatch], fades[2 * kSampleBatch];
+    alignas(64) uint32_t regionOf[2 * kSampleBatch];
     uint32_t unionIds[2][kMaxJoinedBricks];
     const uint32_t* brickIds = nullptr;
     uint32_t brickCount = 0;
@@ -725,13 +726,25 @@ struct Renderer::Impl {
             const uint32_t *aEnd = brickIds + brickCount, *b = ids, *bEnd = ids + region.brickCount;
             uint32_t* out = unionIds[unionSlot];
             uint32_t u = 0;
-            while ((a < aEnd || b < bEnd) && u < kMaxJoinedBricks) {
-              if (b == bEnd || (a < aEnd && *a < *b))
-                out[u++] = *a++;
-              else if (a == aEnd || *b < *a)
-                out[u++] = *b++;
-              else
-                out[u++] = *a++, ++b;
+            if (brickCount + region.brickCount <= kMaxJoinedBricks) {
+              // Without branches on the ids, which neighbouring lists share unpredictably.
+              while (a < aEnd && b < bEnd) {
+                const uint32_t x = *a, y = *b;
+                out[u++] = std::min(x, y);
+                a += x <= y;
+                b += y <= x;
+              }
+              while (a < aEnd) out[u++] = *a++;
+              while (b < bEnd) out[u++] = *b++;
+            } else {
+              while ((a < aEnd || b < bEnd) && u < kMaxJoinedBricks) {
+                if (b == bEnd || (a < aEnd && *a < *b))
+                  out[u++] = *a++;
+                else if (a == aEnd || *b < *a)
+                  out[u++] = *b++;
+                else
+                  out[u++] = *a++, ++b;
+              }
             }
             if (a < aEnd || b < bEnd) {
               if (flush()) return terminated = true, false;
@@ -743,8 +756,8 @@ struct Renderer::Impl {
           }
           if (m == 0) brickIds = ids, brickCount = region.brickCount;
           const int n = batchFn.place(ray.org, ray.dir, march, batch, lengths);
-          std::fill_n(fades + m, n, fade);
-          std::fill_n(regionOf + m, n, seg.region);
+          std::fill_n(fades + m, kSampleBatch, fade); // whole vectors: n or more
+          std::fill_n(regionOf + m, kSampleBatch, seg.region);
           if (n == 0) break;
           if ((batch.count == kSampleBatch || !in.joinSegments) && flush()) return terminated = true, false;
         }
