@@ -12,14 +12,33 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace exa {
+namespace {
 
 /// At most this many bricks in the union list of a batch that joins several segments; a segment
 /// whose bricks would make it longer starts a new batch.
 constexpr uint32_t kMaxJoinedBricks = 16;
-namespace {
+
+/// The union of two ascending lists of brick ids into `out` (kMaxJoinedBricks entries), ascending;
+/// false where it would be longer. Without branches on the ids, which neighbouring regions'
+/// lists share unpredictably.
+bool joinBrickLists(const uint32_t* a, const uint32_t* aEnd, const uint32_t* b, const uint32_t* bEnd, uint32_t* out,
+                    uint32_t& count) {
+  uint32_t u = 0;
+  while (a < aEnd && b < bEnd && u < kMaxJoinedBricks) {
+    const uint32_t x = *a, y = *b;
+    out[u++] = std::min(x, y);
+    a += x <= y;
+    b += y <= x;
+  }
+  while (a < aEnd && u < kMaxJoinedBricks) out[u++] = *a++;
+  while (b < bEnd && u < kMaxJoinedBricks) out[u++] = *b++;
+  count = u;
+  return a == aEnd && b == bEnd;
+}
 
 } // namespace
 
@@ -632,7 +651,7 @@ struct Renderer::Impl {
     const auto flush = [&]() {
       const int n = batch.count;
       const LayerTable& layer = layers[0];
-      bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
+      const bool withGrad = wantGrad && !(in.lazyGradients && lastHidden);
       batchFn.sample(layer.view, brickIds, brickCount, batch, withGrad);
       // The transfer function at every sample (log2 transmittance 0: transparent).
       TfBatch looked;
@@ -643,10 +662,7 @@ struct Renderer::Impl {
         batch.count = 0;
         return false;
       }
-      if (wantGrad && !withGrad) {
-        batchFn.sample(layer.view, brickIds, brickCount, batch, true);
-        withGrad = true;
-      }
+      if (wantGrad && !withGrad) batchFn.sample(layer.view, brickIds, brickCount, batch, true);
       // Opacity and colour of every sample at once, then the in-order compositing.
       ShadedBatch shaded;
       shadeParams.fadeWidth = fades;
@@ -720,38 +736,16 @@ struct Renderer::Impl {
         while (march.a < march.end) {
           int m = batch.count;
           if (m > 0 && (brickIds != ids || brickCount != region.brickCount)) {
-            // Join this segment's bricks to the batch's: a merge of two ascending lists, or a
-            // flush first where the union would be too long.
-            const uint32_t* a = brickIds;
-            const uint32_t *aEnd = brickIds + brickCount, *b = ids, *bEnd = ids + region.brickCount;
+            // Join this segment's bricks to the batch's, or flush first where the union would be
+            // too long.
             uint32_t* out = unionIds[unionSlot];
-            uint32_t u = 0;
-            if (brickCount + region.brickCount <= kMaxJoinedBricks) {
-              // Without branches on the ids, which neighbouring lists share unpredictably.
-              while (a < aEnd && b < bEnd) {
-                const uint32_t x = *a, y = *b;
-                out[u++] = std::min(x, y);
-                a += x <= y;
-                b += y <= x;
-              }
-              while (a < aEnd) out[u++] = *a++;
-              while (b < bEnd) out[u++] = *b++;
+            uint32_t joined = 0;
+            if (joinBrickLists(brickIds, brickIds + brickCount, ids, ids + region.brickCount, out, joined)) {
+              brickIds = out, brickCount = joined;
+              unionSlot ^= 1;
             } else {
-              while ((a < aEnd || b < bEnd) && u < kMaxJoinedBricks) {
-                if (b == bEnd || (a < aEnd && *a < *b))
-                  out[u++] = *a++;
-                else if (a == aEnd || *b < *a)
-                  out[u++] = *b++;
-                else
-                  out[u++] = *a++, ++b;
-              }
-            }
-            if (a < aEnd || b < bEnd) {
               if (flush()) return terminated = true, false;
               m = 0;
-            } else {
-              brickIds = out, brickCount = u;
-              unionSlot ^= 1;
             }
           }
           if (m == 0) brickIds = ids, brickCount = region.brickCount;
