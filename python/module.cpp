@@ -27,6 +27,12 @@ using namespace exa;
 
 namespace {
 
+/// Units per field, one each or none at all (every field without units).
+void checkUnits(const std::vector<std::string>& units, size_t fields) {
+  if (!units.empty() && units.size() != fields)
+    fail("units: ", units.size(), " given for ", fields, " fields (one per field, or none)");
+}
+
 /// A built model, shared by every renderer made from it (they keep it alive).
 struct Dataset {
   std::shared_ptr<const Model> model;
@@ -35,9 +41,11 @@ struct Dataset {
   double loadSeconds = 0;
 };
 
-/// A triangle mesh made once from numpy arrays: scenes that keep it are not rebuilt.
+/// A triangle mesh made once from numpy arrays or read from a file (`source`, which scene files
+/// record): scenes that keep it are not rebuilt.
 struct Mesh {
   std::shared_ptr<const TriangleMesh> mesh;
+  std::string source;
 };
 
 std::shared_ptr<Dataset> makeDataset(Model&& m, std::string name, double seconds) {
@@ -71,7 +79,7 @@ std::shared_ptr<Dataset> fromCells(py::array_t<int64_t, py::array::c_style | py:
                                    py::array_t<int64_t, py::array::c_style | py::array::forcecast> levels,
                                    const std::vector<std::pair<std::string, py::array>>& fields,
                                    const std::vector<double>& origin, const std::vector<double>& spacing,
-                                   int maxBrickWidth) {
+                                   int maxBrickWidth, const std::vector<std::string>& units) {
   if (corners.ndim() != 2 || corners.shape(1) != 3) fail("corners must be an (N, 3) integer array");
   const size_t n = size_t(corners.shape(0));
   if (levels.ndim() != 1 || size_t(levels.shape(0)) != n)
@@ -98,11 +106,13 @@ std::shared_ptr<Dataset> fromCells(py::array_t<int64_t, py::array::c_style | py:
     set.cells[i].level = int(l[i]);
   }
   if (fields.empty()) fail("at least one field is needed");
+  checkUnits(units, fields.size());
   for (const auto& [name, array] : fields) {
     const auto values = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(array);
     if (!values || values.ndim() != 1 || size_t(values.shape(0)) != n)
       fail("field '", name, "' must be an (N,) array of numbers with one value per cell (", n, " cells)");
-    set.fields.push_back({name, std::vector<float>(values.data(), values.data() + n)});
+    set.fields.push_back({name, std::vector<float>(values.data(), values.data() + n),
+                          units.empty() ? std::string() : units[set.fields.size()]});
   }
   BuildOptions bo;
   bo.bricks.maxBrickWidth = maxBrickWidth;
@@ -118,7 +128,9 @@ std::shared_ptr<Dataset> fromCells(py::array_t<int64_t, py::array::c_style | py:
 
 /// grids: list of (lower xyz, upper xyz, cells xyz, [arrays per field, x fastest]).
 std::shared_ptr<Dataset> fromGrids(const py::list& grids, const std::vector<std::string>& names,
-                                   const std::vector<double>& origin, int maxBrickWidth) {
+                                   const std::vector<double>& origin, int maxBrickWidth,
+                                   const std::vector<std::string>& units) {
+  checkUnits(units, names.size());
   std::vector<GridPatch> patches;
   for (size_t g = 0; g < grids.size(); ++g) {
     const py::tuple t = grids[g].cast<py::tuple>();
@@ -147,6 +159,7 @@ std::shared_ptr<Dataset> fromGrids(const py::list& grids, const std::vector<std:
     py::gil_scoped_release release;
     CellSet set = cellsFromGrids(patches, names, "grids", origin.empty() ? nullptr : &o);
     patches.clear();
+    for (size_t f = 0; f < units.size() && f < set.fields.size(); ++f) set.fields[f].units = units[f];
     m = buildModel(std::move(set), bo);
   }
   return makeDataset(std::move(m), "<grids>", t.seconds());
@@ -201,6 +214,15 @@ std::shared_ptr<Mesh> makeMesh(py::array_t<float, py::array::c_style | py::array
   return m;
 }
 
+/// Whether the interpreter is shutting down (daemon threads then end when they take the GIL).
+bool interpreterFinalizing() {
+#if PY_VERSION_HEX >= 0x030D0000
+  return Py_IsFinalizing() != 0;
+#else
+  return _Py_IsFinalizing() != 0;
+#endif
+}
+
 /// A renderer over one dataset: the scene comes as JSON (plus meshes), frames as JSON; passes
 /// accumulate in the renderer's own buffer until the scene or the frame changes.
 class PyRenderer {
@@ -247,7 +269,7 @@ public:
     const int target = passes > 0 ? passes : int(buffer_.passes()) + 1;
     std::atomic<bool> cancel{false}, done{false};
     std::exception_ptr error;
-    bool interrupted = false;
+    bool interrupted = false, cancelled = false;
     {
       py::gil_scoped_release release;
       std::thread worker([&] {
@@ -262,6 +284,19 @@ public:
       });
       while (!done) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        if (cancelRequested_.exchange(false)) {
+          cancelled = true;
+          cancel = true;
+          break;
+        }
+        if (interpreterFinalizing()) {
+          // A daemon thread rendering while the interpreter exits: taking the GIL now would end
+          // this thread by unwinding it with the worker still running (std::terminate). Stop the
+          // worker and wait here for the process to end.
+          cancel = true;
+          worker.join();
+          for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+        }
         py::gil_scoped_acquire acquire;
         if (PyErr_CheckSignals() != 0) {
           interrupted = true;
@@ -271,13 +306,16 @@ public:
       }
       worker.join();
     }
-    if (interrupted) {
-      stale_ = true; // partial passes: start over next time
-      throw py::error_already_set();
-    }
+    if (interrupted || cancelled) stale_ = true; // partial passes: start over next time
+    if (interrupted) throw py::error_already_set();
     if (error) std::rethrow_exception(error);
     return int(buffer_.passes());
   }
+
+  /// Cancels the render in flight between tiles (from any thread, without the GIL), or the next
+  /// one when none is: that render returns at once with the passes the buffer holds, which starts
+  /// over at the next render.
+  void cancel() { cancelRequested_ = true; }
 
   py::array_t<float> image() const {
     Image img;
@@ -351,6 +389,7 @@ private:
   Scene scene_;
   std::string frameKey_, sceneKey_;
   bool stale_ = true;
+  std::atomic<bool> cancelRequested_{false};
 };
 
 } // namespace
@@ -370,6 +409,13 @@ PYBIND11_MODULE(_core, m) {
   py::class_<Dataset, std::shared_ptr<Dataset>>(m, "Dataset")
       .def_property_readonly("name", [](const Dataset& d) { return d.name; })
       .def_property_readonly("fields", [](const Dataset& d) { return d.model->fieldNames; })
+      .def_property_readonly("units",
+                             [](const Dataset& d) {
+                               std::vector<std::string> u;
+                               for (size_t f = 0; f < d.model->fieldNames.size(); ++f) u.push_back(d.model->unitsOf(int(f)));
+                               return u;
+                             },
+                             "Units per field, in field order (empty where unknown)")
       .def_property_readonly("cells", [](const Dataset& d) { return d.model->cellCount(); })
       .def_property_readonly("bounds",
                              [](const Dataset& d) {
@@ -381,6 +427,12 @@ PYBIND11_MODULE(_core, m) {
       .def("default_field", [](const Dataset& d) { return d.model->fieldNames[size_t(d.model->requireField(""))]; })
       .def_property_readonly("default_opacity_scale",
                              [](const Dataset& d) { return d.info.defaultOpacityScale; })
+      .def_property_readonly("opacity_reference_width",
+                             [](const Dataset& d) {
+                               const vec3d s = d.model->world.scale;
+                               return double(d.info.referenceWidth) * (s.x + s.y + s.z) / 3.0;
+                             },
+                             "World length opacity is given per: the finest cell width (averaged over the axes)")
       .def("info_json", [](const Dataset& d) { return modelInfoJson(*d.model, d.name, d.loadSeconds); })
       .def("sample", &sample, py::arg("points"), py::arg("field") = "")
       .def("adapt_transfer_function",
@@ -404,8 +456,11 @@ PYBIND11_MODULE(_core, m) {
       .def_static("read", [](const std::string& path) {
         auto x = std::make_shared<Mesh>();
         x->mesh = std::make_shared<TriangleMesh>(readMesh(path));
+        x->source = path;
         return x;
       }, py::arg("path"), "Reads an OBJ, PLY or .tris file")
+      .def_property_readonly("source", [](const Mesh& x) { return x.source; },
+                             "The file the mesh was read from (empty: made from arrays)")
       .def_property_readonly("vertex_count", [](const Mesh& x) { return x.mesh->vertices.size(); })
       .def_property_readonly("triangle_count", [](const Mesh& x) { return x.mesh->triangles.size(); });
 
@@ -418,13 +473,15 @@ PYBIND11_MODULE(_core, m) {
       .def("save", &PyRenderer::save, py::arg("path"))
       .def("stats", &PyRenderer::stats)
       .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"))
+      .def("cancel", &PyRenderer::cancel, "Cancels the render in flight (or the next one)")
       .def("visible_bounds", &PyRenderer::visibleBounds);
 
   m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(),
         py::arg("max_brick_width") = 32, py::arg("box") = std::vector<int>());
   m.def("from_cells", &fromCells, py::arg("corners"), py::arg("levels"), py::arg("fields"), py::arg("origin"),
-        py::arg("spacing"), py::arg("max_brick_width") = 32);
-  m.def("from_grids", &fromGrids, py::arg("grids"), py::arg("names"), py::arg("origin"), py::arg("max_brick_width") = 32);
+        py::arg("spacing"), py::arg("max_brick_width") = 32, py::arg("units") = std::vector<std::string>());
+  m.def("from_grids", &fromGrids, py::arg("grids"), py::arg("names"), py::arg("origin"), py::arg("max_brick_width") = 32,
+        py::arg("units") = std::vector<std::string>());
   m.def("list_fields", &listFields, py::arg("path"));
   m.def("frame_camera",
         [](const std::vector<double>& lo, const std::vector<double>& hi, double azimuth, double elevation, double fov,
@@ -443,6 +500,18 @@ PYBIND11_MODULE(_core, m) {
         },
         py::arg("lower"), py::arg("upper"), py::arg("azimuth"), py::arg("elevation"), py::arg("fov"),
         py::arg("orthographic"), "The command line's default framing of a world box");
+  m.def("scene_json",
+        [](const std::string& text, const std::string& source) { return writeSceneJson(readSceneJson(text, source)); },
+        py::arg("text"), py::arg("source"),
+        "A scene file's JSON checked by the command line's reader (unknown keys and invalid settings are "
+        "refused with its messages, naming `source`) and written back by its writer, with every setting");
+  m.def("default_field_index",
+        [](const std::vector<std::string>& names) {
+          Model model;
+          model.fieldNames = names;
+          return model.requireField("");
+        },
+        py::arg("names"), "Which of these field names the command line takes by default");
   m.def("colormap_names", &builtinColorMapNames);
   m.def("transfer_function_json",
         [](const std::string& path) {

@@ -12,11 +12,11 @@ check "generate a small dataset" "$exe" -q generate -s blobs -n 20000 --seed 2 -
 check "bench --json reports every variant and ratio" bash -c "'$exe' -q bench b.cells --size 24x24 --frames 1 --json > cases.json && $py -c '
 import json; j=json.load(open(\"cases.json\"))
 names=[v[\"name\"] for v in j[\"variants\"]]
-assert names==[\"regions, kd, adaptive\",\"cell location\",\"fixed-step sampling\",\"hide 80%, skipping on\",\"hide 80%, skipping off\",\"embree traversal\"], names
+assert names==[\"regions, kd, adaptive\",\"cell location\",\"fixed-step sampling\",\"hide 80%, skipping on\",\"hide 80%, skipping off\",\"embree traversal\",\"analytic shading\",\"no shading\"], names
 for v in j[\"variants\"]:
     assert v[\"frame_seconds\"]>0 and v[\"rays\"]==24*24, v
 r=j[\"ratios\"]
-for k in (\"cells_over_regions_time\",\"fixed_over_adaptive_samples\",\"fixed_over_adaptive_time\",\"skip_off_over_on_time\",\"embree_over_kd_time\"): assert r[k]>0, k
+for k in (\"cells_over_regions_time\",\"fixed_over_adaptive_samples\",\"fixed_over_adaptive_time\",\"skip_off_over_on_time\",\"embree_over_kd_time\",\"base_over_analytic_shading_time\",\"base_over_no_shading_time\"): assert r[k]>0, k
 assert r[\"fixed_over_adaptive_samples\"]>1
 # Variants that must give the same image do (without skipping, the transparent samples join the
 # batches too and group the sums otherwise: round-off).

@@ -37,6 +37,7 @@ struct ChomboFixture {
   bool nanValue = false;
   bool shortData = false;
   bool badDx = false; ///< level 2's dx disagrees with the ratios
+  bool latestFormat = false; ///< the newest HDF5 file format (h5w::Writer)
   std::vector<std::vector<Box>> levels{{{{0, 0, 0}, {3, 7, 7}}, {{4, 0, 0}, {7, 7, 7}}},
                                        {{{4, 4, 4}, {7, 7, 7}}},
                                        {{{16, 16, 16}, {23, 23, 23}}, {{24, 16, 16}, {27, 19, 19}}}};
@@ -49,7 +50,7 @@ struct ChomboFixture {
 
   void write() const {
     fs::create_directories(file.parent_path());
-    h5w::Writer w(file.string());
+    h5w::Writer w(file.string(), latestFormat);
     w.attrInts("/", "num_levels", {numLevels});
     w.attrInts("/", "num_components", {2});
     w.attrString("/", "component_0", "density");

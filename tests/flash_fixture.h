@@ -31,6 +31,7 @@ struct FlashFixture {
   bool badSize = false;    ///< gives one leaf block 4/3 of the finest cell size
   bool nanValue = false;
   bool dropRow = false;    ///< variable datasets one block short
+  bool latestFormat = false; ///< the newest HDF5 file format (h5w::Writer)
   std::vector<Block> blocks;
 
   FlashFixture() {
@@ -63,7 +64,7 @@ struct FlashFixture {
     bs[3].hi[0] += shift;
     if (badSize) bs[4].hi[0] = bs[4].lo[0] + (bs[4].hi[0] - bs[4].lo[0]) * 2 / 3;
     fs::create_directories(file.parent_path());
-    h5w::Writer w(file.string());
+    h5w::Writer w(file.string(), latestFormat);
     const size_t n = bs.size();
     std::vector<int> level, node;
     std::vector<double> bbox, size, coord;

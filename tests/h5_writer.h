@@ -13,9 +13,14 @@ namespace h5w {
 
 class Writer {
 public:
-  explicit Writer(const std::string& path) {
+  /// `latestFormat`: the newest file format (version 2 object headers, links stored in them or
+  /// in fractal heaps) instead of the default (symbol tables: B-trees and local heaps).
+  explicit Writer(const std::string& path, bool latestFormat = false) {
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
-    file_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    const hid_t access = H5Pcreate(H5P_FILE_ACCESS);
+    if (latestFormat) H5Pset_libver_bounds(access, H5F_LIBVER_LATEST, H5F_LIBVER_LATEST);
+    file_ = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, access);
+    H5Pclose(access);
     if (file_ < 0) throw std::runtime_error("cannot create " + path);
   }
   ~Writer() { H5Fclose(file_); }

@@ -39,9 +39,15 @@ done
 check "numeric order, not lexical" bash -c "mkdir -p order && for s in 2 10 1; do cp moving/blobs_0000.cells order/s_\$s.cells; cp moving/blobs_0000.scalars order/s_\$s.scalars; cp moving/blobs_0000.radius.scalars order/s_\$s.radius.scalars; done && '$exe' -q movie order -o order_frames --size 16x16 && $py -c \"
 import json; i = json.load(open('order_frames/movie.json'))['inputs']; assert [p.split('/')[-1] for p in i] == ['s_1.cells', 's_2.cells', 's_10.cells'], i\""
 
+check "explicit files keep the order given" bash -c "'$exe' -q movie order/s_10.cells order/s_2.cells order/s_1.cells -o given_frames --size 16x16 && $py -c \"
+import json; i = json.load(open('given_frames/movie.json'))['inputs']; assert [p.split('/')[-1] for p in i] == ['s_10.cells', 's_2.cells', 's_1.cells'], i\""
+check "a folder after a file: the folder in numeric order, a repeated step once" bash -c "'$exe' -q movie order/s_10.cells order -o mixed_frames --size 16x16 && $py -c \"
+import json; i = json.load(open('mixed_frames/movie.json'))['inputs']; assert [p.split('/')[-1] for p in i] == ['s_10.cells', 's_1.cells', 's_2.cells'], i\""
+
 check "--frames 1:2 renders exactly those frames" bash -c "'$exe' -q movie moving -o slice ${look[*]} --frames 1:2 && [ ! -e slice/frame_00000.png ] && cmp slice/frame_00001.png frames/frame_00001.png && cmp slice/frame_00002.png frames/frame_00002.png"
 check "a later run renders only the missing frames" bash -c "'$exe' movie moving -o slice ${look[*]} --json 2>/dev/null | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"rendered\"] == 1 and j[\"missing_frames\"] == 0, j' && cmp slice/frame_00000.png frames/frame_00000.png"
-fails_with "--frames outside the movie" "outside the movie's frames 0..2" "$exe" movie moving -o bad --frames 2:5
+check "--frames past the end renders up to the last frame and says so" bash -c "'$exe' movie moving -o clamped ${look[*]} --frames 2:5 2> clamped.err && [ ! -e clamped/frame_00001.png ] && cmp clamped/frame_00002.png frames/frame_00002.png && [ ! -e clamped/frame_00003.png ] && grep -q 'the movie has 3 frames (0..2), so this renders frames 2..2' clamped.err"
+fails_with "--frames starting after the movie" "outside the movie's frames 0..2" "$exe" movie moving -o bad --frames 3:5
 fails_with "an input that matches nothing" "matches no dataset" "$exe" movie 'nothing_*.cells' -o bad
 fails_with "an unknown movie format" "write .mp4" "$exe" movie moving -o out.avi
 
@@ -51,6 +57,17 @@ same=0; for k in 1 2; do cmp -s moving/blobs_000$((k - 1)).cells moving/blobs_00
 check "a hierarchy is reused exactly when the cells are the same" bash -c "'$exe' movie moving -o again ${look[*]} --json 2>/dev/null | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"steps_reused\"] == $same, j'"
 
 check "orbit: N frames of one step" bash -c "'$exe' -q movie moving/blobs_0000.cells -o orbit --size 32x32 --orbit 8 && [ \$(ls orbit/frame_*.png | wc -l) -eq 8 ] && ! cmp -s orbit/frame_00000.png orbit/frame_00004.png"
+check "orbit with a series: N frames, the camera circles while the steps play" bash -c "'$exe' -q movie moving -o orbit_series ${look[*]} --orbit 6 && [ \$(ls orbit_series/frame_*.png | wc -l) -eq 6 ]"
+for k in 0 1 2; do
+  # Frames 2k and 2k+1 show step k, from the orbit's views 2k and 2k+1.
+  check "orbit with a series: frames $((2 * k)) and $((2 * k + 1)) are step $k's orbit views" bash -c "'$exe' -q movie moving/blobs_000$k.cells -o orbit_step$k ${look[*]} --range $range --orbit 6 && cmp orbit_step$k/frame_0000$((2 * k)).png orbit_series/frame_0000$((2 * k)).png && cmp orbit_step$k/frame_0000$((2 * k + 1)).png orbit_series/frame_0000$((2 * k + 1)).png"
+done
+fails_with "orbit with fewer frames than steps" "every step needs a frame" "$exe" movie moving -o bad --orbit 2
+fails_with "orbit with --frames-per-step" "leave out --frames-per-step" "$exe" movie moving -o bad --orbit 6 --frames-per-step 2
+
+check "--annotate names each frame's own step" bash -c "'$exe' -q movie moving -o annotated ${look[*]} --annotate && for k in 0 1 2; do '$exe' -q render moving/blobs_000\$k.cells ${look[*]} --range $range --annotate -o a\$k.png && cmp a\$k.png annotated/frame_0000\$k.png || exit 1; done"
+check "--annotate shows the dataset's name, not its path" bash -c "'$exe' -q render \$PWD/moving/blobs_0000.cells ${look[*]} --annotate -o abs.png && '$exe' -q render moving/blobs_0000.cells ${look[*]} --annotate -o rel.png && cmp abs.png rel.png"
+
 cat > path.json <<'EOF'
 {"camera_path": {"keyframes": [
   {"time": 0, "camera": {"position": [150, 20, 60], "look_at": [32, 32, 32], "up": [0, 0, 1]}, "opacity_scale": 0.02},

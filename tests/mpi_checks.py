@@ -6,6 +6,7 @@
   mpi_checks.py parts INFO.json NAME.cells
       `info --json` under MPI: the parts tile the lattice, every cell is owned by one part, and
       each part's resident cells are exactly those whose basis support reaches into its box
+      grown by two coarsest cell widths
 """
 import json
 import struct
@@ -50,6 +51,9 @@ def parts(info_path, cells_path):
         hi = [big if v is None else v for v in rank["box"]["upper"]]
         return lo, hi
 
+    # A part holds the cells whose support reaches its box grown by two coarsest cell widths
+    # (smooth shading's gradients difference the field one cell beyond a resident cell).
+    reach = 2 << max((c[3] for c in cells), default=0)
     boxes = [box(r) for r in info["ranks"]]
     failures = 0
     owned = [0] * len(boxes)
@@ -63,7 +67,7 @@ def parts(info_path, cells_path):
                 owners += 1
                 owned[k] += 1
             # The support is the open interval (c + w/2 - w, c + w/2 + w) per axis.
-            if all(2 * c[a] - w < 2 * hi[a] and 2 * c[a] + 3 * w > 2 * lo[a] for a in range(3)):
+            if all(2 * c[a] - w < 2 * (hi[a] + reach) and 2 * c[a] + 3 * w > 2 * (lo[a] - reach) for a in range(3)):
                 resident[k] += 1
         if owners != 1:
             failures += 1

@@ -321,7 +321,7 @@ TEST(BasisBatch, RendersEqualTheScalarPath) {
     scene.layers[0].tf.valueRange = info.valueRanges[0];
     if (variant == 5) scene.layers[0].tf.logScale = true; // the table's normalisation lane by lane
     if (variant == 1) scene.shading = Shading::None;
-    if (variant == 2) scene.shading = Shading::ClampedCentral;
+    if (variant == 2) scene.shading = Shading::Analytic;
     if (variant == 3) { // surfaces with volume-attenuated ambient occlusion (opacity-only batches)
       scene.iso.values = {0.5f};
       scene.ao.rays = 2;

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <random>
+#include <set>
 
 using namespace exa;
 namespace fs = std::filesystem;
@@ -62,7 +63,8 @@ TEST(Defaults, TransparentOverTheBackgroundAndLogWhereTheDataAsksForIt) {
   scaled.opacityScale = 1.f;
   EXPECT_EQ(scaled.lookup(0.1f).w, 0.f);
   EXPECT_GT(scaled.lookup(1.0f).w, 0.f);
-  ASSERT_EQ(c.notes.size(), 1u);
+  ASSERT_EQ(c.notes.size(), 2u); // the exposure, the range
+  EXPECT_NE(c.notes[0].find("exposure"), std::string::npos);
   // A high background (1.0, like a volume fraction) with a hole of low values: the ramp runs
   // towards low values.
   const Model high = uniformModel({"volFrac"}, [](int x, int y, int z) {
@@ -90,6 +92,52 @@ TEST(Defaults, TransparentOverTheBackgroundAndLogWhereTheDataAsksForIt) {
   c = adaptTransferFunction(low, info, 0, given, true, true);
   EXPECT_EQ(c.tf.valueRange, given.valueRange);
   EXPECT_EQ(c.tf.opacity, given.opacity);
+}
+
+TEST(Defaults, ExposureShowsTheTopOfTheColourMapThroughWhatSurroundsIt) {
+  // A ball of values falling from 1.1 at its centre to a background of 0.1, of several radii:
+  // the first picture's opacity scale makes a ray through the centre nearly opaque, its colour
+  // the top of the colour map's, while rays through the outer shell stay translucent.
+  for (int radius : {4, 8, 12}) {
+    SCOPED_TRACE(radius);
+    static int r;
+    r = radius;
+    const Model ball = uniformModel({"f"}, [](int x, int y, int z) {
+      const float d2 = float((x - 16) * (x - 16) + (y - 16) * (y - 16) + (z - 16) * (z - 16));
+      return d2 < float(r * r) ? 0.1f + (1.f - d2 / float(r * r)) : 0.1f;
+    });
+    const DatasetInfo info = DatasetInfo::of(ball);
+    const DefaultChoices c = adaptTransferFunction(ball, info, 0, defaultTransferFunction(), true, true);
+    ASSERT_GT(c.tf.opacityScale, 0.f);
+    Renderer renderer(ball, info);
+    Scene scene;
+    scene.layers = {VolumeLayer{"f", c.tf}};
+    scene.shading = Shading::None;
+    renderer.setScene(scene);
+    Frame frame;
+    frame.width = frame.height = 33;
+    frame.jitter = false;
+    frame.camera.orthographic = true;
+    frame.camera.position = vec3d(16.5, 16.5, -40.0);
+    frame.camera.lookAt = vec3d(16.5, 16.5, 16.5);
+    frame.camera.up = vec3d(0, 1, 0);
+    frame.camera.orthoHeight = 16.5;
+    const Image img = renderer.render(frame);
+    const vec4f centre = img.at(16, 16);
+    EXPECT_GT(centre.w, 0.9f) << "a ray through the centre stays translucent";
+    // The colour map's position whose colour is nearest the centre's (un-premultiplied).
+    const vec3f seen = vec3f(centre.x, centre.y, centre.z) * (1.f / centre.w);
+    float nearest = 0.f, best = 1e30f;
+    for (int k = 0; k <= 100; ++k) {
+      const vec3f d = c.tf.colorMap.at(k / 100.f) - seen;
+      if (dot(d, d) < best) best = dot(d, d), nearest = k / 100.f;
+    }
+    EXPECT_GE(nearest, 0.8f) << "the centre shows the colour map at " << nearest << ", not its top";
+    // Through the shell, half-way out: translucent.
+    const vec4f shell = img.at(16 + r * 3 / 4, 16);
+    EXPECT_LT(shell.w, 0.9f);
+    EXPECT_GT(shell.w, 0.01f);
+  }
 }
 
 TEST(Defaults, RequestsThatCanNeverShowAnythingAreNamed) {
@@ -204,4 +252,49 @@ TEST(Overlay, TicksTextColourBarOutlineAndProjection) {
   lit = 0;
   for (const vec4f& p : box.pixels) lit += p.w == 1.f;
   EXPECT_GT(lit, 100);
+}
+
+namespace {
+
+/// Pixels drawn by `text`, as a string of 0/1 per pixel of a canvas that holds it.
+std::string textPixels(const std::string& text, bool glyphByGlyph) {
+  Image img(textWidth(text, 1) + 8, 16);
+  if (!glyphByGlyph) {
+    drawText(img, 2, 2, text, vec3f(1.f), 1);
+  } else {
+    int x = 2;
+    for (char c : text) x += drawText(img, x, 2, std::string(1, c), vec3f(1.f), 1);
+  }
+  std::string lit;
+  for (const vec4f& p : img.pixels) lit += p.w == 1.f ? '1' : '0';
+  return lit;
+}
+
+} // namespace
+
+TEST(Overlay, EveryTickLabelIsDrawnWhole) {
+  // Ranges over many magnitudes, both signs, linear and logarithmic: each tick label drawn as
+  // one string must light exactly the pixels of its glyphs drawn one by one.
+  std::mt19937 rng(7);
+  std::vector<range1f> ranges = {{0.f, 100.f}, {1e3f, 1e7f}, {-8.88e8f, 8.88e8f}, {1e-30f, 1e30f},
+                                 {-0.0088f, -0.0008f}, {13222500.f, 88888888.f}, {1e-12f, 8e-3f}};
+  std::uniform_real_distribution<double> exponent(-30.0, 30.0), unit(-1.0, 1.0);
+  for (int i = 0; i < 400; ++i) {
+    const double a = unit(rng) * std::pow(10.0, exponent(rng)), b = a + std::abs(unit(rng)) * std::pow(10.0, exponent(rng));
+    ranges.push_back(range1f{float(a), float(b)});
+  }
+  std::set<std::string> labels = {"-8.88e+38", "888", "-0.000888", "1e-308", "-inf", "nan"};
+  for (const range1f& r : ranges)
+    for (bool logScale : {false, true})
+      for (double t : colorBarTicks(r, logScale)) labels.insert(colorBarLabel(t));
+  EXPECT_GT(labels.size(), 300u);
+  for (const std::string& label : labels) {
+    const std::string whole = textPixels(label, false), glyphs = textPixels(label, true);
+    EXPECT_EQ(whole, glyphs) << "label '" << label << "' is not drawn whole";
+    EXPECT_NE(whole.find('1'), std::string::npos) << label;
+  }
+  // Text of any length and of the densest glyphs, as titles and annotations are.
+  std::string dense;
+  for (int i = 0; i < 40; ++i) dense += "8B@#$%&WM";
+  EXPECT_EQ(textPixels(dense, false), textPixels(dense, true));
 }

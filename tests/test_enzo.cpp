@@ -116,6 +116,8 @@ TEST(Enzo, LeafCellsGhostZonesSeveralFilesBothPrecisions) {
     EXPECT_EQ(detectInput(path + ".hierarchy"), InputKind::Enzo);
     EXPECT_EQ(listFields(path), (std::vector<std::string>{"Density", "Temperature"}));
     const CellSet s = loadCells(path);
+    EXPECT_EQ(s.fields.at(0).units, "code units");
+    EXPECT_EQ(s.fields.at(1).units, "K");
     EXPECT_EQ(s.world.scale, vec3d(1.0 / 32));
     EXPECT_EQ(s.world.origin, vec3d(0.0));
     // Independent truth: a cell of grid g is a leaf unless a grid one level finer contains it.

@@ -33,6 +33,9 @@ TEST(Flash, LeafBlocksBothPrecisions) {
     const CellSet s = loadCells(f.file.string());
     EXPECT_EQ(s.simulation.time, 0.5); // from "real scalars"
     EXPECT_EQ(s.simulation.cycle, 42); // from "integer scalars"
+    // FLASH's variables carry CGS units by name.
+    EXPECT_EQ(s.fields.at(0).units, "g/cm^3");
+    EXPECT_EQ(s.fields.at(1).units, "erg/cm^3");
     // Finest cells: a level-3 block is a quarter of a root block.
     const vec3d finest(0.25 / 4, 0.5 / 4, 2.0 / 4);
     EXPECT_EQ(s.world.scale, finest);

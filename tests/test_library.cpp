@@ -379,7 +379,7 @@ TEST(Library, SceneJsonRoundTripsEverySetting) {
   s.light.headlight = false;
   s.light.direction = vec3f(1.f, -2.f, 0.5f);
   s.light.terms.specular = 0.5f;
-  s.shading = Shading::ClampedCentral;
+  s.shading = Shading::Central;
   s.ao = {4, 2.5f, true};
   s.integration.sampling = Sampling::Fixed;
   s.integration.autoTraversal = false;

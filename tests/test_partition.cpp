@@ -259,12 +259,14 @@ TEST(Partition, NativeBoxReadsAndCensusStreamTheRecords) {
       EXPECT_EQ(read.fields[size_t(i)].values, f.values) << f.name;
     }
   }
-  // A part loaded through the registry is exactly the cells whose supports reach into it.
+  // A part loaded through the registry is exactly the cells whose supports reach into it, grown
+  // by two coarsest cell widths (smooth shading's reach).
   const KdPartition p = KdPartition::balance(loadCensus(path), 2);
+  const int coarsest = loadCensus(path).coarsestLevel;
   for (int k = 0; k < 2; ++k) {
-    const std::optional<Model> m = loadModelPart(path, {}, p.box(k), loadCensus(path).coarsestLevel);
+    const std::optional<Model> m = loadModelPart(path, {}, p.box(k), coarsest);
     ASSERT_TRUE(m.has_value());
-    EXPECT_EQ(m->cellCount(), partOf(s, p.box(k)).size());
+    EXPECT_EQ(m->cellCount(), partOf(s, shadingReach(p.box(k), coarsest)).size());
   }
 }
 

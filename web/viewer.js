@@ -14,7 +14,7 @@ const viewer = {
   lastRequest: 0,    // newest request the server accepted
   drawnSequence: 0,
   latest: null,      // header of the frame on screen
-  metrics: { latencies: [], draftFrames: [], finals: [], framesDrawn: 0, errors: [] },
+  metrics: { latencies: [], draftFrames: [], finals: [], framesDrawn: 0, errors: [], saved: [] },
 };
 window.exabricksViewer = viewer;
 
@@ -39,11 +39,39 @@ async function apiJson(path, options = {}) {
   return body;
 }
 
-function showMessage(text) {
-  const m = $('message');
-  m.textContent = text;
-  m.hidden = !text;
-  if (text) viewer.metrics.errors.push(text);
+/// Shows a message in the banner over the image, where the user looks (errors in red, kind 'info'
+/// in blue); an empty text hides it. Errors are also kept for scripts and tests.
+function showMessage(text, kind = 'error') {
+  const banner = $('banner');
+  $('message').textContent = text;
+  banner.hidden = !text;
+  banner.classList.toggle('info', kind === 'info');
+  viewer.messageKind = text ? kind : null;
+  if (text && kind === 'error') viewer.metrics.errors.push(text);
+}
+
+/// Hides the banner unless it says the server cannot be reached (that stays until it can).
+function clearMessage() {
+  if (viewer.messageKind !== 'offline') showMessage('');
+}
+
+const offlineText = 'The viewer has stopped or cannot be reached: start `exabricks view` again and reload this page.';
+
+/// A fetch that failed without an answer: the server is gone (stopped, or the connection dropped).
+function isNetworkError(e) {
+  return e instanceof TypeError;
+}
+
+function serverGone() {
+  if (!viewer.offline) viewer.metrics.errors.push(offlineText);
+  viewer.offline = true;
+  showMessage(offlineText, 'offline');
+}
+
+function serverBack() {
+  if (!viewer.offline) return;
+  viewer.offline = false;
+  if (viewer.messageKind === 'offline') showMessage('');
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -81,10 +109,12 @@ async function sendPending() {
     viewer.lastRequest = r.request;
     pump.awaiting = r.request;
     pump.awaitingSince = performance.now();
+    viewer.lastInteractive = want.interactive;
     viewer.requestTimes.set(r.request, { input: inputTime, interactive: want.interactive });
-    showMessage('');
+    clearMessage();
   } catch (e) {
-    showMessage(e.message);
+    if (isNetworkError(e)) serverGone();
+    else showMessage(e.message);
   } finally {
     pump.inflight = false;
     if (pump.want) sendPending();
@@ -98,36 +128,58 @@ viewer.drawnRequest = 0;
 
 async function readStream() {
   for (;;) {
+    let response = null;
     try {
-      const response = await api('/api/stream');
-      if (!response.ok) throw new Error(`frame stream: ${response.status}`);
-      const reader = response.body.getReader();
-      let buffer = new Uint8Array(0);
-      for (;;) {
-        const { value, done } = await reader.read();
-        if (done) break;
-        const joined = new Uint8Array(buffer.length + value.length);
-        joined.set(buffer);
-        joined.set(value, buffer.length);
-        buffer = joined;
-        for (;;) {
-          if (buffer.length < 4) break;
-          const view = new DataView(buffer.buffer, buffer.byteOffset, buffer.byteLength);
-          const headerLength = view.getUint32(0, true);
-          if (buffer.length < 8 + headerLength) break;
-          const imageLength = view.getUint32(4 + headerLength, true);
-          const total = 8 + headerLength + imageLength;
-          if (buffer.length < total) break;
-          const header = JSON.parse(new TextDecoder().decode(buffer.subarray(4, 4 + headerLength)));
-          const image = buffer.slice(8 + headerLength, total);
-          buffer = buffer.slice(total);
-          onFrame(header, image);
-        }
-      }
+      response = await api('/api/stream');
     } catch (e) {
-      // The server went away or restarted: try again shortly.
+      serverGone(); // no answer at all: the server is not running (or not reachable)
+    }
+    if (response && !response.ok) {
+      let text = `frame stream: ${response.status}`;
+      try {
+        text = (await response.json()).error || text;
+      } catch (e) {
+        // not JSON: keep the status
+      }
+      showMessage(text);
+    } else if (response) {
+      serverBack();
+      try {
+        await readFrames(response.body.getReader());
+      } catch (e) {
+        // the connection dropped
+      }
+      // The stream ended (a stopping server ends every stream): connect again soon, which tells
+      // whether the server is still there.
+      await new Promise((resolve) => setTimeout(resolve, 300));
+      continue;
     }
     await new Promise((resolve) => setTimeout(resolve, 1000));
+  }
+}
+
+async function readFrames(reader) {
+  let buffer = new Uint8Array(0);
+  for (;;) {
+    const { value, done } = await reader.read();
+    if (done) return;
+    const joined = new Uint8Array(buffer.length + value.length);
+    joined.set(buffer);
+    joined.set(value, buffer.length);
+    buffer = joined;
+    for (;;) {
+      if (buffer.length < 4) break;
+      const view = new DataView(buffer.buffer, buffer.byteOffset, buffer.byteLength);
+      const headerLength = view.getUint32(0, true);
+      if (buffer.length < 8 + headerLength) break;
+      const imageLength = view.getUint32(4 + headerLength, true);
+      const total = 8 + headerLength + imageLength;
+      if (buffer.length < total) break;
+      const header = JSON.parse(new TextDecoder().decode(buffer.subarray(4, 4 + headerLength)));
+      const image = buffer.slice(8 + headerLength, total);
+      buffer = buffer.slice(total);
+      onFrame(header, image);
+    }
   }
 }
 
@@ -700,8 +752,8 @@ function syncControls() {
   fillSelect($('colormap'), custom ? maps.concat([['custom', 'from file']]) : maps, custom ? 'custom' : cm || 'viridis');
   $('volume-on').checked = doc.volume !== false;
   const [lo, hi] = effectiveRange();
-  $('range-lo').value = Number(lo.toPrecision(6));
-  $('range-hi').value = Number(hi.toPrecision(6));
+  showRangeValue($('range-lo'), lo);
+  showRangeValue($('range-hi'), hi);
   $('log-scale').checked = !!tf().log;
   const os = tf().opacity_scale;
   const base = viewer.info.default_opacity_scale;
@@ -731,7 +783,7 @@ function syncControls() {
     const b = bounds();
     for (let k = 0; k < 6; k++) $(`clip-box-${k}`).value = (box[k] - b[k % 3]) / (b[(k % 3) + 3] - b[k % 3] || 1);
   }
-  $('shading').value = doc.shading || 'analytic';
+  $('shading').value = doc.shading === 'clamped' ? 'smooth' : (doc.shading || 'smooth');
   const ao = (doc.ambient_occlusion && doc.ambient_occlusion.rays) || 0;
   $('ao-rays').value = ao;
   $('ao-rays-out').textContent = ao;
@@ -742,18 +794,107 @@ function syncControls() {
   refreshHistogram();
 }
 
+// ---------------------------------------------------------------------------------------------
+// Numbers in the range boxes: as many digits as fit (up to six), in plain or scientific notation,
+// whichever is shorter; the box keeps the exact value for as long as its text is not edited, and
+// shows it in full while it has the focus.
+
+let measureContext = null;
+
+function textWidth(text, element) {
+  if (!measureContext) measureContext = document.createElement('canvas').getContext('2d');
+  const style = getComputedStyle(element);
+  measureContext.font = `${style.fontStyle} ${style.fontWeight} ${style.fontSize} ${style.fontFamily}`;
+  return measureContext.measureText(text).width;
+}
+
+/// The shorter of plain and scientific notation of v with `digits` significant digits.
+function numberText(v, digits) {
+  if (!Number.isFinite(v)) return String(v);
+  if (v === 0) return '0';
+  const plain = String(Number(v.toPrecision(digits)));
+  let [mantissa, exponent] = v.toExponential(digits - 1).split('e');
+  if (mantissa.includes('.')) mantissa = mantissa.replace(/0+$/, '').replace(/\.$/, '');
+  const scientific = `${mantissa}e${exponent.replace('+', '')}`;
+  return scientific.length < plain.length ? scientific : plain;
+}
+
+/// The most precise text of v (six digits down to two) that fits the box.
+function fittingNumberText(v, element) {
+  const style = getComputedStyle(element);
+  const room = element.clientWidth - parseFloat(style.paddingLeft || 0) - parseFloat(style.paddingRight || 0) - 2;
+  for (let digits = 6; digits >= 2; digits--) {
+    const text = numberText(v, digits);
+    if (!(room > 0) || textWidth(text, element) <= room) return text;
+  }
+  return numberText(v, 2);
+}
+
+function showRangeValue(element, v) {
+  element.dataset.value = String(v);
+  element.value = document.activeElement === element ? numberText(v, 7) : fittingNumberText(v, element);
+  element.dataset.shown = element.value;
+}
+
+/// The number a range box stands for: its exact value while the text is the one shown.
+function rangeValue(element) {
+  if (element.value === element.dataset.shown && element.dataset.value !== undefined) return Number(element.dataset.value);
+  const text = element.value.trim();
+  return text === '' ? NaN : Number(text);
+}
+
+function setupRangeBoxes() {
+  for (const id of ['range-lo', 'range-hi']) {
+    const element = $(id);
+    element.addEventListener('focus', () => {
+      if (element.value === element.dataset.shown) showRangeValue(element, Number(element.dataset.value));
+    });
+    element.addEventListener('blur', () => {
+      if (element.value === element.dataset.shown) showRangeValue(element, Number(element.dataset.value));
+    });
+  }
+  window.addEventListener('resize', () => {
+    for (const id of ['range-lo', 'range-hi'])
+      if ($(id).value === $(id).dataset.shown) showRangeValue($(id), Number($(id).dataset.value));
+  });
+}
+
+/// A new field gets the first picture's transfer function for it (the server chooses mapping,
+/// range and opacity from its values, as `render` does); the colour map stays.
+async function switchField(name) {
+  layer().field = name;
+  const t = tf();
+  try {
+    const r = await apiJson(`/api/first-picture?field=${encodeURIComponent(name)}`);
+    if (layerField() !== name) return; // switched again meanwhile
+    const chosen = r.transfer_function;
+    if (Array.isArray(chosen.range)) t.range = chosen.range;
+    else delete t.range;
+    t.log = !!chosen.log;
+    if (Array.isArray(chosen.opacity)) t.opacity = chosen.opacity;
+    else delete t.opacity;
+    t.opacity_scale = chosen.opacity_scale;
+    const note = $('field-note');
+    note.textContent = (r.notes || []).join('\n');
+    note.hidden = !(r.notes || []).length;
+  } catch (e) {
+    // Without the server's choice: the field's own range, linear, and a warning.
+    delete t.range;
+    t.log = false;
+    if (isNetworkError(e)) serverGone();
+    else showMessage(`${e.message}: the new field keeps the previous opacity; check the transfer function`);
+  }
+  syncControls();
+  requestRender(false);
+}
+
 function setupControls() {
   const on = (id, event, fn) => $(id).addEventListener(event, fn);
   on('volume-on', 'change', () => {
     viewer.doc.volume = $('volume-on').checked;
     requestRender(false);
   });
-  on('field', 'change', () => {
-    layer().field = $('field').value;
-    delete tf().range; // the new field's own range
-    syncControls();
-    requestRender(false);
-  });
+  on('field', 'change', () => switchField($('field').value));
   on('colormap', 'change', () => {
     if ($('colormap').value === 'custom') return;
     tf().colormap = $('colormap').value;
@@ -774,7 +915,7 @@ function setupControls() {
     $('preset-file').value = '';
   });
   const setRange = () => {
-    const lo = Number($('range-lo').value), hi = Number($('range-hi').value);
+    const lo = rangeValue($('range-lo')), hi = rangeValue($('range-hi'));
     if (!(Number.isFinite(lo) && Number.isFinite(hi) && lo < hi)) {
       showMessage('The range needs two numbers, low below high.');
       return;
@@ -784,6 +925,9 @@ function setupControls() {
       return;
     }
     tf().range = [lo, hi];
+    showRangeValue($('range-lo'), lo);
+    showRangeValue($('range-hi'), hi);
+    clearMessage();
     refreshHistogram();
     renderIsoList();
     requestRender(false);
@@ -875,14 +1019,7 @@ function setupControls() {
     requestRender(false);
   });
   on('reset-view', 'click', resetView);
-  on('save-image', 'click', async () => {
-    const r = await api('/api/snapshot.png');
-    if (!r.ok) {
-      showMessage('No refined image yet.');
-      return;
-    }
-    download(await r.blob(), 'exabricks.png');
-  });
+  on('save-image', 'click', saveImage);
   on('save-scene', 'click', async () => {
     const r = await api('/api/scene');
     download(new Blob([await r.text()], { type: 'application/json' }), 'scene.json');
@@ -905,6 +1042,50 @@ function setupControls() {
     clearTimeout(resizeTimer);
     resizeTimer = setTimeout(() => requestRender(false), 150);
   });
+}
+
+/// Saves the view on screen: waits for the changes not yet sent, then asks the server for that
+/// request's image once refined (a view still refining is saved when refinement completes).
+async function saveImage() {
+  const button = $('save-image');
+  button.disabled = true;
+  try {
+    for (let attempt = 0; attempt < 5; attempt++) {
+      while (pump.inflight || pump.want) await new Promise((resolve) => setTimeout(resolve, 30));
+      if (viewer.lastInteractive) {
+        requestRender(false); // a drag's draft has no full-resolution image: ask for the refined one
+        continue;
+      }
+      const request = viewer.lastRequest;
+      if (!viewer.latest || !viewer.latest.final || viewer.latest.request !== request)
+        showMessage('Saving the PNG when the image on screen is refined…', 'info');
+      let r;
+      try {
+        r = await api(`/api/snapshot.png?request=${request}`);
+      } catch (e) {
+        serverGone();
+        return;
+      }
+      if (r.ok) {
+        if (viewer.messageKind === 'info') showMessage('');
+        download(await r.blob(), 'exabricks.png');
+        viewer.metrics.saved.push(Number(r.headers.get('X-Exabricks-Request')));
+        return;
+      }
+      let text = `Save PNG: ${r.status}`;
+      try {
+        text = (await r.json()).error || text;
+      } catch (e) {
+        // keep the status
+      }
+      if (r.status === 409 && viewer.lastRequest !== request) continue; // the view changed: save the new one
+      showMessage(text);
+      return;
+    }
+    showMessage('Save PNG: the view kept changing; save again once it is refined.');
+  } finally {
+    button.disabled = false;
+  }
 }
 
 function download(blob, name) {
@@ -935,7 +1116,8 @@ async function start() {
   try {
     viewer.info = await apiJson('/api/info');
   } catch (e) {
-    showMessage(`Cannot reach the viewer: ${e.message}`);
+    if (isNetworkError(e)) serverGone();
+    else showMessage(`Cannot reach the viewer: ${e.message}`);
     return;
   }
   $('dataset-name').textContent = viewer.info.name;
@@ -951,6 +1133,8 @@ async function start() {
   setupCameraControls();
   setupEditor();
   setupControls();
+  setupRangeBoxes();
+  $('banner-close').addEventListener('click', () => showMessage(''));
   readStream();
   requestRender(false);
 }

@@ -43,7 +43,7 @@ struct BenchOptions {
 
 int tbbThreads() { return tbb::this_task_arena::max_concurrency(); }
 
-const std::vector<std::string> kCaseNames = {"reconstruction", "sampling", "skipping", "traversal"};
+const std::vector<std::string> kCaseNames = {"reconstruction", "sampling", "skipping", "traversal", "shading"};
 
 /// The machine's load average over the last minute (/proc/loadavg), or -1 where unknown: the
 /// figures are only as quiet as the machine was.
@@ -131,7 +131,7 @@ std::vector<std::string> parseCases(const std::string& s) {
   std::istringstream in(s);
   for (std::string part; std::getline(in, part, ',');) {
     if (std::find(kCaseNames.begin(), kCaseNames.end(), part) == kCaseNames.end())
-      fail("unknown case '", part, "' (choose from: all, reconstruction, sampling, skipping, traversal)");
+      fail("unknown case '", part, "' (choose from: all, reconstruction, sampling, skipping, traversal, shading)");
     if (std::find(out.begin(), out.end(), part) == out.end()) out.push_back(part);
   }
   if (out.empty()) failUsage("--cases names no case");
@@ -258,6 +258,10 @@ void runCases(const Setup& s, const BenchOptions& o) {
   }
   if (has("traversal"))
     variants.push_back({"embree traversal", with([](Scene& r) { r.integration.traversal = TraversalKind::Embree; })});
+  if (has("shading")) {
+    variants.push_back({"analytic shading", with([](Scene& r) { r.shading = Shading::Analytic; })});
+    variants.push_back({"no shading", with([](Scene& r) { r.shading = Shading::None; })});
+  }
   const std::vector<VariantResult> results = measureInterleaved(variants, s.model, frame, o.frames);
   auto result = [&](const char* name) -> const VariantResult& {
     for (const VariantResult& r : results)
@@ -284,6 +288,11 @@ void runCases(const Setup& s, const BenchOptions& o) {
     const VariantResult& off = result("hide 80%, skipping off");
     ratios["skip_off_over_on_time"] = off.stats.seconds / on.stats.seconds;
     ratios["skip_on_vs_off_image"] = diffJson(difference(on.image, off.image));
+  }
+  if (has("shading")) {
+    // The base variant shades with the scene's shading (smooth by default).
+    ratios["base_over_analytic_shading_time"] = base.stats.seconds / result("analytic shading").stats.seconds;
+    ratios["base_over_no_shading_time"] = base.stats.seconds / result("no shading").stats.seconds;
   }
   if (has("traversal")) {
     const VariantResult& embree = result("embree traversal");
@@ -347,6 +356,8 @@ void runCases(const Setup& s, const BenchOptions& o) {
   line("fixed / adaptive sampling, frame time", "fixed_over_adaptive_time", nullptr);
   line("skipping off / on (hide 80%), frame time", "skip_off_over_on_time", "skip_on_vs_off_image");
   line("embree / kd traversal, frame time", "embree_over_kd_time", "embree_vs_kd_image");
+  line("scene's / analytic shading, frame time", "base_over_analytic_shading_time", nullptr);
+  line("scene's / no shading, frame time", "base_over_no_shading_time", nullptr);
 }
 
 void writeCsv(const std::string& path, const std::vector<std::array<double, 6>>& rows) {
@@ -569,7 +580,7 @@ void addBench(CLI::App& app) {
   o->in.add(*cmd);
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Rounds of one frame per variant, interleaved (median, after a warm-up)")->capture_default_str();
-  cmd->add_option("--cases", o->cases, "all, or a comma list of: reconstruction, sampling, skipping, traversal")
+  cmd->add_option("--cases", o->cases, "all, or a comma list of: reconstruction, sampling, skipping, traversal, shading")
       ->capture_default_str();
   CLI::Option* orbit = cmd->add_option("--orbit", o->orbit, "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
       ->expected(0, 1)

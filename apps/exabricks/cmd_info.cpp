@@ -139,8 +139,8 @@ void run(const InfoOptions& o) {
               s.bricksPerRegionByCount, s.bricksPerRegionByVolume,
               (unsigned long long)s.maxBricksPerRegion);
   for (size_t f = 0; f < model.fieldNames.size(); ++f)
-    std::printf("field %-10s [%g, %g]\n", model.fieldNames[f].c_str(), s.fieldRanges[f].lower,
-                s.fieldRanges[f].upper);
+    std::printf("field %-10s [%g, %g]%s\n", model.fieldNames[f].c_str(), s.fieldRanges[f].lower,
+                s.fieldRanges[f].upper, model.unitsOf(int(f)).empty() ? "" : (" " + model.unitsOf(int(f))).c_str());
   std::printf("memory           bricks %.2f MB, regions %.2f MB, values %.2f MB\n",
               s.brickBytes / 1e6, s.regionBytes / 1e6, s.valueBytes / 1e6);
   std::printf("bytes per cell   %.3f for bricks + regions (one float field: 4)\n",

@@ -25,6 +25,7 @@
 #include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <unordered_set>
 
 namespace exa::cli {
 namespace {
@@ -105,6 +106,18 @@ range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const
   return all;
 }
 
+/// The movie's steps: inputs in the order given, a glob pattern or a folder expanded into its
+/// datasets in numeric order (explicit files are never re-sorted: `movie b a` plays b, then a);
+/// a dataset named twice plays once, where it first appears.
+std::vector<std::string> seriesSteps(const std::vector<std::string>& inputs) {
+  std::vector<std::string> out;
+  std::unordered_set<std::string> seen;
+  for (const std::string& input : inputs)
+    for (std::string& path : expandSeries({input}))
+      if (seen.insert(path).second) out.push_back(std::move(path));
+  return out;
+}
+
 std::string findProgram(const std::string& name) {
   const char* path = std::getenv("PATH");
   std::stringstream dirs(path ? path : "/usr/bin:/bin");
@@ -161,7 +174,7 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
                                                       : o.output + ".frames";
 
   // The series and the range mode.
-  const std::vector<std::string> paths = o.inputs.empty() ? std::vector<std::string>{""} : expandSeries(o.inputs);
+  const std::vector<std::string> paths = o.inputs.empty() ? std::vector<std::string>{""} : seriesSteps(o.inputs);
   const int steps = int(paths.size());
   RenderOptions ro = o.scene;
   RangeMode rangeMode = RangeMode::Fixed;
@@ -178,11 +191,23 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   lo.fields = neededFields(doc.scene);
 
   // Frames: one per step (times --frames-per-step), or along the camera path of a single step.
+  // An orbit, fly-in or --path-frames with a series sets the frame count, and time advances
+  // across it: the camera moves while the steps play.
   const bool pathFromScene = !doc.path.empty();
   const int pathCount = o.orbit ? o.orbit : o.flyIn ? o.flyIn : o.pathFrames;
+  const char* pathOption = o.orbit ? "--orbit" : o.flyIn ? "--fly-in" : "--path-frames";
   if ((o.orbit || o.flyIn) && pathFromScene) failUsage("--orbit and --fly-in replace the scene file's camera path: use one");
   if (o.pathFrames && !pathFromScene) failUsage("--path-frames needs a scene file with a camera_path");
-  int frames = steps > 1 ? steps * o.framesPerStep : (pathCount ? pathCount : (pathFromScene ? int(std::lround(o.fps * 5)) : 1));
+  if (steps > 1 && pathCount) {
+    if (given("--frames-per-step"))
+      failUsage(pathOption, " ", pathCount, " sets the movie's frame count, and the ", steps,
+                " steps are spread over it: leave out --frames-per-step");
+    if (pathCount < steps)
+      failUsage(pathOption, " ", pathCount, " gives fewer frames than the series has steps (", steps,
+                "): every step needs a frame; use at least ", steps);
+  }
+  int frames = steps > 1 ? (pathCount ? pathCount : steps * o.framesPerStep)
+                         : (pathCount ? pathCount : (pathFromScene ? int(std::lround(o.fps * 5)) : 1));
   frames = std::max(frames, 1);
   int first = 0, last = frames - 1;
   if (!o.frames.empty()) {
@@ -194,10 +219,21 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
     } catch (...) {
       failUsage("--frames expects A:B (first and last frame, from 0), got '", o.frames, "'");
     }
-    if (first < 0 || last < first || last >= frames)
+    if (first < 0 || last < first || first >= frames)
       failUsage("--frames ", o.frames, " is outside the movie's frames 0..", frames - 1);
+    if (last >= frames) {
+      // A slice past the end (the last batch job of an array sized generously) renders what is there.
+      if (parallel::processes().root())
+        logNote(strCat("--frames ", o.frames, ": the movie has ", frames, " frames (0..", frames - 1,
+                       "), so this renders frames ", first, "..", frames - 1));
+      last = frames - 1;
+    }
   }
-  auto stepOf = [&](int frame) { return steps > 1 ? std::min(steps - 1, frame / o.framesPerStep) : 0; };
+  auto stepOf = [&](int frame) {
+    if (steps <= 1) return 0;
+    if (pathCount) return std::min(steps - 1, int(int64_t(frame) * steps / frames));
+    return std::min(steps - 1, frame / o.framesPerStep);
+  };
 
   // Step 0 fixes the first picture (field, transfer-function defaults, camera) for every slice
   // of the movie, whichever frames this process renders.
@@ -301,6 +337,7 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
     next = std::async(std::launch::async, [&, step, prev] { return loadStep(paths[size_t(step)], lo, prev, reuse); });
   };
   std::unique_ptr<Renderer> renderer;
+  RenderOptions overlays = ro; // --annotate names each frame's own step
   int done = 0;
   Timer loop;
   std::string renderError;
@@ -342,7 +379,9 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
       Timer t;
       Image image = renderer->render(frame);
       renderSeconds += t.seconds();
-      drawOverlays(ro, scene, frame, *current.model, current.info, current.model->requireField(scene.layers[0].field), image);
+      overlays.in.input = paths[size_t(step)];
+      drawOverlays(overlays, scene, frame, *current.model, current.info, current.model->requireField(scene.layers[0].field),
+                   image);
       writePng(framePath(framesDir, i), image, scene.keepAlpha, scene.background);
       ++done;
       if (showProgress) {

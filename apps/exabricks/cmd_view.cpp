@@ -14,10 +14,20 @@
 #include <iostream>
 #include <pthread.h>
 #include <thread>
+#include <unistd.h>
 #endif
 
 namespace exa::cli {
 namespace {
+
+#ifdef EXABRICKS_HAVE_VIEWER
+/// This machine's name, for the SSH hint ("localhost" where it has none).
+std::string hostName() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0 || name[0] == '\0') return "localhost";
+  return name;
+}
+#endif
 
 struct ViewCmdOptions {
   RenderOptions scene;
@@ -41,6 +51,7 @@ void run(const ViewCmdOptions& o, const CLI::App& cmd) {
 
   if (o.port < 0 || o.port > 65535) failUsage("--port must be in 0..65535 (0: any free port)");
   if (!o.token.empty() && o.token.size() < 16) failUsage("--token must have at least 16 characters");
+  view::checkListenAddress(o.host, o.port); // before the dataset loads: a taken port fails at once
   SceneDocument doc = sceneFromOptions(o.scene, cmd);
   if (!cmd.count("--spp") && o.scene.sceneFile.empty()) doc.frame.samplesPerPixel = kDefaultViewerPasses;
 
@@ -64,7 +75,7 @@ void run(const ViewCmdOptions& o, const CLI::App& cmd) {
   content.model = model;
   content.dataset = dataset;
   content.input = doc.input;
-  content.name = o.scene.in.name();
+  content.name = datasetLabel(o.scene.in.input);
   content.initial = doc;
   view::ServerOptions options;
   options.host = o.host;
@@ -77,9 +88,9 @@ void run(const ViewCmdOptions& o, const CLI::App& cmd) {
   if (logLevel() >= LogLevel::Warning) {
     std::fprintf(stderr,
                  "exabricks: viewing %s at %s\n"
-                 "  from another machine: ssh -L %d:localhost:%d THIS_HOST, then open the address there\n"
+                 "  from another machine: ssh -L %d:localhost:%d %s, then open the address there\n"
                  "  Ctrl-C stops the viewer\n",
-                 o.scene.in.name().c_str(), server.url().c_str(), server.port(), server.port());
+                 o.scene.in.name().c_str(), server.url().c_str(), server.port(), server.port(), hostName().c_str());
   }
   std::thread signalWaiter([&] {
     int signal = 0;

@@ -1,5 +1,6 @@
 #include "scene_options.h"
 
+#include "exabricks/amr/scenes.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
 #include "exabricks/io/mesh.h"
@@ -120,7 +121,7 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--elevation", elevation, "Default view: degrees above the x-y plane")->capture_default_str();
   cmd.add_option("--background", background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
   cmd.add_flag("--alpha", alpha, "Keep the alpha channel instead of a background");
-  cmd.add_option("--shading", shading, "analytic, central, clamped or none")->capture_default_str();
+  cmd.add_option("--shading", shading, "smooth (central differences over the local cell width), analytic (the exact gradient, which shows the cell lattice), central or none")->capture_default_str();
   cmd.add_option("--light", light, "headlight, or the direction x,y,z light travels")->capture_default_str();
   cmd.add_option("--traversal", traversal, "Region traversal: auto, kd or embree")->capture_default_str();
   cmd.add_flag("--no-skip", noSkip, "Disable space skipping");
@@ -213,7 +214,7 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   if (apply("--shading"))
     s.shading = pick<Shading>("shading", o.shading,
                               {{"analytic", Shading::Analytic}, {"central", Shading::Central},
-                               {"clamped", Shading::ClampedCentral}, {"none", Shading::None}});
+                               {"smooth", Shading::Smooth}, {"none", Shading::None}, {"clamped", Shading::Smooth}});
   Integration& in = s.integration;
   if (apply("--traversal")) {
     in.autoTraversal = o.traversal == "auto";
@@ -384,6 +385,14 @@ SceneDocument withAbsolutePaths(SceneDocument doc) {
   return doc;
 }
 
+std::string datasetLabel(const std::string& input) {
+  if (input.empty()) return kDefaultDatasetName;
+  std::filesystem::path p = std::filesystem::path(input).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path(); // a folder written with a trailing slash
+  const std::string name = p.filename().string();
+  return name.empty() || name == "." || name == ".." ? input : name;
+}
+
 void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,
                   const DatasetInfo& dataset, int field, Image& image, const WholeData* whole) {
   const vec3f bg = scene.background;
@@ -401,13 +410,14 @@ void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame
   if (o.colorbar && scene.debug == DebugView::None && scene.volume) {
     TransferFunction tf = scene.layers.at(0).tf;
     if (tf.valueRange.empty()) tf.valueRange = dataset.valueRanges[size_t(field)];
-    drawColorBar(image, tf, name, ink);
+    const std::string units = model.unitsOf(field);
+    drawColorBar(image, tf, units.empty() ? name : name + " [" + units + "]", ink);
   }
   if (o.annotate) {
     const box3i cb = whole ? whole->cellBounds : model.cellBounds();
     drawBoxOutline(image, frame.camera,
                    box3d(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper))), ink * 0.6f);
-    std::vector<std::string> lines{o.in.name(), "field " + name};
+    std::vector<std::string> lines{datasetLabel(o.in.input), "field " + name};
     const SimulationState& sim = model.simulation;
     if (sim.hasTime() || sim.hasCycle())
       lines.push_back(strCat(sim.hasTime() ? strCat("time ", sim.time) : std::string(),

@@ -41,7 +41,7 @@ struct RenderOptions {
   double azimuth = 30.0, elevation = 25.0;
   std::vector<float> background{0.f, 0.f, 0.f};
   bool alpha = false;
-  std::string shading = "analytic";
+  std::string shading = "smooth";
   std::string light = "headlight";
   std::string traversal = "auto";
   bool noSkip = false;
@@ -102,6 +102,9 @@ Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const Scen
 /// The scene document as a file records it: paths made absolute, so that it reads the same from
 /// any folder.
 SceneDocument withAbsolutePaths(SceneDocument doc);
+/// The dataset's name as pictures and pages show it: the last component of its path
+/// ("run/plt00100/" is "plt00100"), or the default dataset's description.
+std::string datasetLabel(const std::string& input);
 /// The colour bar, annotations and level legend the options ask for, drawn into the image in a
 /// colour that stands out against the background.
 void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,

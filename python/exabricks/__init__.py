@@ -1,6 +1,7 @@
 """exabricks: fast, seam-free rendering of structured AMR data (the ExaBricks method).
 
-Data in:  load(path), from_cells(corners, levels, fields), from_grids(grids), from_yt(ds).
+Data in:  load(path), from_cells(corners, levels, fields), from_grids(grids), from_yt(ds); a yt scene
+as a whole: Scene.from_yt(sc).
 Rendering: Scene(dataset) with TransferFunction, Camera, iso-surfaces, meshes, clipping and
 ambient occlusion; Scene.render() returns an (H, W, 4) float32 array of linear, premultiplied
 RGBA. Dataset.sample(points) reconstructs values and gradients; Dataset.info() describes the
@@ -10,6 +11,7 @@ model as `exabricks info --json` does. See docs/python.md.
 import copy
 import json
 import math
+import os
 
 import numpy as np
 
@@ -47,6 +49,27 @@ class Dataset:
         return list(self._core.fields)
 
     @property
+    def units(self):
+        """Units per field name, as the input states them ("" where unknown): read by the file's
+        reader, given to from_cells / from_grids, or taken from yt by from_yt."""
+        return dict(zip(self._core.fields, self._core.units))
+
+    def field_units(self, name=None):
+        """The units of a field (the default field when None); "" where unknown."""
+        fields = list(self._core.fields)
+        name = name or self.default_field
+        if name not in fields:
+            raise ValueError("unknown field '%s' (the dataset has %s)" % (name, ", ".join(fields)))
+        return self._core.units[fields.index(name)]
+
+    def field_label(self, name=None):
+        """The title the command line's colour bar gives a field: "name [units]", or the name
+        alone where its units are unknown."""
+        name = name or self.default_field
+        units = self.field_units(name)
+        return "%s [%s]" % (name, units) if units else name
+
+    @property
     def cells(self):
         return self._core.cells
 
@@ -58,6 +81,12 @@ class Dataset:
     @property
     def default_field(self):
         return self._core.default_field()
+
+    @property
+    def opacity_reference_width(self):
+        """The world length opacity is given per: the finest cell's width (averaged over the
+        axes where the spacing differs)."""
+        return self._core.opacity_reference_width
 
     @property
     def default_opacity_scale(self):
@@ -89,14 +118,31 @@ def load(path=None, fields=None, max_brick_width=32, box=None):
                               list(box) if box is not None else []))
 
 
-def from_cells(corners, levels, fields, origin=(0.0, 0.0, 0.0), spacing=(1.0, 1.0, 1.0), max_brick_width=32):
+def _units_list(units, names):
+    """Units per name from a dict (missing names have none) or a list in the names' order."""
+    if units is None:
+        return []
+    if isinstance(units, dict):
+        unknown = [k for k in units if k not in names]
+        if unknown:
+            raise ValueError("units given for %s, which are not among the fields %s" % (unknown, list(names)))
+        return [str(units.get(n) or "") for n in names]
+    units = [str(u or "") for u in units]
+    if len(units) != len(names):
+        raise ValueError("%d units given for %d fields" % (len(units), len(names)))
+    return units
+
+
+def from_cells(corners, levels, fields, origin=(0.0, 0.0, 0.0), spacing=(1.0, 1.0, 1.0), max_brick_width=32,
+               units=None):
     """A dataset from leaf cells: integer lower corners (N, 3) in finest-lattice units, levels (N,)
     (a cell is 2**level finest cells wide; corners are multiples of the width), and one (N,) array
     per field in a dict. World = origin + spacing * lattice. A non-dict `fields` is the field
-    "scalar"."""
+    "scalar". `units`: a dict of units per field name (or a list in field order)."""
     if not isinstance(fields, dict):
         fields = {"scalar": fields}
     pairs = [(str(name), np.asarray(values)) for name, values in fields.items()]
+    unit_list = _units_list(units, [name for name, _ in pairs])
     for name, values in pairs:
         if values.dtype.kind not in "fiu":
             raise ValueError("field '%s' must hold numbers, not %s" % (name, values.dtype))
@@ -105,15 +151,15 @@ def from_cells(corners, levels, fields, origin=(0.0, 0.0, 0.0), spacing=(1.0, 1.
     if corners.dtype.kind not in "iu" or levels.dtype.kind not in "iu":
         raise ValueError("corners and levels must be integer arrays (finest-lattice units)")
     return Dataset(_core.from_cells(corners, levels, pairs, list(map(float, origin)), list(map(float, spacing)),
-                                    max_brick_width))
+                                    max_brick_width, unit_list))
 
 
-def from_grids(grids, fields=None, bbox=None, max_brick_width=32):
+def from_grids(grids, fields=None, bbox=None, max_brick_width=32, units=None):
     """A dataset from overlapping grids in the layout yt's load_amr_grids takes: a list of dicts
     with "left_edge", "right_edge", "level", "dimensions" and one array per field of shape
     `dimensions` (indexed [i, j, k]). Cells covered by a finer grid are dropped. `bbox`
     ([[x0, x1], [y0, y1], [z0, z1]], optional) gives the domain, whose lower corner is the lattice
-    origin."""
+    origin. `units`: a dict of units per field name (or a list in field order)."""
     if not grids:
         raise ValueError("from_grids: no grids")
     reserved = {"left_edge", "right_edge", "level", "dimensions"}
@@ -134,37 +180,122 @@ def from_grids(grids, fields=None, bbox=None, max_brick_width=32):
             arrays.append(np.ascontiguousarray(a.transpose(2, 1, 0)).ravel())  # x fastest
         packed.append((list(map(float, grid["left_edge"])), list(map(float, grid["right_edge"])), dims, arrays))
     origin = [float(bbox[a][0]) for a in range(3)] if bbox is not None else []
-    return Dataset(_core.from_grids(packed, [str(n) for n in names], origin, max_brick_width))
+    names = [str(n) for n in names]
+    return Dataset(_core.from_grids(packed, names, origin, max_brick_width, _units_list(units, names)))
 
 
 def _yt_field_name(field):
     return field[-1] if isinstance(field, tuple) else str(field)
 
 
+def _yt_mesh_fields(ds):
+    """The fields yt holds on the grids (not particles), in the file's order where yt keeps it
+    (AMReX plotfiles), else in yt's order."""
+    index = ds.index
+    order = list(getattr(index, "field_order", None) or ds.field_list)
+    particle_types = set(getattr(ds, "particle_types", ())) | set(getattr(ds, "particle_types_raw", ()))
+    fields = []
+    for f in order:
+        if isinstance(f, tuple) and f[0] in particle_types:
+            continue
+        info = getattr(ds, "field_info", None)
+        try:
+            if info is not None and info[f].sampling_type == "particle":
+                continue
+        except (KeyError, AttributeError, TypeError):
+            pass
+        fields.append(f)
+    return fields
+
+
+def _yt_default_field(ds):
+    """The field the command line would take from the same output: among the mesh fields, the
+    principal one where the data names it, else the first."""
+    fields = _yt_mesh_fields(ds)
+    if not fields:
+        raise ValueError("from_yt: the dataset has no mesh fields (only particles, which exabricks does not "
+                         "render); yt lists %s" % (list(ds.field_list),))
+    return fields[_core.default_field_index([_yt_field_name(f) for f in fields])]
+
+
+def _yt_units(values):
+    """The units of an array yt returned, as yt writes them; "" for none ("dimensionless": yt's
+    word for a field whose units the output does not state, or a pure number)."""
+    units = getattr(values, "units", None)
+    text = str(units) if units is not None else ""
+    return "" if text in ("dimensionless", "1") else text
+
+
+def _yt_code(value):
+    """A yt length (or array of lengths) in code units: the world units of from_yt."""
+    if hasattr(value, "in_units"):
+        try:
+            return np.array(value.in_units("code_length").d, dtype=np.float64)
+        except Exception:  # no code units in its registry: take the numbers
+            pass
+    return np.array(value.d if hasattr(value, "d") else value, dtype=np.float64)
+
+
 def from_yt(ds, fields=None, max_brick_width=32):
     """A dataset from a loaded yt dataset (any code yt reads, through ds.index.grids): the leaf
-    cells of its grids with the given fields (yt field names or (type, name) tuples; by default
-    the first field yt lists for the output's own code). Values are taken in yt's units."""
+    cells of its grids with the given fields (yt field names or (type, name) tuples). Without
+    fields, the mesh field the command line would choose: the principal one where the data names
+    it (scalar, Density, density, dens, rho), else the first in the file's order; particle fields
+    are never taken. Values are taken in yt's units, and each field carries the units of the data
+    yt returns (Dataset.units; "" where yt has none but "dimensionless"). World coordinates are
+    yt's code units."""
     if fields is None:
-        fields = [ds.field_list[0]]
+        fields = [_yt_default_field(ds)]
     elif isinstance(fields, (str, tuple)):
         fields = [fields]
+    names = [_yt_field_name(f) for f in fields]
+    units = {}
     grids = []
     for grid in ds.index.grids:
         entry = {
-            "left_edge": np.asarray(grid.LeftEdge.d, dtype=np.float64),
-            "right_edge": np.asarray(grid.RightEdge.d, dtype=np.float64),
+            "left_edge": _yt_code(grid.LeftEdge),
+            "right_edge": _yt_code(grid.RightEdge),
             "level": int(grid.Level),
             "dimensions": [int(d) for d in grid.ActiveDimensions],
         }
-        for f in fields:
-            entry[_yt_field_name(f)] = np.asarray(grid[f].d if hasattr(grid[f], "d") else grid[f], dtype=np.float64)
+        for f, name in zip(fields, names):
+            values = grid[f]
+            if name not in units:
+                units[name] = _yt_units(values)
+            entry[name] = np.asarray(values.d if hasattr(values, "d") else values, dtype=np.float64)
         grids.append(entry)
         grid.clear_data()
-    left = ds.domain_left_edge.d
-    right = ds.domain_right_edge.d
+    left = _yt_code(ds.domain_left_edge)
+    right = _yt_code(ds.domain_right_edge)
     bbox = [[left[a], right[a]] for a in range(3)]
-    return from_grids(grids, [_yt_field_name(f) for f in fields], bbox=bbox, max_brick_width=max_brick_width)
+    return from_grids(grids, names, bbox=bbox, max_brick_width=max_brick_width, units=units)
+
+
+def _srgb_encode(linear):
+    """sRGB numbers of linear intensities in [0, 1]."""
+    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
+    return [float(v) for v in np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1.0 / 2.4) - 0.055)]
+
+
+def _longest_side(bounds):
+    return float(np.max(np.asarray(bounds[1], float) - np.asarray(bounds[0], float)))
+
+
+def _yt_ray_length(camera):
+    """The world length (code units) of one unit of yt's ray parameter: yt's alpha is opacity per
+    this length. A plane-parallel lens casts its rays across the depth width; perspective and
+    spherical lenses scale their rays to reach the whole domain from the camera (the central
+    ray's length; yt's off-axis rays are longer); a fisheye lens to the largest width."""
+    lens = type(camera.lens).__name__
+    if lens == "PlaneParallelLens":
+        return float(_yt_code(camera.width)[2])
+    if lens in ("PerspectiveLens", "StereoPerspectiveLens", "SphericalLens", "StereoSphericalLens"):
+        centre = _yt_code(camera._domain_center)
+        return float(np.linalg.norm(_yt_code(camera.position) - centre)
+                     + 0.5 * np.linalg.norm(_yt_code(camera._domain_width)))
+    if lens == "FisheyeLens":
+        return float(_yt_code(camera.width).max())
+    raise ValueError("TransferFunction.from_yt: yt's %s is not known" % lens)
 
 
 def _srgb(color):
@@ -172,6 +303,10 @@ def _srgb(color):
     if len(c) != 3 or not all(0.0 <= x <= 1.0 for x in c):
         raise ValueError("a colour is three sRGB numbers in [0, 1], not %r" % (color,))
     return c
+
+
+# Every setting of a scene file with the library's defaults.
+_DEFAULT_DOCUMENT = json.loads(_core.scene_json("{}", "defaults"))
 
 
 class TransferFunction:
@@ -212,28 +347,60 @@ class TransferFunction:
                    opacity_scale=d.get("opacity_scale", 1.0))
 
     @classmethod
-    def from_yt(cls, tf, log=True, points=64):
-        """A yt ColorTransferFunction (its red, green, blue and alpha channels over its x bounds),
-        sampled at `points` values. yt's x is log10 of the value when its source maps the field
-        logarithmically (log=True, yt's default for densities) and the value itself otherwise.
-        yt's alpha scales its own ray integration; here it becomes the opacity per finest cell,
-        with the dataset's default scale."""
+    def from_yt(cls, tf, log=None, points=None, camera=None, dataset=None):
+        """A yt ColorTransferFunction, or the one of a yt VolumeSource (whose log_field then gives
+        `log`): its red, green, blue and alpha channels over its x bounds, at each of its bins (or
+        at `points` values). yt's x is log10 of the value when its source maps the field
+        logarithmically (log=True, the default without a source) and the value itself otherwise.
+
+        yt integrates emission colour x alpha and absorption alpha per unit of its ray parameter,
+        which spans a length L of the camera (the depth width for a plane-parallel lens); with the
+        yt `camera` and the exabricks `dataset` the opacity is converted exactly, the opacity per
+        finest cell of width h being 1 - exp(-alpha h / L) (docs/python.md), so that renders agree
+        in exposure. Without a camera, L is that of the camera yt's create_scene sets up (1.5
+        times the longest side of the domain, plane-parallel). Without a dataset, the opacity
+        peaks at 1 with the dataset's default scale ("auto"), as for any other transfer function.
+        yt's colours are taken as the linear intensities yt integrates, and values at and outside
+        its bounds are transparent, as in yt."""
+        if not hasattr(tf, "funcs") and hasattr(tf, "transfer_function"):  # a VolumeSource
+            if log is None:
+                log = bool(getattr(tf, "log_field", True))
+            tf = tf.transfer_function
+        log = True if log is None else bool(log)
         channels = [np.asarray(f.y, dtype=np.float64) for f in tf.funcs[:4]]
         x = np.asarray(tf.funcs[0].x, dtype=np.float64)
         x0, x1 = float(x[0]), float(x[-1])
         if not x1 > x0:
             raise ValueError("the yt transfer function spans no range")
-        idx = np.unique(np.linspace(0, len(x) - 1, max(2, int(points))).round().astype(int))
+        if points is None:
+            idx = np.arange(len(x))
+        else:
+            idx = np.unique(np.linspace(0, len(x) - 1, max(2, int(points))).round().astype(int))
         t = (x[idx] - x0) / (x1 - x0)
+        t[0], t[-1] = 0.0, 1.0
         rgb = np.clip(np.stack([c[idx] for c in channels[:3]], axis=1), 0.0, 1.0)
         alpha = np.clip(channels[3][idx], 0.0, None)
-        if alpha.max() > 0:
-            alpha = alpha / alpha.max()
-        t[0], t[-1] = 0.0, 1.0
-        colormap = [(float(ti), float(r), float(g), float(b)) for ti, (r, g, b) in zip(t, rgb)]
+        alpha[0] = alpha[-1] = 0.0  # yt's tables give nothing at and beyond their bounds
+        if dataset is not None:
+            # Without a camera, that of yt's create_scene: a depth width of 1.5 times the longest side.
+            length = _yt_ray_length(camera) if camera is not None else 1.5 * _longest_side(dataset.bounds)
+            alpha = -np.expm1(-alpha * float(dataset.opacity_reference_width) / length)
+            scale = float(alpha.max())
+        elif camera is not None:
+            raise ValueError("TransferFunction.from_yt: converting for a yt camera needs the exabricks dataset "
+                             "(dataset=...), whose finest cell the opacity is given per")
+        else:
+            scale = "auto"
+        peak = float(alpha.max())
+        if peak > 0:
+            alpha = alpha / peak
+        elif scale != "auto":
+            scale = 1.0  # nothing is visible; the scale must stay positive
+        # Colour map points are sRGB; the renderer integrates their linear values.
+        colormap = [(float(ti),) + tuple(_srgb_encode(c)) for ti, c in zip(t, rgb)]
         opacity = [(float(ti), float(a)) for ti, a in zip(t, alpha)]
         value_range = (10.0 ** x0, 10.0 ** x1) if log else (x0, x1)
-        return cls(colormap=colormap, opacity=opacity, range=value_range, log=bool(log), opacity_scale="auto")
+        return cls(colormap=colormap, opacity=opacity, range=value_range, log=log, opacity_scale=scale)
 
     def to_dict(self):
         d = {}
@@ -280,15 +447,20 @@ class Camera:
 
     @classmethod
     def from_yt(cls, camera):
-        """The position, focus, north vector and width of a yt camera (orthographic when yt's lens
-        is plane-parallel)."""
-        pos = np.asarray(camera.position.d if hasattr(camera.position, "d") else camera.position, float)
-        focus = np.asarray(camera.focus.d if hasattr(camera.focus, "d") else camera.focus, float)
+        """The position, focus, north vector and width of a yt camera, in code units (the world
+        units of from_yt): orthographic with yt's height when its lens is plane-parallel, else a
+        perspective whose vertical angle is yt's, 2 atan(height / (2 depth width))."""
+        pos = _yt_code(camera.position)
+        focus = _yt_code(camera.focus)
         north = np.asarray(camera.north_vector, float)
-        width = np.asarray(camera.width.d if hasattr(camera.width, "d") else camera.width, float)
+        width = _yt_code(camera.width)
         ortho = type(camera.lens).__name__ == "PlaneParallelLens"
-        distance = float(np.linalg.norm(focus - pos))
-        fov = math.degrees(2.0 * math.atan(0.5 * float(width[1]) / distance)) if distance > 0 else 40.0
+        if not ortho:
+            # yt's perspective lens makes the height the width times the resolution's aspect
+            # when it renders.
+            resolution = [float(r) for r in camera.resolution]
+            width[1] = width[0] * resolution[1] / resolution[0]
+        fov = math.degrees(2.0 * math.atan(0.5 * float(width[1]) / float(width[2]))) if width[2] > 0 else 40.0
         return cls(position=pos, look_at=focus, up=north, fov=fov, orthographic=ortho, ortho_height=float(width[1]))
 
     def to_dict(self):
@@ -316,7 +488,8 @@ class Scene:
         if not isinstance(dataset, Dataset):
             raise TypeError("Scene needs an exabricks.Dataset")
         self.dataset = dataset
-        self._input = "" if dataset.name.startswith("<") else dataset.name
+        # Scene files record the dataset by absolute path, as the command line writes them.
+        self._input = "" if dataset.name.startswith("<") else os.path.abspath(dataset.name)
         self._renderer = _core.Renderer(dataset._core)  # holds the dataset alive
         field = field or dataset.default_field
         self.notes = []  # what the defaults chose, as the command line says on stderr
@@ -337,15 +510,28 @@ class Scene:
         self.clip_planes = []  # (point, normal)
         self.clip_box = None
         self.clip_meshes = False
-        self.headlight = True
-        self.light_direction = (-1.0, -1.0, -1.0)
-        self.ambient, self.diffuse, self.specular, self.shininess = 0.3, 0.7, 0.25, 40.0
-        self.shading = "analytic"
-        self.ao_rays, self.ao_length, self.ao_volume = 0, 0.0, False
-        self.sampling = "adaptive"
-        self.early_termination = True
-        self.space_skipping = True
-        self.traversal = "auto"
+        # Light, shading, ambient occlusion and integration: the library's defaults (those of a
+        # scene file that leaves them out; see docs/rendering.md).
+        light = _DEFAULT_DOCUMENT["light"]
+        self.headlight = light["headlight"]
+        self.light_direction = tuple(light["direction"])
+        self.ambient, self.diffuse = light["ambient"], light["diffuse"]
+        self.specular, self.shininess = light["specular"], light["shininess"]
+        self.shading = _DEFAULT_DOCUMENT["shading"]
+        ao = _DEFAULT_DOCUMENT["ambient_occlusion"]
+        self.ao_rays, self.ao_length, self.ao_volume = ao["rays"], ao["length"], ao["volume"]
+        integration = _DEFAULT_DOCUMENT["integration"]
+        self.sampling = integration["sampling"]
+        self.early_termination = integration["early_termination"]
+        self.space_skipping = integration["space_skipping"]
+        self.traversal = integration["traversal"]
+        self.reconstruction = integration["reconstruction"]
+        self.embree_below_visible_fraction = integration["embree_below_visible_fraction"]
+        self.termination_opacity = integration["termination_opacity"]
+        self.vectorized = integration["vectorized"]
+        self.lazy_gradients = integration["lazy_gradients"]
+        self.join_segments = integration["join_segments"]
+        self.camera_path = None  # movies: {"keyframes": [...], "constant_speed": bool}, as in the scene file
         self.debug = "none"
         self.background = (0.0, 0.0, 0.0)
         self.alpha = False
@@ -432,9 +618,14 @@ class Scene:
             "shading": self.shading,
             "ambient_occlusion": {"rays": int(self.ao_rays), "length": float(self.ao_length),
                                   "volume": bool(self.ao_volume)},
-            "integration": {"sampling": self.sampling, "traversal": self.traversal,
+            "integration": {"sampling": self.sampling, "reconstruction": self.reconstruction,
+                            "traversal": self.traversal,
+                            "embree_below_visible_fraction": float(self.embree_below_visible_fraction),
                             "space_skipping": bool(self.space_skipping),
-                            "early_termination": bool(self.early_termination)},
+                            "early_termination": bool(self.early_termination),
+                            "termination_opacity": float(self.termination_opacity),
+                            "vectorized": bool(self.vectorized), "lazy_gradients": bool(self.lazy_gradients),
+                            "join_segments": bool(self.join_segments)},
             "debug": self.debug,
             "background": _srgb(self.background),
             "alpha": bool(self.alpha),
@@ -443,66 +634,107 @@ class Scene:
             del d["input"]
         if self.clip_box is not None:
             d["clip"]["box"] = [float(v) for v in self.clip_box]
-        if with_meshes and self.meshes:
+        # Meshes read from files are recorded by their file; those made from arrays are not.
+        files = [{"file": m.source, "color": _srgb(c)} for m, c in self.meshes if m.source]
+        if files:
+            d["meshes"] = files
+        if with_meshes and len(files) < len(self.meshes):
             raise ValueError("meshes made from arrays are kept by the Scene; write them with the mesh files instead")
+        if self.camera_path is not None:
+            d["camera_path"] = copy.deepcopy(self.camera_path)
         return d
 
     def to_json(self):
-        return json.dumps(self.to_dict(), indent=2)
+        """The scene file's text, as the command line writes it (every setting; checked by its reader)."""
+        return _core.scene_json(json.dumps(self.to_dict()), "scene")
 
     def save_json(self, path):
         """Writes the scene file `exabricks render --scene` reads."""
+        text = self.to_json()
         with open(path, "w") as f:
-            f.write(self.to_json() + "\n")
+            f.write(text)
 
     @classmethod
     def from_json(cls, dataset, text):
-        """A scene from scene-file JSON (as written by save_json or `render --write-scene`)."""
-        d = json.loads(text)
+        """A scene from a scene file: its path, or its JSON text (as written by save_json or
+        `render --write-scene`). It is read by the command line's reader, so that unknown keys and
+        invalid settings are refused with the messages of `render --scene`, and every setting it
+        holds is kept (save_json writes them back). Settings the file leaves out keep the
+        defaults of Scene(dataset); the dataset is the one given, whatever input the file names."""
+        source = "scene"
+        if isinstance(text, bytes):
+            text = text.decode("utf-8")
+        if isinstance(text, os.PathLike) or (isinstance(text, str) and not text.lstrip().startswith(("{", "["))):
+            source = os.fspath(text)
+            with open(source, encoding="utf-8") as f:
+                text = f.read()
+        d = json.loads(_core.scene_json(text, source))  # checked, with every setting
+        given = set(json.loads(text))
         s = cls(dataset)
-        if "camera" in d:
+        if "camera" in given:
             c = d["camera"]
-            s.camera = Camera(c.get("position", (0, 0, 1)), c.get("look_at", (0, 0, 0)), c.get("up", (0, 0, 1)),
-                              c.get("fov", 40.0), c.get("orthographic", False), c.get("ortho_height", 1.0))
-        f = d.get("frame", {})
-        s.width, s.height = f.get("width", s.width), f.get("height", s.height)
-        s.spp, s.rate = f.get("samples_per_pixel", s.spp), f.get("rate", s.rate)
-        s.jitter, s.seed = f.get("jitter", s.jitter), f.get("seed", s.seed)
-        if "layers" in d:
-            s.layers = [Layer(l.get("field") or dataset.default_field,
-                              TransferFunction.from_dict(l.get("transfer_function", {"opacity_scale": "auto"})))
+            s.camera = Camera(c["position"], c["look_at"], c["up"], c["fov"], c["orthographic"], c["ortho_height"])
+        f = d["frame"]
+        s.width, s.height, s.spp, s.rate = f["width"], f["height"], f["samples_per_pixel"], f["rate"]
+        s.jitter, s.seed = f["jitter"], f["seed"]
+        if "layers" in given:
+            s.layers = [Layer(l["field"] or dataset.default_field, TransferFunction.from_dict(l["transfer_function"]))
                         for l in d["layers"]]
-        s.volume = d.get("volume", True)
-        iso = d.get("iso", {})
-        s.iso_values = list(iso.get("values", []))
-        s.iso_field = iso.get("field", "")
-        s.iso_colors = [tuple(c) for c in iso.get("colors", [])]
-        s.iso_color_field = iso.get("color_field", "")
-        if "color_map" in iso:
-            s.iso_color_map = TransferFunction.from_dict(iso["color_map"])
-        for m in d.get("meshes", []):
-            s.add_mesh(path=m["file"], color=m.get("color", (0.6, 0.6, 0.62)))
-        clip = d.get("clip", {})
-        s.clip_planes = [(tuple(p["point"]), tuple(p["normal"])) for p in clip.get("planes", [])]
+        s.volume = d["volume"]
+        iso = d["iso"]
+        s.iso_values = list(iso["values"])
+        s.iso_field = iso["field"]
+        s.iso_colors = [tuple(c) for c in iso["colors"]]
+        s.iso_color_field = iso["color_field"]
+        s.iso_color_map = TransferFunction.from_dict(iso["color_map"])
+        for m in d["meshes"]:
+            if "file" not in m:
+                raise ValueError("%s: meshes given inline are not read into a Scene; add them with add_mesh" % source)
+            s.add_mesh(path=m["file"], color=m["color"])
+        clip = d["clip"]
+        s.clip_planes = [(tuple(p["point"]), tuple(p["normal"])) for p in clip["planes"]]
         s.clip_box = tuple(clip["box"]) if clip.get("box") else None
-        s.clip_meshes = clip.get("meshes", False)
-        light = d.get("light", {})
-        s.headlight = light.get("headlight", True)
-        s.light_direction = tuple(light.get("direction", s.light_direction))
+        s.clip_meshes = clip["meshes"]
+        light = d["light"]
+        s.headlight = light["headlight"]
+        s.light_direction = tuple(light["direction"])
         for k in ("ambient", "diffuse", "specular", "shininess"):
-            setattr(s, k, light.get(k, getattr(s, k)))
-        s.shading = d.get("shading", s.shading)
-        ao = d.get("ambient_occlusion", {})
-        s.ao_rays, s.ao_length, s.ao_volume = ao.get("rays", 0), ao.get("length", 0.0), ao.get("volume", False)
-        integ = d.get("integration", {})
-        s.sampling = integ.get("sampling", s.sampling)
-        s.traversal = integ.get("traversal", s.traversal)
-        s.space_skipping = integ.get("space_skipping", True)
-        s.early_termination = integ.get("early_termination", True)
-        s.debug = d.get("debug", "none")
-        s.background = tuple(d.get("background", s.background))
-        s.alpha = d.get("alpha", False)
+            setattr(s, k, light[k])
+        s.shading = d["shading"]
+        ao = d["ambient_occlusion"]
+        s.ao_rays, s.ao_length, s.ao_volume = ao["rays"], ao["length"], ao["volume"]
+        integ = d["integration"]
+        for key in ("sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
+                    "early_termination", "termination_opacity", "vectorized", "lazy_gradients", "join_segments"):
+            setattr(s, key, integ[key])
+        s.debug = d["debug"]
+        s.background = tuple(d["background"])
+        s.alpha = d["alpha"]
+        s.camera_path = d.get("camera_path")
         return s
+
+    @classmethod
+    def from_yt(cls, scene, dataset=None, source=None, **settings):
+        """The scene of a yt Scene: the field of its volume source (the first unless `source` is
+        given) as a dataset (from_yt, unless `dataset` is given), its transfer function with the
+        opacity converted for its camera (TransferFunction.from_yt), its camera and resolution,
+        and no shading (yt's volume rendering does not light). `settings` are set on the result.
+        Its render's image array agrees in exposure with the one yt's render returns."""
+        if source is None:
+            volumes = [s for s in scene.sources.values() if hasattr(s, "transfer_function") and hasattr(s, "field")]
+            if not volumes:
+                raise ValueError("Scene.from_yt: the yt scene has no volume source")
+            source = volumes[0]
+        field = source.field
+        if dataset is None:
+            dataset = from_yt(source.data_source.ds, [field])
+        camera = scene.camera
+        tf = TransferFunction.from_yt(source, camera=camera, dataset=dataset)
+        resolution = [int(r) for r in camera.resolution]
+        defaults = {"shading": "none", "camera": Camera.from_yt(camera), "width": resolution[0],
+                    "height": resolution[1]}
+        defaults.update(settings)
+        return cls(dataset, field=_yt_field_name(field), transfer_function=tf, **defaults)
 
     # -- rendering ----------------------------------------------------------------------------
     def _frame_json(self, width, height, spp, rate):
@@ -511,9 +743,10 @@ class Scene:
                                      "rate": float(rate), "jitter": bool(self.jitter), "seed": int(self.seed)}})
 
     def _scene_json(self):
-        """The scene without camera, frame and input: what the renderer takes."""
+        """The scene without camera, frame, input, camera path and mesh files (the meshes go to the
+        renderer as made): what the renderer takes."""
         d = self.to_dict()
-        for key in ("camera", "frame", "input"):
+        for key in ("camera", "frame", "input", "camera_path", "meshes"):
             d.pop(key, None)
         return json.dumps(d)
 

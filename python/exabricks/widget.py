@@ -1,10 +1,22 @@
 """An interactive view of a Scene in Jupyter (ipywidgets): orbit, transfer-function range and
 opacity scale, iso-value. Every change renders a cheap preview at once; a background thread then
-refines the full-resolution image pass by pass until the target is reached or the next change."""
+refines the full-resolution image pass by pass until the target is reached or the next change.
+When the interpreter exits, the refinement is cancelled and its thread joined first (a daemon
+thread still rendering at exit would otherwise be torn down mid-render)."""
 
+import atexit
 import threading
+import weakref
 
 import numpy as np
+
+_live = weakref.WeakSet()
+
+
+@atexit.register
+def _close_all():
+    for widget in list(_live):
+        widget.close()
 
 
 class SceneWidget:
@@ -18,6 +30,8 @@ class SceneWidget:
         self._generation = 0
         self._lock = threading.Lock()
         self._thread = None
+        self._threads = []
+        _live.add(self)
         field = scene.field
         info = scene.dataset.info()
         rng = next((f["range"] for f in info["fields"] if f["name"] == field), {"min": 0.0, "max": 1.0})
@@ -61,6 +75,7 @@ class SceneWidget:
             self.image.value = self.scene.png(w, h, 1)
         self.status.value = "preview %dx%d" % (w, h)
         self._thread = threading.Thread(target=self._refine, args=(generation,), daemon=True)
+        self._threads = [t for t in self._threads if t.is_alive()] + [self._thread]
         self._thread.start()
 
     def _refine(self, generation):
@@ -73,6 +88,15 @@ class SceneWidget:
             self.status.value = "%d of %d samples per pixel" % (done, self.passes)
             if done >= self.passes:
                 return
+
+    def close(self):
+        """Stops refining: cancels the pass in flight and waits for the background threads."""
+        self._generation += 1  # a refining thread stops before its next pass
+        self.scene._renderer.cancel()
+        for thread in self._threads:
+            if thread is not threading.current_thread():
+                thread.join()
+        self._threads = []
 
     def wait(self):
         """Waits for the refinement in progress (for scripts and tests)."""

@@ -31,6 +31,10 @@ int Model::fieldIndex(const std::string& name) const {
   return -1;
 }
 
+std::string Model::unitsOf(int field) const {
+  return field >= 0 && size_t(field) < fieldUnits.size() ? fieldUnits[size_t(field)] : std::string();
+}
+
 int Model::requireField(const std::string& name) const {
   if (fieldNames.empty()) fail("the data has no fields");
   if (name.empty()) {
@@ -134,6 +138,7 @@ Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* ke
     model.bricks = std::move(bricks.bricks);
     for (Field& f : cells.fields) {
       model.fieldNames.push_back(f.name);
+      model.fieldUnits.push_back(f.units);
       model.fieldValues.push_back(toBrickOrder(f.values, bricks.cellOfSlot));
       std::vector<float>().swap(f.values);
     }
@@ -147,6 +152,7 @@ Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* ke
     std::vector<Cell>().swap(cells.cells);
     for (Field& f : cells.fields) {
       model.fieldNames.push_back(f.name);
+      model.fieldUnits.push_back(f.units);
       model.fieldValues.push_back(std::move(f.values));
     }
   }
@@ -184,6 +190,7 @@ Model rebuildValues(const Model& like, const ModelStructure& structure, CellSet&
   model.bricks = like.bricks;
   for (Field& f : cells.fields) {
     model.fieldNames.push_back(f.name);
+    model.fieldUnits.push_back(f.units);
     model.fieldValues.push_back(toBrickOrder(f.values, structure.cellOfSlot));
     std::vector<float>().swap(f.values);
   }

@@ -75,6 +75,11 @@ box3i haloReadBox(const box3l& part, int coarsestLevel) {
   return out;
 }
 
+box3l shadingReach(const box3l& part, int coarsestLevel) {
+  const int64_t w = int64_t(2) << coarsestLevel;
+  return box3l(part.lower - vec3l(w), part.upper + vec3l(w));
+}
+
 void keepSupportOf(CellSet& set, const box3l& part) {
   keepCells(set, [&](const Cell& c) { return supportReaches(c.bounds(), c.level, part); });
 }

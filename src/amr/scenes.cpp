@@ -152,12 +152,77 @@ Scene makeRamp(uint64_t seed, int maxLevel) {
   return scene;
 }
 
+/// A cosmology-like density: a log-normal field of periodic plane waves (amplitude falling with
+/// wavenumber, as a power spectrum does), with compact haloes on top, spanning five to six
+/// decades; cells refine by one level per factor of eight in overdensity, so the voids keep the
+/// coarsest cells.
+Scene makeCosmic(uint64_t seed, int maxLevel) {
+  struct Wave {
+    vec3d k;
+    double amplitude, phase;
+  };
+  struct Halo {
+    vec3d centre;
+    double sigma, mass;
+  };
+  uint64_t s = mix64(seed ^ 0xc05b1cull);
+  std::vector<Wave> waves;
+  double variance = 0;
+  while (waves.size() < 32) {
+    const double kz = std::floor(uniform(s) * 13) - 6, ky = std::floor(uniform(s) * 13) - 6,
+                 kx = std::floor(uniform(s) * 13) - 6;
+    const vec3d k(kx, ky, kz);
+    const double kl = length(k);
+    if (kl < 1.5) continue;
+    const double phase = 2 * M_PI * uniform(s);
+    waves.push_back({k * (2 * M_PI), std::pow(kl, -1.3), phase});
+    variance += 0.5 * waves.back().amplitude * waves.back().amplitude;
+  }
+  const double norm = 1.6 / std::sqrt(variance); // standard deviation of ln(density)
+  for (Wave& w : waves) w.amplitude *= norm;
+  std::vector<Halo> haloes;
+  for (int i = 0; i < 24; ++i) {
+    const double cz = uniform(s), cy = uniform(s), cx = uniform(s);
+    const double sigma = 0.006 + 0.014 * uniform(s);
+    haloes.push_back({vec3d(cx, cy, cz), sigma, std::pow(10.0, 1.5 + 2.5 * uniform(s))});
+  }
+  auto density = [waves, haloes](const vec3d& p) {
+    double d = 0;
+    for (const Wave& w : waves) d += w.amplitude * std::cos(dot(w.k, p) + w.phase);
+    double rho = std::exp(d - 1.28); // mean of the log-normal part near 1
+    for (const Halo& h : haloes) {
+      vec3d q = p - h.centre;
+      for (int a = 0; a < 3; ++a) q[a] -= std::round(q[a]); // periodic
+      const double r2 = dot(q, q) / (h.sigma * h.sigma);
+      if (r2 < 40) rho += h.mass * std::exp(-0.5 * r2);
+    }
+    return rho;
+  };
+  Scene scene;
+  scene.fieldNames = {"density"};
+  scene.evaluate = [density](const vec3d& p, float* v) { v[0] = float(density(p)); };
+  auto levelAt = [density, maxLevel](const vec3d& p) {
+    const double rho = density(p);
+    const int refinements = rho > 1.0 ? 1 + int(std::floor(std::log(rho) / std::log(8.0))) : 0;
+    return std::clamp(maxLevel - refinements, 0, maxLevel);
+  };
+  scene.levelIn = [levelAt](const vec3d& lo, const vec3d& hi) {
+    int level = levelAt((lo + hi) * 0.5);
+    for (int c = 0; c < 8 && level > 0; ++c)
+      level = std::min(level, levelAt(vec3d(c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z)));
+    return level;
+  };
+  scene.block = 2;
+  return scene;
+}
+
 Scene makeScene(const SceneOptions& o) {
   const int maxLevel = o.levels - 1;
   if (o.name == "blobs") return makeBlobs(o.seed, maxLevel, o.time, o.gridTime);
   if (o.time != 0 || o.gridTime >= 0) fail("scene '", o.name, "' does not change with time (only blobs moves)");
   if (o.name == "shells") return makeShells(o.seed, maxLevel);
   if (o.name == "ramp") return makeRamp(o.seed, maxLevel);
+  if (o.name == "cosmic") return makeCosmic(o.seed, maxLevel);
   std::string known;
   for (const SceneInfo& s : sceneList()) known += (known.empty() ? "" : ", ") + s.name;
   fail("unknown scene '", o.name, "' (scenes: ", known, ")");
@@ -223,6 +288,8 @@ const std::vector<SceneInfo>& sceneList() {
       {"shells", "radial waves in a hollow ball with a cut-out; finest cells next to coarsest "
                  "(level jumps of more than one) and holes; fields scalar, radius"},
       {"ramp", "linear field x + 2y + 3z with random levels per block and level jumps"},
+      {"cosmic", "cosmology-like density: log-normal web with haloes over five decades, refined by "
+                 "overdensity (coarsest cells in the voids); field density"},
   };
   return list;
 }

@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -314,6 +315,50 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
   }
 }
 
+/// Bounds every box by the bytes of its FAB file before anything is allocated per cell: a FAB
+/// holds at least 4 bytes (float32) per cell and component, the FABs of one file do not share
+/// bytes, and a file shorter than what its boxes need is refused naming the file, the level and
+/// the box. Each file is measured once.
+void checkFabBytes(const Plotfile& pf, const std::vector<LevelData>& levels) {
+  struct FileUse {
+    uint64_t size = 0, needed = 0;
+  };
+  std::map<std::string, FileUse> files;
+  const uint64_t ncomp = pf.names.size();
+  for (size_t l = 0; l < levels.size(); ++l) {
+    const LevelData& ld = levels[l];
+    for (size_t b = 0; b < ld.boxes.size(); ++b) {
+      const std::string& file = ld.files[b];
+      auto it = files.find(file);
+      if (it == files.end()) {
+        std::error_code ec;
+        const uint64_t size = fs::file_size(file, ec);
+        if (ec)
+          fail(file, ": cannot open the data of level ", l, " box ", b, ": ", ec.message(),
+               " (missing file of the plotfile?)");
+        it = files.emplace(file, FileUse{size, 0}).first;
+      }
+      FileUse& use = it->second;
+      const vec3l n = ld.boxes[b].hi - ld.boxes[b].lo + vec3l(1 + 2 * ld.nghost);
+      uint64_t cells = 0, values = 0, bytes = 0;
+      const std::string where = strCat(file, ": offset ", ld.offsets[b], ": FAB of level ", l, " box ", b, " (", n.x,
+                                       "x", n.y, "x", n.z, " cells, ", ncomp, " components)");
+      if (!io::cellCountWithin(n.x, n.y, n.z, UINT64_MAX / 4, cells) ||
+          !io::productWithin(cells, ncomp, UINT64_MAX / 4, values))
+        fail(where, ": too many values");
+      bytes = values * 4;
+      if (ld.offsets[b] >= use.size || bytes > use.size - ld.offsets[b])
+        fail(where, ": needs at least ", bytes, " bytes of data (float32), but ",
+             ld.offsets[b] >= use.size ? 0 : use.size - ld.offsets[b], " bytes follow the offset in a file of ",
+             use.size, " bytes (truncated file or corrupt box?)");
+      use.needed += bytes;
+      if (use.needed > use.size)
+        fail(where, ": the boxes stored in this file need at least ", use.needed,
+             " bytes of data (float32), but the file holds ", use.size, " (truncated file or corrupt boxes?)");
+    }
+  }
+}
+
 } // namespace
 
 bool isAmrexPlotfile(const std::string& path) {
@@ -379,7 +424,9 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
       patches.push_back({b.lo * w, b.hi - b.lo + vec3l(1), w});
       origin.push_back({l, bi});
     }
-  const io::Coverage coverage(patches, [&](size_t i) { return strCat("level ", origin[i].first, " box ", origin[i].second); });
+  checkFabBytes(pf, levels);
+  const io::Coverage coverage(
+      patches, [&](size_t i) { return strCat(path, ": level ", origin[i].first, " box ", origin[i].second); });
   for (size_t i = 0; i < patches.size(); ++i) {
     const auto [l, bi] = origin[i];
     const LevelData& ld = levels[size_t(l)];
@@ -412,21 +459,25 @@ Census amrexCensus(const std::string& path) {
   for (int l = pf.finestLevel - 1; l >= 0; --l) width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
   std::vector<io::Patch> patches;
   std::vector<std::pair<int, size_t>> origin;
+  std::vector<LevelData> levels;
   for (int l = 0; l <= pf.finestLevel; ++l) {
-    const LevelData ld = readCellHeader(pf, l);
+    levels.push_back(readCellHeader(pf, l));
+    const LevelData& ld = levels.back();
     for (size_t bi = 0; bi < ld.boxes.size(); ++bi) {
       const IndexBox& b = ld.boxes[bi];
       patches.push_back({b.lo * width[size_t(l)], b.hi - b.lo + vec3l(1), width[size_t(l)]});
       origin.push_back({l, bi});
     }
   }
+  // The boxes are counted from the headers, but only as far as the data files can hold them.
+  checkFabBytes(pf, levels);
   // Leaf cells per box from the boxes alone: its cells less those the next finer level covers.
-  const io::Coverage coverage(patches, [&](size_t i) { return strCat("level ", origin[i].first, " box ", origin[i].second); });
+  const io::Coverage coverage(
+      patches, [&](size_t i) { return strCat(path, ": level ", origin[i].first, " box ", origin[i].second); });
   Census census;
   census.coarsestLevel = std::max(0, io::log2Exact(width[0]));
   for (size_t i = 0; i < patches.size(); ++i) {
-    const std::vector<uint8_t> covered = coverage.covered(i);
-    const auto leaves = std::count(covered.begin(), covered.end(), uint8_t(0));
+    const uint64_t leaves = coverage.leafCount(i);
     if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
   }
   return census;

@@ -121,6 +121,9 @@ ChomboHeader readHeader(const h5::File& f) {
     if (dims.size() != 1) f.bad(dataName, "expected a one-dimensional dataset");
     if (lv.offsets.front() != 0 || int64_t(dims[0]) != lv.offsets.back())
       f.bad(dataName, strCat("holds ", dims[0], " values, but the offsets describe ", lv.offsets.back() - lv.offsets.front()));
+    // The boxes' cells are bounded by the values the file stores before anything is allocated
+    // per cell (the coverage of each box included).
+    f.requireStorage(dataName);
     h.levels.push_back(std::move(lv));
   }
   // The cell sizes must follow the ratios; a mismatch means the header contradicts itself.
@@ -142,6 +145,8 @@ bool isChomboFile(const std::string& path) {
   try {
     const h5::File f(path);
     return f.exists("/level_0") && f.hasAttribute("/", "num_levels");
+  } catch (const h5::DamagedFile&) {
+    throw; // a damaged HDF5 file, whatever its layout: the check's message says what is wrong
   } catch (const Error&) {
     return false;
   }

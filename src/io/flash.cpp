@@ -82,6 +82,8 @@ FlashHeader readHeader(const h5::File& f) {
         int64_t(d[3]) != h.blockCells.x)
       f.bad(name, strCat("dimensions do not match [", h.blocks, ", ", h.blockCells.z, ", ", h.blockCells.y, ", ",
                          h.blockCells.x, "] (blocks, nzb, nyb, nxb)"));
+    // The cells of every block are bounded by the values stored before any is allocated.
+    f.requireStorage(name);
   }
   return h;
 }
@@ -93,6 +95,8 @@ bool isFlashFile(const std::string& path) {
   try {
     const h5::File f(path);
     return f.isDataset("node type") && f.isDataset("bounding box");
+  } catch (const h5::DamagedFile&) {
+    throw; // a damaged HDF5 file, whatever its layout: the check's message says what is wrong
   } catch (const Error&) {
     return false;
   }

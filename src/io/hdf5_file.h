@@ -3,9 +3,12 @@
 // turned into exa::Error naming the file and the object. HDF5's own error printing is silenced.
 #pragma once
 
+#include "exabricks/core/error.h"
+
 #include <hdf5.h>
 
 #include <cstdint>
+#include <map>
 #include <string>
 #include <utility>
 #include <vector>
@@ -53,10 +56,40 @@ struct CompoundTable {
   size_t records = 0;
 };
 
+/// The error checkInChild throws: the file crashed libhdf5 (or made it hang, run out of memory
+/// or report a damaged structure) in the child. Probes pass it on instead of taking the file
+/// for another format.
+class DamagedFile : public Error {
+public:
+  using Error::Error;
+};
+
+/// Checks that libhdf5 can walk the file's metadata without crashing, in a child process: it
+/// opens the file and reads every group listing, object header, attribute and dataset
+/// description the readers can ask for (and the first element of each dataset), as File does.
+/// A child that dies by a signal, runs out of memory, takes longer than a minute (plus a second
+/// per GB of file) or meets a group, attribute list, object header or chunk index that libhdf5
+/// cannot read makes this fail (DamagedFile) naming the file and the object. A file that
+/// passed is not checked again while it stays the same (device, inode, size and times, and for
+/// a file changed in the last seconds a hash of its bytes). File calls it.
+void checkInChild(const std::string& path);
+
+/// Turns checkInChild on (the default) or off for this process. Only the structure-aware fuzz
+/// targets turn it off: they write well-formed HDF5 with libhdf5 itself for every input, and
+/// a process per input would slow them tenfold.
+void setChildCheck(bool enabled);
+
 /// A read-only HDF5 file. Object paths are absolute ("/level_0/boxes") or relative to the root.
+/// Opening one first runs checkInChild. Every call holds one process-wide lock, so that the
+/// check never forks while another thread is inside libhdf5. Names are looked up in the
+/// listings of their groups and objects (never by asking libhdf5 about a name that may not
+/// exist), and every datatype and dataspace is checked before anything is read or converted.
 class File {
 public:
   explicit File(const std::string& path);
+  ~File();
+  File(const File&) = delete;
+  File& operator=(const File&) = delete;
   const std::string& path() const { return path_; }
 
   /// True when every link on the path exists.
@@ -94,8 +127,13 @@ private:
   Id openObject(const std::string& object) const;
   Id openDataset(const std::string& dataset) const;
   Id openAttribute(const std::string& object, const std::string& name, Id& holder) const;
+  /// Link names of a group (sorted; empty when it is not a group), listed once.
+  const std::vector<std::string>& links(const std::string& group) const;
+  /// Attribute names of an existing object (sorted), listed once.
+  const std::vector<std::string>& attributes(const std::string& object) const;
   std::string path_;
   Id file_;
+  mutable std::map<std::string, std::vector<std::string>> links_, attributes_;
 };
 
 } // namespace exa::h5

@@ -10,6 +10,7 @@
 #include "exabricks/io/hdf5.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
+#include "exabricks/io/units.h"
 #include "exabricks/io/vtk_amr.h"
 
 #include <cmath>
@@ -116,7 +117,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     request.fields = options.fields;
     request.box = options.box;
     request.raw = options.raw;
-    set = findReader(path)->read(path, request);
+    const FormatReader* reader = findReader(path);
+    set = reader->read(path, request);
+    assignConventionalUnits(reader->kind, set);
   }
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   selectFields(set, options.fields, source);
@@ -173,6 +176,7 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
     request.box = readBoxOf(box);
     request.raw = options.raw;
     CellSet set = reader.read(path, request);
+    assignConventionalUnits(reader.kind, set);
     selectFields(set, options.fields, path);
     // Keep the cells inside the part: each cell lies in exactly one.
     keepCells(set, [&](const Cell& c) { return centreInside(c.lower, c.level, box); });
@@ -183,7 +187,10 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
     if (model.fieldNames.empty()) {
       model.world = set.world;
       model.simulation = set.simulation;
-      for (const Field& f : set.fields) model.fieldNames.push_back(f.name);
+      for (const Field& f : set.fields) {
+        model.fieldNames.push_back(f.name);
+        model.fieldUnits.push_back(f.units);
+      }
       values.resize(set.fields.size());
       for (auto& v : values) v.reserve(cells);
     }
@@ -283,6 +290,7 @@ Census loadCensus(const std::string& path, const LoadOptions& options) {
 std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& options, const box3l& part,
                                    int coarsestLevel) {
   const std::string source = path.empty() ? kDefaultDatasetName : path;
+  const box3l reach = shadingReach(part, coarsestLevel);
   if (detectInput(path) == InputKind::Model) {
     // A model file is read whole; its bricks whose supports reach into the part are kept.
     Model all = loadModel(path, options);
@@ -290,10 +298,11 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     m.world = all.world;
     m.simulation = all.simulation;
     m.fieldNames = all.fieldNames;
+    m.fieldUnits = all.fieldUnits;
     std::vector<std::vector<float>> values(all.fieldValues.size());
     uint64_t offset = 0;
     for (const Brick& b : all.bricks) {
-      if (!supportReaches(b.bounds(), b.level, part)) continue;
+      if (!supportReaches(b.bounds(), b.level, reach)) continue;
       Brick kept = b;
       kept.valueOffset = uint32_t(offset);
       for (size_t f = 0; f < all.fieldValues.size(); ++f)
@@ -308,7 +317,7 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     return m;
   }
   CellSet set;
-  const box3i readBox = haloReadBox(part, coarsestLevel);
+  const box3i readBox = haloReadBox(reach, coarsestLevel);
   if (detectInput(path) == InputKind::Default) {
     set = defaultDataset();
   } else {
@@ -316,10 +325,12 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     request.fields = options.fields;
     request.box = readBox;
     request.raw = options.raw;
-    set = findReader(path)->read(path, request);
+    const FormatReader* reader = findReader(path);
+    set = reader->read(path, request);
+    assignConventionalUnits(reader->kind, set);
   }
   selectFields(set, options.fields, source);
-  keepSupportOf(set, part);
+  keepSupportOf(set, reach);
   if (set.cells.empty()) return std::nullopt;
   validateCells(set, source);
   try {

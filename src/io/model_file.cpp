@@ -110,7 +110,10 @@ public:
          std::shared_ptr<const void> keep, bool mapped)
       : path_(path), start_(payload - sizeof(Header)), at_(payload), left_(payloadBytes), version_(version),
         keep_(std::move(keep)), mapped_(mapped) {}
-  void raw(void* data, size_t size, const char* what) { std::memcpy(data, take(size, what), size); }
+  void raw(void* data, size_t size, const char* what) {
+    const char* from = take(size, what);
+    if (size > 0) std::memcpy(data, from, size); // an empty array's data() may be null
+  }
   template <typename T> T value(const char* what) {
     T v;
     raw(&v, sizeof(T), what);
@@ -129,7 +132,7 @@ public:
     if (reinterpret_cast<uintptr_t>(data) % alignof(float) == 0)
       return ValueArray(keep_, reinterpret_cast<const float*>(data), n);
     std::vector<float> v(n);
-    std::memcpy(v.data(), data, n * sizeof(float));
+    if (n > 0) std::memcpy(v.data(), data, n * sizeof(float));
     return ValueArray(std::move(v));
   }
   uint64_t left() const { return left_; }

@@ -36,7 +36,9 @@ std::string modelInfoJson(const Model& model, const std::string& input, double l
   j["levels"] = levels;
   nlohmann::json fields = nlohmann::json::array();
   for (size_t f = 0; f < model.fieldNames.size(); ++f)
-    fields.push_back({{"name", model.fieldNames[f]}, {"range", range(s.fieldRanges[f])}});
+    fields.push_back({{"name", model.fieldNames[f]},
+                      {"units", model.unitsOf(int(f))},
+                      {"range", range(s.fieldRanges[f])}});
   j["fields"] = fields;
   j["memory_bytes"] = {{"bricks", s.brickBytes},
                        {"regions", s.regionBytes},

@@ -2,6 +2,9 @@
 
 #include "exabricks/core/error.h"
 
+#include "checked.h"
+
+#include <algorithm>
 #include <atomic>
 #include <bit>
 #include <cerrno>
@@ -504,6 +507,17 @@ CellSet readGrids(const std::string& path) {
     if (double(n.x) * double(n.y) * double(n.z) + double(set.cells.size()) > double(kMaxGridsCells))
       fail(path, ": line ", lineNo, ": box of ", n.x, "x", n.y, "x", n.z, " cells: a .grids fixture describes at most ",
            kMaxGridsCells, " cells (store larger data as NAME.cells)");
+    {
+      // Room for the line's cells, growing geometrically; running out of memory names the line.
+      const uint64_t add = uint64_t(n.x * n.y * n.z), need = set.cells.size() + add;
+      auto where = [&] { return strCat(path, ": line ", lineNo, ": box of ", n.x, "x", n.y, "x", n.z, " cells"); };
+      if (need > set.cells.capacity()) {
+        const uint64_t room = std::max<uint64_t>(need, std::min<uint64_t>(2 * set.cells.capacity(), kMaxGridsCells));
+        const uint64_t grow = room - set.cells.size();
+        io::reserveMore(set.cells, grow, where);
+        io::reserveMore(field.values, grow, where);
+      }
+    }
     for (int64_t k = 0; k < n.z; ++k)
       for (int64_t j = 0; j < n.y; ++j)
         for (int64_t i = 0; i < n.x; ++i) {

@@ -77,13 +77,12 @@ void Coverage::build(uint32_t node, uint32_t begin, uint32_t end) {
   build(child + 1, mid, end);
 }
 
-std::vector<uint8_t> Coverage::covered(size_t i) const {
+void Coverage::forEachCover(size_t i, const std::function<void(const vec3l&, const vec3l&)>& use) const {
   const Patch& p = patches_[i];
-  std::vector<uint8_t> mask = allocate<uint8_t>(uint64_t(p.cellCount()), [&] { return name_(i); });
   // Only the next finer width decides: the formats nest each level inside the one above, so a
   // deeper patch lies under next-finer patches and may legitimately cut coarse cells.
   const auto next = std::lower_bound(widths_.begin(), widths_.end(), p.width);
-  if (next == widths_.begin()) return mask;
+  if (next == widths_.begin()) return;
   const int64_t coverWidth = *(next - 1);
   const vec3l plo = p.lower, phi = p.upper();
   auto overlaps = [&](const vec3l& lo, const vec3l& hi) {
@@ -108,13 +107,46 @@ std::vector<uint8_t> Coverage::covered(size_t i) const {
         if ((lo[a] - plo[a]) % p.width != 0 || (hi[a] - plo[a]) % p.width != 0)
           fail(name_(items_[k]), " covers only part of a cell of ", name_(i),
                " (finer patches must cover whole coarser cells)");
-      const vec3l clo = (lo - plo) / p.width, chi = (hi - plo) / p.width;
-      for (int64_t z = clo.z; z < chi.z; ++z)
-        for (int64_t y = clo.y; y < chi.y; ++y)
-          std::fill_n(mask.begin() + ((z * p.cells.y + y) * p.cells.x + clo.x), chi.x - clo.x, uint8_t(1));
+      use((lo - plo) / p.width, (hi - plo) / p.width);
     }
   }
+}
+
+std::vector<uint8_t> Coverage::covered(size_t i) const {
+  const Patch& p = patches_[i];
+  std::vector<uint8_t> mask = allocate<uint8_t>(uint64_t(p.cellCount()), [&] { return name_(i); });
+  forEachCover(i, [&](const vec3l& clo, const vec3l& chi) {
+    for (int64_t z = clo.z; z < chi.z; ++z)
+      for (int64_t y = clo.y; y < chi.y; ++y)
+        std::fill_n(mask.begin() + ((z * p.cells.y + y) * p.cells.x + clo.x), chi.x - clo.x, uint8_t(1));
+  });
   return mask;
+}
+
+uint64_t Coverage::leafCount(size_t i) const {
+  const Patch& p = patches_[i];
+  // The covering boxes (in p's cells) and their bounding box: a mask over that box alone.
+  std::vector<std::pair<vec3l, vec3l>> covers;
+  vec3l blo(INT64_MAX), bhi(INT64_MIN);
+  forEachCover(i, [&](const vec3l& clo, const vec3l& chi) {
+    covers.push_back({clo, chi});
+    blo = min(blo, clo);
+    bhi = max(bhi, chi);
+  });
+  const uint64_t all = uint64_t(p.cellCount());
+  if (covers.empty()) return all;
+  if (covers.size() == 1) {
+    const vec3l n = covers[0].second - covers[0].first;
+    return all - uint64_t(n.x * n.y * n.z);
+  }
+  const vec3l n = bhi - blo;
+  std::vector<uint8_t> mask = allocate<uint8_t>(uint64_t(n.x * n.y * n.z), [&] { return name_(i); });
+  for (const auto& [clo, chi] : covers)
+    for (int64_t z = clo.z; z < chi.z; ++z)
+      for (int64_t y = clo.y; y < chi.y; ++y)
+        std::fill_n(mask.begin() + (((z - blo.z) * n.y + (y - blo.y)) * n.x + (clo.x - blo.x)), chi.x - clo.x,
+                    uint8_t(1));
+  return all - uint64_t(std::count(mask.begin(), mask.end(), uint8_t(1)));
 }
 
 void badValue(double value, const std::string& where) {

@@ -46,6 +46,9 @@ public:
   /// One flag per cell of patch i (x fastest): 1 where a patch of the next finer width present
   /// covers the cell. Such a patch covering only part of a cell is an error naming both.
   std::vector<uint8_t> covered(size_t i) const;
+  /// Cells of patch i that no patch of the next finer width covers, without a mask over the
+  /// whole patch (only over the bounding box of its covered parts).
+  uint64_t leafCount(size_t i) const;
 
 private:
   struct Node {
@@ -53,6 +56,9 @@ private:
     uint32_t first, count;    ///< leaf: item range; inner: count == 0, children at first, first+1
   };
   void build(uint32_t node, uint32_t begin, uint32_t end);
+  /// Calls `use(lo, hi)` with each part of patch i that a patch of the next finer width covers,
+  /// in p's cells (exclusive upper).
+  void forEachCover(size_t i, const std::function<void(const vec3l&, const vec3l&)>& use) const;
   std::vector<Patch> patches_;
   std::vector<uint32_t> items_;
   std::vector<Node> nodes_;

@@ -11,6 +11,8 @@ namespace exa {
 namespace {
 
 constexpr int kBins = 256;
+/// The optical depth a ray across the data gathers at the data's mean opacity (exposure).
+constexpr double kExposureDepth = 2.0;
 
 /// Volume-weighted histogram of the normalised value; returns the total volume. For a model
 /// that holds part of the data, only the cells the part owns count, and the parts' histograms
@@ -50,6 +52,27 @@ int medianBin(const std::vector<double>& hist, double total, bool fromHigh) {
     if (cumulative >= 0.5 * total) return bin;
   }
   return fromHigh ? 0 : kBins - 1;
+}
+
+/// The opacity scale of the first picture's exposure (see adaptTransferFunction).
+float exposureScale(const Model& model, int field, const TransferFunction& tf, const DatasetInfo& dataset,
+                    const PartialData* part) {
+  TransferFunction ramp = tf;
+  ramp.opacityScale = 1.f;
+  std::vector<double> hist;
+  const double volume = histogram(model, field, ramp, hist, part);
+  if (!(volume > 0.0)) return dataset.defaultOpacityScale;
+  // Finest cells per lattice unit cubed: the histogram counts lattice volume.
+  const double cellVolume = std::pow(double(dataset.referenceWidth), 3.0);
+  double depth = 0.0, above = 0.0, outer = 0.0;
+  for (int k = kBins - 1; k >= 0; --k) {
+    above += hist[size_t(k)];
+    const double span = std::cbrt(above / cellVolume);
+    depth += double(ramp.atNormalized((float(k) + 0.5f) / kBins).w) * (span - outer);
+    outer = span;
+  }
+  if (!(depth > 0.0)) return dataset.defaultOpacityScale;
+  return float(std::clamp(kExposureDepth / depth, 1e-6, 1.0));
 }
 
 } // namespace
@@ -105,10 +128,10 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
   };
   if (backgroundHigh && tLo > 0.f) {
     tf.valueRange = range1f{range.lower, valueAt(tLo)};
-    tf.opacity = {{0.f, 1.f}, {1.f, 0.f}};
+    tf.opacity = {{0.f, 1.f}, {0.25f, 0.5625f}, {0.5f, 0.25f}, {0.75f, 0.0625f}, {1.f, 0.f}};
   } else if (!backgroundHigh && tHi < 1.f) {
     tf.valueRange = range1f{valueAt(tHi), range.upper};
-    tf.opacity = {{0.f, 0.f}, {1.f, 1.f}};
+    tf.opacity = {{0.f, 0.f}, {0.25f, 0.0625f}, {0.5f, 0.25f}, {0.75f, 0.5625f}, {1.f, 1.f}};
   } else {
     return out;
   }
@@ -116,6 +139,15 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
     tf.valueRange = tfIn.valueRange;
     tf.opacity = tfIn.opacity;
     return out;
+  }
+  // Exposure: the optical depth along a ray from outside the structure to its highest values,
+  // each value's cells taken as one compact blob (the cells at t or above span
+  // (volume at t or above)^(1/3) cells), is kExposureDepth; the structure's top shows the top of
+  // the colour map, seen through what lies around it.
+  if (tfIn.opacityScale == 0.f) {
+    tf.opacityScale = exposureScale(model, field, tf, dataset, part);
+    out.notes.push_back(strCat("exposure: opacity scale ", tf.opacityScale,
+                               " (optical depth ", kExposureDepth, " to the highest values; --opacity-scale to choose)"));
   }
   if (dominant)
     out.notes.push_back(strCat(std::lround(100.0 * share), " % of the volume holds '", name,

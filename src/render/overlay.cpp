@@ -28,13 +28,13 @@ void drawLine(Image& image, double x0, double y0, double x1, double y1, const ve
   }
 }
 
-std::string label(double v) {
+} // namespace
+
+std::string colorBarLabel(double v) {
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
   return buf;
 }
-
-} // namespace
 
 int overlayScale(const Image& image) { return 1 + std::max(0, (std::min(image.width, image.height) - 1) / 400); }
 
@@ -44,13 +44,21 @@ int textWidth(const std::string& text, int scale) {
 }
 
 int drawText(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale) {
-  // stb's easy font: quads of four vertices (x, y, z, colour) per glyph stroke.
-  std::vector<char> buffer(text.size() * 270 + 64);
+  // stb's easy font: quads of four vertices (x, y, z, colour; 16 bytes each) per glyph stroke. It
+  // stops quietly when its buffer is full, so the buffer grows until a pass leaves room for
+  // another quad: then no stroke was dropped.
+  constexpr size_t kQuadBytes = 4 * 16;
   std::string copy = text;
-  const int quads = stb_easy_font_print(0.f, 0.f, copy.data(), nullptr, buffer.data(), int(buffer.size()));
+  std::vector<char> buffer(text.size() * 16 * kQuadBytes + kQuadBytes);
+  int quads = 0;
+  for (;;) {
+    quads = stb_easy_font_print(0.f, 0.f, copy.data(), nullptr, buffer.data(), int(buffer.size()));
+    if (size_t(quads + 1) * kQuadBytes <= buffer.size()) break;
+    buffer.resize(buffer.size() * 2);
+  }
   for (int q = 0; q < quads; ++q) {
-    const float* v = reinterpret_cast<const float*>(buffer.data() + size_t(q) * 4 * 16);
-    const float qx0 = v[0], qy0 = v[1], qx1 = v[8], qy1 = v[9]; // vertices 0 and 2 (16 bytes each)
+    const float* v = reinterpret_cast<const float*>(buffer.data() + size_t(q) * kQuadBytes);
+    const float qx0 = v[0], qy0 = v[1], qx1 = v[8], qy1 = v[9]; // vertices 0 and 2
     fillRect(image, x + int(qx0 * scale), y + int(qy0 * scale), x + int(qx1 * scale), y + int(qy1 * scale), color);
   }
   return textWidth(text, scale);
@@ -90,7 +98,7 @@ void drawColorBar(Image& image, const TransferFunction& tf, const std::string& t
   const int barW = std::max(6, image.width / 40), barH = std::max(20, image.height * 3 / 5);
   const std::vector<double> ticks = colorBarTicks(tf.valueRange, tf.logScale);
   int labelW = 0;
-  for (double t : ticks) labelW = std::max(labelW, textWidth(label(t), s));
+  for (double t : ticks) labelW = std::max(labelW, textWidth(colorBarLabel(t), s));
   const int x1 = image.width - labelW - 6 * s - 4, x0 = x1 - barW;
   const int y0 = (image.height - barH) / 2, y1 = y0 + barH;
   for (int y = y0; y < y1; ++y) {
@@ -106,7 +114,7 @@ void drawColorBar(Image& image, const TransferFunction& tf, const std::string& t
     const float n = tf.normalize(float(t));
     const int y = y1 - int(std::lround(double(n) * barH));
     drawLine(image, x1, y, x1 + 3 * s, y, textColor);
-    drawText(image, x1 + 5 * s, y - 4 * s, label(t), textColor, s);
+    drawText(image, x1 + 5 * s, y - 4 * s, colorBarLabel(t), textColor, s);
   }
   const std::string head = tf.logScale ? title + " (log)" : title;
   drawText(image, std::max(0, x1 - textWidth(head, s)), y0 - 14 * s, head, textColor, s);

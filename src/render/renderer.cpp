@@ -2,6 +2,7 @@
 
 #include "exabricks/amr/basis_batch.h"
 #include "exabricks/amr/cell_locator.h"
+#include "exabricks/amr/gradients.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
@@ -13,7 +14,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 
 namespace exa {
 namespace {
@@ -21,6 +24,12 @@ namespace {
 /// At most this many bricks in the union list of a batch that joins several segments; a segment
 /// whose bricks would make it longer starts a new batch.
 constexpr uint32_t kMaxJoinedBricks = 16;
+
+/// Whether p lies in the closed box b.
+bool insideBox(const box3f& b, const vec3f& p) {
+  return p.x >= b.lower.x && p.x <= b.upper.x && p.y >= b.lower.y && p.y <= b.upper.y && p.z >= b.lower.z &&
+         p.z <= b.upper.z;
+}
 
 /// The union of two ascending lists of brick ids into `out` (kMaxJoinedBricks entries), ascending;
 /// false where it would be longer. Without branches on the ids, which neighbouring regions'
@@ -71,6 +80,7 @@ vec3f defaultIsoColor(int index) {
 struct LayerTable {
   int field = 0;
   FieldView view;
+  std::array<FieldView, 3> grad{}; ///< smooth shading: the field's gradient fields (cellGradients)
   TransferFunction tf;
   std::vector<vec4f> table;
   TfTableView t;
@@ -136,6 +146,7 @@ DatasetInfo DatasetInfo::from(int finestLevel, const box3i& cb, const vec3d& wor
   if (!cb.empty()) d.worldDiagonal = length(vec3d(cb.size()) * worldScale);
   d.valueRanges = std::move(valueRanges);
   const float extentCells = cb.empty() ? 1.f : float(reduceMax(cb.size())) / d.referenceWidth;
+  d.extentCells = extentCells;
   d.defaultOpacityScale = std::min(1.f, 8.f / std::max(1.f, extentCells));
   return d;
 }
@@ -229,6 +240,8 @@ struct Renderer::Impl {
   bool haveScene = false;
 
   std::vector<LayerTable> layers;
+  /// Smooth shading's gradient fields (cellGradients) per model field, built when first needed.
+  std::map<int, std::array<std::vector<float>, 3>> gradientFields;
   std::vector<uint8_t> visible;
   std::unique_ptr<RegionTraversal> traversal;
   std::unique_ptr<CellLocator> locator; ///< only for Reconstruction::CellLocation
@@ -619,6 +632,8 @@ struct Renderer::Impl {
     const ShadingTerms& terms = scene.light.terms;
     const Integration& in = scene.integration;
     const bool wantGrad = !OpacityOnly && shading == Shading::Analytic;
+    // Smooth shading in batches: the gradient fields reconstructed after the lookup.
+    const bool smooth = !OpacityOnly && shading == Shading::Smooth;
     // Batches: one layer reconstructed from its regions (the common case).
     const bool batched = in.vectorized && layerCount == 1 && in.reconstruction == Reconstruction::Regions;
     bool lastHidden = true; // the last batch showed nothing: reconstruct values first
@@ -628,12 +643,12 @@ struct Renderer::Impl {
     if (batched) {
       batchFn = batchFunctions();
       shadeParams.invReferenceWidth = invReferenceWidth;
-      shadeParams.shade = wantGrad;
+      shadeParams.shade = wantGrad || smooth;
       shadeParams.gradientScale = invScale;
       shadeParams.light = light, shadeParams.halfVector = halfVector, shadeParams.terms = terms;
       shadeParams.fadeByValue = fadeByValue(layers[0]);
     }
-    const bool central = shading == Shading::Central || shading == Shading::ClampedCentral;
+    const bool central = shading == Shading::Central;
     // The batch being filled: the samples of one segment, or with joinSegments of several
     // consecutive ones, reconstructed over the union of their regions' brick lists (ascending, so
     // every sample sums its own region's bricks in its region's order; basis_batch.h).
@@ -663,6 +678,7 @@ struct Renderer::Impl {
         return false;
       }
       if (wantGrad && !withGrad) batchFn.sample(layer.view, brickIds, brickCount, batch, true);
+      if (smooth) smoothGradients(layer, brickIds, brickCount, batchFn.sample, batch);
       // Opacity and colour of every sample at once, then the in-order compositing.
       ShadedBatch shaded;
       shadeParams.fadeWidth = fades;
@@ -703,8 +719,7 @@ struct Renderer::Impl {
             const Region& region = model.regions.regions[regionOf[i]];
             const float value = batch.value[i];
             const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
-            const vec3f grad =
-                centralGradient(layer, regionOf[i], region, p, value, shading == Shading::ClampedCentral);
+            const vec3f grad = centralGradient(layer, regionOf[i], region, p, value);
             c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
           }
           r += w * c.x;
@@ -783,8 +798,10 @@ struct Renderer::Impl {
           if (OpacityOnly) continue;
           vec3f c = rgba.rgb();
           if (shading != Shading::None) {
-            if (central)
-              grad = centralGradient(layer, seg.region, region, p, value, shading == Shading::ClampedCentral);
+            if (shading == Shading::Smooth)
+              grad = smoothGradientAt(layer, seg.region, p);
+            else if (central)
+              grad = centralGradient(layer, seg.region, region, p, value);
             c = shadeVolumeSample(c, grad * invScale, light, halfVector, terms, volumeFade(layer, region, value));
           }
           if (layerCount == 1) {
@@ -821,27 +838,68 @@ struct Renderer::Impl {
     return fadeScaleAt(fadeWidth(layer, region), fadeByValue(layer), value);
   }
 
-  /// Central differences over half the region's finest width (the shading baselines); clamped
-  /// to the region's box, or sampled wherever the points fall.
+  /// Builds the gradient fields of every volume layer's field that has none yet and points the
+  /// layers at them; true when one was built.
+  bool attachGradients() {
+    bool built = false;
+    for (LayerTable& layer : layers) {
+      auto it = gradientFields.find(layer.field);
+      if (it == gradientFields.end()) {
+        it = gradientFields.emplace(layer.field, cellGradients(layer.view, model.bricks,
+                                                               model.fieldValues[size_t(layer.field)].size()))
+                 .first;
+        built = true;
+      }
+      for (int a = 0; a < 3; ++a) {
+        layer.grad[size_t(a)] = layer.view;
+        layer.grad[size_t(a)].values = it->second[size_t(a)].data();
+      }
+    }
+    return built;
+  }
+
+  /// Smooth shading's gradient at every sample of a batch: the layer's gradient fields
+  /// reconstructed like its values, from the same bricks (per lattice unit; 0 where none).
+  static void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t count,
+                              SampleBricksBatchFunction sample, SampleBatch& batch) {
+    SampleBatch g;
+    g.count = batch.count;
+    std::copy(std::begin(batch.x), std::end(batch.x), g.x);
+    std::copy(std::begin(batch.y), std::end(batch.y), g.y);
+    std::copy(std::begin(batch.z), std::end(batch.z), g.z);
+    float* const out[3] = {batch.gx, batch.gy, batch.gz};
+    for (int a = 0; a < 3; ++a) {
+      sample(layer.grad[size_t(a)], ids, count, g, false);
+      for (int i = 0; i < batch.count; ++i) out[a][i] = g.valid[i] ? g.value[i] : 0.f;
+    }
+  }
+
+  /// The same at one point of a region.
+  static vec3f smoothGradientAt(const LayerTable& layer, uint32_t regionIndex, const vec3f& p) {
+    vec3f g(0.f);
+    for (int a = 0; a < 3; ++a)
+      if (!sampleRegion(layer.grad[size_t(a)], regionIndex, p, g[a])) g[a] = 0.f;
+    return g;
+  }
+
+  /// Central differences at p over half the region's finest width each way; each point
+  /// reconstructed from the region's bricks where it lies inside the region, else where it
+  /// falls; one-sided where a point has no value.
   vec3f centralGradient(const LayerTable& layer, uint32_t regionIndex, const Region& region, const vec3f& p,
-                        float value, bool clamped) const {
+                        float value) const {
     vec3f grad;
     const float h = 0.5f * region.finestWidth();
     const box3f rb = region.bounds();
+    auto at = [&](const vec3f& q, float& v) {
+      return insideBox(rb, q) ? sampleRegion(layer.view, regionIndex, q, v) : sampleField(layer.view, q, v);
+    };
     for (int ax = 0; ax < 3; ++ax) {
       vec3f pp = p, pm = p;
       pp[ax] += h;
       pm[ax] -= h;
       float vp = value, vm = value;
-      if (clamped) {
-        pp[ax] = std::min(pp[ax], rb.upper[ax]);
-        pm[ax] = std::max(pm[ax], rb.lower[ax]);
-        sampleRegion(layer.view, regionIndex, pp, vp);
-        sampleRegion(layer.view, regionIndex, pm, vm);
-      } else {
-        sampleField(layer.view, pp, vp);
-        sampleField(layer.view, pm, vm);
-      }
+      if (!at(pp, vp)) vp = value, pp[ax] = p[ax];
+      if (!at(pm, vm)) vm = value, pm[ax] = p[ax];
       const float span = pp[ax] - pm[ax];
       grad[ax] = span > 0.f ? (vp - vm) / span : 0.f;
     }
@@ -989,6 +1047,10 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     Timer t;
     im.updateVolume(s, fields);
     u.volumeSeconds = t.seconds();
+  }
+  if (s.shading == Shading::Smooth) {
+    Timer t;
+    if (im.attachGradients()) u.volumeSeconds += t.seconds();
   }
   if (u.iso) {
     Timer t;

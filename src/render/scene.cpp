@@ -86,7 +86,7 @@ const char* shadingName(Shading s) {
   switch (s) {
   case Shading::Analytic: return "analytic";
   case Shading::Central: return "central";
-  case Shading::ClampedCentral: return "clamped";
+  case Shading::Smooth: return "smooth";
   case Shading::None: return "none";
   }
   return "analytic";
@@ -465,7 +465,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   }
   r.choice<Shading>("shading", s.shading,
                     {{"analytic", Shading::Analytic}, {"central", Shading::Central},
-                     {"clamped", Shading::ClampedCentral}, {"none", Shading::None}});
+                     {"smooth", Shading::Smooth}, {"none", Shading::None}, {"clamped", Shading::Smooth}});
   if (r.find("ambient_occlusion")) {
     const Reader c = r.child("ambient_occlusion");
     c.only({"rays", "length", "volume"});

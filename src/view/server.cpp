@@ -5,6 +5,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
 #include "exabricks/io/image.h"
+#include "exabricks/render/defaults.h"
 #include "exabricks/render/transfer_function.h"
 
 #include "session.h"
@@ -15,9 +16,13 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <netdb.h>
 #include <random>
+#include <sys/socket.h>
+#include <unistd.h>
 
 namespace exa::view {
 
@@ -73,6 +78,44 @@ double numberParam(const httplib::Request& req, const char* name, double fallbac
   return v;
 }
 
+/// The listening socket's options: SO_REUSEADDR only (a restarted viewer binds its port while
+/// old connections linger), never SO_REUSEPORT, which would let a second server bind the same
+/// port and share its connections.
+void listenSocketOptions(int sock) {
+  int yes = 1;
+  setsockopt(sock, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
+}
+
+/// Why host:port cannot be bound, found by binding a probe socket the same way: the errno of
+/// the failed bind (0 when the probe binds, -1 when the address does not resolve) and its text.
+std::pair<int, std::string> bindProblem(const std::string& host, int port) {
+  addrinfo hints{};
+  hints.ai_family = AF_UNSPEC;
+  hints.ai_socktype = SOCK_STREAM;
+  hints.ai_flags = AI_PASSIVE;
+  addrinfo* found = nullptr;
+  if (const int rc = getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found); rc != 0)
+    return {-1, strCat("cannot resolve the address: ", gai_strerror(rc))};
+  std::pair<int, std::string> problem{0, ""};
+  for (addrinfo* a = found; a; a = a->ai_next) {
+    const int sock = ::socket(a->ai_family, a->ai_socktype, a->ai_protocol);
+    if (sock < 0) {
+      problem = {errno, std::strerror(errno)};
+      continue;
+    }
+    listenSocketOptions(sock);
+    const bool bound = ::bind(sock, a->ai_addr, a->ai_addrlen) == 0;
+    if (!bound) problem = {errno, std::strerror(errno)};
+    ::close(sock);
+    if (bound) {
+      problem = {0, ""};
+      break;
+    }
+  }
+  freeaddrinfo(found);
+  return problem;
+}
+
 json rangeJson(const range1f& r) {
   if (r.empty()) return json::array({nullptr, nullptr});
   return json::array({r.lower, r.upper});
@@ -87,6 +130,7 @@ struct Server::Impl {
   httplib::Server http;
   std::unique_ptr<Session> session;
   std::atomic<int> streams{0};
+  std::atomic<int> snapshotWaits{0};
   std::atomic<bool> stopping{false};
   int port = 0;
 
@@ -348,14 +392,51 @@ void Server::Impl::routes() {
         [this](bool) { streams.fetch_sub(1); });
   });
 
-  http.Get("/api/snapshot.png", [this](const httplib::Request&, httplib::Response& res) {
-    const Session::Snapshot s = session->snapshot();
-    if (!s.image) reject(404, "no full-resolution image yet");
+  // The full-resolution image, losslessly: the latest one, or (with request=N, as the page's Save
+  // PNG asks) request N's once it is refined to its samples per pixel.
+  http.Get("/api/snapshot.png", [this](const httplib::Request& req, httplib::Response& res) {
+    Session::Snapshot s;
+    if (req.has_param("request")) {
+      const double id = numberParam(req, "request", 0);
+      if (!(id >= 1 && id == std::floor(id) && id < 9.0e15)) reject(400, "snapshot: request must be a request number");
+      if (snapshotWaits.fetch_add(1) >= 2) {
+        snapshotWaits.fetch_sub(1);
+        reject(429, "snapshot: two saves are already waiting for their images");
+      }
+      const Session::Wait wait = session->waitSnapshot(uint64_t(id), 600 * 1000, s);
+      snapshotWaits.fetch_sub(1);
+      switch (wait) {
+      case Session::Wait::Ready: break;
+      case Session::Wait::Superseded: reject(409, "the view changed before its image was refined: save again");
+      case Session::Wait::Draft: reject(409, "the view is still being dragged: it has no full-resolution image yet");
+      case Session::Wait::Failed: reject(409, "the view could not be rendered (see the error shown)");
+      case Session::Wait::Unknown: reject(404, strCat("snapshot: no request ", uint64_t(id)));
+      case Session::Wait::TimedOut: reject(503, "the image is still refining after 10 minutes: save again later");
+      case Session::Wait::Stopped: reject(503, "the viewer is stopping");
+      }
+    } else {
+      s = session->snapshot();
+      if (!s.image) reject(404, "no full-resolution image yet");
+    }
     const std::vector<unsigned char> png = encodePng(*s.image, s.keepAlpha, s.background);
     res.set_header("X-Exabricks-Request", std::to_string(s.request));
     res.set_header("X-Exabricks-Passes", std::to_string(s.passes));
     res.set_header("Cache-Control", "no-store");
     res.set_content(std::string(png.begin(), png.end()), "image/png");
+  });
+
+  // The first picture's transfer function for a field (docs/rendering.md, "The first picture"):
+  // what the page adopts when the user switches fields, so that the new field gets its own
+  // mapping, range and opacity instead of the old field's.
+  http.Get("/api/first-picture", [this](const httplib::Request& req, httplib::Response& res) {
+    const Model& model = *content.model;
+    if (!req.has_param("field")) reject(400, "first-picture: parameter 'field' is missing");
+    const std::string name = req.get_param_value("field");
+    const int field = model.fieldIndex(name);
+    if (field < 0) reject(400, strCat("first-picture: unknown field '", name, "'"));
+    const DefaultChoices c =
+        adaptTransferFunction(model, content.dataset, field, defaultTransferFunction(), true, true);
+    sendJson(res, {{"field", name}, {"transfer_function", json::parse(transferFunctionJson(c.tf))}, {"notes", c.notes}});
   });
 
   // The scene in effect, in the form `exabricks render --scene` reads.
@@ -410,6 +491,7 @@ void Server::bind() {
   s.http.set_write_timeout(10, 0);
   s.http.set_keep_alive_timeout(1); // idle connections close soon, so that stopping is quick
   s.http.set_tcp_nodelay(true);
+  s.http.set_socket_options(listenSocketOptions);
   // Streams hold a worker each; leave room for the API requests beside them.
   const size_t workers = size_t(std::max(4, s.options.maxStreams + 4));
   s.http.new_task_queue = [workers] { return new httplib::ThreadPool(workers); };
@@ -418,13 +500,26 @@ void Server::bind() {
     s.port = s.http.bind_to_any_port(s.options.host);
     if (s.port < 0) fail("viewer: cannot listen on ", s.options.host, " (any port)");
   } else {
-    if (!s.http.bind_to_port(s.options.host, s.options.port))
+    if (!s.http.bind_to_port(s.options.host, s.options.port)) {
+      checkListenAddress(s.options.host, s.options.port);
       fail("viewer: cannot listen on ", s.options.host, " port ", s.options.port,
-           " (in use, or not an address of this machine; --port 0 picks a free port)");
+           " (is it an address of this machine? --port 0 picks a free port)");
+    }
     s.port = s.options.port;
   }
   s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options);
   s.session->submit(s.content.initial, false); // the first picture renders while the page loads
+}
+
+void checkListenAddress(const std::string& host, int port) {
+  if (port == 0) return;
+  const auto [code, why] = bindProblem(host, port);
+  if (code == EADDRINUSE)
+    fail("viewer: cannot listen on ", host, " port ", port, ": the port is in use (another viewer or server ",
+         "listens there); choose another with --port N, or --port 0 for any free port");
+  if (code != 0)
+    fail("viewer: cannot listen on ", host, " port ", port, ": ", why,
+         " (is it an address of this machine? --port 0 picks a free port)");
 }
 
 int Server::port() const { return impl_->port; }

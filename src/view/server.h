@@ -68,6 +68,11 @@ struct FrameInfo {
   size_t visibleRegions = 0, regions = 0;
 };
 
+/// Throws exa::Error saying why the viewer could not listen on host:port (in use by another
+/// server, or not an address of this machine); returns when a socket binds there now. A viewer
+/// checks before it loads its dataset, so that a taken port is refused at once.
+void checkListenAddress(const std::string& host, int port);
+
 class Server {
 public:
   Server(ViewContent content, ServerOptions options);

@@ -67,9 +67,11 @@ uint64_t Session::submit(const SceneDocument& doc, bool interactive) {
   r.interactive = interactive;
   r.accepted = std::chrono::steady_clock::now();
   currentDoc_ = doc;
+  newestInteractive_ = interactive;
   pending_ = std::move(r);
   cancel_ = true; // the pass in flight stops before its next tile
   requestReady_.notify_all();
+  frameReady_.notify_all(); // a wait for an older request's image ends now
   return newest_;
 }
 
@@ -89,6 +91,24 @@ std::shared_ptr<const PublishedFrame> Session::waitFrame(uint64_t afterSequence,
 Session::Snapshot Session::snapshot() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return snapshot_;
+}
+
+Session::Wait Session::waitSnapshot(uint64_t id, int timeoutMs, Snapshot& out) const {
+  std::unique_lock<std::mutex> lock(mutex_);
+  auto complete = [&] { return snapshot_.image && snapshot_.request == id && snapshot_.passes >= snapshot_.targetPasses; };
+  if (id == 0 || id > newest_) return Wait::Unknown;
+  std::optional<Wait> answer;
+  const bool inTime = frameReady_.wait_for(lock, std::chrono::milliseconds(timeoutMs), [&] {
+    if (complete()) answer = Wait::Ready;
+    else if (stopping_) answer = Wait::Stopped;
+    else if (failed_ == id) answer = Wait::Failed;
+    else if (id != newest_) answer = Wait::Superseded;
+    else if (newestInteractive_) answer = Wait::Draft;
+    return answer.has_value();
+  });
+  if (!inTime) return Wait::TimedOut;
+  if (*answer == Wait::Ready) out = snapshot_;
+  return *answer;
 }
 
 std::optional<SceneDocument> Session::current() const {
@@ -202,6 +222,7 @@ void Session::publishError(const Request& request, const std::string& message) {
   frame->error = message;
   std::lock_guard<std::mutex> lock(mutex_);
   if (stopping_ || request.id != newest_) return;
+  failed_ = request.id;
   frame->info.request = request.id;
   frame->info.sequence = ++sequence_;
   frame->info.sinceRequest = secondsSince(request.accepted);

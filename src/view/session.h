@@ -44,6 +44,10 @@ public:
     bool keepAlpha = false;
   };
   Snapshot snapshot() const;
+  /// Waits until request `id` has its full-resolution image refined to the frame's samples per
+  /// pixel (what Save PNG saves: the view on screen once refined), or `timeoutMs` passes.
+  enum class Wait { Ready, Superseded, Draft, Failed, Unknown, TimedOut, Stopped };
+  Wait waitSnapshot(uint64_t id, int timeoutMs, Snapshot& out) const;
   /// The document of the newest request (empty before the first).
   std::optional<SceneDocument> current() const;
   void stop();
@@ -65,9 +69,11 @@ private:
   Renderer renderer_;
   ServerOptions options_;
   mutable std::mutex mutex_;
-  std::condition_variable requestReady_, frameReady_;
+  mutable std::condition_variable requestReady_, frameReady_;
   std::optional<Request> pending_;      ///< newest request not yet taken by the render thread
   uint64_t newest_ = 0;                 ///< number of the newest accepted request
+  bool newestInteractive_ = false;      ///< it asked for a draft only (the user is dragging)
+  uint64_t failed_ = 0;                 ///< the newest request that ended in an error
   std::optional<SceneDocument> currentDoc_;
   std::atomic<bool> cancel_{false};
   bool stopping_ = false;

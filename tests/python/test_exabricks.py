@@ -4,6 +4,7 @@ import json
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -317,3 +318,39 @@ def test_widget_renders_a_preview_then_refines():
     w.azimuth.value = 120.0
     assert w.wait().shape == (48, 64, 4)
     assert s.stats()["passes"] == 3
+
+
+@pytest.mark.parametrize("script", [
+    # A widget refining in its background thread when the interpreter exits.
+    "import exabricks as eb\ns = eb.Scene(eb.load())\nw = s.widget(width=512, height=512, passes=64)\n",
+    # Any daemon thread rendering when the interpreter exits.
+    "import threading, time, exabricks as eb\ns = eb.Scene(eb.load(), width=1024, height=1024)\n"
+    "threading.Thread(target=lambda: s.render(spp=64), daemon=True).start()\ntime.sleep(0.3)\n",
+])
+def test_leaving_the_interpreter_while_rendering_exits_cleanly(script):
+    if "widget" in script:
+        pytest.importorskip("ipywidgets", reason="ipywidgets is not installed (Debian: python3-ipywidgets)")
+    for _ in range(3):
+        r = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120)
+        assert r.returncode == 0, (r.returncode, r.stderr)
+        assert "terminate" not in r.stderr
+
+
+def test_from_yt_without_fields_takes_the_mesh_field_the_command_line_would():
+    yt = pytest.importorskip("yt", reason="yt is not installed (Debian: python3-yt)")
+    yt.set_log_level(50)
+    # Particles beside the grid: yt lists the particle fields first.
+    rng = np.random.default_rng(3)
+    n = 50
+    data = {"density": (rng.uniform(0.5, 1.5, (8, 8, 8)), "g/cm**3"),
+            "particle_position_x": (rng.uniform(0, 1, n), "cm"), "particle_position_y": (rng.uniform(0, 1, n), "cm"),
+            "particle_position_z": (rng.uniform(0, 1, n), "cm"), "particle_mass": (np.ones(n), "g")}
+    stream = yt.load_uniform_grid(data, (8, 8, 8), length_unit="cm", bbox=np.array([[0.0, 1.0]] * 3))
+    assert stream.field_list[0][0] in stream.particle_types  # what the first field used to be
+    ds = eb.from_yt(stream)
+    assert ds.fields == ["density"] and ds.cells == 512
+    # An AMReX plotfile with many fields: the one the command line takes by default.
+    path = shared("amrex/pelelm_3lev_3d/example_plt_3d")
+    plotfile = yt.load(str(path))
+    ds = eb.from_yt(plotfile)
+    assert ds.fields == [eb.load(path).default_field] == ["density"]

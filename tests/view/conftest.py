@@ -132,3 +132,18 @@ def cli():
 def artifacts():
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     return ARTIFACTS
+
+
+@pytest.fixture
+def flow_dataset(cli, tmp_path):
+    """The default dataset written as files (flow.cells) with a third field, 'velocity', of both
+    signs and large values (about -1.3e7 to 2.5e7): what a log mapping or a narrow box cannot show."""
+    import numpy as np
+
+    folder = tmp_path / "data"
+    folder.mkdir()
+    path = folder / "flow.cells"
+    subprocess.run([cli, "-q", "convert", "-o", str(path)], check=True, capture_output=True)
+    scalar = np.fromfile(folder / "flow.scalars", dtype="<f4")
+    ((scalar - 0.5) * 2.6e7).astype("<f4").tofile(folder / "flow.velocity.scalars")
+    return path

@@ -227,3 +227,69 @@ def test_port_in_use_is_a_clear_error(cli):
         r = subprocess.run([cli, "view", "--port", str(port)], capture_output=True, text=True, timeout=60)
     assert r.returncode == 1
     assert "cannot listen" in r.stderr and str(port) in r.stderr
+
+
+def test_a_second_viewer_on_the_same_port_is_refused(start_viewer, cli):
+    v = start_viewer()
+    t = time.time()
+    r = subprocess.run([cli, "view", "--port", str(v.port)], capture_output=True, text=True, timeout=60)
+    assert r.returncode != 0, r.stderr
+    assert "port %d" % v.port in r.stderr and "in use" in r.stderr, r.stderr
+    assert "viewing" not in r.stderr  # refused before loading and serving
+    assert time.time() - t < 20
+    # The first viewer still answers every request (none went to a second server).
+    for _ in range(20):
+        status, _, _ = v.request("GET", "/api/info")
+        assert status == 200
+
+
+def test_the_page_names_the_dataset_and_the_hint_names_this_host(start_viewer, flow_dataset):
+    v = start_viewer(str(flow_dataset.resolve()))
+    info = v.info()
+    assert info["name"] == "flow.cells"
+    assert info["input"] == str(flow_dataset.resolve())
+    text = v.stderr_path.read_text()
+    assert "ssh -L %d:localhost:%d %s," % (v.port, v.port, socket.gethostname()) in text, text
+    assert "THIS_HOST" not in text
+
+
+def test_save_waits_for_the_view_on_screen_to_refine(start_viewer, cli, tmp_path):
+    v = start_viewer()
+    first = v.render(small_scene(v))
+    v.wait_final(first)
+    # A second view, still refining when the save is asked for: the save gets that view, refined.
+    doc = small_scene(v, width=96, height=96, samples_per_pixel=40)
+    doc["camera"]["position"] = [p + 30 for p in doc["camera"]["position"]]
+    second = v.render(doc)
+    status, png, headers = v.request("GET", "/api/snapshot.png?request=%d" % second, timeout=120)
+    assert status == 200, png[:300]
+    assert headers["X-Exabricks-Request"] == str(second) and headers["X-Exabricks-Passes"] == "40"
+    assert png == cli_png(cli, tmp_path, doc)
+    # An older view is gone once a newer one was asked for; unknown requests and drafts are refused.
+    status, body, _ = v.request("GET", "/api/snapshot.png?request=%d" % first)
+    assert status == 409 and b"changed" in body
+    status, body, _ = v.request("GET", "/api/snapshot.png?request=%d" % (second + 5))
+    assert status == 404
+    draft = v.render(small_scene(v), interactive=True)
+    status, body, _ = v.request("GET", "/api/snapshot.png?request=%d" % draft)
+    assert status == 409 and b"dragged" in body
+    status, body, _ = v.request("GET", "/api/snapshot.png?request=abc")
+    assert status == 400
+
+
+def test_first_picture_of_a_field_is_the_command_lines(start_viewer, cli, flow_dataset, tmp_path):
+    v = start_viewer(str(flow_dataset), "--log")
+    for field in ["velocity", "radius", "scalar"]:
+        chosen = v.json("GET", "/api/first-picture?field=" + field)
+        scene = tmp_path / ("first-%s.json" % field)
+        subprocess.run([cli, "-q", "render", str(flow_dataset), "-f", field, "--size", "8x8", "-o",
+                        str(tmp_path / "first.png"), "--write-scene", str(scene)], check=True, capture_output=True)
+        expected = json.loads(scene.read_text())["layers"][0]["transfer_function"]
+        got = chosen["transfer_function"]
+        assert got["log"] == expected["log"] and got["opacity"] == expected["opacity"], (field, got, expected)
+        assert got.get("range") == pytest.approx(expected.get("range")), (field, got, expected)
+        assert got["opacity_scale"] == expected["opacity_scale"]
+    velocity = v.json("GET", "/api/first-picture?field=velocity")["transfer_function"]
+    assert velocity["log"] is False  # negative values: never logarithmic, whatever the first view used
+    status, body, _ = v.request("GET", "/api/first-picture?field=nosuch")
+    assert status == 400 and b"nosuch" in body

@@ -1,7 +1,9 @@
 """The viewer in a real browser (Debian's headless Chromium driven by Selenium): the page shows the
 data, orbiting and editing the transfer function and an iso-value change the image, and once
-refined the displayed image matches the command line's render of the scene the page saves.
-Screenshots are kept in the test-artifacts folder."""
+refined the displayed image matches the command line's render of the scene the page saves; a new
+field gets its own first picture, range boxes show their numbers whole, Save PNG saves the view on
+screen, and errors (a stopped server among them) show over the image. Screenshots are kept in the
+test-artifacts folder."""
 import base64
 import json
 import os
@@ -17,6 +19,8 @@ from selenium import webdriver  # noqa: E402
 from selenium.webdriver.chrome.service import Service  # noqa: E402
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
 from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.common.keys import Keys  # noqa: E402
+from selenium.webdriver.support.ui import Select  # noqa: E402
 
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
 DRIVER = shutil.which("chromedriver") or "/usr/bin/chromedriver"
@@ -115,20 +119,23 @@ def test_orbit_edit_and_refine_match_the_command_line(start_viewer, cli, browser
     assert np.abs(after_orbit.astype(int) - before.astype(int)).mean() > 1.0, "orbiting did not change the image"
     browser.save_screenshot(str(artifacts / "viewer-2-orbited.png"))
 
-    # Move an opacity point: the last point of the curve, dragged down.
+    # Move an opacity point: the middle point of the curve, dragged down.
     editor = browser.find_element(By.ID, "tf-editor")
     points = browser.execute_script("return window.exabricksViewer.doc.layers[0].transfer_function.opacity")
-    last = points[-1]
+    k = len(points) // 2
+    last = points[k]
     width, height = editor.size["width"], editor.size["height"]
     x = 4 + last[0] * (300 - 8)
     y = 4 + (1 - last[1]) * (130 - 12 - 8)
     ActionChains(browser).move_to_element_with_offset(editor, x * width / 300 - width / 2, y * height / 130 - height / 2) \
         .click_and_hold().move_by_offset(0, 25).move_by_offset(0, 25).release().perform()
     moved = browser.execute_script("return window.exabricksViewer.doc.layers[0].transfer_function.opacity")
-    assert moved[-1][1] < last[1] - 0.1, (last, moved)
+    assert moved[k][1] < last[1] - 0.1, (last, moved)
     edited = wait_refined(browser, orbited["request"])
     after_tf = canvas_pixels(browser)
-    assert np.abs(after_tf.astype(int) - after_orbit.astype(int)).mean() > 0.5, "the opacity edit changed nothing"
+    shown = np.maximum(after_tf.max(axis=-1), after_orbit.max(axis=-1)) > 8
+    change = np.abs(after_tf.astype(int) - after_orbit.astype(int)).max(axis=-1)
+    assert change[shown].mean() > 1.0 and change.max() > 20, "the opacity edit changed nothing"
 
     # Add an iso-surface and drag its value.
     browser.find_element(By.ID, "iso-add").click()
@@ -167,3 +174,100 @@ def test_orbit_edit_and_refine_match_the_command_line(start_viewer, cli, browser
     assert status == 200 and png == out_png.read_bytes()
     errors = browser.execute_script("return window.exabricksViewer.metrics.errors")
     assert errors == []
+
+
+def transfer_function(driver):
+    return driver.execute_script("return window.exabricksViewer.doc.layers[0].transfer_function")
+
+
+def test_a_new_field_gets_its_own_first_picture(start_viewer, browser, flow_dataset, artifacts):
+    # The first view maps 'scalar' logarithmically (--log); 'velocity' has negative values, which a
+    # log mapping would hide, so switching to it must choose its own mapping, range and opacity.
+    v = start_viewer(str(flow_dataset.resolve()), "--log")
+    browser.get(v.url + "&size=%d" % SIZE)
+    first = wait_refined(browser)
+    assert browser.title.startswith("flow.cells"), browser.title
+    assert browser.find_element(By.ID, "dataset-name").text == "flow.cells"
+    assert transfer_function(browser)["log"] is True
+    Select(browser.find_element(By.ID, "field")).select_by_value("velocity")
+    wait_for(browser, lambda: transfer_function(browser).get("log") is False, 20, "the new field's mapping")
+    wait_refined(browser, first["request"])
+    chosen = v.json("GET", "/api/first-picture?field=velocity")["transfer_function"]
+    tf = transfer_function(browser)
+    assert tf["range"] == pytest.approx(chosen["range"]) and tf["opacity"] == chosen["opacity"], (tf, chosen)
+    assert tf["opacity_scale"] == chosen["opacity_scale"]
+    assert canvas_pixels(browser).max() > 40, "the velocities do not show"
+    note = browser.find_element(By.ID, "field-note")
+    assert note.is_displayed() and "velocity" in note.text
+    browser.save_screenshot(str(artifacts / "viewer-4-new-field.png"))
+    # The range boxes show the whole number (or scientific notation) inside the box.
+    for box, value in zip(["range-lo", "range-hi"], tf["range"]):
+        text, fits = browser.execute_script(
+            "const e = document.getElementById(arguments[0]);"
+            "const c = document.createElement('canvas').getContext('2d'); const s = getComputedStyle(e);"
+            "c.font = s.fontStyle + ' ' + s.fontWeight + ' ' + s.fontSize + ' ' + s.fontFamily;"
+            "const room = e.clientWidth - parseFloat(s.paddingLeft) - parseFloat(s.paddingRight);"
+            "return [e.value, e.type === 'text' && c.measureText(e.value).width <= room];", box)
+        assert fits, (box, text)
+        assert float(text) == pytest.approx(value, rel=1e-4), (box, text, value)
+    # A number typed in full is taken exactly, and shown so that it fits.
+    hi = browser.find_element(By.ID, "range-hi")
+    hi.send_keys(Keys.CONTROL, "a")  # the modifier is released at the end of the call
+    hi.send_keys("13222500", Keys.ENTER)
+    wait_for(browser, lambda: transfer_function(browser)["range"][1] == 13222500, 10, "the typed range")
+    browser.find_element(By.ID, "image").click()  # the box loses the focus
+    shown = hi.get_attribute("value")
+    assert float(shown) == pytest.approx(13222500, rel=1e-5), shown
+    assert browser.execute_script("return window.exabricksViewer.metrics.errors") == []
+
+
+def test_save_png_saves_the_view_on_screen(start_viewer, cli, browser, tmp_path):
+    v = start_viewer("--spp", "48")
+    browser.get(v.url + "&size=%d" % SIZE)
+    first = wait_refined(browser)
+    canvas = browser.find_element(By.ID, "image")
+    ActionChains(browser).move_to_element(canvas).click_and_hold().move_by_offset(60, 0).move_by_offset(30, 20) \
+        .release().perform()
+    # Save at once, while the new view refines: the file is the new view, refined.
+    browser.find_element(By.ID, "save-image").click()
+    at_click = latest(browser)
+    assert not (at_click["final"] and at_click["request"] > first["request"]), "refinement ended before the click"
+    saved_png = tmp_path / "downloads" / "exabricks.png"
+    wait_for(browser, saved_png.exists, 120, "the saved PNG")
+    time.sleep(0.3)
+    browser.find_element(By.ID, "save-scene").click()
+    saved_scene = tmp_path / "downloads" / "scene.json"
+    wait_for(browser, saved_scene.exists, 20, "the saved scene")
+    time.sleep(0.2)
+    out = tmp_path / "cli.png"
+    subprocess.run([cli, "render", "--scene", str(saved_scene), "-o", str(out)], check=True, capture_output=True)
+    assert saved_png.read_bytes() == out.read_bytes(), "Save PNG did not save the view on screen"
+    assert browser.execute_script("return window.exabricksViewer.metrics.saved")[0] > first["request"]
+
+
+def test_errors_show_over_the_image_and_a_stopped_server_says_so(start_viewer, browser, artifacts):
+    v = start_viewer()
+    browser.get(v.url + "&size=%d" % SIZE)
+    wait_refined(browser)
+
+    def banner_in_view():
+        return browser.execute_script(
+            "const b = document.getElementById('banner'); if (b.hidden) return null;"
+            "const r = b.getBoundingClientRect(), v = document.getElementById('view').getBoundingClientRect();"
+            "return [b.textContent, r.top >= v.top && r.bottom <= v.bottom && r.left >= v.left && r.right <= v.right"
+            "  && r.bottom <= window.innerHeight && r.height > 0];")
+
+    lo = browser.find_element(By.ID, "range-lo")
+    lo.clear()
+    lo.send_keys("abc" + Keys.ENTER)
+    text, placed = wait_for(browser, banner_in_view, 10, "the error banner")
+    assert "two numbers" in text and placed, (text, placed)
+    browser.save_screenshot(str(artifacts / "viewer-5-error.png"))
+    browser.find_element(By.ID, "banner-close").click()
+    assert banner_in_view() is None
+
+    assert v.stop() == 0
+    text, placed = wait_for(browser, lambda: (banner_in_view() or ["", False])[0] and banner_in_view(), 20,
+                            "the stopped-server banner")
+    assert "stopped" in text and placed, text
+    browser.save_screenshot(str(artifacts / "viewer-6-stopped.png"))

@@ -39,6 +39,7 @@ inline bool cellOverlaps(const Cell& c, const box3i& box) {
 struct Field {
   std::string name;
   std::vector<float> values;
+  std::string units; ///< as the file or its format states them; empty where unknown
 };
 
 /// A set of leaf cells with fields and world placement.

@@ -57,12 +57,15 @@ struct Model {
   SimulationState simulation; ///< from the reader (not stored in model files)
   std::vector<Brick> bricks;
   std::vector<std::string> fieldNames;
+  std::vector<std::string> fieldUnits; ///< per field, empty where unknown (not stored in model files)
   std::vector<ValueArray> fieldValues; ///< per field, brick-ordered values
   RegionSet regions;
   BuildStats stats;
 
   uint64_t cellCount() const;
   int fieldIndex(const std::string& name) const;
+  /// The field's units, empty where unknown.
+  std::string unitsOf(int field) const;
   /// Index of `name`; when `name` is empty, the default field: "scalar", "Density", "density",
   /// "dens" or "rho" (the first present), else the first in file order. Throws when the field is
   /// unknown.

@@ -89,6 +89,11 @@ template <typename Visit> void forCellsCentredIn(const Brick& b, const box3l& bo
         if (centreInside(b.lower + vec3i(x, y, z) * w, b.level, box)) visit(slot);
 }
 
+/// The part grown by two coarsest cell widths: smooth shading's gradient at a cell whose support
+/// reaches the part differences the reconstruction one cell width beyond the cell's centre, so a
+/// part's renderer holds the cells whose support reaches this box.
+box3l shadingReach(const box3l& part, int coarsestLevel);
+
 /// The box a reader must return cells of for a part: every cell whose support reaches into the
 /// part overlaps it (the part grown by the coarsest width, clamped to the lattice range).
 box3i haloReadBox(const box3l& part, int coarsestLevel);

@@ -45,7 +45,8 @@ std::vector<std::string> listFields(const std::string& path);
 Census loadCensus(const std::string& path, const LoadOptions& options = {});
 
 /// The share of a dataset one process renders in data-parallel mode: every cell whose basis
-/// support reaches into the lattice box `part` (the part and its halo; readers that take a box
+/// support reaches into the lattice box `part` grown by shadingReach (the part and its halo,
+/// wide enough for smooth shading at the part's faces; readers that take a box
 /// read little more), built into a model; none when no cell reaches it. Model files are read
 /// whole and their bricks that reach the part kept.
 std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& options, const box3l& part,

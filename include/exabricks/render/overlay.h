@@ -23,6 +23,9 @@ int textWidth(const std::string& text, int scale);
 /// decades (every n-th when there are many) for logarithmic mapping.
 std::vector<double> colorBarTicks(const range1f& range, bool logScale);
 
+/// The text drawn beside a colour-bar tick at value v (three significant digits).
+std::string colorBarLabel(double v);
+
 /// A vertical colour bar at the right edge: the colour map over the transfer function's value
 /// range (which must be set), ticks with their values, and `title` above it (the field name).
 void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor);

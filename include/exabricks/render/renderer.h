@@ -36,6 +36,7 @@ struct DatasetInfo {
   float referenceWidth = 1.f;        ///< lattice units: opacity is per this width; fixed steps use it
   double worldDiagonal = 1.0;        ///< default ambient-occlusion length is a tenth of it
   std::vector<range1f> valueRanges;  ///< per field: the default transfer-function range
+  float extentCells = 1.f;           ///< the data's longest side in finest cells
   float defaultOpacityScale = 1.f;   ///< a ray through the whole data gathers an optical depth of ~8
 
   static DatasetInfo of(const Model& model);

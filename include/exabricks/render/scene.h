@@ -16,7 +16,14 @@
 
 namespace exa {
 
-enum class Shading { Analytic, Central, ClampedCentral, None };
+/// How volume samples get the normal they are lit with. Smooth (the default): a gradient field
+/// reconstructed like the values, from per-cell central differences of the reconstruction one
+/// cell width each way (amr/gradients.h). The basis interpolant has kinks at cell centres and
+/// support faces, so its exact gradient jumps there and, lit, draws the cell lattice; the
+/// reconstructed gradient field is continuous. Analytic: that exact gradient (cheaper). Central:
+/// central differences half the region's finest width each way, at every sample. None: unlit.
+/// ("clamped", an earlier name, reads as Smooth.)
+enum class Shading { Analytic, Central, Smooth, None };
 enum class DebugView { None, Level, Brick, Region, Steps };
 /// How samples are placed: adaptive (per region, half its finest cell width) or fixed (half
 /// the dataset's finest cell width everywhere).
@@ -115,7 +122,7 @@ struct Scene {
   std::vector<SceneMesh> meshes;
   Clipping clip;
   Light light;
-  Shading shading = Shading::Analytic;
+  Shading shading = Shading::Smooth;
   AmbientOcclusion ao;
   Integration integration;
   DebugView debug = DebugView::None;

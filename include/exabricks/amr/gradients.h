@@ -1,0 +1,22 @@
+// Gradient fields for smooth shading: per cell, the gradient of the basis reconstruction at the
+// cell's centre by central differences one cell width each way. Reconstructed with the basis
+// like a field's values, they give a gradient that is continuous where the reconstruction's
+// exact gradient jumps (at cell centres and support faces), so lighting by it does not draw the
+// cells.
+#pragma once
+
+#include "exabricks/amr/basis.h"
+#include "exabricks/amr/bricks.h"
+
+#include <array>
+#include <vector>
+
+namespace exa {
+
+/// The x, y and z components, per lattice unit, in brick order (as the field's values), of
+/// (f(c + w e) - f(c - w e)) / 2w at every cell's centre c (w its width, f the reconstruction of
+/// `view`); one-sided where one point has no value, 0 where neither has.
+std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
+                                                size_t valueCount);
+
+} // namespace exa

@@ -1,0 +1,139 @@
+"""Scene files through Python: read and written by the command line's reader and writer, so that
+every setting survives `render --write-scene` -> Scene.from_json -> save_json -> `render --scene`,
+unknown keys are refused with the messages of `render --scene`, and a path is taken where a JSON
+text is."""
+import json
+import pathlib
+import subprocess
+
+import pytest
+
+import exabricks as eb
+from exabricks import _core
+
+CAMERA = {"position": [150.0, 20.0, 60.0], "look_at": [30.0, 31.0, 33.0], "up": [0.0, 0.2, 1.0], "fov": 33.0,
+          "orthographic": True, "ortho_height": 70.0}
+
+
+def every_setting(mesh):
+    """A scene file in which every setting differs from its default."""
+    return {
+        "camera": CAMERA,
+        "camera_path": {"constant_speed": True, "keyframes": [
+            {"time": 0, "camera": CAMERA, "opacity_scale": 0.02, "range": [0.01, 1.4], "iso_values": [0.5]},
+            {"time": 2, "camera": dict(CAMERA, position=[60.0, 150.0, 80.0], fov=30.0), "opacity_scale": 0.2,
+             "range": [0.1, 1.4], "iso_values": [0.9]}]},
+        "frame": {"width": 40, "height": 30, "samples_per_pixel": 2, "rate": 0.75, "jitter": False, "seed": 7},
+        "layers": [
+            {"field": "scalar", "transfer_function": {"colormap": "magma", "opacity": [[0, 0], [0.5, 0.2], [1, 0.9]],
+                                                      "range": [0.05, 1.3], "log": True, "opacity_scale": 0.5}},
+            {"field": "radius", "transfer_function": {"colormap": {"points": [[0, 0, 0, 1], [1, 1, 0.5, 0]]},
+                                                      "opacity": [[0, 0.1], [1, 0]], "range": [0.1, 0.7],
+                                                      "opacity_scale": 0.1}}],
+        "volume": False,
+        "iso": {"field": "scalar", "values": [0.3, 0.6], "colors": [[0.9, 0.5, 0.2], [0.2, 0.6, 0.9]],
+                "color_field": "radius",
+                "color_map": {"colormap": "inferno", "range": [0.1, 0.8], "opacity_scale": 0.7}},
+        "meshes": [{"file": str(mesh), "color": [0.7, 0.2, 0.3]}],
+        "clip": {"planes": [{"point": [32, 32, 32], "normal": [0, 0, 1]}], "box": [1, 2, 3, 60, 61, 62],
+                 "meshes": True},
+        "light": {"headlight": False, "direction": [1, -0.5, -1], "ambient": 0.2, "diffuse": 0.6, "specular": 0.4,
+                  "shininess": 20},
+        "shading": "central",
+        "ambient_occlusion": {"rays": 2, "length": 5, "volume": True},
+        "integration": {"sampling": "fixed", "reconstruction": "cells", "traversal": "embree",
+                        "embree_below_visible_fraction": 0.3, "space_skipping": False, "early_termination": False,
+                        "termination_opacity": 0.9, "vectorized": False, "lazy_gradients": False,
+                        "join_segments": False},
+        "debug": "level",
+        "background": [0.1, 0.2, 0.3],
+        "alpha": True,
+    }
+
+
+def assert_same(a, b, where="scene"):
+    """Equal documents: the same keys and values (numbers within float32 round-off)."""
+    if isinstance(a, dict):
+        assert isinstance(b, dict) and sorted(a) == sorted(b), (where, sorted(a), sorted(b) if isinstance(b, dict) else b)
+        for k in a:
+            assert_same(a[k], b[k], where + "." + k)
+    elif isinstance(a, list):
+        assert isinstance(b, list) and len(a) == len(b), (where, a, b)
+        for i, (x, y) in enumerate(zip(a, b)):
+            assert_same(x, y, "%s[%d]" % (where, i))
+    elif isinstance(a, float) or isinstance(b, float):
+        assert b == pytest.approx(a, rel=1e-6, abs=1e-9), (where, a, b)
+    else:
+        assert a == b, (where, a, b)
+
+
+@pytest.fixture
+def dataset_file(cli, tmp_path):
+    path = tmp_path / "b.cells"
+    subprocess.run([cli, "-q", "generate", "-s", "blobs", "-n", "8000", "-o", str(path)], check=True)
+    return path.resolve()
+
+
+def test_every_setting_survives_python(cli, dataset_file, tmp_path):
+    mesh = tmp_path / "tri.obj"
+    mesh.write_text("v 10 10 10\nv 50 12 20\nv 30 50 40\nf 1 2 3\n")
+    (tmp_path / "full.json").write_text(json.dumps(every_setting(mesh)))
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--scene", str(tmp_path / "full.json"), "-o",
+                    str(tmp_path / "cli.png"), "--write-scene", str(tmp_path / "cli.json")], check=True)
+    written = json.loads((tmp_path / "cli.json").read_text())
+    # Every setting of the file differs from the library's default (else the test would miss it).
+    defaults = json.loads(_core.scene_json("{}", "defaults"))
+    for key, default in defaults.items():
+        assert key in written, key
+        if isinstance(default, dict):
+            for k, v in default.items():
+                assert written[key][k] != v, "%s.%s keeps its default %r" % (key, k, v)
+        else:
+            assert written[key] != default, "%s keeps its default %r" % (key, default)
+    assert "camera_path" in written and "input" in written
+
+    ds = eb.load(dataset_file)
+    scene = eb.Scene.from_json(ds, tmp_path / "cli.json")  # a path, where a JSON text is also taken
+    scene.save_json(tmp_path / "py.json")
+    assert_same(written, json.loads((tmp_path / "py.json").read_text()))
+    # And the command line renders the same picture from it, and writes it back unchanged.
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--scene", str(tmp_path / "py.json"), "-o",
+                    str(tmp_path / "py.png"), "--write-scene", str(tmp_path / "again.json")], check=True)
+    assert (tmp_path / "py.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
+    assert_same(written, json.loads((tmp_path / "again.json").read_text()))
+    # The text of the file reads the same as its path.
+    from_text = eb.Scene.from_json(ds, (tmp_path / "cli.json").read_text())
+    assert_same(json.loads(scene.to_json()), json.loads(from_text.to_json()))
+    assert from_text.camera_path["constant_speed"] is True and from_text.reconstruction == "cells"
+
+
+@pytest.mark.parametrize("bad", [{"lights": {}}, {"light": {"ambiant": 1}}, {"integration": {"vectorised": False}},
+                                 {"frame": {"width": 0}}, {"shading": "phong"}])
+def test_unknown_keys_and_bad_settings_are_refused_as_the_command_line_does(cli, tmp_path, bad):
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(bad))
+    r = subprocess.run([cli, "render", "--scene", str(path), "-o", str(tmp_path / "x.png")], capture_output=True,
+                       text=True)
+    assert r.returncode != 0
+    message = r.stderr.strip().splitlines()[-1]
+    prefix = "exabricks: error: "
+    assert message.startswith(prefix), r.stderr
+    ds = eb.load()
+    with pytest.raises(ValueError) as e:
+        eb.Scene.from_json(ds, path)
+    assert str(e.value) == message[len(prefix):]
+    with pytest.raises(ValueError) as e:  # as text: the same message, naming "scene"
+        eb.Scene.from_json(ds, json.dumps(bad))
+    assert str(e.value) == message[len(prefix):].replace(str(path), "scene", 1)
+
+
+def test_a_scene_file_path_as_text_and_as_path(tmp_path):
+    ds = eb.load()
+    s = eb.Scene(ds, width=20, height=10, shading="central")
+    s.save_json(tmp_path / "s.json")
+    for given in (tmp_path / "s.json", str(tmp_path / "s.json"), (tmp_path / "s.json").read_text(),
+                  (tmp_path / "s.json").read_bytes()):
+        t = eb.Scene.from_json(ds, given)
+        assert (t.width, t.height, t.shading) == (20, 10, "central")
+    with pytest.raises(FileNotFoundError):
+        eb.Scene.from_json(ds, str(tmp_path / "missing.json"))
