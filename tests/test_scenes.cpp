@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include <algorithm>
+#include <cmath>
 #include <set>
 
 using namespace exa;
@@ -86,4 +88,25 @@ TEST(Scenes, PiecesConcatenateToTheWholeScene) {
       }
     }
   }
+}
+
+TEST(Scenes, CosmicSpansDecadesWithCoarseVoidsAndFineHaloes) {
+  const CellSet s = generateScene({"cosmic", 30000, 1, 4});
+  ASSERT_EQ(s.fields.size(), 1u);
+  EXPECT_EQ(s.fields[0].name, "density");
+  float lo = 1e30f, hi = 0.f;
+  double coarseMean = 0, fineMean = 0;
+  size_t coarse = 0, fine = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    const float v = s.fields[0].values[i];
+    ASSERT_GT(v, 0.f);
+    lo = std::min(lo, v), hi = std::max(hi, v);
+    if (s.cells[i].level == 3) coarseMean += std::log10(v), ++coarse;
+    if (s.cells[i].level == 0) fineMean += std::log10(v), ++fine;
+  }
+  EXPECT_GT(std::log10(hi / lo), 4.0) << "a cosmology-like density spans decades";
+  ASSERT_GT(coarse, 0u);
+  ASSERT_GT(fine, 0u);
+  // Refinement follows overdensity: the finest cells are denser, by more than a decade on average.
+  EXPECT_GT(fineMean / double(fine) - coarseMean / double(coarse), 1.0);
 }

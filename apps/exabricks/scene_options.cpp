@@ -121,7 +121,7 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--elevation", elevation, "Default view: degrees above the x-y plane")->capture_default_str();
   cmd.add_option("--background", background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
   cmd.add_flag("--alpha", alpha, "Keep the alpha channel instead of a background");
-  cmd.add_option("--shading", shading, "smooth (central differences over the local cell width), analytic (the exact gradient, which shows the cell lattice), central or none")->capture_default_str();
+  cmd.add_option("--shading", shading, "smooth (a gradient field of per-cell central differences, reconstructed like the values), analytic (the exact gradient, which shows the cell lattice), central or none")->capture_default_str();
   cmd.add_option("--light", light, "headlight, or the direction x,y,z light travels")->capture_default_str();
   cmd.add_option("--traversal", traversal, "Region traversal: auto, kd or embree")->capture_default_str();
   cmd.add_flag("--no-skip", noSkip, "Disable space skipping");
