@@ -31,7 +31,8 @@ const Model& model(const std::string& name, uint64_t cells) {
 
 void BM_BuildBricks(benchmark::State& state, const std::string& name) {
   const CellSet& s = scene(name, uint64_t(state.range(0)));
-  for (auto _ : state) benchmark::DoNotOptimize(buildBricks(s.cells).bricks.size());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(buildBricks(s.cells).bricks.size());
   state.counters["cells"] = double(s.size());
   state.counters["cells/s"] = benchmark::Counter(double(s.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
@@ -76,7 +77,8 @@ template <typename Real> void BM_Sample(benchmark::State& state, bool coherent, 
       continue;
     }
     const vec3<Real> dir = normalize(vec3<Real>(u(rng) - Real(0.5), u(rng) - Real(0.5), u(rng) - Real(0.5)));
-    for (int k = 0; k < 256 && i < points.size(); ++k) points[i++] = p0 + dir * (Real(0.5) * Real(k));
+    for (int k = 0; k < 256 && i < points.size(); ++k)
+      points[i++] = p0 + dir * (Real(0.5) * Real(k));
   }
   size_t valid = 0;
   for (auto _ : state) {
@@ -87,7 +89,8 @@ template <typename Real> void BM_Sample(benchmark::State& state, bool coherent, 
     }
   }
   benchmark::DoNotOptimize(valid);
-  state.counters["samples/s"] = benchmark::Counter(double(points.size()), benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["samples/s"] =
+      benchmark::Counter(double(points.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
 void BM_SampleFloat(benchmark::State& state, bool coherent, bool gradient) {
@@ -99,11 +102,31 @@ void BM_SampleDouble(benchmark::State& state, bool coherent, bool gradient) {
 
 } // namespace
 
-BENCHMARK_CAPTURE(BM_BuildBricks, blobs, "blobs")->Arg(1000000)->Arg(10000000)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_BuildBricks, shells, "shells")->Arg(1000000)->Arg(10000000)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_BuildRegions, blobs, "blobs")->Arg(1000000)->Arg(10000000)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_BuildRegions, shells, "shells")->Arg(1000000)->Arg(10000000)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK_CAPTURE(BM_BuildModel, blobs, "blobs")->Arg(10000000)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
+BENCHMARK_CAPTURE(BM_BuildBricks, blobs, "blobs")
+    ->Arg(1000000)
+    ->Arg(10000000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_BuildBricks, shells, "shells")
+    ->Arg(1000000)
+    ->Arg(10000000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_BuildRegions, blobs, "blobs")
+    ->Arg(1000000)
+    ->Arg(10000000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_BuildRegions, shells, "shells")
+    ->Arg(1000000)
+    ->Arg(10000000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK_CAPTURE(BM_BuildModel, blobs, "blobs")
+    ->Arg(10000000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(2);
 BENCHMARK_CAPTURE(BM_SampleFloat, random_value, false, false)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_SampleFloat, random_gradient, false, true)->Arg(1000000)->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_SampleFloat, coherent_value, true, false)->Arg(1000000)->Unit(benchmark::kMillisecond);

@@ -46,7 +46,8 @@ std::vector<vec3f> points(const Model& m, bool coherent) {
       continue;
     }
     const vec3f dir = normalize(vec3f(u(rng) - 0.5f, u(rng) - 0.5f, u(rng) - 0.5f));
-    for (int k = 0; k < 256 && i < out.size(); ++k) out[i++] = p0 + dir * (0.5f * float(k));
+    for (int k = 0; k < 256 && i < out.size(); ++k)
+      out[i++] = p0 + dir * (0.5f * float(k));
   }
   return out;
 }
@@ -67,24 +68,37 @@ void BM_Reconstruct(benchmark::State& state, const std::string& scene, bool cell
   }
   benchmark::DoNotOptimize(valid);
   state.counters["samples/s"] = benchmark::Counter(double(ps.size()), benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["ns/sample"] =
-      benchmark::Counter(double(ps.size()), benchmark::Counter::kIsIterationInvariantRate | benchmark::Counter::kInvert);
+  state.counters["ns/sample"] = benchmark::Counter(double(ps.size()), benchmark::Counter::kIsIterationInvariantRate |
+                                                                          benchmark::Counter::kInvert);
 }
 
 void BM_BuildCellLocator(benchmark::State& state, const std::string& scene) {
   const Model& m = model(scene, uint64_t(state.range(0)));
-  for (auto _ : state) benchmark::DoNotOptimize(CellLocator(m).nodeCount());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(CellLocator(m).nodeCount());
   state.counters["bricks"] = double(m.bricks.size());
 }
 
 } // namespace
 
 BENCHMARK_CAPTURE(BM_BuildCellLocator, blobs, "blobs")->Arg(1000000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Reconstruct, blobs_regions_coherent, "blobs", false, true)->Arg(1000000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Reconstruct, blobs_cells_coherent, "blobs", true, true)->Arg(1000000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Reconstruct, blobs_regions_random, "blobs", false, false)->Arg(1000000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Reconstruct, blobs_cells_random, "blobs", true, false)->Arg(1000000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Reconstruct, shells_regions_coherent, "shells", false, true)->Arg(1000000)->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_Reconstruct, shells_cells_coherent, "shells", true, true)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Reconstruct, blobs_regions_coherent, "blobs", false, true)
+    ->Arg(1000000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Reconstruct, blobs_cells_coherent, "blobs", true, true)
+    ->Arg(1000000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Reconstruct, blobs_regions_random, "blobs", false, false)
+    ->Arg(1000000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Reconstruct, blobs_cells_random, "blobs", true, false)
+    ->Arg(1000000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Reconstruct, shells_regions_coherent, "shells", false, true)
+    ->Arg(1000000)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_Reconstruct, shells_cells_coherent, "shells", true, true)
+    ->Arg(1000000)
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_MAIN();

@@ -35,8 +35,9 @@ int main(int argc, char** argv) {
   const DeviceInputs d = DeviceInputs::read(argv[1]);
   const int n = int(d.rays.size());
 
-  const DeviceRayInputs device = d.view(toDevice(d.bricks), toDevice(d.values), toDevice(d.regions), toDevice(d.brickIds),
-                                        toDevice(d.nodes), toDevice(d.visible), toDevice(d.table));
+  const DeviceRayInputs device =
+      d.view(toDevice(d.bricks), toDevice(d.values), toDevice(d.regions), toDevice(d.brickIds), toDevice(d.nodes),
+             toDevice(d.visible), toDevice(d.table));
   Ray* rays = toDevice(d.rays);
   vec4f* colors = nullptr;
   float* iso = nullptr;

@@ -76,7 +76,9 @@ struct DeviceInputs {
     header.rays = rays.size();
     std::ofstream out(path, std::ios::binary);
     out.write(reinterpret_cast<const char*>(&header), sizeof header);
-    auto put = [&](const auto& v) { out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof v[0])); };
+    auto put = [&](const auto& v) {
+      out.write(reinterpret_cast<const char*>(v.data()), std::streamsize(v.size() * sizeof v[0]));
+    };
     put(bricks), put(values), put(regions), put(brickIds), put(nodes), put(visible), put(table), put(rays);
     if (!out) throw std::runtime_error(path + ": cannot write");
   }
@@ -85,7 +87,8 @@ struct DeviceInputs {
     DeviceInputs d;
     std::ifstream in(path, std::ios::binary);
     in.read(reinterpret_cast<char*>(&d.header), sizeof d.header);
-    if (!in || std::memcmp(d.header.magic, "EXADEV01", 8) != 0) throw std::runtime_error(path + ": not a device-check input file");
+    if (!in || std::memcmp(d.header.magic, "EXADEV01", 8) != 0)
+      throw std::runtime_error(path + ": not a device-check input file");
     auto get = [&](auto& v, uint64_t n) {
       v.resize(n);
       in.read(reinterpret_cast<char*>(v.data()), std::streamsize(n * sizeof v[0]));

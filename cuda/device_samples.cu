@@ -31,8 +31,11 @@ EXA_HOST_DEVICE inline vec4f integrateRay(const DeviceRayInputs& in, const Ray& 
       if (isoT < 0.f) {
         float vn;
         const float tn = t + in.dt;
-        if (sampleRegion(in.field, seg.region, ray.org + ray.dir * tn, vn) && (v >= in.isoValue) != (vn >= in.isoValue)) {
-          auto value = [&](float tt, float& out) { return sampleRegion(in.field, seg.region, ray.org + ray.dir * tt, out); };
+        if (sampleRegion(in.field, seg.region, ray.org + ray.dir * tn, vn) &&
+            (v >= in.isoValue) != (vn >= in.isoValue)) {
+          auto value = [&](float tt, float& out) {
+            return sampleRegion(in.field, seg.region, ray.org + ray.dir * tt, out);
+          };
           isoT = refineCrossing(value, t, tn, v, vn, in.isoValue, v >= in.isoValue, 1e-3f);
         }
       }
@@ -51,7 +54,8 @@ __global__ void integrateRaysKernel(DeviceRayInputs in, const Ray* rays, int cou
 }
 
 void integrateRaysHost(const DeviceRayInputs& in, const Ray* rays, int count, vec4f* colors, float* isoT) {
-  for (int i = 0; i < count; ++i) colors[i] = integrateRay(in, rays[i], isoT[i]);
+  for (int i = 0; i < count; ++i)
+    colors[i] = integrateRay(in, rays[i], isoT[i]);
 }
 
 } // namespace exa

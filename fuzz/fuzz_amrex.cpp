@@ -14,7 +14,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::write("plt/Level_0/Cell_H", p[1]);
   fuzz::write("plt/Level_0/Cell_D_00000", p[2]);
   try {
-    for (const std::string& name : exa::listAmrexFields(dir)) exa::amrexFieldRange(dir, name);
+    for (const std::string& name : exa::listAmrexFields(dir))
+      exa::amrexFieldRange(dir, name);
     const exa::CellSet s = exa::readAmrex(dir);
     if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
   } catch (const exa::Error&) {

@@ -77,19 +77,22 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     case 4: {
       std::vector<long long> v(in.byte() % 6);
-      for (long long& x : v) x = in.value<int32_t>();
+      for (long long& x : v)
+        x = in.value<int32_t>();
       fuzz::setDataset(file, level + "/data:offsets=0", H5T_NATIVE_LLONG, v.data(), v.size());
       break;
     }
     case 5: {
       std::vector<int> v((in.byte() % 4) * 6);
-      for (int& x : v) x = int(int8_t(in.byte()));
+      for (int& x : v)
+        x = int(int8_t(in.byte()));
       fuzz::setDataset(file, level + "/boxes", H5T_NATIVE_INT, v.data(), v.size());
       break;
     }
     case 6: {
       std::vector<double> v(in.byte());
-      for (double& x : v) x = double(int8_t(in.byte()));
+      for (double& x : v)
+        x = double(int8_t(in.byte()));
       fuzz::setDataset(file, level + "/data:datatype=0", H5T_NATIVE_DOUBLE, v.data(), v.size());
       break;
     }

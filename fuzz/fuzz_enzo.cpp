@@ -20,8 +20,8 @@ void writeDataFile(const std::string& path) {
     H5Gclose(H5Gcreate2(f, group.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     const std::vector<double> values(shapes[g][0] * shapes[g][1] * shapes[g][2], 1.5 + g);
     const hid_t space = H5Screate_simple(3, shapes[g], nullptr);
-    const hid_t d = H5Dcreate2(f, (group + "/Density").c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT,
-                               H5P_DEFAULT);
+    const hid_t d =
+        H5Dcreate2(f, (group + "/Density").c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     H5Dwrite(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
     H5Dclose(d);
     H5Sclose(space);

@@ -63,7 +63,8 @@ public:
   template <typename T> T value() {
     T v{};
     unsigned char b[sizeof(T)] = {};
-    for (unsigned char& c : b) c = byte();
+    for (unsigned char& c : b)
+      c = byte();
     std::memcpy(&v, b, sizeof(T));
     return v;
   }

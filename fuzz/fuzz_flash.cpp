@@ -40,10 +40,18 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const uint8_t what = in.byte();
     const double v = double(int8_t(in.byte())) / 8;
     switch (what % 4) {
-    case 0: b.lo[what / 4 % 3] = v; break;
-    case 1: b.hi[what / 4 % 3] = v; break;
-    case 2: b.level = int(v * 8) % 6; break;
-    default: b.nodeType = int(v * 8) % 4; break;
+    case 0:
+      b.lo[what / 4 % 3] = v;
+      break;
+    case 1:
+      b.hi[what / 4 % 3] = v;
+      break;
+    case 2:
+      b.level = int(v * 8) % 6;
+      break;
+    default:
+      b.nodeType = int(v * 8) % 4;
+      break;
     }
   }
   try {
@@ -53,21 +61,23 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   const hid_t file = H5Fopen(f.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (file < 0) return 0;
-  static const char* const tables[] = {"refine level", "node type", "bounding box", "block size", "coordinates",
-                                       "dens", "pres", "unknown names"};
+  static const char* const tables[] = {"refine level", "node type", "bounding box", "block size",
+                                       "coordinates",  "dens",      "pres",         "unknown names"};
   while (!in.empty()) {
     const uint8_t op = in.byte();
     const char* table = tables[(op >> 2) % 8];
     switch (op % 4) {
     case 0: {
       std::vector<int> v(in.byte() % 24);
-      for (int& x : v) x = int(int8_t(in.byte()));
+      for (int& x : v)
+        x = int(int8_t(in.byte()));
       fuzz::setDataset(file, table, H5T_NATIVE_INT, v.data(), v.size());
       break;
     }
     case 1: {
       std::vector<double> v(in.byte());
-      for (double& x : v) x = double(int8_t(in.byte())) / 4;
+      for (double& x : v)
+        x = double(int8_t(in.byte())) / 4;
       fuzz::setDataset(file, table, H5T_NATIVE_DOUBLE, v.data(), v.size());
       break;
     }

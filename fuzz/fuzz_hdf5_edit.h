@@ -12,7 +12,8 @@
 namespace fuzz {
 
 /// Replaces (or adds) attribute `name` of `object` with `n` values of `type`.
-inline void setAttr(hid_t file, const std::string& object, const std::string& name, hid_t type, const void* value, hsize_t n) {
+inline void setAttr(hid_t file, const std::string& object, const std::string& name, hid_t type, const void* value,
+                    hsize_t n) {
   const hid_t o = H5Oopen(file, object.c_str(), H5P_DEFAULT);
   if (o < 0) return;
   H5Adelete(o, name.c_str());

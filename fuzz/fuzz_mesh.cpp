@@ -14,9 +14,8 @@
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   static const char* const extensions[] = {".obj", ".ply", ".tris", ".mesh"};
   const char* ext = extensions[size > 0 ? data[0] % 4 : 0];
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("exabricks-fuzz-mesh-" + std::to_string(::getpid()) + ext))
-                               .string();
+  const std::string path =
+      (std::filesystem::temp_directory_path() / ("exabricks-fuzz-mesh-" + std::to_string(::getpid()) + ext)).string();
   if (std::FILE* f = std::fopen(path.c_str(), "wb")) {
     const size_t written = size > 1 ? std::fwrite(data + 1, 1, size - 1, f) : 0;
     std::fclose(f);

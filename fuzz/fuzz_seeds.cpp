@@ -35,7 +35,8 @@ public:
   template <typename A> void array(const A& a) {
     value(uint64_t(a.size()));
     if (version_ >= 2)
-      while (bytes_.size() % 8 != 0) bytes_.push_back('\0');
+      while (bytes_.size() % 8 != 0)
+        bytes_.push_back('\0');
     if (a.size() > 0) raw(a.data(), a.size() * sizeof(*a.data()));
   }
   void raw(const void* p, size_t n) { bytes_.append(static_cast<const char*>(p), n); }
@@ -66,8 +67,10 @@ std::string modelBytes(const exa::Model& m, uint32_t version) {
   w.array(m.regions.brickIds);
   w.array(m.regions.nodes);
   w.value(m.regions.bounds);
-  for (size_t f = 0; f < m.fieldNames.size(); ++f) w.array(m.regions.valueRanges[f]);
-  for (double s : {m.stats.brickSeconds, m.stats.regionSeconds, m.stats.rangeSeconds}) w.value(s);
+  for (size_t f = 0; f < m.fieldNames.size(); ++f)
+    w.array(m.regions.valueRanges[f]);
+  for (double s : {m.stats.brickSeconds, m.stats.regionSeconds, m.stats.rangeSeconds})
+    w.value(s);
   return w.finish();
 }
 
@@ -86,18 +89,21 @@ void modelSeeds(const fs::path& dir) {
                         Size{"blobs", 3000, 2}}) {
     const exa::Model m = exa::buildModel(exa::generateScene({s.scene, s.cells, 1, s.levels}));
     const std::string name = std::string(s.scene) + "-" + std::to_string(s.cells);
-    for (uint32_t version : {1u, 2u}) save(dir / (name + "-v" + std::to_string(version)), modelBytes(m, version));
+    for (uint32_t version : {1u, 2u})
+      save(dir / (name + "-v" + std::to_string(version)), modelBytes(m, version));
     exa::writeModel(m, (dir / (name + "-current")).string());
   }
   // Every array empty: no bricks, fields, regions or k-d nodes; then one brick and one field of
   // no values whose (version 1) array starts at an odd offset, after a name of three bytes.
   exa::Model empty;
-  for (uint32_t version : {1u, 2u}) save(dir / ("empty-v" + std::to_string(version)), modelBytes(empty, version));
+  for (uint32_t version : {1u, 2u})
+    save(dir / ("empty-v" + std::to_string(version)), modelBytes(empty, version));
   empty.bricks.resize(1);
   empty.fieldNames = {"abc"};
   empty.fieldValues.resize(1);
   empty.regions.valueRanges.resize(1);
-  for (uint32_t version : {1u, 2u}) save(dir / ("empty-field-v" + std::to_string(version)), modelBytes(empty, version));
+  for (uint32_t version : {1u, 2u})
+    save(dir / ("empty-field-v" + std::to_string(version)), modelBytes(empty, version));
 }
 
 void hdf5Seeds(const fs::path& dir) {
@@ -131,8 +137,10 @@ int main(int argc, char** argv) {
   const fs::path dir = argv[2];
   fs::create_directories(dir);
   try {
-    if (std::string(argv[1]) == "model") modelSeeds(dir);
-    else hdf5Seeds(dir);
+    if (std::string(argv[1]) == "model")
+      modelSeeds(dir);
+    else
+      hdf5Seeds(dir);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "fuzz_seeds: %s\n", e.what());
     return 1;

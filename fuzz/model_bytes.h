@@ -16,7 +16,8 @@ inline uint64_t modelChecksum(const char* p, size_t n) {
   uint64_t h = 0xcbf29ce484222325ull;
   for (size_t i = 0; i < n; i += 8) {
     uint64_t word = 0;
-    for (size_t k = 0; k < 8 && i + k < n; ++k) word |= uint64_t(static_cast<unsigned char>(p[i + k])) << (8 * k);
+    for (size_t k = 0; k < 8 && i + k < n; ++k)
+      word |= uint64_t(static_cast<unsigned char>(p[i + k])) << (8 * k);
     h = (h ^ word) * 0x100000001b3ull;
   }
   return h;

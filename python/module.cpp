@@ -137,7 +137,8 @@ std::shared_ptr<Dataset> fromGrids(const py::list& grids, const std::vector<std:
     GridPatch p;
     const auto lo = t[0].cast<std::vector<double>>(), hi = t[1].cast<std::vector<double>>();
     const auto n = t[2].cast<std::vector<int64_t>>();
-    if (lo.size() != 3 || hi.size() != 3 || n.size() != 3) fail("grid ", g, ": edges and dimensions need three numbers");
+    if (lo.size() != 3 || hi.size() != 3 || n.size() != 3)
+      fail("grid ", g, ": edges and dimensions need three numbers");
     p.lower = vec3d(lo[0], lo[1], lo[2]);
     p.upper = vec3d(hi[0], hi[1], hi[2]);
     p.cells = vec3l(n[0], n[1], n[2]);
@@ -149,8 +150,10 @@ std::shared_ptr<Dataset> fromGrids(const py::list& grids, const std::vector<std:
     patches.push_back(std::move(p));
   }
   vec3d o;
-  if (origin.size() == 3) o = vec3d(origin[0], origin[1], origin[2]);
-  else if (!origin.empty()) fail("origin needs three numbers");
+  if (origin.size() == 3)
+    o = vec3d(origin[0], origin[1], origin[2]);
+  else if (!origin.empty())
+    fail("origin needs three numbers");
   BuildOptions bo;
   bo.bricks.maxBrickWidth = maxBrickWidth;
   Timer t;
@@ -159,7 +162,8 @@ std::shared_ptr<Dataset> fromGrids(const py::list& grids, const std::vector<std:
     py::gil_scoped_release release;
     CellSet set = cellsFromGrids(patches, names, "grids", origin.empty() ? nullptr : &o);
     patches.clear();
-    for (size_t f = 0; f < units.size() && f < set.fields.size(); ++f) set.fields[f].units = units[f];
+    for (size_t f = 0; f < units.size() && f < set.fields.size(); ++f)
+      set.fields[f].units = units[f];
     m = buildModel(std::move(set), bo);
   }
   return makeDataset(std::move(m), "<grids>", t.seconds());
@@ -197,7 +201,8 @@ std::shared_ptr<Mesh> makeMesh(py::array_t<float, py::array::c_style | py::array
   if (triangles.ndim() != 2 || triangles.shape(1) != 3) fail("mesh triangles must be a (T, 3) integer array");
   auto mesh = std::make_shared<TriangleMesh>();
   const float* v = vertices.data();
-  for (py::ssize_t i = 0; i < vertices.shape(0); ++i) mesh->vertices.push_back({v[3 * i], v[3 * i + 1], v[3 * i + 2]});
+  for (py::ssize_t i = 0; i < vertices.shape(0); ++i)
+    mesh->vertices.push_back({v[3 * i], v[3 * i + 1], v[3 * i + 2]});
   const int64_t* t = triangles.data();
   for (py::ssize_t i = 0; i < triangles.shape(0); ++i) {
     vec3i tri;
@@ -227,9 +232,11 @@ bool interpreterFinalizing() {
 /// accumulate in the renderer's own buffer until the scene or the frame changes.
 class PyRenderer {
 public:
-  explicit PyRenderer(std::shared_ptr<Dataset> d) : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info) {}
+  explicit PyRenderer(std::shared_ptr<Dataset> d)
+      : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info) {}
 
-  py::dict setScene(const std::string& json, const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
+  py::dict setScene(const std::string& json,
+                    const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
     SceneDocument doc = readSceneJson(json, "scene");
     loadSceneMeshes(doc.scene, "scene");
     std::string key = json;
@@ -295,7 +302,8 @@ public:
           // worker and wait here for the process to end.
           cancel = true;
           worker.join();
-          for (;;) std::this_thread::sleep_for(std::chrono::hours(1));
+          for (;;)
+            std::this_thread::sleep_for(std::chrono::hours(1));
         }
         py::gil_scoped_acquire acquire;
         if (PyErr_CheckSignals() != 0) {
@@ -359,7 +367,8 @@ public:
   py::object visibleBounds() const {
     const box3d b = renderer_.visibleBounds();
     if (b.empty()) return py::none();
-    return py::make_tuple(py::make_tuple(b.lower.x, b.lower.y, b.lower.z), py::make_tuple(b.upper.x, b.upper.y, b.upper.z));
+    return py::make_tuple(py::make_tuple(b.lower.x, b.lower.y, b.lower.z),
+                          py::make_tuple(b.upper.x, b.upper.y, b.upper.z));
   }
 
   py::object pick(const std::vector<double>& origin, const std::vector<double>& direction) const {
@@ -409,58 +418,65 @@ PYBIND11_MODULE(_core, m) {
   py::class_<Dataset, std::shared_ptr<Dataset>>(m, "Dataset")
       .def_property_readonly("name", [](const Dataset& d) { return d.name; })
       .def_property_readonly("fields", [](const Dataset& d) { return d.model->fieldNames; })
-      .def_property_readonly("units",
-                             [](const Dataset& d) {
-                               std::vector<std::string> u;
-                               for (size_t f = 0; f < d.model->fieldNames.size(); ++f) u.push_back(d.model->unitsOf(int(f)));
-                               return u;
-                             },
-                             "Units per field, in field order (empty where unknown)")
+      .def_property_readonly(
+          "units",
+          [](const Dataset& d) {
+            std::vector<std::string> u;
+            for (size_t f = 0; f < d.model->fieldNames.size(); ++f)
+              u.push_back(d.model->unitsOf(int(f)));
+            return u;
+          },
+          "Units per field, in field order (empty where unknown)")
       .def_property_readonly("cells", [](const Dataset& d) { return d.model->cellCount(); })
       .def_property_readonly("bounds",
                              [](const Dataset& d) {
                                const box3i b = d.model->cellBounds();
                                const vec3d lo = d.model->world.toWorld(vec3d(b.lower));
                                const vec3d hi = d.model->world.toWorld(vec3d(b.upper));
-                               return py::make_tuple(py::make_tuple(lo.x, lo.y, lo.z), py::make_tuple(hi.x, hi.y, hi.z));
+                               return py::make_tuple(py::make_tuple(lo.x, lo.y, lo.z),
+                                                     py::make_tuple(hi.x, hi.y, hi.z));
                              })
       .def("default_field", [](const Dataset& d) { return d.model->fieldNames[size_t(d.model->requireField(""))]; })
-      .def_property_readonly("default_opacity_scale",
-                             [](const Dataset& d) { return d.info.defaultOpacityScale; })
-      .def_property_readonly("opacity_reference_width",
-                             [](const Dataset& d) {
-                               const vec3d s = d.model->world.scale;
-                               return double(d.info.referenceWidth) * (s.x + s.y + s.z) / 3.0;
-                             },
-                             "World length opacity is given per: the finest cell width (averaged over the axes)")
+      .def_property_readonly("default_opacity_scale", [](const Dataset& d) { return d.info.defaultOpacityScale; })
+      .def_property_readonly(
+          "opacity_reference_width",
+          [](const Dataset& d) {
+            const vec3d s = d.model->world.scale;
+            return double(d.info.referenceWidth) * (s.x + s.y + s.z) / 3.0;
+          },
+          "World length opacity is given per: the finest cell width (averaged over the axes)")
       .def("info_json", [](const Dataset& d) { return modelInfoJson(*d.model, d.name, d.loadSeconds); })
       .def("sample", &sample, py::arg("points"), py::arg("field") = "")
-      .def("adapt_transfer_function",
-           [](const Dataset& d, const std::string& field, const std::string& tfJson, bool autoLog, bool autoOpacity) {
-             const int f = d.model->requireField(field);
-             const DefaultChoices c = adaptTransferFunction(*d.model, d.info, f,
-                                                            parseTransferFunction(tfJson, "transfer function"), autoLog,
-                                                            autoOpacity);
-             return py::make_tuple(transferFunctionJson(c.tf), c.notes);
-           },
-           py::arg("field"), py::arg("tf_json"), py::arg("auto_log") = true, py::arg("auto_opacity") = true)
-      .def("warnings",
-           [](const Dataset& d, const std::string& sceneJson) {
-             const SceneDocument doc = readSceneJson(sceneJson, "scene");
-             return sceneWarnings(doc.scene, *d.model, d.info);
-           },
-           py::arg("scene_json"));
+      .def(
+          "adapt_transfer_function",
+          [](const Dataset& d, const std::string& field, const std::string& tfJson, bool autoLog, bool autoOpacity) {
+            const int f = d.model->requireField(field);
+            const DefaultChoices c = adaptTransferFunction(
+                *d.model, d.info, f, parseTransferFunction(tfJson, "transfer function"), autoLog, autoOpacity);
+            return py::make_tuple(transferFunctionJson(c.tf), c.notes);
+          },
+          py::arg("field"), py::arg("tf_json"), py::arg("auto_log") = true, py::arg("auto_opacity") = true)
+      .def(
+          "warnings",
+          [](const Dataset& d, const std::string& sceneJson) {
+            const SceneDocument doc = readSceneJson(sceneJson, "scene");
+            return sceneWarnings(doc.scene, *d.model, d.info);
+          },
+          py::arg("scene_json"));
 
   py::class_<Mesh, std::shared_ptr<Mesh>>(m, "Mesh")
       .def(py::init(&makeMesh), py::arg("vertices"), py::arg("triangles"))
-      .def_static("read", [](const std::string& path) {
-        auto x = std::make_shared<Mesh>();
-        x->mesh = std::make_shared<TriangleMesh>(readMesh(path));
-        x->source = path;
-        return x;
-      }, py::arg("path"), "Reads an OBJ, PLY or .tris file")
-      .def_property_readonly("source", [](const Mesh& x) { return x.source; },
-                             "The file the mesh was read from (empty: made from arrays)")
+      .def_static(
+          "read",
+          [](const std::string& path) {
+            auto x = std::make_shared<Mesh>();
+            x->mesh = std::make_shared<TriangleMesh>(readMesh(path));
+            x->source = path;
+            return x;
+          },
+          py::arg("path"), "Reads an OBJ, PLY or .tris file")
+      .def_property_readonly(
+          "source", [](const Mesh& x) { return x.source; }, "The file the mesh was read from (empty: made from arrays)")
       .def_property_readonly("vertex_count", [](const Mesh& x) { return x.mesh->vertices.size(); })
       .def_property_readonly("triangle_count", [](const Mesh& x) { return x.mesh->triangles.size(); });
 
@@ -476,49 +492,54 @@ PYBIND11_MODULE(_core, m) {
       .def("cancel", &PyRenderer::cancel, "Cancels the render in flight (or the next one)")
       .def("visible_bounds", &PyRenderer::visibleBounds);
 
-  m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(),
-        py::arg("max_brick_width") = 32, py::arg("box") = std::vector<int>());
+  m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(), py::arg("max_brick_width") = 32,
+        py::arg("box") = std::vector<int>());
   m.def("from_cells", &fromCells, py::arg("corners"), py::arg("levels"), py::arg("fields"), py::arg("origin"),
         py::arg("spacing"), py::arg("max_brick_width") = 32, py::arg("units") = std::vector<std::string>());
-  m.def("from_grids", &fromGrids, py::arg("grids"), py::arg("names"), py::arg("origin"), py::arg("max_brick_width") = 32,
-        py::arg("units") = std::vector<std::string>());
+  m.def("from_grids", &fromGrids, py::arg("grids"), py::arg("names"), py::arg("origin"),
+        py::arg("max_brick_width") = 32, py::arg("units") = std::vector<std::string>());
   m.def("list_fields", &listFields, py::arg("path"));
-  m.def("frame_camera",
-        [](const std::vector<double>& lo, const std::vector<double>& hi, double azimuth, double elevation, double fov,
-           bool orthographic) {
-          if (lo.size() != 3 || hi.size() != 3) fail("bounds need three numbers per corner");
-          const Camera c = Camera::frame(box3d(vec3d(lo[0], lo[1], lo[2]), vec3d(hi[0], hi[1], hi[2])), azimuth,
-                                         elevation, fov, orthographic);
-          py::dict d;
-          d["position"] = py::make_tuple(c.position.x, c.position.y, c.position.z);
-          d["look_at"] = py::make_tuple(c.lookAt.x, c.lookAt.y, c.lookAt.z);
-          d["up"] = py::make_tuple(c.up.x, c.up.y, c.up.z);
-          d["fov"] = c.fovy;
-          d["orthographic"] = c.orthographic;
-          d["ortho_height"] = c.orthoHeight;
-          return d;
-        },
-        py::arg("lower"), py::arg("upper"), py::arg("azimuth"), py::arg("elevation"), py::arg("fov"),
-        py::arg("orthographic"), "The command line's default framing of a world box");
-  m.def("scene_json",
-        [](const std::string& text, const std::string& source) { return writeSceneJson(readSceneJson(text, source)); },
-        py::arg("text"), py::arg("source"),
-        "A scene file's JSON checked by the command line's reader (unknown keys and invalid settings are "
-        "refused with its messages, naming `source`) and written back by its writer, with every setting");
-  m.def("default_field_index",
-        [](const std::vector<std::string>& names) {
-          Model model;
-          model.fieldNames = names;
-          return model.requireField("");
-        },
-        py::arg("names"), "Which of these field names the command line takes by default");
+  m.def(
+      "frame_camera",
+      [](const std::vector<double>& lo, const std::vector<double>& hi, double azimuth, double elevation, double fov,
+         bool orthographic) {
+        if (lo.size() != 3 || hi.size() != 3) fail("bounds need three numbers per corner");
+        const Camera c = Camera::frame(box3d(vec3d(lo[0], lo[1], lo[2]), vec3d(hi[0], hi[1], hi[2])), azimuth,
+                                       elevation, fov, orthographic);
+        py::dict d;
+        d["position"] = py::make_tuple(c.position.x, c.position.y, c.position.z);
+        d["look_at"] = py::make_tuple(c.lookAt.x, c.lookAt.y, c.lookAt.z);
+        d["up"] = py::make_tuple(c.up.x, c.up.y, c.up.z);
+        d["fov"] = c.fovy;
+        d["orthographic"] = c.orthographic;
+        d["ortho_height"] = c.orthoHeight;
+        return d;
+      },
+      py::arg("lower"), py::arg("upper"), py::arg("azimuth"), py::arg("elevation"), py::arg("fov"),
+      py::arg("orthographic"), "The command line's default framing of a world box");
+  m.def(
+      "scene_json",
+      [](const std::string& text, const std::string& source) { return writeSceneJson(readSceneJson(text, source)); },
+      py::arg("text"), py::arg("source"),
+      "A scene file's JSON checked by the command line's reader (unknown keys and invalid settings are "
+      "refused with its messages, naming `source`) and written back by its writer, with every setting");
+  m.def(
+      "default_field_index",
+      [](const std::vector<std::string>& names) {
+        Model model;
+        model.fieldNames = names;
+        return model.requireField("");
+      },
+      py::arg("names"), "Which of these field names the command line takes by default");
   m.def("colormap_names", &builtinColorMapNames);
-  m.def("transfer_function_json",
-        [](const std::string& path) {
-          bool preset = false;
-          const TransferFunction tf = readTransferFunction(path, &preset);
-          return py::make_tuple(transferFunctionJson(tf), preset);
-        },
-        py::arg("path"), "A transfer function file (exabricks JSON or ParaView preset) in exabricks JSON form, "
-                         "and whether it was a ParaView preset");
+  m.def(
+      "transfer_function_json",
+      [](const std::string& path) {
+        bool preset = false;
+        const TransferFunction tf = readTransferFunction(path, &preset);
+        return py::make_tuple(transferFunctionJson(tf), preset);
+      },
+      py::arg("path"),
+      "A transfer function file (exabricks JSON or ParaView preset) in exabricks JSON form, "
+      "and whether it was a ParaView preset");
 }

@@ -36,7 +36,7 @@ struct ChomboFixture {
   int numLevels = 3;
   bool nanValue = false;
   bool shortData = false;
-  bool badDx = false; ///< level 2's dx disagrees with the ratios
+  bool badDx = false;        ///< level 2's dx disagrees with the ratios
   bool latestFormat = false; ///< the newest HDF5 file format (h5w::Writer)
   std::vector<std::vector<Box>> levels{{{{0, 0, 0}, {3, 7, 7}}, {{4, 0, 0}, {7, 7, 7}}},
                                        {{{4, 4, 4}, {7, 7, 7}}},
@@ -44,7 +44,8 @@ struct ChomboFixture {
   std::vector<int> ratios() const { return {2, ratio1, 2}; }
   double dx(int l) const {
     double d = 1.0;
-    for (int i = 0; i < l; ++i) d /= ratios()[size_t(i)];
+    for (int i = 0; i < l; ++i)
+      d /= ratios()[size_t(i)];
     return d;
   }
 
@@ -63,7 +64,8 @@ struct ChomboFixture {
       w.attrDoubles(g, "dx", {badDx && l == 2 ? 1.5 * dx(l) : dx(l)});
       w.attrInts(g, "ref_ratio", {ratios()[size_t(l)]});
       w.group(g + "/data_attributes");
-      w.attrIntCompound(g + "/data_attributes", "outputGhost", {"intvecti", "intvectj", "intvectk"}, {ghost, ghost, ghost});
+      w.attrIntCompound(g + "/data_attributes", "outputGhost", {"intvecti", "intvectj", "intvectk"},
+                        {ghost, ghost, ghost});
       std::vector<int> boxes;
       std::vector<long long> offsets{0};
       std::vector<double> data;

@@ -24,7 +24,8 @@ struct NamedCells {
 
 /// Moves every cell by `offset` (a multiple of the coarsest width keeps them aligned).
 inline CellSet translated(CellSet s, const vec3i& offset) {
-  for (Cell& c : s.cells) c.lower = c.lower + offset;
+  for (Cell& c : s.cells)
+    c.lower = c.lower + offset;
   return s;
 }
 

@@ -27,10 +27,10 @@ struct FlashFixture {
   bool float32 = false;
   int nxb = 4, nyb = 4, nzb = 2;
   int dimensionality = 3;
-  double shift = 0;        ///< moves one leaf block off the lattice
-  bool badSize = false;    ///< gives one leaf block 4/3 of the finest cell size
+  double shift = 0;     ///< moves one leaf block off the lattice
+  bool badSize = false; ///< gives one leaf block 4/3 of the finest cell size
   bool nanValue = false;
-  bool dropRow = false;    ///< variable datasets one block short
+  bool dropRow = false;      ///< variable datasets one block short
   bool latestFormat = false; ///< the newest HDF5 file format (h5w::Writer)
   std::vector<Block> blocks;
 
@@ -95,7 +95,8 @@ struct FlashFixture {
         for (int k = 0; k < nzb; ++k)
           for (int j = 0; j < nyb; ++j)
             for (int i = 0; i < nxb; ++i) {
-              const double t = truth(b.lo[0] + (i + 0.5) * d[0], b.lo[1] + (j + 0.5) * d[1], b.lo[2] + (k + 0.5) * d[2]);
+              const double t =
+                  truth(b.lo[0] + (i + 0.5) * d[0], b.lo[1] + (j + 0.5) * d[1], b.lo[2] + (k + 0.5) * d[2]);
               v.push_back(b.nodeType != 1 ? -5.0 : var == 0 ? t : 3 * t + b.level);
             }
       }

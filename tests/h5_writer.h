@@ -27,17 +27,21 @@ public:
   Writer(const Writer&) = delete;
   Writer& operator=(const Writer&) = delete;
 
-  void group(const std::string& path) { H5Gclose(check(H5Gcreate2(file_, path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT))); }
+  void group(const std::string& path) {
+    H5Gclose(check(H5Gcreate2(file_, path.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT)));
+  }
 
   /// A dataset of `fileType` from memory of `memType` (dims outermost first).
-  void dataset(const std::string& path, hid_t memType, hid_t fileType, const std::vector<hsize_t>& dims, const void* data) {
+  void dataset(const std::string& path, hid_t memType, hid_t fileType, const std::vector<hsize_t>& dims,
+               const void* data) {
     const hid_t space = H5Screate_simple(int(dims.size()), dims.data(), nullptr);
     const hid_t d = check(H5Dcreate2(file_, path.c_str(), fileType, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
     if (H5Dwrite(d, memType, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) < 0) throw std::runtime_error("write " + path);
     H5Dclose(d);
     H5Sclose(space);
   }
-  void doubles(const std::string& path, const std::vector<hsize_t>& dims, const std::vector<double>& v, bool asFloat = false) {
+  void doubles(const std::string& path, const std::vector<hsize_t>& dims, const std::vector<double>& v,
+               bool asFloat = false) {
     dataset(path, H5T_NATIVE_DOUBLE, asFloat ? H5T_IEEE_F32LE : H5T_IEEE_F64LE, dims, v.data());
   }
   void ints(const std::string& path, const std::vector<hsize_t>& dims, const std::vector<int>& v) {
@@ -47,9 +51,11 @@ public:
     dataset(path, H5T_NATIVE_LLONG, H5T_STD_I64LE, dims, v.data());
   }
   /// Fixed-length strings of `size` characters, space padded.
-  void strings(const std::string& path, const std::vector<hsize_t>& dims, const std::vector<std::string>& v, size_t size) {
+  void strings(const std::string& path, const std::vector<hsize_t>& dims, const std::vector<std::string>& v,
+               size_t size) {
     std::string buf;
-    for (const std::string& s : v) buf += (s + std::string(size, ' ')).substr(0, size);
+    for (const std::string& s : v)
+      buf += (s + std::string(size, ' ')).substr(0, size);
     const hid_t t = H5Tcopy(H5T_C_S1);
     H5Tset_size(t, size);
     H5Tset_strpad(t, H5T_STR_SPACEPAD);
@@ -116,10 +122,12 @@ private:
   }
   static hid_t intCompoundType(const std::vector<std::string>& members) {
     const hid_t t = H5Tcreate(H5T_COMPOUND, members.size() * sizeof(int));
-    for (size_t i = 0; i < members.size(); ++i) H5Tinsert(t, members[i].c_str(), i * sizeof(int), H5T_NATIVE_INT);
+    for (size_t i = 0; i < members.size(); ++i)
+      H5Tinsert(t, members[i].c_str(), i * sizeof(int), H5T_NATIVE_INT);
     return t;
   }
-  void attr(const std::string& obj, const std::string& name, hid_t memType, hid_t fileType, size_t n, const void* data) {
+  void attr(const std::string& obj, const std::string& name, hid_t memType, hid_t fileType, size_t n,
+            const void* data) {
     const hid_t o = check(H5Oopen(file_, obj.c_str(), H5P_DEFAULT));
     const hsize_t dims[1] = {n};
     const hid_t space = n == 1 ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, dims, nullptr);

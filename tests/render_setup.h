@@ -22,7 +22,8 @@ public:
   SceneRenderer(const Model& model, int field, const RenderSetup& setup)
       : model_(model), renderer(model), scene(setup.scene), frame(setup.frame) {
     fieldName_ = model.fieldNames.at(size_t(field));
-    for (VolumeLayer& l : scene.layers) l.field = fieldName_;
+    for (VolumeLayer& l : scene.layers)
+      l.field = fieldName_;
     last = renderer.setScene(scene);
   }
   SceneUpdate setTransferFunction(const TransferFunction& tf) {
@@ -32,7 +33,8 @@ public:
   /// Layers as (field index, transfer function).
   SceneUpdate setVolumeLayers(const std::vector<std::pair<int, TransferFunction>>& layers) {
     scene.layers.clear();
-    for (const auto& [f, tf] : layers) scene.layers.push_back({model_.fieldNames.at(size_t(f)), tf});
+    for (const auto& [f, tf] : layers)
+      scene.layers.push_back({model_.fieldNames.at(size_t(f)), tf});
     return last = renderer.setScene(scene);
   }
   SceneUpdate setIsoSurfaces(const IsoSurfaces& iso) {

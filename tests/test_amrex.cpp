@@ -24,14 +24,15 @@ fs::path sharedData() {
   return fs::path(EXABRICKS_SOURCE_DIR).parent_path() / "shared" / "data";
 }
 
-#define REQUIRE_DATA(sub)                                                                          \
-  const fs::path data = sharedData() / (sub);                                                      \
-  if (!fs::exists(data)) GTEST_SKIP() << "sample data not found at " << data.string()              \
-                                      << " (set EXABRICKS_DATA to the shared data folder)"
+#define REQUIRE_DATA(sub)                                                                                              \
+  const fs::path data = sharedData() / (sub);                                                                          \
+  if (!fs::exists(data))                                                                                               \
+  GTEST_SKIP() << "sample data not found at " << data.string() << " (set EXABRICKS_DATA to the shared data folder)"
 
 std::map<int, uint64_t> cellsPerLevel(const CellSet& s) {
   std::map<int, uint64_t> m;
-  for (const Cell& c : s.cells) m[c.level]++;
+  for (const Cell& c : s.cells)
+    m[c.level]++;
   return m;
 }
 
@@ -54,7 +55,8 @@ struct Fixture {
     std::ofstream h(dir / "Header");
     h << "HyperCLaw-V1.1\n2\nrho\ntemp\n" << dim << "\n0.5\n1\n-1 0 2\n3 4 6\n" << ratio << "\n";
     h << "((0,0,0) (3,3,3) (0,0,0)) ((0,0,0) (" << 4 * ratio - 1 << "," << 4 * ratio - 1 << "," << 4 * ratio - 1
-      << ") (0,0,0))\n0 0\n1 1 1\n" << 1.0 / ratio << " " << 1.0 / ratio << " " << 1.0 / ratio << "\n0\n0\n";
+      << ") (0,0,0))\n0 0\n1 1 1\n"
+      << 1.0 / ratio << " " << 1.0 / ratio << " " << 1.0 / ratio << "\n0\n0\n";
     h << "0 1 0.5\n0\n-1 3\n0 4\n2 6\nLevel_0/Cell\n1 1 0.5\n0\n0 1\n1 2\n3 4\nLevel_1/Cell\n";
     writeLevel(0, {0, 0, 0}, {3, 3, 3});
     writeLevel(1, {ratio, ratio, ratio}, {3 * ratio - 1, 2 * ratio - 1, 2 * ratio - 1});
@@ -71,7 +73,8 @@ struct Fixture {
     const vec3i glo = lo - g, ghi = hi + g;
     const int bytes = float32 ? 4 : 8;
     d << "FAB ((8, (" << (float32 ? "32 8 23 0 1 9 0 127" : "64 11 52 0 1 12 0 1023") << ")),(" << bytes << ", (";
-    for (int i = 0; i < bytes; ++i) d << (bigEndian ? i + 1 : bytes - i) << (i + 1 < bytes ? " " : "");
+    for (int i = 0; i < bytes; ++i)
+      d << (bigEndian ? i + 1 : bytes - i) << (i + 1 < bytes ? " " : "");
     d << ")))((" << glo.x << "," << glo.y << "," << glo.z << ") (" << ghi.x << "," << ghi.y << "," << ghi.z
       << ") (0,0,0)) 2\n";
     const vec3i n = ghi - glo + vec3i(1);
@@ -79,7 +82,8 @@ struct Fixture {
       for (int z = 0; z < n.z; ++z)
         for (int y = 0; y < n.y; ++y)
           for (int x = 0; x < n.x; ++x) {
-            const bool inside = x >= ghost && y >= ghost && z >= ghost && x < n.x - ghost && y < n.y - ghost && z < n.z - ghost;
+            const bool inside =
+                x >= ghost && y >= ghost && z >= ghost && x < n.x - ghost && y < n.y - ghost && z < n.z - ghost;
             const vec3i v = hi - lo + vec3i(1);
             const int64_t i = (int64_t(z - ghost) * v.y + (y - ghost)) * v.x + (x - ghost);
             const double value = inside ? value1(level, i) + 1000.0 * comp : -7.0;
@@ -91,7 +95,8 @@ struct Fixture {
               std::memcpy(b, &value, 8);
             }
             if (bigEndian)
-              for (int k = 0; k < bytes / 2; ++k) std::swap(b[k], b[bytes - 1 - k]);
+              for (int k = 0; k < bytes / 2; ++k)
+                std::swap(b[k], b[bytes - 1 - k]);
             d.write(reinterpret_cast<const char*>(b), bytes);
           }
   }
@@ -123,7 +128,8 @@ TEST(Amrex, SharedAdvectionSampleLeafCounts) {
   EXPECT_EQ(levels.at(0), 737280u);
   // phi lies in [0.99015, 1.99454] over all stored cells; the peak sits on the finest level.
   range1f r;
-  for (float v : s.fields[0].values) r.extend(v);
+  for (float v : s.fields[0].values)
+    r.extend(v);
   EXPECT_GE(r.lower, 0.99014f); // the published range is rounded to five digits
   EXPECT_LE(r.upper, 1.99455f);
   EXPECT_GT(r.upper, 1.99f);
@@ -223,7 +229,8 @@ TEST(Amrex, ABoxReadsOnlyTheCellsThatOverlapIt) {
   }
   // The box (0,0,0)-(4,4,4) lies in the coarse level only: the fine box's data is not read.
   const CellSet coarseOnly = readAmrex(f.dir.string(), {}, box3i(vec3i(0), vec3i(4)));
-  for (const Cell& c : coarseOnly.cells) EXPECT_EQ(c.level, 2);
+  for (const Cell& c : coarseOnly.cells)
+    EXPECT_EQ(c.level, 2);
 }
 
 TEST(Amrex, TheCensusCountsTheLeafCellsFromTheHeadersAlone) {
@@ -234,7 +241,8 @@ TEST(Amrex, TheCensusCountsTheLeafCellsFromTheHeadersAlone) {
   const Census census = amrexCensus(f.dir.string());
   EXPECT_DOUBLE_EQ(census.cells(), double(all.size()));
   int coarsest = 0;
-  for (const Cell& c : all.cells) coarsest = std::max(coarsest, c.level);
+  for (const Cell& c : all.cells)
+    coarsest = std::max(coarsest, c.level);
   EXPECT_EQ(census.coarsestLevel, coarsest);
   // Every leaf cell lies in a census box of its level's count.
   for (const Cell& c : all.cells) {
@@ -269,7 +277,8 @@ TEST(Amrex, SharedSampleBuiltInPartsEqualsTheWholeBuild) {
   std::uniform_real_distribution<double> u(0.0, 1.0);
   for (int i = 0; i < 5000; ++i) {
     vec3d q;
-    for (int k = 0; k < 3; ++k) q[k] = double(cb.lower[k]) + u(rng) * double(cb.upper[k] - cb.lower[k]);
+    for (int k = 0; k < 3; ++k)
+      q[k] = double(cb.lower[k]) + u(rng) * double(cb.upper[k] - cb.lower[k]);
     double v0 = 0, v1 = 0;
     vec3d g0, g1;
     const bool h0 = a.sampleWorld(0, a.world.toWorld(q), v0, g0);
@@ -277,7 +286,8 @@ TEST(Amrex, SharedSampleBuiltInPartsEqualsTheWholeBuild) {
     ASSERT_EQ(h0, h1);
     if (!h0) continue;
     EXPECT_NEAR(v0, v1, 1e-5 * (1.0 + std::abs(v0)));
-    for (int k = 0; k < 3; ++k) EXPECT_NEAR(g0[k], g1[k], 1e-4 * (1.0 + std::abs(g0[k])));
+    for (int k = 0; k < 3; ++k)
+      EXPECT_NEAR(g0[k], g1[k], 1e-4 * (1.0 + std::abs(g0[k])));
   }
 }
 
@@ -353,7 +363,8 @@ TEST(Amrex, BadPlotfilesAreRejectedClearly) {
 }
 
 TEST(Amrex, FieldRangesFromMetadataHoldTheData) {
-  for (const char* sub : {"amrex/advection_3d/plt_small", "amrex/advection_3d/plt_drop", "amrex/pelelm_3lev_3d/example_plt_3d"}) {
+  for (const char* sub :
+       {"amrex/advection_3d/plt_small", "amrex/advection_3d/plt_drop", "amrex/pelelm_3lev_3d/example_plt_3d"}) {
     const fs::path dir = sharedData() / sub;
     if (!fs::exists(dir)) continue;
     for (const std::string& name : listAmrexFields(dir.string())) {
@@ -361,7 +372,8 @@ TEST(Amrex, FieldRangesFromMetadataHoldTheData) {
       ASSERT_TRUE(meta.has_value()) << sub << " " << name;
       const CellSet cells = readAmrex(dir.string(), {name});
       range1f data;
-      for (float v : cells.fields[0].values) data.extend(v);
+      for (float v : cells.fields[0].values)
+        data.extend(v);
       // The tables cover the boxes finer levels cover too (averages of the finer values), so the
       // range holds the leaves' range and, for these files, equals it to float precision.
       const float tol = 1e-6f * std::max(std::abs(data.lower), std::abs(data.upper)) + 1e-30f;
@@ -371,5 +383,6 @@ TEST(Amrex, FieldRangesFromMetadataHoldTheData) {
       EXPECT_NEAR(meta->upper, data.upper, 1e-3 * (data.upper - data.lower) + tol) << sub << " " << name;
     }
   }
-  EXPECT_FALSE(fieldRangeFromMetadata(sharedData().string() + "/amrex/advection_3d/plt_drop", "no-such-field").has_value());
+  EXPECT_FALSE(
+      fieldRangeFromMetadata(sharedData().string() + "/amrex/advection_3d/plt_drop", "no-such-field").has_value());
 }

@@ -21,12 +21,13 @@ bool compareAt(const CellSet& cells, const Model& m, int field, const vec3d& p) 
   double value = 0;
   vec3d grad;
   const bool ok = sampleField(m.view(field), p, value, &grad);
-  const std::string where = "at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
-                            std::to_string(p.z) + ")";
+  const std::string where =
+      "at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
   EXPECT_EQ(ok, ref.valid) << where;
   if (ok && ref.valid) {
     expectClose(value, ref.value, 1e-9, "value " + where);
-    for (int a = 0; a < 3; ++a) expectClose(grad[a], ref.gradient[a], 1e-8, "gradient " + where);
+    for (int a = 0; a < 3; ++a)
+      expectClose(grad[a], ref.gradient[a], 1e-8, "gradient " + where);
   }
   return ok;
 }
@@ -90,7 +91,8 @@ TEST(Basis, MatchesBruteForceOnBrickRegionAndLevelBoundaries) {
     CellSet copy = d.cells;
     const Model m = buildModel(std::move(copy));
     std::mt19937 rng(11);
-    for (const vec3d& p : boundaryPoints(m, rng, 3000)) compareAt(d.cells, m, 0, p);
+    for (const vec3d& p : boundaryPoints(m, rng, 3000))
+      compareAt(d.cells, m, 0, p);
   }
 }
 
@@ -184,7 +186,8 @@ TEST(Basis, FloatSamplerAgreesWithDouble) {
   const box3f b = m.regions.bounds;
   for (int i = 0; i < 2000; ++i) {
     vec3f p;
-    for (int a = 0; a < 3; ++a) p[a] = std::uniform_real_distribution<float>(b.lower[a], b.upper[a])(rng);
+    for (int a = 0; a < 3; ++a)
+      p[a] = std::uniform_real_distribution<float>(b.lower[a], b.upper[a])(rng);
     double vd;
     float vf;
     vec3d gd;

@@ -12,8 +12,8 @@
 
 #include <gtest/gtest.h>
 
-#include <cfloat>
 #include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -38,63 +38,65 @@ TEST(BasisBatch, EqualsTheScalarReconstruction) {
   // brick has two cells or more along x, one by one otherwise.
   int narrow = 0, wide = 0;
   forEveryTarget([&] {
-  for (const test::NamedCells& d : test::smallDatasets()) {
-    const Model m = buildModel(CellSet(d.cells));
-    for (const Brick& brick : m.bricks) ++(brick.size.x == 1 ? narrow : wide);
-    const FieldView view = m.view(0);
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> u(0.f, 1.f);
-    std::uniform_int_distribution<int> pickRegion(0, int(m.regions.regions.size()) - 1);
-    for (int trial = 0; trial < 300; ++trial) {
-      const uint32_t r = uint32_t(pickRegion(rng));
-      const box3f b = m.regions.regions[r].bounds();
-      SampleBatch batch, reference;
-      batch.count = 1 + trial % kSampleBatch;
-      for (int i = 0; i < batch.count; ++i) {
-        // Inside the region, on its faces and on cell centres and faces now and then.
-        vec3f p;
-        for (int a = 0; a < 3; ++a) {
-          const float t = trial % 7 == 0 ? float(i % 3) * 0.5f : u(rng);
-          p[a] = b.lower[a] + t * (b.upper[a] - b.lower[a]);
-          if (trial % 5 == 0) p[a] = std::round(p[a] * 2.f) * 0.5f;
-        }
-        batch.x[i] = p.x, batch.y[i] = p.y, batch.z[i] = p.z;
-      }
-      reference = batch;
-      for (bool gradient : {false, true}) {
-        sampleRegionBatch(view, r, batch, gradient);
-        sampleRegionBatchScalar(view, r, reference, gradient);
+    for (const test::NamedCells& d : test::smallDatasets()) {
+      const Model m = buildModel(CellSet(d.cells));
+      for (const Brick& brick : m.bricks)
+        ++(brick.size.x == 1 ? narrow : wide);
+      const FieldView view = m.view(0);
+      std::mt19937 rng(11);
+      std::uniform_real_distribution<float> u(0.f, 1.f);
+      std::uniform_int_distribution<int> pickRegion(0, int(m.regions.regions.size()) - 1);
+      for (int trial = 0; trial < 300; ++trial) {
+        const uint32_t r = uint32_t(pickRegion(rng));
+        const box3f b = m.regions.regions[r].bounds();
+        SampleBatch batch, reference;
+        batch.count = 1 + trial % kSampleBatch;
         for (int i = 0; i < batch.count; ++i) {
-          ASSERT_EQ(batch.valid[i] != 0, reference.valid[i] != 0) << d.name << " region " << r << " sample " << i;
-          if (!reference.valid[i]) continue;
-          const float v = reference.value[i];
-          EXPECT_NEAR(batch.value[i], v, 2e-6f * (1.f + std::abs(v))) << d.name;
-          if (!gradient) continue;
-          // Gradients against the reconstruction in double precision: the batch's is as close as
-          // the scalar float reference's, up to float round-off (2e-5). Where the positions keep
-          // few bits of fraction, the two float forms round differently. The quotient rule
-          // divides by the total weight squared: at the edge of the supports, where the total
-          // weight is small against its derivative, round-off grows by their ratio.
-          const Region& region = m.regions.regions[r];
-          BasisAccumulator<double> truth;
-          for (uint32_t k = 0; k < region.brickCount; ++k)
-            truth.addBrick(m.bricks[m.regions.brickIds[region.brickBegin + k]], view.values,
-                           vec3d(batch.x[i], batch.y[i], batch.z[i]), true);
-          ASSERT_TRUE(truth.valid());
-          const vec3d truthGradient = truth.gradient();
-          const float g[3] = {reference.gx[i], reference.gy[i], reference.gz[i]};
-          const float h[3] = {batch.gx[i], batch.gy[i], batch.gz[i]};
-          const double scale = 1.0 + std::abs(truthGradient.x) + std::abs(truthGradient.y) + std::abs(truthGradient.z);
-          const double condition =
-              (std::abs(truth.dSumW.x) + std::abs(truth.dSumW.y) + std::abs(truth.dSumW.z)) / truth.sumW;
-          const double tolerance = 2e-5 * scale + 8.0 * FLT_EPSILON * condition * (1.0 + std::abs(truth.value()));
-          for (int a = 0; a < 3; ++a)
-            EXPECT_LE(std::abs(h[a] - truthGradient[a]), std::abs(g[a] - truthGradient[a]) + tolerance)
-                << d.name << " axis " << a;
+          // Inside the region, on its faces and on cell centres and faces now and then.
+          vec3f p;
+          for (int a = 0; a < 3; ++a) {
+            const float t = trial % 7 == 0 ? float(i % 3) * 0.5f : u(rng);
+            p[a] = b.lower[a] + t * (b.upper[a] - b.lower[a]);
+            if (trial % 5 == 0) p[a] = std::round(p[a] * 2.f) * 0.5f;
+          }
+          batch.x[i] = p.x, batch.y[i] = p.y, batch.z[i] = p.z;
+        }
+        reference = batch;
+        for (bool gradient : {false, true}) {
+          sampleRegionBatch(view, r, batch, gradient);
+          sampleRegionBatchScalar(view, r, reference, gradient);
+          for (int i = 0; i < batch.count; ++i) {
+            ASSERT_EQ(batch.valid[i] != 0, reference.valid[i] != 0) << d.name << " region " << r << " sample " << i;
+            if (!reference.valid[i]) continue;
+            const float v = reference.value[i];
+            EXPECT_NEAR(batch.value[i], v, 2e-6f * (1.f + std::abs(v))) << d.name;
+            if (!gradient) continue;
+            // Gradients against the reconstruction in double precision: the batch's is as close as
+            // the scalar float reference's, up to float round-off (2e-5). Where the positions keep
+            // few bits of fraction, the two float forms round differently. The quotient rule
+            // divides by the total weight squared: at the edge of the supports, where the total
+            // weight is small against its derivative, round-off grows by their ratio.
+            const Region& region = m.regions.regions[r];
+            BasisAccumulator<double> truth;
+            for (uint32_t k = 0; k < region.brickCount; ++k)
+              truth.addBrick(m.bricks[m.regions.brickIds[region.brickBegin + k]], view.values,
+                             vec3d(batch.x[i], batch.y[i], batch.z[i]), true);
+            ASSERT_TRUE(truth.valid());
+            const vec3d truthGradient = truth.gradient();
+            const float g[3] = {reference.gx[i], reference.gy[i], reference.gz[i]};
+            const float h[3] = {batch.gx[i], batch.gy[i], batch.gz[i]};
+            const double scale =
+                1.0 + std::abs(truthGradient.x) + std::abs(truthGradient.y) + std::abs(truthGradient.z);
+            const double condition =
+                (std::abs(truth.dSumW.x) + std::abs(truth.dSumW.y) + std::abs(truth.dSumW.z)) / truth.sumW;
+            const double tolerance = 2e-5 * scale + 8.0 * FLT_EPSILON * condition * (1.0 + std::abs(truth.value()));
+            for (int a = 0; a < 3; ++a)
+              EXPECT_LE(std::abs(h[a] - truthGradient[a]), std::abs(g[a] - truthGradient[a]) + tolerance)
+                  << d.name << " axis " << a;
+          }
         }
       }
     }
-  }
   });
   EXPECT_GT(narrow, 0);
   EXPECT_GT(wide, 0);
@@ -126,7 +128,8 @@ TEST(BasisBatch, UnionOfRegionListsEqualsEachSamplesOwnRegion) {
           const int n = std::min(1 + int(u(rng) * 8.f), kSampleBatch - batch.count);
           for (int i = 0; i < n; ++i) {
             vec3f p;
-            for (int a = 0; a < 3; ++a) p[a] = b.lower[a] + u(rng) * (b.upper[a] - b.lower[a]);
+            for (int a = 0; a < 3; ++a)
+              p[a] = b.lower[a] + u(rng) * (b.upper[a] - b.lower[a]);
             const int k = batch.count++;
             batch.x[k] = p.x, batch.y[k] = p.y, batch.z[k] = p.z;
             owner[k] = r;
@@ -233,7 +236,8 @@ TEST(ShadeBatch, EqualsTheScalarFunctions) {
         p.halfVector = normalize(vec3f(0.1f, 0.2f, 1.f));
         p.fadeByValue = trial % 3 == 0;
         float fades[kSampleBatch]; // per sample: a batch may join regions of several widths
-        for (int i = 0; i < kSampleBatch; ++i) fades[i] = (p.fadeByValue ? 2.f : 0.4f) * (1.f + 0.5f * float(i % 3));
+        for (int i = 0; i < kSampleBatch; ++i)
+          fades[i] = (p.fadeByValue ? 2.f : 0.4f) * (1.f + 0.5f * float(i % 3));
         p.fadeWidth = fades;
         ShadedBatch shaded, expected;
         shadeVolumeBatch(batch, reference, lengths, p, shaded);
@@ -272,7 +276,8 @@ TEST(ShadeBatch, PlacementEqualsTheScalarMarch) {
         alignas(64) float la[2 * kSampleBatch], lb[2 * kSampleBatch];
         const int first = round % 2 == 1 ? std::min(int(u(rng) * kSampleBatch), kSampleBatch - 1) : 0;
         a.count = b.count = first;
-        for (int i = 0; i < first; ++i) a.x[i] = a.y[i] = a.z[i] = la[i] = -7.f;
+        for (int i = 0; i < first; ++i)
+          a.x[i] = a.y[i] = a.z[i] = la[i] = -7.f;
         const int n = placeSamples(org, dir, vector, a, la);
         const int m = placeSamplesScalar(org, dir, scalar, b, lb);
         ASSERT_EQ(n, m);
@@ -314,8 +319,8 @@ TEST(BasisBatch, RendersEqualTheScalarPath) {
   frame.height = 96;
   frame.samplesPerPixel = 2;
   const box3i cb = m.cellBounds();
-  frame.camera = Camera::frame(box3d(m.world.toWorld(vec3d(cb.lower)), m.world.toWorld(vec3d(cb.upper))), 30, 20, 40,
-                               false);
+  frame.camera =
+      Camera::frame(box3d(m.world.toWorld(vec3d(cb.lower)), m.world.toWorld(vec3d(cb.upper))), 30, 20, 40, false);
   for (int variant = 0; variant < 7; ++variant) {
     Scene scene;
     scene.layers[0].tf.valueRange = info.valueRanges[0];

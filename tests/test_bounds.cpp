@@ -19,12 +19,12 @@
 #include <filesystem>
 #include <fstream>
 #include <initializer_list>
-#include <vector>
 #include <string>
 #include <sys/resource.h>
 #include <sys/time.h>
 #include <sys/wait.h>
 #include <unistd.h>
+#include <vector>
 
 using namespace exa;
 namespace fs = std::filesystem;
@@ -72,8 +72,10 @@ Outcome refuseInChild(const std::string& path, bool model = false) {
     int code = 2;
     std::string message = "loaded without error";
     try {
-      if (model) loadModel(path);
-      else loadCells(path);
+      if (model)
+        loadModel(path);
+      else
+        loadCells(path);
     } catch (const Error& e) {
       message = e.what();
       code = 0;
@@ -88,7 +90,8 @@ Outcome refuseInChild(const std::string& path, bool model = false) {
   close(fds[1]);
   Outcome out;
   char buf[4096];
-  for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;) out.message.append(buf, size_t(n));
+  for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;)
+    out.message.append(buf, size_t(n));
   close(fds[0]);
   int status = 0;
   rusage usage{};
@@ -104,7 +107,8 @@ void expectRefused(const fs::path& path, std::initializer_list<const char*> part
   const long before = mappedBytes();
   const Outcome o = refuseInChild(path.string());
   EXPECT_EQ(o.status, 0) << o.message;
-  for (const char* p : parts) EXPECT_NE(o.message.find(p), std::string::npos) << "'" << p << "' not in: " << o.message;
+  for (const char* p : parts)
+    EXPECT_NE(o.message.find(p), std::string::npos) << "'" << p << "' not in: " << o.message;
   EXPECT_LT(o.seconds, 1.0) << o.message;
   EXPECT_LT(o.peakKiB * 1024L, before + kLimitBytes) << o.message;
   std::printf("%s: refused in %.3f s, peak %ld KiB: %s\n", path.filename().c_str(), o.seconds, o.peakKiB,
@@ -124,8 +128,9 @@ fs::path amrexPlotfile(const std::string& name, const std::string& box, const st
                        size_t dataBytes = 80) {
   const fs::path dir = fresh(name) / "plt";
   fs::create_directories(dir / "Level_0");
-  std::ofstream(dir / "Header") << "HyperCLaw-V1.1\n" << nvars << "\nrho\n3\n0\n0\n0 0 0\n1 1 1\n\n" << box
-                                << "\n0\n1 1 1\n0\n0\n0 1 0\n0\n0 1\n0 1\n0 1\nLevel_0/Cell\n";
+  std::ofstream(dir / "Header") << "HyperCLaw-V1.1\n"
+                                << nvars << "\nrho\n3\n0\n0\n0 0 0\n1 1 1\n\n"
+                                << box << "\n0\n1 1 1\n0\n0\n0 1 0\n0\n0 1\n0 1\n0 1\nLevel_0/Cell\n";
   std::ofstream(dir / "Level_0" / "Cell_H") << "1\n0\n1\n0\n(1 0\n" << box << "\n)\n1\nFabOnDisk: Cell_D_00000 0\n";
   std::ofstream d(dir / "Level_0" / "Cell_D_00000", std::ios::binary);
   d << "FAB ((8, (64 11 52 0 1 12 0 1023)),(8, (8 7 6 5 4 3 2 1)))" << box << " 1\n" << std::string(dataBytes, '\0');
@@ -137,8 +142,8 @@ fs::path vtkHierarchy(const std::string& name, long n) {
   const fs::path dir = fresh(name);
   std::ofstream(dir / "data.vthb") << "<VTKFile type=\"vtkOverlappingAMR\" version=\"1.1\">\n"
                                    << "<vtkOverlappingAMR origin=\"0 0 0\" grid_description=\"XYZ\">\n"
-                                   << "<Block level=\"0\" spacing=\"1 1 1\">\n<DataSet index=\"0\" amr_box=\"0 " << n - 1
-                                   << " 0 " << n - 1 << " 0 " << n - 1 << "\" file=\"p.vti\"/>\n"
+                                   << "<Block level=\"0\" spacing=\"1 1 1\">\n<DataSet index=\"0\" amr_box=\"0 "
+                                   << n - 1 << " 0 " << n - 1 << " 0 " << n - 1 << "\" file=\"p.vti\"/>\n"
                                    << "</Block>\n</vtkOverlappingAMR>\n</VTKFile>\n";
   std::ofstream(dir / "p.vti") << "<VTKFile type=\"ImageData\" version=\"1.0\" header_type=\"UInt32\">\n"
                                << "<ImageData WholeExtent=\"0 " << n << " 0 " << n << " 0 " << n << "\">\n"
@@ -186,7 +191,8 @@ void unwrittenDataset(const std::string& file, const std::string& name, const st
   const hid_t space = H5Screate_simple(int(dims.size()), dims.data(), nullptr);
   const hid_t dcpl = H5Pcreate(H5P_DATASET_CREATE);
   std::vector<hsize_t> chunk(dims.size(), 1);
-  for (size_t a = 0; a < dims.size(); ++a) chunk[a] = std::min<hsize_t>(dims[a], 64);
+  for (size_t a = 0; a < dims.size(); ++a)
+    chunk[a] = std::min<hsize_t>(dims[a], 64);
   H5Pset_chunk(dcpl, int(chunk.size()), chunk.data());
   H5Dclose(H5Dcreate2(f, name.c_str(), H5T_IEEE_F64LE, space, H5P_DEFAULT, dcpl, H5P_DEFAULT));
   H5Pclose(dcpl);
@@ -219,8 +225,8 @@ fs::path flashFile(const std::string& name, int n) {
     w.ints("node type", {1}, {1});
     w.doubles("bounding box", {1, 3, 2}, {0, 1, 0, 1, 0, 1});
     w.strings("unknown names", {1, 1}, {"dens"}, 4);
-    w.nameValueTable("integer scalars", {"nxb", "nyb", "nzb", "dimensionality"},
-                     {double(n), double(n), double(n), 3.0}, true);
+    w.nameValueTable("integer scalars", {"nxb", "nyb", "nzb", "dimensionality"}, {double(n), double(n), double(n), 3.0},
+                     true);
   }
   unwrittenDataset(path.string(), "dens", {1, hsize_t(n), hsize_t(n), hsize_t(n)});
   return path;
@@ -251,11 +257,13 @@ void expectCliRefuses(const fs::path& path, const std::vector<const char*>& part
   ASSERT_NE(pipe, nullptr);
   std::string out;
   char buf[4096];
-  for (size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;) out.append(buf, n);
+  for (size_t n; (n = std::fread(buf, 1, sizeof buf, pipe)) > 0;)
+    out.append(buf, n);
   const int status = pclose(pipe);
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << "status " << status << ": " << out;
-  for (const char* p : parts) EXPECT_NE(out.find(p), std::string::npos) << "'" << p << "' not in: " << out;
+  for (const char* p : parts)
+    EXPECT_NE(out.find(p), std::string::npos) << "'" << p << "' not in: " << out;
   EXPECT_EQ(out.find("out of memory"), std::string::npos) << out;
   EXPECT_LT(seconds, 2.0) << out;
   std::printf("exabricks info %s under 256 MB: refused in %.3f s: %s", path.filename().c_str(), seconds, out.c_str());
@@ -312,11 +320,15 @@ TEST(Bounds, TwoToThe33CellsInEveryReaderUnder256MB) {
     fs::create_directories(dir / "Level_0");
     const std::string b[3] = {"((0,0,0) (63,63,63) (0,0,0))", "((64,0,0) (127,63,63) (0,0,0))",
                               "((128,0,0) (191,63,63) (0,0,0))"};
-    std::ofstream(dir / "Header") << "HyperCLaw-V1.1\n1\nrho\n3\n0\n0\n0 0 0\n1 1 1\n\n((0,0,0) (191,63,63) (0,0,0))"
-                                  << "\n0\n1 1 1\n0\n0\n0 3 0\n0\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\nLevel_0/Cell\n";
-    std::ofstream(dir / "Level_0" / "Cell_H") << "1\n0\n1\n0\n(3 0\n" << b[0] << "\n" << b[1] << "\n" << b[2]
-                                              << "\n)\n3\nFabOnDisk: Cell_D_00000 0\nFabOnDisk: Cell_D_00000 0\n"
-                                              << "FabOnDisk: Cell_D_00000 0\n";
+    std::ofstream(dir / "Header")
+        << "HyperCLaw-V1.1\n1\nrho\n3\n0\n0\n0 0 0\n1 1 1\n\n((0,0,0) (191,63,63) (0,0,0))"
+        << "\n0\n1 1 1\n0\n0\n0 3 0\n0\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\n0 1\nLevel_0/Cell\n";
+    std::ofstream(dir / "Level_0" / "Cell_H")
+        << "1\n0\n1\n0\n(3 0\n"
+        << b[0] << "\n"
+        << b[1] << "\n"
+        << b[2] << "\n)\n3\nFabOnDisk: Cell_D_00000 0\nFabOnDisk: Cell_D_00000 0\n"
+        << "FabOnDisk: Cell_D_00000 0\n";
     std::ofstream(dir / "Level_0" / "Cell_D_00000", std::ios::binary) << std::string(64 * 64 * 64 * 6, '\0');
     cases.push_back({dir, {"Cell_D_00000", "level 0 box 1", "the boxes stored in this file need"}});
   }
@@ -341,7 +353,8 @@ TEST(Bounds, TwoToThe33CellsInEveryReaderUnder256MB) {
     const Outcome o = refuseInChild(c.path.string(), c.path.extension() == ".exa");
     EXPECT_EQ(o.status, 0) << o.message;
     EXPECT_LT(o.seconds, 1.0) << o.message;
-    for (const char* p : c.parts) EXPECT_NE(o.message.find(p), std::string::npos) << "'" << p << "' not in: " << o.message;
+    for (const char* p : c.parts)
+      EXPECT_NE(o.message.find(p), std::string::npos) << "'" << p << "' not in: " << o.message;
     std::printf("%s: refused in %.3f s, peak %ld KiB\n", c.path.filename().c_str(), o.seconds, o.peakKiB);
     expectCliRefuses(c.path, c.parts);
   }

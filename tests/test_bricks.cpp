@@ -35,10 +35,12 @@ void checkBricks(const CellSet& set, const BrickBuild& b, int maxWidth) {
         }
   }
   EXPECT_EQ(next, set.cells.size());
-  for (size_t i = 0; i < seen.size(); ++i) ASSERT_EQ(seen[i], 1) << "cell " << i;
+  for (size_t i = 0; i < seen.size(); ++i)
+    ASSERT_EQ(seen[i], 1) << "cell " << i;
   // Bricks are pairwise disjoint: sweep along x over bricks sorted by their lower x.
   std::vector<box3i> boxes;
-  for (const Brick& brick : b.bricks) boxes.push_back(brick.bounds());
+  for (const Brick& brick : b.bricks)
+    boxes.push_back(brick.bounds());
   std::sort(boxes.begin(), boxes.end(), [](const box3i& l, const box3i& r) { return l.lower.x < r.lower.x; });
   for (size_t i = 0; i < boxes.size(); ++i)
     for (size_t j = i + 1; j < boxes.size() && boxes[j].lower.x < boxes[i].upper.x; ++j) {
@@ -47,7 +49,8 @@ void checkBricks(const CellSet& set, const BrickBuild& b, int maxWidth) {
     }
   // Values reorder with the slots.
   const std::vector<float> ordered = toBrickOrder(set.fields[0].values, b.cellOfSlot);
-  for (size_t s = 0; s < ordered.size(); ++s) ASSERT_EQ(ordered[s], set.fields[0].values[b.cellOfSlot[s]]);
+  for (size_t s = 0; s < ordered.size(); ++s)
+    ASSERT_EQ(ordered[s], set.fields[0].values[b.cellOfSlot[s]]);
 }
 
 } // namespace
@@ -66,7 +69,8 @@ TEST(Bricks, FullBoxIsOneBrick) {
   CellSet s;
   for (int z = 0; z < 4; ++z)
     for (int y = 0; y < 3; ++y)
-      for (int x = 0; x < 5; ++x) s.cells.push_back({vec3i(x, y, z) * 2 + vec3i(-8, 6, 2), 1});
+      for (int x = 0; x < 5; ++x)
+        s.cells.push_back({vec3i(x, y, z) * 2 + vec3i(-8, 6, 2), 1});
   const BrickBuild b = buildBricks(s.cells);
   ASSERT_EQ(b.bricks.size(), 1u);
   EXPECT_EQ(b.bricks[0].size, vec3i(5, 3, 4));
@@ -83,11 +87,13 @@ TEST(Bricks, BlocksStayWholeAndFarApartCellsSplitQuickly) {
   for (int block = 0; block < 4; ++block)
     for (int z = 0; z < 4; ++z)
       for (int y = 0; y < 4; ++y)
-        for (int x = 0; x < 4; ++x) s.cells.push_back({vec3i(8 + 16 * block + 4 * x, 4 * y, 4 * z), 2});
+        for (int x = 0; x < 4; ++x)
+          s.cells.push_back({vec3i(8 + 16 * block + 4 * x, 4 * y, 4 * z), 2});
   // A coarser layer beside them makes the node mixed, so the first split is a choice.
   for (int z = 0; z < 2; ++z)
     for (int y = 0; y < 2; ++y)
-      for (int x = 0; x < 9; ++x) s.cells.push_back({vec3i(8 * x, 16 + 8 * y, 8 * z), 3});
+      for (int x = 0; x < 9; ++x)
+        s.cells.push_back({vec3i(8 * x, 16 + 8 * y, 8 * z), 3});
   const BrickBuild b = buildBricks(s.cells, {8});
   int fine = 0;
   for (const Brick& brick : b.bricks)
@@ -167,8 +173,10 @@ TEST(Bricks, ReorderingInPlaceEqualsIndexedBuild) {
       std::vector<Cell> cells = d.cells.cells;
       std::vector<std::vector<float>> values;
       std::vector<std::vector<float>*> arrays;
-      for (const Field& f : d.cells.fields) values.push_back(f.values);
-      for (auto& v : values) arrays.push_back(&v);
+      for (const Field& f : d.cells.fields)
+        values.push_back(f.values);
+      for (auto& v : values)
+        arrays.push_back(&v);
       const std::vector<Brick> bricks = buildBricksReordering(cells, arrays, {width});
       ASSERT_EQ(bricks.size(), indexed.bricks.size());
       for (size_t i = 0; i < bricks.size(); ++i) {

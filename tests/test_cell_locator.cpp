@@ -23,9 +23,11 @@ struct Scale {
 
 Scale scaleOf(const Model& m) {
   float lo = INFINITY, hi = -INFINITY;
-  for (float v : m.fieldValues[0]) lo = std::min(lo, v), hi = std::max(hi, v);
+  for (float v : m.fieldValues[0])
+    lo = std::min(lo, v), hi = std::max(hi, v);
   int finest = kMaxLevel;
-  for (const Brick& b : m.bricks) finest = std::min(finest, b.level);
+  for (const Brick& b : m.bricks)
+    finest = std::min(finest, b.level);
   Scale s;
   s.value = std::max({1.f, std::abs(lo), std::abs(hi)});
   s.gradient = std::max(1.f, (hi - lo) / float(1 << finest));
@@ -39,8 +41,8 @@ bool compareAt(const Model& m, const CellLocator& locator, const vec3f& p, const
   vec3f wantGrad, gotGrad;
   const bool wantOk = sampleField(m.view(0), p, want, &wantGrad);
   const bool gotOk = locator.sample(0, p, got, &gotGrad);
-  const std::string where = dataset + " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " +
-                            std::to_string(p.z) + ")";
+  const std::string where =
+      dataset + " at (" + std::to_string(p.x) + ", " + std::to_string(p.y) + ", " + std::to_string(p.z) + ")";
   EXPECT_EQ(gotOk, wantOk) << where;
   if (gotOk && wantOk) {
     EXPECT_NEAR(got, want, 2e-5f * scale.value) << "value " << where;
@@ -116,11 +118,21 @@ TEST(CellLocator, CellCentresFacesAndSupportFacesMatch) {
         for (int a = 0; a < 3; ++a) {
           const float corner = float(brick.lower[a]) + w * float(int(rng() % uint32_t(brick.size[a])));
           switch (rng() % 5) {
-          case 0: p[a] = corner + 0.5f * w; break;   // centre
-          case 1: p[a] = corner; break;              // lower cell face
-          case 2: p[a] = corner + w; break;          // upper cell face
-          case 3: p[a] = corner - 0.5f * w; break;   // support face below a centre
-          default: p[a] = corner + 1.5f * w; break;  // support face above a centre
+          case 0:
+            p[a] = corner + 0.5f * w;
+            break; // centre
+          case 1:
+            p[a] = corner;
+            break; // lower cell face
+          case 2:
+            p[a] = corner + w;
+            break; // upper cell face
+          case 3:
+            p[a] = corner - 0.5f * w;
+            break; // support face below a centre
+          default:
+            p[a] = corner + 1.5f * w;
+            break; // support face above a centre
           }
         }
       } else {

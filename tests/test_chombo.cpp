@@ -39,7 +39,8 @@ TEST(Chombo, LeafCellsAndValuesBothPrecisionsWithGhostCells) {
     for (size_t i = 0; i < s.size(); ++i) {
       const Cell& c = s.cells[i];
       const auto it = expected.find({c.lower.x, c.lower.y, c.lower.z, c.level});
-      ASSERT_NE(it, expected.end()) << "unexpected cell " << c.lower.x << " " << c.lower.y << " " << c.lower.z << " level " << c.level;
+      ASSERT_NE(it, expected.end()) << "unexpected cell " << c.lower.x << " " << c.lower.y << " " << c.lower.z
+                                    << " level " << c.level;
       const vec3d centre = s.world.toWorld(vec3d(c.lower) + vec3d(0.5 * c.width()));
       const double v = truth(centre.x, centre.y, centre.z);
       EXPECT_NEAR(s.fields[0].values[i], v, tol * (1 + std::abs(v)));
@@ -80,14 +81,18 @@ TEST(Chombo, BadFilesAreRejectedClearly) {
     return loadError(f.file.string());
   };
   auto expectIn = [](const std::string& m, std::initializer_list<const char*> parts) {
-    for (const char* p : parts) EXPECT_NE(m.find(p), std::string::npos) << "'" << p << "' not in: " << m;
+    for (const char* p : parts)
+      EXPECT_NE(m.find(p), std::string::npos) << "'" << p << "' not in: " << m;
   };
   expectIn(errorFor("ratio3", [](ChomboFixture& f) { f.ratio1 = 3; }),
            {"ratio3.3d.hdf5", "level_1", "refinement ratio 3", "power of two"});
   expectIn(errorFor("flat", [](ChomboFixture& f) { f.spaceDim = 2; }), {"flat.3d.hdf5", "SpaceDim is 2", "3-D"});
-  expectIn(errorFor("nan", [](ChomboFixture& f) { f.nanValue = true; }), {"nan.3d.hdf5", "level 2 box 0", "density", "NaN"});
-  expectIn(errorFor("short", [](ChomboFixture& f) { f.shortData = true; }), {"short.3d.hdf5", "level_1/data:datatype=0", "values"});
-  expectIn(errorFor("levels", [](ChomboFixture& f) { f.numLevels = 4; }), {"levels.3d.hdf5", "level_3", "missing group"});
+  expectIn(errorFor("nan", [](ChomboFixture& f) { f.nanValue = true; }),
+           {"nan.3d.hdf5", "level 2 box 0", "density", "NaN"});
+  expectIn(errorFor("short", [](ChomboFixture& f) { f.shortData = true; }),
+           {"short.3d.hdf5", "level_1/data:datatype=0", "values"});
+  expectIn(errorFor("levels", [](ChomboFixture& f) { f.numLevels = 4; }),
+           {"levels.3d.hdf5", "level_3", "missing group"});
   expectIn(errorFor("dx", [](ChomboFixture& f) { f.badDx = true; }), {"dx.3d.hdf5", "level_2", "inconsistent headers"});
   // A truncated file keeps its signature but cannot be opened.
   ChomboFixture f;

@@ -65,7 +65,7 @@ void writeBytes(const fs::path& p, const std::string& bytes) {
 }
 
 struct Outcome {
-  int status = -1;      ///< 0 loaded, 1 refused with exa::Error, 3 another exception, 128+N signal N
+  int status = -1; ///< 0 loaded, 1 refused with exa::Error, 3 another exception, 128+N signal N
   std::string message;
 };
 
@@ -102,7 +102,8 @@ Outcome loadInChild(const std::string& path) {
   close(fds[1]);
   Outcome out;
   char buf[4096];
-  for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;) out.message.append(buf, size_t(n));
+  for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;)
+    out.message.append(buf, size_t(n));
   close(fds[0]);
   int status = 0;
   waitpid(pid, &status, 0);
@@ -110,17 +111,21 @@ Outcome loadInChild(const std::string& path) {
   return out;
 }
 
-/// Offsets to damage: the superblock, every byte of each structure that starts with one of
-/// libhdf5's signatures (up to the next one, at most 160 bytes), and every `stride`-th byte.
+/// Offsets to damage: the superblock, the 160 bytes from each of libhdf5's structure signatures
+/// (B-tree and symbol table nodes, heaps, object headers and their continuations, ...), and
+/// every `stride`-th byte.
 std::set<size_t> offsetsToDamage(const std::string& bytes, size_t stride) {
   static const char* kSignatures[] = {"TREE", "SNOD", "HEAP", "OHDR", "OCHK", "FRHP", "FHDB", "FHIB",
                                       "BTHD", "BTIN", "BTLF", "FSHD", "FSSE", "GCOL", "SMTB", "SMLI"};
   std::set<size_t> out;
-  for (size_t i = 0; i < std::min<size_t>(bytes.size(), 136); ++i) out.insert(i);
+  for (size_t i = 0; i < std::min<size_t>(bytes.size(), 136); ++i)
+    out.insert(i);
   for (const char* sig : kSignatures)
     for (size_t at = bytes.find(sig); at != std::string::npos; at = bytes.find(sig, at + 1))
-      for (size_t i = at; i < std::min(bytes.size(), at + 160); ++i) out.insert(i);
-  for (size_t i = 0; i < bytes.size(); i += stride) out.insert(i);
+      for (size_t i = at; i < std::min(bytes.size(), at + 160); ++i)
+        out.insert(i);
+  for (size_t i = 0; i < bytes.size(); i += stride)
+    out.insert(i);
   return out;
 }
 
@@ -165,28 +170,31 @@ Tally damageAndLoad(const fs::path& valid, size_t stride) {
         ++t.loaded;
       } else if (o.status == 1 && o.message.find(copy.filename().string()) != std::string::npos) {
         ++t.refused;
-        if (o.message.find("libhdf5 cannot read") != std::string::npos) ++t.faultInChild;
+        if (o.message.find("libhdf5 cannot read") != std::string::npos)
+          ++t.faultInChild;
         else if (o.message.find("separate process") != std::string::npos ||
                  o.message.find("did not finish") != std::string::npos)
           ++t.crashedChild;
       } else {
-        t.failures.push_back(strCat("byte ", at, " set to ", int(now), " (was ", int(was), "): ",
-                                    o.status >= 128 ? strCat("killed by signal ", o.status - 128)
-                                                    : strCat("exit ", o.status), ": ", o.message));
+        t.failures.push_back(
+            strCat("byte ", at, " set to ", int(now), " (was ", int(was),
+                   "): ", o.status >= 128 ? strCat("killed by signal ", o.status - 128) : strCat("exit ", o.status),
+                   ": ", o.message));
       }
     }
   }
   std::printf("%s: %zu bytes, %d damaged copies loaded, %d refused (libhdf5 crashed in the checking child: %d, "
               "reported a damaged structure there: %d), %zu failures, %.1f s\n",
-              valid.filename().c_str(), bytes.size(), t.loaded, t.refused, t.crashedChild, t.faultInChild, t.failures.size(),
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+              valid.filename().c_str(), bytes.size(), t.loaded, t.refused, t.crashedChild, t.faultInChild,
+              t.failures.size(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   return t;
 }
 
 void expectNoFailures(const Tally& t) {
-  EXPECT_TRUE(t.failures.empty()) << t.failures.size() << " damaged copies crashed or failed badly; the first: "
-                                  << t.failures.front();
-  for (size_t i = 0; i < std::min<size_t>(t.failures.size(), 10); ++i) std::printf("  %s\n", t.failures[i].c_str());
+  EXPECT_TRUE(t.failures.empty()) << t.failures.size()
+                                  << " damaged copies crashed or failed badly; the first: " << t.failures.front();
+  for (size_t i = 0; i < std::min<size_t>(t.failures.size(), 10); ++i)
+    std::printf("  %s\n", t.failures[i].c_str());
 }
 
 } // namespace

@@ -23,12 +23,14 @@ namespace {
 /// 32^3 finest cells with values from f(x, y, z), in fields named as given.
 Model uniformModel(const std::vector<std::string>& names, float (*f)(int, int, int)) {
   CellSet s;
-  for (const std::string& n : names) s.fields.push_back({n, {}});
+  for (const std::string& n : names)
+    s.fields.push_back({n, {}});
   for (int z = 0; z < 32; ++z)
     for (int y = 0; y < 32; ++y)
       for (int x = 0; x < 32; ++x) {
         s.cells.push_back({vec3i(x, y, z), 0});
-        for (Field& fld : s.fields) fld.values.push_back(f(x, y, z));
+        for (Field& fld : s.fields)
+          fld.values.push_back(f(x, y, z));
       }
   return buildModel(std::move(s));
 }
@@ -57,7 +59,7 @@ TEST(Defaults, TransparentOverTheBackgroundAndLogWhereTheDataAsksForIt) {
   const DatasetInfo info = DatasetInfo::of(low);
   DefaultChoices c = adaptTransferFunction(low, info, 0, defaultTransferFunction(), true, true);
   EXPECT_FALSE(c.tf.logScale);
-  EXPECT_GT(c.tf.valueRange.lower, 0.1f);     // the background lies below the range: transparent
+  EXPECT_GT(c.tf.valueRange.lower, 0.1f); // the background lies below the range: transparent
   EXPECT_EQ(c.tf.valueRange.upper, info.valueRanges[0].upper);
   TransferFunction scaled = c.tf; // opacity scale "auto" (0) is the renderer's to resolve
   scaled.opacityScale = 1.f;
@@ -79,9 +81,11 @@ TEST(Defaults, TransparentOverTheBackgroundAndLogWhereTheDataAsksForIt) {
   std::mt19937 rng(3);
   static std::vector<float> cosmic;
   std::lognormal_distribution<float> ln(0.f, 2.5f);
-  for (int i = 0; i < 32 * 32 * 32; ++i) cosmic.push_back(std::min(1e4f, std::max(1e-4f, ln(rng))));
+  for (int i = 0; i < 32 * 32 * 32; ++i)
+    cosmic.push_back(std::min(1e4f, std::max(1e-4f, ln(rng))));
   cosmic[0] = 1e-4f, cosmic[1] = 1e4f;
-  const Model web = uniformModel({"Density"}, [](int x, int y, int z) { return cosmic[size_t((z * 32 + y) * 32 + x)]; });
+  const Model web =
+      uniformModel({"Density"}, [](int x, int y, int z) { return cosmic[size_t((z * 32 + y) * 32 + x)]; });
   c = adaptTransferFunction(web, DatasetInfo::of(web), 0, defaultTransferFunction(), true, true);
   EXPECT_TRUE(c.tf.logScale);
   c = adaptTransferFunction(web, DatasetInfo::of(web), 0, defaultTransferFunction(), false, true);
@@ -171,8 +175,8 @@ TEST(Defaults, DefaultRendersOfRealDataShowTheData) {
   // Every shared sample and the embedded dataset, rendered by the command line with no option
   // but the size: some pixels show the data, some the background, and the colours vary.
   std::vector<std::string> inputs{""};
-  for (const char* sub : {"amrex/advection_3d/plt_drop", "amrex/advection_3d/plt_small",
-                          "amrex/pele_eb_3d/plt_eb_3d", "amrex/pelelm_3lev_3d/example_plt_3d"})
+  for (const char* sub : {"amrex/advection_3d/plt_drop", "amrex/advection_3d/plt_small", "amrex/pele_eb_3d/plt_eb_3d",
+                          "amrex/pelelm_3lev_3d/example_plt_3d"})
     if (fs::exists(sharedData() / sub)) inputs.push_back((sharedData() / sub).string());
   if (inputs.size() == 1)
     std::printf("shared samples not found at %s (set EXABRICKS_DATA): the embedded dataset only\n",
@@ -202,7 +206,8 @@ TEST(Defaults, DefaultRendersOfRealDataShowTheData) {
     EXPECT_GT(shown / n, 0.02) << "blank";
     EXPECT_LT(shown / n, 0.98) << "no background left";
     EXPECT_LT(saturated / n, 0.05) << "saturated";
-    const double mean = sum / std::max(shown, 1), spread = std::sqrt(std::max(0.0, sum2 / std::max(shown, 1) - mean * mean));
+    const double mean = sum / std::max(shown, 1),
+                 spread = std::sqrt(std::max(0.0, sum2 / std::max(shown, 1) - mean * mean));
     // (plt_eb_3d's density is two values, 0 in the obstacle and 1.18 around it: its picture is
     // the obstacle, unshaded inside, with a spread of 0.005.)
     EXPECT_GT(spread, 0.004) << "a flat picture";
@@ -225,7 +230,8 @@ TEST(Overlay, TicksTextColourBarOutlineAndProjection) {
   Image img(200, 150);
   EXPECT_GT(drawText(img, 5, 5, "exabricks 1.5", vec3f(1.f), 1), 40);
   int lit = 0;
-  for (const vec4f& p : img.pixels) lit += p.w == 1.f;
+  for (const vec4f& p : img.pixels)
+    lit += p.w == 1.f;
   EXPECT_GT(lit, 30);
   Image bar(200, 150);
   TransferFunction tf = defaultTransferFunction("viridis");
@@ -233,7 +239,8 @@ TEST(Overlay, TicksTextColourBarOutlineAndProjection) {
   drawColorBar(bar, tf, "density", vec3f(1.f));
   int right = 0, left = 0;
   for (int y = 0; y < 150; ++y)
-    for (int x = 0; x < 200; ++x) (x > 140 ? right : left) += bar.at(x, y).w == 1.f;
+    for (int x = 0; x < 200; ++x)
+      (x > 140 ? right : left) += bar.at(x, y).w == 1.f;
   EXPECT_GT(right, 500);
   EXPECT_LT(left, right);
   // project() inverts ray(), for both projections.
@@ -250,7 +257,8 @@ TEST(Overlay, TicksTextColourBarOutlineAndProjection) {
   drawBoxOutline(box, Camera::frame(box3d(vec3d(0.0), vec3d(1.0)), 30, 25, 40, false), box3d(vec3d(0.0), vec3d(1.0)),
                  vec3f(1.f));
   lit = 0;
-  for (const vec4f& p : box.pixels) lit += p.w == 1.f;
+  for (const vec4f& p : box.pixels)
+    lit += p.w == 1.f;
   EXPECT_GT(lit, 100);
 }
 
@@ -263,10 +271,12 @@ std::string textPixels(const std::string& text, bool glyphByGlyph) {
     drawText(img, 2, 2, text, vec3f(1.f), 1);
   } else {
     int x = 2;
-    for (char c : text) x += drawText(img, x, 2, std::string(1, c), vec3f(1.f), 1);
+    for (char c : text)
+      x += drawText(img, x, 2, std::string(1, c), vec3f(1.f), 1);
   }
   std::string lit;
-  for (const vec4f& p : img.pixels) lit += p.w == 1.f ? '1' : '0';
+  for (const vec4f& p : img.pixels)
+    lit += p.w == 1.f ? '1' : '0';
   return lit;
 }
 
@@ -276,17 +286,20 @@ TEST(Overlay, EveryTickLabelIsDrawnWhole) {
   // Ranges over many magnitudes, both signs, linear and logarithmic: each tick label drawn as
   // one string must light exactly the pixels of its glyphs drawn one by one.
   std::mt19937 rng(7);
-  std::vector<range1f> ranges = {{0.f, 100.f}, {1e3f, 1e7f}, {-8.88e8f, 8.88e8f}, {1e-30f, 1e30f},
-                                 {-0.0088f, -0.0008f}, {13222500.f, 88888888.f}, {1e-12f, 8e-3f}};
+  std::vector<range1f> ranges = {{0.f, 100.f},    {1e3f, 1e7f},         {-8.88e8f, 8.88e8f},
+                                 {1e-30f, 1e30f}, {-0.0088f, -0.0008f}, {13222500.f, 88888888.f},
+                                 {1e-12f, 8e-3f}};
   std::uniform_real_distribution<double> exponent(-30.0, 30.0), unit(-1.0, 1.0);
   for (int i = 0; i < 400; ++i) {
-    const double a = unit(rng) * std::pow(10.0, exponent(rng)), b = a + std::abs(unit(rng)) * std::pow(10.0, exponent(rng));
+    const double a = unit(rng) * std::pow(10.0, exponent(rng)),
+                 b = a + std::abs(unit(rng)) * std::pow(10.0, exponent(rng));
     ranges.push_back(range1f{float(a), float(b)});
   }
   std::set<std::string> labels = {"-8.88e+38", "888", "-0.000888", "1e-308", "-inf", "nan"};
   for (const range1f& r : ranges)
     for (bool logScale : {false, true})
-      for (double t : colorBarTicks(r, logScale)) labels.insert(colorBarLabel(t));
+      for (double t : colorBarTicks(r, logScale))
+        labels.insert(colorBarLabel(t));
   EXPECT_GT(labels.size(), 300u);
   for (const std::string& label : labels) {
     const std::string whole = textPixels(label, false), glyphs = textPixels(label, true);
@@ -295,6 +308,7 @@ TEST(Overlay, EveryTickLabelIsDrawnWhole) {
   }
   // Text of any length and of the densest glyphs, as titles and annotations are.
   std::string dense;
-  for (int i = 0; i < 40; ++i) dense += "8B@#$%&WM";
+  for (int i = 0; i < 40; ++i)
+    dense += "8B@#$%&WM";
   EXPECT_EQ(textPixels(dense, false), textPixels(dense, true));
 }

@@ -38,7 +38,7 @@ struct EnzoFixture {
   bool float32 = false;
   int refineBy = 2;
   int rank = 3;
-  bool truncate = false;    ///< cut the hierarchy text inside grid 3
+  bool truncate = false; ///< cut the hierarchy text inside grid 3
   bool wrongShape = false;
   std::vector<EGrid> grids{{1, 0, {0, 0, 0}, {1, 1, 1}, 0},
                            {2, 1, {0.25, 0.25, 0.25}, {0.75, 0.5, 0.5}, 1},
@@ -60,11 +60,13 @@ struct EnzoFixture {
     h.precision(17);
     for (const EGrid& g : grids) {
       const int n[3] = {cells(g, 0), cells(g, 1), cells(g, 2)};
-      h << "\nGrid = " << g.id << "\nTask = " << g.file << "\nGridRank = " << rank << "\nGridDimension = " << n[0] + 2 * kGhost
-        << " " << n[1] + 2 * kGhost << " " << n[2] + 2 * kGhost << "\nGridStartIndex = 3 3 3\nGridEndIndex = " << n[0] + 2
-        << " " << n[1] + 2 << " " << n[2] + 2 << "\nGridLeftEdge = " << g.left[0] << " " << g.left[1] << " " << g.left[2]
+      h << "\nGrid = " << g.id << "\nTask = " << g.file << "\nGridRank = " << rank
+        << "\nGridDimension = " << n[0] + 2 * kGhost << " " << n[1] + 2 * kGhost << " " << n[2] + 2 * kGhost
+        << "\nGridStartIndex = 3 3 3\nGridEndIndex = " << n[0] + 2 << " " << n[1] + 2 << " " << n[2] + 2
+        << "\nGridLeftEdge = " << g.left[0] << " " << g.left[1] << " " << g.left[2]
         << "\nGridRightEdge = " << g.right[0] << " " << g.right[1] << " " << g.right[2]
-        << "\nTime = 0.5\nNumberOfBaryonFields = 2\nFieldType = 0 4\nBaryonFileName = /scratch/run42/DD0010/DD0010.cpu000"
+        << "\nTime = 0.5\nNumberOfBaryonFields = 2\nFieldType = 0 4\nBaryonFileName = "
+           "/scratch/run42/DD0010/DD0010.cpu000"
         << g.file << "\nCourantSafetyNumber = 0.3\nPointer: Grid[" << g.id << "]->NextGridThisLevel = 0\n";
     }
     std::string text = h.str();
@@ -86,7 +88,8 @@ struct EnzoFixture {
             for (int j = -gh; j < n[1] + gh; ++j)
               for (int i = -gh; i < n[0] + gh; ++i) {
                 const bool inside = i >= 0 && j >= 0 && k >= 0 && i < n[0] && j < n[1] && k < n[2];
-                const double t = truth(g.left[0] + (i + 0.5) * dx, g.left[1] + (j + 0.5) * dx, g.left[2] + (k + 0.5) * dx);
+                const double t =
+                    truth(g.left[0] + (i + 0.5) * dx, g.left[1] + (j + 0.5) * dx, g.left[2] + (k + 0.5) * dx);
                 v.push_back(!inside ? -999.0 : field == 0 ? t : 10 * t + g.level);
               }
           std::vector<hsize_t> dims{hsize_t(n[2] + 2 * gh), hsize_t(n[1] + 2 * gh), hsize_t(n[0] + 2 * gh)};
@@ -169,7 +172,8 @@ TEST(Enzo, BadOutputsAreRejectedClearly) {
   expectIn(errorFor("ratio3", [](EnzoFixture& f) { f.refineBy = 3; }), {"DD0010", "RefineBy 3", "power of two"});
   expectIn(errorFor("cut", [](EnzoFixture& f) { f.truncate = true; }),
            {"DD0010.hierarchy", "grid 3", "missing GridLeftEdge", "truncated"});
-  expectIn(errorFor("shape", [](EnzoFixture& f) { f.wrongShape = true; }), {"DD0010.cpu0000", "Grid00000003/Density", "grid 3", "shape"});
+  expectIn(errorFor("shape", [](EnzoFixture& f) { f.wrongShape = true; }),
+           {"DD0010.cpu0000", "Grid00000003/Density", "grid 3", "shape"});
   {
     EnzoFixture f;
     f.dir = base / "nogroup";
@@ -204,8 +208,10 @@ TEST(Enzo, CutHierarchiesGiveErrorsNotCrashes) {
   for (size_t at = 0; at < original.size(); at += 29) {
     for (int mode = 0; mode < 2; ++mode) {
       std::string text = original;
-      if (mode == 0) text.resize(at);
-      else text[at] = "9 -x\n="[at % 6];
+      if (mode == 0)
+        text.resize(at);
+      else
+        text[at] = "9 -x\n="[at % 6];
       std::ofstream(f.dir / "DD0010.hierarchy") << text;
       try {
         loadCells(f.parameterFile().string());

@@ -80,9 +80,15 @@ TEST(Flash, BadFilesAreRejectedClearly) {
     f.write();
     return loadError(f.file.string());
   };
-  expectIn(errorFor("flat", [](FlashFixture& f) { f.dimensionality = 2; f.nzb = 1; }), {"flat", "integer scalars", "2-D"});
+  expectIn(errorFor("flat",
+                    [](FlashFixture& f) {
+                      f.dimensionality = 2;
+                      f.nzb = 1;
+                    }),
+           {"flat", "integer scalars", "2-D"});
   expectIn(errorFor("flat2", [](FlashFixture& f) { f.nzb = 1; }), {"flat2", "nzb is 1", "2-D"});
-  expectIn(errorFor("shifted", [](FlashFixture& f) { f.shift = 0.01; }), {"shifted", "block 3", "not on the finest lattice"});
+  expectIn(errorFor("shifted", [](FlashFixture& f) { f.shift = 0.01; }),
+           {"shifted", "block 3", "not on the finest lattice"});
   expectIn(errorFor("third", [](FlashFixture& f) { f.badSize = true; }), {"third", "block 4", "not a power of two"});
   expectIn(errorFor("nan", [](FlashFixture& f) { f.nanValue = true; }), {"nan", "block 17", "dens", "NaN"});
   expectIn(errorFor("rows", [](FlashFixture& f) { f.dropRow = true; }), {"rows", "dens", "dimensions do not match"});

@@ -7,12 +7,12 @@
 
 #include <bit>
 #include <cmath>
-#include <limits>
-#include <random>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
+#include <random>
 
 using namespace exa;
 namespace fs = std::filesystem;
@@ -25,9 +25,7 @@ fs::path tmpDir() {
   return dir;
 }
 
-std::string tmpPath(const std::string& name) {
-  return (tmpDir() / name).string();
-}
+std::string tmpPath(const std::string& name) { return (tmpDir() / name).string(); }
 
 /// Premultiplied pixels with alpha from 0 to 1 across and colour varying down.
 Image gradientImage() {
@@ -41,9 +39,7 @@ Image gradientImage() {
 }
 
 /// The 8-bit sRGB code a linear value was stored as (exact for what readPng returns).
-float srgbCode(float linear) {
-  return linearToSrgb(linear) * 255.f;
-}
+float srgbCode(float linear) { return linearToSrgb(linear) * 255.f; }
 
 std::string errorOf(const std::function<void()>& f) {
   try {
@@ -65,12 +61,8 @@ size_t temporaryFilesIn(const fs::path& dir) {
 
 TEST(Image, SrgbTransferFollowsTheStandard) {
   // Independent double-precision formulas of IEC 61966-2-1.
-  auto encode = [](double c) {
-    return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055;
-  };
-  auto decode = [](double c) {
-    return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
-  };
+  auto encode = [](double c) { return c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1 / 2.4) - 0.055; };
+  auto decode = [](double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); };
   for (int i = 0; i <= 1000; ++i) {
     const double c = i / 1000.0;
     EXPECT_NEAR(linearToSrgb(float(c)), encode(c), 1e-6);
@@ -132,8 +124,7 @@ TEST(Image, PngOverBackgroundComposites) {
     const vec4f& o = img.pixels[i];
     const vec4f& b = back.pixels[i];
     EXPECT_EQ(b.w, 1.f);
-    const float expect[3] = {o.x + (1 - o.w) * bg.x, o.y + (1 - o.w) * bg.y,
-                             o.z + (1 - o.w) * bg.z};
+    const float expect[3] = {o.x + (1 - o.w) * bg.x, o.y + (1 - o.w) * bg.y, o.z + (1 - o.w) * bg.z};
     for (int c = 0; c < 3; ++c)
       EXPECT_NEAR(srgbCode((&b.x)[c]), srgbCode(expect[c]), 0.5f + 1e-3f) << i << " " << c;
   }
@@ -168,10 +159,8 @@ TEST(Image, PfmRoundTripIsExactAndStoredBottomUp) {
   ASSERT_EQ(bytes.size(), header.size() + 17 * 9 * 12);
   EXPECT_EQ(bytes.substr(0, header.size()), header);
   auto floatAt = [&](size_t index) {
-    const auto* p =
-        reinterpret_cast<const unsigned char*>(bytes.data() + header.size() + 4 * index);
-    const uint32_t bits =
-        uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+    const auto* p = reinterpret_cast<const unsigned char*>(bytes.data() + header.size() + 4 * index);
+    const uint32_t bits = uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
     float f;
     std::memcpy(&f, &bits, 4);
     return f;
@@ -197,8 +186,7 @@ TEST(Image, PfmReadsBigEndianAndGreyscale) {
     std::memcpy(&b, &f, 4);
     return std::string{char(b), char(b >> 8), char(b >> 16), char(b >> 24)};
   };
-  const std::string rgb =
-      "PF\n2 1\n1.0\n" + be(1.5f) + be(2.5f) + be(3.5f) + be(-1.f) + be(0.f) + be(0.25f);
+  const std::string rgb = "PF\n2 1\n1.0\n" + be(1.5f) + be(2.5f) + be(3.5f) + be(-1.f) + be(0.f) + be(0.25f);
   std::ofstream(tmpPath("be.pfm"), std::ios::binary) << rgb;
   const Image a = readPfm(tmpPath("be.pfm"));
   ASSERT_EQ(a.width, 2);
@@ -227,8 +215,7 @@ TEST(Image, FailedWritesLeaveNothing) {
   fs::remove_all(dir);
   fs::create_directories(dir / "taken.png");
   const std::string taken = (dir / "taken.png").string();
-  EXPECT_NE(errorOf([&] { writePng(taken, gradientImage(), true); }).find(taken),
-            std::string::npos);
+  EXPECT_NE(errorOf([&] { writePng(taken, gradientImage(), true); }).find(taken), std::string::npos);
   EXPECT_NE(errorOf([&] { writePfm(taken, gradientImage()); }).find(taken), std::string::npos);
   EXPECT_EQ(temporaryFilesIn(dir), 0u);
   EXPECT_TRUE(fs::is_directory(taken));

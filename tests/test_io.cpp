@@ -33,9 +33,7 @@ protected:
   void writeBytes(const std::string& name, const void* data, size_t size) const {
     std::ofstream(path(name), std::ios::binary).write(static_cast<const char*>(data), std::streamsize(size));
   }
-  void writeText(const std::string& name, const std::string& text) const {
-    std::ofstream(path(name)) << text;
-  }
+  void writeText(const std::string& name, const std::string& text) const { std::ofstream(path(name)) << text; }
   /// Writes raw records and values as NAME.cells / NAME.scalars.
   void writeRaw(const std::string& name, const std::vector<Cell>& cells, const std::vector<float>& values) {
     writeBytes(name + ".cells", cells.data(), cells.size() * sizeof(Cell));
@@ -53,10 +51,11 @@ protected:
   fs::path dir;
 };
 
-#define EXPECT_MESSAGE(msg, ...)                                                                   \
-  do {                                                                                             \
-    const std::string m_ = (msg);                                                                  \
-    for (const char* part : {__VA_ARGS__}) EXPECT_NE(m_.find(part), std::string::npos) << m_;      \
+#define EXPECT_MESSAGE(msg, ...)                                                                                       \
+  do {                                                                                                                 \
+    const std::string m_ = (msg);                                                                                      \
+    for (const char* part : {__VA_ARGS__})                                                                             \
+      EXPECT_NE(m_.find(part), std::string::npos) << m_;                                                               \
   } while (0)
 
 } // namespace
@@ -89,7 +88,8 @@ TEST_F(IoTest, NativeWriterInPiecesEqualsWholeWrite) {
       CellSet piece;
       piece.cells.assign(s.cells.begin() + long(begin), s.cells.begin() + long(end));
       for (const Field& f : s.fields)
-        piece.fields.push_back({f.name, std::vector<float>(f.values.begin() + long(begin), f.values.begin() + long(end))});
+        piece.fields.push_back(
+            {f.name, std::vector<float>(f.values.begin() + long(begin), f.values.begin() + long(end))});
       writer.append(piece);
       EXPECT_FALSE(fs::exists(path("pieces.cells"))) << "nothing is published before finish";
     }
@@ -202,8 +202,8 @@ void expectSameModel(const Model& r, const Model& m) {
   EXPECT_EQ(r.regions.brickIds, m.regions.brickIds);
   EXPECT_EQ(r.regions.valueRanges, m.regions.valueRanges);
   ASSERT_EQ(r.regions.regions.size(), m.regions.regions.size());
-  EXPECT_EQ(std::memcmp(r.regions.regions.data(), m.regions.regions.data(),
-                        m.regions.regions.size() * sizeof(Region)), 0);
+  EXPECT_EQ(std::memcmp(r.regions.regions.data(), m.regions.regions.data(), m.regions.regions.size() * sizeof(Region)),
+            0);
 }
 } // namespace
 
@@ -337,7 +337,8 @@ TEST_F(IoTest, FilesArePublishedTogetherOrNotAtAll) {
   const char data[4] = {1, 2, 3, 4};
   auto leftovers = [&] {
     int n = 0;
-    for (const auto& e : fs::directory_iterator(dir)) n += e.path().filename().string().find(".tmp") != std::string::npos;
+    for (const auto& e : fs::directory_iterator(dir))
+      n += e.path().filename().string().find(".tmp") != std::string::npos;
     return n;
   };
   {
@@ -383,16 +384,18 @@ TEST_F(IoTest, TemporariesOfKilledWritesAreRemovedByTheNextWrite) {
   ASSERT_GT(child, 0);
   ASSERT_EQ(waitpid(child, nullptr, 0), child);
   const std::string dead = std::to_string(child), alive = std::to_string(getppid());
-  for (const std::string& name : std::vector<std::string>{"m.exa.tmp" + dead + ".0", "m.exa.tmp" + dead, "d.cells.tmp" + dead + ".0",
-                                  "d.scalars.tmp" + dead + ".1", "m.exa.tmp" + alive + ".0", "m.exa.tmpx.0"})
+  for (const std::string& name :
+       std::vector<std::string>{"m.exa.tmp" + dead + ".0", "m.exa.tmp" + dead, "d.cells.tmp" + dead + ".0",
+                                "d.scalars.tmp" + dead + ".1", "m.exa.tmp" + alive + ".0", "m.exa.tmpx.0"})
     writeText(name, "partial");
   CellSet s = generateScene({"blobs", 500, 1, 2});
   writeNative(s, path("d.cells"));
   writeModel(buildModel(std::move(s)), path("m.exa"));
-  for (const std::string& gone : std::vector<std::string>{"m.exa.tmp" + dead + ".0", "m.exa.tmp" + dead, "d.cells.tmp" + dead + ".0",
-                                  "d.scalars.tmp" + dead + ".1"})
+  for (const std::string& gone : std::vector<std::string>{"m.exa.tmp" + dead + ".0", "m.exa.tmp" + dead,
+                                                          "d.cells.tmp" + dead + ".0", "d.scalars.tmp" + dead + ".1"})
     EXPECT_FALSE(fs::exists(path(gone))) << gone;
-  for (const std::string& kept : std::vector<std::string>{"m.exa.tmp" + alive + ".0", "m.exa.tmpx.0"}) EXPECT_TRUE(fs::exists(path(kept))) << kept;
+  for (const std::string& kept : std::vector<std::string>{"m.exa.tmp" + alive + ".0", "m.exa.tmpx.0"})
+    EXPECT_TRUE(fs::exists(path(kept))) << kept;
 }
 
 TEST_F(IoTest, GridsFixturesAreBoundedBeforeExpanding) {

@@ -60,7 +60,8 @@ const Model& model() {
   static const Model m = [] {
     CellSet cells = generateScene({"blobs", 20000, 5, 4});
     Field second{"second", {}};
-    for (float v : cells.fields[0].values) second.values.push_back(1.f - v * v);
+    for (float v : cells.fields[0].values)
+      second.values.push_back(1.f - v * v);
     cells.fields.push_back(second);
     return buildModel(std::move(cells));
   }();
@@ -128,14 +129,43 @@ TEST(Library, EachSceneChangeEqualsAFreshRendererAndRebuildsOnlyWhatItNeeds) {
   };
   const Change changes[] = {
       {"transfer function", [](Scene& s) { s.layers[0].tf.colorMap = builtinColorMap("magma"); }, true, false, false},
-      {"opacity", [](Scene& s) { s.layers[0].tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {1.f, 1.f}}; }, true, false, false},
-      {"value range", [](Scene& s) { s.layers[0].tf.valueRange = range1f{0.2f, 0.7f}; }, true, false, false},
-      {"second layer", [](Scene& s) { s.layers.push_back({"second", defaultTransferFunction("inferno")}); }, true, false, false},
-      {"iso-values", [](Scene& s) { s.iso.values = {0.35f, 0.6f}; }, false, true, false},
+      {"opacity",
+       [](Scene& s) {
+         s.layers[0].tf.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {1.f, 1.f}};
+       },
+       true, false, false},
+      {"value range",
+       [](Scene& s) {
+         s.layers[0].tf.valueRange = range1f{0.2f, 0.7f};
+       },
+       true, false, false},
+      {"second layer",
+       [](Scene& s) {
+         s.layers.push_back({"second", defaultTransferFunction("inferno")});
+       },
+       true, false, false},
+      {"iso-values",
+       [](Scene& s) {
+         s.iso.values = {0.35f, 0.6f};
+       },
+       false, true, false},
       {"iso colour field", [](Scene& s) { s.iso.colorField = "second"; }, false, true, false},
-      {"mesh", [](Scene& s) { s.meshes.push_back({std::make_shared<TriangleMesh>(floorMesh()), vec3f(0.3f, 0.6f, 0.2f), ""}); }, false, false, true},
-      {"clip plane", [](Scene& s) { s.clip.planes = {{vec3d(20.0, 20.0, 20.0), vec3d(1.0, 0.5, 0.0)}}; }, false, false, false},
-      {"light", [](Scene& s) { s.light.headlight = false; s.light.terms.specular = 0.6f; }, false, false, false},
+      {"mesh",
+       [](Scene& s) {
+         s.meshes.push_back({std::make_shared<TriangleMesh>(floorMesh()), vec3f(0.3f, 0.6f, 0.2f), ""});
+       },
+       false, false, true},
+      {"clip plane",
+       [](Scene& s) {
+         s.clip.planes = {{vec3d(20.0, 20.0, 20.0), vec3d(1.0, 0.5, 0.0)}};
+       },
+       false, false, false},
+      {"light",
+       [](Scene& s) {
+         s.light.headlight = false;
+         s.light.terms.specular = 0.6f;
+       },
+       false, false, false},
       {"shading", [](Scene& s) { s.shading = Shading::None; }, false, false, false},
       {"ambient occlusion", [](Scene& s) { s.ao.rays = 3; }, false, false, false},
       // Space skipping is exact: the traversal is rebuilt, the image stays the same.
@@ -269,7 +299,8 @@ TEST(Library, ACancelledPassAddsOnlyWholeTiles) {
   stopper.join();
   EXPECT_FALSE(complete);
   uint32_t passes = 0;
-  for (int t = 0; t < buffer.tileCount(); ++t) passes += buffer.tilePasses(t);
+  for (int t = 0; t < buffer.tileCount(); ++t)
+    passes += buffer.tilePasses(t);
   EXPECT_LT(passes, uint32_t(buffer.tileCount()));
 }
 
@@ -428,8 +459,9 @@ TEST(Library, SceneJsonErrorsNameTheSourceAndTheKey) {
   EXPECT_NE(message("{\"frame\": {\"width\": \"wide\"}}").find("\"frame.width\" must be a number"), std::string::npos);
   EXPECT_NE(message("{\"frame\": {\"width\": 0}}").find("image size"), std::string::npos);
   EXPECT_NE(message("{\"shading\": \"phong\"}").find("choose from"), std::string::npos);
-  EXPECT_NE(message("{\"layers\": [{\"transfer_function\": {\"colormap\": \"nope\"}}]}").find("layers[0].transfer_function"),
-            std::string::npos);
+  EXPECT_NE(
+      message("{\"layers\": [{\"transfer_function\": {\"colormap\": \"nope\"}}]}").find("layers[0].transfer_function"),
+      std::string::npos);
   EXPECT_NE(message("{\"camera\": {\"position\": [1, 1, 1], \"look_at\": [1, 1, 1]}}").find("degenerate camera"),
             std::string::npos);
   EXPECT_NE(message("[1, 2").find("invalid JSON"), std::string::npos);
@@ -503,9 +535,11 @@ TEST(SampleMath, FrontToBackCompositingEqualsBackToFrontOver) {
   std::uniform_real_distribution<float> u(0.f, 1.f);
   for (int trial = 0; trial < 50; ++trial) {
     std::vector<std::pair<vec3f, float>> layers(6);
-    for (auto& l : layers) l = {vec3f(u(rng), u(rng), u(rng)), u(rng)};
+    for (auto& l : layers)
+      l = {vec3f(u(rng), u(rng), u(rng)), u(rng)};
     vec4f front;
-    for (const auto& [c, a] : layers) compositeBehind(front, c, a);
+    for (const auto& [c, a] : layers)
+      compositeBehind(front, c, a);
     vec4f back; // "over", from the far end
     for (auto it = layers.rbegin(); it != layers.rend(); ++it) {
       const auto& [c, a] = *it;
@@ -588,7 +622,8 @@ TEST(SampleMath, TransferFunctionTableAndSkippingTest) {
       float a = u(rng), b = u(rng);
       if (a > b) std::swap(a, b);
       bool anyVisible = false;
-      for (int k = 0; k <= 64; ++k) anyVisible = anyVisible || tfLookup(t, a + (b - a) * float(k) / 64.f).w < 0.f;
+      for (int k = 0; k <= 64; ++k)
+        anyVisible = anyVisible || tfLookup(t, a + (b - a) * float(k) / 64.f).w < 0.f;
       if (anyVisible) {
         EXPECT_TRUE(tfMayBeVisible(t, range1f{a, b}));
       }

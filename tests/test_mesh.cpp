@@ -17,15 +17,12 @@ namespace fs = std::filesystem;
 namespace {
 
 // The fixture: a tetrahedron and a square pyramid (quad base) side by side.
-const std::vector<vec3f> kVertices = {
-    {0, 0, 0}, {1, 0, 0}, {0, 1, 0},   {0, 0, 1},                               // tetrahedron
-    {2, 0, 0}, {3, 0, 0}, {3, 1, 0.5f}, {2, 1, 0}, {2.5f, 0.5f, -1.25f}};       // pyramid
-const std::vector<std::vector<int>> kFaces = {
-    {0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},
-    {4, 7, 6, 5}, {4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}};
-const std::vector<vec3i> kTriangles = {
-    {0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3},
-    {4, 7, 6}, {4, 6, 5}, {4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}};
+const std::vector<vec3f> kVertices = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0},    {0, 0, 1}, // tetrahedron
+                                      {2, 0, 0}, {3, 0, 0}, {3, 1, 0.5f}, {2, 1, 0}, {2.5f, 0.5f, -1.25f}}; // pyramid
+const std::vector<std::vector<int>> kFaces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {4, 7, 6, 5},
+                                              {4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}};
+const std::vector<vec3i> kTriangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}, {4, 7, 6},
+                                       {4, 6, 5}, {4, 5, 8}, {5, 6, 8}, {6, 7, 8}, {7, 4, 8}};
 
 /// Little or big endian binary writer.
 struct Bytes {
@@ -47,8 +44,7 @@ struct Bytes {
 class MeshTest : public ::testing::Test {
 protected:
   void SetUp() override {
-    dir = fs::path(EXABRICKS_TEST_TMP) / "mesh" /
-          ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    dir = fs::path(EXABRICKS_TEST_TMP) / "mesh" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
     fs::remove_all(dir);
     fs::create_directories(dir);
   }
@@ -140,7 +136,8 @@ protected:
     b.put<int32_t>(1).put<int32_t>(2).put<uint8_t>(0);
     for (const auto& f : kFaces) {
       b.put<uint8_t>(1).put<uint8_t>(uint8_t(f.size()));
-      for (int i : f) b.put<int32_t>(i);
+      for (int i : f)
+        b.put<int32_t>(i);
       b.put<uint16_t>(2).put<float>(0.25f).put<float>(0.75f);
     }
     return b.data;
@@ -150,11 +147,14 @@ protected:
   static std::string tris() {
     Bytes b;
     b.put<int32_t>(4);
-    for (int i = 0; i < 4; ++i) b.put(kVertices[i].x).put(kVertices[i].y).put(kVertices[i].z);
+    for (int i = 0; i < 4; ++i)
+      b.put(kVertices[i].x).put(kVertices[i].y).put(kVertices[i].z);
     b.put<int32_t>(4);
-    for (int i = 0; i < 4; ++i) b.put(kTriangles[i].x).put(kTriangles[i].y).put(kTriangles[i].z);
+    for (int i = 0; i < 4; ++i)
+      b.put(kTriangles[i].x).put(kTriangles[i].y).put(kTriangles[i].z);
     b.put<int32_t>(5);
-    for (int i = 4; i < 9; ++i) b.put(kVertices[i].x).put(kVertices[i].y).put(kVertices[i].z);
+    for (int i = 4; i < 9; ++i)
+      b.put(kVertices[i].x).put(kVertices[i].y).put(kVertices[i].z);
     b.put<int32_t>(6);
     for (int i = 4; i < 10; ++i)
       b.put(kTriangles[i].x - 4).put(kTriangles[i].y - 4).put(kTriangles[i].z - 4);
@@ -164,10 +164,11 @@ protected:
   fs::path dir;
 };
 
-#define EXPECT_MESSAGE(msg, ...)                                                                   \
-  do {                                                                                             \
-    const std::string m_ = (msg);                                                                  \
-    for (const char* part : {__VA_ARGS__}) EXPECT_NE(m_.find(part), std::string::npos) << m_;      \
+#define EXPECT_MESSAGE(msg, ...)                                                                                       \
+  do {                                                                                                                 \
+    const std::string m_ = (msg);                                                                                      \
+    for (const char* part : {__VA_ARGS__})                                                                             \
+      EXPECT_NE(m_.find(part), std::string::npos) << m_;                                                               \
   } while (0)
 
 } // namespace
@@ -187,7 +188,8 @@ TEST_F(MeshTest, PlyAsciiAndBinaryInBothByteOrders) {
   expectFixture(readMesh(write("little.ply", plyBinary(false))));
   expectFixture(readMesh(write("big.ply", plyBinary(true))));
   std::string crlf;
-  for (char c : plyAscii()) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  for (char c : plyAscii())
+    crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
   expectFixture(readMesh(write("crlf.ply", crlf)));
   // Known by its magic line, whatever the name.
   expectFixture(readMesh(write("mesh.data", plyBinary(false))));
@@ -202,10 +204,9 @@ TEST_F(MeshTest, TrisWithTwoMeshesIsMerged) {
 
 TEST_F(MeshTest, BadInputsNameFileRecordAndProblem) {
   const std::string little = plyBinary(false);
-  EXPECT_MESSAGE(errorOf(write("trunc.ply", little.substr(0, little.size() - 7))), "trunc.ply",
-                 "element 'face' 8", "byte", "truncated");
-  EXPECT_MESSAGE(errorOf(write("trunc2.ply", little.substr(0, little.size() - 120))), "trunc2.ply",
-                 "truncated");
+  EXPECT_MESSAGE(errorOf(write("trunc.ply", little.substr(0, little.size() - 7))), "trunc.ply", "element 'face' 8",
+                 "byte", "truncated");
+  EXPECT_MESSAGE(errorOf(write("trunc2.ply", little.substr(0, little.size() - 120))), "trunc2.ply", "truncated");
 
   std::string absurd = plyBinary(false);
   absurd.replace(absurd.find("vertex 9"), 8, "vertex 2000000000");
@@ -227,40 +228,36 @@ TEST_F(MeshTest, BadInputsNameFileRecordAndProblem) {
   range.replace(range.find("3 1 2 3\n"), 8, "3 1 2 9\n");
   EXPECT_MESSAGE(errorOf(write("range.ply", range)), "range.ply", "element 'face' 3", "line 28",
                  "vertex index 9 out of range [0, 9)");
-  EXPECT_MESSAGE(errorOf(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n")), "range.obj",
-                 "line 4", "vertex index 4 out of range");
-  EXPECT_MESSAGE(errorOf(write("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n")), "neg.obj",
-                 "line 4", "vertex index -4 out of range");
-  EXPECT_MESSAGE(errorOf(write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")), "zero.obj",
-                 "line 4", "index 0");
+  EXPECT_MESSAGE(errorOf(write("range.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n")), "range.obj", "line 4",
+                 "vertex index 4 out of range");
+  EXPECT_MESSAGE(errorOf(write("neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n")), "neg.obj", "line 4",
+                 "vertex index -4 out of range");
+  EXPECT_MESSAGE(errorOf(write("zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n")), "zero.obj", "line 4", "index 0");
   std::string rangeTris = tris();
   const int32_t five = 5; // the pyramid has vertices 0..4 of its own
   std::memcpy(rangeTris.data() + rangeTris.size() - 4, &five, 4);
   EXPECT_MESSAGE(errorOf(write("range.tris", rangeTris)), "range.tris", "mesh 1 triangle 5",
                  "vertex index 5 out of range [0, 5)");
 
-  EXPECT_MESSAGE(errorOf(write("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n")), "nan.obj",
-                 "line 2", "NaN or infinite");
-  EXPECT_MESSAGE(errorOf(write("inf.obj", "v 0 0 0\nv 1 1e300 0\nv 0 1 0\nf 1 2 3\n")), "inf.obj",
-                 "line 2", "NaN or infinite");
+  EXPECT_MESSAGE(errorOf(write("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n")), "nan.obj", "line 2",
+                 "NaN or infinite");
+  EXPECT_MESSAGE(errorOf(write("inf.obj", "v 0 0 0\nv 1 1e300 0\nv 0 1 0\nf 1 2 3\n")), "inf.obj", "line 2",
+                 "NaN or infinite");
   std::string nanTris = tris();
   const float nan = std::numeric_limits<float>::quiet_NaN();
   std::memcpy(nanTris.data() + 4 + 12 + 4, &nan, 4);
-  EXPECT_MESSAGE(errorOf(write("nan.tris", nanTris)), "nan.tris", "mesh 0 vertex 1", "byte 16",
-                 "NaN or infinite");
+  EXPECT_MESSAGE(errorOf(write("nan.tris", nanTris)), "nan.tris", "mesh 0 vertex 1", "byte 16", "NaN or infinite");
   std::string nanPly = plyBinary(true);
   const size_t at = nanPly.find("end_header\n") + 11 + 1;
   std::memset(nanPly.data() + at, 0xff, 4); // x of vertex 0: all ones is a NaN in either order
   EXPECT_MESSAGE(errorOf(write("nan.ply", nanPly)), "nan.ply", "element 'vertex' 0", "NaN or infinite");
 
-  EXPECT_MESSAGE(errorOf(write("face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n")), "face.obj",
-                 "line 4", "malformed 'f' line", "'x'");
-  EXPECT_MESSAGE(errorOf(write("short.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n")), "short.obj", "line 3",
+  EXPECT_MESSAGE(errorOf(write("face.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n")), "face.obj", "line 4",
+                 "malformed 'f' line", "'x'");
+  EXPECT_MESSAGE(errorOf(write("short.obj", "v 0 0 0\nv 1 0 0\nf 1 2\n")), "short.obj", "line 3", "malformed 'f' line");
+  EXPECT_MESSAGE(errorOf(write("slash.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n")), "slash.obj", "line 4",
                  "malformed 'f' line");
-  EXPECT_MESSAGE(errorOf(write("slash.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/a 2 3\n")), "slash.obj",
-                 "line 4", "malformed 'f' line");
-  EXPECT_MESSAGE(errorOf(write("vert.obj", "v 0 0\nf 1 1 1\n")), "vert.obj", "line 1",
-                 "malformed 'v' line");
+  EXPECT_MESSAGE(errorOf(write("vert.obj", "v 0 0\nf 1 1 1\n")), "vert.obj", "line 1", "malformed 'v' line");
 
   EXPECT_MESSAGE(errorOf(write("empty.obj", "")), "empty.obj", "empty file");
   EXPECT_MESSAGE(errorOf(write("empty.tris", "")), "empty.tris", "empty file");
@@ -281,15 +278,16 @@ TEST_F(MeshTest, BadInputsNameFileRecordAndProblem) {
   EXPECT_MESSAGE(errorOf(write("noend.ply", noEnd)), "noend.ply", "no 'end_header'");
   std::string truncAscii = plyAscii();
   truncAscii.resize(truncAscii.find("0 1\n1 2\n") - 5);
-  EXPECT_MESSAGE(errorOf(write("truncascii.ply", truncAscii)), "truncascii.ply", "element 'face' 8",
-                 "truncated");
+  EXPECT_MESSAGE(errorOf(write("truncascii.ply", truncAscii)), "truncascii.ply", "element 'face' 8", "truncated");
 }
 
 TEST_F(MeshTest, CorruptedBinaryFilesOnlyEverThrowExaError) {
   std::mt19937 rng(12345);
-  const std::vector<std::pair<std::string, std::string>> seeds = {
-      {"seed.ply", plyBinary(false)}, {"seed_be.ply", plyBinary(true)}, {"seed.tris", tris()},
-      {"seed.dat", tris()}, {"seed.obj", obj()}};
+  const std::vector<std::pair<std::string, std::string>> seeds = {{"seed.ply", plyBinary(false)},
+                                                                  {"seed_be.ply", plyBinary(true)},
+                                                                  {"seed.tris", tris()},
+                                                                  {"seed.dat", tris()},
+                                                                  {"seed.obj", obj()}};
   int succeeded = 0, failed = 0;
   for (const auto& [name, valid] : seeds) {
     for (int iteration = 0; iteration < 400; ++iteration) {
@@ -332,8 +330,8 @@ TEST_F(MeshTest, LargeMeshReadsQuickly) {
   // A 400 x 400 grid of quads (320,000 triangles) in every format.
   const int n = 400;
   std::string o, ascii = "ply\nformat ascii 1.0\nelement vertex " + std::to_string((n + 1) * (n + 1)) +
-                            "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
-                            std::to_string(n * n) + "\nproperty list uchar int vertex_indices\nend_header\n";
+                         "\nproperty float x\nproperty float y\nproperty float z\nelement face " +
+                         std::to_string(n * n) + "\nproperty list uchar int vertex_indices\nend_header\n";
   Bytes t;
   t.put<int32_t>((n + 1) * (n + 1));
   for (int j = 0; j <= n; ++j)
@@ -347,10 +345,10 @@ TEST_F(MeshTest, LargeMeshReadsQuickly) {
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       const int a = j * (n + 1) + i, b = a + 1, c = b + n + 1, d = a + n + 1;
-      o += "f " + std::to_string(a + 1) + " " + std::to_string(b + 1) + " " + std::to_string(c + 1) +
-           " " + std::to_string(d + 1) + "\n";
-      ascii += "4 " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + " " +
-               std::to_string(d) + "\n";
+      o += "f " + std::to_string(a + 1) + " " + std::to_string(b + 1) + " " + std::to_string(c + 1) + " " +
+           std::to_string(d + 1) + "\n";
+      ascii +=
+          "4 " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) + " " + std::to_string(d) + "\n";
       t.put(a).put(b).put(c).put(a).put(c).put(d);
     }
   const TriangleMesh fromObj = readMesh(write("grid.obj", o));

@@ -137,7 +137,8 @@ TEST(CameraPath, SceneFilesRoundTrip) {
   doc.path = curvedPath();
   doc.path.constantSpeed = true;
   doc.path.keyframes[0].opacityScale = 0.5f;
-  for (size_t i = 1; i < doc.path.keyframes.size(); ++i) doc.path.keyframes[i].opacityScale = 0.25f;
+  for (size_t i = 1; i < doc.path.keyframes.size(); ++i)
+    doc.path.keyframes[i].opacityScale = 0.25f;
   const SceneDocument back = readSceneJson(writeSceneJson(doc), "test");
   ASSERT_EQ(back.path.keyframes.size(), doc.path.keyframes.size());
   EXPECT_TRUE(back.path.constantSpeed);

@@ -60,9 +60,11 @@ TEST(Partition, PartsTileTheLatticeAndBalanceTheCells) {
       std::uniform_real_distribution<double> u(-0.5, 1.5);
       for (int i = 0; i < 2000; ++i) {
         vec3d q;
-        for (int a = 0; a < 3; ++a) q[a] = double(b.lower[a]) + u(rng) * double(b.upper[a] - b.lower[a]);
+        for (int a = 0; a < 3; ++a)
+          q[a] = double(b.lower[a]) + u(rng) * double(b.upper[a] - b.lower[a]);
         int holders = 0;
-        for (int k = 0; k < parts; ++k) holders += contains(p.box(k), q);
+        for (int k = 0; k < parts; ++k)
+          holders += contains(p.box(k), q);
         EXPECT_EQ(holders, 1) << d.name << " at " << q.x << " " << q.y << " " << q.z;
       }
       // Balanced: with the few thousand cells of these datasets, within a quarter of the mean (the blocks
@@ -70,7 +72,8 @@ TEST(Partition, PartsTileTheLatticeAndBalanceTheCells) {
       if (d.cells.size() >= 2500 && parts <= 4) {
         const std::vector<uint64_t> owned = ownedPerPart(d.cells, p);
         const double mean = double(d.cells.size()) / parts;
-        for (uint64_t n : owned) EXPECT_NEAR(double(n), mean, 0.25 * mean) << d.name << " parts " << parts;
+        for (uint64_t n : owned)
+          EXPECT_NEAR(double(n), mean, 0.25 * mean) << d.name << " parts " << parts;
       }
     }
   }
@@ -95,14 +98,16 @@ TEST(Partition, GrainedPlanesCutNoCell) {
         for (int k = 0; k < parts; ++k) {
           const box3l& b = p.box(k);
           bool in = true;
-          for (int a = 0; a < 3; ++a) in = in && cb.lower[a] >= b.lower[a] && cb.upper[a] <= b.upper[a];
+          for (int a = 0; a < 3; ++a)
+            in = in && cb.lower[a] >= b.lower[a] && cb.upper[a] <= b.upper[a];
           inside += in;
         }
         ASSERT_EQ(inside, 1) << d.name << " parts " << parts;
       }
       if (d.cells.size() >= 2500 && parts <= 2) {
         const std::vector<uint64_t> owned = ownedPerPart(d.cells, p);
-        for (uint64_t n : owned) EXPECT_GT(double(n), 0.25 * double(d.cells.size()) / parts) << d.name;
+        for (uint64_t n : owned)
+          EXPECT_GT(double(n), 0.25 * double(d.cells.size()) / parts) << d.name;
       }
     }
   }
@@ -117,11 +122,13 @@ TEST(Partition, VisibilityOrderIsTheOrderRaysMeetTheParts) {
   std::uniform_real_distribution<double> u(-1.0, 2.0), dir(-1.0, 1.0);
   for (int i = 0; i < 300; ++i) {
     vec3d eye;
-    for (int a = 0; a < 3; ++a) eye[a] = double(b.lower[a]) + u(rng) * double(b.upper[a] - b.lower[a]);
+    for (int a = 0; a < 3; ++a)
+      eye[a] = double(b.lower[a]) + u(rng) * double(b.upper[a] - b.lower[a]);
     const std::vector<int> order = p.orderFrom(eye);
     ASSERT_EQ(order.size(), 7u);
     std::vector<int> rank(7);
-    for (int k = 0; k < 7; ++k) rank[size_t(order[size_t(k)])] = k;
+    for (int k = 0; k < 7; ++k)
+      rank[size_t(order[size_t(k)])] = k;
     // March a ray from the eye: the parts it passes through come in the order's order.
     const vec3d d = normalize(test::draw3(dir, rng));
     int last = -1;
@@ -137,7 +144,8 @@ TEST(Partition, VisibilityOrderIsTheOrderRaysMeetTheParts) {
     // Orthographic: the same along the direction from any start.
     const std::vector<int> along = p.orderAlong(d);
     std::vector<int> rankAlong(7);
-    for (int k = 0; k < 7; ++k) rankAlong[size_t(along[size_t(k)])] = k;
+    for (int k = 0; k < 7; ++k)
+      rankAlong[size_t(along[size_t(k)])] = k;
     last = -1;
     const vec3d start = eye - d * (4.0 * double(reduceMax(b.size())));
     for (double t = 0; t < 8.0 * double(reduceMax(b.size())); t += step) {
@@ -155,7 +163,8 @@ TEST(Partition, EncodesAndRejectsCorruptForms) {
   const KdPartition p = KdPartition::balance(censusOf(generateScene({"shells", 3000, 2, 4})), 5);
   const KdPartition q = KdPartition::decode(p.encode());
   ASSERT_EQ(q.parts(), 5);
-  for (int k = 0; k < 5; ++k) EXPECT_EQ(q.box(k), p.box(k));
+  for (int k = 0; k < 5; ++k)
+    EXPECT_EQ(q.box(k), p.box(k));
   EXPECT_EQ(q.orderFrom(vec3d(1, 2, 3)), p.orderFrom(vec3d(1, 2, 3)));
   std::vector<int64_t> bad = p.encode();
   bad[2 + 2] = 0; // a node pointing back at the root
@@ -222,7 +231,8 @@ TEST(Partition, ReconstructionInsideAPartEqualsTheWholeData) {
       int checked = 0;
       for (int i = 0; i < 4000 && checked < 400; ++i) {
         vec3d q;
-        for (int a = 0; a < 3; ++a) q[a] = double(cb.lower[a]) + u(rng) * double(cb.upper[a] - cb.lower[a]);
+        for (int a = 0; a < 3; ++a)
+          q[a] = double(cb.lower[a]) + u(rng) * double(cb.upper[a] - cb.lower[a]);
         if (!contains(p.box(k), q)) continue;
         ++checked;
         double v0 = 0, v1 = 0;
@@ -232,7 +242,8 @@ TEST(Partition, ReconstructionInsideAPartEqualsTheWholeData) {
         ASSERT_EQ(h0, h1) << d.name << " part " << k;
         if (!h0) continue;
         EXPECT_NEAR(v0, v1, 1e-5 * (1.0 + std::abs(v0))) << d.name;
-        for (int a = 0; a < 3; ++a) EXPECT_NEAR(g0[a], g1[a], 1e-4 * (1.0 + std::abs(g0[a]))) << d.name;
+        for (int a = 0; a < 3; ++a)
+          EXPECT_NEAR(g0[a], g1[a], 1e-4 * (1.0 + std::abs(g0[a]))) << d.name;
       }
     }
   }
@@ -246,8 +257,8 @@ TEST(Partition, NativeBoxReadsAndCensusStreamTheRecords) {
   writeNative(s, path);
   EXPECT_DOUBLE_EQ(nativeCensus(path).cells(), double(s.size()));
   EXPECT_EQ(nativeCensus(path).coarsestLevel, censusOf(s).coarsestLevel);
-  for (const box3i& box : {box3i(vec3i(0), vec3i(20)), box3i(vec3i(10, -5, 30), vec3i(40, 18, 31)),
-                           box3i(vec3i(-100), vec3i(-90))}) {
+  for (const box3i& box :
+       {box3i(vec3i(0), vec3i(20)), box3i(vec3i(10, -5, 30), vec3i(40, 18, 31)), box3i(vec3i(-100), vec3i(-90))}) {
     CellSet cropped = s;
     cropCells(cropped, box);
     const CellSet read = readNative(path, {}, box);
@@ -305,7 +316,8 @@ TEST(Partition, BuildInPartsEqualsTheWholeBuild) {
     std::uniform_real_distribution<double> u(-0.1, 1.1);
     for (int i = 0; i < 3000; ++i) {
       vec3d q;
-      for (int k = 0; k < 3; ++k) q[k] = double(cb.lower[k]) + u(rng) * double(cb.upper[k] - cb.lower[k]);
+      for (int k = 0; k < 3; ++k)
+        q[k] = double(cb.lower[k]) + u(rng) * double(cb.upper[k] - cb.lower[k]);
       for (int f = 0; f < int(a.fieldNames.size()); ++f) {
         double v0 = 0, v1 = 0;
         vec3d g0, g1;
@@ -314,7 +326,8 @@ TEST(Partition, BuildInPartsEqualsTheWholeBuild) {
         ASSERT_EQ(h0, h1);
         if (!h0) continue;
         EXPECT_NEAR(v0, v1, 1e-5 * (1.0 + std::abs(v0)));
-        for (int k = 0; k < 3; ++k) EXPECT_NEAR(g0[k], g1[k], 1e-4 * (1.0 + std::abs(g0[k])));
+        for (int k = 0; k < 3; ++k)
+          EXPECT_NEAR(g0[k], g1[k], 1e-4 * (1.0 + std::abs(g0[k])));
       }
     }
   }
@@ -322,7 +335,8 @@ TEST(Partition, BuildInPartsEqualsTheWholeBuild) {
   CellSet bad = generateScene({"blobs", 5000, 1, 3});
   const Cell twin = bad.cells[bad.cells.size() / 2];
   bad.cells.push_back(twin);
-  for (Field& f : bad.fields) f.values.push_back(1.0f);
+  for (Field& f : bad.fields)
+    f.values.push_back(1.0f);
   const std::string path = (dir / "bad.cells").string();
   writeNative(bad, path);
   LoadOptions inParts;
@@ -356,19 +370,19 @@ TEST(Partition, BuildInPartsEqualsTheWholeBuild) {
 Image renderInParts(const CellSet& cells, const KdPartition& p, const Scene& scene, const Frame& frame,
                     const DatasetInfo& dataset, const BuildOptions& build = {}) {
   std::vector<Model> models;
-  for (int k = 0; k < p.parts(); ++k) models.push_back(buildModel(partOf(cells, p.box(k)), build));
+  for (int k = 0; k < p.parts(); ++k)
+    models.push_back(buildModel(partOf(cells, p.box(k)), build));
   std::vector<std::unique_ptr<Renderer>> renderers;
   for (int k = 0; k < p.parts(); ++k) {
     renderers.push_back(std::make_unique<Renderer>(models[size_t(k)], dataset));
     const box3l& b = p.box(k);
-    renderers.back()->setDomain(box3d(models[size_t(k)].world.toWorld(vec3d(b.lower)),
-                                      models[size_t(k)].world.toWorld(vec3d(b.upper))));
+    renderers.back()->setDomain(
+        box3d(models[size_t(k)].world.toWorld(vec3d(b.lower)), models[size_t(k)].world.toWorld(vec3d(b.upper))));
     renderers.back()->setScene(scene);
   }
   const Camera& cam = frame.camera;
-  const std::vector<int> order = cam.orthographic
-                                     ? p.orderAlong((cam.lookAt - cam.position) / models[0].world.scale)
-                                     : p.orderFrom(models[0].world.toLattice(cam.position));
+  const std::vector<int> order = cam.orthographic ? p.orderAlong((cam.lookAt - cam.position) / models[0].world.scale)
+                                                  : p.orderFrom(models[0].world.toLattice(cam.position));
   const size_t pixels = size_t(frame.width) * size_t(frame.height);
   std::vector<vec4f> sum(pixels);
   for (int pass = 0; pass < frame.samplesPerPixel; ++pass) {
@@ -380,12 +394,14 @@ Image renderInParts(const CellSet& cells, const KdPartition& p, const Scene& sce
       renderers[size_t(k)]->renderPass(f, fb, {});
       const FrameBuffer::Sums s = fb.sums();
       for (size_t i = 0; i < pixels; ++i) {
-        for (int c = 0; c < 4; ++c) layers[size_t(k)][i * kCompositeChannels + size_t(c)] = s.colors[4 * i + size_t(c)];
+        for (int c = 0; c < 4; ++c)
+          layers[size_t(k)][i * kCompositeChannels + size_t(c)] = s.colors[4 * i + size_t(c)];
         layers[size_t(k)][i * kCompositeChannels + 4] = s.steps[i];
       }
     }
     std::vector<const float*> ordered;
-    for (int k : order) ordered.push_back(layers[size_t(k)].data());
+    for (int k : order)
+      ordered.push_back(layers[size_t(k)].data());
     std::vector<float> out(pixels * kCompositeChannels);
     compositeFrontToBack(ordered.data(), ordered.size(), pixels, out.data());
     for (size_t i = 0; i < pixels; ++i)
@@ -393,7 +409,8 @@ Image renderInParts(const CellSet& cells, const KdPartition& p, const Scene& sce
                       out[i * kCompositeChannels + 3]);
   }
   Image image(frame.width, frame.height);
-  for (size_t i = 0; i < pixels; ++i) image.pixels[i] = sum[i] * (1.f / float(frame.samplesPerPixel));
+  for (size_t i = 0; i < pixels; ++i)
+    image.pixels[i] = sum[i] * (1.f / float(frame.samplesPerPixel));
   return image;
 }
 

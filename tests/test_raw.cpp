@@ -30,7 +30,8 @@ std::vector<float> denseVolume() {
   std::vector<float> v;
   for (int z = 0; z < kDims.z; ++z)
     for (int y = 0; y < kDims.y; ++y)
-      for (int x = 0; x < kDims.x; ++x) v.push_back(float(voxel(x, y, z)));
+      for (int x = 0; x < kDims.x; ++x)
+        v.push_back(float(voxel(x, y, z)));
   return v;
 }
 
@@ -51,7 +52,8 @@ void checkAgainstVolume(const CellSet& s, const std::vector<float>& dense, doubl
               << "voxel " << x << " " << y << " " << z << " in a level-" << c.level << " cell";
         }
   }
-  for (size_t v = 0; v < hits.size(); ++v) ASSERT_EQ(hits[v], 1) << "voxel " << v;
+  for (size_t v = 0; v < hits.size(); ++v)
+    ASSERT_EQ(hits[v], 1) << "voxel " << v;
 }
 
 void writeRaw(const fs::path& path, const std::string& type, const std::vector<float>& dense) {
@@ -83,13 +85,15 @@ TEST(Raw, MergedCellsAgreeWithTheVolumeWithinTheThreshold) {
     checkAgainstVolume(s, dense, threshold);
     validateCells(s, "merged");
     int top = 0;
-    for (const Cell& c : s.cells) top = std::max(top, c.level);
-    EXPECT_EQ(top, 4); // the constant slab merges to 16^3 cells
+    for (const Cell& c : s.cells)
+      top = std::max(top, c.level);
+    EXPECT_EQ(top, 4);                         // the constant slab merges to 16^3 cells
     EXPECT_LT(s.size(), dense.size() * 3 / 5); // the slab alone is half the volume
   }
   // A larger threshold never gives more cells; a lower maximum level caps the cell size.
   EXPECT_LE(mergeDenseVolume(dense, kDims, 0.5, 4).size(), mergeDenseVolume(dense, kDims, 0.01, 4).size());
-  for (const Cell& c : mergeDenseVolume(dense, kDims, 0.5, 2).cells) EXPECT_LE(c.level, 2);
+  for (const Cell& c : mergeDenseVolume(dense, kDims, 0.5, 2).cells)
+    EXPECT_LE(c.level, 2);
   EXPECT_EQ(mergeDenseVolume(dense, kDims, 1e9, 0).size(), dense.size());
 }
 

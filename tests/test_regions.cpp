@@ -14,8 +14,7 @@ namespace {
 /// Support of a brick in half lattice units, open box.
 box3l supportOf(const Brick& b) {
   const int64_t w = b.cellWidth();
-  return {vec3l(b.lower) * int64_t(2) - vec3l(w),
-          (vec3l(b.lower) + vec3l(b.size) * w) * int64_t(2) + vec3l(w)};
+  return {vec3l(b.lower) * int64_t(2) - vec3l(w), (vec3l(b.lower) + vec3l(b.size) * w) * int64_t(2) + vec3l(w)};
 }
 
 bool overlapsOpen(const box3l& a, const box3l& b) {
@@ -57,8 +56,7 @@ void checkRegions(const CellSet& cells, const Model& m) {
       for (size_t c = 0; c < cells.cells.size(); ++c) {
         const Cell& cell = cells.cells[c];
         const int64_t w = cell.width();
-        const box3l support(vec3l(cell.lower) * int64_t(2) - vec3l(w),
-                            vec3l(cell.lower) * int64_t(2) + vec3l(3 * w));
+        const box3l support(vec3l(cell.lower) * int64_t(2) - vec3l(w), vec3l(cell.lower) * int64_t(2) + vec3l(3 * w));
         if (overlapsOpen(support, rb)) truth.extend(cells.fields[f].values[c]);
       }
       ASSERT_EQ(m.regions.valueRanges[f][i], truth) << "region " << i << " field " << f;
@@ -140,7 +138,8 @@ TEST(Regions, KdTreeLocatesTheRegionHoldingAPoint) {
       for (size_t k = 0; k < m.regions.regions.size(); ++k) {
         const box3f rb = m.regions.regions[k].bounds();
         bool in = true;
-        for (int a = 0; a < 3; ++a) in = in && p[a] >= rb.lower[a] && p[a] <= rb.upper[a];
+        for (int a = 0; a < 3; ++a)
+          in = in && p[a] >= rb.lower[a] && p[a] <= rb.upper[a];
         inAny = inAny || in;
       }
       if (r == kNoRegion) {
@@ -216,7 +215,8 @@ void checkMergedRegions(const CellSet& cells) {
       ASSERT_NE(m, kNoRegion);
       const Region& into = merged.regions.regions[m];
       const box3l mb = halfBox(into), eb = halfBox(r);
-      for (int a = 0; a < 3; ++a) ASSERT_TRUE(mb.lower[a] <= eb.lower[a] && eb.upper[a] <= mb.upper[a]);
+      for (int a = 0; a < 3; ++a)
+        ASSERT_TRUE(mb.lower[a] <= eb.lower[a] && eb.upper[a] <= mb.upper[a]);
       EXPECT_EQ(into.finestLevel, r.finestLevel);
       const auto* ids = merged.regions.brickIds.data() + into.brickBegin;
       for (uint32_t k = 0; k < r.brickCount; ++k)

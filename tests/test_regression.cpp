@@ -46,7 +46,8 @@ std::vector<float> difference(const Image& a, const Image& b) {
   std::vector<float> d(a.pixels.size());
   for (size_t i = 0; i < d.size(); ++i)
     d[i] = (std::abs(a.pixels[i].x - b.pixels[i].x) + std::abs(a.pixels[i].y - b.pixels[i].y) +
-            std::abs(a.pixels[i].z - b.pixels[i].z)) / 3.f;
+            std::abs(a.pixels[i].z - b.pixels[i].z)) /
+           3.f;
   return d;
 }
 
@@ -83,7 +84,8 @@ void compareWithReference(const std::string& name, const Image& got, bool noisy)
   const std::vector<float> diff = difference(quantised, ref);
   if (!noisy) {
     size_t bad = 0;
-    for (float d : diff) bad += d > 2.f / 255.f;
+    for (float d : diff)
+      bad += d > 2.f / 255.f;
     if (double(bad) > 0.005 * double(diff.size())) {
       saveFailure(name, quantised, ref, diff);
       FAIL() << bad << " of " << diff.size() << " pixels differ";
@@ -111,7 +113,8 @@ void compareWithReference(const std::string& name, const Image& got, bool noisy)
   };
   const std::vector<float> fd = difference(filtered(quantised), filtered(ref));
   double mean = 0;
-  for (float d : fd) mean += d;
+  for (float d : fd)
+    mean += d;
   mean /= double(fd.size());
   if (mean > 0.004) {
     saveFailure(name, quantised, ref, diff);

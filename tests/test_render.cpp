@@ -253,52 +253,52 @@ TEST(Render, ShadingNeverInventsStructureInAConstantField) {
   // the same field with one-ulp noise: their gradients are round-off, and every shading mode must
   // draw them exactly as unshaded.
   for (bool noise : {false, true}) {
-  SCOPED_TRACE(noise ? "one-ulp noise" : "constant");
-  std::mt19937 rng(7);
-  CellSet cells;
-  cells.fields.push_back({"scalar", {}});
-  for (int z = 0; z < 32; z += 4)
-    for (int y = 0; y < 32; y += 4)
-      for (int x = 0; x < 32; x += 4) {
-        const int level = (x + y + z) / 4 % 3;
-        const int w = 1 << level;
-        for (int dz = 0; dz < 4; dz += w)
-          for (int dy = 0; dy < 4; dy += w)
-            for (int dx = 0; dx < 4; dx += w) {
-              cells.cells.push_back({vec3i(x + dx, y + dy, z + dz), level});
-              const int ulps = noise ? int(rng() % 3) - 1 : 0;
-              cells.fields[0].values.push_back(ulps == 0 ? 0.3f : std::nextafter(0.3f, ulps > 0 ? 1.f : 0.f));
-            }
-      }
-  BuildOptions bo;
-  bo.bricks.maxBrickWidth = 3; // many bricks: their faces cut through the data
-  const Model m = buildModel(std::move(cells), bo);
-  TransferFunction tf = constantOpacity(0.05f);
-  tf.colorMap = builtinColorMap("inferno");
-  // The constant field with its own (zero-width) range; the noisy one as part of a field whose
-  // range is [0, 1] (the scale shading weights are measured against).
-  tf.valueRange = noise ? range1f{0.f, 1.f} : range1f();
-  const Camera cam = framed(m, 35, 20);
-  auto render = [&](Shading s) {
-    RenderSetup o = smallOptions(64);
-    o.scene.shading = s;
-    o.scene.light.headlight = false; // a fixed light makes any wrong normal visible
-    SceneRenderer r(m, 0, o);
-    r.setTransferFunction(tf);
-    return r.render(cam);
-  };
-  const Image flat = render(Shading::None);
-  EXPECT_GT(flat.pixels[32 * 64 + 32].w, 0.1f);
-  for (Shading s : {Shading::Analytic, Shading::Central, Shading::Smooth}) {
-    const Image shaded = render(s);
-    // Exactly for the constant field; for the noisy one, invisibly (a few samples near the
-    // data's edge, where the weight sum is small, keep a trace of shading: below 1e-5 here, an
-    // 8-bit step is 4e-3).
-    if (noise)
-      EXPECT_LT(maxAbsDiff(shaded, flat), 1e-5) << int(s);
-    else
-      EXPECT_TRUE(identical(shaded, flat)) << int(s);
-  }
+    SCOPED_TRACE(noise ? "one-ulp noise" : "constant");
+    std::mt19937 rng(7);
+    CellSet cells;
+    cells.fields.push_back({"scalar", {}});
+    for (int z = 0; z < 32; z += 4)
+      for (int y = 0; y < 32; y += 4)
+        for (int x = 0; x < 32; x += 4) {
+          const int level = (x + y + z) / 4 % 3;
+          const int w = 1 << level;
+          for (int dz = 0; dz < 4; dz += w)
+            for (int dy = 0; dy < 4; dy += w)
+              for (int dx = 0; dx < 4; dx += w) {
+                cells.cells.push_back({vec3i(x + dx, y + dy, z + dz), level});
+                const int ulps = noise ? int(rng() % 3) - 1 : 0;
+                cells.fields[0].values.push_back(ulps == 0 ? 0.3f : std::nextafter(0.3f, ulps > 0 ? 1.f : 0.f));
+              }
+        }
+    BuildOptions bo;
+    bo.bricks.maxBrickWidth = 3; // many bricks: their faces cut through the data
+    const Model m = buildModel(std::move(cells), bo);
+    TransferFunction tf = constantOpacity(0.05f);
+    tf.colorMap = builtinColorMap("inferno");
+    // The constant field with its own (zero-width) range; the noisy one as part of a field whose
+    // range is [0, 1] (the scale shading weights are measured against).
+    tf.valueRange = noise ? range1f{0.f, 1.f} : range1f();
+    const Camera cam = framed(m, 35, 20);
+    auto render = [&](Shading s) {
+      RenderSetup o = smallOptions(64);
+      o.scene.shading = s;
+      o.scene.light.headlight = false; // a fixed light makes any wrong normal visible
+      SceneRenderer r(m, 0, o);
+      r.setTransferFunction(tf);
+      return r.render(cam);
+    };
+    const Image flat = render(Shading::None);
+    EXPECT_GT(flat.pixels[32 * 64 + 32].w, 0.1f);
+    for (Shading s : {Shading::Analytic, Shading::Central, Shading::Smooth}) {
+      const Image shaded = render(s);
+      // Exactly for the constant field; for the noisy one, invisibly (a few samples near the
+      // data's edge, where the weight sum is small, keep a trace of shading: below 1e-5 here, an
+      // 8-bit step is 4e-3).
+      if (noise)
+        EXPECT_LT(maxAbsDiff(shaded, flat), 1e-5) << int(s);
+      else
+        EXPECT_TRUE(identical(shaded, flat)) << int(s);
+    }
   }
   // A field with structure is still shaded.
   const Model& blobs = blobsModel();
@@ -311,8 +311,10 @@ TEST(Render, ShadingNeverInventsStructureInAConstantField) {
     r.setTransferFunction(ramp);
     static Image first;
     const Image img = r.render(framed(blobs, 30, 25));
-    if (s == Shading::Analytic) first = img;
-    else EXPECT_GT(meanAbsDiff(first, img), 1e-3);
+    if (s == Shading::Analytic)
+      first = img;
+    else
+      EXPECT_GT(meanAbsDiff(first, img), 1e-3);
   }
 }
 
@@ -344,7 +346,8 @@ double bandPower(const Image& img, double period) {
       for (int i = 0; i < n; ++i)
         mean += v[size_t(i)] = pass ? l[size_t(i) * size_t(w) + size_t(line)] : l[size_t(line) * size_t(w) + size_t(i)];
       mean /= n;
-      for (int i = 0; i < n; ++i) v[size_t(i)] = (v[size_t(i)] - mean) * (0.5 - 0.5 * std::cos(2 * M_PI * i / (n - 1)));
+      for (int i = 0; i < n; ++i)
+        v[size_t(i)] = (v[size_t(i)] - mean) * (0.5 - 0.5 * std::cos(2 * M_PI * i / (n - 1)));
       for (int k = std::max(1, k0); k <= std::min(k1, n / 2); ++k) {
         double re = 0, im = 0;
         for (int i = 0; i < n; ++i) {
@@ -422,7 +425,8 @@ TEST(Render, DefaultShadingDoesNotDrawTheCellLattice) {
     auto difference = [&](const Image& a, const Image& ref) {
       Image d(size - 2 * margin, size - 2 * margin);
       for (int y = 0; y < d.height; ++y)
-        for (int x = 0; x < d.width; ++x) d.at(x, y) = a.at(x + margin, y + margin) - ref.at(x + margin, y + margin);
+        for (int x = 0; x < d.width; ++x)
+          d.at(x, y) = a.at(x + margin, y + margin) - ref.at(x + margin, y + margin);
       return d;
     };
     std::map<Shading, Image> error;
@@ -469,7 +473,7 @@ TEST(Render, GradientFieldsAreCentralDifferencesOfTheReconstruction) {
               double vp = 0, vm = 0;
               const bool hp = m.sampleWorld(0, m.world.toWorld(pp), vp, unused);
               const bool hm = m.sampleWorld(0, m.world.toWorld(pm), vm, unused);
-              const double expected = hp && hm ? (vp - vm) / (2 * w)
+              const double expected = hp && hm       ? (vp - vm) / (2 * w)
                                       : hp && centre ? (vp - v0) / w
                                       : hm && centre ? (v0 - vm) / w
                                                      : 0.0;

@@ -22,12 +22,12 @@ TEST(Scenes, DeterministicAndValid) {
     }
     EXPECT_EQ(a.cells, b.cells);
     ASSERT_EQ(a.fields.size(), b.fields.size());
-    for (size_t f = 0; f < a.fields.size(); ++f) EXPECT_EQ(a.fields[f].values, b.fields[f].values);
+    for (size_t f = 0; f < a.fields.size(); ++f)
+      EXPECT_EQ(a.fields[f].values, b.fields[f].values);
     EXPECT_NO_THROW(validateCells(a, info.name));
     EXPECT_NO_THROW(buildBricks(a.cells)); // no overlaps
     const CellSet other = generateScene({info.name, 5000, 5, 4});
-    EXPECT_TRUE(a.cells != other.cells || a.fields[0].values != other.fields[0].values)
-        << "seed matters";
+    EXPECT_TRUE(a.cells != other.cells || a.fields[0].values != other.fields[0].values) << "seed matters";
   }
 }
 
@@ -44,13 +44,15 @@ TEST(Scenes, SizeFollowsTheRequest) {
 TEST(Scenes, ShellsHaveHolesAndLevelJumpsOfMoreThanOne) {
   const CellSet s = generateScene({"shells", 300000, 1, 4});
   std::set<int> levels;
-  for (const Cell& c : s.cells) levels.insert(c.level);
+  for (const Cell& c : s.cells)
+    levels.insert(c.level);
   EXPECT_TRUE(levels.count(0) && levels.count(3));
   EXPECT_FALSE(levels.count(2)) << "finest cells sit directly beside coarsest";
   // Holes: fewer cells' volume than the bounding box.
   const box3l b = s.bounds();
   double volume = 0;
-  for (const Cell& c : s.cells) volume += std::pow(double(c.width()), 3);
+  for (const Cell& c : s.cells)
+    volume += std::pow(double(c.width()), 3);
   const vec3l e = b.size();
   EXPECT_LT(volume, 0.8 * double(e.x) * double(e.y) * double(e.z));
 }

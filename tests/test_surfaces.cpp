@@ -4,10 +4,10 @@
 #include "datasets.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
-#include "reference.h"
 #include "exabricks/core/error.h"
 #include "exabricks/io/mesh.h"
 #include "exabricks/render/renderer.h"
+#include "reference.h"
 #include "render_setup.h"
 
 #include <gtest/gtest.h>
@@ -23,7 +23,8 @@ namespace {
 /// Level-0 cells filling [0, n)^3 with value f(cell centre) in one field per function.
 template <typename... F> CellSet uniformCells(int n, const std::vector<std::string>& names, F... fs) {
   CellSet s;
-  for (const std::string& name : names) s.fields.push_back({name, {}});
+  for (const std::string& name : names)
+    s.fields.push_back({name, {}});
   for (int z = 0; z < n; ++z)
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x) {
@@ -203,7 +204,8 @@ TEST(Surfaces, IsoRegionSetFollowsTheIsoValues) {
   r.setIsoSurfaces(is);
   const size_t one = r.isoRegions();
   size_t expected = 0;
-  for (const range1f& v : m.regions.valueRanges[0]) expected += v.lower <= 10.f && 10.f <= v.upper;
+  for (const range1f& v : m.regions.valueRanges[0])
+    expected += v.lower <= 10.f && 10.f <= v.upper;
   EXPECT_EQ(one, expected);
   is.values = {10.f, 25.f};
   r.setIsoSurfaces(is);
@@ -243,7 +245,8 @@ TEST(Surfaces, MeshInFrontHidesTheVolume) {
   const Image b = behind.render(cam, &st);
   EXPECT_GT(st.samples, 0u);
   EXPECT_GT(maxAbsDiff(a, b), 0.1);
-  for (const vec4f& p : b.pixels) EXPECT_FLOAT_EQ(p.w, 1.f);
+  for (const vec4f& p : b.pixels)
+    EXPECT_FLOAT_EQ(p.w, 1.f);
 }
 
 TEST(Surfaces, ClipPlaneRemovesExactlyOneHalfSpace) {
@@ -377,7 +380,8 @@ TEST(Surfaces, SecondFieldColoursTheIsoSurface) {
   const vec3d centre(32.0);
   const Model m = buildModel(radialTwoLevels(centre, 26.0));
   RenderSetup o = surfaceOptions(64);
-  o.scene.light.terms.ambient = 1.f, o.scene.light.terms.diffuse = 0.f, o.scene.light.terms.specular = 0.f; // unlit: the pixel is the surface colour
+  o.scene.light.terms.ambient = 1.f, o.scene.light.terms.diffuse = 0.f,
+  o.scene.light.terms.specular = 0.f; // unlit: the pixel is the surface colour
   SceneRenderer r(m, 0, o);
   r.setTransferFunction(invisible());
   IsoSurfaces is;
@@ -408,8 +412,8 @@ TEST(Surfaces, SecondFieldColoursTheIsoSurface) {
 }
 
 TEST(Surfaces, LayersCombineAsSummedOpticalDepth) {
-  CellSet cells = uniformCells(16, {"a", "b"}, [](const vec3d& p) { return p.x / 16.0; },
-                               [](const vec3d& p) { return p.y / 16.0; });
+  CellSet cells = uniformCells(
+      16, {"a", "b"}, [](const vec3d& p) { return p.x / 16.0; }, [](const vec3d& p) { return p.y / 16.0; });
   const Model m = buildModel(std::move(cells));
   RenderSetup o = surfaceOptions(24);
   o.scene.shading = Shading::None;
@@ -462,7 +466,8 @@ TEST(Surfaces, IsoHitsAreTheFirstRootsOfTheBruteForceReconstruction) {
   SceneRenderer r(m, 0, surfaceOptions(8));
   r.setTransferFunction(invisible());
   range1f range;
-  for (float v : cells.fields[0].values) range.extend(v);
+  for (float v : cells.fields[0].values)
+    range.extend(v);
   const float iso = range.lower + 0.45f * (range.upper - range.lower);
   IsoSurfaces is;
   is.field = r.field(0);

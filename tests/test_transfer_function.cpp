@@ -34,9 +34,7 @@ std::string readError(const std::string& path) {
   return "no error";
 }
 
-float luminance(const vec3f& c) {
-  return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z;
-}
+float luminance(const vec3f& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /// 8-bit sRGB of a linear colour, unrounded.
 vec3f srgb255(const vec3f& c) {
@@ -111,17 +109,14 @@ TEST(ColorMap, MatchesPublishedColours) {
     float t;
     int r, g, b;
   } expect[] = {
-      {"viridis", 0.f, 0x44, 0x01, 0x54},  {"viridis", 0.25f, 0x3b, 0x52, 0x8b},
-      {"viridis", 0.5f, 0x21, 0x90, 0x8c}, {"viridis", 0.75f, 0x5d, 0xc8, 0x63},
-      {"viridis", 1.f, 0xfd, 0xe7, 0x25},  {"plasma", 0.f, 0x0d, 0x08, 0x87},
-      {"plasma", 0.25f, 0x7e, 0x03, 0xa8}, {"plasma", 0.5f, 0xcc, 0x46, 0x78},
-      {"plasma", 0.75f, 0xf8, 0x94, 0x41}, {"plasma", 1.f, 0xf0, 0xf9, 0x21},
-      {"inferno", 0.f, 0x00, 0x00, 0x04},  {"inferno", 0.25f, 0x56, 0x10, 0x6e},
-      {"inferno", 0.5f, 0xbb, 0x37, 0x54}, {"inferno", 0.75f, 0xf9, 0x8c, 0x0a},
-      {"inferno", 1.f, 0xfc, 0xff, 0xa4},  {"magma", 0.f, 0x00, 0x00, 0x04},
-      {"magma", 0.25f, 0x51, 0x12, 0x7c},  {"magma", 0.5f, 0xb6, 0x36, 0x79},
-      {"magma", 0.75f, 0xfb, 0x88, 0x61},  {"magma", 1.f, 0xfc, 0xfd, 0xbf},
-      {"grayscale", 0.f, 0, 0, 0},         {"grayscale", 1.f, 255, 255, 255},
+      {"viridis", 0.f, 0x44, 0x01, 0x54},   {"viridis", 0.25f, 0x3b, 0x52, 0x8b}, {"viridis", 0.5f, 0x21, 0x90, 0x8c},
+      {"viridis", 0.75f, 0x5d, 0xc8, 0x63}, {"viridis", 1.f, 0xfd, 0xe7, 0x25},   {"plasma", 0.f, 0x0d, 0x08, 0x87},
+      {"plasma", 0.25f, 0x7e, 0x03, 0xa8},  {"plasma", 0.5f, 0xcc, 0x46, 0x78},   {"plasma", 0.75f, 0xf8, 0x94, 0x41},
+      {"plasma", 1.f, 0xf0, 0xf9, 0x21},    {"inferno", 0.f, 0x00, 0x00, 0x04},   {"inferno", 0.25f, 0x56, 0x10, 0x6e},
+      {"inferno", 0.5f, 0xbb, 0x37, 0x54},  {"inferno", 0.75f, 0xf9, 0x8c, 0x0a}, {"inferno", 1.f, 0xfc, 0xff, 0xa4},
+      {"magma", 0.f, 0x00, 0x00, 0x04},     {"magma", 0.25f, 0x51, 0x12, 0x7c},   {"magma", 0.5f, 0xb6, 0x36, 0x79},
+      {"magma", 0.75f, 0xfb, 0x88, 0x61},   {"magma", 1.f, 0xfc, 0xfd, 0xbf},     {"grayscale", 0.f, 0, 0, 0},
+      {"grayscale", 1.f, 255, 255, 255},
   };
   for (const Expect& e : expect) {
     SCOPED_TRACE(std::string(e.map) + " at " + std::to_string(e.t));
@@ -136,9 +131,8 @@ TEST(ColorMap, MatchesPublishedColours) {
 TEST(ColorMap, CoolToWarmFollowsMorelandsTable) {
   // Moreland's published diverging map at eighths, 8-bit sRGB. The implementation computes the
   // map in Msh space from the two ends only.
-  const int table[9][3] = {{59, 76, 192},   {98, 130, 234},  {141, 176, 254},
-                           {184, 208, 249}, {221, 221, 221}, {245, 196, 173},
-                           {244, 154, 123}, {222, 96, 77},   {180, 4, 38}};
+  const int table[9][3] = {{59, 76, 192},   {98, 130, 234},  {141, 176, 254}, {184, 208, 249}, {221, 221, 221},
+                           {245, 196, 173}, {244, 154, 123}, {222, 96, 77},   {180, 4, 38}};
   const ColorMap m = builtinColorMap("cool-to-warm");
   EXPECT_GE(m.positions.size(), 17u);
   for (int i = 0; i <= 8; ++i) {
@@ -308,8 +302,7 @@ TEST(TransferFunction, MaxOpacityMatchesABruteForceScan) {
     const float exact = tf.maxOpacity(r);
     SCOPED_TRACE(trial);
     EXPECT_GE(exact, brute);
-    EXPECT_LE(exact,
-              std::min(1.f, brute + 20.f * tf.opacityScale * float(t1 - t0) / steps + 1e-5f));
+    EXPECT_LE(exact, std::min(1.f, brute + 20.f * tf.opacityScale * float(t1 - t0) / steps + 1e-5f));
     EXPECT_LE(exact, 1.f);
   }
 }
@@ -386,8 +379,7 @@ TEST(TransferFunction, ParaViewPresetObjectWithOpacityBeyondTheColours) {
   EXPECT_NEAR(tf.lookup(4.f).w, 2.f / 3.f, 1e-6f);
   EXPECT_NEAR(tf.lookup(1.f).w, 5.f / 6.f, 1e-6f);
   // Without "Points" the opacity is the default ramp.
-  const std::string plain =
-      writeTemp("pv-plain.json", R"({"RGBPoints": [-1, 0, 0, 0, 1, 1, 1, 1]})");
+  const std::string plain = writeTemp("pv-plain.json", R"({"RGBPoints": [-1, 0, 0, 0, 1, 1, 1, 1]})");
   const TransferFunction ramp = readTransferFunction(plain);
   EXPECT_TRUE(ramp.opacity.empty());
   EXPECT_NEAR(ramp.lookup(0.f).w, 0.5f, 1e-6f);
@@ -406,8 +398,7 @@ TEST(TransferFunction, ExabricksJson) {
   EXPECT_FLOAT_EQ(tf.maxOpacity({0.f, 4.f}), 0.5f);
 
   const std::string custom =
-      writeTemp("custom.json",
-                R"({"colormap": {"points": [[0, 0, 0, 0], [0.5, 0.5, 0.5, 0.5], [1, 1, 1, 1]]}})");
+      writeTemp("custom.json", R"({"colormap": {"points": [[0, 0, 0, 0], [0.5, 0.5, 0.5, 0.5], [1, 1, 1, 1]]}})");
   const TransferFunction c = readTransferFunction(custom);
   EXPECT_EQ(c.colorMap.name, "custom");
   EXPECT_FLOAT_EQ(c.colorMap.at(1.f).x, 1.f);
@@ -442,8 +433,7 @@ TEST(TransferFunction, BadFilesAreRejectedClearly) {
       {"unknown.json", R"({"colour": "viridis"})", "unknown key \"colour\""},
       {"name.json", R"({"colormap": "rainbow"})", "unknown colour map 'rainbow'"},
       {"cmtype.json", R"({"colormap": 3})", "\"colormap\" must be"},
-      {"cmkey.json", R"({"colormap": {"points": [[0,0,0,0],[1,1,1,1]], "space": "lab"}})",
-       "unknown key \"space\""},
+      {"cmkey.json", R"({"colormap": {"points": [[0,0,0,0],[1,1,1,1]], "space": "lab"}})", "unknown key \"space\""},
       {"cmpoint.json", R"({"colormap": {"points": [[0,0,0],[1,1,1,1]]}})", "[x, r, g, b]"},
       {"cmorder.json", R"({"colormap": {"points": [[0,0,0,0],[0.6,1,1,1],[0.5,1,1,1],[1,1,1,1]]}})",
        "must not decrease"},
@@ -468,13 +458,10 @@ TEST(TransferFunction, BadFilesAreRejectedClearly) {
       {"flat.json", R"({"RGBPoints": [1, 0, 0, 0, 1, 1, 1, 1]})", "no value range"},
       {"range01.json", R"({"RGBPoints": [0, 0, 0, 2, 1, 1, 1, 1]})", "outside [0, 1]"},
       {"rgbnull.json", R"({"RGBPoints": [0, 0, 0, null, 1, 1, 1, 1]})", "must be a number"},
-      {"points4.json", R"({"RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "Points": [0, 1, 0.5]})",
-       "\"Points\""},
-      {"points-order.json",
-       R"({"RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "Points": [1, 0, 0.5, 0, 0, 1, 0.5, 0]})",
+      {"points4.json", R"({"RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "Points": [0, 1, 0.5]})", "\"Points\""},
+      {"points-order.json", R"({"RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "Points": [1, 0, 0.5, 0, 0, 1, 0.5, 0]})",
        "must not decrease"},
-      {"points-alpha.json", R"({"RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "Points": [0, 2, 0.5, 0]})",
-       "outside [0, 1]"},
+      {"points-alpha.json", R"({"RGBPoints": [0, 0, 0, 0, 1, 1, 1, 1], "Points": [0, 2, 0.5, 0]})", "outside [0, 1]"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.name);

@@ -102,8 +102,8 @@ TEST(Traversal, SegmentsTileEachRayAndBothBackEndsAgree) {
       }
       const auto truth = coverage(m, ray);
       ASSERT_EQ(merged.size(), truth.size())
-          << "ray org " << ray.org.x << " " << ray.org.y << " " << ray.org.z << " dir " << ray.dir.x << " "
-          << ray.dir.y << " " << ray.dir.z << " first truth " << (truth.empty() ? 0.f : truth[0].first) << ".."
+          << "ray org " << ray.org.x << " " << ray.org.y << " " << ray.org.z << " dir " << ray.dir.x << " " << ray.dir.y
+          << " " << ray.dir.z << " first truth " << (truth.empty() ? 0.f : truth[0].first) << ".."
           << (truth.empty() ? 0.f : truth[0].second);
       for (size_t i = 0; i < truth.size(); ++i) {
         EXPECT_NEAR(merged[i].first, truth[i].first, 1e-3f);
@@ -119,11 +119,13 @@ TEST(Traversal, HiddenRegionsAreSkipped) {
   for (TraversalKind kind : {TraversalKind::KdTree, TraversalKind::Embree}) {
     RegionTraversal t(m, kind);
     std::vector<uint8_t> visible(m.regions.regions.size(), 0);
-    for (size_t i = 0; i < visible.size(); i += 3) visible[i] = 1;
+    for (size_t i = 0; i < visible.size(); i += 3)
+      visible[i] = 1;
     t.setVisible(visible);
     std::mt19937 rng(5);
     for (const Ray& ray : testRays(m, rng))
-      for (const Segment& s : collect(t, ray)) EXPECT_TRUE(visible[s.region]);
+      for (const Segment& s : collect(t, ray))
+        EXPECT_TRUE(visible[s.region]);
   }
 }
 

@@ -46,7 +46,7 @@ std::string base64(const std::string& bytes) {
 /// T = 2 rho + level, a vtkGhostType array and a 3-component array that is not a field.
 struct VtkFixture {
   fs::path dir;
-  std::string format = "ascii";  ///< ascii, binary or appended
+  std::string format = "ascii"; ///< ascii, binary or appended
   bool bigEndian = false;
   bool header64 = false;
   bool zlib = false;
@@ -64,7 +64,8 @@ struct VtkFixture {
 
   std::string number(uint64_t v, size_t bytes) const {
     std::string s(bytes, '\0');
-    for (size_t i = 0; i < bytes; ++i) s[bigEndian ? bytes - 1 - i : i] = char((v >> (8 * i)) & 0xff);
+    for (size_t i = 0; i < bytes; ++i)
+      s[bigEndian ? bytes - 1 - i : i] = char((v >> (8 * i)) & 0xff);
     return s;
   }
   std::string encodeValues(const std::vector<double>& v, bool asFloat) const {
@@ -78,7 +79,8 @@ struct VtkFixture {
       } else {
         std::memcpy(b, &d, 8);
       }
-      for (size_t i = 0; i < n; ++i) out += char(b[bigEndian ? n - 1 - i : i]);
+      for (size_t i = 0; i < n; ++i)
+        out += char(b[bigEndian ? n - 1 - i : i]);
     }
     return out;
   }
@@ -94,7 +96,8 @@ struct VtkFixture {
       const std::string part = data.substr(b * bs, bs);
       uLongf size = compressBound(uLong(part.size()));
       std::string out(size, '\0');
-      compress2(reinterpret_cast<Bytef*>(out.data()), &size, reinterpret_cast<const Bytef*>(part.data()), uLong(part.size()), 6);
+      compress2(reinterpret_cast<Bytef*>(out.data()), &size, reinterpret_cast<const Bytef*>(part.data()),
+                uLong(part.size()), 6);
       out.resize(size);
       header += number(out.size(), hb);
       packed += out;
@@ -110,14 +113,15 @@ struct VtkFixture {
          "header_type=\"UInt32\">\n  <vtkOverlappingAMR origin=\"1 2 3\" grid_description=\""
       << gridDescription << "\">\n";
     for (int l = 0; l < 3; ++l) {
-      h << "    <Block level=\"" << l << "\" spacing=\"" << spacing(l) << " " << spacing(l) << " " << spacing(l) << "\">\n";
+      h << "    <Block level=\"" << l << "\" spacing=\"" << spacing(l) << " " << spacing(l) << " " << spacing(l)
+        << "\">\n";
       int index = 0;
       for (size_t bi = 0; bi < boxes.size(); ++bi) {
         const VBox& b = boxes[bi];
         if (b.level != l) continue;
         const std::string piece = "data/data_" + std::to_string(l) + "_" + std::to_string(index) + ".vti";
-        h << "      <DataSet index=\"" << index++ << "\" amr_box=\"" << b.lo[0] << " " << b.hi[0] << " " << b.lo[1] << " "
-          << b.hi[1] << " " << b.lo[2] << " " << b.hi[2] << "\" file=\"" << piece << "\"/>\n";
+        h << "      <DataSet index=\"" << index++ << "\" amr_box=\"" << b.lo[0] << " " << b.hi[0] << " " << b.lo[1]
+          << " " << b.hi[1] << " " << b.lo[2] << " " << b.hi[2] << "\" file=\"" << piece << "\"/>\n";
         writePiece(dir / piece, b, bi + 1 == boxes.size());
       }
       h << "    </Block>\n";
@@ -127,7 +131,8 @@ struct VtkFixture {
 
   void writePiece(const fs::path& path, const VBox& b, bool last) const {
     int n[3];
-    for (int a = 0; a < 3; ++a) n[a] = b.hi[a] - b.lo[a] + 1;
+    for (int a = 0; a < 3; ++a)
+      n[a] = b.hi[a] - b.lo[a] + 1;
     if (wrongExtent && b.level == 1) n[2] -= 1;
     const double s = spacing(b.level);
     std::vector<double> rho, temp, ghost, vel;
@@ -150,17 +155,19 @@ struct VtkFixture {
         << b.lo[0] + n[0] << " " << b.lo[1] << " " << b.lo[1] + n[1] << " " << b.lo[2] << " " << b.lo[2] + n[2]
         << "\">\n<PointData>\n</PointData>\n<CellData Scalars=\"rho\">\n";
     auto array = [&](const char* name, const std::vector<double>& v, const char* type, bool asFloat, int comps) {
-      out << "<DataArray type=\"" << type << "\" Name=\"" << name << "\" NumberOfComponents=\"" << comps << "\" format=\""
-          << format << "\"";
+      out << "<DataArray type=\"" << type << "\" Name=\"" << name << "\" NumberOfComponents=\"" << comps
+          << "\" format=\"" << format << "\"";
       if (format == "ascii") {
         out << ">\n";
-        for (double d : v) out << d << " ";
+        for (double d : v)
+          out << d << " ";
         out << "\n</DataArray>\n";
         return;
       }
       std::string bytes;
       if (std::string(type) == "UInt8") {
-        for (double d : v) bytes += char(int(d));
+        for (double d : v)
+          bytes += char(int(d));
       } else {
         bytes = encodeValues(v, asFloat);
       }
@@ -195,16 +202,23 @@ TEST(VtkAmr, LeafCellsInEveryEncoding) {
     size_t zlibBlock = 64;
     bool lastZero = false;
   };
-  const Variant variants[] = {{"ascii", false, false, false, false},   {"binary", false, false, false, true},
-                              {"binary", true, true, false, false},    {"appended", false, true, false, false},
-                              {"appended", true, false, false, true},  {"appended", false, false, true, true},
-                              {"binary", true, true, true, false},     {"appended", true, true, true, false},
+  const Variant variants[] = {{"ascii", false, false, false, false},
+                              {"binary", false, false, false, true},
+                              {"binary", true, true, false, false},
+                              {"appended", false, true, false, false},
+                              {"appended", true, false, false, true},
+                              {"appended", false, false, true, true},
+                              {"binary", true, true, true, false},
+                              {"appended", true, true, true, false},
                               // As VTK writes small arrays: one block, smaller than the nominal 32768.
-                              {"appended", false, false, true, true, 32768}, {"binary", false, true, true, false, 32768},
+                              {"appended", false, false, true, true, 32768},
+                              {"binary", false, true, true, false, 32768},
                               // Several blocks with a short last one, UInt32 and UInt64 headers.
-                              {"appended", false, false, true, false, 100}, {"binary", true, true, true, true, 100},
+                              {"appended", false, false, true, false, 100},
+                              {"binary", true, true, true, true, 100},
                               // Whole blocks only: the last block's size written as 0.
-                              {"appended", false, false, true, false, 64, true}, {"binary", false, true, true, true, 64, true}};
+                              {"appended", false, false, true, false, 64, true},
+                              {"binary", false, true, true, true, 64, true}};
   int vi = 0;
   for (const Variant& v : variants) {
     SCOPED_TRACE(vi);
@@ -269,8 +283,14 @@ TEST(VtkAmr, BadFilesAreRejectedClearly) {
   expectIn(errorFor("flat", [](VtkFixture& f) { f.gridDescription = "XY"; }), {"data.vthb", "XY", "3-D"});
   expectIn(errorFor("ratio3", [](VtkFixture& f) { f.ratio2 = 3; }), {"data.vthb", "spacing", "not a power of two"});
   expectIn(errorFor("cut", [](VtkFixture& f) { f.truncate = true; }), {"data_2_0.vti", "truncated"});
-  expectIn(errorFor("cutz", [](VtkFixture& f) { f.truncate = true; f.zlib = true; }), {"data_2_0.vti", "truncated"});
-  expectIn(errorFor("extent", [](VtkFixture& f) { f.wrongExtent = true; }), {"data_1_0.vti", "level 1 DataSet 0", "amr_box"});
+  expectIn(errorFor("cutz",
+                    [](VtkFixture& f) {
+                      f.truncate = true;
+                      f.zlib = true;
+                    }),
+           {"data_2_0.vti", "truncated"});
+  expectIn(errorFor("extent", [](VtkFixture& f) { f.wrongExtent = true; }),
+           {"data_1_0.vti", "level 1 DataSet 0", "amr_box"});
   {
     VtkFixture f;
     f.dir = base / "missing";
@@ -282,7 +302,8 @@ TEST(VtkAmr, BadFilesAreRejectedClearly) {
     VtkFixture f;
     f.dir = base / "header";
     f.write();
-    std::ofstream(f.file()) << "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkOverlappingAMR\">\n<vtkOverlappingAMR origin=\"0 0\">";
+    std::ofstream(f.file())
+        << "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkOverlappingAMR\">\n<vtkOverlappingAMR origin=\"0 0\">";
     expectIn(loadError(f.file().string()), {"data.vthb", "origin"});
   }
 }
@@ -307,8 +328,10 @@ TEST(VtkAmr, CorruptedPiecesGiveErrorsNotCrashes) {
     for (size_t at = 0; at < original.size(); at += step) {
       for (int mode = 0; mode < 2; ++mode) {
         std::string bytes = original;
-        if (mode == 0) bytes.resize(at);
-        else bytes[at] = char(bytes[at] ^ 0x5a);
+        if (mode == 0)
+          bytes.resize(at);
+        else
+          bytes[at] = char(bytes[at] ^ 0x5a);
         std::ofstream(target, std::ios::binary) << bytes;
         try {
           readVtkAmr(f.file().string());
@@ -335,7 +358,8 @@ TEST(VtkAmr, CompressionHeadersAsVtkWritesThem) {
   }
   uLongf size = compressBound(uLong(plain.size()));
   std::string packed(size, '\0');
-  compress2(reinterpret_cast<Bytef*>(packed.data()), &size, reinterpret_cast<const Bytef*>(plain.data()), uLong(plain.size()), 6);
+  compress2(reinterpret_cast<Bytef*>(packed.data()), &size, reinterpret_cast<const Bytef*>(plain.data()),
+            uLong(plain.size()), 6);
   packed.resize(size);
   auto u32 = [](uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
   auto write = [&](const std::string& header, const std::string& data) {
@@ -346,7 +370,8 @@ TEST(VtkAmr, CompressionHeadersAsVtkWritesThem) {
                                         "</Block>\n</vtkOverlappingAMR>\n</VTKFile>\n";
     std::ofstream(dir / "p.vti", std::ios::binary)
         << "<VTKFile type=\"ImageData\" version=\"1.0\" byte_order=\"LittleEndian\" header_type=\"UInt32\" "
-           "compressor=\"vtkZLibDataCompressor\">\n<ImageData WholeExtent=\"0 3 0 2 0 2\">\n<Piece Extent=\"0 3 0 2 0 2\">\n"
+           "compressor=\"vtkZLibDataCompressor\">\n<ImageData WholeExtent=\"0 3 0 2 0 2\">\n<Piece Extent=\"0 3 0 2 0 "
+           "2\">\n"
            "<CellData>\n<DataArray type=\"Float64\" Name=\"rho\" format=\"appended\" offset=\"0\"/>\n</CellData>\n"
            "</Piece>\n</ImageData>\n<AppendedData encoding=\"raw\">\n_"
         << header << data << "\n</AppendedData>\n</VTKFile>\n";
@@ -354,14 +379,16 @@ TEST(VtkAmr, CompressionHeadersAsVtkWritesThem) {
   };
   const CellSet s = loadCells(write(u32(1) + u32(32768) + u32(96) + u32(uint32_t(packed.size())), packed));
   ASSERT_EQ(s.size(), 12u);
-  for (size_t i = 0; i < 12; ++i) EXPECT_EQ(s.fields[0].values[i], float(i));
+  for (size_t i = 0; i < 12; ++i)
+    EXPECT_EQ(s.fields[0].values[i], float(i));
   expectIn(loadError(write(u32(1) + u32(32768) + u32(40000) + u32(uint32_t(packed.size())), packed)),
            {"p.vti", "array 'rho'", "corrupt compression header", "last block of 40000 bytes"});
   expectIn(loadError(write(u32(1) + u32(0) + u32(0) + u32(uint32_t(packed.size())), packed)),
            {"p.vti", "array 'rho'", "block size 0"});
   expectIn(loadError(write(u32(1) + u32(32768) + u32(96) + u32(1u << 30), packed)),
            {"p.vti", "array 'rho'", "compressed blocks", "bytes are present"});
-  expectIn(loadError(write(u32(4000000) + u32(1) + u32(1), "")), {"p.vti", "array 'rho'", "corrupt compression header"});
+  expectIn(loadError(write(u32(4000000) + u32(1) + u32(1), "")),
+           {"p.vti", "array 'rho'", "corrupt compression header"});
   expectIn(loadError(write(u32(3) + u32(32) + u32(32) + u32(10) + u32(10) + u32(10), std::string(30, 'x'))),
            {"p.vti", "array 'rho'", "zlib block 0", "corrupt data"});
 }

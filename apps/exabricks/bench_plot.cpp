@@ -62,8 +62,8 @@ const std::map<char, std::array<const char*, 7>>& glyphs() {
   return g;
 }
 
-constexpr int kScale = 2;                  ///< font pixels per glyph pixel
-constexpr int kAdvance = 6 * kScale;       ///< glyph width plus spacing
+constexpr int kScale = 2;            ///< font pixels per glyph pixel
+constexpr int kAdvance = 6 * kScale; ///< glyph width plus spacing
 constexpr int kTextHeight = 7 * kScale;
 
 struct Canvas {
@@ -73,7 +73,8 @@ struct Canvas {
   }
   void rect(int x0, int y0, int x1, int y1, const vec4f& c) {
     for (int y = y0; y <= y1; ++y)
-      for (int x = x0; x <= x1; ++x) put(x, y, c);
+      for (int x = x0; x <= x1; ++x)
+        put(x, y, c);
   }
   int textWidth(const std::string& s) const { return int(s.size()) * kAdvance; }
   void text(int x, int y, const std::string& s, const vec4f& c) {
@@ -115,8 +116,10 @@ void drawPanel(Canvas& cv, const ScatterPanel& p, int left, int width, int heigh
   const int plotX0 = left + 100, plotX1 = left + width - 30;
   const int plotY0 = 70, plotY1 = height - 80;
   double maxX = 0, maxY = 0;
-  for (double v : p.x) maxX = std::max(maxX, v);
-  for (double v : p.y) maxY = std::max(maxY, v);
+  for (double v : p.x)
+    maxX = std::max(maxX, v);
+  for (double v : p.y)
+    maxY = std::max(maxY, v);
   const double stepX = tickStep(maxX, 5), stepY = tickStep(maxY, 5);
   const double spanX = std::max(stepX, std::ceil(maxX / stepX - 1e-9) * stepX);
   const double spanY = std::max(stepY, std::ceil(maxY / stepY - 1e-9) * stepY);
@@ -146,7 +149,8 @@ void drawPanel(Canvas& cv, const ScatterPanel& p, int left, int width, int heigh
   cv.rect(plotX0, plotY1 - 1, plotX1, plotY1, black);
   cv.rect(plotX0, plotY0, plotX0 + 1, plotY1, black);
   cv.rect(plotX1 - 1, plotY0, plotX1, plotY1, black);
-  for (size_t i = 0; i < std::min(p.x.size(), p.y.size()); ++i) cv.disc(px(p.x[i]), py(p.y[i]), 4, blue);
+  for (size_t i = 0; i < std::min(p.x.size(), p.y.size()); ++i)
+    cv.disc(px(p.x[i]), py(p.y[i]), 4, blue);
 }
 
 } // namespace
@@ -155,7 +159,8 @@ Image drawScatterPanels(const std::vector<ScatterPanel>& panels, int panelWidth,
   Image image(std::max(1, panelWidth * int(panels.size())), height);
   std::fill(image.pixels.begin(), image.pixels.end(), vec4f{1.f, 1.f, 1.f, 1.f});
   Canvas cv{image};
-  for (size_t i = 0; i < panels.size(); ++i) drawPanel(cv, panels[i], int(i) * panelWidth, panelWidth, height);
+  for (size_t i = 0; i < panels.size(); ++i)
+    drawPanel(cv, panels[i], int(i) * panelWidth, panelWidth, height);
   return image;
 }
 

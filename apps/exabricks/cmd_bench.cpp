@@ -33,7 +33,7 @@ struct BenchOptions {
   std::string cases = "all";
   int orbit = 50;
   bool orbitStudy = false; ///< --orbit was given
-  int progressive = 0;      ///< progressive study: preview passes after a transfer-function change
+  int progressive = 0;     ///< progressive study: preview passes after a transfer-function change
   int previewDivisor = 2;
   float previewRate = 0.5f;
   std::string csv = "exabricks-orbit.csv";
@@ -139,13 +139,14 @@ std::vector<std::string> parseCases(const std::string& s) {
 }
 
 /// Least squares fit y = a x1 + b x2 + c (normal equations); false when singular.
-bool fitTwo(const std::vector<double>& x1, const std::vector<double>& x2, const std::vector<double>& y,
-            double& a, double& b, double& c) {
+bool fitTwo(const std::vector<double>& x1, const std::vector<double>& x2, const std::vector<double>& y, double& a,
+            double& b, double& c) {
   double m[3][4] = {};
   for (size_t i = 0; i < y.size(); ++i) {
     const double row[3] = {x1[i], x2[i], 1.0};
     for (int r = 0; r < 3; ++r) {
-      for (int k = 0; k < 3; ++k) m[r][k] += row[r] * row[k];
+      for (int k = 0; k < 3; ++k)
+        m[r][k] += row[r] * row[k];
       m[r][3] += row[r] * y[i];
     }
   }
@@ -158,7 +159,8 @@ bool fitTwo(const std::vector<double>& x1, const std::vector<double>& x2, const 
     for (int r = 0; r < 3; ++r) {
       if (r == col) continue;
       const double f = m[r][col] / m[col][col];
-      for (int k = col; k < 4; ++k) m[r][k] -= f * m[col][k];
+      for (int k = col; k < 4; ++k)
+        m[r][k] -= f * m[col][k];
     }
   }
   a = m[0][3] / m[0][0];
@@ -170,7 +172,8 @@ bool fitTwo(const std::vector<double>& x1, const std::vector<double>& x2, const 
 double correlation(const std::vector<double>& x, const std::vector<double>& y) {
   const double n = double(x.size());
   double mx = 0, my = 0;
-  for (size_t i = 0; i < x.size(); ++i) mx += x[i], my += y[i];
+  for (size_t i = 0; i < x.size(); ++i)
+    mx += x[i], my += y[i];
   mx /= n, my /= n;
   double sxy = 0, sxx = 0, syy = 0;
   for (size_t i = 0; i < x.size(); ++i) {
@@ -187,7 +190,7 @@ struct Setup {
   double loadSeconds = 0;
   uint64_t peakAfterLoad = 0;
   double loadAtStart = -1;
-  Scene base;  ///< the field with the default transfer function, k-d traversal, no early termination
+  Scene base; ///< the field with the default transfer function, k-d traversal, no early termination
   Frame frame;
   box3d worldBox;
 };
@@ -279,7 +282,8 @@ void runCases(const Setup& s, const BenchOptions& o) {
   }
   if (has("sampling")) {
     const VariantResult& fixed = result("fixed-step sampling");
-    ratios["fixed_over_adaptive_samples"] = double(fixed.stats.samples) / double(std::max<uint64_t>(base.stats.samples, 1));
+    ratios["fixed_over_adaptive_samples"] =
+        double(fixed.stats.samples) / double(std::max<uint64_t>(base.stats.samples, 1));
     ratios["fixed_over_adaptive_time"] = fixed.stats.seconds / base.stats.seconds;
     ratios["adaptive_vs_fixed_image"] = diffJson(difference(base.image, fixed.image));
   }
@@ -307,14 +311,14 @@ void runCases(const Setup& s, const BenchOptions& o) {
   nlohmann::json variantsJson = nlohmann::json::array();
   for (const VariantResult& r : results)
     variantsJson.push_back({{"name", r.name},
-                        {"frame_seconds", r.stats.seconds},
-                        {"rays", r.stats.rays},
-                        {"samples", r.stats.samples},
-                        {"regions_visited", r.stats.regionsVisited},
-                        {"samples_per_second", r.stats.samplesPerSecond()},
-                        {"visible_regions", r.visibleRegions},
-                        {"traversal", r.traversal},
-                        {"transfer_function_update_seconds", r.updateSeconds}});
+                            {"frame_seconds", r.stats.seconds},
+                            {"rays", r.stats.rays},
+                            {"samples", r.stats.samples},
+                            {"regions_visited", r.stats.regionsVisited},
+                            {"samples_per_second", r.stats.samplesPerSecond()},
+                            {"visible_regions", r.visibleRegions},
+                            {"traversal", r.traversal},
+                            {"transfer_function_update_seconds", r.updateSeconds}});
   j["variants"] = variantsJson;
   j["ratios"] = ratios;
   j["memory"]["peak_rss_bytes"] = peakRssBytes();
@@ -405,9 +409,10 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
   auto stats = [](std::vector<double> v) {
     std::sort(v.begin(), v.end());
     double mean = 0;
-    for (double x : v) mean += x;
-    return nlohmann::json{{"min", v.front()}, {"median", v[v.size() / 2]}, {"max", v.back()},
-                          {"mean", mean / double(v.size())}};
+    for (double x : v)
+      mean += x;
+    return nlohmann::json{
+        {"min", v.front()}, {"median", v[v.size() / 2]}, {"max", v.back()}, {"mean", mean / double(v.size())}};
   };
 
   // Plot: time against samples and against regions visited, in millions.
@@ -416,10 +421,13 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
   auto scaled = [](const std::vector<double>& v, double maxValue, std::string& unit) {
     double div = 1.0;
     unit = "";
-    if (maxValue >= 1e6) div = 1e6, unit = " (M)";
-    else if (maxValue >= 1e3) div = 1e3, unit = " (k)";
+    if (maxValue >= 1e6)
+      div = 1e6, unit = " (M)";
+    else if (maxValue >= 1e3)
+      div = 1e3, unit = " (k)";
     std::vector<double> out;
-    for (double x : v) out.push_back(x / div);
+    for (double x : v)
+      out.push_back(x / div);
     return out;
   };
   std::string su, ru;
@@ -439,7 +447,8 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
   j["correlation_time_samples"] = correlation(samples, t);
   j["correlation_time_regions"] = correlation(regions, t);
   if (fitted)
-    j["fit"] = {{"seconds_per_million_samples", a * 1e6}, {"seconds_per_million_regions", b * 1e6}, {"seconds_constant", c}};
+    j["fit"] = {
+        {"seconds_per_million_samples", a * 1e6}, {"seconds_per_million_regions", b * 1e6}, {"seconds_constant", c}};
   j["memory"]["peak_rss_bytes"] = peakRssBytes();
   if (o.json) {
     std::cout << j.dump(2) << "\n";
@@ -454,8 +463,7 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
                 j[key]["median"].get<double>(), j[key]["max"].get<double>(), j[key]["mean"].get<double>());
   std::printf("correlation of frame time with samples %.3f, with regions visited %.3f\n",
               j["correlation_time_samples"].get<double>(), j["correlation_time_regions"].get<double>());
-  if (fitted)
-    std::printf("fit: time = %.4f s per M samples + %.4f s per M regions + %.4f s\n", a * 1e6, b * 1e6, c);
+  if (fitted) std::printf("fit: time = %.4f s per M samples + %.4f s per M regions + %.4f s\n", a * 1e6, b * 1e6, c);
   std::printf("wrote %s and %s\n", o.csv.c_str(), o.plot.c_str());
 }
 
@@ -579,12 +587,15 @@ void addBench(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("bench", "Measure renderer variants, or frame time over an orbit of views");
   o->in.add(*cmd);
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
-  cmd->add_option("--frames", o->frames, "Rounds of one frame per variant, interleaved (median, after a warm-up)")->capture_default_str();
-  cmd->add_option("--cases", o->cases, "all, or a comma list of: reconstruction, sampling, skipping, traversal, shading")
+  cmd->add_option("--frames", o->frames, "Rounds of one frame per variant, interleaved (median, after a warm-up)")
       ->capture_default_str();
-  CLI::Option* orbit = cmd->add_option("--orbit", o->orbit, "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
-      ->expected(0, 1)
-      ->default_str("50");
+  cmd->add_option("--cases", o->cases,
+                  "all, or a comma list of: reconstruction, sampling, skipping, traversal, shading")
+      ->capture_default_str();
+  CLI::Option* orbit = cmd->add_option("--orbit", o->orbit,
+                                       "Orbit study instead of the cases: N views on the bounding sphere (default 50)")
+                           ->expected(0, 1)
+                           ->default_str("50");
   cmd->add_option("--progressive", o->progressive,
                   "Progressive study instead of the cases: N preview passes after a transfer-function change");
   cmd->add_option("--preview-divisor", o->previewDivisor, "Progressive study: preview resolution divisor")

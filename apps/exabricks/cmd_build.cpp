@@ -23,8 +23,8 @@ void run(const BuildCmdOptions& o) {
   const Model model = loadModel(o.in.input, load);
   writeModel(model, o.output);
   const ModelSummary s = summarize(model);
-  logInfo(strCat("wrote ", o.output, " (", s.cells, " cells, ", s.bricks, " bricks, ", s.regions,
-                 " regions) in ", timer.seconds(), " s"));
+  logInfo(strCat("wrote ", o.output, " (", s.cells, " cells, ", s.bricks, " bricks, ", s.regions, " regions) in ",
+                 timer.seconds(), " s"));
 }
 
 } // namespace

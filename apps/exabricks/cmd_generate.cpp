@@ -10,19 +10,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 
 namespace exa::cli {
 namespace {
 
 struct GenerateOptions {
   SceneOptions scene;
-  int steps = 0;     ///< 0: one dataset; N: a time series of N steps
-  int regrid = 1;    ///< steps between two changes of the hierarchy
-  double dt = 1.0;   ///< time between steps
+  int steps = 0;   ///< 0: one dataset; N: a time series of N steps
+  int regrid = 1;  ///< steps between two changes of the hierarchy
+  double dt = 1.0; ///< time between steps
   std::string output;
   bool list = false;
   bool json = false;
@@ -33,7 +33,8 @@ int slabsPerPiece() { return 4 * int(std::max<size_t>(1, tbb::this_task_arena::m
 
 void run(const GenerateOptions& o) {
   if (o.list) {
-    for (const SceneInfo& s : sceneList()) std::printf("%-8s %s\n", s.name.c_str(), s.description.c_str());
+    for (const SceneInfo& s : sceneList())
+      std::printf("%-8s %s\n", s.name.c_str(), s.description.c_str());
     return;
   }
   if (o.output.empty()) fail("generate: an output NAME.cells is required (-o)");
@@ -48,10 +49,12 @@ void run(const GenerateOptions& o) {
     std::unique_ptr<NativeWriter> writer;
     cellCount = generateScenePieces(o.scene, slabsPerPiece(), [&](CellSet& piece) {
       validateCellRecords(piece.cells, o.scene.name);
-      for (const Field& f : piece.fields) validateFieldValues(f, piece.cells.size(), o.scene.name);
+      for (const Field& f : piece.fields)
+        validateFieldValues(f, piece.cells.size(), o.scene.name);
       if (!writer) {
         std::vector<std::string> names;
-        for (const Field& f : piece.fields) names.push_back(f.name);
+        for (const Field& f : piece.fields)
+          names.push_back(f.name);
         writer = std::make_unique<NativeWriter>(o.output, names);
       }
       writer->append(piece);
@@ -86,8 +89,11 @@ void run(const GenerateOptions& o) {
   logInfo(strCat("generated ", cellCount, " cells in ", timer.seconds(), " s; wrote ", outputs.size(), " dataset(s)"));
   if (o.json) {
     nlohmann::json j{{"output", o.steps ? nlohmann::json(outputs) : nlohmann::json(o.output)},
-                     {"scene", o.scene.name}, {"cells", cellCount}, {"seed", o.scene.seed},
-                     {"levels", o.scene.levels}, {"seconds", timer.seconds()}};
+                     {"scene", o.scene.name},
+                     {"cells", cellCount},
+                     {"seed", o.scene.seed},
+                     {"levels", o.scene.levels},
+                     {"seconds", timer.seconds()}};
     if (o.steps) j["steps"] = o.steps;
     std::cout << j.dump(2) << "\n";
   }
@@ -99,15 +105,13 @@ void addGenerate(CLI::App& app) {
   auto opts = std::make_shared<GenerateOptions>();
   CLI::App* cmd = app.add_subcommand("generate", "Write a synthetic AMR dataset (NAME.cells + fields)");
   cmd->add_option("-s,--scene", opts->scene.name, "Scene name (see --list)")->capture_default_str();
-  cmd->add_option("-n,--cells", opts->scene.targetCells, "Approximate number of cells")
-      ->capture_default_str();
+  cmd->add_option("-n,--cells", opts->scene.targetCells, "Approximate number of cells")->capture_default_str();
   cmd->add_option("--seed", opts->scene.seed, "Random seed")->capture_default_str();
-  cmd->add_option("--levels", opts->scene.levels, "Number of levels")
-      ->check(CLI::Range(1, 12))
-      ->capture_default_str();
+  cmd->add_option("--levels", opts->scene.levels, "Number of levels")->check(CLI::Range(1, 12))->capture_default_str();
   cmd->add_option("-o,--output", opts->output, "Output NAME.cells");
   cmd->add_option("--steps", opts->steps, "Write a time series of N steps NAME_0000.cells, ... (blobs move)");
-  cmd->add_option("--regrid", opts->regrid, "Steps between changes of the hierarchy in a series")->capture_default_str();
+  cmd->add_option("--regrid", opts->regrid, "Steps between changes of the hierarchy in a series")
+      ->capture_default_str();
   cmd->add_option("--dt", opts->dt, "Time between steps of a series")->capture_default_str();
   cmd->add_flag("--list", opts->list, "List the scenes");
   cmd->add_flag("--json", opts->json, "Print a JSON summary on stdout");

@@ -26,7 +26,8 @@ void printFields(const InfoOptions& o) {
     std::cout << nlohmann::json{{"fields", names}}.dump(2) << "\n";
     return;
   }
-  for (const std::string& n : names) std::printf("%s\n", n.c_str());
+  for (const std::string& n : names)
+    std::printf("%s\n", n.c_str());
 }
 
 /// Under MPI: the data-parallel split, each process's part and what it holds (its box, the cells
@@ -55,14 +56,16 @@ void runParts(const InfoOptions& o) {
     return int64_t(v);
   };
   uint64_t totalOwned = 0;
-  for (double v : own) totalOwned += uint64_t(v);
+  for (double v : own)
+    totalOwned += uint64_t(v);
   if (o.json) {
     nlohmann::json ranks = nlohmann::json::array();
     for (int r = 0; r < n; ++r) {
       const size_t i = size_t(r);
       ranks.push_back({{"rank", r},
-                       {"box", {{"lower", {face(box[0][i]), face(box[1][i]), face(box[2][i])}},
-                                {"upper", {face(box[3][i]), face(box[4][i]), face(box[5][i])}}}},
+                       {"box",
+                        {{"lower", {face(box[0][i]), face(box[1][i]), face(box[2][i])}},
+                         {"upper", {face(box[3][i]), face(box[4][i]), face(box[5][i])}}}},
                        {"resident_cells", uint64_t(resident[i])},
                        {"owned_cells", uint64_t(own[i])},
                        {"halo_cells", uint64_t(resident[i]) - uint64_t(own[i])},
@@ -77,7 +80,8 @@ void runParts(const InfoOptions& o) {
     j["distribute"] = "data";
     j["cells"] = totalOwned;
     j["coarsest_level"] = part.coarsestLevel;
-    j["lattice_bounds"] = {{"lower", {cb.lower.x, cb.lower.y, cb.lower.z}}, {"upper", {cb.upper.x, cb.upper.y, cb.upper.z}}};
+    j["lattice_bounds"] = {{"lower", {cb.lower.x, cb.lower.y, cb.lower.z}},
+                           {"upper", {cb.upper.x, cb.upper.y, cb.upper.z}}};
     j["ranks"] = ranks;
     std::cout << j.dump(2) << "\n";
     return;
@@ -89,7 +93,9 @@ void runParts(const InfoOptions& o) {
               "peak MB");
   for (int r = 0; r < n; ++r) {
     const size_t i = size_t(r);
-    auto txt = [&](double v) { return std::abs(v) >= double(kUnboundedLattice) ? std::string("-") : strCat(int64_t(v)); };
+    auto txt = [&](double v) {
+      return std::abs(v) >= double(kUnboundedLattice) ? std::string("-") : strCat(int64_t(v));
+    };
     const std::string b = strCat("[", txt(box[0][i]), " ", txt(box[1][i]), " ", txt(box[2][i]), "] - [", txt(box[3][i]),
                                  " ", txt(box[4][i]), " ", txt(box[5][i]), "]");
     std::printf("  %-5d %-44s %12llu %12llu %12llu %10.1f\n", r, b.c_str(), (unsigned long long)own[i],
@@ -122,32 +128,29 @@ void run(const InfoOptions& o) {
     std::printf("simulation       time %s, cycle %s\n",
                 model.simulation.hasTime() ? strCat(model.simulation.time).c_str() : "unknown",
                 model.simulation.hasCycle() ? std::to_string(model.simulation.cycle).c_str() : "unknown");
-  std::printf("lattice bounds   [%d %d %d] - [%d %d %d] (finest-level units, upper exclusive)\n",
-              lattice.lower.x, lattice.lower.y, lattice.lower.z, lattice.upper.x,
-              lattice.upper.y, lattice.upper.z);
-  std::printf("world bounds     [%g %g %g] - [%g %g %g]\n", worldLo.x, worldLo.y, worldLo.z,
-              worldHi.x, worldHi.y, worldHi.z);
+  std::printf("lattice bounds   [%d %d %d] - [%d %d %d] (finest-level units, upper exclusive)\n", lattice.lower.x,
+              lattice.lower.y, lattice.lower.z, lattice.upper.x, lattice.upper.y, lattice.upper.z);
+  std::printf("world bounds     [%g %g %g] - [%g %g %g]\n", worldLo.x, worldLo.y, worldLo.z, worldHi.x, worldHi.y,
+              worldHi.z);
   std::printf("cells            %llu\n", (unsigned long long)s.cells);
   std::printf("  %-8s %-10s %14s %12s\n", "level", "width", "cells", "bricks");
   for (const auto& l : s.levels)
-    std::printf("  %-8d %-10d %14llu %12llu\n", l.level, 1 << l.level,
-                (unsigned long long)l.cells, (unsigned long long)l.bricks);
+    std::printf("  %-8d %-10d %14llu %12llu\n", l.level, 1 << l.level, (unsigned long long)l.cells,
+                (unsigned long long)l.bricks);
   std::printf("bricks           %llu (%llu single-cell)\n", (unsigned long long)s.bricks,
               (unsigned long long)s.singleCellBricks);
   std::printf("regions          %llu\n", (unsigned long long)s.regions);
-  std::printf("bricks/region    %.3f by count, %.3f by volume, %llu at most\n",
-              s.bricksPerRegionByCount, s.bricksPerRegionByVolume,
-              (unsigned long long)s.maxBricksPerRegion);
+  std::printf("bricks/region    %.3f by count, %.3f by volume, %llu at most\n", s.bricksPerRegionByCount,
+              s.bricksPerRegionByVolume, (unsigned long long)s.maxBricksPerRegion);
   for (size_t f = 0; f < model.fieldNames.size(); ++f)
-    std::printf("field %-10s [%g, %g]%s\n", model.fieldNames[f].c_str(), s.fieldRanges[f].lower,
-                s.fieldRanges[f].upper, model.unitsOf(int(f)).empty() ? "" : (" " + model.unitsOf(int(f))).c_str());
-  std::printf("memory           bricks %.2f MB, regions %.2f MB, values %.2f MB\n",
-              s.brickBytes / 1e6, s.regionBytes / 1e6, s.valueBytes / 1e6);
+    std::printf("field %-10s [%g, %g]%s\n", model.fieldNames[f].c_str(), s.fieldRanges[f].lower, s.fieldRanges[f].upper,
+                model.unitsOf(int(f)).empty() ? "" : (" " + model.unitsOf(int(f))).c_str());
+  std::printf("memory           bricks %.2f MB, regions %.2f MB, values %.2f MB\n", s.brickBytes / 1e6,
+              s.regionBytes / 1e6, s.valueBytes / 1e6);
   std::printf("bytes per cell   %.3f for bricks + regions (one float field: 4)\n",
               double(s.brickBytes + s.regionBytes) * perCell);
   std::printf("build time       bricks %.3f s, regions %.3f s, value ranges %.3f s (load total %.3f s)\n",
-              model.stats.brickSeconds, model.stats.regionSeconds, model.stats.rangeSeconds,
-              loadSeconds);
+              model.stats.brickSeconds, model.stats.regionSeconds, model.stats.rangeSeconds, loadSeconds);
   if (model.stats.parts > 1) std::printf("built in parts   %d, each read alone\n", model.stats.parts);
 }
 

@@ -37,10 +37,10 @@ struct MovieCmdOptions {
   std::vector<std::string> inputs;
   std::string output;
   double fps = 24;
-  std::string frames;          ///< A:B, inclusive, 0-based
-  int orbit = 0;               ///< frames around the data
-  int flyIn = 0;               ///< frames of a fly-in
-  int pathFrames = 0;          ///< frames along the scene file's camera path
+  std::string frames; ///< A:B, inclusive, 0-based
+  int orbit = 0;      ///< frames around the data
+  int flyIn = 0;      ///< frames of a fly-in
+  int pathFrames = 0; ///< frames along the scene file's camera path
   int framesPerStep = 1;
   std::string framesDir;
   bool noPrefetch = false;
@@ -67,7 +67,8 @@ Step loadStep(const std::string& path, const LoadOptions& lo, const Step* previo
   } else {
     CellSet cells = loadCells(path, lo);
     if (reuse && previous && previous->structure && previous->structure->matches(cells, lo.build)) {
-      step.model = std::make_shared<const Model>(rebuildValues(*previous->model, *previous->structure, std::move(cells)));
+      step.model =
+          std::make_shared<const Model>(rebuildValues(*previous->model, *previous->structure, std::move(cells)));
       step.structure = previous->structure;
       step.reused = true;
     } else {
@@ -83,7 +84,8 @@ Step loadStep(const std::string& path, const LoadOptions& lo, const Step* previo
 
 /// The range of the named field over every step: from metadata where the format records ranges,
 /// else reading only that field.
-range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const std::string& field, int& fromMetadata) {
+range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const std::string& field,
+                    int& fromMetadata) {
   range1f all;
   fromMetadata = 0;
   lo.fields = {field};
@@ -95,13 +97,15 @@ range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const
     }
     if (detectInput(path) == InputKind::Model) {
       const Model m = loadModel(path, lo);
-      for (float v : m.fieldValues.at(size_t(m.requireField(field)))) all.extend(v);
+      for (float v : m.fieldValues.at(size_t(m.requireField(field))))
+        all.extend(v);
       continue;
     }
     const CellSet cells = loadCells(path, lo);
     const int f = cells.fieldIndex(field);
     if (f < 0) fail(path, ": no field '", field, "' (the series' first step has it)");
-    for (float v : cells.fields[size_t(f)].values) all.extend(v);
+    for (float v : cells.fields[size_t(f)].values)
+      all.extend(v);
   }
   return all;
 }
@@ -131,7 +135,8 @@ std::string findProgram(const std::string& name) {
 /// Runs a program with arguments (no shell); returns its exit status (-1 when it cannot start).
 int runProgram(const std::vector<std::string>& args) {
   std::vector<char*> argv;
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  for (const std::string& a : args)
+    argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
   const pid_t pid = ::fork();
   if (pid < 0) return -1;
@@ -169,9 +174,7 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   const bool toFolder = ext.empty() || (fs::is_directory(o.output));
   if (!toFolder && ext != ".mp4" && ext != ".webm")
     failUsage("-o ", o.output, ": write .mp4 (H.264), .webm (VP9) or a folder for the frames alone");
-  const std::string framesDir = !o.framesDir.empty() ? o.framesDir
-                                : toFolder            ? o.output
-                                                      : o.output + ".frames";
+  const std::string framesDir = !o.framesDir.empty() ? o.framesDir : toFolder ? o.output : o.output + ".frames";
 
   // The series and the range mode.
   const std::vector<std::string> paths = o.inputs.empty() ? std::vector<std::string>{""} : seriesSteps(o.inputs);
@@ -196,7 +199,8 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   const bool pathFromScene = !doc.path.empty();
   const int pathCount = o.orbit ? o.orbit : o.flyIn ? o.flyIn : o.pathFrames;
   const char* pathOption = o.orbit ? "--orbit" : o.flyIn ? "--fly-in" : "--path-frames";
-  if ((o.orbit || o.flyIn) && pathFromScene) failUsage("--orbit and --fly-in replace the scene file's camera path: use one");
+  if ((o.orbit || o.flyIn) && pathFromScene)
+    failUsage("--orbit and --fly-in replace the scene file's camera path: use one");
   if (o.pathFrames && !pathFromScene) failUsage("--path-frames needs a scene file with a camera_path");
   if (steps > 1 && pathCount) {
     if (given("--frames-per-step"))
@@ -289,9 +293,13 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   // Frames already rendered for this very movie are kept (a movie split over several jobs with
   // --frames is joined by running the command again without it).
   fs::create_directories(framesDir);
-  nlohmann::json manifest = {{"inputs", nlohmann::json(paths)}, {"scene", nlohmann::json::parse(writeSceneJson(doc))},
-                             {"frames", frames}, {"frames_per_step", o.framesPerStep}, {"orbit", o.orbit},
-                             {"fly_in", o.flyIn}, {"overlays", {ro.colorbar, ro.annotate}}};
+  nlohmann::json manifest = {{"inputs", nlohmann::json(paths)},
+                             {"scene", nlohmann::json::parse(writeSceneJson(doc))},
+                             {"frames", frames},
+                             {"frames_per_step", o.framesPerStep},
+                             {"orbit", o.orbit},
+                             {"fly_in", o.flyIn},
+                             {"overlays", {ro.colorbar, ro.annotate}}};
   const std::string manifestPath = (fs::path(framesDir) / "movie.json").string();
   bool sameMovie = false;
   {
@@ -380,8 +388,8 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
       Image image = renderer->render(frame);
       renderSeconds += t.seconds();
       overlays.in.input = paths[size_t(step)];
-      drawOverlays(overlays, scene, frame, *current.model, current.info, current.model->requireField(scene.layers[0].field),
-                   image);
+      drawOverlays(overlays, scene, frame, *current.model, current.info,
+                   current.model->requireField(scene.layers[0].field), image);
       writePng(framePath(framesDir, i), image, scene.keepAlpha, scene.background);
       ++done;
       if (showProgress) {
@@ -410,32 +418,34 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   parallel::agreeOrFail(renderError, "render its frames");
   if (!procs.root()) return;
   int missing = 0;
-  for (int i = 0; i < frames; ++i) missing += fs::exists(framePath(framesDir, i)) ? 0 : 1;
+  for (int i = 0; i < frames; ++i)
+    missing += fs::exists(framePath(framesDir, i)) ? 0 : 1;
   std::string encoded;
   if (!toFolder) {
     const std::string pattern = (fs::path(framesDir) / "frame_%05d.png").string();
     const bool webm = ext == ".webm";
     const std::string fpsText = strCat(o.fps);
-    const std::string example = strCat("ffmpeg -framerate ", fpsText, " -i ", pattern,
-                                       webm ? " -c:v libvpx-vp9 -b:v 0 -crf 32 " : " -c:v libx264 -pix_fmt yuv420p -crf 18 ",
-                                       o.output);
+    const std::string example =
+        strCat("ffmpeg -framerate ", fpsText, " -i ", pattern,
+               webm ? " -c:v libvpx-vp9 -b:v 0 -crf 32 " : " -c:v libx264 -pix_fmt yuv420p -crf 18 ", o.output);
     const std::string ffmpeg = findProgram("ffmpeg");
     if (missing) {
       logNote(strCat("frames ", first, "..", last, " are in ", framesDir, "; ", missing, " of ", frames,
                      " frames are still to render (other --frames slices); run this command again without "
-                     "--frames to render what is missing and encode ", o.output));
+                     "--frames to render what is missing and encode ",
+                     o.output));
     } else if (ffmpeg.empty()) {
       logWarning(strCat("ffmpeg is not installed, so ", o.output, " was not encoded; the ", frames, " frames are in ",
                         framesDir, ". Install ffmpeg and run this command again, or encode them with: ", example));
     } else {
       const std::string temporary = strCat(o.output, ".encoding-", ::getpid(), ext);
-      std::vector<std::string> args{ffmpeg, "-y", "-loglevel", "error", "-framerate", fpsText, "-i", pattern,
-                                    "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2"};
+      std::vector<std::string> args{ffmpeg,  "-y", "-loglevel", "error", "-framerate",
+                                    fpsText, "-i", pattern,     "-vf",   "pad=ceil(iw/2)*2:ceil(ih/2)*2"};
       if (webm)
         args.insert(args.end(), {"-c:v", "libvpx-vp9", "-b:v", "0", "-crf", "32", "-pix_fmt", "yuv420p", "-f", "webm"});
       else
-        args.insert(args.end(), {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18", "-movflags", "+faststart",
-                                 "-f", "mp4"});
+        args.insert(args.end(),
+                    {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18", "-movflags", "+faststart", "-f", "mp4"});
       args.push_back(temporary);
       const int rc = runProgram(args);
       std::error_code ec;
@@ -454,14 +464,22 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   }
 
   if (o.json) {
-    nlohmann::json j{{"frames", frames},          {"rendered", done},
-                     {"first", first},            {"last", last},
-                     {"steps", steps},            {"steps_loaded", loadedSteps},
-                     {"steps_reused", reusedSteps}, {"frames_dir", framesDir},
-                     {"output", encoded},         {"missing_frames", missing},
-                     {"seconds", total.seconds()}, {"render_seconds", renderSeconds},
-                     {"load_seconds", loadSeconds}, {"load_wait_seconds", waitSeconds},
-                     {"prefetch", !o.noPrefetch}, {"reuse", reuse}};
+    nlohmann::json j{{"frames", frames},
+                     {"rendered", done},
+                     {"first", first},
+                     {"last", last},
+                     {"steps", steps},
+                     {"steps_loaded", loadedSteps},
+                     {"steps_reused", reusedSteps},
+                     {"frames_dir", framesDir},
+                     {"output", encoded},
+                     {"missing_frames", missing},
+                     {"seconds", total.seconds()},
+                     {"render_seconds", renderSeconds},
+                     {"load_seconds", loadSeconds},
+                     {"load_wait_seconds", waitSeconds},
+                     {"prefetch", !o.noPrefetch},
+                     {"reuse", reuse}};
     std::cout << j.dump(2) << "\n";
   }
 }
@@ -475,7 +493,8 @@ void addMovie(CLI::App& app) {
   // The movie's inputs replace the single INPUT of the render options.
   cmd->remove_option(cmd->get_option("input"));
   cmd->add_option("inputs", o->inputs, "Datasets: files, folders or glob patterns (numeric order)");
-  cmd->add_option("-o,--output", o->output, "Movie to write: .mp4 or .webm, or a folder for the PNG frames")->required();
+  cmd->add_option("-o,--output", o->output, "Movie to write: .mp4 or .webm, or a folder for the PNG frames")
+      ->required();
   cmd->add_option("--fps", o->fps, "Frames per second")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Render only frames A:B (from 0, inclusive), e.g. one slice per job");
   cmd->add_option("--orbit", o->orbit, "N frames around the data at --elevation, starting at --azimuth");

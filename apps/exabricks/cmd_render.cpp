@@ -38,7 +38,8 @@ struct RenderCmdOptions {
 /// device or a pipe), or JPEG for .jpg / .jpeg.
 bool isJpeg(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  for (char& c : ext)
+    c = char(std::tolower(static_cast<unsigned char>(c)));
   if (ext == ".png" || ext.empty()) return false;
   if (ext == ".jpg" || ext == ".jpeg") return true;
   failUsage("-o ", path, ": unknown image format '", ext, "' (write .png, .jpg or .jpeg)");
@@ -85,8 +86,8 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (part) renderer.setDomain(part->worldBox());
   const SceneUpdate update = renderer.setScene(scene);
   if (!scene.iso.values.empty())
-    logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(),
-                   ", built in ", update.isoSeconds, " s"));
+    logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(), ", built in ",
+                   update.isoSeconds, " s"));
   frame.camera = cameraFromOptions(o.scene, cmd, doc, model,
                                    part ? agreedVisibleBounds(renderer, *part) : renderer.visibleBounds(), whole);
   frame.validate();
@@ -100,7 +101,8 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   auto renderFrame = [&](RenderStats& stats) {
     buffer.clear();
     const uint64_t share = dataParallel ? 1 : uint64_t(parallel::processes().size);
-    Progress progress("rendering", (uint64_t(buffer.tileCount()) + share - 1) / share * uint64_t(frame.samplesPerPixel));
+    Progress progress("rendering",
+                      (uint64_t(buffer.tileCount()) + share - 1) / share * uint64_t(frame.samplesPerPixel));
     if (!showProgress) progress.finish();
     PassControl control;
     control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
@@ -177,7 +179,8 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     if (!partCells.empty()) {
       nlohmann::json ranks = nlohmann::json::array();
       for (size_t r = 0; r < partCells.size(); ++r)
-        ranks.push_back({{"rank", r}, {"resident_cells", uint64_t(partCells[r])}, {"peak_rss_bytes", uint64_t(partRss[r])}});
+        ranks.push_back(
+            {{"rank", r}, {"resident_cells", uint64_t(partCells[r])}, {"peak_rss_bytes", uint64_t(partRss[r])}});
       j["ranks"] = ranks;
     }
     std::cout << j.dump(2) << "\n";

@@ -50,7 +50,8 @@ void run(const SampleOptions& o) {
     // are points outside the data.
     std::istringstream ls(line);
     std::vector<std::string> words;
-    for (std::string word; ls >> word;) words.push_back(word);
+    for (std::string word; ls >> word;)
+      words.push_back(word);
     if (words.empty()) continue;
     double w[3];
     bool ok = words.size() == 3;
@@ -80,8 +81,8 @@ void run(const SampleOptions& o) {
 
 void addSample(CLI::App& app) {
   auto opts = std::make_shared<SampleOptions>();
-  CLI::App* cmd = app.add_subcommand(
-      "sample", "Reconstruct 'value gx gy gz' at 'x y z' world positions (nan outside the data)");
+  CLI::App* cmd =
+      app.add_subcommand("sample", "Reconstruct 'value gx gy gz' at 'x y z' world positions (nan outside the data)");
   opts->in.add(*cmd);
   cmd->add_option("-p,--points", opts->points, "File of 'x y z' lines (default: standard input)");
   cmd->callback([opts] { run(*opts); });

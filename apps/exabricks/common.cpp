@@ -3,8 +3,8 @@
 #include "exabricks/amr/scenes.h"
 
 #include <algorithm>
-#include <fstream>
 #include <cstdio>
+#include <fstream>
 #include <sstream>
 
 namespace exa::cli {
@@ -21,8 +21,7 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
                  "Model file, NAME.cells dataset, .grids fixture, AMReX plotfile, Chombo or FLASH HDF5 file, "
                  "Enzo parameter file, VTK .vthb file or .raw volume (default: embedded dataset)");
   if (fieldOption) cmd.add_option("-f,--field", field, "Field to use (default: the first)");
-  cmd.add_option("--max-brick-width", maxBrickWidth, "Most cells per axis in one brick")
-      ->check(CLI::Range(1, 1024));
+  cmd.add_option("--max-brick-width", maxBrickWidth, "Most cells per axis in one brick")->check(CLI::Range(1, 1024));
   cmd.add_option("--segment-cost", segmentCost,
                  "Regions: what one more segment costs a ray, in brick reconstructions of one sample; "
                  "neighbouring regions of one level merge where that is cheaper (0: one region per set of bricks)")
@@ -32,7 +31,8 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
                  "Build NAME.cells and AMReX inputs of more cells in parts of about this many, each read "
                  "alone (less memory; 0: in one piece)")
       ->capture_default_str();
-  cmd.add_option("--raw-dims", rawDims, "Raw volume: voxels per axis as NXxNYxNZ (default: from NAME_NXxNYxNZ_TYPE.raw)");
+  cmd.add_option("--raw-dims", rawDims,
+                 "Raw volume: voxels per axis as NXxNYxNZ (default: from NAME_NXxNYxNZ_TYPE.raw)");
   cmd.add_option("--raw-type", rawType, "Raw volume: uint8, uint16, float32 or float64");
   cmd.add_option("--raw-threshold", rawThreshold, "Raw volume: largest value spread merged into one cell")
       ->check(CLI::NonNegativeNumber);

@@ -19,10 +19,10 @@ struct InputOptions {
   int maxBrickWidth = 32;
   double segmentCost = RegionBuildOptions().segmentCost;
   uint64_t partCells = uint64_t(1) << 27; ///< larger inputs are built in parts of about this many cells
-  std::string rawDims;       ///< raw volumes: NXxNYxNZ (default: from the file name)
-  std::string rawType;       ///< raw volumes: uint8, uint16, float32 or float64
-  double rawThreshold = 0.0; ///< raw volumes: largest value spread of a merged cell
-  int rawMaxLevel = 4;       ///< raw volumes: coarsest merged level
+  std::string rawDims;                    ///< raw volumes: NXxNYxNZ (default: from the file name)
+  std::string rawType;                    ///< raw volumes: uint8, uint16, float32 or float64
+  double rawThreshold = 0.0;              ///< raw volumes: largest value spread of a merged cell
+  int rawMaxLevel = 4;                    ///< raw volumes: coarsest merged level
 
   void add(CLI::App& cmd, bool fieldOption = true);
   LoadOptions loadOptions(bool onlySelectedField) const;

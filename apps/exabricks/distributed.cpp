@@ -2,8 +2,8 @@
 
 #include "parallel.h"
 
-#include "exabricks/core/error.h"
 #include "exabricks/amr/scenes.h"
+#include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
 #include <algorithm>
@@ -17,7 +17,8 @@ box3d DataPart::worldBox() const {
 
 uint64_t DataPart::ownedCells() const {
   uint64_t n = 0;
-  for (const Brick& b : model.bricks) forCellsCentredIn(b, box, [&](uint32_t) { ++n; });
+  for (const Brick& b : model.bricks)
+    forCellsCentredIn(b, box, [&](uint32_t) { ++n; });
   return n;
 }
 
@@ -76,15 +77,17 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
     high.push_back(r.empty() ? -std::numeric_limits<double>::infinity() : double(r.upper));
   }
   std::vector<bool> levelHere(kMaxLevel + 1, false);
-  for (const Brick& b : m.bricks) levelHere[size_t(b.level)] = true;
-  for (int l = 0; l <= kMaxLevel; ++l) high.push_back(levelHere[size_t(l)] ? 1.0 : 0.0);
+  for (const Brick& b : m.bricks)
+    levelHere[size_t(b.level)] = true;
+  for (int l = 0; l <= kMaxLevel; ++l)
+    high.push_back(levelHere[size_t(l)] ? 1.0 : 0.0);
   std::vector<double> counts{double(fields)};
   parallel::allReduce(counts, parallel::Reduce::Max);
   if (counts[0] != double(fields)) fail("the processes' parts hold different fields");
   parallel::allReduce(low, parallel::Reduce::Min);
   parallel::allReduce(high, parallel::Reduce::Max);
-  part.whole.cellBounds = box3i(vec3i(int(low[1]), int(low[2]), int(low[3])),
-                                vec3i(int(high[0]), int(high[1]), int(high[2])));
+  part.whole.cellBounds =
+      box3i(vec3i(int(low[1]), int(low[2]), int(low[3])), vec3i(int(high[0]), int(high[1]), int(high[2])));
   std::vector<range1f> ranges(fields);
   for (size_t f = 0; f < fields; ++f)
     if (low[4 + f] <= high[3 + f]) ranges[f] = range1f{float(low[4 + f]), float(high[3 + f])};
@@ -99,7 +102,8 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
 box3d agreedVisibleBounds(const Renderer& renderer, const DataPart& part) {
   const box3d local = renderer.visibleBounds();
   const box3d mine = part.worldBox();
-  std::vector<double> low(3, std::numeric_limits<double>::infinity()), high(3, -std::numeric_limits<double>::infinity());
+  std::vector<double> low(3, std::numeric_limits<double>::infinity()),
+      high(3, -std::numeric_limits<double>::infinity());
   box3d clipped;
   for (int a = 0; a < 3; ++a) {
     clipped.lower[a] = std::max(local.lower[a], mine.lower[a]);
@@ -107,7 +111,8 @@ box3d agreedVisibleBounds(const Renderer& renderer, const DataPart& part) {
   }
   if (!local.empty() && clipped.lower.x <= clipped.upper.x && clipped.lower.y <= clipped.upper.y &&
       clipped.lower.z <= clipped.upper.z)
-    for (int a = 0; a < 3; ++a) low[size_t(a)] = clipped.lower[a], high[size_t(a)] = clipped.upper[a];
+    for (int a = 0; a < 3; ++a)
+      low[size_t(a)] = clipped.lower[a], high[size_t(a)] = clipped.upper[a];
   parallel::allReduce(low, parallel::Reduce::Min);
   parallel::allReduce(high, parallel::Reduce::Max);
   for (int a = 0; a < 3; ++a)

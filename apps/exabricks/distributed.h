@@ -20,10 +20,10 @@ namespace exa::cli {
 struct DataPart {
   KdPartition partition;
   int coarsestLevel = 0;
-  box3l box;              ///< this process's part, lattice (faces outside the data unbounded)
-  Model model;            ///< the cells whose supports reach into the part
-  DatasetInfo dataset;    ///< the whole dataset's, agreed by every process
-  WholeData whole;        ///< likewise
+  box3l box;           ///< this process's part, lattice (faces outside the data unbounded)
+  Model model;         ///< the cells whose supports reach into the part
+  DatasetInfo dataset; ///< the whole dataset's, agreed by every process
+  WholeData whole;     ///< likewise
 
   /// The part's box in world coordinates (the renderer's domain).
   box3d worldBox() const;

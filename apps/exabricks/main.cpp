@@ -40,8 +40,7 @@ extern "C" void onInterrupt(int signal) {
 bool flushStandardOutput() {
   std::cout.flush();
   if (std::fflush(stdout) != 0 || std::ferror(stdout) || !std::cout) {
-    std::fprintf(stderr, "exabricks: error: writing standard output: %s\n",
-                 std::strerror(errno ? errno : EIO));
+    std::fprintf(stderr, "exabricks: error: writing standard output: %s\n", std::strerror(errno ? errno : EIO));
     return false;
   }
   return true;
@@ -52,7 +51,8 @@ bool flushStandardOutput() {
 int main(int argc, char** argv) {
   exa::cli::parallel::Session processes(argc, argv);
   const bool root = exa::cli::parallel::processes().root();
-  const std::string who = root ? "exabricks" : "exabricks[" + std::to_string(exa::cli::parallel::processes().rank) + "]";
+  const std::string who =
+      root ? "exabricks" : "exabricks[" + std::to_string(exa::cli::parallel::processes().rank) + "]";
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   CLI::App app{"exabricks: fast, faithful rendering of structured AMR data (ExaBricks method)"};
@@ -68,17 +68,18 @@ int main(int argc, char** argv) {
   app.add_option("--simd", simd, "Instruction set of the sampling batches (default: the best this CPU has)");
   app.parse_complete_callback([&] {
     // Under MPI only the first process logs; every process reports its own errors.
-    exa::setLogLevel(quiet || !root ? exa::LogLevel::Quiet
-                                    : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
+    exa::setLogLevel(quiet || !root ? exa::LogLevel::Quiet : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
     for (const char* command : {"sample", "build", "generate", "convert", "bench", "view"})
       if (app.got_subcommand(command)) exa::cli::parallel::requireOneProcess(command);
     if (!simd.empty() && !exa::useBatchTarget(simd)) {
       std::string known;
-      for (const std::string& t : exa::batchTargets()) known += (known.empty() ? "" : ", ") + t;
+      for (const std::string& t : exa::batchTargets())
+        known += (known.empty() ? "" : ", ") + t;
       exa::failUsage("--simd ", simd, ": not an instruction set of this CPU (", known, ")");
     }
     if (threads > 0)
-      threadLimit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
+      threadLimit =
+          std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, size_t(threads));
   });
   exa::cli::addInfo(app);
   exa::cli::addSample(app);

@@ -140,7 +140,6 @@ bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buff
   return complete;
 }
 
-
 bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBuffer& buffer,
                            const std::vector<int>& order, PassControl control) {
   const int n = state().size;
@@ -168,7 +167,8 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
     stats += *s.stats;
     for (size_t p = 0; p < pixels; ++p) {
       float* o = local.data() + p * kCompositeChannels;
-      for (int c = 0; c < 4; ++c) o[c] = s.colors[4 * p + size_t(c)];
+      for (int c = 0; c < 4; ++c)
+        o[c] = s.colors[4 * p + size_t(c)];
       o[4] = s.steps[p];
     }
     const float* result = local.data();
@@ -194,7 +194,8 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
       MPI_Alltoallv(local.data(), sendCounts.data(), sendDispl.data(), MPI_FLOAT, received.data(), recvCounts.data(),
                     recvDispl.data(), MPI_FLOAT, MPI_COMM_WORLD);
       std::vector<const float*> parts;
-      for (int r : order) parts.push_back(received.data() + size_t(r) * mine * kCompositeChannels);
+      for (int r : order)
+        parts.push_back(received.data() + size_t(r) * mine * kCompositeChannels);
       compositeFrontToBack(parts.data(), parts.size(), mine, composited.data());
       MPI_Gatherv(composited.data(), int(mine * kCompositeChannels), MPI_FLOAT, whole.data(), sendCounts.data(),
                   sendDispl.data(), MPI_FLOAT, 0, MPI_COMM_WORLD);
@@ -206,10 +207,12 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
     const FrameBuffer::Sums out = buffer.sums();
     for (size_t p = 0; p < pixels; ++p) {
       const float* c = result + p * kCompositeChannels;
-      for (int ch = 0; ch < 4; ++ch) out.colors[4 * p + size_t(ch)] += c[ch];
+      for (int ch = 0; ch < 4; ++ch)
+        out.colors[4 * p + size_t(ch)] += c[ch];
       out.steps[p] += c[4];
     }
-    for (size_t t = 0; t < out.tiles; ++t) ++out.tilePasses[t];
+    for (size_t t = 0; t < out.tiles; ++t)
+      ++out.tilePasses[t];
   }
   reduceStats(stats);
   complete = everyone(complete);

@@ -17,8 +17,8 @@
 namespace exa::cli {
 namespace {
 
-template <typename T> T pick(const std::string& what, const std::string& value,
-                             std::initializer_list<std::pair<const char*, T>> choices) {
+template <typename T>
+T pick(const std::string& what, const std::string& value, std::initializer_list<std::pair<const char*, T>> choices) {
   std::string names;
   for (const auto& [name, v] : choices) {
     if (value == name) return v;
@@ -84,7 +84,8 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderO
   if (withRange && !o.range.empty()) {
     std::vector<double> r;
     for (const std::string& part : o.range)
-      for (double v : parseNumbers(part, "--range")) r.push_back(v);
+      for (double v : parseNumbers(part, "--range"))
+        r.push_back(v);
     if (r.size() != 2 || !(r[0] < r[1])) failUsage("--range expects LOW,HIGH with LOW < HIGH");
     tf.valueRange = range1f{float(r[0]), float(r[1])};
   }
@@ -121,7 +122,10 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--elevation", elevation, "Default view: degrees above the x-y plane")->capture_default_str();
   cmd.add_option("--background", background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
   cmd.add_flag("--alpha", alpha, "Keep the alpha channel instead of a background");
-  cmd.add_option("--shading", shading, "smooth (a gradient field of per-cell central differences, reconstructed like the values), analytic (the exact gradient, which shows the cell lattice), central or none")->capture_default_str();
+  cmd.add_option("--shading", shading,
+                 "smooth (a gradient field of per-cell central differences, reconstructed like the values), analytic "
+                 "(the exact gradient, which shows the cell lattice), central or none")
+      ->capture_default_str();
   cmd.add_option("--light", light, "headlight, or the direction x,y,z light travels")->capture_default_str();
   cmd.add_option("--traversal", traversal, "Region traversal: auto, kd or embree")->capture_default_str();
   cmd.add_flag("--no-skip", noSkip, "Disable space skipping");
@@ -134,34 +138,29 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--sampling", sampling, "adaptive (per region) or fixed (finest width everywhere)")
       ->capture_default_str();
   cmd.add_option("--reconstruction", reconstruction,
-                  "regions (bricks listed by the sample's region) or cells (baseline: locate every cell)")
+                 "regions (bricks listed by the sample's region) or cells (baseline: locate every cell)")
       ->capture_default_str();
   cmd.add_option("--debug", debug, "Debug view: level, brick, region or steps")->capture_default_str();
   cmd.add_flag("--no-volume", noVolume, "Draw surfaces only");
-  cmd.add_option("--layer", layers,
-                  "Another field in the volume: FIELD, FIELD=COLORMAP or FIELD=TF_FILE (repeatable)");
+  cmd.add_option("--layer", layers, "Another field in the volume: FIELD, FIELD=COLORMAP or FIELD=TF_FILE (repeatable)");
   cmd.add_option("--iso", iso, "Iso-values v1,v2,... of implicit iso-surfaces")->delimiter(',');
   cmd.add_option("--iso-field", isoField, "Field of the iso-surfaces (default: the rendered field)");
-  cmd.add_option("--iso-color", isoColor, "Iso-surface colours r,g,b[,r,g,b...] (sRGB), one per value")
-      ->delimiter(',');
+  cmd.add_option("--iso-color", isoColor, "Iso-surface colours r,g,b[,r,g,b...] (sRGB), one per value")->delimiter(',');
   cmd.add_option("--iso-color-field", isoColorField, "Colour the iso-surfaces by this field");
   cmd.add_option("--iso-colormap", isoColormap, "Colour map for --iso-color-field")->capture_default_str();
   cmd.add_flag("--iso-color-log", isoColorLog, "Map --iso-color-field logarithmically");
-  cmd.add_option("--iso-color-range", isoColorRange, "Value range LOW,HIGH for --iso-color-field")
-      ->delimiter(',');
+  cmd.add_option("--iso-color-range", isoColorRange, "Value range LOW,HIGH for --iso-color-field")->delimiter(',');
   cmd.add_option("--mesh", meshes, "Triangle mesh (OBJ, PLY or .tris) in world space (repeatable)");
-  cmd.add_option("--mesh-color", meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")
-      ->delimiter(',');
+  cmd.add_option("--mesh-color", meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")->delimiter(',');
   cmd.add_option("--clip-plane", clipPlanes,
-                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
-  cmd.add_option("--clip-box", clipBox, "Keep only the inside of a box x0,y0,z0,x1,y1,z1 (world)")
-      ->delimiter(',');
+                 "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
+  cmd.add_option("--clip-box", clipBox, "Keep only the inside of a box x0,y0,z0,x1,y1,z1 (world)")->delimiter(',');
   cmd.add_flag("--clip-meshes", clipMeshes, "Clip meshes too");
   cmd.add_option("--ao", aoRays, "Ambient occlusion rays per surface hit (0: off)")->capture_default_str();
   cmd.add_option("--ao-length", aoLength, "Ambient occlusion ray length, world units (0: a tenth of the diagonal)");
   cmd.add_flag("--ao-volume", aoVolume, "Let the volume attenuate ambient occlusion rays");
   cmd.add_option("--scene", sceneFile,
-                  "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
+                 "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
 }
 
 SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
@@ -190,8 +189,8 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   VolumeLayer& first = s.layers[0];
   if (apply("--field")) first.field = o.in.field;
   const bool colormapGiven = given("--colormap") || (!fromFile && o.tfFile.empty());
-  first.tf = applyTransferFunctionOptions(fromFile || !o.tfFile.empty() ? first.tf : defaultTransferFunction(),
-                                          o, o.tfFile, colormapGiven ? &o.colormap : nullptr, true);
+  first.tf = applyTransferFunctionOptions(fromFile || !o.tfFile.empty() ? first.tf : defaultTransferFunction(), o,
+                                          o.tfFile, colormapGiven ? &o.colormap : nullptr, true);
   if (apply("--layer")) {
     s.layers.resize(1);
     for (const std::string& spec : o.layers) {
@@ -213,8 +212,11 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
 
   if (apply("--shading"))
     s.shading = pick<Shading>("shading", o.shading,
-                              {{"analytic", Shading::Analytic}, {"central", Shading::Central},
-                               {"smooth", Shading::Smooth}, {"none", Shading::None}, {"clamped", Shading::Smooth}});
+                              {{"analytic", Shading::Analytic},
+                               {"central", Shading::Central},
+                               {"smooth", Shading::Smooth},
+                               {"none", Shading::None},
+                               {"clamped", Shading::Smooth}});
   Integration& in = s.integration;
   if (apply("--traversal")) {
     in.autoTraversal = o.traversal == "auto";
@@ -223,11 +225,12 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
                                          {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
   }
   if (apply("--sampling"))
-    in.sampling = pick<Sampling>("sampling", o.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
+    in.sampling =
+        pick<Sampling>("sampling", o.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
   if (apply("--reconstruction"))
-    in.reconstruction = pick<Reconstruction>("reconstruction", o.reconstruction,
-                                             {{"regions", Reconstruction::Regions},
-                                              {"cells", Reconstruction::CellLocation}});
+    in.reconstruction =
+        pick<Reconstruction>("reconstruction", o.reconstruction,
+                             {{"regions", Reconstruction::Regions}, {"cells", Reconstruction::CellLocation}});
   if (apply("--no-skip")) in.spaceSkipping = !o.noSkip;
   if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
   if (apply("--scalar")) in.vectorized = !o.scalar;
@@ -235,8 +238,11 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   if (apply("--no-join-segments")) in.joinSegments = !o.noJoinSegments;
   if (apply("--debug"))
     s.debug = pick<DebugView>("debug view", o.debug,
-                              {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},
-                               {"region", DebugView::Region}, {"steps", DebugView::Steps}});
+                              {{"none", DebugView::None},
+                               {"level", DebugView::Level},
+                               {"brick", DebugView::Brick},
+                               {"region", DebugView::Region},
+                               {"steps", DebugView::Steps}});
   if (apply("--light")) {
     s.light.headlight = o.light == "headlight";
     if (!s.light.headlight) {
@@ -318,7 +324,8 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
         s.meshes.push_back({std::make_shared<TriangleMesh>(readMesh(path)), vec3f(0.6f, 0.6f, 0.62f), path});
     }
     if (!meshColors.empty())
-      for (size_t i = 0; i < s.meshes.size(); ++i) s.meshes[i].color = meshColors[i % meshColors.size()];
+      for (size_t i = 0; i < s.meshes.size(); ++i)
+        s.meshes[i].color = meshColors[i % meshColors.size()];
   }
   if (!s.volume && s.iso.values.empty() && s.meshes.empty())
     failUsage("--no-volume leaves nothing to draw: add --iso or --mesh");
@@ -330,10 +337,13 @@ std::vector<std::string> neededFields(const Scene& s) {
   std::vector<std::string> names;
   bool all = false;
   auto add = [&](const std::string& n) {
-    if (n.empty()) all = true;
-    else if (std::find(names.begin(), names.end(), n) == names.end()) names.push_back(n);
+    if (n.empty())
+      all = true;
+    else if (std::find(names.begin(), names.end(), n) == names.end())
+      names.push_back(n);
   };
-  for (const VolumeLayer& l : s.layers) add(l.field);
+  for (const VolumeLayer& l : s.layers)
+    add(l.field);
   if (!s.iso.values.empty()) {
     if (!s.iso.field.empty()) add(s.iso.field);
     if (!s.iso.colorField.empty()) add(s.iso.colorField);
@@ -349,8 +359,8 @@ Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const Scen
   const box3d all(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
   const box3d target = o.frameAll || visible.empty() ? all : visible;
   const bool reframe = given("--azimuth") || given("--elevation") || given("--fov") || given("--ortho");
-  Camera camera = doc.hasCamera && !reframe ? doc.frame.camera
-                                           : Camera::frame(target, o.azimuth, o.elevation, o.fov, o.ortho);
+  Camera camera =
+      doc.hasCamera && !reframe ? doc.frame.camera : Camera::frame(target, o.azimuth, o.elevation, o.fov, o.ortho);
   if (!o.position.empty()) camera.position = toVec(o.position, "--position");
   if (!o.lookAt.empty()) camera.lookAt = toVec(o.lookAt, "--look-at");
   if (!o.up.empty()) camera.up = toVec(o.up, "--up");
@@ -366,14 +376,18 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
     logNote(strCat("field '", model.fieldNames[size_t(field)], "' (the default; -f chooses another of ",
                    model.fieldNames.size(), ")"));
   if (o.sceneFile.empty() && o.tfFile.empty()) {
-    const DefaultChoices c = adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
-                                                   !given("--opacity"), whole ? &whole->histogram : nullptr);
+    const DefaultChoices c =
+        adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
+                              !given("--opacity"), whole ? &whole->histogram : nullptr);
     first.tf = c.tf;
-    for (const std::string& note : c.notes) logNote(note);
+    for (const std::string& note : c.notes)
+      logNote(note);
   }
   if (given("--linear"))
-    for (VolumeLayer& l : scene.layers) l.tf.logScale = false;
-  for (const std::string& w : sceneWarnings(scene, model, dataset)) logWarning(w);
+    for (VolumeLayer& l : scene.layers)
+      l.tf.logScale = false;
+  for (const std::string& w : sceneWarnings(scene, model, dataset))
+    logWarning(w);
   return field;
 }
 
@@ -404,7 +418,8 @@ void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame
     if (whole)
       levels = whole->levels;
     else
-      for (const ModelSummary::Level& l : summarize(model).levels) levels.push_back(l.level);
+      for (const ModelSummary::Level& l : summarize(model).levels)
+        levels.push_back(l.level);
     drawLevelLegend(image, levels, ink);
   }
   if (o.colorbar && scene.debug == DebugView::None && scene.volume) {

@@ -27,9 +27,9 @@ struct RenderOptions {
   bool noJitter = false;
   std::string colormap = "viridis";
   std::string tfFile;
-  std::vector<float> opacity;       ///< x0 a0 x1 a1 ... in normalised value
-  float opacityScale = 0.f;         ///< 0: chosen from the dataset's size
-  std::vector<std::string> range;  ///< LOW,HIGH (movies also: global or per-step)
+  std::vector<float> opacity;     ///< x0 a0 x1 a1 ... in normalised value
+  float opacityScale = 0.f;       ///< 0: chosen from the dataset's size
+  std::vector<std::string> range; ///< LOW,HIGH (movies also: global or per-step)
   bool logScale = false;
   bool linear = false;
   bool frameAll = false;
@@ -54,16 +54,16 @@ struct RenderOptions {
   std::string debug = "none";
   // Surfaces and effects.
   bool noVolume = false;
-  std::vector<std::string> layers;   ///< FIELD=COLORMAP or FIELD=TF_FILE
+  std::vector<std::string> layers; ///< FIELD=COLORMAP or FIELD=TF_FILE
   std::vector<float> iso;
   std::string isoField;
-  std::vector<float> isoColor;       ///< sRGB triples, one per iso-value (cycled)
+  std::vector<float> isoColor; ///< sRGB triples, one per iso-value (cycled)
   std::string isoColorField;
   std::string isoColormap = "cool-to-warm";
   std::vector<float> isoColorRange;
   bool isoColorLog = false;
   std::vector<std::string> meshes;
-  std::vector<float> meshColor;      ///< sRGB triples, one per mesh (cycled)
+  std::vector<float> meshColor;        ///< sRGB triples, one per mesh (cycled)
   std::vector<std::string> clipPlanes; ///< px,py,pz,nx,ny,nz each
   std::vector<double> clipBox;
   bool clipMeshes = false;
@@ -84,9 +84,9 @@ std::vector<std::string> neededFields(const Scene& s);
 /// What a process that holds one part of the data (data-parallel rendering) knows of the whole,
 /// agreed by every process: the first picture, the camera and the overlays are the whole data's.
 struct WholeData {
-  box3i cellBounds;          ///< lattice bounds of all cells
-  std::vector<int> levels;   ///< levels that hold cells
-  PartialData histogram;     ///< the part's cells and the sum over the parts
+  box3i cellBounds;        ///< lattice bounds of all cells
+  std::vector<int> levels; ///< levels that hold cells
+  PartialData histogram;   ///< the part's cells and the sum over the parts
 };
 
 /// The first picture: names the default field, adapts the first layer's transfer function to the

@@ -78,7 +78,8 @@ double RegionTraversal::setVisible(const std::vector<uint8_t>& visible) {
   EXA_CHECK(visible.size() == model_.regions.regions.size());
   visible_ = visible;
   visibleCount_ = 0;
-  for (uint8_t v : visible_) visibleCount_ += v != 0;
+  for (uint8_t v : visible_)
+    visibleCount_ += v != 0;
   if (kind_ != TraversalKind::Embree) {
     markVisibleSubtrees();
     return timer.seconds();

@@ -65,10 +65,12 @@ HWY_INLINE void loadPairs(hn::Full256<float>, const float* values, hn::Vec256<in
   alignas(32) int32_t i[8];
   _mm256_store_si256(reinterpret_cast<__m256i*>(i), row.raw);
   // Lanes 0, 1, 4, 5 and 2, 3, 6, 7, so that the in-lane shuffles below keep the order.
-  const __m256 a = _mm256_castpd_ps(_mm256_insertf128_pd(
-      _mm256_castpd128_pd256(loadTwoPairs(values + i[0], values + i[1])), loadTwoPairs(values + i[4], values + i[5]), 1));
-  const __m256 b = _mm256_castpd_ps(_mm256_insertf128_pd(
-      _mm256_castpd128_pd256(loadTwoPairs(values + i[2], values + i[3])), loadTwoPairs(values + i[6], values + i[7]), 1));
+  const __m256 a =
+      _mm256_castpd_ps(_mm256_insertf128_pd(_mm256_castpd128_pd256(loadTwoPairs(values + i[0], values + i[1])),
+                                            loadTwoPairs(values + i[4], values + i[5]), 1));
+  const __m256 b =
+      _mm256_castpd_ps(_mm256_insertf128_pd(_mm256_castpd128_pd256(loadTwoPairs(values + i[2], values + i[3])),
+                                            loadTwoPairs(values + i[6], values + i[7]), 1));
   r0.raw = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
   r1.raw = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
 }
@@ -229,7 +231,8 @@ void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t br
       const V w2 = hn::Mul(safeW, safeW);
       float* out[3] = {batch.gx + base, batch.gy + base, batch.gz + base};
       for (int a = 0; a < 3; ++a)
-        hn::StoreU(hn::IfThenElseZero(ok, hn::Div(hn::Sub(hn::Mul(dWV[a], safeW), hn::Mul(dW[a], sumWV)), w2)), d, out[a]);
+        hn::StoreU(hn::IfThenElseZero(ok, hn::Div(hn::Sub(hn::Mul(dWV[a], safeW), hn::Mul(dW[a], sumWV)), w2)), d,
+                   out[a]);
     }
   }
 }
@@ -276,7 +279,9 @@ void sampleBricksBatch(const FieldView& view, const uint32_t* brickIds, uint32_t
   HWY_DYNAMIC_DISPATCH(SampleBricksBatchImpl)(view, brickIds, brickCount, batch, gradient);
 }
 
-SampleRegionBatchFunction sampleRegionBatchFunction() { return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBatchImpl)); }
+SampleRegionBatchFunction sampleRegionBatchFunction() {
+  return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBatchImpl));
+}
 
 SampleBricksBatchFunction sampleBricksBatchFunction() {
   return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBricksBatchImpl));
@@ -287,7 +292,8 @@ const char* batchTargetName() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }
 std::vector<std::string> batchTargets() {
   static const std::vector<int64_t> targets = hwy::SupportedAndGeneratedTargets(); // before any mock
   std::vector<std::string> names;
-  for (int64_t t : targets) names.push_back(hwy::TargetName(t));
+  for (int64_t t : targets)
+    names.push_back(hwy::TargetName(t));
   return names;
 }
 

@@ -42,7 +42,8 @@ std::string describe(const Cell& c) {
 
 /// The message for two conflicting input cells, `a` (index ia) and `b` (index ib).
 std::string conflictText(uint64_t ia, const Cell& a, uint64_t ib, const Cell& b, bool duplicate) {
-  if (duplicate) return strCat("cells ", std::min(ia, ib), " and ", std::max(ia, ib), " are duplicates: both at ", describe(a));
+  if (duplicate)
+    return strCat("cells ", std::min(ia, ib), " and ", std::max(ia, ib), " are duplicates: both at ", describe(a));
   return strCat("cells ", ia, " ", describe(a), " and ", ib, " ", describe(b), " overlap");
 }
 
@@ -133,11 +134,13 @@ public:
     if (counted <= kParallelGrain) {
       count(0, counted, slabs);
     } else {
-      tbb::enumerable_thread_specific<std::vector<uint32_t>> parts([&] { return std::vector<uint32_t>(offset[3], 0u); });
+      tbb::enumerable_thread_specific<std::vector<uint32_t>> parts(
+          [&] { return std::vector<uint32_t>(offset[3], 0u); });
       tbb::parallel_for(tbb::blocked_range<size_t>(0, counted, kParallelGrain),
                         [&](const tbb::blocked_range<size_t>& r) { count(r.begin(), r.end(), parts.local()); });
       for (const std::vector<uint32_t>& part : parts)
-        for (size_t i = 0; i < slabs.size(); ++i) slabs[i] += part[i];
+        for (size_t i = 0; i < slabs.size(); ++i)
+          slabs[i] += part[i];
     }
     const int longest = argMax(extent);
     int bestAxis = -1;
@@ -180,12 +183,15 @@ private:
   size_t partition(size_t begin, size_t end, int axis, int32_t split) {
     size_t i = begin, j = end;
     for (;;) {
-      while (i < j && cells_[i].lower[axis] < split) ++i;
-      while (i < j && !(cells_[j - 1].lower[axis] < split)) --j;
+      while (i < j && cells_[i].lower[axis] < split)
+        ++i;
+      while (i < j && !(cells_[j - 1].lower[axis] < split))
+        --j;
       if (i >= j) return i;
       std::swap(cells_[i], cells_[j - 1]);
       if (ids_) std::swap(ids_[i], ids_[j - 1]);
-      for (float* v : values_) std::swap(v[i], v[j - 1]);
+      for (float* v : values_)
+        std::swap(v[i], v[j - 1]);
       ++i, --j;
     }
   }
@@ -193,13 +199,15 @@ private:
   NodeInfo analyze(size_t begin, size_t end) const {
     if (end - begin <= kParallelGrain) {
       NodeInfo info;
-      for (size_t i = begin; i < end; ++i) info.add(cells_[i]);
+      for (size_t i = begin; i < end; ++i)
+        info.add(cells_[i]);
       return info;
     }
     return tbb::parallel_reduce(
         tbb::blocked_range<size_t>(begin, end, kParallelGrain), NodeInfo{},
         [&](const tbb::blocked_range<size_t>& r, NodeInfo info) {
-          for (size_t i = r.begin(); i < r.end(); ++i) info.add(cells_[i]);
+          for (size_t i = r.begin(); i < r.end(); ++i)
+            info.add(cells_[i]);
           return info;
         },
         [](NodeInfo a, const NodeInfo& b) {
@@ -226,12 +234,14 @@ private:
     }
     if (ids_) {
       std::vector<uint32_t> ordered(local.size());
-      for (size_t s = 0; s < local.size(); ++s) ordered[s] = ids_[begin + local[s]];
+      for (size_t s = 0; s < local.size(); ++s)
+        ordered[s] = ids_[begin + local[s]];
       std::copy(ordered.begin(), ordered.end(), ids_ + begin);
     }
     std::vector<float> ordered(values_.empty() ? 0 : local.size());
     for (float* v : values_) {
-      for (size_t s = 0; s < local.size(); ++s) ordered[s] = v[begin + local[s]];
+      for (size_t s = 0; s < local.size(); ++s)
+        ordered[s] = v[begin + local[s]];
       std::copy(ordered.begin(), ordered.end(), v + begin);
     }
     bricks.push_back(Brick{info.bounds.lower, info.minLevel, dims, uint32_t(begin)});
@@ -329,8 +339,7 @@ BrickBuild buildBricks(const std::vector<Cell>& cells, const BrickBuildOptions& 
   return buildBricksInPlace(copy, options);
 }
 
-std::vector<float> toBrickOrder(const std::vector<float>& cellValues,
-                                const std::vector<uint32_t>& cellOfSlot) {
+std::vector<float> toBrickOrder(const std::vector<float>& cellValues, const std::vector<uint32_t>& cellOfSlot) {
   std::vector<float> out(cellOfSlot.size());
   tbb::parallel_for(size_t(0), out.size(), [&](size_t i) { out[i] = cellValues[cellOfSlot[i]]; });
   return out;

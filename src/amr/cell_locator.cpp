@@ -66,9 +66,8 @@ struct CellLocator::Impl {
     size_t bestImbalance = count;
     std::vector<uint32_t> order(begin, end);
     for (int axis = 0; axis < 3; ++axis) {
-      std::sort(order.begin(), order.end(), [&](uint32_t x, uint32_t y) {
-        return model.bricks[x].lower[axis] < model.bricks[y].lower[axis];
-      });
+      std::sort(order.begin(), order.end(),
+                [&](uint32_t x, uint32_t y) { return model.bricks[x].lower[axis] < model.bricks[y].lower[axis]; });
       int32_t maxUpper = model.bricks[order[0]].bounds().upper[axis];
       for (size_t i = 1; i < order.size(); ++i) {
         const Brick& brick = model.bricks[order[i]];
@@ -84,9 +83,8 @@ struct CellLocator::Impl {
       }
     }
     if (bestAxis < 0) return makeLeaf(); // no plane separates these bricks
-    const auto mid = std::partition(begin, end, [&](uint32_t id) {
-      return model.bricks[id].lower[bestAxis] < bestPos;
-    });
+    const auto mid =
+        std::partition(begin, end, [&](uint32_t id) { return model.bricks[id].lower[bestAxis] < bestPos; });
     const uint32_t children = uint32_t(nodes.size());
     nodes[n] = {bestPos, uint32_t(bestAxis), children, 0};
     nodes.push_back({});
@@ -108,8 +106,8 @@ struct CellLocator::Impl {
       const Brick& brick = model.bricks[leafBricks[leaf.a + k]];
       if (brick.level != level) continue;
       const box3i bb = brick.bounds();
-      if (c.x < bb.lower.x || c.y < bb.lower.y || c.z < bb.lower.z || c.x >= bb.upper.x ||
-          c.y >= bb.upper.y || c.z >= bb.upper.z)
+      if (c.x < bb.lower.x || c.y < bb.lower.y || c.z < bb.lower.z || c.x >= bb.upper.x || c.y >= bb.upper.y ||
+          c.z >= bb.upper.z)
         continue;
       const int shift = level;
       const uint32_t ix = uint32_t(c.x - brick.lower.x) >> shift;

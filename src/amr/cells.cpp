@@ -30,8 +30,8 @@ std::string cellProblem(const Cell& c) {
     if (v < -kLatticeLimit || v + w > kLatticeLimit)
       return strCat("coordinate ", v, " outside the supported lattice range [-2^29, 2^29]");
     if (v % w != 0)
-      return strCat("corner (", c.lower.x, ",", c.lower.y, ",", c.lower.z,
-                    ") is not aligned to the level-", c.level, " cell width ", w);
+      return strCat("corner (", c.lower.x, ",", c.lower.y, ",", c.lower.z, ") is not aligned to the level-", c.level,
+                    " cell width ", w);
   }
   return {};
 }
@@ -46,21 +46,19 @@ void validateCellRecords(const std::vector<Cell>& cells, const std::string& sour
 
 void validateFieldValues(const Field& f, size_t cellCount, const std::string& source) {
   if (f.values.size() != cellCount)
-    fail(source, ": field '", f.name, "' has ", f.values.size(), " values for ", cellCount,
-         " cells");
+    fail(source, ": field '", f.name, "' has ", f.values.size(), " values for ", cellCount, " cells");
   for (size_t i = 0; i < f.values.size(); ++i)
     if (!std::isfinite(f.values[i]))
-      fail(source, ": record ", i, ": value ", f.values[i], " of field '", f.name,
-           "' is not finite");
+      fail(source, ": record ", i, ": value ", f.values[i], " of field '", f.name, "' is not finite");
 }
 
 void validateCells(const CellSet& set, const std::string& source) {
   validateCellRecords(set.cells, source);
   if (set.fields.empty()) fail(source, ": no fields");
-  for (const Field& f : set.fields) validateFieldValues(f, set.cells.size(), source);
+  for (const Field& f : set.fields)
+    validateFieldValues(f, set.cells.size(), source);
   for (int a = 0; a < 3; ++a)
-    if (!(set.world.scale[a] > 0.0) || !std::isfinite(set.world.scale[a]) ||
-        !std::isfinite(set.world.origin[a]))
+    if (!(set.world.scale[a] > 0.0) || !std::isfinite(set.world.scale[a]) || !std::isfinite(set.world.origin[a]))
       fail(source, ": invalid world transform (scale must be positive and finite)");
 }
 

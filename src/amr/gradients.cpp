@@ -7,7 +7,8 @@ namespace exa {
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
                                                 size_t valueCount) {
   std::array<std::vector<float>, 3> out;
-  for (std::vector<float>& g : out) g.assign(valueCount, 0.f);
+  for (std::vector<float>& g : out)
+    g.assign(valueCount, 0.f);
   tbb::parallel_for(size_t(0), bricks.size(), [&](size_t bi) {
     const Brick& b = bricks[bi];
     const float w = float(b.cellWidth());
@@ -25,8 +26,8 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
           const bool alone = r != kNoRegion && view.regions[r].brickCount == 1 &&
                              view.brickIds[view.regions[r].brickBegin] == uint32_t(bi);
           auto inside = [&](const vec3f& q) {
-            return r != kNoRegion && q.x >= rb.lower.x && q.x <= rb.upper.x && q.y >= rb.lower.y &&
-                   q.y <= rb.upper.y && q.z >= rb.lower.z && q.z <= rb.upper.z;
+            return r != kNoRegion && q.x >= rb.lower.x && q.x <= rb.upper.x && q.y >= rb.lower.y && q.y <= rb.upper.y &&
+                   q.z >= rb.lower.z && q.z <= rb.upper.z;
           };
           auto at = [&](const vec3f& q, float& v) {
             return inside(q) ? sampleRegion(view, r, q, v) : sampleField(view, q, v);

@@ -21,7 +21,8 @@ bool operator==(const ValueArray& a, const ValueArray& b) {
 
 uint64_t Model::cellCount() const {
   uint64_t n = 0;
-  for (const Brick& b : bricks) n += b.cellCount();
+  for (const Brick& b : bricks)
+    n += b.cellCount();
   return n;
 }
 
@@ -47,7 +48,8 @@ int Model::requireField(const std::string& name) const {
   const int i = fieldIndex(name);
   if (i < 0) {
     std::string known;
-    for (const std::string& n : fieldNames) known += (known.empty() ? "" : ", ") + n;
+    for (const std::string& n : fieldNames)
+      known += (known.empty() ? "" : ", ") + n;
     fail("unknown field '", name, "' (fields: ", known, ")");
   }
   return i;
@@ -66,7 +68,8 @@ FieldView Model::view(int field) const {
 
 box3i Model::cellBounds() const {
   box3i b;
-  for (const Brick& br : bricks) b.extend(br.bounds());
+  for (const Brick& br : bricks)
+    b.extend(br.bounds());
   return b;
 }
 
@@ -100,11 +103,13 @@ ModelSummary summarize(const Model& m) {
   }
   for (const auto& values : m.fieldValues) {
     range1f r;
-    for (float v : values) r.extend(v);
+    for (float v : values)
+      r.extend(v);
     s.fieldRanges.push_back(r);
   }
   s.brickBytes = m.bricks.size() * sizeof(Brick);
-  for (const auto& values : m.fieldValues) s.valueBytes += values.size() * sizeof(float);
+  for (const auto& values : m.fieldValues)
+    s.valueBytes += values.size() * sizeof(float);
   s.regionBytes = m.regions.memoryBytes();
   return s;
 }
@@ -146,7 +151,8 @@ Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* ke
   } else {
     // Otherwise the cells and values are permuted in place: no memory beyond them.
     std::vector<std::vector<float>*> values;
-    for (Field& f : cells.fields) values.push_back(&f.values);
+    for (Field& f : cells.fields)
+      values.push_back(&f.values);
     model.bricks = buildBricksReordering(cells.cells, values, options.bricks);
     progress.advance(1);
     std::vector<Cell>().swap(cells.cells);
@@ -176,8 +182,7 @@ Model buildModel(CellSet&& cells, const BuildOptions& options, ModelStructure& s
 
 bool ModelStructure::matches(const CellSet& other, const BuildOptions& options) const {
   return other.world == world && options.bricks.maxBrickWidth == bricks.maxBrickWidth &&
-         other.cells.size() == cells.size() &&
-         std::equal(other.cells.begin(), other.cells.end(), cells.begin());
+         other.cells.size() == cells.size() && std::equal(other.cells.begin(), other.cells.end(), cells.begin());
 }
 
 Model rebuildValues(const Model& like, const ModelStructure& structure, CellSet&& cells) {

@@ -10,13 +10,15 @@ namespace exa {
 
 box3l Census::bounds() const {
   box3l b;
-  for (const CensusBox& c : boxes) b.extend(c.box);
+  for (const CensusBox& c : boxes)
+    b.extend(c.box);
   return b;
 }
 
 double Census::cells() const {
   double n = 0;
-  for (const CensusBox& c : boxes) n += c.cells;
+  for (const CensusBox& c : boxes)
+    n += c.cells;
   return n;
 }
 
@@ -139,14 +141,17 @@ struct Builder {
         const double target = total * double(lowParts) / double(parts);
         auto below = [&](int64_t k) {
           double n = 0;
-          for (const CensusBox& c : items) n += cellsBelow(c, axis, k * grain);
+          for (const CensusBox& c : items)
+            n += cellsBelow(c, axis, k * grain);
           return n;
         };
         int64_t a = ka, b = kb;
         while (a < b) {
           const int64_t m = a + (b - a) / 2;
-          if (below(m) >= target) b = m;
-          else a = m + 1;
+          if (below(m) >= target)
+            b = m;
+          else
+            a = m + 1;
         }
         if (a > ka && std::abs(below(a - 1) - target) <= std::abs(below(a) - target)) --a;
         split = a * grain;
@@ -227,7 +232,8 @@ std::vector<int> KdPartition::orderAlong(const vec3d& direction) const {
 
 std::vector<int64_t> KdPartition::encode() const {
   std::vector<int64_t> out{int64_t(nodes_.size()), int64_t(boxes_.size())};
-  for (const Node& n : nodes_) out.insert(out.end(), {n.axis, n.split, n.child[0], n.child[1], n.part});
+  for (const Node& n : nodes_)
+    out.insert(out.end(), {n.axis, n.split, n.child[0], n.child[1], n.part});
   for (const box3l& b : boxes_)
     out.insert(out.end(), {b.lower.x, b.lower.y, b.lower.z, b.upper.x, b.upper.y, b.upper.z});
   return out;

@@ -20,9 +20,7 @@ struct Fragment {
 
 int64_t floorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
 
-box3f toLattice(const box3l& half) {
-  return {vec3f(half.lower) * 0.5f, vec3f(half.upper) * 0.5f};
-}
+box3f toLattice(const box3l& half) { return {vec3f(half.lower) * 0.5f, vec3f(half.upper) * 0.5f}; }
 
 /// The region builder's output for one subtree; node 0 is the subtree root.
 struct Subtree {
@@ -46,12 +44,10 @@ public:
 
   /// Picks the fragment face closest to the box centre, on the widest axis that has one.
   /// Returns false when no face lies strictly inside the box (the box is a leaf).
-  static bool choosePlane(const box3l& box, const std::vector<Fragment>& frags, int& axisOut,
-                          int64_t& posOut) {
+  static bool choosePlane(const box3l& box, const std::vector<Fragment>& frags, int& axisOut, int64_t& posOut) {
     const vec3l extent = box.size();
     std::array<int, 3> order{0, 1, 2};
-    std::stable_sort(order.begin(), order.end(),
-                     [&](int a, int b) { return extent[a] > extent[b]; });
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return extent[a] > extent[b]; });
     for (int axis : order) {
       const int64_t lo = box.lower[axis], hi = box.upper[axis];
       const int64_t twiceCentre = lo + hi;
@@ -77,8 +73,8 @@ public:
     return false;
   }
 
-  static void split(const std::vector<Fragment>& frags, int axis, int64_t pos,
-                    std::vector<Fragment>& left, std::vector<Fragment>& right) {
+  static void split(const std::vector<Fragment>& frags, int axis, int64_t pos, std::vector<Fragment>& left,
+                    std::vector<Fragment>& right) {
     for (const Fragment& f : frags) {
       if (f.box.lower[axis] < pos) {
         Fragment l = f;
@@ -96,7 +92,7 @@ public:
   /// What a subtree costs a ray, and whether it may become one region (see partition).
   struct Cost {
     double cost = 0;
-    int32_t level = 0;      ///< the finest level of every region in it
+    int32_t level = 0; ///< the finest level of every region in it
     bool collapsible = false;
   };
 
@@ -202,7 +198,8 @@ void graft(RegionSet& set, uint32_t node, const Subtree& sub) {
     return n;
   };
   set.nodes[node] = fix(sub.nodes[0]);
-  for (size_t i = 1; i < sub.nodes.size(); ++i) set.nodes.push_back(fix(sub.nodes[i]));
+  for (size_t i = 1; i < sub.nodes.size(); ++i)
+    set.nodes.push_back(fix(sub.nodes[i]));
   for (Region r : sub.regions) {
     r.brickBegin += idBase;
     set.regions.push_back(r);
@@ -213,9 +210,10 @@ void graft(RegionSet& set, uint32_t node, const Subtree& sub) {
 } // namespace
 
 size_t RegionSet::memoryBytes() const {
-  size_t bytes = regions.size() * sizeof(Region) + brickIds.size() * sizeof(uint32_t) +
-                 nodes.size() * sizeof(RegionKdNode);
-  for (const auto& r : valueRanges) bytes += r.size() * sizeof(range1f);
+  size_t bytes =
+      regions.size() * sizeof(Region) + brickIds.size() * sizeof(uint32_t) + nodes.size() * sizeof(RegionKdNode);
+  for (const auto& r : valueRanges)
+    bytes += r.size() * sizeof(range1f);
   return bytes;
 }
 
@@ -261,8 +259,7 @@ RegionSet buildRegions(const std::vector<Brick>& bricks, const RegionBuildOption
   return set;
 }
 
-std::vector<range1f> computeValueRanges(const RegionSet& set, const std::vector<Brick>& bricks,
-                                        const float* values) {
+std::vector<range1f> computeValueRanges(const RegionSet& set, const std::vector<Brick>& bricks, const float* values) {
   std::vector<range1f> ranges(set.regions.size());
   tbb::parallel_for(size_t(0), set.regions.size(), [&](size_t ri) {
     const Region& region = set.regions[ri];
@@ -282,9 +279,9 @@ std::vector<range1f> computeValueRanges(const RegionSet& set, const std::vector<
       }
       for (int z = lo.z; z <= hi.z; ++z)
         for (int y = lo.y; y <= hi.y; ++y) {
-          const float* row =
-              values + brick.valueOffset + size_t(brick.size.x) * (y + size_t(brick.size.y) * z);
-          for (int x = lo.x; x <= hi.x; ++x) range.extend(row[x]);
+          const float* row = values + brick.valueOffset + size_t(brick.size.x) * (y + size_t(brick.size.y) * z);
+          for (int x = lo.x; x <= hi.x; ++x)
+            range.extend(row[x]);
         }
     }
     ranges[ri] = range;

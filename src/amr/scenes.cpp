@@ -108,8 +108,7 @@ Scene makeShells(uint64_t seed, int maxLevel) {
   scene.fieldNames = {"scalar", "radius"};
   scene.evaluate = [=](const vec3d& p, float* v) {
     const double r = length(p - vec3d(0.5));
-    v[0] = float(0.5 + 0.5 * std::cos(2 * M_PI * frequency * r) * std::exp(-3 * r) +
-                 0.2 * std::sin(6 * p.z));
+    v[0] = float(0.5 + 0.5 * std::cos(2 * M_PI * frequency * r) * std::exp(-3 * r) + 0.2 * std::sin(6 * p.z));
     v[1] = float(r);
   };
   scene.levelIn = [=](const vec3d& lo, const vec3d& hi) {
@@ -117,7 +116,8 @@ Scene makeShells(uint64_t seed, int maxLevel) {
     const vec3d c(0.5);
     const vec3d nearest = max(lo, min(c, hi));
     vec3d farthest;
-    for (int a = 0; a < 3; ++a) farthest[a] = std::abs(lo[a] - c[a]) > std::abs(hi[a] - c[a]) ? lo[a] : hi[a];
+    for (int a = 0; a < 3; ++a)
+      farthest[a] = std::abs(lo[a] - c[a]) > std::abs(hi[a] - c[a]) ? lo[a] : hi[a];
     const double dmin = length(nearest - c), dmax = length(farthest - c);
     auto touches = [&](double band) { return dmin < radius + band && dmax > radius - band; };
     // The finest level next to the coarsest: level jumps of more than one.
@@ -143,8 +143,8 @@ Scene makeRamp(uint64_t seed, int maxLevel) {
   scene.levelIn = [seed, maxLevel](const vec3d& lo, const vec3d& hi) {
     const vec3d c = (lo + hi) * 0.5;
     const vec3i q(int(std::floor(c.x * 4)), int(std::floor(c.y * 4)), int(std::floor(c.z * 4)));
-    const uint64_t h = mix64(seed ^ mix64(uint64_t(q.x) * 73856093ull ^ uint64_t(q.y) * 19349663ull ^
-                                          uint64_t(q.z) * 83492791ull));
+    const uint64_t h =
+        mix64(seed ^ mix64(uint64_t(q.x) * 73856093ull ^ uint64_t(q.y) * 19349663ull ^ uint64_t(q.z) * 83492791ull));
     return int(h % uint64_t(maxLevel + 1));
   };
   scene.jump = true;
@@ -179,7 +179,8 @@ Scene makeCosmic(uint64_t seed, int maxLevel) {
     variance += 0.5 * waves.back().amplitude * waves.back().amplitude;
   }
   const double norm = 1.6 / std::sqrt(variance); // standard deviation of ln(density)
-  for (Wave& w : waves) w.amplitude *= norm;
+  for (Wave& w : waves)
+    w.amplitude *= norm;
   std::vector<Halo> haloes;
   for (int i = 0; i < 24; ++i) {
     const double cz = uniform(s), cy = uniform(s), cx = uniform(s);
@@ -188,11 +189,13 @@ Scene makeCosmic(uint64_t seed, int maxLevel) {
   }
   auto density = [waves, haloes](const vec3d& p) {
     double d = 0;
-    for (const Wave& w : waves) d += w.amplitude * std::cos(dot(w.k, p) + w.phase);
+    for (const Wave& w : waves)
+      d += w.amplitude * std::cos(dot(w.k, p) + w.phase);
     double rho = std::exp(d - 1.28); // mean of the log-normal part near 1
     for (const Halo& h : haloes) {
       vec3d q = p - h.centre;
-      for (int a = 0; a < 3; ++a) q[a] -= std::round(q[a]); // periodic
+      for (int a = 0; a < 3; ++a)
+        q[a] -= std::round(q[a]); // periodic
       const double r2 = dot(q, q) / (h.sigma * h.sigma);
       if (r2 < 40) rho += h.mass * std::exp(-0.5 * r2);
     }
@@ -224,7 +227,8 @@ Scene makeScene(const SceneOptions& o) {
   if (o.name == "ramp") return makeRamp(o.seed, maxLevel);
   if (o.name == "cosmic") return makeCosmic(o.seed, maxLevel);
   std::string known;
-  for (const SceneInfo& s : sceneList()) known += (known.empty() ? "" : ", ") + s.name;
+  for (const SceneInfo& s : sceneList())
+    known += (known.empty() ? "" : ", ") + s.name;
   fail("unknown scene '", o.name, "' (scenes: ", known, ")");
 }
 
@@ -241,8 +245,7 @@ uint64_t refine(const Scene& scene, const vec3i& lower, int level, double unit, 
   int wanted = level;
   if (level > 0) {
     const int bw = scene.block * w;
-    const vec3i block(floorDivInt(lower.x, bw) * bw, floorDivInt(lower.y, bw) * bw,
-                      floorDivInt(lower.z, bw) * bw);
+    const vec3i block(floorDivInt(lower.x, bw) * bw, floorDivInt(lower.y, bw) * bw, floorDivInt(lower.z, bw) * bw);
     wanted = std::min(wanted, scene.levelIn(vec3d(block) * unit, (vec3d(block) + vec3d(bw)) * unit));
   }
   if (wanted < level) {
@@ -261,7 +264,8 @@ uint64_t refine(const Scene& scene, const vec3i& lower, int level, double unit, 
     out->cells.push_back(Cell{lower, level});
     float v[8];
     scene.evaluate(centre, v);
-    for (size_t f = 0; f < out->values.size(); ++f) out->values[f].push_back(v[f]);
+    for (size_t f = 0; f < out->values.size(); ++f)
+      out->values[f].push_back(v[f]);
   }
   return 1;
 }
@@ -276,7 +280,8 @@ uint64_t countCells(const Scene& scene, int base, int maxLevel) {
         perSlab[size_t(z)] += refine(scene, vec3i(x, y, z) * w, maxLevel, unit, nullptr);
   });
   uint64_t n = 0;
-  for (uint64_t c : perSlab) n += c;
+  for (uint64_t c : perSlab)
+    n += c;
   return n;
 }
 
@@ -361,13 +366,15 @@ uint64_t generateScenePieces(const SceneOptions& options, int slabsPerPiece,
       Output& out = slabs[size_t(i)];
       out.values.resize(scene.fieldNames.size());
       for (int y = 0; y < base; ++y)
-        for (int x = 0; x < base; ++x) refine(scene, vec3i(x, y, z0 + i) * w, maxLevel, unit, &out);
+        for (int x = 0; x < base; ++x)
+          refine(scene, vec3i(x, y, z0 + i) * w, maxLevel, unit, &out);
       progress.advance(1);
     });
     // The piece: the slabs in z order, each freed as it is appended.
     CellSet piece;
     size_t cells = 0;
-    for (const Output& slab : slabs) cells += slab.cells.size();
+    for (const Output& slab : slabs)
+      cells += slab.cells.size();
     total += cells;
     if (total >= (uint64_t(1) << 32) - 1) fail("scene produced too many cells: more than ", total - 1);
     piece.cells.reserve(cells);

@@ -63,8 +63,7 @@ void Progress::advance(uint64_t amount) {
   if (impl_->finished) return;
   impl_->drawn = true;
   const double pct = impl_->total ? 100.0 * double(done) / double(impl_->total) : 100.0;
-  std::fprintf(stderr, "\rexabricks: %s %5.1f%% (%.1f s)", impl_->label.c_str(), pct,
-               impl_->timer.seconds());
+  std::fprintf(stderr, "\rexabricks: %s %5.1f%% (%.1f s)", impl_->label.c_str(), pct, impl_->timer.seconds());
   std::fflush(stderr);
 }
 
@@ -72,8 +71,7 @@ void Progress::finish() {
   if (!impl_->enabled || impl_->finished.exchange(true)) return;
   std::lock_guard<std::mutex> lock(gMutex);
   if (!impl_->drawn) return;
-  std::fprintf(stderr, "\rexabricks: %s done (%.2f s)        \n", impl_->label.c_str(),
-               impl_->timer.seconds());
+  std::fprintf(stderr, "\rexabricks: %s done (%.2f s)        \n", impl_->label.c_str(), impl_->timer.seconds());
 }
 
 } // namespace exa

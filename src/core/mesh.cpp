@@ -4,7 +4,8 @@ namespace exa {
 
 box3f TriangleMesh::bounds() const {
   box3f b;
-  for (const vec3f& v : vertices) b.extend(v);
+  for (const vec3f& v : vertices)
+    b.extend(v);
   return b;
 }
 

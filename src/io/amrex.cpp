@@ -63,7 +63,8 @@ std::vector<double> numbers(TextReader& r, const std::string& line, size_t expec
     if (c == '(' || c == ')' || c == ',') c = ' ';
   std::istringstream in(cleaned);
   std::vector<double> v;
-  for (double d; in >> d;) v.push_back(d);
+  for (double d; in >> d;)
+    v.push_back(d);
   if (expected && v.size() < expected) r.bad(strCat("expected ", expected, " numbers for ", what));
   return v;
 }
@@ -121,13 +122,15 @@ Plotfile readHeader(const std::string& dir) {
   if (version.rfind("HyperCLaw", 0) != 0) r.bad("not an AMReX plotfile header ('" + version + "')");
   {
     std::string v = version;
-    while (!v.empty() && std::isspace((unsigned char)v.back())) v.pop_back();
+    while (!v.empty() && std::isspace((unsigned char)v.back()))
+      v.pop_back();
     if (v != "HyperCLaw-V1.1") r.bad("plotfile version '" + v + "' is not supported (HyperCLaw-V1.1 is)");
   }
   const int nvars = int(r.integer(numbers(r, r.line(), 1, "the variable count")[0], 1, 100000, "the variable count"));
   for (int i = 0; i < nvars; ++i) {
     std::string name = r.line();
-    while (!name.empty() && std::isspace((unsigned char)name.back())) name.pop_back();
+    while (!name.empty() && std::isspace((unsigned char)name.back()))
+      name.pop_back();
     if (name.empty()) r.bad("empty variable name");
     pf.names.push_back(name);
   }
@@ -145,8 +148,8 @@ Plotfile readHeader(const std::string& dir) {
   const auto ratios = numbers(r, r.line(), 0, "refinement ratios");
   if (int(ratios.size()) < pf.finestLevel) r.bad("fewer refinement ratios than levels");
   // Ratios may be written as one number per level or as IntVects; take one per level.
-  const size_t stride = ratios.size() >= size_t(3 * pf.finestLevel) && pf.finestLevel > 0 &&
-                                ratios.size() % 3 == 0 && ratios.size() != size_t(pf.finestLevel)
+  const size_t stride = ratios.size() >= size_t(3 * pf.finestLevel) && pf.finestLevel > 0 && ratios.size() % 3 == 0 &&
+                                ratios.size() != size_t(pf.finestLevel)
                             ? 3
                             : 1;
   for (int l = 0; l < pf.finestLevel; ++l) {
@@ -185,9 +188,11 @@ Plotfile readHeader(const std::string& dir) {
     if (head[0] != double(l)) r.bad(strCat("expected level ", l));
     const int64_t ngrids = r.integer(head[1], 0, 100000000, "the grid count");
     r.line(); // level step
-    for (int64_t g = 0; g < ngrids * 3; ++g) r.line();
+    for (int64_t g = 0; g < ngrids * 3; ++g)
+      r.line();
     std::string prefix = r.line();
-    while (!prefix.empty() && std::isspace((unsigned char)prefix.back())) prefix.pop_back();
+    while (!prefix.empty() && std::isspace((unsigned char)prefix.back()))
+      prefix.pop_back();
     pf.levelPrefixes.push_back(prefix);
   }
   return pf;
@@ -230,7 +235,8 @@ LevelData readCellHeader(const Plotfile& pf, int level, std::vector<range1f>* ra
       ranges->assign(size_t(ncomp), range1f());
       for (int pass = 0; pass < 2; ++pass) { // minima, then maxima
         std::string line;
-        while (!r.atEnd() && line.empty()) line = r.line();
+        while (!r.atEnd() && line.empty())
+          line = r.line();
         if (line.empty()) throw Error("no min/max table");
         const std::vector<double> counts = numbers(r, line, 2, "the FAB and component counts");
         if (counts[0] != double(nfabs) || counts[1] != ncomp) r.bad("the min/max table does not match the FABs");
@@ -267,7 +273,8 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
     if (c == '(' || c == ')' || c == ',') c = ' ';
   std::istringstream hs(cleaned);
   std::vector<int64_t> v;
-  for (int64_t x; hs >> x;) v.push_back(x);
+  for (int64_t x; hs >> x;)
+    v.push_back(x);
   if (v.size() < 2 || v[0] < 1 || v[0] > 64 || v.size() < size_t(2 + v[0] + 1))
     fail(file, ": offset ", offset, ": corrupt FAB header");
   const int64_t bits = v[1];
@@ -284,7 +291,8 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
   const vec3l g(nghost);
   if (!(stored.lo == valid.lo - g) || !(stored.hi == valid.hi + g))
     fail(file, ": offset ", offset, ": FAB box does not match the level's box grown by ", nghost, " ghost cells");
-  if (ncomp != int64_t(names.size())) fail(file, ": offset ", offset, ": FAB holds ", ncomp, " components, expected ", names.size());
+  if (ncomp != int64_t(names.size()))
+    fail(file, ": offset ", offset, ": FAB holds ", ncomp, " components, expected ", names.size());
   // The stored box equals the valid one (within the lattice range) grown by at most 64 cells.
   const vec3l n = stored.hi - stored.lo + vec3l(1);
   const int64_t count = n.x * n.y * n.z;
@@ -292,8 +300,7 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
   if (dataStart < 0) fail(file, ": offset ", offset, ": no FAB data");
   const std::string where = strCat(file, ": offset ", offset, ": FAB of ", n.x, "x", n.y, "x", n.z, " cells");
   uint64_t values = 0;
-  if (!io::productWithin(uint64_t(count), uint64_t(ncomp), UINT64_MAX / 8, values))
-    fail(where, ": too many values");
+  if (!io::productWithin(uint64_t(count), uint64_t(ncomp), UINT64_MAX / 8, values)) fail(where, ": too many values");
   io::requireBytes(values, uint64_t(bytes), fileBytes - uint64_t(dataStart), where);
   std::vector<char> raw = io::allocate<char>(uint64_t(count * bytes), [&] { return where; });
   for (size_t k = 0; k < components.size(); ++k) {
@@ -394,7 +401,8 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
     const auto it = std::find(pf.names.begin(), pf.names.end(), name);
     if (it == pf.names.end()) {
       std::string known;
-      for (const std::string& n : pf.names) known += (known.empty() ? "" : ", ") + n;
+      for (const std::string& n : pf.names)
+        known += (known.empty() ? "" : ", ") + n;
       fail(path, ": unknown field '", name, "' (fields: ", known, ")");
     }
     components.push_back(int(it - pf.names.begin()));
@@ -402,15 +410,19 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
 
   // Width of a level-l cell in finest cells, and its exabricks level.
   std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
-  for (int l = pf.finestLevel - 1; l >= 0; --l) width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
+  for (int l = pf.finestLevel - 1; l >= 0; --l)
+    width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
   std::vector<LevelData> levels;
-  for (int l = 0; l <= pf.finestLevel; ++l) levels.push_back(readCellHeader(pf, l));
+  for (int l = 0; l <= pf.finestLevel; ++l)
+    levels.push_back(readCellHeader(pf, l));
 
   CellSet set;
   set.fields.resize(names.size());
-  for (size_t k = 0; k < names.size(); ++k) set.fields[k].name = names[k];
+  for (size_t k = 0; k < names.size(); ++k)
+    set.fields[k].name = names[k];
   uint64_t totalBoxes = 0;
-  for (const LevelData& ld : levels) totalBoxes += ld.boxes.size();
+  for (const LevelData& ld : levels)
+    totalBoxes += ld.boxes.size();
   Progress progress("reading " + path, totalBoxes);
 
   // Every box of every level on the finest lattice; a cell is a leaf unless a box of the next
@@ -456,7 +468,8 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
 Census amrexCensus(const std::string& path) {
   const Plotfile pf = readHeader(path);
   std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
-  for (int l = pf.finestLevel - 1; l >= 0; --l) width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
+  for (int l = pf.finestLevel - 1; l >= 0; --l)
+    width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
   std::vector<io::Patch> patches;
   std::vector<std::pair<int, size_t>> origin;
   std::vector<LevelData> levels;

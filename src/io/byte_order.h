@@ -17,7 +17,8 @@ constexpr bool needsSwap(bool storedBigEndian) {
 template <typename T> T loadScalar(const unsigned char* p, bool swap) {
   unsigned char bytes[sizeof(T)];
   if (swap)
-    for (size_t i = 0; i < sizeof(T); ++i) bytes[i] = p[sizeof(T) - 1 - i];
+    for (size_t i = 0; i < sizeof(T); ++i)
+      bytes[i] = p[sizeof(T) - 1 - i];
   else
     std::memcpy(bytes, p, sizeof(T));
   T v;
@@ -28,7 +29,8 @@ template <typename T> T loadScalar(const unsigned char* p, bool swap) {
 /// An unsigned integer of `size` bytes (1..8) in the given byte order.
 inline uint64_t loadUnsigned(const unsigned char* p, size_t size, bool storedBigEndian) {
   uint64_t v = 0;
-  for (size_t i = 0; i < size; ++i) v |= uint64_t(p[storedBigEndian ? size - 1 - i : i]) << (8 * i);
+  for (size_t i = 0; i < size; ++i)
+    v |= uint64_t(p[storedBigEndian ? size - 1 - i : i]) << (8 * i);
   return v;
 }
 

@@ -57,7 +57,8 @@ void requireBytes(uint64_t count, uint64_t itemBytes, uint64_t present, const st
 /// `n` value-initialised elements; running out of memory (or a size beyond what a vector can
 /// hold) fails naming `where()` and the size.
 template <typename T, typename Where> std::vector<T> allocate(uint64_t n, Where&& where) {
-  if (n > std::vector<T>().max_size()) failAllocation(n * double(sizeof(T)) > 1.8e19 ? UINT64_MAX : n * sizeof(T), where());
+  if (n > std::vector<T>().max_size())
+    failAllocation(n * double(sizeof(T)) > 1.8e19 ? UINT64_MAX : n * sizeof(T), where());
   try {
     return std::vector<T>(static_cast<size_t>(n));
   } catch (const std::bad_alloc&) {

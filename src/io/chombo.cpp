@@ -14,12 +14,12 @@ namespace exa {
 namespace {
 
 struct ChomboLevel {
-  std::string group;               ///< "/level_L"
-  std::vector<io::Patch> boxes;    ///< valid boxes in this level's index space (width 1)
-  std::vector<int64_t> offsets;    ///< start of each box's data, nboxes + 1 entries
-  vec3l ghost{0};                  ///< outputGhost: stored boxes are grown by it
+  std::string group;            ///< "/level_L"
+  std::vector<io::Patch> boxes; ///< valid boxes in this level's index space (width 1)
+  std::vector<int64_t> offsets; ///< start of each box's data, nboxes + 1 entries
+  vec3l ghost{0};               ///< outputGhost: stored boxes are grown by it
   vec3d dx{0.0};
-  int64_t ratio = 0;               ///< to the next finer level (0 on the finest)
+  int64_t ratio = 0; ///< to the next finer level (0 on the finest)
 };
 
 struct ChomboHeader {
@@ -58,9 +58,12 @@ ChomboHeader readHeader(const h5::File& f) {
     lv.group = "/level_" + std::to_string(l);
     if (!f.exists(lv.group)) f.bad(lv.group, strCat("missing group (num_levels is ", numLevels, ")"));
     const std::vector<double> dx = f.attrNumbers(lv.group, "dx");
-    if (dx.size() == 1) lv.dx = vec3d(dx[0]);
-    else if (dx.size() == 3) lv.dx = vec3d(dx[0], dx[1], dx[2]);
-    else f.bad(lv.group, "attribute 'dx' has neither 1 nor 3 values");
+    if (dx.size() == 1)
+      lv.dx = vec3d(dx[0]);
+    else if (dx.size() == 3)
+      lv.dx = vec3d(dx[0], dx[1], dx[2]);
+    else
+      f.bad(lv.group, "attribute 'dx' has neither 1 nor 3 values");
     if (!(lv.dx.x > 0 && lv.dx.y > 0 && lv.dx.z > 0) || !std::isfinite(lv.dx.x + lv.dx.y + lv.dx.z))
       f.bad(lv.group, "attribute 'dx' must be positive");
     if (l + 1 < numLevels) {
@@ -69,14 +72,15 @@ ChomboHeader readHeader(const h5::File& f) {
       for (double v : r)
         if (v != r[0]) f.bad(lv.group, "anisotropic refinement ratios are not supported");
       if (r[0] != std::floor(r[0]) || r[0] < 2 || r[0] > 1024 || io::log2Exact(int64_t(r[0])) < 0)
-        f.bad(lv.group, strCat("refinement ratio ", r[0], " between levels ", l, " and ", l + 1,
-                               " is not a power of two"));
+        f.bad(lv.group,
+              strCat("refinement ratio ", r[0], " between levels ", l, " and ", l + 1, " is not a power of two"));
       lv.ratio = int64_t(r[0]);
     }
     const std::string dataAttrs = lv.group + "/data_attributes";
     if (f.hasAttribute(dataAttrs, "outputGhost")) {
       const std::vector<double> g = f.attrNumbers(dataAttrs, "outputGhost");
-      if (g.size() != 3) f.bad(dataAttrs, strCat("attribute 'outputGhost' has ", g.size(), " values, expected 3 (a 3-D file)"));
+      if (g.size() != 3)
+        f.bad(dataAttrs, strCat("attribute 'outputGhost' has ", g.size(), " values, expected 3 (a 3-D file)"));
       for (int a = 0; a < 3; ++a) {
         if (g[size_t(a)] < 0 || g[size_t(a)] > 64) f.bad(dataAttrs, "attribute 'outputGhost' is out of range");
         lv.ghost[a] = int64_t(g[size_t(a)]);
@@ -99,7 +103,8 @@ ChomboHeader readHeader(const h5::File& f) {
       for (int a = 0; a < 3; ++a) {
         if (!io::integerIn(v[order[a]], -kLatticeLimit, kLatticeLimit, lo[a]) ||
             !io::integerIn(v[order[a + 3]], -kLatticeLimit, kLatticeLimit, hi[a]))
-          f.bad(lv.group + "/boxes", strCat("box ", b, " has corners that are not integers in the supported index range"));
+          f.bad(lv.group + "/boxes",
+                strCat("box ", b, " has corners that are not integers in the supported index range"));
       }
       if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z) f.bad(lv.group + "/boxes", strCat("box ", b, " is empty"));
       lv.boxes.push_back({lo, hi - lo + vec3l(1), 1});
@@ -120,7 +125,8 @@ ChomboHeader readHeader(const h5::File& f) {
     const std::vector<uint64_t> dims = f.dims(dataName);
     if (dims.size() != 1) f.bad(dataName, "expected a one-dimensional dataset");
     if (lv.offsets.front() != 0 || int64_t(dims[0]) != lv.offsets.back())
-      f.bad(dataName, strCat("holds ", dims[0], " values, but the offsets describe ", lv.offsets.back() - lv.offsets.front()));
+      f.bad(dataName,
+            strCat("holds ", dims[0], " values, but the offsets describe ", lv.offsets.back() - lv.offsets.front()));
     // The boxes' cells are bounded by the values the file stores before anything is allocated
     // per cell (the coverage of each box included).
     f.requireStorage(dataName);
@@ -132,8 +138,9 @@ ChomboHeader readHeader(const h5::File& f) {
     const vec3d got = h.levels[l + 1].dx;
     for (int a = 0; a < 3; ++a)
       if (std::abs(expect[a] - got[a]) > 1e-6 * expect[a])
-        f.bad(h.levels[l + 1].group, strCat("dx ", got[a], " does not equal the coarser level's dx ", h.levels[l].dx[a],
-                                            " divided by its ref_ratio ", h.levels[l].ratio, " (inconsistent headers)"));
+        f.bad(h.levels[l + 1].group,
+              strCat("dx ", got[a], " does not equal the coarser level's dx ", h.levels[l].dx[a],
+                     " divided by its ref_ratio ", h.levels[l].ratio, " (inconsistent headers)"));
   }
   return h;
 }
@@ -178,7 +185,8 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
   const io::Coverage coverage(patches, patchName);
 
   CellSet set;
-  for (size_t c : comps) set.fields.push_back({h.names[c], {}});
+  for (size_t c : comps)
+    set.fields.push_back({h.names[c], {}});
   // The simulation's time and step, where the coarsest level's attributes hold them.
   if (f.hasAttribute("/level_0", "time")) {
     const std::vector<double> t = f.attrNumbers("/level_0", "time");
@@ -214,7 +222,8 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
             const double v = src[((z + g.z) * n.y + (y + g.y)) * n.x + (x + g.x)];
             values[k].push_back(io::toFloat32(v, [&] {
               const vec3l at = lv.boxes[b].lower + vec3l(x, y, z);
-              return strCat(patchName(i), ": component '", h.names[comps[k]], "' at index (", at.x, ",", at.y, ",", at.z, ")");
+              return strCat(patchName(i), ": component '", h.names[comps[k]], "' at index (", at.x, ",", at.y, ",",
+                            at.z, ")");
             }));
           }
     }

@@ -67,7 +67,8 @@ int64_t integerOf(const std::string& path, const KeyLine& k) {
 std::vector<double> numbersOf(const std::string& path, const KeyLine& k, size_t expected) {
   std::istringstream in(k.value);
   std::vector<double> v;
-  for (double d; in >> d;) v.push_back(d);
+  for (double d; in >> d;)
+    v.push_back(d);
   if (v.size() < expected || !in.eof())
     fail(path, ": line ", k.line, ": expected ", expected, " numbers for ", k.key, ", got '", k.value, "'");
   for (double d : v)
@@ -105,7 +106,9 @@ Parameters readParameters(const std::string& path) {
   for (const KeyLine& k : readKeyLines(path)) {
     if (k.key == "TopGridRank") {
       p.rank = int(std::clamp<int64_t>(integerOf(path, k), -1, 1000));
-      if (p.rank != 3) fail(path, ": line ", k.line, ": TopGridRank is ", p.rank, ": a ", p.rank, "-D output; only 3-D AMR data can be read");
+      if (p.rank != 3)
+        fail(path, ": line ", k.line, ": TopGridRank is ", p.rank, ": a ", p.rank,
+             "-D output; only 3-D AMR data can be read");
     } else if (k.key == "RefineBy") {
       const double r = numbersOf(path, k, 1)[0];
       int64_t ri = 0;
@@ -194,17 +197,17 @@ Output readOutput(const std::string& path) {
     }
   }
   if (o.grids.empty()) fail(h, ": no 'Grid = N' entries (not an Enzo hierarchy, or an empty one)");
-  static const std::pair<unsigned, const char*> kNeeded[] = {{kRank, "GridRank"}, {kDim, "GridDimension"},
+  static const std::pair<unsigned, const char*> kNeeded[] = {{kRank, "GridRank"},        {kDim, "GridDimension"},
                                                              {kStart, "GridStartIndex"}, {kEnd, "GridEndIndex"},
-                                                             {kLeft, "GridLeftEdge"}, {kRight, "GridRightEdge"}};
+                                                             {kLeft, "GridLeftEdge"},    {kRight, "GridRightEdge"}};
   for (const Grid& g : o.grids) {
     for (const auto& [bit, name] : kNeeded)
       if (!(g.seen & bit)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing ", name, " (truncated hierarchy?)");
     if (g.fields != 0 && !(g.seen & kFile)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing BaryonFileName");
     for (int a = 0; a < 3; ++a) {
       if (g.start[a] < 0 || g.end[a] < g.start[a] || g.end[a] >= g.dimension[a])
-        fail(h, ": grid ", g.id, ": active zones ", g.start[a], "..", g.end[a], " on axis ", a, " do not fit GridDimension ",
-             g.dimension[a]);
+        fail(h, ": grid ", g.id, ": active zones ", g.start[a], "..", g.end[a], " on axis ", a,
+             " do not fit GridDimension ", g.dimension[a]);
       if (!(g.right[a] > g.left[a])) fail(h, ": grid ", g.id, ": GridRightEdge is not above GridLeftEdge on axis ", a);
     }
     io::checkPatchCells(g.dimension, strCat(h, ": grid ", g.id, ": GridDimension"));
@@ -299,7 +302,8 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   // The finest cell size over all grids fixes the lattice; every grid must sit on it exactly.
   vec3d finest(INFINITY);
   for (const Grid& g : o.grids)
-    for (int a = 0; a < 3; ++a) finest[a] = std::min(finest[a], (g.right[a] - g.left[a]) / double(g.active()[a]));
+    for (int a = 0; a < 3; ++a)
+      finest[a] = std::min(finest[a], (g.right[a] - g.left[a]) / double(g.active()[a]));
   std::vector<io::Patch> patches;
   for (const Grid& g : o.grids) {
     io::Patch p;
@@ -315,10 +319,12 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
       const double c = (g.left[a] - o.params.left[a]) / finest[a];
       const double ci = std::round(c);
       if (!(std::abs(c) <= double(kLatticeLimit)) || std::abs(c - ci) > 1e-5 + 1e-12 * std::abs(c))
-        fail(h, ": grid ", g.id, ": GridLeftEdge on axis ", a, " lies ", c, " finest cells from DomainLeftEdge, not on the lattice");
+        fail(h, ": grid ", g.id, ": GridLeftEdge on axis ", a, " lies ", c,
+             " finest cells from DomainLeftEdge, not on the lattice");
       p.lower[a] = int64_t(ci);
       if (p.lower[a] % p.width != 0)
-        fail(h, ": grid ", g.id, ": corner ", p.lower[a], " on axis ", a, " is not a multiple of its cell width ", p.width);
+        fail(h, ": grid ", g.id, ": corner ", p.lower[a], " on axis ", a, " is not a multiple of its cell width ",
+             p.width);
     }
     patches.push_back(p);
   }
@@ -342,7 +348,8 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   const io::Coverage coverage(patches, gridName);
 
   CellSet set;
-  for (size_t k : picked) set.fields.push_back({available[k], {}});
+  for (size_t k : picked)
+    set.fields.push_back({available[k], {}});
   Progress progress("reading " + path, o.grids.size());
   for (size_t i = 0; i < o.grids.size(); ++i) {
     const Grid& g = o.grids[i];
@@ -367,9 +374,8 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
         for (int64_t y = 0; y < n.y; ++y)
           for (int64_t x = 0; x < n.x; ++x) {
             const double v = raw[size_t(((z + offset.z) * stored.y + (y + offset.y)) * stored.x + (x + offset.x))];
-            values[k].push_back(io::toFloat32(v, [&] {
-              return strCat(f.path(), ": ", name, ": grid ", g.id, " cell (", x, ",", y, ",", z, ")");
-            }));
+            values[k].push_back(io::toFloat32(
+                v, [&] { return strCat(f.path(), ": ", name, ": grid ", g.id, " cell (", x, ",", y, ",", z, ")"); }));
           }
     }
     io::appendLeafCells(set, patches[i], covered, values, gridName(i));

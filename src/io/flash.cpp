@@ -57,14 +57,17 @@ FlashHeader readHeader(const h5::File& f) {
     const h5::CompoundTable t = f.readCompound("integer scalars");
     const int64_t dim = tableInt(t, "dimensionality");
     if (dim != -1 && dim != 3)
-      f.bad("integer scalars", strCat("dimensionality is ", dim, ": a ", dim, "-D file; only 3-D AMR data can be read"));
+      f.bad("integer scalars",
+            strCat("dimensionality is ", dim, ": a ", dim, "-D file; only 3-D AMR data can be read"));
     h.blockCells = vec3l(tableInt(t, "nxb"), tableInt(t, "nyb"), tableInt(t, "nzb"));
   }
-  if (bbox[1] != 3) f.bad("bounding box", strCat("holds ", bbox[1], " axes: a ", bbox[1], "-D file; only 3-D AMR data can be read"));
+  if (bbox[1] != 3)
+    f.bad("bounding box", strCat("holds ", bbox[1], " axes: a ", bbox[1], "-D file; only 3-D AMR data can be read"));
   const std::vector<std::string> unknowns = f.readStrings("unknown names");
   for (const std::string& n : unknowns) {
     std::string name = n;
-    while (!name.empty() && name.front() == ' ') name.erase(name.begin());
+    while (!name.empty() && name.front() == ' ')
+      name.erase(name.begin());
     if (!name.empty() && f.isDataset(name)) h.names.push_back(name);
   }
   if (h.names.empty()) f.bad("unknown names", "no variable has a dataset in the file");
@@ -144,8 +147,8 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
         f.bad("bounding box", strCat("block ", b, ": cell size on axis ", a, " is ", ratio[a],
                                      " times the finest leaf cell size, not a power of two"));
       if (a > 0 && int64_t(w) != p.width)
-        f.bad("bounding box", strCat("block ", b, ": refined differently along the axes (cell size ratios ", ratio[0], ", ",
-                                     ratio[a], ")"));
+        f.bad("bounding box", strCat("block ", b, ": refined differently along the axes (cell size ratios ", ratio[0],
+                                     ", ", ratio[a], ")"));
       p.width = int64_t(w);
       const double c = (lo - origin[a]) / finest[a];
       const double ci = std::round(c);
@@ -161,7 +164,8 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
   }
 
   CellSet set;
-  for (size_t v : vars) set.fields.push_back({h.names[v], {}});
+  for (size_t v : vars)
+    set.fields.push_back({h.names[v], {}});
   // The simulation's time and step, where the scalars hold them.
   if (f.isDataset("real scalars")) {
     const double t = tableReal(f.readCompound("real scalars"), "time");

@@ -64,7 +64,8 @@ CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<st
   }
   const io::Coverage coverage(patches, [](size_t g) { return strCat("grid ", g); });
   CellSet set;
-  for (const std::string& name : fieldNames) set.fields.push_back({name, {}});
+  for (const std::string& name : fieldNames)
+    set.fields.push_back({name, {}});
   for (size_t g = 0; g < grids.size(); ++g) {
     std::vector<std::vector<float>> values(fieldNames.size());
     for (size_t f = 0; f < fieldNames.size(); ++f) {

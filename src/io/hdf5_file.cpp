@@ -81,7 +81,8 @@ struct VlenStrings {
 void silence() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
 
 std::string trimmed(std::string s) {
-  while (!s.empty() && (s.back() == ' ' || s.back() == '\0')) s.pop_back();
+  while (!s.empty() && (s.back() == ' ' || s.back() == '\0'))
+    s.pop_back();
   return s;
 }
 
@@ -111,8 +112,8 @@ bool typeIsSound(hid_t type, std::string& problem, int depth = 0) {
     }
     if (c == H5T_FLOAT) {
       size_t spos = 0, epos = 0, esize = 0, mpos = 0, msize = 0;
-      if (H5Tget_fields(type, &spos, &epos, &esize, &mpos, &msize) < 0 || spos >= bits || esize == 0 ||
-          esize > 32 || epos > bits - esize || msize == 0 || msize > 64 || mpos > bits - msize ||
+      if (H5Tget_fields(type, &spos, &epos, &esize, &mpos, &msize) < 0 || spos >= bits || esize == 0 || esize > 32 ||
+          epos > bits - esize || msize == 0 || msize > 64 || mpos > bits - msize ||
           H5Tget_norm(type) == H5T_NORM_ERROR) {
         problem = strCat("corrupt floating-point type (", size, " bytes, exponent ", esize, " bits at ", epos,
                          ", mantissa ", msize, " bits at ", mpos, ")");
@@ -132,8 +133,8 @@ bool typeIsSound(hid_t type, std::string& problem, int depth = 0) {
       const size_t at = H5Tget_member_offset(type, unsigned(i));
       const size_t bytes = member ? H5Tget_size(member.get()) : 0;
       if (!member || bytes == 0 || at > size || bytes > size - at) {
-        problem = strCat("corrupt compound type (member ", i, " of ", bytes, " bytes at offset ", at, " in a record of ",
-                         size, " bytes)");
+        problem = strCat("corrupt compound type (member ", i, " of ", bytes, " bytes at offset ", at,
+                         " in a record of ", size, " bytes)");
         return false;
       }
       if (!typeIsSound(member.get(), problem, depth + 1)) return false;
@@ -486,8 +487,10 @@ private:
       if (!type || !space) return fault(path + " (attribute '" + name + "')");
       std::string problem, text;
       std::vector<double> numbers;
-      if (H5Tget_class(type.get()) == H5T_STRING) readAttributeString(a.get(), name, text, problem);
-      else readAttributeNumbers(a.get(), name, numbers, problem);
+      if (H5Tget_class(type.get()) == H5T_STRING)
+        readAttributeString(a.get(), name, text, problem);
+      else
+        readAttributeNumbers(a.get(), name, numbers, problem);
       if (problem.rfind("cannot read", 0) == 0) return fault(path + " (attribute '" + name + "')");
     }
   }
@@ -624,7 +627,8 @@ long mappedBytes() {
 /// The child: plain deaths on fatal signals (no handlers inherited from the parent, no core
 /// files), a memory and CPU limit, then the walk; exits 0 whatever libhdf5 reports.
 [[noreturn]] void runCheck(const std::string& path, Shared* shared, long seconds) {
-  for (int sig : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGTRAP, SIGSYS}) std::signal(sig, SIG_DFL);
+  for (int sig : {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT, SIGTRAP, SIGSYS})
+    std::signal(sig, SIG_DFL);
   if (__sanitizer_set_death_callback) __sanitizer_set_death_callback(nullptr);
   const rlimit noCore{0, 0};
   setrlimit(RLIMIT_CORE, &noCore);
@@ -644,8 +648,10 @@ long mappedBytes() {
     if (access) H5Pset_fclose_degree(access.get(), H5F_CLOSE_STRONG);
     const Id file(H5Fopen(path.c_str(), H5F_ACC_RDONLY, access ? access.get() : H5P_DEFAULT), H5Fclose);
     Walk walk(file.get(), shared);
-    if (file) walk.object("/", false, 0);
-    else shared->unopened = true;
+    if (file)
+      walk.object("/", false, 0);
+    else
+      shared->unopened = true;
   } catch (...) {
   }
   _exit(0);
@@ -663,8 +669,13 @@ void checkInChild(const std::string& path) {
   if (!childCheck()) return;
   struct stat st {};
   if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) return; // opening it reports that
-  Identity identity{st.st_dev,         st.st_ino,          st.st_size,         long(st.st_mtim.tv_sec),
-                    long(st.st_mtim.tv_nsec), long(st.st_ctim.tv_sec), long(st.st_ctim.tv_nsec)};
+  Identity identity{st.st_dev,
+                    st.st_ino,
+                    st.st_size,
+                    long(st.st_mtim.tv_sec),
+                    long(st.st_mtim.tv_nsec),
+                    long(st.st_ctim.tv_sec),
+                    long(st.st_ctim.tv_nsec)};
   timespec now{};
   clock_gettime(CLOCK_REALTIME, &now);
   const bool recent = long(now.tv_sec) - std::max(identity.mtimeSec, identity.ctimeSec) < kRecentSeconds;
@@ -729,13 +740,14 @@ void checkInChild(const std::string& path) {
   const std::string where(shared->at, strnlen(shared->at, sizeof shared->at));
   const std::string fault(shared->fault, strnlen(shared->fault, sizeof shared->fault));
   if (timedOut)
-    throw DamagedFile(strCat(path, ": damaged HDF5 file: libhdf5 did not finish reading its metadata within ",
-                             seconds, " s (at ", where, ")"));
+    throw DamagedFile(strCat(path, ": damaged HDF5 file: libhdf5 did not finish reading its metadata within ", seconds,
+                             " s (at ", where, ")"));
   if (WIFSIGNALED(status))
     throw DamagedFile(strCat(path, ": damaged HDF5 file: libhdf5 crashed (", strsignal(WTERMSIG(status)), ") reading ",
                              where, " (found in a separate process; the file cannot be read)"));
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw DamagedFile(strCat(path, ": damaged HDF5 file: reading ", where, " failed in a separate process (exit status ",
+    throw DamagedFile(strCat(path, ": damaged HDF5 file: reading ", where,
+                             " failed in a separate process (exit status ",
                              WIFEXITED(status) ? WEXITSTATUS(status) : -1, "; out of memory?)"));
   if (shared->unopened)
     throw DamagedFile(strCat(path, ": cannot open as HDF5 (truncated or damaged file, or one locked by a writer?)"));
@@ -932,7 +944,8 @@ std::vector<double> File::readRows(const std::string& dataset, uint64_t first, u
   cnt[0] = count;
   start[0] = first;
   uint64_t n = 1;
-  for (hsize_t c : cnt) n *= c; // within the whole dataspace's element count, checked above
+  for (hsize_t c : cnt)
+    n *= c; // within the whole dataspace's element count, checked above
   if (n > kMaxElements) bad(dataset, "dataset too large");
   checkStorage(*this, file_.get(), d.get(), elementCount(space.get()), dataset);
   std::vector<double> out = io::allocate<double>(n, [&] { return strCat(path_, ": ", dataset); });
@@ -962,7 +975,8 @@ std::vector<std::string> File::readStrings(const std::string& dataset) const {
     VlenStrings strings{mt.get(), space.get(), std::vector<char*>(static_cast<size_t>(n), nullptr)};
     if (n && H5Dread(d.get(), mt.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, strings.ptrs.data()) < 0)
       bad(dataset, "cannot read");
-    for (char* p : strings.ptrs) out.push_back(trimmed(p ? std::string(p, strnlen(p, kMaxStringBytes)) : ""));
+    for (char* p : strings.ptrs)
+      out.push_back(trimmed(p ? std::string(p, strnlen(p, kMaxStringBytes)) : ""));
     return out;
   }
   const size_t size = H5Tget_size(type.get());
@@ -972,7 +986,8 @@ std::vector<std::string> File::readStrings(const std::string& dataset) const {
   H5Tset_strpad(mt.get(), H5T_STR_NULLTERM);
   std::vector<char> buf(size_t(n) * (size + 1), '\0');
   if (n && H5Dread(d.get(), mt.get(), H5S_ALL, H5S_ALL, H5P_DEFAULT, buf.data()) < 0) bad(dataset, "cannot read");
-  for (uint64_t i = 0; i < n; ++i) out.push_back(trimmed(std::string(buf.data() + i * (size + 1), size)));
+  for (uint64_t i = 0; i < n; ++i)
+    out.push_back(trimmed(std::string(buf.data() + i * (size + 1), size)));
   return out;
 }
 

@@ -15,12 +15,12 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
 #include <bit>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 
 namespace exa {
 
@@ -40,10 +40,9 @@ void appendBytes(void* context, void* data, int size) {
 }
 
 void checkImage(const std::string& path, const Image& image) {
-  if (image.width < 1 || image.height < 1 ||
-      image.pixels.size() != size_t(image.width) * size_t(image.height))
-    fail(path, ": cannot write an empty or inconsistent image (", image.width, "x", image.height,
-         ", ", image.pixels.size(), " pixels)");
+  if (image.width < 1 || image.height < 1 || image.pixels.size() != size_t(image.width) * size_t(image.height))
+    fail(path, ": cannot write an empty or inconsistent image (", image.width, "x", image.height, ", ",
+         image.pixels.size(), " pixels)");
 }
 
 /// Linear RGB of a premultiplied pixel over an opaque background.
@@ -76,8 +75,10 @@ unsigned char srgbByte(float linear) {
       uint32_t lo = 0, hi = std::bit_cast<uint32_t>(1.f); // byte(lo) < k <= byte(hi) = 255
       while (hi - lo > 1) {
         const uint32_t mid = lo + (hi - lo) / 2;
-        if (toByte(linearToSrgb(std::bit_cast<float>(mid))) >= k) hi = mid;
-        else lo = mid;
+        if (toByte(linearToSrgb(std::bit_cast<float>(mid))) >= k)
+          hi = mid;
+        else
+          lo = mid;
       }
       t[size_t(k)] = std::bit_cast<float>(hi);
     }
@@ -146,8 +147,7 @@ void writeJpeg(const std::string& path, const Image& image, const vec3f& backgro
 void writePfm(const std::string& path, const Image& image, const vec3f& background) {
   checkImage(path, image);
   // A negative scale marks little-endian data.
-  const std::string header =
-      "PF\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
+  const std::string header = "PF\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
   std::vector<char> out(header.begin(), header.end());
   out.reserve(header.size() + image.pixels.size() * 12);
   // PFM stores rows bottom to top.
@@ -164,12 +164,11 @@ void writePfm(const std::string& path, const Image& image, const vec3f& backgrou
 Image readPng(const std::string& path) {
   const std::vector<char> file = readFile(path);
   static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  if (file.size() < 8 || std::memcmp(file.data(), signature, 8) != 0)
-    fail(path, ": not a PNG file");
+  if (file.size() < 8 || std::memcmp(file.data(), signature, 8) != 0) fail(path, ": not a PNG file");
   if (file.size() > size_t(INT32_MAX)) fail(path, ": PNG file too large");
   int w = 0, h = 0, n = 0;
-  unsigned char* data = stbi_load_from_memory(reinterpret_cast<const unsigned char*>(file.data()),
-                                              int(file.size()), &w, &h, &n, 4);
+  unsigned char* data =
+      stbi_load_from_memory(reinterpret_cast<const unsigned char*>(file.data()), int(file.size()), &w, &h, &n, 4);
   if (!data) {
     const char* why = stbi_failure_reason();
     fail(path, ": cannot decode PNG: ", why ? why : "unknown error");

@@ -30,7 +30,8 @@ void selectFields(CellSet& set, const std::vector<std::string>& wanted, const st
     const int i = set.fieldIndex(name);
     if (i < 0) {
       std::string known;
-      for (const Field& f : set.fields) known += (known.empty() ? "" : ", ") + f.name;
+      for (const Field& f : set.fields)
+        known += (known.empty() ? "" : ", ") + f.name;
       fail(source, ": unknown field '", name, "' (fields: ", known, ")");
     }
     if (taken[size_t(i)]) { // named twice: a copy of the one chosen
@@ -73,7 +74,8 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
        [](const std::string& p, const ReadRequest& r) { return readRaw(p, r.raw); }},
       {InputKind::Native, "exabricks cells", isNativeName, listNativeFields,
-       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields, r.box); }, nullptr, nativeCensus},
+       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields, r.box); }, nullptr,
+       nativeCensus},
       {InputKind::Grids, ".grids fixture", isGridsName, scalarOnly,
        [](const std::string& p, const ReadRequest&) { return readGrids(p); }},
   };
@@ -192,12 +194,14 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
         model.fieldUnits.push_back(f.units);
       }
       values.resize(set.fields.size());
-      for (auto& v : values) v.reserve(cells);
+      for (auto& v : values)
+        v.reserve(cells);
     }
     if (offset + kept >= uint64_t(UINT32_MAX))
       fail(path, ": too many cells: more than ", offset + kept - 1, " (limit 2^32-1)");
     std::vector<std::vector<float>*> arrays;
-    for (Field& f : set.fields) arrays.push_back(&f.values);
+    for (Field& f : set.fields)
+      arrays.push_back(&f.values);
     std::vector<Brick> bricks;
     try {
       bricks = buildBricksReordering(set.cells, arrays, options.build.bricks);
@@ -216,7 +220,8 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
     offset += kept;
   }
   if (model.bricks.empty()) fail(path, ": no cells");
-  for (auto& v : values) model.fieldValues.push_back(std::move(v));
+  for (auto& v : values)
+    model.fieldValues.push_back(std::move(v));
   model.stats.brickSeconds = timer.seconds();
   model.stats.parts = parts;
   buildRegionsOf(model, options.build.regions);
@@ -268,7 +273,8 @@ std::vector<std::string> listFields(const std::string& path) {
   if (kind == InputKind::Model) return readModel(path).fieldNames;
   if (kind != InputKind::Default) return findReader(path)->listFields(path);
   std::vector<std::string> names;
-  for (const Field& f : defaultDataset().fields) names.push_back(f.name);
+  for (const Field& f : defaultDataset().fields)
+    names.push_back(f.name);
   return names;
 }
 
@@ -312,7 +318,8 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
       m.bricks.push_back(kept);
     }
     if (m.bricks.empty()) return std::nullopt;
-    for (auto& v : values) m.fieldValues.push_back(std::move(v));
+    for (auto& v : values)
+      m.fieldValues.push_back(std::move(v));
     buildRegionsOf(m, options.build.regions);
     return m;
   }

@@ -26,9 +26,7 @@ constexpr int64_t kMaxVertices = std::numeric_limits<int32_t>::max();
 bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v'; }
 bool isSpaceOrNewline(char c) { return isSpace(c) || c == '\n'; }
 
-bool finite(const vec3f& v) {
-  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
+bool finite(const vec3f& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 /// Parses the whole of `token` as a number; a leading '+' is accepted.
 template <typename T> std::optional<T> parseNumber(std::string_view token) {
@@ -64,10 +62,12 @@ public:
   explicit Tokens(std::string_view line) : rest_(line) {}
   std::optional<std::string_view> next() {
     size_t i = 0;
-    while (i < rest_.size() && isSpace(rest_[i])) ++i;
+    while (i < rest_.size() && isSpace(rest_[i]))
+      ++i;
     if (i == rest_.size()) return std::nullopt;
     size_t j = i;
-    while (j < rest_.size() && !isSpace(rest_[j])) ++j;
+    while (j < rest_.size() && !isSpace(rest_[j]))
+      ++j;
     const std::string_view token = rest_.substr(i, j - i);
     rest_.remove_prefix(j);
     return token;
@@ -120,14 +120,12 @@ TriangleMesh readObj(const std::string& path, const char* data, size_t size) {
       vec3f v;
       for (int a = 0; a < 3; ++a) {
         const std::optional<std::string_view> t = tokens.next();
-        if (!t)
-          fail(path, ": line ", lineNo, ": malformed 'v' line: expected three coordinates, got ", a);
+        if (!t) fail(path, ": line ", lineNo, ": malformed 'v' line: expected three coordinates, got ", a);
         const std::optional<float> c = parseCoordinate(*t);
         if (!c) fail(path, ": line ", lineNo, ": malformed 'v' line: '", *t, "' is not a number");
         v[a] = *c;
       }
-      if (!finite(v))
-        fail(path, ": line ", lineNo, ": vertex coordinate is NaN or infinite");
+      if (!finite(v)) fail(path, ": line ", lineNo, ": vertex coordinate is NaN or infinite");
       if (int64_t(mesh.vertices.size()) >= kMaxVertices)
         fail(path, ": line ", lineNo, ": too many vertices (more than ", kMaxVertices, ")");
       mesh.vertices.push_back(v);
@@ -149,14 +147,13 @@ TriangleMesh readObj(const std::string& path, const char* data, size_t size) {
         else
           fail(path, ": line ", lineNo, ": vertex index 0 is invalid (OBJ indices start at 1)");
         if (resolved < 0 || resolved >= kMaxVertices)
-          fail(path, ": line ", lineNo, ": vertex index ", *index, " out of range (",
-               known, " vertices defined so far)");
+          fail(path, ": line ", lineNo, ": vertex index ", *index, " out of range (", known,
+               " vertices defined so far)");
         maxIndex = std::max(maxIndex, resolved);
         polygon.push_back(int32_t(resolved));
       }
       if (polygon.size() < 3)
-        fail(path, ": line ", lineNo, ": malformed 'f' line: a face needs at least 3 vertices, got ",
-             polygon.size());
+        fail(path, ": line ", lineNo, ": malformed 'f' line: a face needs at least 3 vertices, got ", polygon.size());
       if (maxIndex >= known) forward.emplace_back(lineNo, maxIndex);
       appendFan(mesh, polygon);
     }
@@ -164,8 +161,8 @@ TriangleMesh readObj(const std::string& path, const char* data, size_t size) {
   }
   for (const auto& [line, index] : forward)
     if (index >= int64_t(mesh.vertices.size()))
-      fail(path, ": line ", line, ": vertex index ", index + 1, " out of range (",
-           mesh.vertices.size(), " vertices in the file)");
+      fail(path, ": line ", line, ": vertex index ", index + 1, " out of range (", mesh.vertices.size(),
+           " vertices in the file)");
   return mesh;
 }
 
@@ -176,11 +173,11 @@ enum class PlyType : uint8_t { Int8, UInt8, Int16, UInt16, Int32, UInt32, Float3
 
 bool plyType(std::string_view name, PlyType& type) {
   static constexpr std::pair<std::string_view, PlyType> names[] = {
-      {"char", PlyType::Int8},     {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
-      {"uint8", PlyType::UInt8},   {"short", PlyType::Int16},     {"int16", PlyType::Int16},
-      {"ushort", PlyType::UInt16}, {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
-      {"int32", PlyType::Int32},   {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
-      {"float", PlyType::Float32}, {"float32", PlyType::Float32}, {"double", PlyType::Float64},
+      {"char", PlyType::Int8},      {"int8", PlyType::Int8},       {"uchar", PlyType::UInt8},
+      {"uint8", PlyType::UInt8},    {"short", PlyType::Int16},     {"int16", PlyType::Int16},
+      {"ushort", PlyType::UInt16},  {"uint16", PlyType::UInt16},   {"int", PlyType::Int32},
+      {"int32", PlyType::Int32},    {"uint", PlyType::UInt32},     {"uint32", PlyType::UInt32},
+      {"float", PlyType::Float32},  {"float32", PlyType::Float32}, {"double", PlyType::Float64},
       {"float64", PlyType::Float64}};
   for (const auto& [n, t] : names)
     if (n == name) {
@@ -193,13 +190,17 @@ bool plyType(std::string_view name, PlyType& type) {
 size_t typeSize(PlyType t) {
   switch (t) {
   case PlyType::Int8:
-  case PlyType::UInt8: return 1;
+  case PlyType::UInt8:
+    return 1;
   case PlyType::Int16:
-  case PlyType::UInt16: return 2;
+  case PlyType::UInt16:
+    return 2;
   case PlyType::Int32:
   case PlyType::UInt32:
-  case PlyType::Float32: return 4;
-  case PlyType::Float64: return 8;
+  case PlyType::Float32:
+    return 4;
+  case PlyType::Float64:
+    return 8;
   }
   return 0;
 }
@@ -211,8 +212,8 @@ enum class PlyFormat { Ascii, BinaryLittle, BinaryBig };
 struct PlyProperty {
   std::string name;
   bool list = false;
-  PlyType type = PlyType::Float32;      ///< value type, or item type of a list
-  PlyType countType = PlyType::UInt8;   ///< list count type
+  PlyType type = PlyType::Float32;    ///< value type, or item type of a list
+  PlyType countType = PlyType::UInt8; ///< list count type
 };
 
 struct PlyElement {
@@ -241,8 +242,7 @@ PlyHeader readPlyHeader(const std::string& path, const char* data, size_t size) 
     Tokens tokens(line);
     const std::optional<std::string_view> keyword = tokens.next();
     if (lineNo == 1) {
-      if (!keyword || *keyword != "ply" || tokens.next())
-        fail(path, ": line 1: missing 'ply' magic line");
+      if (!keyword || *keyword != "ply" || tokens.next()) fail(path, ": line 1: missing 'ply' magic line");
       continue;
     }
     if (!keyword) continue;
@@ -260,8 +260,7 @@ PlyHeader readPlyHeader(const std::string& path, const char* data, size_t size) 
       else
         fail(path, ": line ", lineNo, ": unknown PLY format '", *f, "'");
       if (!version || *version != "1.0")
-        fail(path, ": line ", lineNo, ": unsupported PLY version '", version.value_or(""),
-             "' (expected 1.0)");
+        fail(path, ": line ", lineNo, ": unsupported PLY version '", version.value_or(""), "' (expected 1.0)");
       haveFormat = true;
     } else if (*keyword == "element") {
       const std::optional<std::string_view> name = tokens.next();
@@ -273,8 +272,7 @@ PlyHeader readPlyHeader(const std::string& path, const char* data, size_t size) 
       if (!n) fail(path, ": line ", lineNo, ": element '", *name, "' count '", *count, "' is not a count");
       header.elements.push_back(PlyElement{std::string(*name), *n, {}});
     } else if (*keyword == "property") {
-      if (header.elements.empty())
-        fail(path, ": line ", lineNo, ": 'property' before any 'element'");
+      if (header.elements.empty()) fail(path, ": line ", lineNo, ": 'property' before any 'element'");
       PlyProperty prop;
       std::optional<std::string_view> t = tokens.next();
       if (t && *t == "list") {
@@ -337,8 +335,7 @@ PlyLayout planPly(const std::string& path, const PlyHeader& header) {
       for (size_t j = 0; j < e.properties.size() && !found; ++j) {
         const PlyProperty& p = e.properties[j];
         if (p.list && (p.name == "vertex_indices" || p.name == "vertex_index")) {
-          if (!isIntegerType(p.type))
-            fail(path, ": PLY face property '", p.name, "' has a non-integer index type");
+          if (!isIntegerType(p.type)) fail(path, ": PLY face property '", p.name, "' has a non-integer index type");
           roles[j] = Role::Indices;
           found = true;
         }
@@ -348,11 +345,9 @@ PlyLayout planPly(const std::string& path, const PlyHeader& header) {
     layout.roles.push_back(std::move(roles));
   }
   if (!layout.vertex) fail(path, ": PLY header has no 'vertex' element");
-  if (!layout.face || layout.face->count == 0)
-    fail(path, ": no triangles (empty mesh: PLY header has no faces)");
+  if (!layout.face || layout.face->count == 0) fail(path, ": no triangles (empty mesh: PLY header has no faces)");
   if (layout.vertex->count > uint64_t(kMaxVertices))
-    fail(path, ": PLY vertex count ", layout.vertex->count, " exceeds the supported ",
-         kMaxVertices);
+    fail(path, ": PLY vertex count ", layout.vertex->count, " exceeds the supported ", kMaxVertices);
   return layout;
 }
 
@@ -378,27 +373,42 @@ void checkCounts(const std::string& path, const PlyHeader& header, size_t size) 
 
 double loadNumber(PlyType t, const unsigned char* p, bool swap) {
   switch (t) {
-  case PlyType::Int8: return io::loadScalar<int8_t>(p, swap);
-  case PlyType::UInt8: return io::loadScalar<uint8_t>(p, swap);
-  case PlyType::Int16: return io::loadScalar<int16_t>(p, swap);
-  case PlyType::UInt16: return io::loadScalar<uint16_t>(p, swap);
-  case PlyType::Int32: return io::loadScalar<int32_t>(p, swap);
-  case PlyType::UInt32: return io::loadScalar<uint32_t>(p, swap);
-  case PlyType::Float32: return io::loadScalar<float>(p, swap);
-  case PlyType::Float64: return io::loadScalar<double>(p, swap);
+  case PlyType::Int8:
+    return io::loadScalar<int8_t>(p, swap);
+  case PlyType::UInt8:
+    return io::loadScalar<uint8_t>(p, swap);
+  case PlyType::Int16:
+    return io::loadScalar<int16_t>(p, swap);
+  case PlyType::UInt16:
+    return io::loadScalar<uint16_t>(p, swap);
+  case PlyType::Int32:
+    return io::loadScalar<int32_t>(p, swap);
+  case PlyType::UInt32:
+    return io::loadScalar<uint32_t>(p, swap);
+  case PlyType::Float32:
+    return io::loadScalar<float>(p, swap);
+  case PlyType::Float64:
+    return io::loadScalar<double>(p, swap);
   }
   return 0;
 }
 
 int64_t loadInteger(PlyType t, const unsigned char* p, bool swap) {
   switch (t) {
-  case PlyType::Int8: return io::loadScalar<int8_t>(p, swap);
-  case PlyType::UInt8: return io::loadScalar<uint8_t>(p, swap);
-  case PlyType::Int16: return io::loadScalar<int16_t>(p, swap);
-  case PlyType::UInt16: return io::loadScalar<uint16_t>(p, swap);
-  case PlyType::Int32: return io::loadScalar<int32_t>(p, swap);
-  case PlyType::UInt32: return io::loadScalar<uint32_t>(p, swap);
-  default: return -1; // float types are rejected for counts and indices in the header
+  case PlyType::Int8:
+    return io::loadScalar<int8_t>(p, swap);
+  case PlyType::UInt8:
+    return io::loadScalar<uint8_t>(p, swap);
+  case PlyType::Int16:
+    return io::loadScalar<int16_t>(p, swap);
+  case PlyType::UInt16:
+    return io::loadScalar<uint16_t>(p, swap);
+  case PlyType::Int32:
+    return io::loadScalar<int32_t>(p, swap);
+  case PlyType::UInt32:
+    return io::loadScalar<uint32_t>(p, swap);
+  default:
+    return -1; // float types are rejected for counts and indices in the header
   }
 }
 
@@ -414,15 +424,12 @@ struct Where {
   const char* unit;
   size_t value;
 };
-std::ostream& operator<<(std::ostream& out, const Where& w) {
-  return out << " (" << w.unit << " " << w.value << ")";
-}
+std::ostream& operator<<(std::ostream& out, const Where& w) { return out << " (" << w.unit << " " << w.value << ")"; }
 
 /// Reads the data section of a PLY file: one pass over all elements in file order.
 class PlyReader {
 public:
-  PlyReader(const std::string& path, const char* data, size_t size, const PlyHeader& header,
-            const PlyLayout& layout)
+  PlyReader(const std::string& path, const char* data, size_t size, const PlyHeader& header, const PlyLayout& layout)
       : path_(path), data_(data), size_(size), header_(header), layout_(layout) {}
 
   TriangleMesh read() {
@@ -450,8 +457,8 @@ public:
 private:
   void addIndex(const PlyElement& e, uint64_t i, int64_t index, Where where) {
     if (index < 0 || index >= numVertices_)
-      fail(path_, ": PLY element '", e.name, "' ", i, where, ": vertex index ", index,
-           " out of range [0, ", numVertices_, ")");
+      fail(path_, ": PLY element '", e.name, "' ", i, where, ": vertex index ", index, " out of range [0, ",
+           numVertices_, ")");
     polygon_.push_back(int32_t(index));
   }
   void finishFace(const PlyElement& e, uint64_t i, Where where) {
@@ -461,8 +468,7 @@ private:
     appendFan(mesh_, polygon_);
   }
   void finishVertex(const PlyElement& e, uint64_t i, const vec3f& v, Where where) {
-    if (!finite(v))
-      fail(path_, ": PLY element '", e.name, "' ", i, where, ": vertex coordinate is NaN or infinite");
+    if (!finite(v)) fail(path_, ": PLY element '", e.name, "' ", i, where, ": vertex coordinate is NaN or infinite");
     mesh_.vertices.push_back(v);
   }
 
@@ -501,7 +507,8 @@ private:
           if (uint64_t(count) > uint64_t(end - p) / in) truncated(e, i, start);
           if (roles[j] == Role::Indices) {
             const Where where = byteAt(start);
-            for (int64_t k = 0; k < count; ++k, p += in) addIndex(e, i, loadInteger(prop.type, p, swap), where);
+            for (int64_t k = 0; k < count; ++k, p += in)
+              addIndex(e, i, loadInteger(prop.type, p, swap), where);
           } else {
             p += size_t(count) * in;
           }
@@ -513,8 +520,7 @@ private:
   }
 
   [[noreturn]] void truncated(const PlyElement& e, uint64_t i, const unsigned char* start) const {
-    fail(path_, ": PLY element '", e.name, "' ", i, byteAt(start), ": truncated data (file ends at byte ",
-         size_, ")");
+    fail(path_, ": PLY element '", e.name, "' ", i, byteAt(start), ": truncated data (file ends at byte ", size_, ")");
   }
 
   void readAscii() {
@@ -527,7 +533,8 @@ private:
         ++p;
       }
       const char* s = p;
-      while (p < end && !isSpaceOrNewline(*p)) ++p;
+      while (p < end && !isSpaceOrNewline(*p))
+        ++p;
       return std::string_view(s, size_t(p - s));
     };
     for (size_t ei = 0; ei < header_.elements.size(); ++ei) {
@@ -541,14 +548,12 @@ private:
         auto token = [&]() {
           const std::string_view t = next();
           if (t.empty())
-            fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line,
-                 "): truncated data (file ends early)");
+            fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line, "): truncated data (file ends early)");
           return t;
         };
         auto integer = [&](std::string_view t) {
           const std::optional<int64_t> n = parseNumber<int64_t>(t);
-          if (!n) fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line, "): '", t,
-                       "' is not an integer");
+          if (!n) fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line, "): '", t, "' is not an integer");
           return *n;
         };
         for (size_t j = 0; j < e.properties.size(); ++j) {
@@ -557,8 +562,7 @@ private:
             const std::string_view t = token();
             if (roles[j] != Role::Skip) {
               const std::optional<float> c = parseCoordinate(t);
-              if (!c) fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line, "): '", t,
-                           "' is not a number");
+              if (!c) fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line, "): '", t, "' is not a number");
               v[int(roles[j]) - int(Role::X)] = *c;
             }
             continue;
@@ -568,8 +572,8 @@ private:
             fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line, "): negative list count ", count);
           // Each list item takes at least two bytes; reject counts the rest of the file cannot hold.
           if (uint64_t(count) > uint64_t(end - p) / 2 + 1)
-            fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line,
-                 "): truncated data (list count ", count, " exceeds the rest of the file)");
+            fail(path_, ": PLY element '", e.name, "' ", i, " (line ", line, "): truncated data (list count ", count,
+                 " exceeds the rest of the file)");
           const Where where{"line", line};
           for (int64_t k = 0; k < count; ++k) {
             const std::string_view t = token();
@@ -636,21 +640,19 @@ TriangleMesh readTris(const std::string& path, const char* data, size_t size) {
       const int32_t n = loadInt32LE(data + pos);
       if (n < 0) fail(path, ": mesh ", m, " (byte ", pos, "): negative ", what, " count ", n);
       if (uint64_t(n) > (size - pos - 4) / 12)
-        fail(path, ": mesh ", m, " (byte ", pos, "): ", what, " count ", n,
-             " exceeds what the file size allows (", size - pos - 4, " bytes left)");
+        fail(path, ": mesh ", m, " (byte ", pos, "): ", what, " count ", n, " exceeds what the file size allows (",
+             size - pos - 4, " bytes left)");
       pos += 4;
       return size_t(n);
     };
     const size_t numVerts = count("vertex");
     const int64_t base = int64_t(mesh.vertices.size());
     if (base + int64_t(numVerts) > kMaxVertices)
-      fail(path, ": mesh ", m, " (byte ", pos - 4, "): too many vertices in total (more than ",
-           kMaxVertices, ")");
+      fail(path, ": mesh ", m, " (byte ", pos - 4, "): too many vertices in total (more than ", kMaxVertices, ")");
     mesh.vertices.reserve(mesh.vertices.size() + numVerts);
     for (size_t i = 0; i < numVerts; ++i, pos += 12) {
       const vec3f v(loadFloatLE(data + pos), loadFloatLE(data + pos + 4), loadFloatLE(data + pos + 8));
-      if (!finite(v))
-        fail(path, ": mesh ", m, " vertex ", i, " (byte ", pos, "): coordinate is NaN or infinite");
+      if (!finite(v)) fail(path, ": mesh ", m, " vertex ", i, " (byte ", pos, "): coordinate is NaN or infinite");
       mesh.vertices.push_back(v);
     }
     const size_t numTris = count("triangle");
@@ -660,8 +662,8 @@ TriangleMesh readTris(const std::string& path, const char* data, size_t size) {
       for (int a = 0; a < 3; ++a) {
         const int32_t index = loadInt32LE(data + pos + 4 * size_t(a));
         if (index < 0 || size_t(index) >= numVerts)
-          fail(path, ": mesh ", m, " triangle ", i, " (byte ", pos, "): vertex index ", index,
-               " out of range [0, ", numVerts, ")");
+          fail(path, ": mesh ", m, " triangle ", i, " (byte ", pos, "): vertex index ", index, " out of range [0, ",
+               numVerts, ")");
         t[a] = int32_t(base + index);
       }
       mesh.triangles.push_back(t);
@@ -672,7 +674,8 @@ TriangleMesh readTris(const std::string& path, const char* data, size_t size) {
 
 std::string lowerExtension(const std::string& path) {
   std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+  for (char& c : ext)
+    c = char(std::tolower(static_cast<unsigned char>(c)));
   return ext;
 }
 

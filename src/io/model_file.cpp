@@ -34,7 +34,8 @@ public:
       p += 8;
       size -= 8;
     }
-    while (size-- > 0) addByte(*p++);
+    while (size-- > 0)
+      addByte(*p++);
   }
   uint64_t value() const {
     uint64_t h = hash_;
@@ -326,12 +327,13 @@ void writeModel(const Model& m, const std::string& path) {
     w.array(m.regions.brickIds);
     w.array(m.regions.nodes);
     w.value(m.regions.bounds);
-    for (const auto& r : m.regions.valueRanges) w.array(r);
-    for (double seconds : {m.stats.brickSeconds, m.stats.regionSeconds, m.stats.rangeSeconds}) w.value(seconds);
+    for (const auto& r : m.regions.valueRanges)
+      w.array(r);
+    for (double seconds : {m.stats.brickSeconds, m.stats.regionSeconds, m.stats.rangeSeconds})
+      w.value(seconds);
     h.payloadBytes = w.bytes();
     h.checksum = w.checksum();
-    if (std::fseek(f, 0, SEEK_SET) != 0 || std::fwrite(&h, sizeof h, 1, f) != 1)
-      fail(path, ": write failed");
+    if (std::fseek(f, 0, SEEK_SET) != 0 || std::fwrite(&h, sizeof h, 1, f) != 1) fail(path, ": write failed");
     // On disk before the rename: a crash leaves the old file or the new one.
     if (std::fflush(f) != 0 || ::fsync(::fileno(f)) != 0) fail(path, ": write failed: ", std::strerror(errno));
     closer.f = nullptr;
@@ -360,14 +362,14 @@ Model readModel(const std::string& path) {
   readAt(path, file.fd, &h, sizeof h, 0);
   if (std::memcmp(h.magic, kModelMagic, 8) != 0) fail(path, ": not an exabricks model file");
   if (h.version != kModelVersion && h.version != 1)
-    fail(path, ": model file version ", h.version, " is not supported (this build reads versions 1 and ",
-         kModelVersion, "); rebuild it with 'exabricks build'");
+    fail(path, ": model file version ", h.version, " is not supported (this build reads versions 1 and ", kModelVersion,
+         "); rebuild it with 'exabricks build'");
   if (h.headerBytes != sizeof(Header)) fail(path, ": corrupt model file header");
   if (h.reserved[0] != 0 || h.reserved[1] != 0)
     fail(path, ": corrupt model file header: its reserved bytes (32..47) are not zero");
   if (total - sizeof(Header) != h.payloadBytes)
-    fail(path, ": truncated or padded model file: header says ", h.payloadBytes,
-         " payload bytes, file holds ", total - sizeof(Header));
+    fail(path, ": truncated or padded model file: header says ", h.payloadBytes, " payload bytes, file holds ",
+         total - sizeof(Header));
 
   // The field values stay in the mapped file (version 2 aligns them); the rest is copied.
   bool mapped = false;
@@ -391,7 +393,8 @@ Model readModel(const std::string& path) {
   m.regions.brickIds = r.array<uint32_t>("region brick ids");
   m.regions.nodes = r.array<RegionKdNode>("k-d tree");
   m.regions.bounds = r.value<box3f>("bounds");
-  for (uint64_t i = 0; i < fields; ++i) m.regions.valueRanges.push_back(r.array<range1f>("value ranges"));
+  for (uint64_t i = 0; i < fields; ++i)
+    m.regions.valueRanges.push_back(r.array<range1f>("value ranges"));
   m.stats.brickSeconds = r.value<double>("build times");
   m.stats.regionSeconds = r.value<double>("build times");
   m.stats.rangeSeconds = r.value<double>("build times");

@@ -23,11 +23,14 @@ std::string modelInfoJson(const Model& model, const std::string& input, double l
   j["bricks_per_region_by_count"] = s.bricksPerRegionByCount;
   j["bricks_per_region_by_volume"] = s.bricksPerRegionByVolume;
   j["max_bricks_per_region"] = s.maxBricksPerRegion;
-  j["bounds"] = {{"lattice", {{"lower", {lattice.lower.x, lattice.lower.y, lattice.lower.z}},
-                              {"upper", {lattice.upper.x, lattice.upper.y, lattice.upper.z}}}},
-                 {"world", {{"lower", {worldLo.x, worldLo.y, worldLo.z}}, {"upper", {worldHi.x, worldHi.y, worldHi.z}}}}};
-  j["simulation"] = {{"time", model.simulation.hasTime() ? nlohmann::json(model.simulation.time) : nlohmann::json()},
-                     {"cycle", model.simulation.hasCycle() ? nlohmann::json(model.simulation.cycle) : nlohmann::json()}};
+  j["bounds"] = {
+      {"lattice",
+       {{"lower", {lattice.lower.x, lattice.lower.y, lattice.lower.z}},
+        {"upper", {lattice.upper.x, lattice.upper.y, lattice.upper.z}}}},
+      {"world", {{"lower", {worldLo.x, worldLo.y, worldLo.z}}, {"upper", {worldHi.x, worldHi.y, worldHi.z}}}}};
+  j["simulation"] = {
+      {"time", model.simulation.hasTime() ? nlohmann::json(model.simulation.time) : nlohmann::json()},
+      {"cycle", model.simulation.hasCycle() ? nlohmann::json(model.simulation.cycle) : nlohmann::json()}};
   j["world"] = {{"origin", {model.world.origin.x, model.world.origin.y, model.world.origin.z}},
                 {"scale", {model.world.scale.x, model.world.scale.y, model.world.scale.z}}};
   nlohmann::json levels = nlohmann::json::array();
@@ -36,9 +39,8 @@ std::string modelInfoJson(const Model& model, const std::string& input, double l
   j["levels"] = levels;
   nlohmann::json fields = nlohmann::json::array();
   for (size_t f = 0; f < model.fieldNames.size(); ++f)
-    fields.push_back({{"name", model.fieldNames[f]},
-                      {"units", model.unitsOf(int(f))},
-                      {"range", range(s.fieldRanges[f])}});
+    fields.push_back(
+        {{"name", model.fieldNames[f]}, {"units", model.unitsOf(int(f))}, {"range", range(s.fieldRanges[f])}});
   j["fields"] = fields;
   j["memory_bytes"] = {{"bricks", s.brickBytes},
                        {"regions", s.regionBytes},

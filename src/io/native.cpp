@@ -31,8 +31,7 @@ namespace {
 
 std::string stemOf(const std::string& cellsPath) {
   const std::string ext = ".cells";
-  if (cellsPath.size() <= ext.size() ||
-      cellsPath.compare(cellsPath.size() - ext.size(), ext.size(), ext) != 0)
+  if (cellsPath.size() <= ext.size() || cellsPath.compare(cellsPath.size() - ext.size(), ext.size(), ext) != 0)
     fail(cellsPath, ": a native dataset is named by its NAME.cells path");
   return cellsPath.substr(0, cellsPath.size() - ext.size());
 }
@@ -308,7 +307,8 @@ template <typename Use> void streamCells(const std::string& cellsPath, Use&& use
   std::vector<Cell> chunk(size_t(std::min<uint64_t>(count, uint64_t(1) << 20)));
   for (uint64_t at = 0; at < count; at += chunk.size()) {
     const size_t n = size_t(std::min<uint64_t>(chunk.size(), count - at));
-    if (std::fread(chunk.data(), sizeof(Cell), n, f) != n) fail(cellsPath, ": read error (file changed while reading?)");
+    if (std::fread(chunk.data(), sizeof(Cell), n, f) != n)
+      fail(cellsPath, ": read error (file changed while reading?)");
     for (size_t i = 0; i < n; ++i) {
       const std::string problem = cellProblem(chunk[i]);
       if (!problem.empty()) fail(cellsPath, ": record ", at + i, ": ", problem);
@@ -348,8 +348,7 @@ std::vector<std::string> fieldNamesToRead(const std::string& cellsPath, const st
                                           const std::vector<std::string>& wanted) {
   std::vector<std::string> names = wanted;
   if (names.empty()) names = listNativeFields(cellsPath);
-  if (names.empty())
-    fail(cellsPath, ": no field files (expected ", stem, ".scalars or ", stem, ".FIELD.scalars)");
+  if (names.empty()) fail(cellsPath, ": no field files (expected ", stem, ".scalars or ", stem, ".FIELD.scalars)");
   return names;
 }
 
@@ -360,7 +359,8 @@ std::string checkedScalarsPath(const std::string& cellsPath, const std::string& 
   std::error_code ec;
   if (!fs::exists(path, ec)) {
     std::string known;
-    for (const std::string& f : listNativeFields(cellsPath)) known += (known.empty() ? "" : ", ") + f;
+    for (const std::string& f : listNativeFields(cellsPath))
+      known += (known.empty() ? "" : ", ") + f;
     fail(cellsPath, ": unknown field '", name, "' (no file ", path, "; fields: ", known, ")");
   }
   const uint64_t bytes = fileSize(path);
@@ -433,7 +433,8 @@ NativeWriter::NativeWriter(const std::string& cellsPath, const std::vector<std::
       fail(cellsPath, ": field name '", name, "' cannot be stored in a file name");
   // Every file to a temporary first; the dataset appears only when all are written.
   files_.begin(cellsPath);
-  for (const std::string& name : fieldNames) files_.begin(scalarsPath(stem, name));
+  for (const std::string& name : fieldNames)
+    files_.begin(scalarsPath(stem, name));
 }
 
 void NativeWriter::append(const CellSet& piece) {
@@ -450,7 +451,8 @@ void NativeWriter::finish() { files_.commit(); }
 
 void writeNative(const CellSet& set, const std::string& cellsPath) {
   std::vector<std::string> names;
-  for (const Field& f : set.fields) names.push_back(f.name);
+  for (const Field& f : set.fields)
+    names.push_back(f.name);
   NativeWriter writer(cellsPath, names);
   writer.append(set);
   writer.finish();
@@ -469,11 +471,12 @@ CellSet readGrids(const std::string& path) {
     if (hash != std::string::npos) line.resize(hash);
     std::istringstream ls(line);
     std::vector<std::string> tokens;
-    for (std::string t; ls >> t;) tokens.push_back(t);
+    for (std::string t; ls >> t;)
+      tokens.push_back(t);
     if (tokens.empty()) continue;
     if (tokens.size() != 8 && tokens.size() != 15)
-      fail(path, ": line ", lineNo, ": expected 'x y z nx ny nz level value' or eight corner",
-           " values, got ", tokens.size(), " numbers");
+      fail(path, ": line ", lineNo, ": expected 'x y z nx ny nz level value' or eight corner", " values, got ",
+           tokens.size(), " numbers");
     int64_t ints[7];
     for (int i = 0; i < 7; ++i) {
       char* end = nullptr;
@@ -497,8 +500,7 @@ CellSet readGrids(const std::string& path) {
       fail(path, ": line ", lineNo, ": box size ", n.x, "x", n.y, "x", n.z, " must be positive");
     const int64_t level = ints[6];
     const Cell probe{vec3i(int32_t(ints[0]), int32_t(ints[1]), int32_t(ints[2])), int32_t(level)};
-    if (const std::string p = cellProblem(probe); !p.empty())
-      fail(path, ": line ", lineNo, ": ", p);
+    if (const std::string p = cellProblem(probe); !p.empty()) fail(path, ": line ", lineNo, ": ", p);
     const int64_t w = int64_t(1) << level;
     for (int a = 0; a < 3; ++a)
       if (ints[a] + n[a] * w > kLatticeLimit)
@@ -521,8 +523,7 @@ CellSet readGrids(const std::string& path) {
     for (int64_t k = 0; k < n.z; ++k)
       for (int64_t j = 0; j < n.y; ++j)
         for (int64_t i = 0; i < n.x; ++i) {
-          set.cells.push_back(Cell{vec3i(int32_t(ints[0] + i * w), int32_t(ints[1] + j * w),
-                                         int32_t(ints[2] + k * w)),
+          set.cells.push_back(Cell{vec3i(int32_t(ints[0] + i * w), int32_t(ints[1] + j * w), int32_t(ints[2] + k * w)),
                                    int32_t(level)});
           double value = v[0];
           if (nv == 8) {

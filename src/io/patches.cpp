@@ -30,17 +30,20 @@ void checkUnbackedPatches(const std::vector<Patch>& patches, const std::vector<u
 int log2Exact(int64_t width) {
   if (width < 1 || (width & (width - 1)) != 0) return -1;
   int l = 0;
-  while ((int64_t(1) << l) < width) ++l;
+  while ((int64_t(1) << l) < width)
+    ++l;
   return l;
 }
 
 Coverage::Coverage(std::vector<Patch> patches, std::function<std::string(size_t)> name)
     : patches_(std::move(patches)), name_(std::move(name)) {
   items_.resize(patches_.size());
-  for (size_t i = 0; i < items_.size(); ++i) items_[i] = uint32_t(i);
+  for (size_t i = 0; i < items_.size(); ++i)
+    items_[i] = uint32_t(i);
   nodes_.push_back({});
   if (!items_.empty()) build(0, 0, uint32_t(items_.size()));
-  for (const Patch& p : patches_) widths_.push_back(p.width);
+  for (const Patch& p : patches_)
+    widths_.push_back(p.width);
   std::sort(widths_.begin(), widths_.end());
   widths_.erase(std::unique(widths_.begin(), widths_.end()), widths_.end());
 }
@@ -157,13 +160,15 @@ void badValue(double value, const std::string& where) {
 void appendLeafCells(CellSet& set, const Patch& patch, const std::vector<uint8_t>& covered,
                      const std::vector<std::vector<float>>& values, const std::string& where) {
   const int level = log2Exact(patch.width);
-  if (level < 0 || level > kMaxLevel) fail(where, ": cell width ", patch.width, " is not a power of two up to 2^", kMaxLevel);
+  if (level < 0 || level > kMaxLevel)
+    fail(where, ": cell width ", patch.width, " is not a power of two up to 2^", kMaxLevel);
   const vec3l hi = patch.upper();
   for (int a = 0; a < 3; ++a)
     if (patch.lower[a] < -kLatticeLimit || hi[a] > kLatticeLimit)
       fail(where, ": lies outside the supported lattice range (±2^29 finest cells)");
   for (const auto& v : values)
-    if (int64_t(v.size()) != patch.cellCount()) fail(where, ": ", v.size(), " values for ", patch.cellCount(), " cells");
+    if (int64_t(v.size()) != patch.cellCount())
+      fail(where, ": ", v.size(), " values for ", patch.cellCount(), " cells");
   size_t i = 0;
   for (int64_t z = 0; z < patch.cells.z; ++z)
     for (int64_t y = 0; y < patch.cells.y; ++y)
@@ -171,7 +176,8 @@ void appendLeafCells(CellSet& set, const Patch& patch, const std::vector<uint8_t
         if (covered[i]) continue;
         const vec3l c = patch.lower + vec3l(x, y, z) * patch.width;
         set.cells.push_back(Cell{vec3i(int32_t(c.x), int32_t(c.y), int32_t(c.z)), level});
-        for (size_t f = 0; f < values.size(); ++f) set.fields[f].values.push_back(values[f][i]);
+        for (size_t f = 0; f < values.size(); ++f)
+          set.fields[f].values.push_back(values[f][i]);
       }
 }
 
@@ -179,14 +185,16 @@ std::vector<size_t> pickFields(const std::string& source, const std::vector<std:
                                const std::vector<std::string>& wanted) {
   std::vector<size_t> out;
   if (wanted.empty()) {
-    for (size_t i = 0; i < available.size(); ++i) out.push_back(i);
+    for (size_t i = 0; i < available.size(); ++i)
+      out.push_back(i);
     return out;
   }
   for (const std::string& name : wanted) {
     const auto it = std::find(available.begin(), available.end(), name);
     if (it == available.end()) {
       std::string known;
-      for (const std::string& n : available) known += (known.empty() ? "" : ", ") + n;
+      for (const std::string& n : available)
+        known += (known.empty() ? "" : ", ") + n;
       fail(source, ": unknown field '", name, "' (fields: ", known, ")");
     }
     out.push_back(size_t(it - available.begin()));

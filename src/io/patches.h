@@ -52,8 +52,8 @@ public:
 
 private:
   struct Node {
-    vec3l lo, hi;             ///< bounds of the subtree's patches, exclusive upper
-    uint32_t first, count;    ///< leaf: item range; inner: count == 0, children at first, first+1
+    vec3l lo, hi;          ///< bounds of the subtree's patches, exclusive upper
+    uint32_t first, count; ///< leaf: item range; inner: count == 0, children at first, first+1
   };
   void build(uint32_t node, uint32_t begin, uint32_t end);
   /// Calls `use(lo, hi)` with each part of patch i that a patch of the next finer width covers,

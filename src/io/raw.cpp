@@ -38,9 +38,7 @@ struct LevelSummary {
 
 } // namespace
 
-bool isRawVolume(const std::string& path) {
-  return path.size() > 4 && path.compare(path.size() - 4, 4, ".raw") == 0;
-}
+bool isRawVolume(const std::string& path) { return path.size() > 4 && path.compare(path.size() - 4, 4, ".raw") == 0; }
 
 bool parseRawName(const std::string& path, RawOptions& out) {
   static const std::regex pattern(R"(_(\d+)x(\d+)x(\d+)_(uint8|uint16|float32|float64)\.raw$)");
@@ -191,7 +189,8 @@ CellSet readRaw(const std::string& path, const RawOptions& options) {
         std::memcpy(&v, p, 8);
       }
       voxels[size_t(uint64_t(z) * slab + i)] = io::toFloat32(v, [&] {
-        return strCat(path, ": voxel (", int64_t(i % uint64_t(o.dims.x)), ",", int64_t(i / uint64_t(o.dims.x)), ",", z, ")");
+        return strCat(path, ": voxel (", int64_t(i % uint64_t(o.dims.x)), ",", int64_t(i / uint64_t(o.dims.x)), ",", z,
+                      ")");
       });
     }
     progress.advance(1);

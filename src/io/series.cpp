@@ -32,12 +32,16 @@ bool naturalLess(const std::string& a, const std::string& b) {
   while (i < a.size() && j < b.size()) {
     if (isDigit(a[i]) && isDigit(b[j])) {
       size_t ei = i, ej = j;
-      while (ei < a.size() && isDigit(a[ei])) ++ei;
-      while (ej < b.size() && isDigit(b[ej])) ++ej;
+      while (ei < a.size() && isDigit(a[ei]))
+        ++ei;
+      while (ej < b.size() && isDigit(b[ej]))
+        ++ej;
       // Compare the runs as numbers: skip leading zeros, then length, then digits.
       size_t zi = i, zj = j;
-      while (zi + 1 < ei && a[zi] == '0') ++zi;
-      while (zj + 1 < ej && b[zj] == '0') ++zj;
+      while (zi + 1 < ei && a[zi] == '0')
+        ++zi;
+      while (zj + 1 < ej && b[zj] == '0')
+        ++zj;
       if (ei - zi != ej - zj) return ei - zi < ej - zj;
       const int c = a.compare(zi, ei - zi, b, zj, ej - zj);
       if (c != 0) return c < 0;

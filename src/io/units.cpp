@@ -15,9 +15,9 @@ std::string lower(std::string s) {
 /// FLASH's variable names (four characters) and their CGS units.
 std::string flashUnits(const std::string& name) {
   static const std::pair<const char*, const char*> table[] = {
-      {"dens", "g/cm^3"}, {"temp", "K"},      {"tele", "K"},      {"tion", "K"},      {"trad", "K"},
-      {"pres", "erg/cm^3"}, {"velx", "cm/s"}, {"vely", "cm/s"},   {"velz", "cm/s"},   {"ener", "erg/g"},
-      {"eint", "erg/g"},  {"gpot", "erg/g"},  {"magx", "G"},      {"magy", "G"},      {"magz", "G"},
+      {"dens", "g/cm^3"},   {"temp", "K"},      {"tele", "K"},    {"tion", "K"},    {"trad", "K"},
+      {"pres", "erg/cm^3"}, {"velx", "cm/s"},   {"vely", "cm/s"}, {"velz", "cm/s"}, {"ener", "erg/g"},
+      {"eint", "erg/g"},    {"gpot", "erg/g"},  {"magx", "G"},    {"magy", "G"},    {"magz", "G"},
       {"magp", "erg/cm^3"}, {"pden", "g/cm^3"}, {"divb", "G/cm"}};
   for (const auto& [key, units] : table)
     if (name == key) return units;
@@ -37,9 +37,12 @@ std::string enzoUnits(const std::string& name) {
 
 std::string conventionalUnits(InputKind kind, const std::string& field) {
   switch (kind) {
-  case InputKind::Flash: return flashUnits(field);
-  case InputKind::Enzo: return enzoUnits(field);
-  default: return "";
+  case InputKind::Flash:
+    return flashUnits(field);
+  case InputKind::Enzo:
+    return enzoUnits(field);
+  default:
+    return "";
   }
 }
 

@@ -57,7 +57,8 @@ std::vector<Tag> scanTags(const std::string& path, const std::string& xml, size_
       continue;
     }
     const size_t close = xml.find('>', pos);
-    if (close == std::string::npos || close > end) fail(path, ": byte ", pos, ": unterminated XML tag (truncated file?)");
+    if (close == std::string::npos || close > end)
+      fail(path, ": byte ", pos, ": unterminated XML tag (truncated file?)");
     if (xml[pos + 1] == '?' || xml[pos + 1] == '!') {
       pos = close + 1;
       continue;
@@ -65,20 +66,25 @@ std::vector<Tag> scanTags(const std::string& path, const std::string& xml, size_
     Tag t;
     t.offset = pos;
     size_t i = pos + 1;
-    while (i < close && !std::isspace((unsigned char)xml[i]) && xml[i] != '/' && xml[i] != '>') ++i;
+    while (i < close && !std::isspace((unsigned char)xml[i]) && xml[i] != '/' && xml[i] != '>')
+      ++i;
     if (xml[pos + 1] == '/') {
-      while (i < close && !std::isspace((unsigned char)xml[i]) && xml[i] != '>') ++i;
+      while (i < close && !std::isspace((unsigned char)xml[i]) && xml[i] != '>')
+        ++i;
     }
     t.name = xml.substr(pos + 1, i - pos - 1);
     while (i < close) {
-      while (i < close && (std::isspace((unsigned char)xml[i]) || xml[i] == '/')) ++i;
+      while (i < close && (std::isspace((unsigned char)xml[i]) || xml[i] == '/'))
+        ++i;
       if (i >= close) break;
       const size_t eq = xml.find('=', i);
       if (eq == std::string::npos || eq > close) fail(path, ": byte ", i, ": malformed attribute in <", t.name, ">");
       std::string key = xml.substr(i, eq - i);
-      while (!key.empty() && std::isspace((unsigned char)key.back())) key.pop_back();
+      while (!key.empty() && std::isspace((unsigned char)key.back()))
+        key.pop_back();
       size_t q = eq + 1;
-      while (q < close && std::isspace((unsigned char)xml[q])) ++q;
+      while (q < close && std::isspace((unsigned char)xml[q]))
+        ++q;
       if (q >= close || (xml[q] != '"' && xml[q] != '\''))
         fail(path, ": byte ", q, ": attribute '", key, "' of <", t.name, "> is not quoted");
       const size_t qe = xml.find(xml[q], q + 1);
@@ -94,10 +100,12 @@ std::vector<Tag> scanTags(const std::string& path, const std::string& xml, size_
   return tags;
 }
 
-std::vector<double> numbers(const std::string& path, const std::string& text, size_t expected, const std::string& what) {
+std::vector<double> numbers(const std::string& path, const std::string& text, size_t expected,
+                            const std::string& what) {
   std::istringstream in(text);
   std::vector<double> v;
-  for (double d; in >> d;) v.push_back(d);
+  for (double d; in >> d;)
+    v.push_back(d);
   if (v.size() != expected || !in.eof()) fail(path, ": ", what, ": expected ", expected, " numbers, got '", text, "'");
   for (double d : v)
     if (!std::isfinite(d)) fail(path, ": ", what, ": not finite");
@@ -114,15 +122,21 @@ struct Encoding {
 Encoding encodingOf(const std::string& path, const Tag& vtkFile) {
   Encoding e;
   const std::string order = vtkFile.attr("byte_order", "LittleEndian");
-  if (order == "BigEndian") e.bigEndian = true;
-  else if (order != "LittleEndian") fail(path, ": unknown byte_order '", order, "'");
+  if (order == "BigEndian")
+    e.bigEndian = true;
+  else if (order != "LittleEndian")
+    fail(path, ": unknown byte_order '", order, "'");
   const std::string header = vtkFile.attr("header_type", "UInt32");
-  if (header == "UInt64") e.headerBytes = 8;
-  else if (header != "UInt32") fail(path, ": unsupported header_type '", header, "' (UInt32 and UInt64 are read)");
+  if (header == "UInt64")
+    e.headerBytes = 8;
+  else if (header != "UInt32")
+    fail(path, ": unsupported header_type '", header, "' (UInt32 and UInt64 are read)");
   const std::string compressor = vtkFile.attr("compressor");
-  if (compressor == "vtkZLibDataCompressor") e.zlib = true;
+  if (compressor == "vtkZLibDataCompressor")
+    e.zlib = true;
   else if (!compressor.empty())
-    fail(path, ": compressor '", compressor, "' is not supported (vtkZLibDataCompressor is; re-save without compression)");
+    fail(path, ": compressor '", compressor,
+         "' is not supported (vtkZLibDataCompressor is; re-save without compression)");
   return e;
 }
 
@@ -132,7 +146,8 @@ std::string decodeBase64(const std::string& path, const std::string& what, const
   static bool init = [] {
     std::fill(std::begin(table), std::end(table), int8_t(-1));
     const char* a = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    for (int i = 0; i < 64; ++i) table[(unsigned char)a[i]] = int8_t(i);
+    for (int i = 0; i < 64; ++i)
+      table[(unsigned char)a[i]] = int8_t(i);
     return true;
   }();
   (void)init;
@@ -255,7 +270,8 @@ std::string readBlock(const std::string& path, const std::string& what, BlockSou
   for (uint64_t& s : sizes) {
     s = header();
     if (s > src.left() - std::min(src.left(), packedTotal)) // packedTotal stays within the bytes left
-      io::requireBytes(packedTotal + std::min(s, UINT64_MAX - packedTotal), 1, src.left(), where + ": compressed blocks");
+      io::requireBytes(packedTotal + std::min(s, UINT64_MAX - packedTotal), 1, src.left(),
+                       where + ": compressed blocks");
     packedTotal += s;
   }
   // Inflating never grows a block by more than kMaxInflate: bound the declared size by the
@@ -280,9 +296,9 @@ std::string readBlock(const std::string& path, const std::string& what, BlockSou
 }
 
 size_t typeSize(const std::string& type) {
-  static const std::map<std::string, size_t> sizes{{"Int8", 1},   {"UInt8", 1},   {"Int16", 2},   {"UInt16", 2},
-                                                    {"Int32", 4},  {"UInt32", 4},  {"Int64", 8},   {"UInt64", 8},
-                                                    {"Float32", 4}, {"Float64", 8}};
+  static const std::map<std::string, size_t> sizes{{"Int8", 1},    {"UInt8", 1},  {"Int16", 2}, {"UInt16", 2},
+                                                   {"Int32", 4},   {"UInt32", 4}, {"Int64", 8}, {"UInt64", 8},
+                                                   {"Float32", 4}, {"Float64", 8}};
   const auto it = sizes.find(type);
   return it == sizes.end() ? 0 : it->second;
 }
@@ -336,7 +352,8 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
       const auto e = numbers(path, t.attr("Extent"), 6, "Piece Extent");
       int64_t ext[6];
       for (int k = 0; k < 6; ++k)
-        ext[k] = io::checkedInteger(e[size_t(k)], -kLatticeLimit, kLatticeLimit, [&] { return strCat(path, ": Piece Extent"); });
+        ext[k] = io::checkedInteger(e[size_t(k)], -kLatticeLimit, kLatticeLimit,
+                                    [&] { return strCat(path, ": Piece Extent"); });
       piece.cells = vec3l(ext[1] - ext[0], ext[3] - ext[2], ext[5] - ext[4]);
       if (piece.cells.x < 0 || piece.cells.y < 0 || piece.cells.z < 0) fail(path, ": Piece Extent is inverted");
       if (piece.cells.x == 0 || piece.cells.y == 0 || piece.cells.z == 0)
@@ -361,7 +378,8 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
       const std::string format = t.attr("format");
       if (format == "ascii") {
         std::istringstream in(t.text);
-        for (double d; in >> d;) values.push_back(d);
+        for (double d; in >> d;)
+          values.push_back(d);
         if (!in.eof()) fail(path, ": ", what, ": malformed ascii value");
       } else if (format == "binary" || format == "appended") {
         std::string bytes;
@@ -427,7 +445,8 @@ Hierarchy readHierarchy(const std::string& path) {
       if (gd != "XYZ") fail(path, ": grid_description '", gd, "': only 3-D (XYZ) AMR data can be read");
     } else if (t.name == "Block") {
       const auto l = numbers(path, t.attr("level"), 1, "Block level");
-      if (!(l[0] >= 0 && l[0] <= 30) || l[0] != std::floor(l[0])) fail(path, ": Block level ", l[0], " is out of range");
+      if (!(l[0] >= 0 && l[0] <= 30) || l[0] != std::floor(l[0]))
+        fail(path, ": Block level ", l[0], " is out of range");
       level = int(l[0]);
       const auto s = numbers(path, t.attr("spacing"), 3, strCat("Block ", level, " spacing"));
       if (!(s[0] > 0 && s[1] > 0 && s[2] > 0)) fail(path, ": Block ", level, ": spacing must be positive");
@@ -485,10 +504,12 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
   const std::vector<std::string> available = readPiece(h.sets.front().file, nullptr).names;
   const std::vector<size_t> picked = io::pickFields(path, available, wanted);
   std::vector<std::string> names;
-  for (size_t k : picked) names.push_back(available[k]);
+  for (size_t k : picked)
+    names.push_back(available[k]);
 
   int finestLevel = 0;
-  for (const DataSetRef& d : h.sets) finestLevel = std::max(finestLevel, d.level);
+  for (const DataSetRef& d : h.sets)
+    finestLevel = std::max(finestLevel, d.level);
   std::vector<io::Patch> patches;
   for (const DataSetRef& d : h.sets) {
     const vec3d s = h.spacing.size() > size_t(d.level) ? h.spacing[size_t(d.level)] : vec3d(0.0);
@@ -524,7 +545,8 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
   const io::Coverage coverage(patches, name);
 
   CellSet set;
-  for (const std::string& n : names) set.fields.push_back({n, {}});
+  for (const std::string& n : names)
+    set.fields.push_back({n, {}});
   Progress progress("reading " + path, patches.size());
   for (size_t i = 0; i < patches.size(); ++i) {
     const std::vector<uint8_t> covered = coverage.covered(i);

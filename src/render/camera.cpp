@@ -4,14 +4,12 @@
 
 namespace exa {
 
-Camera Camera::frame(const box3d& box, double azimuthDeg, double elevationDeg, double fovyDeg,
-                     bool orthographic) {
+Camera Camera::frame(const box3d& box, double azimuthDeg, double elevationDeg, double fovyDeg, bool orthographic) {
   const double deg = M_PI / 180.0;
   const vec3d centre = (box.lower + box.upper) * 0.5;
   const double radius = 0.5 * length(box.upper - box.lower);
   const vec3d dir(std::cos(elevationDeg * deg) * std::cos(azimuthDeg * deg),
-                  std::cos(elevationDeg * deg) * std::sin(azimuthDeg * deg),
-                  std::sin(elevationDeg * deg));
+                  std::cos(elevationDeg * deg) * std::sin(azimuthDeg * deg), std::sin(elevationDeg * deg));
   Camera c;
   c.fovy = fovyDeg;
   c.orthographic = orthographic;

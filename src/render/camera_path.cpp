@@ -12,8 +12,8 @@ namespace {
 
 /// Index of the segment [k, k+1] holding t (keyframes has at least two entries).
 size_t segmentOf(const std::vector<CameraKeyframe>& keys, double t) {
-  const auto it = std::upper_bound(keys.begin(), keys.end(), t,
-                                   [](double v, const CameraKeyframe& k) { return v < k.time; });
+  const auto it =
+      std::upper_bound(keys.begin(), keys.end(), t, [](double v, const CameraKeyframe& k) { return v < k.time; });
   const size_t k = size_t(std::max<std::ptrdiff_t>(1, it - keys.begin()));
   return std::min(k, keys.size() - 1) - 1;
 }
@@ -56,7 +56,8 @@ void CameraPath::validate() const {
     if (k.opacityScale && !(*k.opacityScale > 0.f && std::isfinite(*k.opacityScale)))
       fail("camera path: keyframe ", i, ": the opacity scale must be positive");
     const CameraKeyframe& first = keyframes.front();
-    if (k.range.has_value() != first.range.has_value() || k.opacityScale.has_value() != first.opacityScale.has_value() ||
+    if (k.range.has_value() != first.range.has_value() ||
+        k.opacityScale.has_value() != first.opacityScale.has_value() ||
         k.isoValues.has_value() != first.isoValues.has_value())
       fail("camera path: keyframe ", i, ": a setting keyframed by one keyframe must be given by all of them");
     if (k.isoValues && k.isoValues->size() != first.isoValues->size())
@@ -91,8 +92,8 @@ void CameraPath::applySettings(double t, Scene& scene) const {
   const CameraKeyframe& a = keyframes[k];
   const CameraKeyframe& b = keyframes[std::min(k + 1, keyframes.size() - 1)];
   if (a.range && !scene.layers.empty())
-    scene.layers[0].tf.valueRange = range1f{float(lerp(a.range->lower, b.range->lower, s)),
-                                            float(lerp(a.range->upper, b.range->upper, s))};
+    scene.layers[0].tf.valueRange =
+        range1f{float(lerp(a.range->lower, b.range->lower, s)), float(lerp(a.range->upper, b.range->upper, s))};
   if (a.opacityScale && !scene.layers.empty())
     scene.layers[0].tf.opacityScale = float(lerp(*a.opacityScale, *b.opacityScale, s));
   if (a.isoValues) {
@@ -135,8 +136,7 @@ Camera orbitCamera(const box3d& worldBox, double startAzimuthDeg, double elevati
   return Camera::frame(worldBox, azimuth, elevationDeg, fovyDeg, orthographic);
 }
 
-CameraPath flyInPath(const box3d& worldBox, double azimuthDeg, double elevationDeg, double fovyDeg,
-                     bool orthographic) {
+CameraPath flyInPath(const box3d& worldBox, double azimuthDeg, double elevationDeg, double fovyDeg, bool orthographic) {
   CameraPath path;
   const Camera end = Camera::frame(worldBox, azimuthDeg, elevationDeg, fovyDeg, orthographic);
   const double distances[3] = {3.0, 1.8, 1.0};

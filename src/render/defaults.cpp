@@ -32,7 +32,8 @@ double histogram(const Model& model, int field, const TransferFunction& tf, std:
     if (part)
       forCellsCentredIn(b, part->owned, add); // a part counts only the cells it owns
     else
-      for (uint32_t slot = 0; slot < b.cellCount(); ++slot) add(slot);
+      for (uint32_t slot = 0; slot < b.cellCount(); ++slot)
+        add(slot);
   }
   if (part && part->sumOverParts) {
     hist.push_back(total);
@@ -112,8 +113,10 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
   const double share = hist[size_t(mode)] / total;
   const bool dominant = share >= 0.2;
   int lo = mode, hi = mode;
-  while (lo > 0 && hist[size_t(lo - 1)] >= 0.1 * hist[size_t(mode)]) --lo;
-  while (hi < kBins - 1 && hist[size_t(hi + 1)] >= 0.1 * hist[size_t(mode)]) ++hi;
+  while (lo > 0 && hist[size_t(lo - 1)] >= 0.1 * hist[size_t(mode)])
+    --lo;
+  while (hi < kBins - 1 && hist[size_t(hi + 1)] >= 0.1 * hist[size_t(mode)])
+    ++hi;
   const bool backgroundHigh = dominant && (float(mode) + 0.5f) / kBins > 2.f / 3.f;
   const int median = medianBin(hist, total, backgroundHigh);
   const float tLo = float(dominant ? std::min(lo, median) : median) / kBins;
@@ -146,8 +149,8 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
   // the colour map, seen through what lies around it.
   if (tfIn.opacityScale == 0.f) {
     tf.opacityScale = exposureScale(model, field, tf, dataset, part);
-    out.notes.push_back(strCat("exposure: opacity scale ", tf.opacityScale,
-                               " (optical depth ", kExposureDepth, " to the highest values; --opacity-scale to choose)"));
+    out.notes.push_back(strCat("exposure: opacity scale ", tf.opacityScale, " (optical depth ", kExposureDepth,
+                               " to the highest values; --opacity-scale to choose)"));
   }
   if (dominant)
     out.notes.push_back(strCat(std::lround(100.0 * share), " % of the volume holds '", name,
@@ -181,8 +184,8 @@ std::vector<std::string> sceneWarnings(const Scene& scene, const Model& model, c
     }
   if (!scene.iso.values.empty()) {
     const std::string& isoName = !scene.iso.field.empty() ? scene.iso.field
-                                 : !scene.layers.empty()   ? scene.layers[0].field
-                                                           : std::string();
+                                 : !scene.layers.empty()  ? scene.layers[0].field
+                                                          : std::string();
     const int f = fieldOf(isoName);
     const range1f data = dataset.valueRanges.at(size_t(f));
     for (float v : scene.iso.values)

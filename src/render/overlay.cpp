@@ -15,7 +15,8 @@ void fillRect(Image& image, int x0, int y0, int x1, int y1, const vec3f& c) {
   x0 = std::max(x0, 0), y0 = std::max(y0, 0);
   x1 = std::min(x1, image.width), y1 = std::min(y1, image.height);
   for (int y = y0; y < y1; ++y)
-    for (int x = x0; x < x1; ++x) image.at(x, y) = {c.x, c.y, c.z, 1.f};
+    for (int x = x0; x < x1; ++x)
+      image.at(x, y) = {c.x, c.y, c.z, 1.f};
 }
 
 void drawLine(Image& image, double x0, double y0, double x1, double y1, const vec3f& c) {
@@ -74,7 +75,8 @@ std::vector<double> colorBarTicks(const range1f& range, bool logScale) {
     // (float ranges: 1e-3f is 1.0000000475e-3, a decade within 1e-6 of an end counts)
     const int d0 = int(std::ceil(std::log10(lo) - 1e-6)), d1 = int(std::floor(std::log10(hi) + 1e-6));
     const int every = std::max(1, (d1 - d0 + 1 + 5) / 6);
-    for (int d = d0; d <= d1; d += every) ticks.push_back(std::pow(10.0, d));
+    for (int d = d0; d <= d1; d += every)
+      ticks.push_back(std::pow(10.0, d));
     if (ticks.empty()) ticks = {lo, hi};
     return ticks;
   }
@@ -88,7 +90,8 @@ std::vector<double> colorBarTicks(const range1f& range, bool logScale) {
       break;
     }
   const int64_t k0 = int64_t(std::ceil(lo / step - 1e-6)), k1 = int64_t(std::floor(hi / step + 1e-6));
-  for (int64_t k = k0; k <= k1 && ticks.size() < 64; ++k) ticks.push_back(double(k) * step);
+  for (int64_t k = k0; k <= k1 && ticks.size() < 64; ++k)
+    ticks.push_back(double(k) * step);
   return ticks;
 }
 
@@ -98,7 +101,8 @@ void drawColorBar(Image& image, const TransferFunction& tf, const std::string& t
   const int barW = std::max(6, image.width / 40), barH = std::max(20, image.height * 3 / 5);
   const std::vector<double> ticks = colorBarTicks(tf.valueRange, tf.logScale);
   int labelW = 0;
-  for (double t : ticks) labelW = std::max(labelW, textWidth(colorBarLabel(t), s));
+  for (double t : ticks)
+    labelW = std::max(labelW, textWidth(colorBarLabel(t), s));
   const int x1 = image.width - labelW - 6 * s - 4, x0 = x1 - barW;
   const int y0 = (image.height - barH) / 2, y1 = y0 + barH;
   for (int y = y0; y < y1; ++y) {
@@ -122,14 +126,16 @@ void drawColorBar(Image& image, const TransferFunction& tf, const std::string& t
 
 void drawLines(Image& image, const std::vector<std::string>& lines, const vec3f& color) {
   const int s = overlayScale(image);
-  for (size_t i = 0; i < lines.size(); ++i) drawText(image, 6 * s, 6 * s + int(i) * 12 * s, lines[i], color, s);
+  for (size_t i = 0; i < lines.size(); ++i)
+    drawText(image, 6 * s, 6 * s + int(i) * 12 * s, lines[i], color, s);
 }
 
 void drawBoxOutline(Image& image, const Camera& camera, const box3d& box, const vec3f& color) {
   if (box.empty()) return;
   const double aspect = double(image.width) / double(image.height);
   auto corner = [&](int i) {
-    return vec3d(i & 1 ? box.upper.x : box.lower.x, i & 2 ? box.upper.y : box.lower.y, i & 4 ? box.upper.z : box.lower.z);
+    return vec3d(i & 1 ? box.upper.x : box.lower.x, i & 2 ? box.upper.y : box.lower.y,
+                 i & 4 ? box.upper.z : box.lower.z);
   };
   for (int a = 0; a < 8; ++a)
     for (int bit : {1, 2, 4}) {

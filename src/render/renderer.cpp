@@ -43,8 +43,10 @@ bool joinBrickLists(const uint32_t* a, const uint32_t* aEnd, const uint32_t* b, 
     a += x <= y;
     b += y <= x;
   }
-  while (a < aEnd && u < kMaxJoinedBricks) out[u++] = *a++;
-  while (b < bEnd && u < kMaxJoinedBricks) out[u++] = *b++;
+  while (a < aEnd && u < kMaxJoinedBricks)
+    out[u++] = *a++;
+  while (b < bEnd && u < kMaxJoinedBricks)
+    out[u++] = *b++;
   count = u;
   return a == aEnd && b == bEnd;
 }
@@ -53,14 +55,22 @@ bool joinBrickLists(const uint32_t* a, const uint32_t* aEnd, const uint32_t* b, 
 
 vec3f debugLevelColor(int level) {
   switch (level & 7) {
-  case 0: return {0.90f, 0.10f, 0.10f};
-  case 1: return {0.95f, 0.55f, 0.05f};
-  case 2: return {0.90f, 0.85f, 0.10f};
-  case 3: return {0.20f, 0.75f, 0.20f};
-  case 4: return {0.10f, 0.60f, 0.85f};
-  case 5: return {0.25f, 0.25f, 0.90f};
-  case 6: return {0.60f, 0.20f, 0.80f};
-  default: return {0.55f, 0.55f, 0.55f};
+  case 0:
+    return {0.90f, 0.10f, 0.10f};
+  case 1:
+    return {0.95f, 0.55f, 0.05f};
+  case 2:
+    return {0.90f, 0.85f, 0.10f};
+  case 3:
+    return {0.20f, 0.75f, 0.20f};
+  case 4:
+    return {0.10f, 0.60f, 0.85f};
+  case 5:
+    return {0.25f, 0.25f, 0.90f};
+  case 6:
+    return {0.60f, 0.20f, 0.80f};
+  default:
+    return {0.55f, 0.55f, 0.55f};
   }
 }
 
@@ -69,10 +79,14 @@ namespace {
 /// Default iso-surface colours (linear RGB), cycled over the iso-values.
 vec3f defaultIsoColor(int index) {
   switch (index & 3) {
-  case 0: return {0.80f, 0.80f, 0.78f};
-  case 1: return {0.85f, 0.35f, 0.20f};
-  case 2: return {0.20f, 0.45f, 0.85f};
-  default: return {0.35f, 0.70f, 0.30f};
+  case 0:
+    return {0.80f, 0.80f, 0.78f};
+  case 1:
+    return {0.85f, 0.35f, 0.20f};
+  case 2:
+    return {0.20f, 0.45f, 0.85f};
+  default:
+    return {0.35f, 0.70f, 0.30f};
   }
 }
 
@@ -127,15 +141,16 @@ void orthonormalBasis(const vec3f& n, vec3f& u, vec3f& v) {
   v = cross(n, u);
 }
 
-
 } // namespace
 
 DatasetInfo DatasetInfo::of(const Model& m) {
   int finest = kMaxLevel;
-  for (const Brick& b : m.bricks) finest = std::min(finest, b.level);
+  for (const Brick& b : m.bricks)
+    finest = std::min(finest, b.level);
   std::vector<range1f> ranges(m.fieldValues.size());
   for (size_t f = 0; f < m.fieldValues.size() && f < m.regions.valueRanges.size(); ++f)
-    for (const range1f& r : m.regions.valueRanges[f]) ranges[f].extend(r);
+    for (const range1f& r : m.regions.valueRanges[f])
+      ranges[f].extend(r);
   return from(finest, m.cellBounds(), m.world.scale, std::move(ranges));
 }
 
@@ -186,8 +201,13 @@ void FrameBuffer::clear() {
 
 FrameBuffer::Sums FrameBuffer::sums() {
   static_assert(sizeof(vec4f) == 4 * sizeof(float), "vec4f must be four packed floats");
-  return {reinterpret_cast<float*>(sum_.data()), steps_.data(), sum_.size(), tilePasses_.data(), tilePasses_.size(),
-          &stats_, &stepsView_};
+  return {reinterpret_cast<float*>(sum_.data()),
+          steps_.data(),
+          sum_.size(),
+          tilePasses_.data(),
+          tilePasses_.size(),
+          &stats_,
+          &stepsView_};
 }
 
 uint32_t FrameBuffer::passes() const {
@@ -245,12 +265,12 @@ struct Renderer::Impl {
   std::vector<uint8_t> visible;
   std::unique_ptr<RegionTraversal> traversal;
   std::unique_ptr<CellLocator> locator; ///< only for Reconstruction::CellLocation
-  float referenceWidth = 1.f;  ///< opacity reference (dataset's finest cell width), lattice units
+  float referenceWidth = 1.f;           ///< opacity reference (dataset's finest cell width), lattice units
   float invReferenceWidth = 1.f;
-  vec3f invScale{1.f};         ///< world units per lattice unit, inverted (for gradients)
+  vec3f invScale{1.f}; ///< world units per lattice unit, inverted (for gradients)
   double minScale = 1.0;
-  float meanScale = 1.f;       ///< world units per lattice unit, averaged over the axes
-  bool hasDomain = false;      ///< primary rays see only the inside of `domain` (world)
+  float meanScale = 1.f;  ///< world units per lattice unit, averaged over the axes
+  bool hasDomain = false; ///< primary rays see only the inside of `domain` (world)
   box3d domain;
 
   // Iso-surfaces: their own set of regions (value range holds an iso-value) and traversal.
@@ -259,7 +279,7 @@ struct Renderer::Impl {
   std::vector<uint8_t> isoVisible;
   std::unique_ptr<RegionTraversal> isoTraversal;
   bool isoColored = false;
-  LayerTable isoColor;         ///< colour map of the iso colour field
+  LayerTable isoColor; ///< colour map of the iso colour field
 
   // Triangle meshes in world space.
   RTCDevice device = nullptr;
@@ -292,7 +312,8 @@ struct Renderer::Impl {
   /// Rebuilds the layer tables, the visible regions and the volume traversal.
   void updateVolume(const Scene& s, const std::vector<int>& fields) {
     std::vector<LayerTable> tables(s.layers.size());
-    for (size_t i = 0; i < s.layers.size(); ++i) tables[i].build(model, dataset, fields[i], s.layers[i].tf);
+    for (size_t i = 0; i < s.layers.size(); ++i)
+      tables[i].build(model, dataset, fields[i], s.layers[i].tf);
     layers = std::move(tables);
     // Space skipping: a region whose value ranges map to zero opacity in every layer cannot
     // contribute.
@@ -310,9 +331,10 @@ struct Renderer::Impl {
     TraversalKind kind = in.traversal;
     if (in.autoTraversal) {
       size_t count = 0;
-      for (uint8_t v : visible) count += v;
+      for (uint8_t v : visible)
+        count += v;
       kind = double(count) < double(in.embreeBelowVisibleFraction) * double(visible.size()) ? TraversalKind::Embree
-                                                                                           : TraversalKind::KdTree;
+                                                                                            : TraversalKind::KdTree;
     }
     if (!traversal || traversal->kind() != kind) traversal = std::make_unique<RegionTraversal>(model, kind);
     traversal->setVisible(visible);
@@ -336,16 +358,17 @@ struct Renderer::Impl {
     tbb::parallel_for(size_t(0), ranges.size(), [&](size_t i) {
       const range1f& r = ranges[i];
       bool any = false;
-      for (float v : iso.values) any = any || (!r.empty() && r.lower <= v && v <= r.upper);
+      for (float v : iso.values)
+        any = any || (!r.empty() && r.lower <= v && v <= r.upper);
       isoVisible[i] = any;
     });
     size_t count = 0;
-    for (uint8_t v : isoVisible) count += v;
+    for (uint8_t v : isoVisible)
+      count += v;
     // Iso-surfaces are sparse: Embree skips the empty space in its BVH unless most regions hold one.
-    const TraversalKind kind =
-        double(count) < double(s.integration.embreeBelowVisibleFraction) * double(ranges.size())
-            ? TraversalKind::Embree
-            : TraversalKind::KdTree;
+    const TraversalKind kind = double(count) < double(s.integration.embreeBelowVisibleFraction) * double(ranges.size())
+                                   ? TraversalKind::Embree
+                                   : TraversalKind::KdTree;
     if (!isoTraversal || isoTraversal->kind() != kind) isoTraversal = std::make_unique<RegionTraversal>(model, kind);
     isoTraversal->setVisible(isoVisible);
   }
@@ -361,18 +384,20 @@ struct Renderer::Impl {
       const TriangleMesh& mesh = *s.meshes[m].mesh;
       RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
       auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                                  3 * sizeof(float), mesh.vertices.size()));
-      auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
-          geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t), mesh.triangles.size()));
+                                                                   3 * sizeof(float), mesh.vertices.size()));
+      auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                                                     3 * sizeof(uint32_t), mesh.triangles.size()));
       if (!vertices || !indices) {
         rtcReleaseGeometry(geom);
         releaseMeshes();
         fail("mesh ", m, ": out of memory for ", mesh.triangles.size(), " triangles");
       }
       for (size_t i = 0; i < mesh.vertices.size(); ++i)
-        for (int k = 0; k < 3; ++k) vertices[3 * i + size_t(k)] = mesh.vertices[i][k];
+        for (int k = 0; k < 3; ++k)
+          vertices[3 * i + size_t(k)] = mesh.vertices[i][k];
       for (size_t i = 0; i < mesh.triangles.size(); ++i)
-        for (int k = 0; k < 3; ++k) indices[3 * i + size_t(k)] = uint32_t(mesh.triangles[i][k]);
+        for (int k = 0; k < 3; ++k)
+          indices[3 * i + size_t(k)] = uint32_t(mesh.triangles[i][k]);
       rtcCommitGeometry(geom);
       const unsigned id = rtcAttachGeometry(meshScene, geom);
       rtcReleaseGeometry(geom);
@@ -595,8 +620,8 @@ struct Renderer::Impl {
     for (int i = 0; i < ao.rays; ++i) {
       const float r1 = rng.next(), r2 = rng.next();
       const float radius = std::sqrt(r1), phi = 6.2831853f * r2;
-      const vec3f d = u * (radius * std::cos(phi)) + v * (radius * std::sin(phi)) +
-                      hit.normal * std::sqrt(std::max(0.f, 1.f - r1));
+      const vec3f d =
+          u * (radius * std::cos(phi)) + v * (radius * std::sin(phi)) + hit.normal * std::sqrt(std::max(0.f, 1.f - r1));
       ++c.aoRays;
       const DualRay ar = makeRay(hit.position + vec3d(hit.normal) * eps, vec3d(d), true);
       const double meshMin = scene.clip.meshes ? ar.sMin : 0.0;
@@ -845,8 +870,9 @@ struct Renderer::Impl {
     for (LayerTable& layer : layers) {
       auto it = gradientFields.find(layer.field);
       if (it == gradientFields.end()) {
-        it = gradientFields.emplace(layer.field, cellGradients(layer.view, model.bricks,
-                                                               model.fieldValues[size_t(layer.field)].size()))
+        it = gradientFields
+                 .emplace(layer.field,
+                          cellGradients(layer.view, model.bricks, model.fieldValues[size_t(layer.field)].size()))
                  .first;
         built = true;
       }
@@ -870,7 +896,8 @@ struct Renderer::Impl {
     float* const out[3] = {batch.gx, batch.gy, batch.gz};
     for (int a = 0; a < 3; ++a) {
       sample(layer.grad[size_t(a)], ids, count, g, false);
-      for (int i = 0; i < batch.count; ++i) out[a][i] = g.valid[i] ? g.value[i] : 0.f;
+      for (int i = 0; i < batch.count; ++i)
+        out[a][i] = g.valid[i] ? g.value[i] : 0.f;
     }
   }
 
@@ -988,8 +1015,7 @@ struct Renderer::Impl {
 
 Renderer::Renderer(const Model& model) : Renderer(model, DatasetInfo::of(model)) {}
 
-Renderer::Renderer(const Model& model, const DatasetInfo& dataset)
-    : impl_(std::make_unique<Impl>(model, dataset)) {}
+Renderer::Renderer(const Model& model, const DatasetInfo& dataset) : impl_(std::make_unique<Impl>(model, dataset)) {}
 
 Renderer::~Renderer() = default;
 
@@ -1026,7 +1052,8 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     if (!s.meshes[m].mesh) fail("mesh ", m, " (", s.meshes[m].source, ") has not been read");
   // Resolve every field name first: an unknown one leaves the current scene as it is.
   std::vector<int> fields;
-  for (const VolumeLayer& layer : s.layers) fields.push_back(im.model.requireField(layer.field));
+  for (const VolumeLayer& layer : s.layers)
+    fields.push_back(im.model.requireField(layer.field));
   int isoField = -1, isoColorField = -1;
   if (!s.iso.values.empty()) {
     isoField = !s.iso.field.empty() ? im.model.requireField(s.iso.field)
@@ -1038,7 +1065,8 @@ SceneUpdate Renderer::setScene(const Scene& s) {
   const bool first = !im.haveScene;
   SceneUpdate u;
   u.volume = first || s.layers != cur.layers || s.integration != cur.integration || s.debug != cur.debug;
-  u.iso = first || s.iso != cur.iso || s.integration.embreeBelowVisibleFraction != cur.integration.embreeBelowVisibleFraction;
+  u.iso = first || s.iso != cur.iso ||
+          s.integration.embreeBelowVisibleFraction != cur.integration.embreeBelowVisibleFraction;
   u.meshes = first || s.meshes != cur.meshes;
   // Helpers read the scene while rebuilding: make the new one current first.
   im.scene = s;

@@ -6,7 +6,6 @@
 
 #include <nlohmann/json.hpp>
 
-
 namespace exa {
 
 Scene Scene::volumeOf(const TransferFunction& tf, const std::string& field) {
@@ -45,8 +44,7 @@ void Scene::validate() const {
     for (size_t i = 0; i < mesh.triangles.size(); ++i)
       for (int k = 0; k < 3; ++k)
         if (mesh.triangles[i][k] < 0 || size_t(mesh.triangles[i][k]) >= mesh.vertices.size())
-          fail("mesh ", m, ": triangle ", i, " refers to vertex ", mesh.triangles[i][k], " of ",
-               mesh.vertices.size());
+          fail("mesh ", m, ": triangle ", i, " refers to vertex ", mesh.triangles[i][k], " of ", mesh.vertices.size());
   }
 }
 
@@ -84,21 +82,30 @@ using json = nlohmann::json;
 
 const char* shadingName(Shading s) {
   switch (s) {
-  case Shading::Analytic: return "analytic";
-  case Shading::Central: return "central";
-  case Shading::Smooth: return "smooth";
-  case Shading::None: return "none";
+  case Shading::Analytic:
+    return "analytic";
+  case Shading::Central:
+    return "central";
+  case Shading::Smooth:
+    return "smooth";
+  case Shading::None:
+    return "none";
   }
   return "analytic";
 }
 
 const char* debugName(DebugView d) {
   switch (d) {
-  case DebugView::None: return "none";
-  case DebugView::Level: return "level";
-  case DebugView::Brick: return "brick";
-  case DebugView::Region: return "region";
-  case DebugView::Steps: return "steps";
+  case DebugView::None:
+    return "none";
+  case DebugView::Level:
+    return "level";
+  case DebugView::Brick:
+    return "brick";
+  case DebugView::Region:
+    return "region";
+  case DebugView::Steps:
+    return "steps";
   }
   return "none";
 }
@@ -110,7 +117,8 @@ json srgb(const vec3f& linear) { return vec(linearToSrgb(linear)); }
 /// Reads the keys of one JSON object with errors that name the key path.
 class Reader {
 public:
-  Reader(const json& j, std::string source, std::string path) : j_(j), source_(std::move(source)), path_(std::move(path)) {
+  Reader(const json& j, std::string source, std::string path)
+      : j_(j), source_(std::move(source)), path_(std::move(path)) {
     if (!j_.is_object()) fail(where(), " must be a JSON object");
   }
   /// Fails on keys not in `known`.
@@ -190,7 +198,8 @@ public:
     linear = srgbToLinear(vec3f(c));
     return true;
   }
-  template <typename E> bool choice(const char* k, E& out, std::initializer_list<std::pair<const char*, E>> choices) const {
+  template <typename E>
+  bool choice(const char* k, E& out, std::initializer_list<std::pair<const char*, E>> choices) const {
     std::string v;
     if (!string(k, v)) return false;
     std::string names;
@@ -211,8 +220,8 @@ private:
 };
 
 json cameraJson(const Camera& c) {
-  return {{"position", vec(c.position)}, {"look_at", vec(c.lookAt)}, {"up", vec(c.up)},
-          {"fov", c.fovy},           {"orthographic", c.orthographic}, {"ortho_height", c.orthoHeight}};
+  return {{"position", vec(c.position)},    {"look_at", vec(c.lookAt)},     {"up", vec(c.up)}, {"fov", c.fovy},
+          {"orthographic", c.orthographic}, {"ortho_height", c.orthoHeight}};
 }
 
 /// A camera object; false when it has no position. Errors name the key.
@@ -250,7 +259,8 @@ std::string writeSceneJson(const SceneDocument& doc) {
   j["volume"] = s.volume;
   json iso = {{"field", s.iso.field}, {"values", s.iso.values}};
   json isoColors = json::array();
-  for (const vec3f& col : s.iso.colors) isoColors.push_back(srgb(col));
+  for (const vec3f& col : s.iso.colors)
+    isoColors.push_back(srgb(col));
   iso["colors"] = isoColors;
   iso["color_field"] = s.iso.colorField;
   iso["color_map"] = transferFunctionToJson(s.iso.colorTf);
@@ -262,8 +272,10 @@ std::string writeSceneJson(const SceneDocument& doc) {
       jm["file"] = m.source;
     } else if (m.mesh) {
       json verts = json::array(), tris = json::array();
-      for (const vec3f& v : m.mesh->vertices) verts.push_back(vec(v));
-      for (const vec3i& t : m.mesh->triangles) tris.push_back({t.x, t.y, t.z});
+      for (const vec3f& v : m.mesh->vertices)
+        verts.push_back(vec(v));
+      for (const vec3i& t : m.mesh->triangles)
+        tris.push_back({t.x, t.y, t.z});
       jm["vertices"] = verts;
       jm["triangles"] = tris;
     }
@@ -271,13 +283,14 @@ std::string writeSceneJson(const SceneDocument& doc) {
   }
   j["meshes"] = meshes;
   json planes = json::array();
-  for (const ClipPlane& p : s.clip.planes) planes.push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
+  for (const ClipPlane& p : s.clip.planes)
+    planes.push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
   j["clip"] = {{"planes", planes}, {"meshes", s.clip.meshes}};
   if (!s.clip.box.empty())
     j["clip"]["box"] = {s.clip.box.lower.x, s.clip.box.lower.y, s.clip.box.lower.z,
                         s.clip.box.upper.x, s.clip.box.upper.y, s.clip.box.upper.z};
-  j["light"] = {{"headlight", s.light.headlight}, {"direction", vec(s.light.direction)},
-                {"ambient", s.light.terms.ambient}, {"diffuse", s.light.terms.diffuse},
+  j["light"] = {{"headlight", s.light.headlight},     {"direction", vec(s.light.direction)},
+                {"ambient", s.light.terms.ambient},   {"diffuse", s.light.terms.diffuse},
                 {"specular", s.light.terms.specular}, {"shininess", s.light.terms.shininess}};
   j["shading"] = shadingName(s.shading);
   j["ambient_occlusion"] = {{"rays", s.ao.rays}, {"length", s.ao.length}, {"volume", s.ao.volume}};
@@ -316,7 +329,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     j = json::parse(text);
   } catch (const json::exception& e) {
     std::string m = e.what();
-    if (const size_t p = m.find("] "); m.rfind("[json.exception.", 0) == 0 && p != std::string::npos) m = m.substr(p + 2);
+    if (const size_t p = m.find("] "); m.rfind("[json.exception.", 0) == 0 && p != std::string::npos)
+      m = m.substr(p + 2);
     fail(source, ": invalid JSON: ", m);
   }
   SceneDocument doc;
@@ -352,7 +366,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
       if (k.number("opacity_scale", scale)) key.opacityScale = scale;
       if (const json* v = k.find("iso_values")) {
         std::vector<float> values;
-        for (double d : k.numbers(*v, k.key("iso_values"), 0)) values.push_back(float(d));
+        for (double d : k.numbers(*v, k.key("iso_values"), 0))
+          values.push_back(float(d));
         key.isoValues = values;
       }
       doc.path.keyframes.push_back(key);
@@ -392,7 +407,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.only({"field", "values", "colors", "color_field", "color_map"});
     c.string("field", s.iso.field);
     if (const json* v = c.find("values"))
-      for (double d : c.numbers(*v, c.key("values"), 0)) s.iso.values.push_back(float(d));
+      for (double d : c.numbers(*v, c.key("values"), 0))
+        s.iso.values.push_back(float(d));
     if (const json* v = c.find("colors")) {
       if (!v->is_array()) fail(source, ": \"iso.colors\" must be an array of [r, g, b] (sRGB)");
       for (const json& col : *v) {
@@ -420,7 +436,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
         if (!v || !t || !v->is_array() || !t->is_array())
           fail(source, ": \"", m.key("file"), "\" or \"vertices\" and \"triangles\" arrays are needed");
         auto mesh = std::make_shared<TriangleMesh>();
-        for (const json& x : *v) mesh->vertices.push_back(vec3f(m.triple(x, m.key("vertices"))));
+        for (const json& x : *v)
+          mesh->vertices.push_back(vec3f(m.triple(x, m.key("vertices"))));
         for (const json& x : *t) {
           const vec3d idx = m.triple(x, m.key("triangles"));
           mesh->triangles.push_back(vec3i(int(idx.x), int(idx.y), int(idx.z)));
@@ -464,8 +481,11 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.number("shininess", s.light.terms.shininess);
   }
   r.choice<Shading>("shading", s.shading,
-                    {{"analytic", Shading::Analytic}, {"central", Shading::Central},
-                     {"smooth", Shading::Smooth}, {"none", Shading::None}, {"clamped", Shading::Smooth}});
+                    {{"analytic", Shading::Analytic},
+                     {"central", Shading::Central},
+                     {"smooth", Shading::Smooth},
+                     {"none", Shading::None},
+                     {"clamped", Shading::Smooth}});
   if (r.find("ambient_occlusion")) {
     const Reader c = r.child("ambient_occlusion");
     c.only({"rays", "length", "volume"});
@@ -476,8 +496,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   if (r.find("integration")) {
     const Reader c = r.child("integration");
     c.only({"sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
-            "early_termination", "termination_opacity", "vectorized", "lazy_gradients",
-            "join_segments"});
+            "early_termination", "termination_opacity", "vectorized", "lazy_gradients", "join_segments"});
     Integration& in = s.integration;
     c.choice<Sampling>("sampling", in.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
     c.choice<Reconstruction>("reconstruction", in.reconstruction,
@@ -486,7 +505,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     if (c.string("traversal", t)) {
       in.autoTraversal = t == "auto";
       if (!in.autoTraversal)
-        c.choice<TraversalKind>("traversal", in.traversal, {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
+        c.choice<TraversalKind>("traversal", in.traversal,
+                                {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
     }
     c.number("embree_below_visible_fraction", in.embreeBelowVisibleFraction);
     c.boolean("space_skipping", in.spaceSkipping);
@@ -497,8 +517,11 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.boolean("join_segments", in.joinSegments);
   }
   r.choice<DebugView>("debug", s.debug,
-                      {{"none", DebugView::None}, {"level", DebugView::Level}, {"brick", DebugView::Brick},
-                       {"region", DebugView::Region}, {"steps", DebugView::Steps}});
+                      {{"none", DebugView::None},
+                       {"level", DebugView::Level},
+                       {"brick", DebugView::Brick},
+                       {"region", DebugView::Region},
+                       {"steps", DebugView::Steps}});
   r.color("background", s.background);
   r.boolean("alpha", s.keepAlpha);
   try {

@@ -61,8 +61,7 @@ int PlaceSamplesImpl(const vec3f& org, const vec3f& dir, SegmentMarch& m, Sample
     V a = hn::Min(hn::Mul(hn::Add(hn::Sub(k, one), rho), dt), end);
     if (base == 0) a = hn::IfThenElse(hn::FirstN(d, 1), hn::Set(d, m.a), a);
     const auto live = hn::And(hn::Lt(a, end), hn::FirstN(d, size_t(limit) - base));
-    if (!hn::AllTrue(d, hn::Or(hn::Not(live), hn::Gt(b, a))))
-      return placeSamplesScalar(org, dir, m, batch, lengths);
+    if (!hn::AllTrue(d, hn::Or(hn::Not(live), hn::Gt(b, a)))) return placeSamplesScalar(org, dir, m, batch, lengths);
     const V mid = hn::Mul(half, hn::Add(a, b));
     hn::StoreU(hn::Sub(b, a), d, lengths + first + base);
     hn::StoreU(hn::MulAdd(dx, mid, ox), d, batch.x + first + base);
@@ -93,7 +92,8 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
   // through normalizeValue lane by lane.
   alignas(64) float normalized[kSampleBatch];
   if (!tf.fastLinear)
-    for (int i = 0; i < batch.count; ++i) normalized[i] = normalizeValue(tf.range, tf.logScale, batch.value[i]);
+    for (int i = 0; i < batch.count; ++i)
+      normalized[i] = normalizeValue(tf.range, tf.logScale, batch.value[i]);
   // tfTableAt: the entry below x and the one above, blended by x's fraction. Both entries are
   // one 32-byte load per sample, blended as four channels at once (cheaper than gathering each
   // channel), then sorted into channels.
@@ -104,10 +104,9 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
   for (size_t base = 0; base < count; base += lanes) {
     V n;
     if (tf.fastLinear)
-      n = hn::Min(hn::Max(hn::Mul(hn::Sub(hn::LoadU(d, batch.value + base), hn::Set(d, tf.lower)),
-                                  hn::Set(d, tf.scale)),
-                          zero),
-                  one);
+      n = hn::Min(
+          hn::Max(hn::Mul(hn::Sub(hn::LoadU(d, batch.value + base), hn::Set(d, tf.lower)), hn::Set(d, tf.scale)), zero),
+          one);
     else
       n = hn::LoadU(d, normalized + base);
     const V x = hn::Mul(n, hn::Set(d, float(kTfTableSize - 1)));
@@ -142,8 +141,8 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
   return !hn::AllFalse(d, anyShown);
 }
 
-void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const float* lengths,
-                          const VolumeShadeParams& p, ShadedBatch& out) {
+void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
+                          ShadedBatch& out) {
   const hn::CappedTag<float, kSampleBatch> d;
   const hn::RebindToSigned<decltype(d)> di;
   using V = hn::Vec<decltype(d)>;
@@ -183,8 +182,8 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
       const V rel = hn::Mul(gl, fade);
       const V low = hn::Set(d, kShadingFadeLow), high = hn::Set(d, kShadingFadeHigh);
       const auto full = hn::Ge(rel, high);
-      const V weight = hn::IfThenElse(full, one,
-                                      hn::IfThenElseZero(hn::Gt(rel, low), hn::Div(hn::Sub(rel, low), hn::Sub(high, low))));
+      const V weight = hn::IfThenElse(
+          full, one, hn::IfThenElseZero(hn::Gt(rel, low), hn::Div(hn::Sub(rel, low), hn::Sub(high, low))));
       const auto lit = hn::And(hn::Gt(gl, hn::Set(d, 1e-20f)), hn::Gt(weight, zero));
       const V inv = hn::Div(one, hn::IfThenElse(lit, gl, one));
       const V nx = hn::Mul(gx, inv), ny = hn::Mul(gy, inv), nz = hn::Mul(gz, inv);
@@ -195,11 +194,11 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
       const V litShade = hn::MulAdd(diffuse, hn::Abs(dotWith(p.light)), ambient);
       const V nh = hn::Abs(dotWith(p.halfVector));
       const V exponent = hn::Set(d, s.shininess);
-      const V highlight = hn::Mul(hn::Set(d, s.specular),
-                                  hn::Div(nh, hn::NegMulAdd(hn::Sub(exponent, one), nh, exponent)));
+      const V highlight =
+          hn::Mul(hn::Set(d, s.specular), hn::Div(nh, hn::NegMulAdd(hn::Sub(exponent, one), nh, exponent)));
       const V flat = hn::Add(ambient, diffuse);
-      const V shadeValue = hn::IfThenElse(
-          lit, hn::IfThenElse(full, litShade, hn::MulAdd(hn::Sub(litShade, flat), weight, flat)), flat);
+      const V shadeValue =
+          hn::IfThenElse(lit, hn::IfThenElse(full, litShade, hn::MulAdd(hn::Sub(litShade, flat), weight, flat)), flat);
       const V spec = hn::IfThenElseZero(lit, hn::IfThenElse(full, highlight, hn::Mul(highlight, weight)));
       r = hn::MulAdd(r, shadeValue, spec);
       g = hn::MulAdd(g, shadeValue, spec);

@@ -1,7 +1,7 @@
 #include "exabricks/render/transfer_function.h"
 
-#include "exabricks/core/error.h"
 #include "exabricks/core/color.h"
+#include "exabricks/core/error.h"
 #include "exabricks/render/sample_math.h"
 
 #include "tf_json.h"
@@ -15,16 +15,15 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
 #include <initializer_list>
+#include <iterator>
 #include <numbers>
 
 namespace exa {
 namespace {
 
 vec3f linearFromHex(uint32_t hex) {
-  return vec3f(srgbToLinear(float((hex >> 16) & 255u) / 255.f),
-               srgbToLinear(float((hex >> 8) & 255u) / 255.f),
+  return vec3f(srgbToLinear(float((hex >> 16) & 255u) / 255.f), srgbToLinear(float((hex >> 8) & 255u) / 255.f),
                srgbToLinear(float(hex & 255u) / 255.f));
 }
 
@@ -55,9 +54,7 @@ struct Msh {
 constexpr double kWhiteX = 0.95047, kWhiteY = 1.0, kWhiteZ = 1.08883; // D65
 constexpr double kLabEpsilon = 216.0 / 24389.0, kLabKappa = 24389.0 / 27.0;
 
-double labF(double t) {
-  return t > kLabEpsilon ? std::cbrt(t) : (kLabKappa * t + 16.0) / 116.0;
-}
+double labF(double t) { return t > kLabEpsilon ? std::cbrt(t) : (kLabKappa * t + 16.0) / 116.0; }
 double labFInverse(double f) {
   const double t = f * f * f;
   return t > kLabEpsilon ? t : (116.0 * f - 16.0) / kLabKappa;
@@ -80,8 +77,7 @@ vec3d mshToLinear(const Msh& p) {
   const double fy = (l + 16.0) / 116.0, fx = fy + a / 500.0, fz = fy - b / 200.0;
   const double x = kWhiteX * labFInverse(fx), y = kWhiteY * labFInverse(fy);
   const double z = kWhiteZ * labFInverse(fz);
-  return {3.2404542 * x - 1.5371385 * y - 0.4985314 * z,
-          -0.9692660 * x + 1.8760108 * y + 0.0415560 * z,
+  return {3.2404542 * x - 1.5371385 * y - 0.4985314 * z, -0.9692660 * x + 1.8760108 * y + 0.0415560 * z,
           0.0556434 * x - 0.2040259 * y + 1.0572252 * z};
 }
 
@@ -116,8 +112,7 @@ vec3d divergingColor(Msh a, Msh b, double t) {
 /// bends away from the Msh curve most where a channel is near zero (green at the red end); with
 /// 65 anchors that stays under half an 8-bit step.
 ColorMap diverging(const std::string& name, uint32_t lowHex, uint32_t highHex, int n) {
-  const Msh a = linearToMsh(vec3d(linearFromHex(lowHex))),
-            b = linearToMsh(vec3d(linearFromHex(highHex)));
+  const Msh a = linearToMsh(vec3d(linearFromHex(lowHex))), b = linearToMsh(vec3d(linearFromHex(highHex)));
   ColorMap m;
   m.name = name;
   for (int i = 0; i < n; ++i) {
@@ -127,8 +122,7 @@ ColorMap diverging(const std::string& name, uint32_t lowHex, uint32_t highHex, i
     // Ends are the published colours exactly; elsewhere Lab can leave the gamut by a hair.
     m.colors.push_back(i == 0       ? linearFromHex(lowHex)
                        : i == n - 1 ? linearFromHex(highHex)
-                                    : vec3f(float(std::clamp(c.x, 0.0, 1.0)),
-                                            float(std::clamp(c.y, 0.0, 1.0)),
+                                    : vec3f(float(std::clamp(c.x, 0.0, 1.0)), float(std::clamp(c.y, 0.0, 1.0)),
                                             float(std::clamp(c.z, 0.0, 1.0))));
   }
   return m;
@@ -139,8 +133,8 @@ ColorMap diverging(const std::string& name, uint32_t lowHex, uint32_t highHex, i
 /// end values so that rounding can never exceed what maxOpacity reports.
 float opacityAt(const std::vector<OpacityPoint>& points, float t) {
   if (points.empty()) return std::clamp(t, 0.f, 1.f);
-  const auto it = std::upper_bound(points.begin(), points.end(), t,
-                                   [](float v, const OpacityPoint& p) { return v < p.x; });
+  const auto it =
+      std::upper_bound(points.begin(), points.end(), t, [](float v, const OpacityPoint& p) { return v < p.x; });
   if (it == points.begin()) return points.front().alpha;
   if (it == points.end()) return points.back().alpha;
   const OpacityPoint& a = *(it - 1);
@@ -166,8 +160,7 @@ vec3f ColorMap::at(float t) const {
 }
 
 const std::vector<std::string>& builtinColorMapNames() {
-  static const std::vector<std::string> names = {"viridis", "plasma",       "inferno",
-                                                 "magma",   "cool-to-warm", "grayscale"};
+  static const std::vector<std::string> names = {"viridis", "plasma", "inferno", "magma", "cool-to-warm", "grayscale"};
   return names;
 }
 
@@ -177,21 +170,17 @@ ColorMap builtinColorMap(const std::string& name) {
   // Linear interpolation between them stays within a few 8-bit steps of the full tables (the
   // most in channels near zero, where the sRGB curve is steepest).
   if (name == "viridis")
-    return evenlySpaced(name, {0x440154, 0x481a6c, 0x472f7d, 0x414487, 0x39568c, 0x31688e, 0x2a788e,
-                               0x23888e, 0x1f988b, 0x22a884, 0x35b779, 0x54c568, 0x7ad151, 0xa5db36,
-                               0xd2e21b, 0xfde725});
+    return evenlySpaced(name, {0x440154, 0x481a6c, 0x472f7d, 0x414487, 0x39568c, 0x31688e, 0x2a788e, 0x23888e, 0x1f988b,
+                               0x22a884, 0x35b779, 0x54c568, 0x7ad151, 0xa5db36, 0xd2e21b, 0xfde725});
   if (name == "plasma")
-    return evenlySpaced(name, {0x0d0887, 0x330597, 0x5002a2, 0x6a00a8, 0x8405a7, 0x9c179e, 0xb12a90,
-                               0xc33d80, 0xd35171, 0xe16462, 0xed7953, 0xf68f44, 0xfca636, 0xfec029,
-                               0xf9dc24, 0xf0f921});
+    return evenlySpaced(name, {0x0d0887, 0x330597, 0x5002a2, 0x6a00a8, 0x8405a7, 0x9c179e, 0xb12a90, 0xc33d80, 0xd35171,
+                               0xe16462, 0xed7953, 0xf68f44, 0xfca636, 0xfec029, 0xf9dc24, 0xf0f921});
   if (name == "inferno")
-    return evenlySpaced(name, {0x000004, 0x0c0826, 0x240c4f, 0x420a68, 0x5d126e, 0x781c6d, 0x932667,
-                               0xae305c, 0xc73e4c, 0xdd513a, 0xed6925, 0xf8850f, 0xfca50a, 0xfac62d,
-                               0xf2e661, 0xfcffa4});
+    return evenlySpaced(name, {0x000004, 0x0c0826, 0x240c4f, 0x420a68, 0x5d126e, 0x781c6d, 0x932667, 0xae305c, 0xc73e4c,
+                               0xdd513a, 0xed6925, 0xf8850f, 0xfca50a, 0xfac62d, 0xf2e661, 0xfcffa4});
   if (name == "magma")
-    return evenlySpaced(name, {0x000004, 0x0b0924, 0x20114b, 0x3b0f70, 0x57157e, 0x721f81, 0x8c2981,
-                               0xa8327d, 0xc43c75, 0xde4968, 0xf1605d, 0xfa7f5e, 0xfe9f6d, 0xfebf84,
-                               0xfddea0, 0xfcfdbf});
+    return evenlySpaced(name, {0x000004, 0x0b0924, 0x20114b, 0x3b0f70, 0x57157e, 0x721f81, 0x8c2981, 0xa8327d, 0xc43c75,
+                               0xde4968, 0xf1605d, 0xfa7f5e, 0xfe9f6d, 0xfebf84, 0xfddea0, 0xfcfdbf});
   if (name == "cool-to-warm") return diverging(name, 0x3b4cc0, 0xb40426, 65);
   if (name == "grayscale") return evenlySpaced(name, {0x000000, 0xffffff});
   std::string known;
@@ -223,8 +212,7 @@ float TransferFunction::maxOpacity(const range1f& r) const {
     const float x = opacity[i].x;
     const bool first = i == 0 || opacity[i - 1].x < x;
     const bool last = i + 1 == opacity.size() || opacity[i + 1].x > x;
-    if ((last && x >= n0 && x <= n1) || (first && x > n0 && x <= n1))
-      m = std::max(m, opacity[i].alpha);
+    if ((last && x >= n0 && x <= n1) || (first && x > n0 && x <= n1)) m = std::max(m, opacity[i].alpha);
   }
   const float a = std::clamp(m * opacityScale, 0.f, 1.f);
   return std::isnan(a) ? 0.f : a;
@@ -259,8 +247,7 @@ double unitNumber(const json& v, const std::string& path, const std::string& wha
   return d;
 }
 
-vec3f srgbTriple(const json& r, const json& g, const json& b, const std::string& path,
-                 const std::string& what) {
+vec3f srgbTriple(const json& r, const json& g, const json& b, const std::string& path, const std::string& what) {
   return vec3f(srgbToLinear(float(unitNumber(r, path, what + " red"))),
                srgbToLinear(float(unitNumber(g, path, what + " green"))),
                srgbToLinear(float(unitNumber(b, path, what + " blue"))));
@@ -295,8 +282,7 @@ TransferFunction fromParaView(const json& preset, const std::string& path) {
   for (size_t i = 0; i < n; ++i) {
     xs[i] = number(rgb[4 * i], path, strCat("RGBPoints x of point ", i));
     if (i > 0 && xs[i] < xs[i - 1])
-      fail(path, ": RGBPoints x values must not decrease (point ", i, ": ", xs[i], " after ",
-           xs[i - 1], ")");
+      fail(path, ": RGBPoints x values must not decrease (point ", i, ": ", xs[i], " after ", xs[i - 1], ")");
   }
   const double lo = xs.front(), hi = xs.back();
   if (!(hi > lo)) fail(path, ": RGBPoints span no value range (first and last x are ", lo, ")");
@@ -304,12 +290,11 @@ TransferFunction fromParaView(const json& preset, const std::string& path) {
   TransferFunction tf;
   tf.valueRange = range1f{float(lo), float(hi)};
   const auto nameIt = preset.find("Name");
-  tf.colorMap.name = nameIt != preset.end() && nameIt->is_string() ? nameIt->get<std::string>()
-                                                                   : std::string("preset");
+  tf.colorMap.name = nameIt != preset.end() && nameIt->is_string() ? nameIt->get<std::string>() : std::string("preset");
   for (size_t i = 0; i < n; ++i) {
     tf.colorMap.positions.push_back(float((xs[i] - lo) / (hi - lo)));
-    tf.colorMap.colors.push_back(srgbTriple(rgb[4 * i + 1], rgb[4 * i + 2], rgb[4 * i + 3], path,
-                                            strCat("RGBPoints point ", i)));
+    tf.colorMap.colors.push_back(
+        srgbTriple(rgb[4 * i + 1], rgb[4 * i + 2], rgb[4 * i + 3], path, strCat("RGBPoints point ", i)));
   }
 
   const auto ptsIt = preset.find("Points");
@@ -323,8 +308,7 @@ TransferFunction fromParaView(const json& preset, const std::string& path) {
     for (size_t i = 0; i < pts.size(); i += 4) {
       const double x = number(pts[i], path, strCat("Points x of point ", i / 4));
       if (x < previous)
-        fail(path, ": Points x values must not decrease (point ", i / 4, ": ", x, " after ",
-             previous, ")");
+        fail(path, ": Points x values must not decrease (point ", i / 4, ": ", x, " after ", previous, ")");
       previous = x;
       const double a = unitNumber(pts[i + 1], path, strCat("Points opacity of point ", i / 4));
       raw.push_back({float((x - lo) / (hi - lo)), float(a)});
@@ -336,8 +320,7 @@ TransferFunction fromParaView(const json& preset, const std::string& path) {
 
 ColorMap customColorMap(const json& cm, const std::string& path) {
   for (auto it = cm.begin(); it != cm.end(); ++it)
-    if (it.key() != "points")
-      fail(path, ": unknown key \"", it.key(), "\" in \"colormap\" (known: points)");
+    if (it.key() != "points") fail(path, ": unknown key \"", it.key(), "\" in \"colormap\" (known: points)");
   const auto pts = cm.find("points");
   if (pts == cm.end() || !pts->is_array() || pts->size() < 2)
     fail(path, ": \"colormap\" {\"points\": [[x, r, g, b], ...]} needs at least two points");
@@ -345,12 +328,10 @@ ColorMap customColorMap(const json& cm, const std::string& path) {
   m.name = "custom";
   for (size_t i = 0; i < pts->size(); ++i) {
     const json& p = (*pts)[i];
-    if (!p.is_array() || p.size() != 4)
-      fail(path, ": colormap point ", i, " is ", p.dump(), ", expected [x, r, g, b]");
+    if (!p.is_array() || p.size() != 4) fail(path, ": colormap point ", i, " is ", p.dump(), ", expected [x, r, g, b]");
     const double x = unitNumber(p[0], path, strCat("colormap x of point ", i));
     if (!m.positions.empty() && x < m.positions.back())
-      fail(path, ": colormap x values must not decrease (point ", i, ": ", x, " after ",
-           m.positions.back(), ")");
+      fail(path, ": colormap x values must not decrease (point ", i, ": ", x, " after ", m.positions.back(), ")");
     m.positions.push_back(float(x));
     m.colors.push_back(srgbTriple(p[1], p[2], p[3], path, strCat("colormap point ", i)));
   }
@@ -363,8 +344,7 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
   static const char* const known[] = {"colormap", "opacity", "range", "log", "opacity_scale"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (std::find(std::begin(known), std::end(known), it.key()) == std::end(known))
-      fail(path, ": unknown key \"", it.key(),
-           "\" (known: colormap, opacity, range, log, opacity_scale)");
+      fail(path, ": unknown key \"", it.key(), "\" (known: colormap, opacity, range, log, opacity_scale)");
 
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
@@ -386,14 +366,11 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
     if (!op->is_array() || op->empty()) fail(path, ": \"opacity\" must be [[x, alpha], ...]");
     for (size_t i = 0; i < op->size(); ++i) {
       const json& p = (*op)[i];
-      if (!p.is_array() || p.size() != 2)
-        fail(path, ": opacity point ", i, " is ", p.dump(), ", expected [x, alpha]");
+      if (!p.is_array() || p.size() != 2) fail(path, ": opacity point ", i, " is ", p.dump(), ", expected [x, alpha]");
       const double x = unitNumber(p[0], path, strCat("opacity x of point ", i));
       if (!tf.opacity.empty() && x < tf.opacity.back().x)
-        fail(path, ": opacity x values must not decrease (point ", i, ": ", x, " after ",
-             tf.opacity.back().x, ")");
-      tf.opacity.push_back(
-          {float(x), float(unitNumber(p[1], path, strCat("opacity alpha of point ", i)))});
+        fail(path, ": opacity x values must not decrease (point ", i, ": ", x, " after ", tf.opacity.back().x, ")");
+      tf.opacity.push_back({float(x), float(unitNumber(p[1], path, strCat("opacity alpha of point ", i)))});
     }
   }
   if (const auto lg = j.find("log"); lg != j.end()) {
@@ -404,8 +381,7 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
     if (!r->is_array() || r->size() != 2) fail(path, ": \"range\" must be [low, high]");
     const double lo = number((*r)[0], path, "range low"), hi = number((*r)[1], path, "range high");
     if (!(lo < hi)) fail(path, ": range low (", lo, ") must be below range high (", hi, ")");
-    if (tf.logScale && !(lo > 0.0))
-      fail(path, ": a logarithmic range must be positive, got [", lo, ", ", hi, "]");
+    if (tf.logScale && !(lo > 0.0)) fail(path, ": a logarithmic range must be positive, got [", lo, ", ", hi, "]");
     tf.valueRange = range1f{float(lo), float(hi)};
   }
   if (const auto s = j.find("opacity_scale"); s != j.end() && s->is_string()) {
@@ -422,8 +398,8 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
 
 /// ParaView presets are recognised by their capitalised keys; anything else is the native form.
 bool isParaViewPreset(const json& j) {
-  for (const char* key : {"RGBPoints", "Points", "ColorSpace", "Name", "NanColor", "IndexedColors",
-                          "Annotations", "Creator"})
+  for (const char* key :
+       {"RGBPoints", "Points", "ColorSpace", "Name", "NanColor", "IndexedColors", "Annotations", "Creator"})
     if (j.contains(key)) return true;
   return false;
 }
@@ -434,8 +410,7 @@ TransferFunction transferFunctionFromJson(const json& j, const std::string& sour
   try {
     if (j.is_array()) {
       // ParaView writes a list of presets; the first one is used.
-      if (j.empty() || !j[0].is_object())
-        fail(source, ": expected an array of ParaView colour-map preset objects");
+      if (j.empty() || !j[0].is_object()) fail(source, ": expected an array of ParaView colour-map preset objects");
       return fromParaView(j[0], source);
     }
     if (!j.is_object())
@@ -464,7 +439,8 @@ json transferFunctionToJson(const TransferFunction& tf) {
   }
   if (!tf.opacity.empty()) {
     json op = json::array();
-    for (const OpacityPoint& p : tf.opacity) op.push_back({p.x, p.alpha});
+    for (const OpacityPoint& p : tf.opacity)
+      op.push_back({p.x, p.alpha});
     j["opacity"] = op;
   }
   if (!tf.valueRange.empty()) j["range"] = {tf.valueRange.lower, tf.valueRange.upper};

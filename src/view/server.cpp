@@ -34,7 +34,8 @@ std::string randomToken() {
   std::random_device device;
   std::string token;
   static const char* hex = "0123456789abcdef";
-  for (int i = 0; i < 48; ++i) token += hex[device() & 15u];
+  for (int i = 0; i < 48; ++i)
+    token += hex[device() & 15u];
   return token;
 }
 
@@ -42,7 +43,8 @@ std::string randomToken() {
 bool sameToken(const std::string& a, const std::string& b) {
   if (a.size() != b.size()) return false;
   unsigned char diff = 0;
-  for (size_t i = 0; i < a.size(); ++i) diff |= static_cast<unsigned char>(a[i] ^ b[i]);
+  for (size_t i = 0; i < a.size(); ++i)
+    diff |= static_cast<unsigned char>(a[i] ^ b[i]);
   return diff == 0;
 }
 
@@ -149,11 +151,13 @@ struct Server::Impl {
     for (SceneMesh& m : doc.scene.meshes) {
       if (m.mesh) continue; // given inline
       const auto& known = content.initial.scene.meshes;
-      const auto it = std::find_if(known.begin(), known.end(), [&](const SceneMesh& k) { return k.source == m.source; });
+      const auto it =
+          std::find_if(known.begin(), known.end(), [&](const SceneMesh& k) { return k.source == m.source; });
       if (it == known.end())
         reject(400, strCat(what, ": mesh '", m.source,
                            "' was not given when the viewer started (the viewer reads no file a request names; "
-                           "start it with --mesh ", m.source, ")"));
+                           "start it with --mesh ",
+                           m.source, ")"));
       m.mesh = it->mesh;
     }
     const Frame& f = doc.frame;
@@ -161,8 +165,8 @@ struct Server::Impl {
       reject(400, strCat(what, ": image size ", f.width, "x", f.height, " is outside 1..", options.maxImageSide,
                          " per side"));
     if (f.samplesPerPixel < 1 || f.samplesPerPixel > options.maxSamplesPerPixel)
-      reject(400, strCat(what, ": samples per pixel ", f.samplesPerPixel, " is outside 1..",
-                         options.maxSamplesPerPixel));
+      reject(400,
+             strCat(what, ": samples per pixel ", f.samplesPerPixel, " is outside 1..", options.maxSamplesPerPixel));
     try {
       doc.scene.validate();
       f.validate();
@@ -170,7 +174,8 @@ struct Server::Impl {
       auto check = [&](const std::string& field) {
         if (!field.empty()) model.requireField(field);
       };
-      for (const VolumeLayer& l : doc.scene.layers) check(l.field);
+      for (const VolumeLayer& l : doc.scene.layers)
+        check(l.field);
       check(doc.scene.iso.field);
       check(doc.scene.iso.colorField);
     } catch (const Error& e) {
@@ -257,14 +262,13 @@ struct Server::Impl {
       const float t = tf.normalize(v);
       counts[std::min(size_t(t * float(bins)), counts.size() - 1)]++;
     }
-    return {{"counts", counts}, {"below", below}, {"above", above}, {"excluded", none}, {"lo", lo}, {"hi", hi},
-            {"log", logScale}};
+    return {{"counts", counts}, {"below", below}, {"above", above}, {"excluded", none},
+            {"lo", lo},         {"hi", hi},       {"log", logScale}};
   }
 
   bool authorised(const httplib::Request& req) const {
     if (req.has_param("token") && sameToken(req.get_param_value("token"), token)) return true;
-    if (req.has_header("X-Exabricks-Token") && sameToken(req.get_header_value("X-Exabricks-Token"), token))
-      return true;
+    if (req.has_header("X-Exabricks-Token") && sameToken(req.get_header_value("X-Exabricks-Token"), token)) return true;
     const std::string cookies = req.get_header_value("Cookie");
     const std::string key = strCat(cookieName(), "=");
     for (size_t at = cookies.find(key); at != std::string::npos; at = cookies.find(key, at + 1)) {
@@ -370,12 +374,20 @@ void Server::Impl::routes() {
           if (frame) {
             const FrameInfo& i = frame->info;
             after = i.sequence;
-            header = {{"request", i.request}, {"sequence", i.sequence}, {"draft", i.draft},
-                      {"final", i.final}, {"width", i.width}, {"height", i.height},
-                      {"passes", i.passes}, {"target_passes", i.targetPasses},
-                      {"render_seconds", i.renderSeconds}, {"since_request", i.sinceRequest},
-                      {"samples", i.samples}, {"samples_per_second", i.samplesPerSecond},
-                      {"visible_regions", i.visibleRegions}, {"regions", i.regions}};
+            header = {{"request", i.request},
+                      {"sequence", i.sequence},
+                      {"draft", i.draft},
+                      {"final", i.final},
+                      {"width", i.width},
+                      {"height", i.height},
+                      {"passes", i.passes},
+                      {"target_passes", i.targetPasses},
+                      {"render_seconds", i.renderSeconds},
+                      {"since_request", i.sinceRequest},
+                      {"samples", i.samples},
+                      {"samples_per_second", i.samplesPerSecond},
+                      {"visible_regions", i.visibleRegions},
+                      {"regions", i.regions}};
             if (!frame->error.empty()) header["error"] = frame->error;
             image = frame->jpeg;
           } else {
@@ -406,13 +418,20 @@ void Server::Impl::routes() {
       const Session::Wait wait = session->waitSnapshot(uint64_t(id), 600 * 1000, s);
       snapshotWaits.fetch_sub(1);
       switch (wait) {
-      case Session::Wait::Ready: break;
-      case Session::Wait::Superseded: reject(409, "the view changed before its image was refined: save again");
-      case Session::Wait::Draft: reject(409, "the view is still being dragged: it has no full-resolution image yet");
-      case Session::Wait::Failed: reject(409, "the view could not be rendered (see the error shown)");
-      case Session::Wait::Unknown: reject(404, strCat("snapshot: no request ", uint64_t(id)));
-      case Session::Wait::TimedOut: reject(503, "the image is still refining after 10 minutes: save again later");
-      case Session::Wait::Stopped: reject(503, "the viewer is stopping");
+      case Session::Wait::Ready:
+        break;
+      case Session::Wait::Superseded:
+        reject(409, "the view changed before its image was refined: save again");
+      case Session::Wait::Draft:
+        reject(409, "the view is still being dragged: it has no full-resolution image yet");
+      case Session::Wait::Failed:
+        reject(409, "the view could not be rendered (see the error shown)");
+      case Session::Wait::Unknown:
+        reject(404, strCat("snapshot: no request ", uint64_t(id)));
+      case Session::Wait::TimedOut:
+        reject(503, "the image is still refining after 10 minutes: save again later");
+      case Session::Wait::Stopped:
+        reject(503, "the viewer is stopping");
       }
     } else {
       s = session->snapshot();
@@ -436,7 +455,8 @@ void Server::Impl::routes() {
     if (field < 0) reject(400, strCat("first-picture: unknown field '", name, "'"));
     const DefaultChoices c =
         adaptTransferFunction(model, content.dataset, field, defaultTransferFunction(), true, true);
-    sendJson(res, {{"field", name}, {"transfer_function", json::parse(transferFunctionJson(c.tf))}, {"notes", c.notes}});
+    sendJson(res,
+             {{"field", name}, {"transfer_function", json::parse(transferFunctionJson(c.tf))}, {"notes", c.notes}});
   });
 
   // The scene in effect, in the form `exabricks render --scene` reads.
@@ -468,8 +488,9 @@ void Server::Impl::routes() {
       tf.valueRange = range1f();
       tf.opacityScale = 0.f;
     }
-    sendJson(res, {{"transfer_function", json::parse(transferFunctionJson(tf))}, {"preset", preset},
-                   {"name", tf.colorMap.name}});
+    sendJson(
+        res,
+        {{"transfer_function", json::parse(transferFunctionJson(tf))}, {"preset", preset}, {"name", tf.colorMap.name}});
   });
 }
 
@@ -479,9 +500,7 @@ Server::Server(ViewContent content, ServerOptions options) : impl_(std::make_uni
   impl_->token = impl_->options.token.empty() ? randomToken() : impl_->options.token;
 }
 
-Server::~Server() {
-  stop();
-}
+Server::~Server() { stop(); }
 
 void Server::bind() {
   Impl& s = *impl_;

@@ -32,14 +32,14 @@ namespace view {
 
 struct ServerOptions {
   std::string host = "127.0.0.1";
-  int port = 8080;                      ///< 0: any free port
-  std::string token;                    ///< empty: a random token
-  int maxImageSide = 4096;              ///< largest width or height a request may ask for
+  int port = 8080;         ///< 0: any free port
+  std::string token;       ///< empty: a random token
+  int maxImageSide = 4096; ///< largest width or height a request may ask for
   int maxSamplesPerPixel = 1024;
-  size_t maxRequestBytes = 8u << 20;    ///< largest request body
-  int maxStreams = 8;                   ///< concurrent frame streams (pages)
-  int jpegQuality = 90;                 ///< drafts and refining frames
-  int finalJpegQuality = 95;            ///< the frame that completes the refinement
+  size_t maxRequestBytes = 8u << 20; ///< largest request body
+  int maxStreams = 8;                ///< concurrent frame streams (pages)
+  int jpegQuality = 90;              ///< drafts and refining frames
+  int finalJpegQuality = 95;         ///< the frame that completes the refinement
 };
 
 /// What the viewer shows: the dataset, its name, and the first scene (defaults already adapted
@@ -48,21 +48,21 @@ struct ServerOptions {
 struct ViewContent {
   std::shared_ptr<const Model> model;
   DatasetInfo dataset;
-  std::string input;          ///< the dataset's path as scene files record it (absolute), or empty
-  std::string name;           ///< shown on the page
+  std::string input; ///< the dataset's path as scene files record it (absolute), or empty
+  std::string name;  ///< shown on the page
   SceneDocument initial;
 };
 
 /// Statistics of a published frame (also sent to the page with each frame).
 struct FrameInfo {
-  uint64_t request = 0;       ///< the request it answers
-  uint64_t sequence = 0;      ///< increases with every published frame
+  uint64_t request = 0;  ///< the request it answers
+  uint64_t sequence = 0; ///< increases with every published frame
   bool draft = false;
-  bool final = false;         ///< the last frame of the request (target passes reached)
+  bool final = false; ///< the last frame of the request (target passes reached)
   int width = 0, height = 0;
   int passes = 0, targetPasses = 0;
-  double renderSeconds = 0;   ///< this frame's pass (or draft)
-  double sinceRequest = 0;    ///< seconds from accepting the request to publishing this frame
+  double renderSeconds = 0; ///< this frame's pass (or draft)
+  double sinceRequest = 0;  ///< seconds from accepting the request to publishing this frame
   double samplesPerSecond = 0;
   uint64_t samples = 0;
   size_t visibleRegions = 0, regions = 0;

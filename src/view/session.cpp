@@ -95,15 +95,22 @@ Session::Snapshot Session::snapshot() const {
 
 Session::Wait Session::waitSnapshot(uint64_t id, int timeoutMs, Snapshot& out) const {
   std::unique_lock<std::mutex> lock(mutex_);
-  auto complete = [&] { return snapshot_.image && snapshot_.request == id && snapshot_.passes >= snapshot_.targetPasses; };
+  auto complete = [&] {
+    return snapshot_.image && snapshot_.request == id && snapshot_.passes >= snapshot_.targetPasses;
+  };
   if (id == 0 || id > newest_) return Wait::Unknown;
   std::optional<Wait> answer;
   const bool inTime = frameReady_.wait_for(lock, std::chrono::milliseconds(timeoutMs), [&] {
-    if (complete()) answer = Wait::Ready;
-    else if (stopping_) answer = Wait::Stopped;
-    else if (failed_ == id) answer = Wait::Failed;
-    else if (id != newest_) answer = Wait::Superseded;
-    else if (newestInteractive_) answer = Wait::Draft;
+    if (complete())
+      answer = Wait::Ready;
+    else if (stopping_)
+      answer = Wait::Stopped;
+    else if (failed_ == id)
+      answer = Wait::Failed;
+    else if (id != newest_)
+      answer = Wait::Superseded;
+    else if (newestInteractive_)
+      answer = Wait::Draft;
     return answer.has_value();
   });
   if (!inTime) return Wait::TimedOut;

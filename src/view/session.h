@@ -70,18 +70,18 @@ private:
   ServerOptions options_;
   mutable std::mutex mutex_;
   mutable std::condition_variable requestReady_, frameReady_;
-  std::optional<Request> pending_;      ///< newest request not yet taken by the render thread
-  uint64_t newest_ = 0;                 ///< number of the newest accepted request
-  bool newestInteractive_ = false;      ///< it asked for a draft only (the user is dragging)
-  uint64_t failed_ = 0;                 ///< the newest request that ended in an error
+  std::optional<Request> pending_; ///< newest request not yet taken by the render thread
+  uint64_t newest_ = 0;            ///< number of the newest accepted request
+  bool newestInteractive_ = false; ///< it asked for a draft only (the user is dragging)
+  uint64_t failed_ = 0;            ///< the newest request that ended in an error
   std::optional<SceneDocument> currentDoc_;
   std::atomic<bool> cancel_{false};
   bool stopping_ = false;
   uint64_t sequence_ = 0;
   std::shared_ptr<const PublishedFrame> latest_;
   Snapshot snapshot_;
-  int draftDivisor_ = 4;                ///< adapted so that drafts take about kDraftSeconds
-  std::string lastDraft_;               ///< the scene (JSON) of the last draft published
+  int draftDivisor_ = 4;  ///< adapted so that drafts take about kDraftSeconds
+  std::string lastDraft_; ///< the scene (JSON) of the last draft published
   FrameBuffer buffer_, draftBuffer_;
   std::thread thread_;
 };

@@ -7,7 +7,7 @@
 namespace exa::view {
 
 struct WebAsset {
-  const char* path;  ///< URL path, e.g. "/viewer.js"
+  const char* path; ///< URL path, e.g. "/viewer.js"
   const char* mime;
   const char* data;
   size_t size;

@@ -14,7 +14,8 @@ int main() {
   frame.camera = exa::Camera::frame(exa::box3d(exa::vec3d(b.lower), exa::vec3d(b.upper)), 30, 25, 40, false);
   const exa::Image image = renderer.render(frame);
   float alpha = 0.f;
-  for (const exa::vec4f& p : image.pixels) alpha += p.w;
+  for (const exa::vec4f& p : image.pixels)
+    alpha += p.w;
   std::printf("mean alpha %.3f\n", alpha / float(image.pixels.size()));
   return alpha > 0.f ? 0 : 1;
 }

@@ -32,7 +32,7 @@ struct Segment {
 /// running exactly along a shared face belongs to one region only. Returns false when the ray
 /// misses the box.
 EXA_HOST_DEVICE inline bool rayBoxInterval(const Ray& ray, const vec3f& invDir, const box3f& box, float& t0,
-                           float& t1) {
+                                           float& t1) {
   t0 = -std::numeric_limits<float>::infinity();
   t1 = std::numeric_limits<float>::infinity();
   for (int a = 0; a < 3; ++a) {
@@ -59,14 +59,15 @@ struct RegionTreeView {
   /// Per node, whether any visible region lies below it (the walk skips the others); null: not
   /// known, every subtree is entered.
   const uint8_t* subtreeVisible = nullptr;
-  box3f bounds;                        ///< box of the root
+  box3f bounds; ///< box of the root
 };
 
 /// Front-to-back walk of the k-d tree with an explicit stack: calls `emit(const Segment&)` for
 /// every visible region the ray passes through, in order, until it returns false. Each leaf's
 /// segment is the interval the split planes leave it, clipped to the previous exit. Subtrees
 /// without visible regions are not entered.
-template <typename Emit> EXA_HOST_DEVICE inline void walkRegionTree(const RegionTreeView& tree, const Ray& ray, Emit&& emit) {
+template <typename Emit>
+EXA_HOST_DEVICE inline void walkRegionTree(const RegionTreeView& tree, const Ray& ray, Emit&& emit) {
   if (!tree.nodes) return;
   const vec3f inv = safeInverse(ray.dir);
   float t0, t1;

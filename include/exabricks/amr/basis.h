@@ -42,14 +42,14 @@ EXA_HOST_DEVICE inline float inverseWidth(int level) {
 
 /// Running sums of the quotient B = sumWV / sumW and of their derivatives.
 template <typename Real> struct BasisAccumulator {
-  Real sumW = 0, sumWV = 0;          ///< sum H, sum H (v - v0)
+  Real sumW = 0, sumWV = 0; ///< sum H, sum H (v - v0)
   vec3<Real> dSumW{Real(0)}, dSumWV{Real(0)};
-  Real v0 = 0;                       ///< reference value: the first cell's
+  Real v0 = 0; ///< reference value: the first cell's
   bool haveReference = false;
 
   /// Adds every cell of `brick` whose support holds p (lattice units).
-  EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const float* brickValues,
-                                       const vec3<Real>& p, bool withGradient) {
+  EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const float* brickValues, const vec3<Real>& p,
+                                       bool withGradient) {
     const Real invW = Real(inverseWidth(brick.level));
     int idx[3][2];
     Real h[3][2], dh[3][2];
@@ -79,15 +79,13 @@ template <typename Real> struct BasisAccumulator {
     }
     const float* values = brickValues + brick.valueOffset;
     if (!haveReference && count[0] > 0 && count[1] > 0 && count[2] > 0)
-      setReference(Real(values[size_t(idx[0][0]) + size_t(brick.size.x) * (size_t(idx[1][0]) +
-                                                                           size_t(brick.size.y) * idx[2][0])]));
+      setReference(Real(
+          values[size_t(idx[0][0]) + size_t(brick.size.x) * (size_t(idx[1][0]) + size_t(brick.size.y) * idx[2][0])]));
     for (int iz = 0; iz < count[2]; ++iz)
       for (int iy = 0; iy < count[1]; ++iy) {
-        const float* row =
-            values + size_t(brick.size.x) * (size_t(idx[1][iy]) + size_t(brick.size.y) * idx[2][iz]);
+        const float* row = values + size_t(brick.size.x) * (size_t(idx[1][iy]) + size_t(brick.size.y) * idx[2][iz]);
         for (int ix = 0; ix < count[0]; ++ix)
-          addCell(Real(row[idx[0][ix]]), h[0][ix], h[1][iy], h[2][iz], dh[0][ix], dh[1][iy], dh[2][iz],
-                  withGradient);
+          addCell(Real(row[idx[0][ix]]), h[0][ix], h[1][iy], h[2][iz], dh[0][ix], dh[1][iy], dh[2][iz], withGradient);
       }
   }
 
@@ -116,19 +114,15 @@ template <typename Real> struct BasisAccumulator {
   EXA_HOST_DEVICE inline bool valid() const { return sumW > Real(0); }
   EXA_HOST_DEVICE inline Real value() const { return v0 + sumWV / sumW; }
   /// Gradient in lattice units (per finest-level cell width).
-  EXA_HOST_DEVICE inline vec3<Real> gradient() const {
-    return (dSumWV * sumW - dSumW * sumWV) / (sumW * sumW);
-  }
+  EXA_HOST_DEVICE inline vec3<Real> gradient() const { return (dSumWV * sumW - dSumW * sumWV) / (sumW * sumW); }
 };
 
 /// Index of the region that holds p (lattice units), or kNoRegion. Points on a split plane go
 /// to the upper side, which holds every cell whose support contains them.
-template <typename Real>
-EXA_HOST_DEVICE inline uint32_t locateRegion(const FieldView& view, const vec3<Real>& p) {
+template <typename Real> EXA_HOST_DEVICE inline uint32_t locateRegion(const FieldView& view, const vec3<Real>& p) {
   if (!view.nodes) return kNoRegion;
   for (int a = 0; a < 3; ++a)
-    if (!(p[a] >= Real(view.bounds.lower[a]) && p[a] <= Real(view.bounds.upper[a])))
-      return kNoRegion;
+    if (!(p[a] >= Real(view.bounds.lower[a]) && p[a] <= Real(view.bounds.upper[a]))) return kNoRegion;
   uint32_t n = 0;
   while (view.nodes[n].axis != kLeafAxis) {
     const RegionKdNode& node = view.nodes[n];
@@ -154,8 +148,7 @@ EXA_HOST_DEVICE inline bool sampleBricks(const FieldView& view, const uint32_t* 
 /// Reconstructs the field at p (lattice units) from the bricks of region `regionIndex`: every
 /// brick whose support reaches p when p lies in the region.
 template <typename Real>
-EXA_HOST_DEVICE inline bool sampleRegion(const FieldView& view, uint32_t regionIndex,
-                                         const vec3<Real>& p, Real& value,
+EXA_HOST_DEVICE inline bool sampleRegion(const FieldView& view, uint32_t regionIndex, const vec3<Real>& p, Real& value,
                                          vec3<Real>* gradient = nullptr) {
   const Region& region = view.regions[regionIndex];
   return sampleBricks(view, view.brickIds + region.brickBegin, region.brickCount, p, value, gradient);

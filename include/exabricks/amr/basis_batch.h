@@ -26,7 +26,7 @@ struct SampleBatch {
   alignas(64) float x[2 * kSampleBatch], y[2 * kSampleBatch], z[2 * kSampleBatch];
   alignas(64) float value[kSampleBatch];
   alignas(64) float gx[kSampleBatch], gy[kSampleBatch], gz[kSampleBatch]; ///< per lattice unit
-  alignas(64) int32_t valid[kSampleBatch]; ///< nonzero where some cell has weight
+  alignas(64) int32_t valid[kSampleBatch];                                ///< nonzero where some cell has weight
 };
 
 /// Reconstructs every sample of the batch from the bricks of region `regionIndex` (value, and the
@@ -46,8 +46,8 @@ inline void sampleBricksBatchScalar(const FieldView& view, const uint32_t* brick
   for (int i = 0; i < batch.count; ++i) {
     float v = 0.f;
     vec3f g(0.f);
-    const bool ok = sampleBricks(view, brickIds, brickCount, vec3f(batch.x[i], batch.y[i], batch.z[i]), v,
-                                 gradient ? &g : nullptr);
+    const bool ok =
+        sampleBricks(view, brickIds, brickCount, vec3f(batch.x[i], batch.y[i], batch.z[i]), v, gradient ? &g : nullptr);
     batch.valid[i] = ok;
     batch.value[i] = ok ? v : 0.f;
     batch.gx[i] = g.x, batch.gy[i] = g.y, batch.gz[i] = g.z;

@@ -65,7 +65,6 @@ std::vector<Brick> buildBricksReordering(std::vector<Cell>& cells, const std::ve
                                          const BrickBuildOptions& options = {});
 
 /// Reorders values given per input cell into brick order.
-std::vector<float> toBrickOrder(const std::vector<float>& cellValues,
-                                const std::vector<uint32_t>& cellOfSlot);
+std::vector<float> toBrickOrder(const std::vector<float>& cellValues, const std::vector<uint32_t>& cellOfSlot);
 
 } // namespace exa

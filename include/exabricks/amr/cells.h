@@ -71,11 +71,13 @@ template <typename Keep> void keepCells(CellSet& set, Keep&& keep) {
   for (size_t i = 0; i < set.cells.size(); ++i) {
     if (!keep(set.cells[i])) continue;
     set.cells[kept] = set.cells[i];
-    for (Field& f : set.fields) f.values[kept] = f.values[i];
+    for (Field& f : set.fields)
+      f.values[kept] = f.values[i];
     ++kept;
   }
   set.cells.resize(kept);
-  for (Field& f : set.fields) f.values.resize(kept);
+  for (Field& f : set.fields)
+    f.values.resize(kept);
 }
 
 /// Validates cells and fields independently of where they came from: levels in range, corners

@@ -37,7 +37,8 @@ class CellCensus {
 public:
   void add(const Cell& cell);
   void add(const Cell* cells, size_t count) {
-    for (size_t i = 0; i < count; ++i) add(cells[i]);
+    for (size_t i = 0; i < count; ++i)
+      add(cells[i]);
   }
   Census finish() const;
 
@@ -105,10 +106,10 @@ void keepSupportOf(CellSet& set, const box3l& part);
 class KdPartition {
 public:
   struct Node {
-    int axis = -1;         ///< -1: a leaf
-    int64_t split = 0;     ///< lattice plane: the low child holds x[axis] < split
+    int axis = -1;     ///< -1: a leaf
+    int64_t split = 0; ///< lattice plane: the low child holds x[axis] < split
     int child[2] = {-1, -1};
-    int part = -1;         ///< leaves: the part
+    int part = -1; ///< leaves: the part
   };
 
   /// Splits the census's bounds into `parts` parts: each split halves the parts (the larger half

@@ -39,9 +39,9 @@ constexpr uint32_t kLeafAxis = 3;
 
 struct RegionSet {
   std::vector<Region> regions;
-  std::vector<uint32_t> brickIds;       ///< per region, ascending brick indices
-  std::vector<RegionKdNode> nodes;      ///< node 0 is the root (absent when there are no regions)
-  box3f bounds;                         ///< lattice box of the root node
+  std::vector<uint32_t> brickIds;  ///< per region, ascending brick indices
+  std::vector<RegionKdNode> nodes; ///< node 0 is the root (absent when there are no regions)
+  box3f bounds;                    ///< lattice box of the root node
   /// Per field, per region: range of the values of every cell whose support overlaps it.
   std::vector<std::vector<range1f>> valueRanges;
 

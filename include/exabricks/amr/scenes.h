@@ -12,15 +12,15 @@
 namespace exa {
 
 struct SceneOptions {
-  std::string name = "blobs";   ///< one of sceneNames()
+  std::string name = "blobs";    ///< one of sceneNames()
   uint64_t targetCells = 200000; ///< approximate number of cells to produce
   uint64_t seed = 1;
-  int levels = 4;               ///< number of levels (finest 0 .. coarsest levels-1)
+  int levels = 4; ///< number of levels (finest 0 .. coarsest levels-1)
   /// Time series (blobs): the blobs move with time; the refinement follows them as they were at
   /// gridTime (negative: at `time`), so steps between two regrids share one hierarchy.
   double time = 0;
   double gridTime = -1;
-  int base = 0;                 ///< base cells per axis (0: chosen to approach targetCells)
+  int base = 0; ///< base cells per axis (0: chosen to approach targetCells)
 };
 
 struct SceneInfo {

@@ -34,17 +34,15 @@ template <typename... Args> [[noreturn]] void failUsage(Args&&... args) {
 }
 
 /// Throws exa::Error with the concatenated arguments as message.
-template <typename... Args> [[noreturn]] void fail(Args&&... args) {
-  throw Error(strCat(std::forward<Args>(args)...));
-}
+template <typename... Args> [[noreturn]] void fail(Args&&... args) { throw Error(strCat(std::forward<Args>(args)...)); }
 
 } // namespace exa
 
 /// Internal invariant check; failing it is a bug, not bad input. Extra arguments describe the
 /// values involved.
-#define EXA_CHECK(...)                                                                             \
-  do {                                                                                             \
-    if (!(EXA_CHECK_CONDITION(__VA_ARGS__, 0)))                                                    \
-      ::exa::fail("internal check failed at " __FILE__ ":", __LINE__, ": " #__VA_ARGS__);          \
+#define EXA_CHECK(...)                                                                                                 \
+  do {                                                                                                                 \
+    if (!(EXA_CHECK_CONDITION(__VA_ARGS__, 0)))                                                                        \
+      ::exa::fail("internal check failed at " __FILE__ ":", __LINE__, ": " #__VA_ARGS__);                              \
   } while (0)
 #define EXA_CHECK_CONDITION(cond, ...) (cond)

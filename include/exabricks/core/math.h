@@ -23,8 +23,7 @@ template <typename T> struct vec3 {
   constexpr vec3() = default;
   EXA_HOST_DEVICE constexpr explicit vec3(T s) : x(s), y(s), z(s) {}
   EXA_HOST_DEVICE constexpr vec3(T x_, T y_, T z_) : x(x_), y(y_), z(z_) {}
-  template <typename U>
-  EXA_HOST_DEVICE constexpr explicit vec3(const vec3<U>& o) : x(T(o.x)), y(T(o.y)), z(T(o.z)) {}
+  template <typename U> EXA_HOST_DEVICE constexpr explicit vec3(const vec3<U>& o) : x(T(o.x)), y(T(o.y)), z(T(o.z)) {}
   EXA_HOST_DEVICE constexpr T& operator[](int i) { return i == 0 ? x : (i == 1 ? y : z); }
   EXA_HOST_DEVICE constexpr const T& operator[](int i) const { return i == 0 ? x : (i == 1 ? y : z); }
   friend constexpr bool operator==(const vec3& a, const vec3& b) = default;
@@ -35,16 +34,15 @@ using vec3l = vec3<int64_t>;
 using vec3f = vec3<float>;
 using vec3d = vec3<double>;
 
-#define EXA_VEC_BINOP(op)                                                                          \
-  template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator op(const vec3<T>& a,          \
-                                                                       const vec3<T>& b) {         \
-    return {a.x op b.x, a.y op b.y, a.z op b.z};                                                   \
-  }                                                                                                \
-  template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator op(const vec3<T>& a, T s) {     \
-    return {a.x op s, a.y op s, a.z op s};                                                         \
-  }                                                                                                \
-  template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator op(T s, const vec3<T>& a) {     \
-    return {s op a.x, s op a.y, s op a.z};                                                         \
+#define EXA_VEC_BINOP(op)                                                                                              \
+  template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator op(const vec3<T>& a, const vec3<T>& b) {            \
+    return {a.x op b.x, a.y op b.y, a.z op b.z};                                                                       \
+  }                                                                                                                    \
+  template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator op(const vec3<T>& a, T s) {                         \
+    return {a.x op s, a.y op s, a.z op s};                                                                             \
+  }                                                                                                                    \
+  template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator op(T s, const vec3<T>& a) {                         \
+    return {s op a.x, s op a.y, s op a.z};                                                                             \
   }
 EXA_VEC_BINOP(+)
 EXA_VEC_BINOP(-)
@@ -52,9 +50,7 @@ EXA_VEC_BINOP(*)
 EXA_VEC_BINOP(/)
 #undef EXA_VEC_BINOP
 
-template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator-(const vec3<T>& a) {
-  return {-a.x, -a.y, -a.z};
-}
+template <typename T> EXA_HOST_DEVICE constexpr vec3<T> operator-(const vec3<T>& a) { return {-a.x, -a.y, -a.z}; }
 template <typename T> EXA_HOST_DEVICE constexpr vec3<T>& operator+=(vec3<T>& a, const vec3<T>& b) {
   a = a + b;
   return a;
@@ -75,9 +71,7 @@ template <typename T> EXA_HOST_DEVICE constexpr T dot(const vec3<T>& a, const ve
 template <typename T> EXA_HOST_DEVICE constexpr vec3<T> cross(const vec3<T>& a, const vec3<T>& b) {
   return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
 }
-template <typename T> EXA_HOST_DEVICE inline T length(const vec3<T>& a) {
-  return std::sqrt(dot(a, a));
-}
+template <typename T> EXA_HOST_DEVICE inline T length(const vec3<T>& a) { return std::sqrt(dot(a, a)); }
 template <typename T> EXA_HOST_DEVICE inline vec3<T> normalize(const vec3<T>& a) {
   const T l = length(a);
   return l > T(0) ? a * (T(1) / l) : a;

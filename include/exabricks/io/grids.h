@@ -11,8 +11,8 @@
 namespace exa {
 
 struct GridPatch {
-  vec3d lower, upper;                     ///< world box of the grid
-  vec3l cells;                            ///< cells per axis
+  vec3d lower, upper;                      ///< world box of the grid
+  vec3l cells;                             ///< cells per axis
   std::vector<std::vector<double>> values; ///< per field, x fastest, one per cell
 };
 

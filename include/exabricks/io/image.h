@@ -20,8 +20,7 @@ std::vector<unsigned char> encodePng(const Image& image, bool keepAlpha, const v
 
 /// Writes an 8-bit sRGB PNG atomically. With keepAlpha the PNG has an alpha channel
 /// (un-premultiplied colour); otherwise pixels are composited over `background` (linear RGB).
-void writePng(const std::string& path, const Image& image, bool keepAlpha,
-              const vec3f& background = vec3f(0.f));
+void writePng(const std::string& path, const Image& image, bool keepAlpha, const vec3f& background = vec3f(0.f));
 
 /// Writes an 8-bit sRGB JPEG (composited over `background`) atomically.
 void writeJpeg(const std::string& path, const Image& image, const vec3f& background = vec3f(0.f), int quality = 92);

@@ -21,13 +21,13 @@ struct ReadRequest {
   /// Finest-lattice box; when not empty, only cells that overlap it are returned (readers that
   /// can skip the data of whole patches outside it do so).
   box3i box;
-  RawOptions raw;                  ///< dimensions, type and merging of raw volumes
+  RawOptions raw; ///< dimensions, type and merging of raw volumes
 };
 
 struct FormatReader {
   InputKind kind;
-  const char* name;                                          ///< "AMReX plotfile", ...
-  bool (*probe)(const std::string& path);                     ///< by content first, by name last
+  const char* name;                       ///< "AMReX plotfile", ...
+  bool (*probe)(const std::string& path); ///< by content first, by name last
   std::vector<std::string> (*listFields)(const std::string& path);
   CellSet (*read)(const std::string& path, const ReadRequest& request);
   /// A field's value range from metadata alone, where the format records one (else null, or

@@ -15,8 +15,8 @@ struct Scene;
 struct CameraKeyframe {
   double time = 0;
   Camera camera;
-  std::optional<range1f> range;        ///< the first layer's value range
-  std::optional<float> opacityScale;   ///< the first layer's opacity scale (> 0)
+  std::optional<range1f> range;      ///< the first layer's value range
+  std::optional<float> opacityScale; ///< the first layer's opacity scale (> 0)
   std::optional<std::vector<float>> isoValues;
 };
 
@@ -49,7 +49,6 @@ Camera orbitCamera(const box3d& worldBox, double startAzimuthDeg, double elevati
                    bool orthographic, int frame, int frames);
 /// A fly-in: from three times the framing distance, 60 degrees of azimuth away, to the framing
 /// view at the given azimuth and elevation (three keyframes at times 0, 0.5 and 1).
-CameraPath flyInPath(const box3d& worldBox, double azimuthDeg, double elevationDeg, double fovyDeg,
-                     bool orthographic);
+CameraPath flyInPath(const box3d& worldBox, double azimuthDeg, double elevationDeg, double fovyDeg, bool orthographic);
 
 } // namespace exa

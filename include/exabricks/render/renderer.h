@@ -33,11 +33,11 @@ struct Model;
 /// Dataset-wide values the renderer needs, explicit so that a renderer that sees only part of
 /// the data can be given the whole dataset's values. `of()` computes them once from a model.
 struct DatasetInfo {
-  float referenceWidth = 1.f;        ///< lattice units: opacity is per this width; fixed steps use it
-  double worldDiagonal = 1.0;        ///< default ambient-occlusion length is a tenth of it
-  std::vector<range1f> valueRanges;  ///< per field: the default transfer-function range
-  float extentCells = 1.f;           ///< the data's longest side in finest cells
-  float defaultOpacityScale = 1.f;   ///< a ray through the whole data gathers an optical depth of ~8
+  float referenceWidth = 1.f;       ///< lattice units: opacity is per this width; fixed steps use it
+  double worldDiagonal = 1.0;       ///< default ambient-occlusion length is a tenth of it
+  std::vector<range1f> valueRanges; ///< per field: the default transfer-function range
+  float extentCells = 1.f;          ///< the data's longest side in finest cells
+  float defaultOpacityScale = 1.f;  ///< a ray through the whole data gathers an optical depth of ~8
 
   static DatasetInfo of(const Model& model);
   /// The values of a dataset whose finest level, lattice bounds of the cells, world scale and
@@ -52,30 +52,30 @@ vec3f debugLevelColor(int level);
 /// The nearest surface along a ray.
 struct SurfaceHit {
   enum Kind { Mesh, Iso } kind = Mesh;
-  double distance = 0;     ///< world distance from the ray origin along the unit direction
-  vec3d position{0.0};     ///< world
-  vec3f normal{0.f};       ///< world, unit, facing the ray origin
-  int index = 0;           ///< mesh number, or iso-value number
+  double distance = 0; ///< world distance from the ray origin along the unit direction
+  vec3d position{0.0}; ///< world
+  vec3f normal{0.f};   ///< world, unit, facing the ray origin
+  int index = 0;       ///< mesh number, or iso-value number
 };
 
 struct RenderStats {
-  double seconds = 0;             ///< wall time of the pass(es)
+  double seconds = 0; ///< wall time of the pass(es)
   uint64_t rays = 0;
-  uint64_t samples = 0;           ///< reconstructed samples (value + gradient each)
-  uint64_t regionsVisited = 0;    ///< segments integrated
-  uint64_t surfaceHits = 0;       ///< primary rays that ended on a mesh or iso-surface
-  uint64_t isoSamples = 0;        ///< samples taken to find iso-surfaces (incl. root finding)
+  uint64_t samples = 0;        ///< reconstructed samples (value + gradient each)
+  uint64_t regionsVisited = 0; ///< segments integrated
+  uint64_t surfaceHits = 0;    ///< primary rays that ended on a mesh or iso-surface
+  uint64_t isoSamples = 0;     ///< samples taken to find iso-surfaces (incl. root finding)
   uint64_t aoRays = 0;
-  uint64_t tiles = 0;             ///< tiles rendered
+  uint64_t tiles = 0; ///< tiles rendered
   double samplesPerSecond() const { return seconds > 0 ? double(samples) / double(seconds) : 0; }
   RenderStats& operator+=(const RenderStats& o);
 };
 
 /// What setScene() rebuilt, and how long each part took.
 struct SceneUpdate {
-  bool volume = false;      ///< layer tables, visible regions and traversal
-  bool iso = false;         ///< iso region set
-  bool meshes = false;      ///< mesh BVH
+  bool volume = false; ///< layer tables, visible regions and traversal
+  bool iso = false;    ///< iso region set
+  bool meshes = false; ///< mesh BVH
   double volumeSeconds = 0, isoSeconds = 0, meshSeconds = 0;
   double seconds() const { return volumeSeconds + isoSeconds + meshSeconds; }
 };
@@ -116,13 +116,13 @@ public:
   /// rendered into buffers of one size: adding the arrays element by element (tiles a process did
   /// not render hold zeros) gives the buffer of all the shares, bit for bit.
   struct Sums {
-    float* colors;           ///< 4 per pixel (premultiplied RGBA)
-    float* steps;            ///< 1 per pixel (steps debug view)
+    float* colors; ///< 4 per pixel (premultiplied RGBA)
+    float* steps;  ///< 1 per pixel (steps debug view)
     size_t pixels;
-    uint32_t* tilePasses;    ///< 1 per tile
+    uint32_t* tilePasses; ///< 1 per tile
     size_t tiles;
     RenderStats* stats;
-    bool* stepsView;         ///< whether the sums are of the steps debug view
+    bool* stepsView; ///< whether the sums are of the steps debug view
   };
   Sums sums();
 
@@ -130,7 +130,7 @@ private:
   friend class Renderer;
   int width_ = 0, height_ = 0, tilesX_ = 0, tilesY_ = 0;
   std::vector<vec4f> sum_;
-  std::vector<float> steps_;        ///< samples per pixel, summed (steps debug view)
+  std::vector<float> steps_; ///< samples per pixel, summed (steps debug view)
   std::vector<uint32_t> tilePasses_;
   std::vector<TileCounters> counters_;
   bool stepsView_ = false;

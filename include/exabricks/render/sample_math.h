@@ -43,7 +43,7 @@ struct TfTableView {
   const vec4f* entries = nullptr; ///< kTfTableSize entries
   range1f range;
   bool logScale = false;
-  bool fastLinear = false;        ///< linear with a proper range: n = (v - lower) * scale
+  bool fastLinear = false; ///< linear with a proper range: n = (v - lower) * scale
   float lower = 0.f, scale = 0.f;
 };
 

@@ -43,11 +43,11 @@ struct VolumeLayer {
 
 /// Implicit iso-surfaces of one field at one or more values.
 struct IsoSurfaces {
-  std::string field;              ///< empty: the first volume layer's field
-  std::vector<float> values;      ///< none: no iso-surfaces
+  std::string field;         ///< empty: the first volume layer's field
+  std::vector<float> values; ///< none: no iso-surfaces
   /// Linear-RGB colour per iso-value (cycled when fewer than values), used without colorField.
   std::vector<vec3f> colors;
-  std::string colorField;         ///< not empty: colour by this field's value at the hit point ...
+  std::string colorField; ///< not empty: colour by this field's value at the hit point ...
   TransferFunction colorTf = defaultTransferFunction("cool-to-warm"); ///< ... through this map and range
   friend bool operator==(const IsoSurfaces&, const IsoSurfaces&) = default;
 };
@@ -78,8 +78,8 @@ struct Clipping {
 };
 
 struct Light {
-  bool headlight = true;                  ///< light from the eye; else from direction
-  vec3f direction{-1.f, -1.f, -1.f};      ///< world direction light travels along
+  bool headlight = true;             ///< light from the eye; else from direction
+  vec3f direction{-1.f, -1.f, -1.f}; ///< world direction light travels along
   ShadingTerms terms;
 };
 
@@ -117,7 +117,7 @@ struct Integration {
 
 struct Scene {
   std::vector<VolumeLayer> layers{VolumeLayer{}}; ///< several fields: summed optical depth
-  bool volume = true;                            ///< integrate the volume (off: surfaces only)
+  bool volume = true;                             ///< integrate the volume (off: surfaces only)
   IsoSurfaces iso;
   std::vector<SceneMesh> meshes;
   Clipping clip;
@@ -129,7 +129,7 @@ struct Scene {
   /// Linear RGB, used when images are written. Black: the volume emits light, and faint
   /// structure shows against black where it vanishes against white.
   vec3f background{0.f};
-  bool keepAlpha = false;                        ///< images keep alpha instead of the background
+  bool keepAlpha = false; ///< images keep alpha instead of the background
 
   /// A scene of one volume layer.
   static Scene volumeOf(const TransferFunction& tf, const std::string& field = {});
@@ -147,8 +147,8 @@ struct Frame {
   int width = 800, height = 800;
   int samplesPerPixel = 1;
   int frameIndex = 0;
-  float rate = 1.f;              ///< quality factor: step = region's finest width x 0.5 / rate
-  bool jitter = true;            ///< random offsets of the sample positions
+  float rate = 1.f;   ///< quality factor: step = region's finest width x 0.5 / rate
+  bool jitter = true; ///< random offsets of the sample positions
   uint64_t seed = 0;
 
   /// A cheap draft of this frame: 1/divisor of the resolution per axis (at least one pixel)
@@ -160,7 +160,7 @@ struct Frame {
 
 /// A scene file: the scene, the frame, and optionally the input they were made for.
 struct SceneDocument {
-  std::string input;     ///< dataset path, empty when not recorded
+  std::string input; ///< dataset path, empty when not recorded
   Scene scene;
   Frame frame;
   bool hasCamera = false; ///< the document set a camera (else the caller frames the data)

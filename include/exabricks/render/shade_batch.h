@@ -41,8 +41,7 @@ int placeSamples(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatc
 
 /// The same interval after interval (the reference, and where the vector form cannot promise
 /// the same positions).
-inline int placeSamplesScalar(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch,
-                              float* lengths) {
+inline int placeSamplesScalar(const vec3f& org, const vec3f& dir, SegmentMarch& m, SampleBatch& batch, float* lengths) {
   const int first = batch.count;
   int n = first;
   while (n < kSampleBatch && m.a < m.end) {
@@ -82,8 +81,8 @@ struct VolumeShadeParams {
   bool fadeByValue = false;
 };
 
-/// Opacity and colour of every sample (`lengths` has kSampleBatch entries): alpha = correctedOpacity(logT, lengths[i]); colour the
-/// table's, shaded by shadeVolumeSample where asked. Samples with logT >= 0 get alpha 0.
+/// Opacity and colour of every sample (`lengths` has kSampleBatch entries): alpha = correctedOpacity(logT, lengths[i]);
+/// colour the table's, shaded by shadeVolumeSample where asked. Samples with logT >= 0 get alpha 0.
 struct ShadedBatch {
   alignas(64) float alpha[kSampleBatch];
   alignas(64) float r[kSampleBatch], g[kSampleBatch], b[kSampleBatch];
