@@ -113,7 +113,7 @@ bool typeIsSound(hid_t type, std::string& problem, int depth = 0) {
     if (c == H5T_FLOAT) {
       size_t spos = 0, epos = 0, esize = 0, mpos = 0, msize = 0;
       if (H5Tget_fields(type, &spos, &epos, &esize, &mpos, &msize) < 0 || spos >= bits || esize == 0 || esize > 32 ||
-          epos > bits - esize || msize == 0 || msize > 64 || mpos > bits - msize ||
+          epos > bits - esize || msize == 0 || msize > bits || mpos > bits - msize ||
           H5Tget_norm(type) == H5T_NORM_ERROR) {
         problem = strCat("corrupt floating-point type (", size, " bytes, exponent ", esize, " bits at ", epos,
                          ", mantissa ", msize, " bits at ", mpos, ")");
