@@ -9,6 +9,7 @@
 #include "exabricks/io/load.h"
 #include "exabricks/io/model_file.h"
 
+#include "child_run.h"
 #include "h5_writer.h"
 
 #include <gtest/gtest.h>
@@ -29,48 +30,19 @@
 using namespace exa;
 namespace fs = std::filesystem;
 
-#if defined(__SANITIZE_ADDRESS__)
-#define EXABRICKS_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define EXABRICKS_ASAN 1
-#endif
-#endif
-
 namespace {
 
 constexpr long kLimitBytes = 100L << 20;
 
-long mappedBytes() {
-  std::ifstream in("/proc/self/statm");
-  long pages = 0;
-  in >> pages;
-  return pages * sysconf(_SC_PAGESIZE);
-}
-
-struct Outcome {
-  std::string message;
-  int status = -1;
-  double seconds = 0;
-  long peakKiB = 0;
-};
+using test::ChildOutcome;
+using test::mappedBytes;
+using Outcome = ChildOutcome;
 
 /// Loads `path` (its cells, or with `model` a model) in a child process under the memory limit;
 /// the child reports the exa::Error message through a pipe and exits 0, or exits 2 when the
 /// load succeeded, 3 on any other exception.
 Outcome refuseInChild(const std::string& path, bool model = false) {
-  int fds[2];
-  EXPECT_EQ(pipe(fds), 0);
-  const auto start = std::chrono::steady_clock::now();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-#ifndef EXABRICKS_ASAN
-    const rlimit lim{rlim_t(mappedBytes() + kLimitBytes), rlim_t(mappedBytes() + kLimitBytes)};
-    setrlimit(RLIMIT_AS, &lim);
-#endif
-    int code = 2;
-    std::string message = "loaded without error";
+  return test::runInChild(kLimitBytes, 0, [&](std::string& message) {
     try {
       if (model)
         loadModel(path);
@@ -78,28 +50,14 @@ Outcome refuseInChild(const std::string& path, bool model = false) {
         loadCells(path);
     } catch (const Error& e) {
       message = e.what();
-      code = 0;
+      return 0;
     } catch (const std::exception& e) {
       message = std::string("not an exa::Error: ") + e.what();
-      code = 3;
+      return 3;
     }
-    [[maybe_unused]] const ssize_t written = write(fds[1], message.data(), message.size());
-    close(fds[1]);
-    _exit(code);
-  }
-  close(fds[1]);
-  Outcome out;
-  char buf[4096];
-  for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;)
-    out.message.append(buf, size_t(n));
-  close(fds[0]);
-  int status = 0;
-  rusage usage{};
-  wait4(pid, &status, 0, &usage);
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  out.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  out.peakKiB = usage.ru_maxrss;
-  return out;
+    message = "loaded without error";
+    return 2;
+  });
 }
 
 /// The fixture is refused in under a second, within the memory limit, with every part named.

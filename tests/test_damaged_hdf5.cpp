@@ -9,6 +9,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/load.h"
 
+#include "child_run.h"
 #include "chombo_fixture.h"
 #include "flash_fixture.h"
 
@@ -31,24 +32,7 @@
 using namespace exa;
 namespace fs = std::filesystem;
 
-#if defined(__SANITIZE_ADDRESS__)
-#define EXABRICKS_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define EXABRICKS_ASAN 1
-#endif
-#endif
-
 namespace {
-
-#ifndef EXABRICKS_ASAN
-long mappedBytes() {
-  std::ifstream in("/proc/self/statm");
-  long pages = 0;
-  in >> pages;
-  return pages * sysconf(_SC_PAGESIZE);
-}
-#endif
 
 fs::path fresh(const std::string& name) {
   const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "damaged-hdf5" / name;
@@ -66,51 +50,25 @@ void writeBytes(const fs::path& p, const std::string& bytes) {
   std::ofstream(p, std::ios::binary | std::ios::trunc).write(bytes.data(), std::streamsize(bytes.size()));
 }
 
-struct Outcome {
-  int status = -1; ///< 0 loaded, 1 refused with exa::Error, 3 another exception, 128+N signal N
-  std::string message;
-};
+/// status: 0 loaded, 1 refused with exa::Error, 3 another exception, 128+N signal N.
+using Outcome = test::ChildOutcome;
 
 /// Lists the fields of `path` and loads its cells in a child process under a memory limit and
 /// an alarm: the outcome and the message of the error, if any.
 Outcome loadInChild(const std::string& path) {
-  int fds[2];
-  if (pipe(fds) != 0) return {};
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-#ifndef EXABRICKS_ASAN
-    const rlim_t limit = rlim_t(mappedBytes() + (1L << 30));
-    const rlimit lim{limit, limit};
-    setrlimit(RLIMIT_AS, &lim);
-#endif
-    alarm(60);
-    int code = 0;
-    std::string message;
+  return test::runInChild(1L << 30, 60, [&](std::string& message) {
     try {
       listFields(path);
       loadCells(path);
     } catch (const Error& e) {
       message = e.what();
-      code = 1;
+      return 1;
     } catch (const std::exception& e) {
       message = std::string("not an exa::Error: ") + e.what();
-      code = 3;
+      return 3;
     }
-    [[maybe_unused]] const ssize_t written = write(fds[1], message.data(), message.size());
-    close(fds[1]);
-    _exit(code);
-  }
-  close(fds[1]);
-  Outcome out;
-  char buf[4096];
-  for (ssize_t n; (n = read(fds[0], buf, sizeof buf)) > 0;)
-    out.message.append(buf, size_t(n));
-  close(fds[0]);
-  int status = 0;
-  waitpid(pid, &status, 0);
-  out.status = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  return out;
+    return 0;
+  });
 }
 
 /// Offsets to damage: the superblock, the 160 bytes from each of libhdf5's structure signatures
