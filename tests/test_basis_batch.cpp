@@ -332,13 +332,15 @@ TEST(BasisBatch, RendersEqualTheScalarPath) {
       scene.ao.rays = 2;
       scene.ao.volume = true;
     }
-    if (variant == 4) scene.integration.lazyGradients = false;
-    if (variant == 6) scene.integration.joinSegments = false; // one batch per region segment
-    scene.integration.vectorized = false;
+    RendererOptions options;
+    if (variant == 4) options.lazyGradients = false;
+    if (variant == 6) options.joinSegments = false; // one batch per region segment
+    options.vectorized = false;
     renderer.setScene(scene);
+    renderer.setOptions(options);
     const Image reference = renderer.render(frame);
-    scene.integration.vectorized = true;
-    renderer.setScene(scene);
+    options.vectorized = true;
+    renderer.setOptions(options);
     RenderStats stats;
     const Image image = renderer.render(frame, &stats);
     EXPECT_GT(stats.samples, 0u);

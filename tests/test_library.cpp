@@ -416,7 +416,8 @@ TEST(Library, SceneJsonRoundTripsEverySetting) {
   s.integration.autoTraversal = false;
   s.integration.traversal = TraversalKind::Embree;
   s.integration.earlyTermination = false;
-  s.integration.joinSegments = false;
+  s.integration.spaceSkipping = false;
+  s.integration.terminationOpacity = 0.9f;
   s.debug = DebugView::Region;
   s.background = vec3f(0.f, 0.f, 0.f);
   s.keepAlpha = true;
@@ -443,6 +444,20 @@ TEST(Library, SceneJsonRoundTripsEverySetting) {
   r1.debug = r2.debug = DebugView::None;
   r1.volume = r2.volume = true;
   EXPECT_LT(maxAbsDiff(freshRender(r1, doc.frame), freshRender(r2, back.frame)), 1e-6);
+}
+
+TEST(Library, SceneFilesWithRendererOptionsStillRead) {
+  // Scene files once carried the march's measurement switches; they read with a note and change
+  // nothing of the scene.
+  testing::internal::CaptureStderr();
+  const SceneDocument d = readSceneJson(
+      "{\"integration\": {\"vectorized\": false, \"lazy_gradients\": false, \"join_segments\": false}}", "old.json");
+  const std::string log = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(d.scene.integration, Integration());
+  EXPECT_NE(log.find("old.json: \"integration.vectorized\" is ignored"), std::string::npos) << log;
+  EXPECT_EQ(writeSceneJson(d).find("vectorized"), std::string::npos);
+  // Still checked as what they were.
+  EXPECT_THROW(readSceneJson("{\"integration\": {\"vectorized\": 3}}", "old.json"), Error);
 }
 
 TEST(Library, SceneJsonErrorsNameTheSourceAndTheKey) {

@@ -34,6 +34,7 @@ namespace fs = std::filesystem;
 
 struct MovieCmdOptions {
   RenderOptions scene;
+  MarchFlags march;
   std::vector<std::string> inputs;
   std::string output;
   double fps = 24;
@@ -372,7 +373,10 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
         ++loadedSteps;
         currentStep = step;
       }
-      if (!renderer) renderer = std::make_unique<Renderer>(*current.model, current.info);
+      if (!renderer) {
+        renderer = std::make_unique<Renderer>(*current.model, current.info);
+        renderer->setOptions(o.march.options());
+      }
       // The next step this process needs, loaded beside the render.
       if (!o.noPrefetch)
         for (size_t m = n + 1; m < todo.size(); ++m)
@@ -490,6 +494,7 @@ void addMovie(CLI::App& app) {
   auto o = std::make_shared<MovieCmdOptions>();
   CLI::App* cmd = app.add_subcommand("movie", "Render a time series and/or a camera path to a movie");
   o->scene.add(*cmd);
+  o->march.add(*cmd);
   // The movie's inputs replace the single INPUT of the render options.
   cmd->remove_option(cmd->get_option("input"));
   cmd->add_option("inputs", o->inputs, "Datasets: files, folders or glob patterns (numeric order)");

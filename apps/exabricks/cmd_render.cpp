@@ -25,6 +25,7 @@ namespace {
 
 struct RenderCmdOptions {
   RenderOptions scene;
+  MarchFlags march;
   std::string output;
   std::string floatOutput;
   bool stats = false;
@@ -83,6 +84,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   const int field = applyDataDefaults(o.scene, cmd, scene, model, dataset, whole);
 
   Renderer renderer(model, dataset);
+  renderer.setOptions(o.march.options());
   if (part) renderer.setDomain(part->worldBox());
   const SceneUpdate update = renderer.setScene(scene);
   if (!scene.iso.values.empty())
@@ -163,7 +165,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     j["transfer_function_update_seconds"] = update.volumeSeconds;
     j["load_seconds"] = loadSeconds;
     j["traversal"] = traversal;
-    j["simd"] = scene.integration.vectorized ? batchTargetName() : "off";
+    j["simd"] = renderer.options().vectorized ? batchTargetName() : "off";
     j["surface_hits"] = stats.surfaceHits;
     j["iso_samples"] = stats.isoSamples;
     j["ao_rays"] = stats.aoRays;
@@ -211,6 +213,7 @@ void addRender(CLI::App& app) {
   auto o = std::make_shared<RenderCmdOptions>();
   CLI::App* cmd = app.add_subcommand("render", "Volume-render a field to a PNG or JPEG image");
   o->scene.add(*cmd);
+  o->march.add(*cmd);
   cmd->add_option("-o,--output", o->output, "Image to write: .png, or .jpg / .jpeg")->required();
   cmd->add_option("--float", o->floatOutput, "Also write the float image as PFM");
   cmd->add_flag("--stats", o->stats, "Time the frame after a warm-up and print statistics");

@@ -130,11 +130,6 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--traversal", traversal, "Region traversal: auto, kd or embree")->capture_default_str();
   cmd.add_flag("--no-skip", noSkip, "Disable space skipping");
   cmd.add_flag("--no-early-termination", noEarlyTermination, "Integrate every ray to its end");
-  cmd.add_flag("--scalar", scalar, "Reconstruct one sample after another (no SIMD batches; the reference path)");
-  cmd.add_flag("--no-lazy-gradients", noLazyGradients,
-               "Reconstruct gradients with every batch, also after samples the transfer function hides");
-  cmd.add_flag("--no-join-segments", noJoinSegments,
-               "One batch per region segment, instead of batches filled from consecutive segments");
   cmd.add_option("--sampling", sampling, "adaptive (per region) or fixed (finest width everywhere)")
       ->capture_default_str();
   cmd.add_option("--reconstruction", reconstruction,
@@ -161,6 +156,23 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_flag("--ao-volume", aoVolume, "Let the volume attenuate ambient occlusion rays");
   cmd.add_option("--scene", sceneFile,
                  "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
+}
+
+void MarchFlags::add(CLI::App& cmd) {
+  cmd.add_flag("--scalar", scalar,
+               "Measurement: reconstruct one sample after another (no SIMD batches; the reference loop)");
+  cmd.add_flag("--no-lazy-gradients", noLazyGradients,
+               "Measurement: reconstruct gradients with every batch, also after samples the transfer function hides");
+  cmd.add_flag("--no-join-segments", noJoinSegments,
+               "Measurement: one batch per region segment, instead of batches filled from consecutive segments");
+}
+
+RendererOptions MarchFlags::options() const {
+  RendererOptions r;
+  r.vectorized = !scalar;
+  r.lazyGradients = !noLazyGradients;
+  r.joinSegments = !noJoinSegments;
+  return r;
 }
 
 SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
@@ -233,9 +245,6 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
                              {{"regions", Reconstruction::Regions}, {"cells", Reconstruction::CellLocation}});
   if (apply("--no-skip")) in.spaceSkipping = !o.noSkip;
   if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
-  if (apply("--scalar")) in.vectorized = !o.scalar;
-  if (apply("--no-lazy-gradients")) in.lazyGradients = !o.noLazyGradients;
-  if (apply("--no-join-segments")) in.joinSegments = !o.noJoinSegments;
   if (apply("--debug"))
     s.debug = pick<DebugView>("debug view", o.debug,
                               {{"none", DebugView::None},

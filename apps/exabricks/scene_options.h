@@ -46,9 +46,6 @@ struct RenderOptions {
   std::string traversal = "auto";
   bool noSkip = false;
   bool noEarlyTermination = false;
-  bool scalar = false;
-  bool noLazyGradients = false;
-  bool noJoinSegments = false;
   std::string sampling = "adaptive";
   std::string reconstruction = "regions";
   std::string debug = "none";
@@ -74,6 +71,16 @@ struct RenderOptions {
 
   /// Registers every option above on a command.
   void add(CLI::App& cmd);
+};
+
+/// The renderer options (how the march computes, for measurements) of render and movie.
+struct MarchFlags {
+  bool scalar = false;
+  bool noLazyGradients = false;
+  bool noJoinSegments = false;
+
+  void add(CLI::App& cmd);
+  RendererOptions options() const;
 };
 
 /// The scene and frame the options describe, over the scene file when one is given: without a

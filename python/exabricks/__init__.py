@@ -528,9 +528,6 @@ class Scene:
         self.reconstruction = integration["reconstruction"]
         self.embree_below_visible_fraction = integration["embree_below_visible_fraction"]
         self.termination_opacity = integration["termination_opacity"]
-        self.vectorized = integration["vectorized"]
-        self.lazy_gradients = integration["lazy_gradients"]
-        self.join_segments = integration["join_segments"]
         self.camera_path = None  # movies: {"keyframes": [...], "constant_speed": bool}, as in the scene file
         self.debug = "none"
         self.background = (0.0, 0.0, 0.0)
@@ -623,9 +620,7 @@ class Scene:
                             "embree_below_visible_fraction": float(self.embree_below_visible_fraction),
                             "space_skipping": bool(self.space_skipping),
                             "early_termination": bool(self.early_termination),
-                            "termination_opacity": float(self.termination_opacity),
-                            "vectorized": bool(self.vectorized), "lazy_gradients": bool(self.lazy_gradients),
-                            "join_segments": bool(self.join_segments)},
+                            "termination_opacity": float(self.termination_opacity)},
             "debug": self.debug,
             "background": _srgb(self.background),
             "alpha": bool(self.alpha),
@@ -705,7 +700,7 @@ class Scene:
         s.ao_rays, s.ao_length, s.ao_volume = ao["rays"], ao["length"], ao["volume"]
         integ = d["integration"]
         for key in ("sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
-                    "early_termination", "termination_opacity", "vectorized", "lazy_gradients", "join_segments"):
+                    "early_termination", "termination_opacity"):
             setattr(s, key, integ[key])
         s.debug = d["debug"]
         s.background = tuple(d["background"])

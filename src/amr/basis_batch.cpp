@@ -38,7 +38,7 @@ namespace hn = hwy::HWY_NAMESPACE;
 #if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4 || HWY_TARGET == HWY_AVX3
 // A cell's value and its neighbour's along x are adjacent floats: one 64-bit load per lane fetches
 // both, where a gather loads every float on its own (on Zen 3 frames with AVX2 gathers took 1.06 to
-// 1.25 times as long; docs/performance.md). Lane i gets values[row[i]] in r0 and
+// 1.25 times as long; docs/performance-log.md). Lane i gets values[row[i]] in r0 and
 // values[row[i] + 1] in r1. AVX-512 gathers the pairs as 64-bit elements.
 #define EXA_PAIR_LOADS 1
 HWY_INLINE __m128d loadPair(const float* p) {

@@ -1,6 +1,7 @@
 #include "exabricks/render/scene.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
 
 #include "tf_json.h"
 
@@ -302,10 +303,7 @@ std::string writeSceneJson(const SceneDocument& doc) {
       {"embree_below_visible_fraction", in.embreeBelowVisibleFraction},
       {"space_skipping", in.spaceSkipping},
       {"early_termination", in.earlyTermination},
-      {"termination_opacity", in.terminationOpacity},
-      {"vectorized", in.vectorized},
-      {"lazy_gradients", in.lazyGradients},
-      {"join_segments", in.joinSegments}};
+      {"termination_opacity", in.terminationOpacity}};
   j["debug"] = debugName(s.debug);
   j["background"] = srgb(s.background);
   j["alpha"] = s.keepAlpha;
@@ -512,9 +510,14 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.boolean("space_skipping", in.spaceSkipping);
     c.boolean("early_termination", in.earlyTermination);
     c.number("termination_opacity", in.terminationOpacity);
-    c.boolean("vectorized", in.vectorized);
-    c.boolean("lazy_gradients", in.lazyGradients);
-    c.boolean("join_segments", in.joinSegments);
+    // Renderer options that scene files once carried (RendererOptions): read and ignored.
+    for (const char* key : {"vectorized", "lazy_gradients", "join_segments"}) {
+      bool unused = false;
+      if (c.boolean(key, unused))
+        logNote(strCat(source, ": \"integration.", key,
+                       "\" is ignored: it is a renderer option for benchmarks (exabricks bench, render flags), not a "
+                       "scene setting"));
+    }
   }
   r.choice<DebugView>("debug", s.debug,
                       {{"none", DebugView::None},

@@ -18,6 +18,7 @@
 #pragma once
 
 #include "exabricks/core/image.h"
+#include "exabricks/render/frame_buffer.h"
 #include "exabricks/render/scene.h"
 
 #include <atomic>
@@ -58,19 +59,6 @@ struct SurfaceHit {
   int index = 0;       ///< mesh number, or iso-value number
 };
 
-struct RenderStats {
-  double seconds = 0; ///< wall time of the pass(es)
-  uint64_t rays = 0;
-  uint64_t samples = 0;        ///< reconstructed samples (value + gradient each)
-  uint64_t regionsVisited = 0; ///< segments integrated
-  uint64_t surfaceHits = 0;    ///< primary rays that ended on a mesh or iso-surface
-  uint64_t isoSamples = 0;     ///< samples taken to find iso-surfaces (incl. root finding)
-  uint64_t aoRays = 0;
-  uint64_t tiles = 0; ///< tiles rendered
-  double samplesPerSecond() const { return seconds > 0 ? double(samples) / double(seconds) : 0; }
-  RenderStats& operator+=(const RenderStats& o);
-};
-
 /// What setScene() rebuilt, and how long each part took.
 struct SceneUpdate {
   bool volume = false; ///< layer tables, visible regions and traversal
@@ -80,61 +68,21 @@ struct SceneUpdate {
   double seconds() const { return volumeSeconds + isoSeconds + meshSeconds; }
 };
 
-/// Square tiles of this many pixels are the unit of work, progress and cancellation.
-constexpr int kRenderTile = 16;
-
-/// The sums of a progressive image: per pixel the premultiplied colours of every pass and per
-/// tile the number of passes added. Owned by the caller; resize() allocates, passes do not.
-class FrameBuffer {
-public:
-  /// Counters of one tile in the last pass that covered it.
-  struct TileCounters {
-    uint64_t rays = 0, samples = 0, regions = 0, surfaceHits = 0, isoSamples = 0, aoRays = 0;
-  };
-
-  FrameBuffer() = default;
-  FrameBuffer(int width, int height) { resize(width, height); }
-  /// Sets the size and clears; keeps the memory when the size is unchanged.
-  void resize(int width, int height);
-  void clear();
-  int width() const { return width_; }
-  int height() const { return height_; }
-  int tilesX() const { return tilesX_; }
-  int tilesY() const { return tilesY_; }
-  int tileCount() const { return tilesX_ * tilesY_; }
-  /// Passes added to a tile, and the fewest over all tiles (complete passes).
-  uint32_t tilePasses(int tile) const { return tilePasses_[size_t(tile)]; }
-  uint32_t passes() const;
-  /// The mean of the passes (each tile divided by its own count; tiles without a pass are
-  /// transparent black). The steps debug view resolves to a heat map scaled to its maximum.
-  void resolve(Image& out) const;
-  Image resolve() const;
-  /// Statistics summed over the passes since the last clear.
-  const RenderStats& stats() const { return stats_; }
-
-  /// The buffer's sums as plain arrays, for combining the tile shares that several processes
-  /// rendered into buffers of one size: adding the arrays element by element (tiles a process did
-  /// not render hold zeros) gives the buffer of all the shares, bit for bit.
-  struct Sums {
-    float* colors; ///< 4 per pixel (premultiplied RGBA)
-    float* steps;  ///< 1 per pixel (steps debug view)
-    size_t pixels;
-    uint32_t* tilePasses; ///< 1 per tile
-    size_t tiles;
-    RenderStats* stats;
-    bool* stepsView; ///< whether the sums are of the steps debug view
-  };
-  Sums sums();
-
-private:
-  friend class Renderer;
-  int width_ = 0, height_ = 0, tilesX_ = 0, tilesY_ = 0;
-  std::vector<vec4f> sum_;
-  std::vector<float> steps_; ///< samples per pixel, summed (steps debug view)
-  std::vector<uint32_t> tilePasses_;
-  std::vector<TileCounters> counters_;
-  bool stepsView_ = false;
-  RenderStats stats_;
+/// How the renderer computes, not what it shows: switches that benchmarks and tests use to
+/// compare variants of the volume march. Images are the same whatever they are set to, to float
+/// round-off (the tests hold them to it); none of them is a scene setting.
+struct RendererOptions {
+  /// Reconstruct consecutive samples of one layer together with SIMD (amr/basis_batch.h), then
+  /// shade and composite them in order; off: one sample after another (the reference loop, which
+  /// also serves several layers and cell location).
+  bool vectorized = true;
+  /// After samples that the transfer function hides, reconstruct the next batch's values first
+  /// and their gradients only if one of them shows.
+  bool lazyGradients = true;
+  /// Fill each batch with the samples of consecutive region segments (reconstructed over the
+  /// union of their regions' brick lists); off: one batch per segment.
+  bool joinSegments = true;
+  friend bool operator==(const RendererOptions&, const RendererOptions&) = default;
 };
 
 /// Controls of one pass: a share of the tiles, cancellation and progress.
@@ -160,6 +108,9 @@ public:
   /// field.
   SceneUpdate setScene(const Scene& scene);
   const Scene& scene() const;
+  /// How the following passes compute (RendererOptions); takes effect at once, rebuilds nothing.
+  void setOptions(const RendererOptions& options);
+  const RendererOptions& options() const;
   const DatasetInfo& dataset() const;
   const Model& model() const;
 

@@ -93,7 +93,7 @@ struct AmbientOcclusion {
 
 /// How the volume is integrated. With autoTraversal the renderer picks per transfer function:
 /// Embree when few regions are visible (it skips hidden space in its BVH), the k-d tree
-/// otherwise (cheaper per step); docs/performance.md has the measurements behind the threshold.
+/// otherwise (cheaper per step); docs/performance-log.md has the measurements behind the threshold.
 struct Integration {
   Sampling sampling = Sampling::Adaptive;
   Reconstruction reconstruction = Reconstruction::Regions;
@@ -103,15 +103,6 @@ struct Integration {
   bool spaceSkipping = true;
   bool earlyTermination = true;
   float terminationOpacity = 0.98f;
-  /// Reconstruct consecutive samples of a region segment together with SIMD (amr/basis_batch.h),
-  /// then shade and composite them in order; off: one sample after another (the reference).
-  bool vectorized = true;
-  /// With vectorized: after samples that the transfer function hides, reconstruct the next batch's
-  /// values first and their gradients only if one of them shows.
-  bool lazyGradients = true;
-  /// With vectorized: fill each batch with the samples of consecutive region segments (reconstructed
-  /// over the union of their regions' brick lists); off: one batch per segment.
-  bool joinSegments = true;
   friend bool operator==(const Integration&, const Integration&) = default;
 };
 

@@ -1,0 +1,82 @@
+// The sums of a progressive image (FrameBuffer): what a renderer's passes add to and what a
+// caller resolves into an image, with the statistics of the passes.
+#pragma once
+
+#include "exabricks/core/image.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace exa {
+
+struct RenderStats {
+  double seconds = 0; ///< wall time of the pass(es)
+  uint64_t rays = 0;
+  uint64_t samples = 0;        ///< reconstructed samples (value + gradient each)
+  uint64_t regionsVisited = 0; ///< segments integrated
+  uint64_t surfaceHits = 0;    ///< primary rays that ended on a mesh or iso-surface
+  uint64_t isoSamples = 0;     ///< samples taken to find iso-surfaces (incl. root finding)
+  uint64_t aoRays = 0;
+  uint64_t tiles = 0; ///< tiles rendered
+  double samplesPerSecond() const { return seconds > 0 ? double(samples) / double(seconds) : 0; }
+  RenderStats& operator+=(const RenderStats& o);
+};
+
+/// Square tiles of this many pixels are the unit of work, progress and cancellation.
+constexpr int kRenderTile = 16;
+
+/// The sums of a progressive image: per pixel the premultiplied colours of every pass and per
+/// tile the number of passes added. Owned by the caller; resize() allocates, passes do not.
+class FrameBuffer {
+public:
+  /// Counters of one tile in the last pass that covered it.
+  struct TileCounters {
+    uint64_t rays = 0, samples = 0, regions = 0, surfaceHits = 0, isoSamples = 0, aoRays = 0;
+  };
+
+  FrameBuffer() = default;
+  FrameBuffer(int width, int height) { resize(width, height); }
+  /// Sets the size and clears; keeps the memory when the size is unchanged.
+  void resize(int width, int height);
+  void clear();
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int tilesX() const { return tilesX_; }
+  int tilesY() const { return tilesY_; }
+  int tileCount() const { return tilesX_ * tilesY_; }
+  /// Passes added to a tile, and the fewest over all tiles (complete passes).
+  uint32_t tilePasses(int tile) const { return tilePasses_[size_t(tile)]; }
+  uint32_t passes() const;
+  /// The mean of the passes (each tile divided by its own count; tiles without a pass are
+  /// transparent black). The steps debug view resolves to a heat map scaled to its maximum.
+  void resolve(Image& out) const;
+  Image resolve() const;
+  /// Statistics summed over the passes since the last clear.
+  const RenderStats& stats() const { return stats_; }
+
+  /// The buffer's sums as plain arrays, for combining the tile shares that several processes
+  /// rendered into buffers of one size: adding the arrays element by element (tiles a process did
+  /// not render hold zeros) gives the buffer of all the shares, bit for bit.
+  struct Sums {
+    float* colors; ///< 4 per pixel (premultiplied RGBA)
+    float* steps;  ///< 1 per pixel (steps debug view)
+    size_t pixels;
+    uint32_t* tilePasses; ///< 1 per tile
+    size_t tiles;
+    RenderStats* stats;
+    bool* stepsView; ///< whether the sums are of the steps debug view
+  };
+  Sums sums();
+
+private:
+  friend class Renderer;
+  int width_ = 0, height_ = 0, tilesX_ = 0, tilesY_ = 0;
+  std::vector<vec4f> sum_;
+  std::vector<float> steps_; ///< samples per pixel, summed (steps debug view)
+  std::vector<uint32_t> tilePasses_;
+  std::vector<TileCounters> counters_;
+  bool stepsView_ = false;
+  RenderStats stats_;
+};
+
+} // namespace exa

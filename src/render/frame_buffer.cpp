@@ -1,0 +1,97 @@
+#include "exabricks/render/frame_buffer.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/render/transfer_function.h"
+
+#include <algorithm>
+
+namespace exa {
+
+RenderStats& RenderStats::operator+=(const RenderStats& o) {
+  seconds += o.seconds;
+  rays += o.rays;
+  samples += o.samples;
+  regionsVisited += o.regionsVisited;
+  surfaceHits += o.surfaceHits;
+  isoSamples += o.isoSamples;
+  aoRays += o.aoRays;
+  tiles += o.tiles;
+  return *this;
+}
+
+void FrameBuffer::resize(int width, int height) {
+  if (width < 1 || height < 1 || width > 32768 || height > 32768)
+    fail("frame buffer size ", width, "x", height, " is out of range (1..32768)");
+  width_ = width;
+  height_ = height;
+  tilesX_ = (width + kRenderTile - 1) / kRenderTile;
+  tilesY_ = (height + kRenderTile - 1) / kRenderTile;
+  sum_.resize(size_t(width) * size_t(height));
+  steps_.resize(size_t(width) * size_t(height));
+  tilePasses_.resize(size_t(tilesX_) * size_t(tilesY_));
+  counters_.resize(size_t(tilesX_) * size_t(tilesY_));
+  clear();
+}
+
+void FrameBuffer::clear() {
+  std::fill(sum_.begin(), sum_.end(), vec4f());
+  std::fill(steps_.begin(), steps_.end(), 0.f);
+  std::fill(tilePasses_.begin(), tilePasses_.end(), 0u);
+  stats_ = RenderStats();
+}
+
+FrameBuffer::Sums FrameBuffer::sums() {
+  static_assert(sizeof(vec4f) == 4 * sizeof(float), "vec4f must be four packed floats");
+  return {reinterpret_cast<float*>(sum_.data()),
+          steps_.data(),
+          sum_.size(),
+          tilePasses_.data(),
+          tilePasses_.size(),
+          &stats_,
+          &stepsView_};
+}
+
+uint32_t FrameBuffer::passes() const {
+  if (tilePasses_.empty()) return 0;
+  return *std::min_element(tilePasses_.begin(), tilePasses_.end());
+}
+
+void FrameBuffer::resolve(Image& out) const {
+  if (out.width != width_ || out.height != height_) out = Image(width_, height_);
+  auto tilePassesAt = [&](int x, int y) {
+    return tilePasses_[size_t(y / kRenderTile) * size_t(tilesX_) + size_t(x / kRenderTile)];
+  };
+  // The steps view: samples per ray, averaged over the passes, scaled to the image's maximum.
+  float maxSteps = 1.f;
+  if (stepsView_)
+    for (int y = 0; y < height_; ++y)
+      for (int x = 0; x < width_; ++x)
+        if (const uint32_t n = tilePassesAt(x, y))
+          maxSteps = std::max(maxSteps, steps_[size_t(y) * size_t(width_) + size_t(x)] * (1.f / float(n)));
+  const ColorMap heat = stepsView_ ? builtinColorMap("inferno") : ColorMap();
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x) {
+      const size_t i = size_t(y) * size_t(width_) + size_t(x);
+      const uint32_t n = tilePassesAt(x, y);
+      if (n == 0) {
+        out.pixels[i] = vec4f();
+        continue;
+      }
+      const float inv = 1.f / float(n);
+      if (stepsView_) {
+        const vec3f c = heat.at(steps_[i] * inv / maxSteps);
+        out.pixels[i] = {c.x, c.y, c.z, 1.f};
+      } else {
+        const vec4f& s = sum_[i];
+        out.pixels[i] = {s.x * inv, s.y * inv, s.z * inv, s.w * inv};
+      }
+    }
+}
+
+Image FrameBuffer::resolve() const {
+  Image image;
+  resolve(image);
+  return image;
+}
+
+} // namespace exa

@@ -1,0 +1,428 @@
+#include "volume_marcher.h"
+
+#include "exabricks/amr/basis_batch.h"
+#include "exabricks/amr/gradients.h"
+#include "exabricks/core/error.h"
+#include "exabricks/render/shade_batch.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace exa {
+namespace {
+
+/// At most this many bricks in the union list of a batch that joins several segments; a segment
+/// whose bricks would make it longer starts a new batch.
+constexpr uint32_t kMaxJoinedBricks = 16;
+
+/// Whether p lies in the closed box b.
+bool insideBox(const box3f& b, const vec3f& p) {
+  return p.x >= b.lower.x && p.x <= b.upper.x && p.y >= b.lower.y && p.y <= b.upper.y && p.z >= b.lower.z &&
+         p.z <= b.upper.z;
+}
+
+/// The union of two ascending lists of brick ids into `out` (kMaxJoinedBricks entries), ascending;
+/// false where it would be longer. Without branches on the ids, which neighbouring regions'
+/// lists share unpredictably.
+bool joinBrickLists(const uint32_t* a, const uint32_t* aEnd, const uint32_t* b, const uint32_t* bEnd, uint32_t* out,
+                    uint32_t& count) {
+  uint32_t u = 0;
+  while (a < aEnd && b < bEnd && u < kMaxJoinedBricks) {
+    const uint32_t x = *a, y = *b;
+    out[u++] = std::min(x, y);
+    a += x <= y;
+    b += y <= x;
+  }
+  while (a < aEnd && u < kMaxJoinedBricks)
+    out[u++] = *a++;
+  while (b < bEnd && u < kMaxJoinedBricks)
+    out[u++] = *b++;
+  count = u;
+  return a == aEnd && b == bEnd;
+}
+
+/// Smooth shading's gradient at every sample of a batch: the layer's gradient fields
+/// reconstructed like its values, from the same bricks (per lattice unit; 0 where none).
+void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t count, SampleBricksBatchFunction sample,
+                     SampleBatch& batch) {
+  SampleBatch g;
+  g.count = batch.count;
+  std::copy(std::begin(batch.x), std::end(batch.x), g.x);
+  std::copy(std::begin(batch.y), std::end(batch.y), g.y);
+  std::copy(std::begin(batch.z), std::end(batch.z), g.z);
+  float* const out[3] = {batch.gx, batch.gy, batch.gz};
+  for (int a = 0; a < 3; ++a) {
+    sample(layer.grad[size_t(a)], ids, count, g, false);
+    for (int i = 0; i < batch.count; ++i)
+      out[a][i] = g.valid[i] ? g.value[i] : 0.f;
+  }
+}
+
+/// The same at one point of a region.
+vec3f smoothGradientAt(const LayerTable& layer, uint32_t regionIndex, const vec3f& p) {
+  vec3f g(0.f);
+  for (int a = 0; a < 3; ++a)
+    if (!sampleRegion(layer.grad[size_t(a)], regionIndex, p, g[a])) g[a] = 0.f;
+  return g;
+}
+
+/// Central differences at p over half the region's finest width each way; each point
+/// reconstructed from the region's bricks where it lies inside the region, else where it
+/// falls; one-sided where a point has no value.
+vec3f centralGradient(const FieldView& view, uint32_t regionIndex, const Region& region, const vec3f& p, float value) {
+  vec3f grad;
+  const float h = 0.5f * region.finestWidth();
+  const box3f rb = region.bounds();
+  auto at = [&](const vec3f& q, float& v) {
+    return insideBox(rb, q) ? sampleRegion(view, regionIndex, q, v) : sampleField(view, q, v);
+  };
+  for (int ax = 0; ax < 3; ++ax) {
+    vec3f pp = p, pm = p;
+    pp[ax] += h;
+    pm[ax] -= h;
+    float vp = value, vm = value;
+    if (!at(pp, vp)) vp = value, pp[ax] = p[ax];
+    if (!at(pm, vm)) vm = value, pm[ax] = p[ax];
+    const float span = pp[ax] - pm[ax];
+    grad[ax] = span > 0.f ? (vp - vm) / span : 0.f;
+  }
+  return grad;
+}
+
+/// What the batches of one ray share: the one layer, its regions, the shading and the running
+/// batch. The batch holds the samples of one segment, or with joinSegments of several
+/// consecutive ones, reconstructed over the union of their regions' brick lists (ascending, so
+/// every sample sums its own region's bricks in its region's order; basis_batch.h).
+template <bool OpacityOnly> class BatchMarch {
+public:
+  BatchMarch(const LayerTable& layer, const Model& model, const MarchSettings& s, const RayLight& light,
+             float referenceWidth, const vec3f& invScale, float meanScale, vec4f& acc, uint64_t& raySamples)
+      : layer_(layer), model_(model), s_(s), light_(light), referenceWidth_(referenceWidth), invScale_(invScale),
+        meanScale_(meanScale), acc_(acc), raySamples_(raySamples) {
+    wantGrad_ = !OpacityOnly && s.shading == Shading::Analytic;
+    smooth_ = !OpacityOnly && s.shading == Shading::Smooth;
+    central_ = s.shading == Shading::Central;
+    fn_ = batchFunctions();
+    params_.invReferenceWidth = 1.f / referenceWidth;
+    params_.shade = wantGrad_ || smooth_;
+    params_.gradientScale = invScale;
+    params_.light = light.light, params_.halfVector = light.halfVector, params_.terms = s.terms;
+    params_.fadeByValue = layer.fadeByValue();
+    batch_.count = 0;
+  }
+
+  /// Places the samples of a segment in the ray's batches, flushing the full ones; false where
+  /// the ray terminated.
+  bool add(const Ray& ray, float rho, const Segment& seg) {
+    const Region& region = model_.regions.regions[seg.region];
+    const float dt = sampleStep(region, s_.sampling, referenceWidth_, s_.rate);
+    // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
+    SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
+    const uint32_t* ids = layer_.view.brickIds + region.brickBegin;
+    const float fade = layer_.fadeWidth(region, meanScale_);
+    while (march.a < march.end) {
+      int m = batch_.count;
+      if (m > 0 && (brickIds_ != ids || brickCount_ != region.brickCount)) {
+        // Join this segment's bricks to the batch's, or flush first where the union would be
+        // too long.
+        uint32_t* out = unionIds_[unionSlot_];
+        uint32_t joined = 0;
+        if (joinBrickLists(brickIds_, brickIds_ + brickCount_, ids, ids + region.brickCount, out, joined)) {
+          brickIds_ = out, brickCount_ = joined;
+          unionSlot_ ^= 1;
+        } else {
+          if (flush()) return false;
+          m = 0;
+        }
+      }
+      if (m == 0) brickIds_ = ids, brickCount_ = region.brickCount;
+      const int n = fn_.place(ray.org, ray.dir, march, batch_, lengths_);
+      std::fill_n(fades_ + m, kSampleBatch, fade); // whole vectors: n or more
+      std::fill_n(regionOf_ + m, kSampleBatch, seg.region);
+      if (n == 0) break;
+      if ((batch_.count == kSampleBatch || !s_.options.joinSegments) && flush()) return false;
+    }
+    return true;
+  }
+
+  /// Reconstructs, shades and composites the batch in order and empties it; true where the ray
+  /// terminated.
+  bool flush() {
+    const int n = batch_.count;
+    if (n == 0) return false;
+    const bool withGrad = wantGrad_ && !(s_.options.lazyGradients && lastHidden_);
+    fn_.sample(layer_.view, brickIds_, brickCount_, batch_, withGrad);
+    // The transfer function at every sample (log2 transmittance 0: transparent).
+    TfBatch looked;
+    const bool anyShown = fn_.tfLookup(layer_.t, batch_, looked);
+    lastHidden_ = !anyShown;
+    if (!anyShown) {
+      raySamples_ += uint64_t(n);
+      batch_.count = 0;
+      return false;
+    }
+    if (wantGrad_ && !withGrad) fn_.sample(layer_.view, brickIds_, brickCount_, batch_, true);
+    if (smooth_) smoothGradients(layer_, brickIds_, brickCount_, fn_.sample, batch_);
+    // Opacity and colour of every sample at once, then the in-order compositing.
+    ShadedBatch shaded;
+    params_.fadeWidth = fades_;
+    fn_.shade(batch_, looked, lengths_, params_, shaded);
+    batch_.count = 0;
+    return composite(n, looked, shaded);
+  }
+
+private:
+  /// Front to back with the transmittance as a running product: one multiplication per sample on
+  /// the dependency chain (compositeBehind's sums, reassociated). Samples that show nothing have
+  /// alpha 0. True where the ray terminated.
+  bool composite(int n, const TfBatch& looked, const ShadedBatch& shaded) {
+    float transmittance = 1.f - acc_.w, r = 0.f, g = 0.f, b = 0.f;
+    int i = 0;
+    bool done = false;
+    if (!OpacityOnly && !central_) {
+      // The whole batch without a per-sample test: the opacity only grows along the batch, so
+      // where it ends below the termination threshold no sample reached it, and only where it
+      // ends above is the batch composited again with the test, sample by sample.
+      float t = transmittance;
+      for (int j = 0; j < n; ++j) {
+        const float alpha = shaded.alpha[j];
+        const float w = t * alpha;
+        r += w * shaded.r[j];
+        g += w * shaded.g[j];
+        b += w * shaded.b[j];
+        t *= 1.f - alpha;
+      }
+      if (!(s_.earlyTermination && 1.f - t >= s_.terminationOpacity)) {
+        transmittance = t;
+        i = n;
+      } else {
+        r = g = b = 0.f;
+      }
+    }
+    while (i < n) {
+      const float alpha = shaded.alpha[i];
+      const float w = transmittance * alpha;
+      if (!OpacityOnly) {
+        vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
+        if (central_ && looked.logT[i] < 0.f) c = shadeCentral(i, c); // the batch left it unshaded
+        r += w * c.x;
+        g += w * c.y;
+        b += w * c.z;
+      }
+      transmittance *= 1.f - alpha;
+      ++i;
+      if (s_.earlyTermination && 1.f - transmittance >= s_.terminationOpacity) {
+        done = true;
+        break;
+      }
+    }
+    raySamples_ += uint64_t(i);
+    acc_.x += r, acc_.y += g, acc_.z += b;
+    acc_.w = 1.f - transmittance;
+    return done;
+  }
+
+  /// Central-difference shading of sample i of the batch.
+  vec3f shadeCentral(int i, const vec3f& c) const {
+    const Region& region = model_.regions.regions[regionOf_[i]];
+    const float value = batch_.value[i];
+    const vec3f p(batch_.x[i], batch_.y[i], batch_.z[i]);
+    const vec3f grad = centralGradient(layer_.view, regionOf_[i], region, p, value);
+    return shadeVolumeSample(c, grad * invScale_, light_.light, light_.halfVector, s_.terms,
+                             layer_.fade(region, meanScale_, value));
+  }
+
+  const LayerTable& layer_;
+  const Model& model_;
+  const MarchSettings& s_;
+  const RayLight& light_;
+  float referenceWidth_;
+  vec3f invScale_;
+  float meanScale_;
+  vec4f& acc_;
+  uint64_t& raySamples_;
+  bool wantGrad_ = false, smooth_ = false, central_ = false;
+  bool lastHidden_ = true; // the last batch showed nothing: reconstruct values first
+  BatchFunctions fn_{};
+  VolumeShadeParams params_; // what the batches' shading needs besides the samples
+  SampleBatch batch_;
+  // Per sample, with room for whole-vector stores past the batch's end (as its positions).
+  alignas(64) float lengths_[2 * kSampleBatch], fades_[2 * kSampleBatch];
+  alignas(64) uint32_t regionOf_[2 * kSampleBatch];
+  uint32_t unionIds_[2][kMaxJoinedBricks];
+  const uint32_t* brickIds_ = nullptr;
+  uint32_t brickCount_ = 0;
+  int unionSlot_ = 0;
+};
+
+} // namespace
+
+MarchSettings MarchSettings::of(const Scene& scene, const RendererOptions& options, float rate) {
+  MarchSettings m;
+  m.shading = scene.shading;
+  m.terms = scene.light.terms;
+  m.sampling = scene.integration.sampling;
+  m.reconstruction = scene.integration.reconstruction;
+  m.earlyTermination = scene.integration.earlyTermination;
+  m.terminationOpacity = scene.integration.terminationOpacity;
+  m.options = options;
+  m.rate = rate;
+  return m;
+}
+
+VolumeMarcher::VolumeMarcher(const Model& model, const DatasetInfo& dataset) : model_(model), dataset_(dataset) {
+  referenceWidth_ = dataset.referenceWidth;
+  invReferenceWidth_ = 1.f / referenceWidth_;
+  invScale_ = vec3f(1.0 / model.world.scale.x, 1.0 / model.world.scale.y, 1.0 / model.world.scale.z);
+  meanScale_ = float((model.world.scale.x + model.world.scale.y + model.world.scale.z) / 3.0);
+}
+
+void VolumeMarcher::update(const std::vector<VolumeLayer>& layers, const std::vector<int>& fields,
+                           const Integration& in, bool skipping) {
+  std::vector<LayerTable> tables(layers.size());
+  for (size_t i = 0; i < layers.size(); ++i)
+    tables[i].build(model_, dataset_, fields[i], layers[i].tf);
+  layers_ = std::move(tables);
+  // Space skipping: a region whose value ranges map to zero opacity in every layer cannot
+  // contribute.
+  const size_t regionCount = model_.regions.regions.size();
+  visible_.assign(regionCount, layers_.empty() && skipping ? 0 : 1);
+  if (skipping && !layers_.empty())
+    tbb::parallel_for(size_t(0), regionCount, [&](size_t i) {
+      bool any = false;
+      for (const LayerTable& layer : layers_)
+        any = any || tfMayBeVisible(layer.t, model_.regions.valueRanges[size_t(layer.field)][i]);
+      visible_[i] = any;
+    });
+  TraversalKind kind = in.traversal;
+  if (in.autoTraversal) {
+    size_t count = 0;
+    for (uint8_t v : visible_)
+      count += v;
+    kind = double(count) < double(in.embreeBelowVisibleFraction) * double(visible_.size()) ? TraversalKind::Embree
+                                                                                           : TraversalKind::KdTree;
+  }
+  if (!traversal_ || traversal_->kind() != kind) traversal_ = std::make_unique<RegionTraversal>(model_, kind);
+  traversal_->setVisible(visible_);
+  if (in.reconstruction == Reconstruction::CellLocation && !locator_) locator_ = std::make_unique<CellLocator>(model_);
+}
+
+bool VolumeMarcher::attachGradients() {
+  bool built = false;
+  for (LayerTable& layer : layers_) {
+    auto it = gradientFields_.find(layer.field);
+    if (it == gradientFields_.end()) {
+      it = gradientFields_
+               .emplace(layer.field,
+                        cellGradients(layer.view, model_.bricks, model_.fieldValues[size_t(layer.field)].size()))
+               .first;
+      built = true;
+    }
+    for (int a = 0; a < 3; ++a) {
+      layer.grad[size_t(a)] = layer.view;
+      layer.grad[size_t(a)].values = it->second[size_t(a)].data();
+    }
+  }
+  return built;
+}
+
+template <bool OpacityOnly>
+void VolumeMarcher::march(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
+                          uint64_t& raySamples, uint64_t& regionCount) const {
+  if (layers_.empty() || !(ray.tmax > ray.tmin)) return;
+  // Batches: one layer reconstructed from its regions (the common case).
+  const bool batched = s.options.vectorized && layers_.size() == 1 && s.reconstruction == Reconstruction::Regions;
+  if (batched)
+    marchBatches<OpacityOnly>(ray, rho, light, s, acc, raySamples, regionCount);
+  else
+    marchSamples<OpacityOnly>(ray, rho, light, s, acc, raySamples, regionCount);
+}
+
+template <bool OpacityOnly>
+void VolumeMarcher::marchBatches(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
+                                 uint64_t& raySamples, uint64_t& regionCount) const {
+  BatchMarch<OpacityOnly> batches(layers_[0], model_, s, light, referenceWidth_, invScale_, meanScale_, acc,
+                                  raySamples);
+  bool terminated = false;
+  traversal_->traverse(ray, [&](const Segment& seg) {
+    ++regionCount;
+    if (batches.add(ray, rho, seg)) return true;
+    terminated = true;
+    return false;
+  });
+  if (!terminated) batches.flush();
+}
+
+template <bool OpacityOnly>
+void VolumeMarcher::marchSamples(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
+                                 uint64_t& raySamples, uint64_t& regionCount) const {
+  const size_t layerCount = layers_.size();
+  const bool wantGrad = !OpacityOnly && s.shading == Shading::Analytic;
+  traversal_->traverse(ray, [&](const Segment& seg) {
+    ++regionCount;
+    const Region& region = model_.regions.regions[seg.region];
+    const float dt = sampleStep(region, s.sampling, referenceWidth_, s.rate);
+    // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
+    SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
+    while (march.a < march.end) {
+      const float b = march.intervalEnd();
+      if (!(b > march.a)) break;
+      march.k += 1.f;
+      const float len = b - march.a;
+      const float tm = 0.5f * (march.a + b);
+      march.a = b;
+      const vec3f p = ray.org + ray.dir * tm;
+      ++raySamples;
+      float logSum = 0.f, alphaSum = 0.f, alpha = 0.f;
+      vec3f colorSum(0.f), color(0.f);
+      for (size_t li = 0; li < layerCount; ++li) {
+        const LayerTable& layer = layers_[li];
+        float value;
+        vec3f grad;
+        const bool found = s.reconstruction == Reconstruction::Regions
+                               ? sampleRegion(layer.view, seg.region, p, value, wantGrad ? &grad : nullptr)
+                               : locator_->sample(layer.field, p, value, wantGrad ? &grad : nullptr);
+        if (!found) break; // no value here for any field: the cells are shared
+        const vec4f rgba = layer.lookup(value);
+        if (rgba.w >= 0.f) continue; // log2 transmittance 0: fully transparent
+        const float layerAlpha = correctedOpacity(rgba.w, len, invReferenceWidth_);
+        logSum += rgba.w;
+        if (OpacityOnly) continue;
+        vec3f c = rgba.rgb();
+        if (s.shading != Shading::None) {
+          if (s.shading == Shading::Smooth)
+            grad = smoothGradientAt(layer, seg.region, p);
+          else if (s.shading == Shading::Central)
+            grad = centralGradient(layer.view, seg.region, region, p, value);
+          c = shadeVolumeSample(c, grad * invScale_, light.light, light.halfVector, s.terms,
+                                layer.fade(region, meanScale_, value));
+        }
+        if (layerCount == 1) {
+          alpha = layerAlpha;
+          color = c;
+        } else {
+          colorSum += c * layerAlpha;
+          alphaSum += layerAlpha;
+        }
+      }
+      if (!(logSum < 0.f)) continue;
+      if (OpacityOnly || layerCount > 1) alpha = correctedOpacity(logSum, len, invReferenceWidth_);
+      if (!OpacityOnly && layerCount > 1) color = alphaSum > 0.f ? colorSum * (1.f / alphaSum) : vec3f(0.f);
+      if (OpacityOnly)
+        acc.w += (1.f - acc.w) * alpha;
+      else
+        compositeBehind(acc, color, alpha);
+      if (s.earlyTermination && acc.w >= s.terminationOpacity) return false;
+    }
+    return true;
+  });
+}
+
+template void VolumeMarcher::march<false>(const Ray&, float, const RayLight&, const MarchSettings&, vec4f&, uint64_t&,
+                                          uint64_t&) const;
+template void VolumeMarcher::march<true>(const Ray&, float, const RayLight&, const MarchSettings&, vec4f&, uint64_t&,
+                                         uint64_t&) const;
+
+} // namespace exa

@@ -1,0 +1,90 @@
+// The volume along a ray (paper §5): the visible regions' segments front to back, samples at
+// mid-intervals of adaptive steps, basis reconstruction, the transfer function with opacity
+// correction, shading and front-to-back compositing. The marcher owns what it samples with: the
+// layers' tables, the visible region set and its traversal, smooth shading's gradient fields.
+#pragma once
+
+#include "layer_table.h"
+
+#include "exabricks/accel/traversal.h"
+#include "exabricks/amr/cell_locator.h"
+#include "exabricks/render/renderer.h"
+
+#include <array>
+#include <map>
+#include <memory>
+#include <vector>
+
+namespace exa {
+
+/// What a march takes from the scene, the renderer's options and the frame: the same for every
+/// ray of a pass.
+struct MarchSettings {
+  Shading shading = Shading::Smooth;
+  ShadingTerms terms;
+  Sampling sampling = Sampling::Adaptive;
+  Reconstruction reconstruction = Reconstruction::Regions;
+  bool earlyTermination = true;
+  float terminationOpacity = 0.98f;
+  RendererOptions options;
+  float rate = 1.f; ///< samples per half region's finest width
+
+  static MarchSettings of(const Scene& scene, const RendererOptions& options, float rate);
+};
+
+/// A ray's lighting: the direction towards the light and the half vector with the view (world, unit).
+struct RayLight {
+  vec3f light{0.f}, halfVector{0.f};
+};
+
+class VolumeMarcher {
+public:
+  VolumeMarcher(const Model& model, const DatasetInfo& dataset);
+
+  /// Rebuilds the layer tables, the visible regions (with `skipping`, those whose value ranges some
+  /// layer's transfer function may show; else all) and the traversal (`in` picks its kind).
+  void update(const std::vector<VolumeLayer>& layers, const std::vector<int>& fields, const Integration& in,
+              bool skipping);
+  /// Builds the gradient fields of every layer's field that has none yet (smooth shading) and
+  /// points the layers at them; true when one was built.
+  bool attachGradients();
+
+  bool empty() const { return layers_.empty(); }
+  const RegionTraversal* traversal() const { return traversal_.get(); }
+  const std::vector<uint8_t>& visible() const { return visible_; }
+
+  /// Marches the visible regions along the lattice ray within [tmin, tmax] with sample offset
+  /// rho (in steps), compositing front to back into acc (premultiplied). OpacityOnly skips colour
+  /// and shading (shadow-like rays). Adds the samples taken and the segments visited.
+  template <bool OpacityOnly>
+  void march(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc, uint64_t& raySamples,
+             uint64_t& regionCount) const;
+
+private:
+  template <bool OpacityOnly>
+  void marchBatches(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
+                    uint64_t& raySamples, uint64_t& regionCount) const;
+  template <bool OpacityOnly>
+  void marchSamples(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
+                    uint64_t& raySamples, uint64_t& regionCount) const;
+
+  const Model& model_;
+  const DatasetInfo& dataset_;
+  std::vector<LayerTable> layers_;
+  /// Smooth shading's gradient fields (cellGradients) per model field, built when first needed.
+  std::map<int, std::array<std::vector<float>, 3>> gradientFields_;
+  std::vector<uint8_t> visible_;
+  std::unique_ptr<RegionTraversal> traversal_;
+  std::unique_ptr<CellLocator> locator_; ///< only for Reconstruction::CellLocation
+  float referenceWidth_ = 1.f;           ///< opacity reference (dataset's finest cell width), lattice units
+  float invReferenceWidth_ = 1.f;
+  vec3f invScale_{1.f};   ///< world units per lattice unit, inverted (for gradients)
+  float meanScale_ = 1.f; ///< world units per lattice unit, averaged over the axes
+};
+
+extern template void VolumeMarcher::march<false>(const Ray&, float, const RayLight&, const MarchSettings&, vec4f&,
+                                                 uint64_t&, uint64_t&) const;
+extern template void VolumeMarcher::march<true>(const Ray&, float, const RayLight&, const MarchSettings&, vec4f&,
+                                                uint64_t&, uint64_t&) const;
+
+} // namespace exa
