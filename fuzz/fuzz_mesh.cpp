@@ -2,7 +2,7 @@
 // by the first byte (so that OBJ, PLY, .tris and structure detection are all reached) and read;
 // only exa::Error may escape the reader.
 #include "exabricks/core/error.h"
-#include "exabricks/io/mesh.h"
+#include "exabricks/documents/mesh.h"
 
 #include <cstddef>
 #include <cstdint>

@@ -3,7 +3,7 @@
 // blank nor saturated.
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/overlay.h"
 

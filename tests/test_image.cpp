@@ -1,7 +1,7 @@
 // Image files: sRGB transfer against its defining formula, PNG round trips through 8-bit
 // quantisation, exact PFM round trips and byte layout, and atomic writes.
 #include "exabricks/core/error.h"
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
 
 #include <gtest/gtest.h>
 

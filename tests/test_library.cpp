@@ -4,7 +4,7 @@
 #include "datasets.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
-#include "exabricks/io/scene_file.h"
+#include "exabricks/documents/scene_file.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/sample_math.h"
 

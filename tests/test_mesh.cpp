@@ -1,5 +1,5 @@
 #include "exabricks/core/error.h"
-#include "exabricks/io/mesh.h"
+#include "exabricks/documents/mesh.h"
 
 #include <gtest/gtest.h>
 

@@ -4,8 +4,8 @@
 // the build tree. Regenerate references with:
 //   EXABRICKS_UPDATE_REFERENCES=1 build/tests/exabricks_tests --gtest_filter='Regression.*'
 #include "exabricks/amr/scenes.h"
-#include "exabricks/io/image.h"
-#include "exabricks/io/mesh.h"
+#include "exabricks/documents/image.h"
+#include "exabricks/documents/mesh.h"
 #include "exabricks/render/renderer.h"
 #include "render_setup.h"
 

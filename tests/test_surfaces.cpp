@@ -5,7 +5,7 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
-#include "exabricks/io/mesh.h"
+#include "exabricks/documents/mesh.h"
 #include "exabricks/render/renderer.h"
 #include "reference.h"
 #include "render_setup.h"

@@ -2,7 +2,8 @@
 // other than the anchors the implementation uses), brute-force scans for maxOpacity, and
 // hand-written files in both formats.
 #include "exabricks/core/error.h"
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
+#include "exabricks/documents/transfer_function_file.h"
 #include "exabricks/render/transfer_function.h"
 
 #include <gtest/gtest.h>

@@ -2,7 +2,7 @@
 // panels with tick marks and numbers in a small built-in bitmap font.
 #pragma once
 
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
 
 #include <string>
 #include <vector>

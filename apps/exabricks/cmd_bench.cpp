@@ -7,7 +7,7 @@
 
 #include "exabricks/amr/cell_locator.h"
 #include "exabricks/core/log.h"
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
 #include "exabricks/render/renderer.h"
 
 #include <tbb/task_arena.h>

@@ -5,10 +5,10 @@
 #include "parallel.h"
 #include "scene_options.h"
 
+#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
-#include "exabricks/io/image.h"
-#include "exabricks/io/native.h"
-#include "exabricks/io/scene_file.h"
+#include "exabricks/documents/image.h"
+#include "exabricks/documents/scene_file.h"
 #include "exabricks/io/series.h"
 #include "exabricks/render/renderer.h"
 

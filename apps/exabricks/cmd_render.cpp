@@ -7,8 +7,8 @@
 
 #include "exabricks/amr/basis_batch.h"
 #include "exabricks/core/log.h"
-#include "exabricks/io/image.h"
-#include "exabricks/io/scene_file.h"
+#include "exabricks/documents/image.h"
+#include "exabricks/documents/scene_file.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 

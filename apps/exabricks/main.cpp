@@ -9,8 +9,8 @@
 #include "exabricks/amr/basis_batch.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
-#include "exabricks/io/native.h"
 
 #include <tbb/global_control.h>
 

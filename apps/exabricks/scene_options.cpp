@@ -3,8 +3,9 @@
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
-#include "exabricks/io/mesh.h"
-#include "exabricks/io/scene_file.h"
+#include "exabricks/documents/mesh.h"
+#include "exabricks/documents/scene_file.h"
+#include "exabricks/documents/transfer_function_file.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/overlay.h"
 

@@ -24,7 +24,7 @@ bool useBatchTarget(const std::string& name) { return name.empty() || name == "s
 #else
 
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "amr/basis_batch.cpp"
+#define HWY_TARGET_INCLUDE "basis_batch.cpp"
 #include <hwy/foreach_target.h> // IWYU pragma: keep
 #include <hwy/highway.h>
 
@@ -262,7 +262,7 @@ const char* TargetName() { return hwy::TargetName(HWY_TARGET); }
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
-#include "batch_dispatch.h"
+#include "exabricks/core/simd_dispatch.h"
 
 namespace exa {
 

@@ -3,8 +3,8 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
-#include "byte_order.h"
 #include "checked.h"
+#include "exabricks/core/byte_order.h"
 #include "patches.h"
 
 #include <tbb/parallel_for.h>

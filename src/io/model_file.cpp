@@ -1,7 +1,7 @@
 #include "exabricks/io/model_file.h"
 
 #include "exabricks/core/error.h"
-#include "exabricks/io/native.h"
+#include "exabricks/core/files.h"
 
 #include <fcntl.h>
 #include <sys/mman.h>

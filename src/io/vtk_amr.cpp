@@ -5,8 +5,8 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
-#include "byte_order.h"
 #include "checked.h"
+#include "exabricks/core/byte_order.h"
 
 #include <zlib.h>
 

@@ -427,7 +427,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
       SceneMesh sm;
       m.color("color", sm.color);
       if (m.string("file", sm.source)) {
-        // Read by the caller (io/scene_file.h): the library's render layer reads no files.
+        // Read by the caller (documents/scene_file.h): the library's render layer reads no files.
       } else {
         const json* v = m.find("vertices");
         const json* t = m.find("triangles");

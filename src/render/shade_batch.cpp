@@ -29,7 +29,7 @@ BatchFunctions batchFunctions() {
 #else
 
 #undef HWY_TARGET_INCLUDE
-#define HWY_TARGET_INCLUDE "render/shade_batch.cpp"
+#define HWY_TARGET_INCLUDE "shade_batch.cpp"
 #include <hwy/foreach_target.h> // IWYU pragma: keep
 #include <hwy/highway.h>
 
@@ -215,7 +215,7 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
-#include "../amr/batch_dispatch.h"
+#include "exabricks/core/simd_dispatch.h"
 
 namespace exa {
 

@@ -9,14 +9,10 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <initializer_list>
-#include <iterator>
 #include <numbers>
 
 namespace exa {
@@ -466,16 +462,6 @@ std::vector<vec4f> tabulateTransferFunction(const TransferFunction& tf) {
     table[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
   }
   return table;
-}
-
-TransferFunction readTransferFunction(const std::string& path, bool* isPreset) {
-  std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) fail(path, ": cannot open: is a directory");
-  std::ifstream in(path, std::ios::binary);
-  if (!in) fail(path, ": cannot open: ", std::strerror(errno));
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) fail(path, ": cannot read: ", std::strerror(errno));
-  return parseTransferFunction(text, path, isPreset);
 }
 
 TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source, bool* isPreset) {

@@ -4,7 +4,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/transfer_function.h"
 

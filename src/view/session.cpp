@@ -2,7 +2,7 @@
 
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
 
 #include <turbojpeg.h>
 

@@ -1,5 +1,5 @@
 // Images: linear-RGB, premultiplied-alpha float pixels, row 0 at the top. Reading and writing
-// files is in io/image.h.
+// files is in documents/image.h.
 #pragma once
 
 #include "exabricks/core/color.h"

@@ -1,4 +1,4 @@
-// Triangle meshes in world space (surfaces shown with the volume). Files are read by io/mesh.h.
+// Triangle meshes in world space (surfaces shown with the volume). Files are read by documents/mesh.h.
 #pragma once
 
 #include "exabricks/core/math.h"

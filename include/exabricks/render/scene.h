@@ -161,7 +161,7 @@ struct SceneDocument {
 /// Writes a scene document as JSON (every setting, colours in sRGB).
 std::string writeSceneJson(const SceneDocument& doc);
 /// Reads JSON written by writeSceneJson, or any subset of its keys (the rest keep their
-/// defaults). Meshes named by file keep their `source` and no data: io/scene_file.h reads them.
+/// defaults). Meshes named by file keep their `source` and no data: documents/scene_file.h reads them.
 /// Errors name `source` and the offending key.
 SceneDocument readSceneJson(const std::string& text, const std::string& source);
 

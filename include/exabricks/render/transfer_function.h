@@ -60,15 +60,12 @@ std::vector<vec4f> tabulateTransferFunction(const TransferFunction& tf);
 /// range and the dataset's default opacity scale (opacityScale 0).
 TransferFunction defaultTransferFunction(const std::string& colorMap = "viridis");
 
-/// Reads a transfer function file: a ParaView colour-map preset (a JSON array or object with
+/// A transfer function from JSON text: a ParaView colour-map preset (a JSON array or object with
 /// "RGBPoints" and optional "Points" for opacity, "ColorSpace", "Name") or an exabricks JSON
-/// object (see docs/transfer-functions.md). The value range in the file, if any, is kept in
-/// valueRange (a preset's is the span of its points; `isPreset` says which form the file had,
-/// for callers that rescale presets to the data as ParaView does); errors name the file and the
-/// problem.
-TransferFunction readTransferFunction(const std::string& path, bool* isPreset = nullptr);
-
-/// The same from JSON text; errors name `source`.
+/// object (see docs/transfer-functions.md). The value range in the text, if any, is kept in
+/// valueRange (a preset's is the span of its points; `isPreset` says which form it had, for
+/// callers that rescale presets to the data as ParaView does); errors name `source` and the
+/// problem. documents/transfer_function_file.h reads files.
 TransferFunction parseTransferFunction(const std::string& jsonText, const std::string& source,
                                        bool* isPreset = nullptr);
 /// The exabricks JSON form of a transfer function (built-in colour maps by name, others as

@@ -1,8 +1,8 @@
-#include "exabricks/io/scene_file.h"
+#include "exabricks/documents/scene_file.h"
 
 #include "exabricks/core/error.h"
-#include "exabricks/io/mesh.h"
-#include "exabricks/io/native.h"
+#include "exabricks/core/files.h"
+#include "exabricks/documents/mesh.h"
 
 #include <cerrno>
 #include <cstring>

@@ -1,9 +1,9 @@
-#include "exabricks/io/image.h"
+#include "exabricks/documents/image.h"
 
 #include "exabricks/core/error.h"
-#include "exabricks/io/native.h"
+#include "exabricks/core/files.h"
 
-#include "byte_order.h"
+#include "exabricks/core/byte_order.h"
 
 // Debian's libstb ships the stb implementations compiled into libstb.so, so only the
 // declarations are included here (no STB_*_IMPLEMENTATION).

@@ -1,9 +1,9 @@
-#include "exabricks/io/mesh.h"
+#include "exabricks/documents/mesh.h"
 
 #include "exabricks/core/error.h"
-#include "exabricks/io/native.h"
+#include "exabricks/core/files.h"
 
-#include "byte_order.h"
+#include "exabricks/core/byte_order.h"
 
 #include <bit>
 #include <cctype>
