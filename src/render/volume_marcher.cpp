@@ -60,14 +60,6 @@ void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t coun
   }
 }
 
-/// The same at one point of a region.
-vec3f smoothGradientAt(const LayerTable& layer, uint32_t regionIndex, const vec3f& p) {
-  vec3f g(0.f);
-  for (int a = 0; a < 3; ++a)
-    if (!sampleRegion(layer.grad[size_t(a)], regionIndex, p, g[a])) g[a] = 0.f;
-  return g;
-}
-
 /// Central differences at p over half the region's finest width each way; each point
 /// reconstructed from the region's bricks where it lies inside the region, else where it
 /// falls; one-sided where a point has no value.
@@ -91,37 +83,46 @@ vec3f centralGradient(const FieldView& view, uint32_t regionIndex, const Region&
   return grad;
 }
 
-/// What the batches of one ray share: the one layer, its regions, the shading and the running
-/// batch. The batch holds the samples of one segment, or with joinSegments of several
+/// The march of one ray in batches: the samples of one segment, or with joinSegments of several
 /// consecutive ones, reconstructed over the union of their regions' brick lists (ascending, so
-/// every sample sums its own region's bricks in its region's order; basis_batch.h).
+/// every sample sums its own region's bricks in its region's order; basis_batch.h), or cell by
+/// cell by the locator (Reconstruction::CellLocation). Each batch is looked up in the layers'
+/// transfer functions, shaded and composited in order. Several layers sum their optical depths
+/// per sample and weigh their colours by their opacities.
 template <bool OpacityOnly> class BatchMarch {
 public:
-  BatchMarch(const LayerTable& layer, const Model& model, const MarchSettings& s, const RayLight& light,
-             float referenceWidth, const vec3f& invScale, float meanScale, vec4f& acc, uint64_t& raySamples)
-      : layer_(layer), model_(model), s_(s), light_(light), referenceWidth_(referenceWidth), invScale_(invScale),
-        meanScale_(meanScale), acc_(acc), raySamples_(raySamples) {
+  struct Inputs {
+    const std::vector<LayerTable>& layers;
+    const Model& model;
+    const CellLocator* locator; ///< set for Reconstruction::CellLocation
+    float referenceWidth;
+    vec3f invScale;
+    float meanScale;
+  };
+
+  BatchMarch(const Inputs& in, const MarchSettings& s, const RayLight& light, vec4f& acc, uint64_t& raySamples)
+      : in_(in), layer_(in.layers[0]), s_(s), light_(light), acc_(acc), raySamples_(raySamples) {
     wantGrad_ = !OpacityOnly && s.shading == Shading::Analytic;
     smooth_ = !OpacityOnly && s.shading == Shading::Smooth;
     central_ = s.shading == Shading::Central;
-    fn_ = batchFunctions();
-    params_.invReferenceWidth = 1.f / referenceWidth;
+    fn_ = s.options.vectorized ? batchFunctions() : scalarBatchFunctions();
+    params_.invReferenceWidth = 1.f / in.referenceWidth;
     params_.shade = wantGrad_ || smooth_;
-    params_.gradientScale = invScale;
+    params_.gradientScale = in.invScale;
     params_.light = light.light, params_.halfVector = light.halfVector, params_.terms = s.terms;
-    params_.fadeByValue = layer.fadeByValue();
+    params_.fadeByValue = layer_.fadeByValue();
     batch_.count = 0;
   }
 
   /// Places the samples of a segment in the ray's batches, flushing the full ones; false where
   /// the ray terminated.
   bool add(const Ray& ray, float rho, const Segment& seg) {
-    const Region& region = model_.regions.regions[seg.region];
-    const float dt = sampleStep(region, s_.sampling, referenceWidth_, s_.rate);
+    const Region& region = in_.model.regions.regions[seg.region];
+    const float dt = sampleStep(region, s_.sampling, in_.referenceWidth, s_.rate);
     // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
     SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
     const uint32_t* ids = layer_.view.brickIds + region.brickBegin;
-    const float fade = layer_.fadeWidth(region, meanScale_);
+    const float fade = layer_.fadeWidth(region, in_.meanScale);
     while (march.a < march.end) {
       int m = batch_.count;
       if (m > 0 && (brickIds_ != ids || brickCount_ != region.brickCount)) {
@@ -150,10 +151,32 @@ public:
   /// Reconstructs, shades and composites the batch in order and empties it; true where the ray
   /// terminated.
   bool flush() {
+    if (batch_.count == 0) return false;
+    return in_.layers.size() == 1 ? flushLayer() : flushLayers();
+  }
+
+private:
+  /// The batch's values (and gradients) of one layer's field.
+  void reconstruct(const LayerTable& layer, SampleBatch& batch, bool gradient) const {
+    if (!in_.locator) {
+      fn_.sample(layer.view, brickIds_, brickCount_, batch, gradient);
+      return;
+    }
+    for (int i = 0; i < batch.count; ++i) {
+      vec3f g(0.f);
+      float v = 0.f;
+      batch.valid[i] =
+          in_.locator->sample(layer.field, vec3f(batch.x[i], batch.y[i], batch.z[i]), v, gradient ? &g : nullptr);
+      batch.value[i] = v;
+      batch.gx[i] = g.x, batch.gy[i] = g.y, batch.gz[i] = g.z;
+    }
+  }
+
+  /// One layer (the common case).
+  bool flushLayer() {
     const int n = batch_.count;
-    if (n == 0) return false;
     const bool withGrad = wantGrad_ && !(s_.options.lazyGradients && lastHidden_);
-    fn_.sample(layer_.view, brickIds_, brickCount_, batch_, withGrad);
+    reconstruct(layer_, batch_, withGrad);
     // The transfer function at every sample (log2 transmittance 0: transparent).
     TfBatch looked;
     const bool anyShown = fn_.tfLookup(layer_.t, batch_, looked);
@@ -163,25 +186,71 @@ public:
       batch_.count = 0;
       return false;
     }
-    if (wantGrad_ && !withGrad) fn_.sample(layer_.view, brickIds_, brickCount_, batch_, true);
+    if (wantGrad_ && !withGrad) reconstruct(layer_, batch_, true);
     if (smooth_) smoothGradients(layer_, brickIds_, brickCount_, fn_.sample, batch_);
     // Opacity and colour of every sample at once, then the in-order compositing.
     ShadedBatch shaded;
     params_.fadeWidth = fades_;
     fn_.shade(batch_, looked, lengths_, params_, shaded);
     batch_.count = 0;
-    return composite(n, looked, shaded);
+    return composite(n, central_ ? &looked : nullptr, shaded);
   }
 
-private:
+  /// Several layers: per sample the summed log2 transmittance of the layers that show, and their
+  /// colours weighed by their own opacities.
+  bool flushLayers() {
+    const int n = batch_.count;
+    alignas(64) float logSum[kSampleBatch] = {}, alphaSum[kSampleBatch] = {};
+    alignas(64) float r[kSampleBatch] = {}, g[kSampleBatch] = {}, b[kSampleBatch] = {};
+    alignas(64) float fades[2 * kSampleBatch];
+    for (const LayerTable& layer : in_.layers) {
+      SampleBatch& lb = layerBatch_;
+      lb.count = n;
+      std::copy(std::begin(batch_.x), std::end(batch_.x), lb.x);
+      std::copy(std::begin(batch_.y), std::end(batch_.y), lb.y);
+      std::copy(std::begin(batch_.z), std::end(batch_.z), lb.z);
+      reconstruct(layer, lb, wantGrad_);
+      TfBatch looked;
+      if (!fn_.tfLookup(layer.t, lb, looked)) continue;
+      if (smooth_) smoothGradients(layer, brickIds_, brickCount_, fn_.sample, lb);
+      for (int i = 0; i < n; ++i)
+        fades[i] = layer.fadeWidth(in_.model.regions.regions[regionOf_[i]], in_.meanScale);
+      VolumeShadeParams params = params_;
+      params.fadeWidth = fades;
+      params.fadeByValue = layer.fadeByValue();
+      ShadedBatch shaded;
+      fn_.shade(lb, looked, lengths_, params, shaded);
+      for (int i = 0; i < n; ++i) {
+        if (!(looked.logT[i] < 0.f)) continue; // fully transparent here
+        logSum[i] += looked.logT[i];
+        if (OpacityOnly) continue;
+        vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
+        if (central_) c = shadeCentral(layer, lb, i, c);
+        const vec3f weighted = c * shaded.alpha[i];
+        r[i] += weighted.x, g[i] += weighted.y, b[i] += weighted.z;
+        alphaSum[i] += shaded.alpha[i];
+      }
+    }
+    ShadedBatch combined;
+    for (int i = 0; i < n; ++i) {
+      const bool shows = logSum[i] < 0.f;
+      combined.alpha[i] = shows ? correctedOpacity(logSum[i], lengths_[i], params_.invReferenceWidth) : 0.f;
+      const vec3f c = alphaSum[i] > 0.f ? vec3f(r[i], g[i], b[i]) * (1.f / alphaSum[i]) : vec3f(0.f);
+      combined.r[i] = c.x, combined.g[i] = c.y, combined.b[i] = c.z;
+    }
+    batch_.count = 0;
+    return composite(n, nullptr, combined);
+  }
+
   /// Front to back with the transmittance as a running product: one multiplication per sample on
   /// the dependency chain (compositeBehind's sums, reassociated). Samples that show nothing have
-  /// alpha 0. True where the ray terminated.
-  bool composite(int n, const TfBatch& looked, const ShadedBatch& shaded) {
+  /// alpha 0. `centralOf`: the one layer's lookup, where its colours still need central-difference
+  /// shading. True where the ray terminated.
+  bool composite(int n, const TfBatch* centralOf, const ShadedBatch& shaded) {
     float transmittance = 1.f - acc_.w, r = 0.f, g = 0.f, b = 0.f;
     int i = 0;
     bool done = false;
-    if (!OpacityOnly && !central_) {
+    if (!OpacityOnly && !centralOf) {
       // The whole batch without a per-sample test: the opacity only grows along the batch, so
       // where it ends below the termination threshold no sample reached it, and only where it
       // ends above is the batch composited again with the test, sample by sample.
@@ -206,7 +275,7 @@ private:
       const float w = transmittance * alpha;
       if (!OpacityOnly) {
         vec3f c(shaded.r[i], shaded.g[i], shaded.b[i]);
-        if (central_ && looked.logT[i] < 0.f) c = shadeCentral(i, c); // the batch left it unshaded
+        if (centralOf && centralOf->logT[i] < 0.f) c = shadeCentral(layer_, batch_, i, c); // left unshaded
         r += w * c.x;
         g += w * c.y;
         b += w * c.z;
@@ -224,23 +293,20 @@ private:
     return done;
   }
 
-  /// Central-difference shading of sample i of the batch.
-  vec3f shadeCentral(int i, const vec3f& c) const {
-    const Region& region = model_.regions.regions[regionOf_[i]];
-    const float value = batch_.value[i];
-    const vec3f p(batch_.x[i], batch_.y[i], batch_.z[i]);
-    const vec3f grad = centralGradient(layer_.view, regionOf_[i], region, p, value);
-    return shadeVolumeSample(c, grad * invScale_, light_.light, light_.halfVector, s_.terms,
-                             layer_.fade(region, meanScale_, value));
+  /// Central-difference shading of sample i of a layer's batch.
+  vec3f shadeCentral(const LayerTable& layer, const SampleBatch& batch, int i, const vec3f& c) const {
+    const Region& region = in_.model.regions.regions[regionOf_[i]];
+    const float value = batch.value[i];
+    const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
+    const vec3f grad = centralGradient(layer.view, regionOf_[i], region, p, value);
+    return shadeVolumeSample(c, grad * in_.invScale, light_.light, light_.halfVector, s_.terms,
+                             layer.fade(region, in_.meanScale, value));
   }
 
-  const LayerTable& layer_;
-  const Model& model_;
+  const Inputs& in_;
+  const LayerTable& layer_; ///< the first layer (the only one, in the common case)
   const MarchSettings& s_;
   const RayLight& light_;
-  float referenceWidth_;
-  vec3f invScale_;
-  float meanScale_;
   vec4f& acc_;
   uint64_t& raySamples_;
   bool wantGrad_ = false, smooth_ = false, central_ = false;
@@ -248,6 +314,7 @@ private:
   BatchFunctions fn_{};
   VolumeShadeParams params_; // what the batches' shading needs besides the samples
   SampleBatch batch_;
+  SampleBatch layerBatch_; ///< several layers: the one being reconstructed
   // Per sample, with room for whole-vector stores past the batch's end (as its positions).
   alignas(64) float lengths_[2 * kSampleBatch], fades_[2 * kSampleBatch];
   alignas(64) uint32_t regionOf_[2 * kSampleBatch];
@@ -274,7 +341,6 @@ MarchSettings MarchSettings::of(const Scene& scene, const RendererOptions& optio
 
 VolumeMarcher::VolumeMarcher(const Model& model, const DatasetInfo& dataset) : model_(model), dataset_(dataset) {
   referenceWidth_ = dataset.referenceWidth;
-  invReferenceWidth_ = 1.f / referenceWidth_;
   invScale_ = vec3f(1.0 / model.world.scale.x, 1.0 / model.world.scale.y, 1.0 / model.world.scale.z);
   meanScale_ = float((model.world.scale.x + model.world.scale.y + model.world.scale.z) / 3.0);
 }
@@ -332,19 +398,10 @@ template <bool OpacityOnly>
 void VolumeMarcher::march(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
                           uint64_t& raySamples, uint64_t& regionCount) const {
   if (layers_.empty() || !(ray.tmax > ray.tmin)) return;
-  // Batches: one layer reconstructed from its regions (the common case).
-  const bool batched = s.options.vectorized && layers_.size() == 1 && s.reconstruction == Reconstruction::Regions;
-  if (batched)
-    marchBatches<OpacityOnly>(ray, rho, light, s, acc, raySamples, regionCount);
-  else
-    marchSamples<OpacityOnly>(ray, rho, light, s, acc, raySamples, regionCount);
-}
-
-template <bool OpacityOnly>
-void VolumeMarcher::marchBatches(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
-                                 uint64_t& raySamples, uint64_t& regionCount) const {
-  BatchMarch<OpacityOnly> batches(layers_[0], model_, s, light, referenceWidth_, invScale_, meanScale_, acc,
-                                  raySamples);
+  const typename BatchMarch<OpacityOnly>::Inputs inputs{
+      layers_,         model_,    s.reconstruction == Reconstruction::CellLocation ? locator_.get() : nullptr,
+      referenceWidth_, invScale_, meanScale_};
+  BatchMarch<OpacityOnly> batches(inputs, s, light, acc, raySamples);
   bool terminated = false;
   traversal_->traverse(ray, [&](const Segment& seg) {
     ++regionCount;
@@ -353,71 +410,6 @@ void VolumeMarcher::marchBatches(const Ray& ray, float rho, const RayLight& ligh
     return false;
   });
   if (!terminated) batches.flush();
-}
-
-template <bool OpacityOnly>
-void VolumeMarcher::marchSamples(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
-                                 uint64_t& raySamples, uint64_t& regionCount) const {
-  const size_t layerCount = layers_.size();
-  const bool wantGrad = !OpacityOnly && s.shading == Shading::Analytic;
-  traversal_->traverse(ray, [&](const Segment& seg) {
-    ++regionCount;
-    const Region& region = model_.regions.regions[seg.region];
-    const float dt = sampleStep(region, s.sampling, referenceWidth_, s.rate);
-    // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
-    SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
-    while (march.a < march.end) {
-      const float b = march.intervalEnd();
-      if (!(b > march.a)) break;
-      march.k += 1.f;
-      const float len = b - march.a;
-      const float tm = 0.5f * (march.a + b);
-      march.a = b;
-      const vec3f p = ray.org + ray.dir * tm;
-      ++raySamples;
-      float logSum = 0.f, alphaSum = 0.f, alpha = 0.f;
-      vec3f colorSum(0.f), color(0.f);
-      for (size_t li = 0; li < layerCount; ++li) {
-        const LayerTable& layer = layers_[li];
-        float value;
-        vec3f grad;
-        const bool found = s.reconstruction == Reconstruction::Regions
-                               ? sampleRegion(layer.view, seg.region, p, value, wantGrad ? &grad : nullptr)
-                               : locator_->sample(layer.field, p, value, wantGrad ? &grad : nullptr);
-        if (!found) break; // no value here for any field: the cells are shared
-        const vec4f rgba = layer.lookup(value);
-        if (rgba.w >= 0.f) continue; // log2 transmittance 0: fully transparent
-        const float layerAlpha = correctedOpacity(rgba.w, len, invReferenceWidth_);
-        logSum += rgba.w;
-        if (OpacityOnly) continue;
-        vec3f c = rgba.rgb();
-        if (s.shading != Shading::None) {
-          if (s.shading == Shading::Smooth)
-            grad = smoothGradientAt(layer, seg.region, p);
-          else if (s.shading == Shading::Central)
-            grad = centralGradient(layer.view, seg.region, region, p, value);
-          c = shadeVolumeSample(c, grad * invScale_, light.light, light.halfVector, s.terms,
-                                layer.fade(region, meanScale_, value));
-        }
-        if (layerCount == 1) {
-          alpha = layerAlpha;
-          color = c;
-        } else {
-          colorSum += c * layerAlpha;
-          alphaSum += layerAlpha;
-        }
-      }
-      if (!(logSum < 0.f)) continue;
-      if (OpacityOnly || layerCount > 1) alpha = correctedOpacity(logSum, len, invReferenceWidth_);
-      if (!OpacityOnly && layerCount > 1) color = alphaSum > 0.f ? colorSum * (1.f / alphaSum) : vec3f(0.f);
-      if (OpacityOnly)
-        acc.w += (1.f - acc.w) * alpha;
-      else
-        compositeBehind(acc, color, alpha);
-      if (s.earlyTermination && acc.w >= s.terminationOpacity) return false;
-    }
-    return true;
-  });
 }
 
 template void VolumeMarcher::march<false>(const Ray&, float, const RayLight&, const MarchSettings&, vec4f&, uint64_t&,

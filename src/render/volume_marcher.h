@@ -55,19 +55,15 @@ public:
 
   /// Marches the visible regions along the lattice ray within [tmin, tmax] with sample offset
   /// rho (in steps), compositing front to back into acc (premultiplied). OpacityOnly skips colour
-  /// and shading (shadow-like rays). Adds the samples taken and the segments visited.
+  /// and shading (shadow-like rays). Adds the samples taken and the segments visited. One march
+  /// for every case: batches of consecutive samples, reconstructed from their regions' bricks or
+  /// by the cell locator, for one layer or several (tests/reference_march.h holds the
+  /// one-sample-at-a-time reference it is tested against).
   template <bool OpacityOnly>
   void march(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc, uint64_t& raySamples,
              uint64_t& regionCount) const;
 
 private:
-  template <bool OpacityOnly>
-  void marchBatches(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
-                    uint64_t& raySamples, uint64_t& regionCount) const;
-  template <bool OpacityOnly>
-  void marchSamples(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc,
-                    uint64_t& raySamples, uint64_t& regionCount) const;
-
   const Model& model_;
   const DatasetInfo& dataset_;
   std::vector<LayerTable> layers_;
@@ -77,9 +73,8 @@ private:
   std::unique_ptr<RegionTraversal> traversal_;
   std::unique_ptr<CellLocator> locator_; ///< only for Reconstruction::CellLocation
   float referenceWidth_ = 1.f;           ///< opacity reference (dataset's finest cell width), lattice units
-  float invReferenceWidth_ = 1.f;
-  vec3f invScale_{1.f};   ///< world units per lattice unit, inverted (for gradients)
-  float meanScale_ = 1.f; ///< world units per lattice unit, averaged over the axes
+  vec3f invScale_{1.f};                  ///< world units per lattice unit, inverted (for gradients)
+  float meanScale_ = 1.f;                ///< world units per lattice unit, averaged over the axes
 };
 
 extern template void VolumeMarcher::march<false>(const Ray&, float, const RayLight&, const MarchSettings&, vec4f&,

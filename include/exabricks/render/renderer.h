@@ -72,9 +72,8 @@ struct SceneUpdate {
 /// compare variants of the volume march. Images are the same whatever they are set to, to float
 /// round-off (the tests hold them to it); none of them is a scene setting.
 struct RendererOptions {
-  /// Reconstruct consecutive samples of one layer together with SIMD (amr/basis_batch.h), then
-  /// shade and composite them in order; off: one sample after another (the reference loop, which
-  /// also serves several layers and cell location).
+  /// The march's batches with SIMD (amr/basis_batch.h, render/shade_batch.h) for the instruction
+  /// set chosen at run time; off: the same batches lane after lane through the scalar functions.
   bool vectorized = true;
   /// After samples that the transfer function hides, reconstruct the next batch's values first
   /// and their gradients only if one of them shows.

@@ -126,4 +126,9 @@ inline void shadeVolumeBatchScalar(const SampleBatch& batch, const TfBatch& tf, 
   }
 }
 
+/// The same four functions lane after lane (the reference table; RendererOptions::vectorized off).
+inline BatchFunctions scalarBatchFunctions() {
+  return {placeSamplesScalar, sampleBricksBatchScalar, tfLookupBatchScalar, shadeVolumeBatchScalar};
+}
+
 } // namespace exa
