@@ -46,7 +46,8 @@ template <typename Owner> void checkSetting(const Setting<Owner>& s, double valu
 /// Checks every numeric setting of `owner` against its range.
 template <typename Owner> void checkSettings(const std::vector<Setting<Owner>>& table, const Owner& owner) {
   for (const Setting<Owner>& s : table)
-    if (s.type == SettingType::Integer || s.type == SettingType::Number) checkSetting(s, s.get(owner).template get<double>());
+    if (s.type == SettingType::Integer || s.type == SettingType::Number)
+      checkSetting(s, s.get(owner).template get<double>());
 }
 
 } // namespace exa
