@@ -14,6 +14,7 @@
 #include "exabricks/io/model_info.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/render/scene_vocabulary.h"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -524,6 +525,8 @@ PYBIND11_MODULE(_core, m) {
       py::arg("text"), py::arg("source"),
       "A scene file's JSON checked by the command line's reader (unknown keys and invalid settings are "
       "refused with its messages, naming `source`) and written back by its writer, with every setting");
+  m.def("scene_vocabulary", &sceneVocabularyJson,
+        "Every scalar setting of a scene file as JSON: key, name, type, default, range, choices and help");
   m.def(
       "default_field_index",
       [](const std::vector<std::string>& names) {

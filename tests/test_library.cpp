@@ -472,7 +472,8 @@ TEST(Library, SceneJsonErrorsNameTheSourceAndTheKey) {
   EXPECT_NE(message("{\"bogus\": 1}").find("view.json: unknown key \"bogus\""), std::string::npos);
   EXPECT_NE(message("{\"light\": {\"ambiant\": 1}}").find("\"light.ambiant\""), std::string::npos);
   EXPECT_NE(message("{\"frame\": {\"width\": \"wide\"}}").find("\"frame.width\" must be a number"), std::string::npos);
-  EXPECT_NE(message("{\"frame\": {\"width\": 0}}").find("image size"), std::string::npos);
+  EXPECT_NE(message("{\"frame\": {\"width\": 0}}").find("\"frame.width\" must be an integer in 1..32768, not 0"),
+            std::string::npos);
   EXPECT_NE(message("{\"shading\": \"phong\"}").find("choose from"), std::string::npos);
   EXPECT_NE(
       message("{\"layers\": [{\"transfer_function\": {\"colormap\": \"nope\"}}]}").find("layers[0].transfer_function"),

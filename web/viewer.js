@@ -8,6 +8,7 @@ const $ = (id) => document.getElementById(id);
 
 const viewer = {
   info: null,        // GET /api/info
+  vocabulary: [],    // GET /api/vocabulary: the scalar settings of scene files
   doc: null,         // the scene document being edited
   initialCamera: null,
   histogram: null,
@@ -783,7 +784,7 @@ function syncControls() {
     const b = bounds();
     for (let k = 0; k < 6; k++) $(`clip-box-${k}`).value = (box[k] - b[k % 3]) / (b[(k % 3) + 3] - b[k % 3] || 1);
   }
-  $('shading').value = doc.shading === 'clamped' ? 'smooth' : (doc.shading || 'smooth');
+  $('shading').value = doc.shading;
   const ao = (doc.ambient_occlusion && doc.ambient_occlusion.rays) || 0;
   $('ao-rays').value = ao;
   $('ao-rays-out').textContent = ao;
@@ -1100,6 +1101,15 @@ function download(blob, name) {
   }, 1000);
 }
 
+/// Fills every select bound to a choice setting (data-setting="KEY") with the names the server's
+/// description offers.
+function fillChoices() {
+  for (const select of document.querySelectorAll('select[data-setting]')) {
+    const setting = viewer.vocabulary.find((s) => s.key === select.dataset.setting);
+    if (setting && setting.choices) fillSelect(select, setting.choices.map((c) => [c, c]), setting.default);
+  }
+}
+
 /// Takes a whole scene document (from the server's own JSON writer) as the one being edited.
 function adoptDocument(doc, hasCamera = true) {
   const camera = viewer.doc ? viewer.doc.camera : null;
@@ -1115,6 +1125,7 @@ function adoptDocument(doc, hasCamera = true) {
 async function start() {
   try {
     viewer.info = await apiJson('/api/info');
+    viewer.vocabulary = await apiJson('/api/vocabulary');
   } catch (e) {
     if (isNetworkError(e)) serverGone();
     else showMessage(`Cannot reach the viewer: ${e.message}`);
@@ -1123,6 +1134,7 @@ async function start() {
   $('dataset-name').textContent = viewer.info.name;
   document.title = `${viewer.info.name} — exabricks`;
   buildClipBoxSliders();
+  fillChoices();
   adoptDocument(viewer.info.document);
   viewer.initialCamera = JSON.parse(JSON.stringify(viewer.doc.camera));
   if (urlSize && /^\d+$/.test(urlSize)) {

@@ -9,6 +9,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/render/scene_vocabulary.h"
 
 #include <tbb/task_arena.h>
 
@@ -108,7 +109,7 @@ std::vector<VariantResult> measureInterleaved(const std::vector<Variant>& varian
     r.name = variants[v].name;
     r.updateSeconds = renderers[v]->setScene(variants[v].scene).seconds();
     r.visibleRegions = renderers[v]->visibleRegions();
-    r.traversal = renderers[v]->traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+    r.traversal = nameOf(renderers[v]->traversalInUse());
     RenderStats warm;
     renderers[v]->render(frame, &warm); // warm-up, not counted
   }
@@ -534,7 +535,7 @@ void runProgressive(const Setup& s, const BenchOptions& o) {
   j["preview_samples_per_pass"] = double(previewSamples) / double(o.progressive);
   j["full_pass_seconds"] = median(fullSeconds);
   j["full_frame_after_change_seconds"] = median(fullChange);
-  j["traversal"] = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+  j["traversal"] = nameOf(renderer.traversalInUse());
   j["visible_regions"] = renderer.visibleRegions();
   if (o.json) {
     std::cout << j.dump(2) << "\n";

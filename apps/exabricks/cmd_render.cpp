@@ -11,6 +11,7 @@
 #include "exabricks/documents/scene_file.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/render/scene_vocabulary.h"
 
 #include <algorithm>
 #include <cctype>
@@ -147,7 +148,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, scene.background);
   logInfo(strCat("wrote ", o.output));
 
-  const char* traversal = renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd";
+  const char* traversal = nameOf(renderer.traversalInUse());
   if (o.json) {
     nlohmann::json j;
     j["output"] = o.output;

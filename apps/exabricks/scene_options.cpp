@@ -8,6 +8,7 @@
 #include "exabricks/documents/transfer_function_file.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/overlay.h"
+#include "exabricks/render/scene_vocabulary.h"
 
 #include <algorithm>
 #include <cmath>
@@ -18,14 +19,25 @@
 namespace exa::cli {
 namespace {
 
-template <typename T>
-T pick(const std::string& what, const std::string& value, std::initializer_list<std::pair<const char*, T>> choices) {
-  std::string names;
-  for (const auto& [name, v] : choices) {
-    if (value == name) return v;
-    names += (names.empty() ? "" : ", ") + std::string(name);
+/// The value a flag names, from the library's names of the enumeration.
+template <typename E> E pick(const char* flag, const std::string& value) {
+  try {
+    return parseName<E>(value, flag);
+  } catch (const UsageError&) {
+    throw;
+  } catch (const Error& e) {
+    failUsage(e.what());
   }
-  failUsage("unknown ", what, " '", value, "' (choose from: ", names, ")");
+}
+
+/// A flag's value checked against the range of the scene setting it sets.
+template <typename T> T checked(const char* flag, const char* key, T value) {
+  try {
+    checkSceneSetting(key, double(value));
+  } catch (const Error& e) {
+    failUsage(flag, ": ", e.what());
+  }
+  return value;
 }
 
 vec3d toVec(const std::vector<double>& v, const char* what) {
@@ -100,9 +112,9 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderO
 void RenderOptions::add(CLI::App& cmd) {
   in.add(cmd);
   cmd.add_option("--size", size, "Image size WIDTHxHEIGHT")->capture_default_str();
-  cmd.add_option("--spp", spp, "Jittered samples per pixel, accumulated")->capture_default_str();
+  cmd.add_option("--spp", spp, sceneSettingHelp("frame.samples_per_pixel"))->capture_default_str();
   cmd.add_option("--rate", rate, "Quality factor: samples per half finest cell width")->capture_default_str();
-  cmd.add_option("--seed", seed, "Seed of the per-pixel jitter")->capture_default_str();
+  cmd.add_option("--seed", seed, sceneSettingHelp("frame.seed"))->capture_default_str();
   cmd.add_flag("--no-jitter", noJitter, "Sample every ray at the same offsets");
   cmd.add_option("--colormap", colormap, "Built-in colour map")->capture_default_str();
   cmd.add_option("--tf", tfFile, "Transfer function file (ParaView preset or exabricks JSON)");
@@ -123,20 +135,15 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--elevation", elevation, "Default view: degrees above the x-y plane")->capture_default_str();
   cmd.add_option("--background", background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
   cmd.add_flag("--alpha", alpha, "Keep the alpha channel instead of a background");
-  cmd.add_option("--shading", shading,
-                 "smooth (a gradient field of per-cell central differences, reconstructed like the values), analytic "
-                 "(the exact gradient, which shows the cell lattice), central or none")
-      ->capture_default_str();
+  cmd.add_option("--shading", shading, sceneSettingHelp("shading"))->capture_default_str();
   cmd.add_option("--light", light, "headlight, or the direction x,y,z light travels")->capture_default_str();
-  cmd.add_option("--traversal", traversal, "Region traversal: auto, kd or embree")->capture_default_str();
+  cmd.add_option("--traversal", traversal, sceneSettingHelp("integration.traversal"))->capture_default_str();
   cmd.add_flag("--no-skip", noSkip, "Disable space skipping");
   cmd.add_flag("--no-early-termination", noEarlyTermination, "Integrate every ray to its end");
-  cmd.add_option("--sampling", sampling, "adaptive (per region) or fixed (finest width everywhere)")
+  cmd.add_option("--sampling", sampling, sceneSettingHelp("integration.sampling"))->capture_default_str();
+  cmd.add_option("--reconstruction", reconstruction, sceneSettingHelp("integration.reconstruction"))
       ->capture_default_str();
-  cmd.add_option("--reconstruction", reconstruction,
-                 "regions (bricks listed by the sample's region) or cells (baseline: locate every cell)")
-      ->capture_default_str();
-  cmd.add_option("--debug", debug, "Debug view: level, brick, region or steps")->capture_default_str();
+  cmd.add_option("--debug", debug, sceneSettingHelp("debug"))->capture_default_str();
   cmd.add_flag("--no-volume", noVolume, "Draw surfaces only");
   cmd.add_option("--layer", layers, "Another field in the volume: FIELD, FIELD=COLORMAP or FIELD=TF_FILE (repeatable)");
   cmd.add_option("--iso", iso, "Iso-values v1,v2,... of implicit iso-surfaces")->delimiter(',');
@@ -152,9 +159,9 @@ void RenderOptions::add(CLI::App& cmd) {
                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
   cmd.add_option("--clip-box", clipBox, "Keep only the inside of a box x0,y0,z0,x1,y1,z1 (world)")->delimiter(',');
   cmd.add_flag("--clip-meshes", clipMeshes, "Clip meshes too");
-  cmd.add_option("--ao", aoRays, "Ambient occlusion rays per surface hit (0: off)")->capture_default_str();
-  cmd.add_option("--ao-length", aoLength, "Ambient occlusion ray length, world units (0: a tenth of the diagonal)");
-  cmd.add_flag("--ao-volume", aoVolume, "Let the volume attenuate ambient occlusion rays");
+  cmd.add_option("--ao", aoRays, sceneSettingHelp("ambient_occlusion.rays"))->capture_default_str();
+  cmd.add_option("--ao-length", aoLength, sceneSettingHelp("ambient_occlusion.length"));
+  cmd.add_flag("--ao-volume", aoVolume, sceneSettingHelp("ambient_occlusion.volume"));
   cmd.add_option("--scene", sceneFile,
                  "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
 }
@@ -186,11 +193,8 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   if (!o.in.input.empty()) doc.input = o.in.input;
 
   if (apply("--size")) parseSize(o.size, f.width, f.height);
-  if (apply("--spp")) {
-    if (o.spp < 1 || o.spp > 65536) failUsage("--spp must be in 1..65536");
-    f.samplesPerPixel = o.spp;
-  }
-  if (apply("--rate")) f.rate = o.rate;
+  if (apply("--spp")) f.samplesPerPixel = checked("--spp", "frame.samples_per_pixel", o.spp);
+  if (apply("--rate")) f.rate = checked("--rate", "frame.rate", o.rate);
   if (apply("--seed")) f.seed = o.seed;
   if (apply("--no-jitter")) f.jitter = !o.noJitter;
 
@@ -223,36 +227,14 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
     }
   }
 
-  if (apply("--shading"))
-    s.shading = pick<Shading>("shading", o.shading,
-                              {{"analytic", Shading::Analytic},
-                               {"central", Shading::Central},
-                               {"smooth", Shading::Smooth},
-                               {"none", Shading::None},
-                               {"clamped", Shading::Smooth}});
+  if (apply("--shading")) s.shading = pick<Shading>("--shading", o.shading);
   Integration& in = s.integration;
-  if (apply("--traversal")) {
-    in.autoTraversal = o.traversal == "auto";
-    if (!in.autoTraversal)
-      in.traversal = pick<TraversalKind>("traversal", o.traversal,
-                                         {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
-  }
-  if (apply("--sampling"))
-    in.sampling =
-        pick<Sampling>("sampling", o.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
-  if (apply("--reconstruction"))
-    in.reconstruction =
-        pick<Reconstruction>("reconstruction", o.reconstruction,
-                             {{"regions", Reconstruction::Regions}, {"cells", Reconstruction::CellLocation}});
+  if (apply("--traversal")) setTraversal(in, pick<TraversalSetting>("--traversal", o.traversal));
+  if (apply("--sampling")) in.sampling = pick<Sampling>("--sampling", o.sampling);
+  if (apply("--reconstruction")) in.reconstruction = pick<Reconstruction>("--reconstruction", o.reconstruction);
   if (apply("--no-skip")) in.spaceSkipping = !o.noSkip;
   if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
-  if (apply("--debug"))
-    s.debug = pick<DebugView>("debug view", o.debug,
-                              {{"none", DebugView::None},
-                               {"level", DebugView::Level},
-                               {"brick", DebugView::Brick},
-                               {"region", DebugView::Region},
-                               {"steps", DebugView::Steps}});
+  if (apply("--debug")) s.debug = pick<DebugView>("--debug", o.debug);
   if (apply("--light")) {
     s.light.headlight = o.light == "headlight";
     if (!s.light.headlight) {
@@ -298,14 +280,8 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
     }
   }
   if (apply("--clip-meshes")) s.clip.meshes = o.clipMeshes;
-  if (apply("--ao")) {
-    if (o.aoRays < 0 || o.aoRays > 1024) failUsage("--ao must be in 0..1024 rays");
-    s.ao.rays = o.aoRays;
-  }
-  if (apply("--ao-length")) {
-    if (!(o.aoLength >= 0.f)) failUsage("--ao-length must not be negative");
-    s.ao.length = o.aoLength;
-  }
+  if (apply("--ao")) s.ao.rays = checked("--ao", "ambient_occlusion.rays", o.aoRays);
+  if (apply("--ao-length")) s.ao.length = checked("--ao-length", "ambient_occlusion.length", o.aoLength);
   if (apply("--ao-volume")) s.ao.volume = o.aoVolume;
 
   // Iso-surfaces.

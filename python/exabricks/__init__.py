@@ -19,7 +19,7 @@ from . import _core
 
 __all__ = [
     "Dataset", "TransferFunction", "Camera", "Scene", "load", "from_cells", "from_grids", "from_yt",
-    "colormap_names", "list_fields",
+    "colormap_names", "list_fields", "scene_vocabulary",
 ]
 
 
@@ -308,6 +308,30 @@ def _srgb(color):
 # Every setting of a scene file with the library's defaults.
 _DEFAULT_DOCUMENT = json.loads(_core.scene_json("{}", "defaults"))
 
+# The scalar settings of a scene file as the library describes them (key, name, type, default,
+# range, choices, help): each is the Scene attribute of its name.
+_VOCABULARY = json.loads(_core.scene_vocabulary())
+_TYPES = {"boolean": bool, "integer": int, "number": float, "choice": str}
+
+
+def scene_vocabulary():
+    """The scalar settings of a scene file: a list of dicts with "key" (the path in the file),
+    "name" (the Scene attribute), "type", "default", "min"/"max" where bounded, "choices" and "help"."""
+    return copy.deepcopy(_VOCABULARY)
+
+
+def _document_value(doc, key):
+    for part in key.split("."):
+        doc = doc[part]
+    return doc
+
+
+def _set_document_value(doc, key, value):
+    *sections, leaf = key.split(".")
+    for part in sections:
+        doc = doc.setdefault(part, {})
+    doc[leaf] = value
+
 
 class TransferFunction:
     """A colour map and a piecewise-linear opacity over a value range (linear or log10).
@@ -500,7 +524,8 @@ class Scene:
                 field, json.dumps(TransferFunction().to_dict()), True, True)
             transfer_function = TransferFunction.from_dict(json.loads(tf_json))
         self.layers = [Layer(field, transfer_function)]
-        self.volume = True
+        for setting in _VOCABULARY:  # the scalar settings, with the library's defaults
+            setattr(self, setting["name"], setting["default"])
         self.iso_values = []
         self.iso_field = ""
         self.iso_colors = []
@@ -509,35 +534,10 @@ class Scene:
         self.meshes = []  # (exabricks._core.Mesh, sRGB colour)
         self.clip_planes = []  # (point, normal)
         self.clip_box = None
-        self.clip_meshes = False
-        # Light, shading, ambient occlusion and integration: the library's defaults (those of a
-        # scene file that leaves them out; see docs/rendering.md).
-        light = _DEFAULT_DOCUMENT["light"]
-        self.headlight = light["headlight"]
-        self.light_direction = tuple(light["direction"])
-        self.ambient, self.diffuse = light["ambient"], light["diffuse"]
-        self.specular, self.shininess = light["specular"], light["shininess"]
-        self.shading = _DEFAULT_DOCUMENT["shading"]
-        ao = _DEFAULT_DOCUMENT["ambient_occlusion"]
-        self.ao_rays, self.ao_length, self.ao_volume = ao["rays"], ao["length"], ao["volume"]
-        integration = _DEFAULT_DOCUMENT["integration"]
-        self.sampling = integration["sampling"]
-        self.early_termination = integration["early_termination"]
-        self.space_skipping = integration["space_skipping"]
-        self.traversal = integration["traversal"]
-        self.reconstruction = integration["reconstruction"]
-        self.embree_below_visible_fraction = integration["embree_below_visible_fraction"]
-        self.termination_opacity = integration["termination_opacity"]
+        self.light_direction = tuple(_DEFAULT_DOCUMENT["light"]["direction"])
         self.camera_path = None  # movies: {"keyframes": [...], "constant_speed": bool}, as in the scene file
-        self.debug = "none"
         self.background = (0.0, 0.0, 0.0)
-        self.alpha = False
         self.camera = None
-        self.width, self.height = 800, 800
-        self.spp = 1
-        self.rate = 1.0
-        self.seed = 0
-        self.jitter = True
         for key, value in settings.items():
             if not hasattr(self, key):
                 raise AttributeError("Scene has no setting '%s'" % key)
@@ -600,31 +600,16 @@ class Scene:
         d = {
             "input": self._input,
             "camera": self.camera.to_dict() if self.camera is not None else Camera().to_dict(),
-            "frame": {"width": int(self.width), "height": int(self.height), "samples_per_pixel": int(self.spp),
-                      "rate": float(self.rate), "jitter": bool(self.jitter), "seed": int(self.seed)},
             "layers": [{"field": l.field, "transfer_function": l.transfer_function.to_dict()} for l in self.layers],
-            "volume": bool(self.volume),
             "iso": {"field": self.iso_field, "values": [float(v) for v in self.iso_values],
                     "colors": [_srgb(c) for c in self.iso_colors], "color_field": self.iso_color_field,
                     "color_map": self.iso_color_map.to_dict()},
-            "clip": {"planes": [{"point": list(map(float, p)), "normal": list(map(float, n))} for p, n in self.clip_planes],
-                     "meshes": bool(self.clip_meshes)},
-            "light": {"headlight": bool(self.headlight), "direction": list(map(float, self.light_direction)),
-                      "ambient": float(self.ambient), "diffuse": float(self.diffuse),
-                      "specular": float(self.specular), "shininess": float(self.shininess)},
-            "shading": self.shading,
-            "ambient_occlusion": {"rays": int(self.ao_rays), "length": float(self.ao_length),
-                                  "volume": bool(self.ao_volume)},
-            "integration": {"sampling": self.sampling, "reconstruction": self.reconstruction,
-                            "traversal": self.traversal,
-                            "embree_below_visible_fraction": float(self.embree_below_visible_fraction),
-                            "space_skipping": bool(self.space_skipping),
-                            "early_termination": bool(self.early_termination),
-                            "termination_opacity": float(self.termination_opacity)},
-            "debug": self.debug,
+            "clip": {"planes": [{"point": list(map(float, p)), "normal": list(map(float, n))} for p, n in self.clip_planes]},
+            "light": {"direction": list(map(float, self.light_direction))},
             "background": _srgb(self.background),
-            "alpha": bool(self.alpha),
         }
+        for setting in _VOCABULARY:
+            _set_document_value(d, setting["key"], _TYPES[setting["type"]](getattr(self, setting["name"])))
         if not d["input"]:
             del d["input"]
         if self.clip_box is not None:
@@ -669,13 +654,11 @@ class Scene:
         if "camera" in given:
             c = d["camera"]
             s.camera = Camera(c["position"], c["look_at"], c["up"], c["fov"], c["orthographic"], c["ortho_height"])
-        f = d["frame"]
-        s.width, s.height, s.spp, s.rate = f["width"], f["height"], f["samples_per_pixel"], f["rate"]
-        s.jitter, s.seed = f["jitter"], f["seed"]
+        for setting in _VOCABULARY:
+            setattr(s, setting["name"], _document_value(d, setting["key"]))
         if "layers" in given:
             s.layers = [Layer(l["field"] or dataset.default_field, TransferFunction.from_dict(l["transfer_function"]))
                         for l in d["layers"]]
-        s.volume = d["volume"]
         iso = d["iso"]
         s.iso_values = list(iso["values"])
         s.iso_field = iso["field"]
@@ -689,22 +672,8 @@ class Scene:
         clip = d["clip"]
         s.clip_planes = [(tuple(p["point"]), tuple(p["normal"])) for p in clip["planes"]]
         s.clip_box = tuple(clip["box"]) if clip.get("box") else None
-        s.clip_meshes = clip["meshes"]
-        light = d["light"]
-        s.headlight = light["headlight"]
-        s.light_direction = tuple(light["direction"])
-        for k in ("ambient", "diffuse", "specular", "shininess"):
-            setattr(s, k, light[k])
-        s.shading = d["shading"]
-        ao = d["ambient_occlusion"]
-        s.ao_rays, s.ao_length, s.ao_volume = ao["rays"], ao["length"], ao["volume"]
-        integ = d["integration"]
-        for key in ("sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
-                    "early_termination", "termination_opacity"):
-            setattr(s, key, integ[key])
-        s.debug = d["debug"]
+        s.light_direction = tuple(d["light"]["direction"])
         s.background = tuple(d["background"])
-        s.alpha = d["alpha"]
         s.camera_path = d.get("camera_path")
         return s
 

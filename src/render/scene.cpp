@@ -2,7 +2,9 @@
 
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/render/scene_vocabulary.h"
 
+#include "scene_settings.h"
 #include "tf_json.h"
 
 #include <nlohmann/json.hpp>
@@ -16,18 +18,12 @@ Scene Scene::volumeOf(const TransferFunction& tf, const std::string& field) {
 }
 
 void Scene::validate() const {
-  if (ao.rays < 0 || ao.rays > 1024) fail("ambient occlusion rays must be in 0..1024");
-  if (!(ao.length >= 0.f) || std::isinf(ao.length))
-    fail("ambient occlusion length must be a finite non-negative number");
+  checkSettings(sceneSettings(), *this);
   for (const ClipPlane& p : clip.planes)
     if (!(length(p.normal) > 0.0) || !std::isfinite(length(p.normal)) || !std::isfinite(length(p.point)))
       fail("a clip plane needs a finite point and a non-zero normal");
   for (float v : iso.values)
     if (!std::isfinite(v)) fail("iso-values must be finite numbers");
-  if (!(integration.terminationOpacity > 0.f && integration.terminationOpacity <= 1.f))
-    fail("termination opacity must be in (0, 1]");
-  if (!(integration.embreeBelowVisibleFraction >= 0.f && integration.embreeBelowVisibleFraction <= 1.f))
-    fail("the Embree threshold must be a fraction in [0, 1]");
   if (!light.headlight && !(length(light.direction) > 0.f && std::isfinite(length(light.direction))))
     fail("the light direction must be finite and non-zero");
   for (size_t m = 0; m < meshes.size(); ++m) {
@@ -59,11 +55,8 @@ Frame Frame::preview(int divisor, float previewRate) const {
 }
 
 void Frame::validate() const {
-  if (width < 1 || height < 1 || width > 32768 || height > 32768)
-    fail("image size ", width, "x", height, " is out of range (1..32768)");
-  if (samplesPerPixel < 1 || samplesPerPixel > 65536) fail("samples per pixel must be in 1..65536");
+  checkSettings(frameSettings(), *this);
   if (frameIndex < 0) fail("the frame index must not be negative");
-  if (!(rate > 0.f) || rate > 1024.f) fail("sampling rate must be in (0, 1024]");
   const Camera& c = camera;
   const vec3d forward = c.lookAt - c.position;
   if (!std::isfinite(length(forward)) || !std::isfinite(length(c.up)) || !std::isfinite(length(c.position)))
@@ -81,36 +74,6 @@ namespace {
 
 using json = nlohmann::json;
 
-const char* shadingName(Shading s) {
-  switch (s) {
-  case Shading::Analytic:
-    return "analytic";
-  case Shading::Central:
-    return "central";
-  case Shading::Smooth:
-    return "smooth";
-  case Shading::None:
-    return "none";
-  }
-  return "analytic";
-}
-
-const char* debugName(DebugView d) {
-  switch (d) {
-  case DebugView::None:
-    return "none";
-  case DebugView::Level:
-    return "level";
-  case DebugView::Brick:
-    return "brick";
-  case DebugView::Region:
-    return "region";
-  case DebugView::Steps:
-    return "steps";
-  }
-  return "none";
-}
-
 json vec(const vec3d& v) { return {v.x, v.y, v.z}; }
 json vec(const vec3f& v) { return {v.x, v.y, v.z}; }
 json srgb(const vec3f& linear) { return vec(linearToSrgb(linear)); }
@@ -123,13 +86,13 @@ public:
     if (!j_.is_object()) fail(where(), " must be a JSON object");
   }
   /// Fails on keys not in `known`.
-  void only(std::initializer_list<const char*> known) const {
+  void only(const std::vector<std::string>& known) const {
     for (auto it = j_.begin(); it != j_.end(); ++it) {
       bool ok = false;
       std::string list;
-      for (const char* k : known) {
+      for (const std::string& k : known) {
         ok = ok || it.key() == k;
-        list += (list.empty() ? "" : ", ") + std::string(k);
+        list += (list.empty() ? "" : ", ") + k;
       }
       if (!ok) fail(source_, ": unknown key \"", key(it.key()), "\" (known: ", list, ")");
     }
@@ -199,23 +162,32 @@ public:
     linear = srgbToLinear(vec3f(c));
     return true;
   }
-  template <typename E>
-  bool choice(const char* k, E& out, std::initializer_list<std::pair<const char*, E>> choices) const {
-    std::string v;
-    if (!string(k, v)) return false;
-    std::string names;
-    for (const auto& [name, e] : choices) {
-      if (v == name) {
-        out = e;
-        return true;
-      }
-      names += (names.empty() ? "" : ", ") + std::string(name);
-    }
-    fail(source_, ": \"", key(k), "\" is '", v, "' (choose from: ", names, ")");
+  /// Reads the described settings directly under `section` of this object ("" at the top).
+  template <typename Owner>
+  void settings(const std::vector<Setting<Owner>>& table, const std::string& section, Owner& o) const {
+    for (const Setting<Owner>& s : table)
+      if (s.section() == section)
+        if (const json* v = find(s.leaf().c_str())) setting(s, *v, o);
   }
+
   Reader child(const char* k) const { return Reader(*find(k), source_, key(k)); }
 
 private:
+  template <typename Owner> void setting(const Setting<Owner>& s, const json& v, Owner& o) const {
+    const std::string what = source_ + ": \"" + s.key + "\"";
+    if (s.type == SettingType::Boolean && !v.is_boolean()) fail(what, " must be true or false, not ", v.dump());
+    if (s.type == SettingType::Choice && !v.is_string()) fail(what, " must be a string, not ", v.dump());
+    if (s.type == SettingType::Integer || s.type == SettingType::Number) {
+      if (!v.is_number()) fail(what, " must be a number, not ", v.dump());
+      try {
+        checkSetting(s, v.get<double>());
+      } catch (const Error& e) {
+        fail(source_, ": ", e.what());
+      }
+    }
+    s.set(o, v, what);
+  }
+
   const json& j_;
   std::string source_, path_;
 };
@@ -243,6 +215,22 @@ TransferFunction readTf(const Reader& r, const char* k, const TransferFunction& 
   return transferFunctionFromJson(*v, r.source() + ": \"" + r.key(k) + "\"");
 }
 
+/// The keys directly under `section` of a scene file: `keys` (read by hand), then the described ones.
+std::vector<std::string> keysOf(const std::string& section, std::vector<std::string> keys) {
+  for (const Setting<Scene>& s : sceneSettings())
+    if (s.section() == section) keys.push_back(s.leaf());
+  for (const Setting<Frame>& s : frameSettings())
+    if (s.section() == section) keys.push_back(s.leaf());
+  return keys;
+}
+
+template <typename Owner> void writeSettings(const std::vector<Setting<Owner>>& table, const Owner& o, json& j) {
+  for (const Setting<Owner>& s : table) {
+    json& section = s.section().empty() ? j : j[s.section()];
+    section[s.leaf()] = s.get(o);
+  }
+}
+
 } // namespace
 
 std::string writeSceneJson(const SceneDocument& doc) {
@@ -251,13 +239,10 @@ std::string writeSceneJson(const SceneDocument& doc) {
   json j = json::object();
   if (!doc.input.empty()) j["input"] = doc.input;
   j["camera"] = cameraJson(f.camera);
-  j["frame"] = {{"width", f.width}, {"height", f.height}, {"samples_per_pixel", f.samplesPerPixel},
-                {"rate", f.rate},   {"jitter", f.jitter}, {"seed", f.seed}};
   json layers = json::array();
   for (const VolumeLayer& l : s.layers)
     layers.push_back({{"field", l.field}, {"transfer_function", transferFunctionToJson(l.tf)}});
   j["layers"] = layers;
-  j["volume"] = s.volume;
   json iso = {{"field", s.iso.field}, {"values", s.iso.values}};
   json isoColors = json::array();
   for (const vec3f& col : s.iso.colors)
@@ -286,27 +271,14 @@ std::string writeSceneJson(const SceneDocument& doc) {
   json planes = json::array();
   for (const ClipPlane& p : s.clip.planes)
     planes.push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
-  j["clip"] = {{"planes", planes}, {"meshes", s.clip.meshes}};
+  j["clip"] = {{"planes", planes}};
   if (!s.clip.box.empty())
     j["clip"]["box"] = {s.clip.box.lower.x, s.clip.box.lower.y, s.clip.box.lower.z,
                         s.clip.box.upper.x, s.clip.box.upper.y, s.clip.box.upper.z};
-  j["light"] = {{"headlight", s.light.headlight},     {"direction", vec(s.light.direction)},
-                {"ambient", s.light.terms.ambient},   {"diffuse", s.light.terms.diffuse},
-                {"specular", s.light.terms.specular}, {"shininess", s.light.terms.shininess}};
-  j["shading"] = shadingName(s.shading);
-  j["ambient_occlusion"] = {{"rays", s.ao.rays}, {"length", s.ao.length}, {"volume", s.ao.volume}};
-  const Integration& in = s.integration;
-  j["integration"] = {
-      {"sampling", in.sampling == Sampling::Adaptive ? "adaptive" : "fixed"},
-      {"reconstruction", in.reconstruction == Reconstruction::Regions ? "regions" : "cells"},
-      {"traversal", in.autoTraversal ? "auto" : (in.traversal == TraversalKind::KdTree ? "kd" : "embree")},
-      {"embree_below_visible_fraction", in.embreeBelowVisibleFraction},
-      {"space_skipping", in.spaceSkipping},
-      {"early_termination", in.earlyTermination},
-      {"termination_opacity", in.terminationOpacity}};
-  j["debug"] = debugName(s.debug);
+  j["light"] = {{"direction", vec(s.light.direction)}};
   j["background"] = srgb(s.background);
-  j["alpha"] = s.keepAlpha;
+  writeSettings(frameSettings(), f, j);
+  writeSettings(sceneSettings(), s, j);
   if (!doc.path.empty()) {
     json keys = json::array();
     for (const CameraKeyframe& k : doc.path.keyframes) {
@@ -335,8 +307,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   Scene& s = doc.scene;
   Frame& f = doc.frame;
   const Reader r(j, source, "");
-  r.only({"input", "camera", "camera_path", "frame", "layers", "volume", "iso", "meshes", "clip", "light", "shading",
-          "ambient_occlusion", "integration", "debug", "background", "alpha"});
+  r.only(keysOf("", {"input", "camera", "camera_path", "frame", "layers", "iso", "meshes", "clip", "light",
+                     "ambient_occlusion", "integration", "background"}));
   r.string("input", doc.input);
   if (r.find("camera")) {
     doc.hasCamera = readCamera(r.child("camera"), f.camera);
@@ -378,14 +350,9 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   }
   if (r.find("frame")) {
     const Reader c = r.child("frame");
-    c.only({"width", "height", "samples_per_pixel", "rate", "jitter", "seed", "frame_index"});
-    c.number("width", f.width);
-    c.number("height", f.height);
-    c.number("samples_per_pixel", f.samplesPerPixel);
+    c.only(keysOf("frame", {"frame_index"}));
+    c.settings(frameSettings(), "frame", f);
     c.number("frame_index", f.frameIndex);
-    c.number("rate", f.rate);
-    c.boolean("jitter", f.jitter);
-    c.number("seed", f.seed);
   }
   if (const json* layers = r.find("layers")) {
     if (!layers->is_array()) fail(source, ": \"layers\" must be an array of {\"field\", \"transfer_function\"}");
@@ -399,7 +366,6 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
       s.layers.push_back(layer);
     }
   }
-  r.boolean("volume", s.volume);
   if (r.find("iso")) {
     const Reader c = r.child("iso");
     c.only({"field", "values", "colors", "color_field", "color_map"});
@@ -447,7 +413,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   }
   if (r.find("clip")) {
     const Reader c = r.child("clip");
-    c.only({"planes", "box", "meshes"});
+    c.only(keysOf("clip", {"planes", "box"}));
     if (const json* planes = c.find("planes")) {
       if (!planes->is_array()) fail(source, ": \"clip.planes\" must be an array of {\"point\", \"normal\"}");
       for (size_t i = 0; i < planes->size(); ++i) {
@@ -465,51 +431,24 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
         fail(source, ": \"clip.box\" needs its lower corner below its upper one");
       s.clip.box = box3d(vec3d(n[0], n[1], n[2]), vec3d(n[3], n[4], n[5]));
     }
-    c.boolean("meshes", s.clip.meshes);
+    c.settings(sceneSettings(), "clip", s);
   }
   if (r.find("light")) {
     const Reader c = r.child("light");
-    c.only({"headlight", "direction", "ambient", "diffuse", "specular", "shininess"});
-    c.boolean("headlight", s.light.headlight);
+    c.only(keysOf("light", {"direction"}));
+    c.settings(sceneSettings(), "light", s);
     vec3d d;
     if (c.vec3("direction", d)) s.light.direction = vec3f(d);
-    c.number("ambient", s.light.terms.ambient);
-    c.number("diffuse", s.light.terms.diffuse);
-    c.number("specular", s.light.terms.specular);
-    c.number("shininess", s.light.terms.shininess);
   }
-  r.choice<Shading>("shading", s.shading,
-                    {{"analytic", Shading::Analytic},
-                     {"central", Shading::Central},
-                     {"smooth", Shading::Smooth},
-                     {"none", Shading::None},
-                     {"clamped", Shading::Smooth}});
   if (r.find("ambient_occlusion")) {
     const Reader c = r.child("ambient_occlusion");
-    c.only({"rays", "length", "volume"});
-    c.number("rays", s.ao.rays);
-    c.number("length", s.ao.length);
-    c.boolean("volume", s.ao.volume);
+    c.only(keysOf("ambient_occlusion", {}));
+    c.settings(sceneSettings(), "ambient_occlusion", s);
   }
   if (r.find("integration")) {
     const Reader c = r.child("integration");
-    c.only({"sampling", "reconstruction", "traversal", "embree_below_visible_fraction", "space_skipping",
-            "early_termination", "termination_opacity", "vectorized", "lazy_gradients", "join_segments"});
-    Integration& in = s.integration;
-    c.choice<Sampling>("sampling", in.sampling, {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}});
-    c.choice<Reconstruction>("reconstruction", in.reconstruction,
-                             {{"regions", Reconstruction::Regions}, {"cells", Reconstruction::CellLocation}});
-    std::string t;
-    if (c.string("traversal", t)) {
-      in.autoTraversal = t == "auto";
-      if (!in.autoTraversal)
-        c.choice<TraversalKind>("traversal", in.traversal,
-                                {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}});
-    }
-    c.number("embree_below_visible_fraction", in.embreeBelowVisibleFraction);
-    c.boolean("space_skipping", in.spaceSkipping);
-    c.boolean("early_termination", in.earlyTermination);
-    c.number("termination_opacity", in.terminationOpacity);
+    c.only(keysOf("integration", {"vectorized", "lazy_gradients", "join_segments"}));
+    c.settings(sceneSettings(), "integration", s);
     // Renderer options that scene files once carried (RendererOptions): read and ignored.
     for (const char* key : {"vectorized", "lazy_gradients", "join_segments"}) {
       bool unused = false;
@@ -519,14 +458,8 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
                        "scene setting"));
     }
   }
-  r.choice<DebugView>("debug", s.debug,
-                      {{"none", DebugView::None},
-                       {"level", DebugView::Level},
-                       {"brick", DebugView::Brick},
-                       {"region", DebugView::Region},
-                       {"steps", DebugView::Steps}});
+  r.settings(sceneSettings(), "", s);
   r.color("background", s.background);
-  r.boolean("alpha", s.keepAlpha);
   try {
     s.validate(); // meshes named by file are checked once they are read
     if (doc.hasCamera || r.find("frame")) f.validate();

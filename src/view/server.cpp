@@ -6,6 +6,7 @@
 #include "exabricks/core/text.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/render/defaults.h"
+#include "exabricks/render/scene_vocabulary.h"
 #include "exabricks/render/transfer_function.h"
 
 #include "session.h"
@@ -459,6 +460,9 @@ void Server::Impl::routes() {
              {{"field", name}, {"transfer_function", json::parse(transferFunctionJson(c.tf))}, {"notes", c.notes}});
   });
 
+  // The scalar settings of scene files: key, type, default, range, choices and help.
+  http.Get("/api/vocabulary",
+           [](const httplib::Request&, httplib::Response& res) { sendJson(res, json::parse(sceneVocabularyJson())); });
   // The scene in effect, in the form `exabricks render --scene` reads.
   http.Get("/api/scene", [this](const httplib::Request&, httplib::Response& res) {
     const std::optional<SceneDocument> doc = session->current();

@@ -3,6 +3,7 @@ every setting survives `render --write-scene` -> Scene.from_json -> save_json ->
 unknown keys are refused with the messages of `render --scene`, and a path is taken where a JSON
 text is."""
 import json
+import math
 import pathlib
 import subprocess
 
@@ -136,3 +137,58 @@ def test_a_scene_file_path_as_text_and_as_path(tmp_path):
         assert (t.width, t.height, t.shading) == (20, 10, "central")
     with pytest.raises(FileNotFoundError):
         eb.Scene.from_json(ds, str(tmp_path / "missing.json"))
+
+
+def other_value(setting):
+    """A value of a described setting in its range and different from its default (the rule of
+    the library's test of the vocabulary)."""
+    kind, default = setting["type"], setting["default"]
+    if kind == "boolean":
+        return not default
+    if kind == "choice":
+        return next(c for c in setting["choices"] if c != default)
+    if kind == "integer":
+        v = math.floor((setting["min"] + default) / 2)
+        return default + 1 if v == default else v
+    v = (setting["min"] + default) / 2
+    if v != default:
+        return v
+    return (default + setting["max"]) / 2 if "max" in setting else default + 1
+
+
+def at_key(doc, key):
+    for part in key.split("."):
+        doc = doc[part]
+    return doc
+
+
+def put_key(doc, key, value):
+    *sections, leaf = key.split(".")
+    for part in sections:
+        doc = doc.setdefault(part, {})
+    doc[leaf] = value
+
+
+def test_every_described_setting_survives_write_scene_and_python(cli, dataset_file, tmp_path):
+    vocabulary = eb.scene_vocabulary()
+    assert {s["name"] for s in vocabulary} <= set(vars(eb.Scene(eb.load(), camera=eb.Camera())))
+    doc = {"layers": [{"field": "scalar"}], "iso": {"values": [0.5]}, "camera": CAMERA}
+    for s in vocabulary:
+        put_key(doc, s["key"], other_value(s))
+    (tmp_path / "every.json").write_text(json.dumps(doc))
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--scene", str(tmp_path / "every.json"), "-o",
+                    str(tmp_path / "every.png"), "--write-scene", str(tmp_path / "cli.json")], check=True)
+    text = (tmp_path / "cli.json").read_text()
+    written = json.loads(text)
+    for s in vocabulary:
+        assert at_key(written, s["key"]) != s["default"], s["key"]
+        assert_same(other_value(s), at_key(written, s["key"]), s["key"])
+    # --scene then --write-scene keeps it.
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--scene", str(tmp_path / "cli.json"), "-o",
+                    str(tmp_path / "again.png"), "--write-scene", str(tmp_path / "again.json")], check=True)
+    assert (tmp_path / "again.json").read_text() == text
+    # And so does the Python Scene, through its attributes of the same names.
+    scene = eb.Scene.from_json(eb.load(dataset_file), text)
+    for s in vocabulary:
+        assert_same(at_key(written, s["key"]), getattr(scene, s["name"]), s["name"])
+    assert_same(written, json.loads(scene.to_json()))

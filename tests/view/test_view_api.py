@@ -133,9 +133,9 @@ def test_bad_requests_get_4xx_and_the_server_keeps_serving(start_viewer):
         ("POST", "/api/render", json.dumps({"scene": doc, "extra": 1}), 400, b"unknown key"),
         ("POST", "/api/render", json.dumps({"scene": doc, "interactive": "yes"}), 400, b"interactive"),
         ("POST", "/api/render", json.dumps({"scene": dict(doc, frame=dict(doc["frame"], width=100000))}), 400,
-         b"image size"),
+         b"frame.width"),
         ("POST", "/api/render", json.dumps({"scene": dict(doc, frame=dict(doc["frame"], samples_per_pixel=0))}),
-         400, b"samples per pixel"),
+         400, b"frame.samples_per_pixel"),
         ("POST", "/api/render", json.dumps({"scene": dict(doc, layers=[{"field": "nosuchfield"}])}), 400,
          b"nosuchfield"),
         ("POST", "/api/render", json.dumps({"scene": dict(doc, light={"ambiant": 1})}), 400, b"ambiant"),
@@ -293,3 +293,25 @@ def test_first_picture_of_a_field_is_the_command_lines(start_viewer, cli, flow_d
     assert velocity["log"] is False  # negative values: never logarithmic, whatever the first view used
     status, body, _ = v.request("GET", "/api/first-picture?field=nosuch")
     assert status == 400 and b"nosuch" in body
+
+
+def test_the_vocabulary_and_unknown_keys_as_the_command_line_has_them(start_viewer, cli, tmp_path):
+    v = start_viewer()
+    vocabulary = v.json("GET", "/api/vocabulary")
+    shading = next(s for s in vocabulary if s["key"] == "shading")
+    assert shading["choices"] == ["analytic", "central", "smooth", "none"] and shading["default"] == "smooth"
+    assert all(s["help"] and "default" in s for s in vocabulary)
+    status, _, _ = v.request("GET", "/api/vocabulary", token=False)
+    assert status == 403
+    # An unknown key: the message of `render --scene`, naming the upload instead of the file.
+    bad = {"integration": {"bogus": 1}}
+    path = tmp_path / "bad.json"
+    path.write_text(json.dumps(bad))
+    r = subprocess.run([cli, "render", "--scene", str(path), "-o", str(tmp_path / "x.png")], capture_output=True,
+                       text=True)
+    prefix = "exabricks: error: "
+    message = r.stderr.strip().splitlines()[-1]
+    assert r.returncode != 0 and message.startswith(prefix), r.stderr
+    status, data, _ = v.request("POST", "/api/scene", json.dumps(bad))
+    assert status == 400
+    assert json.loads(data)["error"] == message[len(prefix):].replace(str(path), "uploaded scene", 1)

@@ -188,6 +188,10 @@ def test_a_new_field_gets_its_own_first_picture(start_viewer, browser, flow_data
     first = wait_refined(browser)
     assert browser.title.startswith("flow.cells"), browser.title
     assert browser.find_element(By.ID, "dataset-name").text == "flow.cells"
+    # The shading choices are the server's vocabulary.
+    shading = Select(browser.find_element(By.ID, "shading"))
+    assert [o.get_attribute("value") for o in shading.options] == ["analytic", "central", "smooth", "none"]
+    assert shading.first_selected_option.get_attribute("value") == "smooth"
     assert transfer_function(browser)["log"] is True
     Select(browser.find_element(By.ID, "field")).select_by_value("velocity")
     wait_for(browser, lambda: transfer_function(browser).get("log") is False, 20, "the new field's mapping")

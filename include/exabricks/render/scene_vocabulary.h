@@ -1,0 +1,70 @@
+// The words of scene files: the names of every enumeration (as scene files, command-line flags,
+// Python and the viewer spell them) and the description of every scalar setting (key, type,
+// default, allowed range, choices and help), which the JSON reader and writer, validation and the
+// front ends read.
+#pragma once
+
+#include "exabricks/core/error.h"
+#include "exabricks/render/scene.h"
+
+#include <span>
+#include <string>
+
+namespace exa {
+
+/// The traversal setting as scene files spell it: auto (Integration::autoTraversal) or one kind.
+enum class TraversalSetting { Auto, KdTree, Embree };
+TraversalSetting traversalSetting(const Integration& in);
+/// Sets autoTraversal, and the traversal kind unless auto.
+void setTraversal(Integration& in, TraversalSetting t);
+
+/// One name of an enumeration value. A value's first name is the one written; aliases (earlier
+/// names) are read as well but not offered.
+template <typename E> struct EnumName {
+  const char* name;
+  E value;
+  bool alias = false;
+};
+
+std::span<const EnumName<Shading>> enumNames(Shading);
+std::span<const EnumName<DebugView>> enumNames(DebugView);
+std::span<const EnumName<Sampling>> enumNames(Sampling);
+std::span<const EnumName<Reconstruction>> enumNames(Reconstruction);
+std::span<const EnumName<TraversalSetting>> enumNames(TraversalSetting);
+/// The traversal a renderer uses (statistics name it so): kd or embree.
+std::span<const EnumName<TraversalKind>> enumNames(TraversalKind);
+
+/// The name a value is written with.
+template <typename E> const char* nameOf(E value) {
+  for (const EnumName<E>& n : enumNames(E{}))
+    if (n.value == value && !n.alias) return n.name;
+  fail("no name for enumeration value ", int(value));
+}
+
+/// The names offered for a choice, separated by ", " (aliases left out).
+template <typename E> std::string choicesOf() {
+  std::string out;
+  for (const EnumName<E>& n : enumNames(E{}))
+    if (!n.alias) out += (out.empty() ? "" : ", ") + std::string(n.name);
+  return out;
+}
+
+/// The value a name (or alias) stands for; an unknown name throws exa::Error
+/// "WHAT is 'NAME' (choose from: ...)".
+template <typename E> E parseName(const std::string& name, const std::string& what) {
+  for (const EnumName<E>& n : enumNames(E{}))
+    if (name == n.name) return n.value;
+  fail(what, " is '", name, "' (choose from: ", choicesOf<E>(), ")");
+}
+
+/// The description of every scalar setting of a scene file, as a JSON array of objects: "key"
+/// (the path in the file, such as "integration.termination_opacity"), "name" (its flat name, the
+/// Python Scene's attribute), "type" (boolean, integer, number or choice), "default", "min" and
+/// "max" where bounded (with "min_exclusive" / "max_exclusive" when open), "choices" and "help".
+std::string sceneVocabularyJson();
+/// The one-line help of a described setting (key as in sceneVocabularyJson).
+std::string sceneSettingHelp(const std::string& key);
+/// Throws exa::Error when `value` is outside the range of a described numeric setting.
+void checkSceneSetting(const std::string& key, double value);
+
+} // namespace exa

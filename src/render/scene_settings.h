@@ -1,0 +1,53 @@
+// The table of scalar scene and frame settings behind render/scene_vocabulary.h (private to the
+// library): each setting once, with its key, type, range, help and access to its member.
+#pragma once
+
+#include "exabricks/render/scene.h"
+
+#include <nlohmann/json.hpp>
+
+#include <functional>
+#include <string>
+#include <vector>
+
+namespace exa {
+
+enum class SettingType { Boolean, Integer, Number, Choice };
+
+template <typename Owner> struct Setting {
+  std::string key;  ///< path in the scene file: "section.leaf", or "leaf" at the top level
+  std::string name; ///< flat name (the Python Scene's attribute)
+  SettingType type = SettingType::Boolean;
+  double low = 0.0, high = 0.0; ///< integer and number: allowed range (may be infinite)
+  bool lowOpen = false, highOpen = false;
+  std::vector<std::string> choices; ///< choice: the names offered
+  std::string help;
+  std::function<nlohmann::json(const Owner&)> get;
+  /// Sets a value of the right JSON type; choices name `what` when the name is unknown.
+  std::function<void(Owner&, const nlohmann::json&, const std::string& what)> set;
+
+  std::string section() const {
+    const size_t dot = key.rfind('.');
+    return dot == std::string::npos ? std::string() : key.substr(0, dot);
+  }
+  std::string leaf() const { return key.substr(key.rfind('.') + 1); }
+};
+
+const std::vector<Setting<Scene>>& sceneSettings();
+const std::vector<Setting<Frame>>& frameSettings();
+
+/// Throws exa::Error when a number is outside a setting's range (or not an integer where one is
+/// needed): "KEY" must be in RANGE, not VALUE.
+void checkSettingValue(const std::string& key, SettingType type, double low, double high, bool lowOpen, bool highOpen,
+                       double value);
+template <typename Owner> void checkSetting(const Setting<Owner>& s, double value) {
+  checkSettingValue(s.key, s.type, s.low, s.high, s.lowOpen, s.highOpen, value);
+}
+/// Checks every numeric setting of `owner` against its range.
+template <typename Owner> void checkSettings(const std::vector<Setting<Owner>>& table, const Owner& owner) {
+  for (const Setting<Owner>& s : table)
+    if (s.type == SettingType::Integer || s.type == SettingType::Number)
+      checkSetting(s, s.get(owner).template get<double>());
+}
+
+} // namespace exa

@@ -1,0 +1,288 @@
+#include "exabricks/render/scene_vocabulary.h"
+
+#include "scene_settings.h"
+
+#include <cmath>
+#include <limits>
+
+namespace exa {
+
+TraversalSetting traversalSetting(const Integration& in) {
+  if (in.autoTraversal) return TraversalSetting::Auto;
+  return in.traversal == TraversalKind::Embree ? TraversalSetting::Embree : TraversalSetting::KdTree;
+}
+
+void setTraversal(Integration& in, TraversalSetting t) {
+  in.autoTraversal = t == TraversalSetting::Auto;
+  if (!in.autoTraversal) in.traversal = t == TraversalSetting::Embree ? TraversalKind::Embree : TraversalKind::KdTree;
+}
+
+std::span<const EnumName<Shading>> enumNames(Shading) {
+  static const EnumName<Shading> names[] = {{"analytic", Shading::Analytic},
+                                            {"central", Shading::Central},
+                                            {"smooth", Shading::Smooth},
+                                            {"none", Shading::None},
+                                            {"clamped", Shading::Smooth, true}};
+  return names;
+}
+
+std::span<const EnumName<DebugView>> enumNames(DebugView) {
+  static const EnumName<DebugView> names[] = {{"none", DebugView::None},
+                                              {"level", DebugView::Level},
+                                              {"brick", DebugView::Brick},
+                                              {"region", DebugView::Region},
+                                              {"steps", DebugView::Steps}};
+  return names;
+}
+
+std::span<const EnumName<Sampling>> enumNames(Sampling) {
+  static const EnumName<Sampling> names[] = {{"adaptive", Sampling::Adaptive}, {"fixed", Sampling::Fixed}};
+  return names;
+}
+
+std::span<const EnumName<Reconstruction>> enumNames(Reconstruction) {
+  static const EnumName<Reconstruction> names[] = {{"regions", Reconstruction::Regions},
+                                                   {"cells", Reconstruction::CellLocation}};
+  return names;
+}
+
+std::span<const EnumName<TraversalSetting>> enumNames(TraversalSetting) {
+  static const EnumName<TraversalSetting> names[] = {
+      {"auto", TraversalSetting::Auto}, {"kd", TraversalSetting::KdTree}, {"embree", TraversalSetting::Embree}};
+  return names;
+}
+
+std::span<const EnumName<TraversalKind>> enumNames(TraversalKind) {
+  static const EnumName<TraversalKind> names[] = {{"kd", TraversalKind::KdTree}, {"embree", TraversalKind::Embree}};
+  return names;
+}
+
+namespace {
+
+using json = nlohmann::json;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+template <typename E> std::vector<std::string> offered() {
+  std::vector<std::string> out;
+  for (const EnumName<E>& n : enumNames(E{}))
+    if (!n.alias) out.push_back(n.name);
+  return out;
+}
+
+template <typename Owner, typename Ref>
+Setting<Owner> boolean(const char* key, const char* name, Ref ref, const char* help) {
+  Setting<Owner> s{key, name, SettingType::Boolean};
+  s.help = help;
+  s.get = [ref](const Owner& o) { return json(ref(const_cast<Owner&>(o))); };
+  s.set = [ref](Owner& o, const json& v, const std::string&) { ref(o) = v.get<bool>(); };
+  return s;
+}
+
+/// An integer or a number in [low, high] (open ends where asked).
+template <typename Owner, typename Ref>
+Setting<Owner> number(const char* key, const char* name, Ref ref, double low, double high, const char* help,
+                      bool lowOpen = false, bool highOpen = false) {
+  using T = std::remove_reference_t<decltype(ref(std::declval<Owner&>()))>;
+  Setting<Owner> s{key,     name,    std::is_integral_v<T> ? SettingType::Integer : SettingType::Number, low, high,
+                   lowOpen, highOpen};
+  s.help = help;
+  s.get = [ref](const Owner& o) { return json(ref(const_cast<Owner&>(o))); };
+  s.set = [ref](Owner& o, const json& v, const std::string&) {
+    if constexpr (std::is_integral_v<T>)
+      ref(o) = v.is_number_integer() ? v.get<T>() : T(v.get<double>());
+    else
+      ref(o) = T(v.get<double>());
+  };
+  return s;
+}
+
+/// A choice among an enumeration's names, read and written through get and put.
+template <typename Owner, typename E, typename Get, typename Put>
+Setting<Owner> choice(const char* key, const char* name, Get get, Put put, const char* help) {
+  Setting<Owner> s{key, name, SettingType::Choice};
+  s.choices = offered<E>();
+  s.help = help;
+  s.get = [get](const Owner& o) { return json(nameOf<E>(get(o))); };
+  s.set = [put](Owner& o, const json& v, const std::string& what) { put(o, parseName<E>(v.get<std::string>(), what)); };
+  return s;
+}
+
+template <typename Owner, typename E, typename Ref>
+Setting<Owner> choice(const char* key, const char* name, Ref ref, const char* help) {
+  return choice<Owner, E>(
+      key, name, [ref](const Owner& o) { return ref(const_cast<Owner&>(o)); }, [ref](Owner& o, E e) { ref(o) = e; },
+      help);
+}
+
+} // namespace
+
+const std::vector<Setting<Scene>>& sceneSettings() {
+  using S = Scene;
+  static const std::vector<Setting<Scene>> table = {
+      boolean<S>(
+          "volume", "volume", [](S& s) -> bool& { return s.volume; }, "Integrate the volume (false: surfaces only)"),
+      choice<S, Shading>(
+          "shading", "shading", [](S& s) -> Shading& { return s.shading; },
+          "Normals of volume samples: smooth (a gradient field of per-cell central differences, "
+          "reconstructed like the values), analytic (the exact gradient, which shows the cell "
+          "lattice), central (differences at every sample) or none (unlit)"),
+      choice<S, DebugView>(
+          "debug", "debug", [](S& s) -> DebugView& { return s.debug; },
+          "Debug view: none, or colour by level, brick, region or steps per ray"),
+      boolean<S>(
+          "alpha", "alpha", [](S& s) -> bool& { return s.keepAlpha; },
+          "Images keep the alpha channel instead of the background"),
+      boolean<S>(
+          "clip.meshes", "clip_meshes", [](S& s) -> bool& { return s.clip.meshes; }, "Clip meshes too"),
+      boolean<S>(
+          "light.headlight", "headlight", [](S& s) -> bool& { return s.light.headlight; },
+          "Light from the eye (false: along light.direction)"),
+      number<S>(
+          "light.ambient", "ambient", [](S& s) -> float& { return s.light.terms.ambient; }, 0.0, kInf,
+          "Ambient term of the lighting"),
+      number<S>(
+          "light.diffuse", "diffuse", [](S& s) -> float& { return s.light.terms.diffuse; }, 0.0, kInf,
+          "Diffuse term of the lighting"),
+      number<S>(
+          "light.specular", "specular", [](S& s) -> float& { return s.light.terms.specular; }, 0.0, kInf,
+          "Specular term of the lighting"),
+      number<S>(
+          "light.shininess", "shininess", [](S& s) -> float& { return s.light.terms.shininess; }, 0.0, kInf,
+          "Specular exponent"),
+      number<S>(
+          "ambient_occlusion.rays", "ao_rays", [](S& s) -> int& { return s.ao.rays; }, 0, 1024,
+          "Ambient occlusion rays per surface hit (0: off)"),
+      number<S>(
+          "ambient_occlusion.length", "ao_length", [](S& s) -> float& { return s.ao.length; }, 0.0, kInf,
+          "Ambient occlusion ray length, world units (0: a tenth of the data's diagonal)"),
+      boolean<S>(
+          "ambient_occlusion.volume", "ao_volume", [](S& s) -> bool& { return s.ao.volume; },
+          "The volume attenuates ambient occlusion rays"),
+      choice<S, Sampling>(
+          "integration.sampling", "sampling", [](S& s) -> Sampling& { return s.integration.sampling; },
+          "Sample placement: adaptive (per region) or fixed (the finest width everywhere)"),
+      choice<S, Reconstruction>(
+          "integration.reconstruction", "reconstruction",
+          [](S& s) -> Reconstruction& { return s.integration.reconstruction; },
+          "regions (bricks listed by the sample's region) or cells (baseline: locate every "
+          "cell)"),
+      choice<S, TraversalSetting>(
+          "integration.traversal", "traversal", [](const S& s) { return traversalSetting(s.integration); },
+          [](S& s, TraversalSetting t) { setTraversal(s.integration, t); },
+          "Region traversal: auto (Embree when few regions are visible), kd or embree"),
+      number<S>(
+          "integration.embree_below_visible_fraction", "embree_below_visible_fraction",
+          [](S& s) -> float& { return s.integration.embreeBelowVisibleFraction; }, 0.0, 1.0,
+          "With auto traversal: Embree below this fraction of visible regions"),
+      boolean<S>(
+          "integration.space_skipping", "space_skipping", [](S& s) -> bool& { return s.integration.spaceSkipping; },
+          "Skip regions the transfer function hides"),
+      boolean<S>(
+          "integration.early_termination", "early_termination",
+          [](S& s) -> bool& { return s.integration.earlyTermination; },
+          "End rays once their opacity reaches termination_opacity"),
+      number<S>(
+          "integration.termination_opacity", "termination_opacity",
+          [](S& s) -> float& { return s.integration.terminationOpacity; }, 0.0, 1.0,
+          "Opacity at which early termination ends a ray", true),
+  };
+  return table;
+}
+
+const std::vector<Setting<Frame>>& frameSettings() {
+  using F = Frame;
+  static const std::vector<Setting<Frame>> table = {
+      number<F>(
+          "frame.width", "width", [](F& f) -> int& { return f.width; }, 1, 32768, "Image width in pixels"),
+      number<F>(
+          "frame.height", "height", [](F& f) -> int& { return f.height; }, 1, 32768, "Image height in pixels"),
+      number<F>(
+          "frame.samples_per_pixel", "spp", [](F& f) -> int& { return f.samplesPerPixel; }, 1, 65536,
+          "Jittered samples per pixel, accumulated"),
+      number<F>(
+          "frame.rate", "rate", [](F& f) -> float& { return f.rate; }, 0.0, 1024.0,
+          "Quality factor: step = region's finest width x 0.5 / rate", true),
+      boolean<F>(
+          "frame.jitter", "jitter", [](F& f) -> bool& { return f.jitter; }, "Random offsets of the sample positions"),
+      number<F>(
+          "frame.seed", "seed", [](F& f) -> uint64_t& { return f.seed; }, 0.0, 18446744073709549568.0,
+          "Seed of the per-pixel jitter"),
+  };
+  return table;
+}
+
+namespace {
+
+/// A number as a message shows it: integers without a fraction.
+std::string shown(double v) {
+  if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 1e15) return std::to_string(int64_t(v));
+  return nlohmann::json(v).dump();
+}
+
+} // namespace
+
+void checkSettingValue(const std::string& key, SettingType type, double low, double high, bool lowOpen, bool highOpen,
+                       double value) {
+  const bool integer = type == SettingType::Integer;
+  const bool ok = std::isfinite(value) && (lowOpen ? value > low : value >= low) &&
+                  (highOpen ? value < high : value <= high) && (!integer || value == std::floor(value));
+  if (ok) return;
+  const std::string lo = shown(low), hi = shown(high), v = shown(value);
+  if (integer && high > 1e15) fail("\"", key, "\" must be an integer >= ", lo, ", not ", v);
+  if (integer) fail("\"", key, "\" must be an integer in ", lo, "..", hi, ", not ", v);
+  if (std::isinf(high)) fail("\"", key, "\" must be a finite number ", lowOpen ? "> " : ">= ", lo, ", not ", v);
+  fail("\"", key, "\" must be in ", lowOpen ? "(" : "[", lo, ", ", hi, highOpen ? ")" : "]", ", not ", v);
+}
+
+namespace {
+
+template <typename Owner> void describe(const std::vector<Setting<Owner>>& table, json& out) {
+  static const char* types[] = {"boolean", "integer", "number", "choice"};
+  const Owner defaults{};
+  for (const Setting<Owner>& s : table) {
+    json e = {
+        {"key", s.key}, {"name", s.name}, {"type", types[int(s.type)]}, {"default", s.get(defaults)}, {"help", s.help}};
+    if (s.type == SettingType::Integer || s.type == SettingType::Number) {
+      e["min"] = s.low;
+      if (s.lowOpen) e["min_exclusive"] = true;
+      if (std::isfinite(s.high)) e["max"] = s.high;
+      if (s.highOpen) e["max_exclusive"] = true;
+    }
+    if (s.type == SettingType::Choice) e["choices"] = s.choices;
+    out.push_back(e);
+  }
+}
+
+} // namespace
+
+namespace {
+
+template <typename Owner>
+const Setting<Owner>* findSetting(const std::vector<Setting<Owner>>& table, const std::string& key) {
+  for (const Setting<Owner>& s : table)
+    if (s.key == key) return &s;
+  return nullptr;
+}
+
+} // namespace
+
+std::string sceneSettingHelp(const std::string& key) {
+  if (const auto* s = findSetting(sceneSettings(), key)) return s->help;
+  if (const auto* s = findSetting(frameSettings(), key)) return s->help;
+  fail("no scene setting \"", key, "\"");
+}
+
+void checkSceneSetting(const std::string& key, double value) {
+  if (const auto* s = findSetting(sceneSettings(), key)) return checkSetting(*s, value);
+  if (const auto* s = findSetting(frameSettings(), key)) return checkSetting(*s, value);
+  fail("no scene setting \"", key, "\"");
+}
+
+std::string sceneVocabularyJson() {
+  json out = json::array();
+  describe(frameSettings(), out);
+  describe(sceneSettings(), out);
+  return out.dump();
+}
+
+} // namespace exa
