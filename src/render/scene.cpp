@@ -293,6 +293,138 @@ std::string writeSceneJson(const SceneDocument& doc) {
   return j.dump(2) + "\n";
 }
 
+namespace {
+
+void readCameraPath(const Reader& p, const std::string& source, CameraPath& path) {
+  p.only({"keyframes", "constant_speed"});
+  p.boolean("constant_speed", path.constantSpeed);
+  const json* keys = p.find("keyframes");
+  if (!keys || !keys->is_array() || keys->empty())
+    fail(source, ": \"camera_path.keyframes\" must be a non-empty array of {\"time\", \"camera\", ...}");
+  for (size_t i = 0; i < keys->size(); ++i) {
+    const Reader k((*keys)[i], source, "camera_path.keyframes[" + std::to_string(i) + "]");
+    k.only({"time", "camera", "range", "opacity_scale", "iso_values"});
+    CameraKeyframe key;
+    if (!k.number("time", key.time)) fail(source, ": \"", k.key("time"), "\" is required");
+    if (!k.find("camera") || !readCamera(k.child("camera"), key.camera))
+      fail(source, ": \"", k.key("camera"), "\" with a \"position\" is required");
+    if (const json* v = k.find("range")) {
+      const std::vector<double> n = k.numbers(*v, k.key("range"), 2);
+      key.range = range1f{float(n[0]), float(n[1])};
+    }
+    float scale = 0.f;
+    if (k.number("opacity_scale", scale)) key.opacityScale = scale;
+    if (const json* v = k.find("iso_values")) {
+      std::vector<float> values;
+      for (double d : k.numbers(*v, k.key("iso_values"), 0))
+        values.push_back(float(d));
+      key.isoValues = values;
+    }
+    path.keyframes.push_back(key);
+  }
+  try {
+    path.validate();
+  } catch (const Error& e) {
+    fail(source, ": ", e.what());
+  }
+}
+
+void readLayers(const json& layers, const std::string& source, std::vector<VolumeLayer>& out) {
+  if (!layers.is_array()) fail(source, ": \"layers\" must be an array of {\"field\", \"transfer_function\"}");
+  out.clear();
+  for (size_t i = 0; i < layers.size(); ++i) {
+    const Reader l(layers[i], source, "layers[" + std::to_string(i) + "]");
+    l.only({"field", "transfer_function"});
+    VolumeLayer layer;
+    l.string("field", layer.field);
+    layer.tf = readTf(l, "transfer_function", layer.tf);
+    out.push_back(layer);
+  }
+}
+
+void readIso(const Reader& c, const std::string& source, IsoSurfaces& iso) {
+  c.only({"field", "values", "colors", "color_field", "color_map"});
+  c.string("field", iso.field);
+  if (const json* v = c.find("values"))
+    for (double d : c.numbers(*v, c.key("values"), 0))
+      iso.values.push_back(float(d));
+  if (const json* v = c.find("colors")) {
+    if (!v->is_array()) fail(source, ": \"iso.colors\" must be an array of [r, g, b] (sRGB)");
+    for (const json& col : *v) {
+      const std::vector<double> n = c.numbers(col, c.key("colors"), 3);
+      for (double x : n)
+        if (!(x >= 0.0 && x <= 1.0)) fail(source, ": \"iso.colors\" components must lie in [0, 1] (sRGB)");
+      iso.colors.push_back(srgbToLinear(vec3f(float(n[0]), float(n[1]), float(n[2]))));
+    }
+  }
+  c.string("color_field", iso.colorField);
+  iso.colorTf = readTf(c, "color_map", iso.colorTf);
+}
+
+void readMeshes(const json& meshes, const std::string& source, std::vector<SceneMesh>& out) {
+  if (!meshes.is_array()) fail(source, ": \"meshes\" must be an array");
+  for (size_t i = 0; i < meshes.size(); ++i) {
+    const Reader m(meshes[i], source, "meshes[" + std::to_string(i) + "]");
+    m.only({"file", "color", "vertices", "triangles"});
+    SceneMesh sm;
+    m.color("color", sm.color);
+    if (m.string("file", sm.source)) {
+      // Read by the caller (documents/scene_file.h): the library's render layer reads no files.
+    } else {
+      const json* v = m.find("vertices");
+      const json* t = m.find("triangles");
+      if (!v || !t || !v->is_array() || !t->is_array())
+        fail(source, ": \"", m.key("file"), "\" or \"vertices\" and \"triangles\" arrays are needed");
+      auto mesh = std::make_shared<TriangleMesh>();
+      for (const json& x : *v)
+        mesh->vertices.push_back(vec3f(m.triple(x, m.key("vertices"))));
+      for (const json& x : *t) {
+        const vec3d idx = m.triple(x, m.key("triangles"));
+        mesh->triangles.push_back(vec3i(int(idx.x), int(idx.y), int(idx.z)));
+      }
+      sm.mesh = mesh;
+    }
+    out.push_back(sm);
+  }
+}
+
+void readClip(const Reader& c, const std::string& source, Scene& s) {
+  c.only(keysOf("clip", {"planes", "box"}));
+  if (const json* planes = c.find("planes")) {
+    if (!planes->is_array()) fail(source, ": \"clip.planes\" must be an array of {\"point\", \"normal\"}");
+    for (size_t i = 0; i < planes->size(); ++i) {
+      const Reader p((*planes)[i], source, "clip.planes[" + std::to_string(i) + "]");
+      p.only({"point", "normal"});
+      ClipPlane cp;
+      if (!p.vec3("point", cp.point) || !p.vec3("normal", cp.normal))
+        fail(source, ": \"clip.planes[", i, "]\" needs \"point\" and \"normal\"");
+      s.clip.planes.push_back(cp);
+    }
+  }
+  if (const json* b = c.find("box"); b && !b->is_null()) {
+    const std::vector<double> n = c.numbers(*b, "clip.box", 6);
+    if (!(n[0] < n[3] && n[1] < n[4] && n[2] < n[5]))
+      fail(source, ": \"clip.box\" needs its lower corner below its upper one");
+    s.clip.box = box3d(vec3d(n[0], n[1], n[2]), vec3d(n[3], n[4], n[5]));
+  }
+  c.settings(sceneSettings(), "clip", s);
+}
+
+void readIntegration(const Reader& c, const std::string& source, Scene& s) {
+  c.only(keysOf("integration", {"vectorized", "lazy_gradients", "join_segments"}));
+  c.settings(sceneSettings(), "integration", s);
+  // Renderer options that scene files once carried (RendererOptions): read and ignored.
+  for (const char* key : {"vectorized", "lazy_gradients", "join_segments"}) {
+    bool unused = false;
+    if (c.boolean(key, unused))
+      logNote(strCat(source, ": \"integration.", key,
+                     "\" is ignored: it is a renderer option for benchmarks (exabricks bench, render flags), not a "
+                     "scene setting"));
+  }
+}
+
+} // namespace
+
 SceneDocument readSceneJson(const std::string& text, const std::string& source) {
   json j;
   try {
@@ -314,125 +446,17 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     doc.hasCamera = readCamera(r.child("camera"), f.camera);
     if (!doc.hasCamera) fail(source, ": \"camera\" needs a \"position\"");
   }
-  if (r.find("camera_path")) {
-    const Reader p = r.child("camera_path");
-    p.only({"keyframes", "constant_speed"});
-    p.boolean("constant_speed", doc.path.constantSpeed);
-    const json* keys = p.find("keyframes");
-    if (!keys || !keys->is_array() || keys->empty())
-      fail(source, ": \"camera_path.keyframes\" must be a non-empty array of {\"time\", \"camera\", ...}");
-    for (size_t i = 0; i < keys->size(); ++i) {
-      const Reader k((*keys)[i], source, "camera_path.keyframes[" + std::to_string(i) + "]");
-      k.only({"time", "camera", "range", "opacity_scale", "iso_values"});
-      CameraKeyframe key;
-      if (!k.number("time", key.time)) fail(source, ": \"", k.key("time"), "\" is required");
-      if (!k.find("camera") || !readCamera(k.child("camera"), key.camera))
-        fail(source, ": \"", k.key("camera"), "\" with a \"position\" is required");
-      if (const json* v = k.find("range")) {
-        const std::vector<double> n = k.numbers(*v, k.key("range"), 2);
-        key.range = range1f{float(n[0]), float(n[1])};
-      }
-      float scale = 0.f;
-      if (k.number("opacity_scale", scale)) key.opacityScale = scale;
-      if (const json* v = k.find("iso_values")) {
-        std::vector<float> values;
-        for (double d : k.numbers(*v, k.key("iso_values"), 0))
-          values.push_back(float(d));
-        key.isoValues = values;
-      }
-      doc.path.keyframes.push_back(key);
-    }
-    try {
-      doc.path.validate();
-    } catch (const Error& e) {
-      fail(source, ": ", e.what());
-    }
-  }
+  if (r.find("camera_path")) readCameraPath(r.child("camera_path"), source, doc.path);
   if (r.find("frame")) {
     const Reader c = r.child("frame");
     c.only(keysOf("frame", {"frame_index"}));
     c.settings(frameSettings(), "frame", f);
     c.number("frame_index", f.frameIndex);
   }
-  if (const json* layers = r.find("layers")) {
-    if (!layers->is_array()) fail(source, ": \"layers\" must be an array of {\"field\", \"transfer_function\"}");
-    s.layers.clear();
-    for (size_t i = 0; i < layers->size(); ++i) {
-      const Reader l((*layers)[i], source, "layers[" + std::to_string(i) + "]");
-      l.only({"field", "transfer_function"});
-      VolumeLayer layer;
-      l.string("field", layer.field);
-      layer.tf = readTf(l, "transfer_function", layer.tf);
-      s.layers.push_back(layer);
-    }
-  }
-  if (r.find("iso")) {
-    const Reader c = r.child("iso");
-    c.only({"field", "values", "colors", "color_field", "color_map"});
-    c.string("field", s.iso.field);
-    if (const json* v = c.find("values"))
-      for (double d : c.numbers(*v, c.key("values"), 0))
-        s.iso.values.push_back(float(d));
-    if (const json* v = c.find("colors")) {
-      if (!v->is_array()) fail(source, ": \"iso.colors\" must be an array of [r, g, b] (sRGB)");
-      for (const json& col : *v) {
-        const std::vector<double> n = c.numbers(col, c.key("colors"), 3);
-        for (double x : n)
-          if (!(x >= 0.0 && x <= 1.0)) fail(source, ": \"iso.colors\" components must lie in [0, 1] (sRGB)");
-        s.iso.colors.push_back(srgbToLinear(vec3f(float(n[0]), float(n[1]), float(n[2]))));
-      }
-    }
-    c.string("color_field", s.iso.colorField);
-    s.iso.colorTf = readTf(c, "color_map", s.iso.colorTf);
-  }
-  if (const json* meshes = r.find("meshes")) {
-    if (!meshes->is_array()) fail(source, ": \"meshes\" must be an array");
-    for (size_t i = 0; i < meshes->size(); ++i) {
-      const Reader m((*meshes)[i], source, "meshes[" + std::to_string(i) + "]");
-      m.only({"file", "color", "vertices", "triangles"});
-      SceneMesh sm;
-      m.color("color", sm.color);
-      if (m.string("file", sm.source)) {
-        // Read by the caller (documents/scene_file.h): the library's render layer reads no files.
-      } else {
-        const json* v = m.find("vertices");
-        const json* t = m.find("triangles");
-        if (!v || !t || !v->is_array() || !t->is_array())
-          fail(source, ": \"", m.key("file"), "\" or \"vertices\" and \"triangles\" arrays are needed");
-        auto mesh = std::make_shared<TriangleMesh>();
-        for (const json& x : *v)
-          mesh->vertices.push_back(vec3f(m.triple(x, m.key("vertices"))));
-        for (const json& x : *t) {
-          const vec3d idx = m.triple(x, m.key("triangles"));
-          mesh->triangles.push_back(vec3i(int(idx.x), int(idx.y), int(idx.z)));
-        }
-        sm.mesh = mesh;
-      }
-      s.meshes.push_back(sm);
-    }
-  }
-  if (r.find("clip")) {
-    const Reader c = r.child("clip");
-    c.only(keysOf("clip", {"planes", "box"}));
-    if (const json* planes = c.find("planes")) {
-      if (!planes->is_array()) fail(source, ": \"clip.planes\" must be an array of {\"point\", \"normal\"}");
-      for (size_t i = 0; i < planes->size(); ++i) {
-        const Reader p((*planes)[i], source, "clip.planes[" + std::to_string(i) + "]");
-        p.only({"point", "normal"});
-        ClipPlane cp;
-        if (!p.vec3("point", cp.point) || !p.vec3("normal", cp.normal))
-          fail(source, ": \"clip.planes[", i, "]\" needs \"point\" and \"normal\"");
-        s.clip.planes.push_back(cp);
-      }
-    }
-    if (const json* b = c.find("box"); b && !b->is_null()) {
-      const std::vector<double> n = c.numbers(*b, "clip.box", 6);
-      if (!(n[0] < n[3] && n[1] < n[4] && n[2] < n[5]))
-        fail(source, ": \"clip.box\" needs its lower corner below its upper one");
-      s.clip.box = box3d(vec3d(n[0], n[1], n[2]), vec3d(n[3], n[4], n[5]));
-    }
-    c.settings(sceneSettings(), "clip", s);
-  }
+  if (const json* layers = r.find("layers")) readLayers(*layers, source, s.layers);
+  if (r.find("iso")) readIso(r.child("iso"), source, s.iso);
+  if (const json* meshes = r.find("meshes")) readMeshes(*meshes, source, s.meshes);
+  if (r.find("clip")) readClip(r.child("clip"), source, s);
   if (r.find("light")) {
     const Reader c = r.child("light");
     c.only(keysOf("light", {"direction"}));
@@ -445,19 +469,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.only(keysOf("ambient_occlusion", {}));
     c.settings(sceneSettings(), "ambient_occlusion", s);
   }
-  if (r.find("integration")) {
-    const Reader c = r.child("integration");
-    c.only(keysOf("integration", {"vectorized", "lazy_gradients", "join_segments"}));
-    c.settings(sceneSettings(), "integration", s);
-    // Renderer options that scene files once carried (RendererOptions): read and ignored.
-    for (const char* key : {"vectorized", "lazy_gradients", "join_segments"}) {
-      bool unused = false;
-      if (c.boolean(key, unused))
-        logNote(strCat(source, ": \"integration.", key,
-                       "\" is ignored: it is a renderer option for benchmarks (exabricks bench, render flags), not a "
-                       "scene setting"));
-    }
-  }
+  if (r.find("integration")) readIntegration(r.child("integration"), source, s);
   r.settings(sceneSettings(), "", s);
   r.color("background", s.background);
   try {
