@@ -1,7 +1,5 @@
 #include "hdf5_file.h"
 
-#include "exabricks/io/hdf5.h"
-
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
@@ -1065,6 +1063,4 @@ std::string File::attrString(const std::string& object, const std::string& name)
 
 } // namespace exa::h5
 
-namespace exa {
-bool isHdf5File(const std::string& path) { return h5::hasSignature(path); }
-} // namespace exa
+namespace exa {} // namespace exa

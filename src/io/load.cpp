@@ -7,11 +7,12 @@
 #include "exabricks/io/chombo.h"
 #include "exabricks/io/enzo.h"
 #include "exabricks/io/flash.h"
-#include "exabricks/io/hdf5.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
 #include "exabricks/io/units.h"
 #include "exabricks/io/vtk_amr.h"
+
+#include "hdf5_file.h"
 
 #include <cmath>
 #include <filesystem>
@@ -85,7 +86,7 @@ const std::vector<FormatReader>& formatReaders() {
 const FormatReader* findReader(const std::string& path) {
   for (const FormatReader& r : formatReaders())
     if (!probesByName(r) && r.probe(path)) return &r;
-  if (isHdf5File(path))
+  if (h5::hasSignature(path))
     fail(path, ": an HDF5 file with neither Chombo's nor FLASH's layout, or one that cannot be opened",
          " (truncated or damaged?)");
   for (const FormatReader& r : formatReaders())
