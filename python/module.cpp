@@ -1,6 +1,6 @@
 // exabricks._core: the library for Python. Datasets (loaded, from numpy cells or from grids),
 // a renderer driven by the scene JSON of render/scene.h, meshes from numpy arrays, sampling and
-// the model description. The pure-Python package (python/exabricks) builds on it.
+// the model description, time series (series.cpp). The pure-Python package (python/exabricks) builds on it.
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
@@ -16,6 +16,8 @@
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene_vocabulary.h"
 
+#include "core.h"
+
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -26,6 +28,14 @@
 
 namespace py = pybind11;
 using namespace exa;
+using exa::pymod::Dataset;
+using exa::pymod::Mesh;
+
+py::array_t<float> exa::pymod::imageArray(const Image& img) {
+  py::array_t<float> out({size_t(img.height), size_t(img.width), size_t(4)});
+  std::memcpy(out.mutable_data(), img.pixels.data(), img.pixels.size() * sizeof(vec4f));
+  return out;
+}
 
 namespace {
 
@@ -34,21 +44,6 @@ void checkUnits(const std::vector<std::string>& units, size_t fields) {
   if (!units.empty() && units.size() != fields)
     fail("units: ", units.size(), " given for ", fields, " fields (one per field, or none)");
 }
-
-/// A built model, shared by every renderer made from it (they keep it alive).
-struct Dataset {
-  std::shared_ptr<const Model> model;
-  DatasetInfo info; ///< computed once, shared by its renderers, defaults and warnings
-  std::string name;
-  double loadSeconds = 0;
-};
-
-/// A triangle mesh made once from numpy arrays or read from a file (`source`, which scene files
-/// record): scenes that keep it are not rebuilt.
-struct Mesh {
-  std::shared_ptr<const TriangleMesh> mesh;
-  std::string source;
-};
 
 std::shared_ptr<Dataset> makeDataset(Model&& m, std::string name, double seconds) {
   auto d = std::make_shared<Dataset>();
@@ -330,9 +325,7 @@ public:
   py::array_t<float> image() const {
     Image img;
     buffer_.resolve(img);
-    py::array_t<float> out({size_t(img.height), size_t(img.width), size_t(4)});
-    std::memcpy(out.mutable_data(), img.pixels.data(), img.pixels.size() * sizeof(vec4f));
-    return out;
+    return pymod::imageArray(img);
   }
 
   py::bytes png() const {
@@ -536,6 +529,10 @@ PYBIND11_MODULE(_core, m) {
       },
       py::arg("names"), "Which of these field names the command line takes by default");
   m.def("colormap_names", &builtinColorMapNames);
+  m.def(
+      "read_png", [](const std::string& path) { return pymod::imageArray(readPng(path)); }, py::arg("path"),
+      "An 8-bit PNG as an (H, W, 4) float32 array of linear, premultiplied RGBA");
+  pymod::bindSeries(m);
   m.def(
       "transfer_function_json",
       [](const std::string& path) {

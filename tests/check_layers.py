@@ -25,6 +25,7 @@ BELOW = {
     "render": {"core", "amr", "accel"},
     "io": {"core", "amr"},
     "documents": {"core", "amr", "accel", "render", "io"},
+    "workflows": {"core", "amr", "accel", "render", "io", "documents"},
 }
 INCLUDE = re.compile(r'^\s*#\s*include\s*"([^"]+)"', re.M)
 

@@ -3,14 +3,17 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
+#include "exabricks/io/native.h"
 #include "exabricks/io/series.h"
 #include "exabricks/render/camera_path.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
+#include "exabricks/workflows/series.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 
 using namespace exa;
 
@@ -222,4 +225,59 @@ TEST(Series, NaturalOrder) {
   EXPECT_TRUE(naturalLess("a", "b"));
   EXPECT_TRUE(naturalLess("x9", "x09") != naturalLess("x09", "x9")); // a strict order even for equal numbers
   EXPECT_FALSE(naturalLess("same", "same"));
+}
+
+TEST(SeriesRenderer, FramePlansStepsAndShares) {
+  const FramePlan perStep = FramePlan::perStep(3, 2);
+  EXPECT_EQ(perStep.frames, 6);
+  EXPECT_EQ(perStep.stepOf(0), 0);
+  EXPECT_EQ(perStep.stepOf(3), 1);
+  EXPECT_EQ(perStep.stepOf(5), 2);
+  EXPECT_EQ(perStep.framesOf(1), (std::vector<int>{2, 3}));
+  const FramePlan spread = FramePlan::spread(3, 7);
+  for (int step = 0; step < 3; ++step)
+    EXPECT_FALSE(spread.framesOf(step).empty()) << step;
+  EXPECT_EQ(spread.stepOf(6), 2);
+  EXPECT_THROW(FramePlan::spread(3, 2), Error);
+  EXPECT_EQ(frameShare({4, 5, 6, 7, 8}, 1, 2), (std::vector<int>{5, 7}));
+  EXPECT_EQ(frameShare({4, 5}, 0, 1), (std::vector<int>{4, 5}));
+  EXPECT_EQ(framePath("out", 42), (std::filesystem::path("out") / "frame_00042.png").string());
+}
+
+TEST(SeriesRenderer, ReusesStructuresPrefetchesAndEqualsSeparateRenders) {
+  const std::filesystem::path dir = std::filesystem::path(EXABRICKS_TEST_TMP) / "series_renderer";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  SceneOptions so = resolveSceneSize(SceneOptions{"blobs", 20000, 3, 4});
+  so.gridTime = 0; // one hierarchy for every step
+  for (int t = 0; t < 3; ++t) {
+    so.time = t;
+    writeNative(generateScene(so), (dir / ("s_" + std::to_string(t) + ".cells")).string());
+  }
+  const std::vector<std::string> steps = seriesSteps({(dir / "s_*.cells").string()});
+  ASSERT_EQ(steps.size(), 3u);
+  SeriesRenderer series(steps, {});
+  Frame frame;
+  frame.width = frame.height = 24;
+  const Model first = loadModel(steps[0]);
+  frame.camera = Camera::frame(box3d(vec3d(0.0), vec3d(first.cellBounds().upper)), 30, 20, 40, false);
+  const FramePlan plan = FramePlan::perStep(3);
+  std::vector<Image> images(3);
+  series.renderFrames(plan, Scene{}, frame, {0, 1, 2},
+                      [&](int i, const SeriesStep& step, const Scene&, const Frame&, Image& image) {
+                        EXPECT_EQ(step.index, i);
+                        images[size_t(i)] = image;
+                      });
+  EXPECT_EQ(series.stats().loaded, 3);
+  EXPECT_EQ(series.stats().reused, 2);
+  for (int t = 0; t < 3; ++t) {
+    const Model m = loadModel(steps[size_t(t)]);
+    Renderer r(m);
+    r.setScene(Scene{});
+    EXPECT_EQ(r.render(frame).pixels, images[size_t(t)].pixels) << t;
+  }
+  const SeriesRange range = seriesRange(steps, {}, first.fieldNames[0]);
+  EXPECT_FALSE(range.range.empty());
+  EXPECT_THROW(series.load(3), Error);
+  EXPECT_THROW(seriesSteps({(dir / "nothing_*.cells").string()}), Error);
 }

@@ -1,8 +1,8 @@
 // exabricks info: what a dataset holds and what its bricks and regions look like.
 #include "commands.h"
 #include "common.h"
-#include "distributed.h"
-#include "parallel.h"
+#include "mpi/data_parallel.h"
+#include "mpi/processes.h"
 
 #include "exabricks/io/model_info.h"
 
@@ -34,11 +34,11 @@ void printFields(const InfoOptions& o) {
 /// it holds with its halo, those it owns, bricks, regions, memory).
 void runParts(const InfoOptions& o) {
   Timer total;
-  const DataPart part = loadDataPart(o.in.input, o.in.loadOptions(true));
+  const mpi::DataPart part = mpi::loadDataPart(o.in.input, o.in.loadOptions(true));
   const double loadSeconds = total.seconds();
   const ModelSummary s = summarize(part.model);
   const uint64_t owned = part.ownedCells();
-  auto gather = [](double v) { return parallel::allGather(v); };
+  auto gather = [](double v) { return mpi::allGather(v); };
   const std::vector<double> resident = gather(double(s.cells)), own = gather(double(owned)),
                             bricks = gather(double(s.bricks)), regions = gather(double(s.regions)),
                             rss = gather(double(peakRssBytes())), seconds = gather(loadSeconds);
@@ -47,8 +47,8 @@ void runParts(const InfoOptions& o) {
     box[size_t(a)] = gather(double(part.box.lower[a]));
     box[size_t(a) + 3] = gather(double(part.box.upper[a]));
   }
-  if (!parallel::processes().root()) return;
-  const int n = parallel::processes().size;
+  if (!mpi::processes().root()) return;
+  const int n = mpi::processes().size;
   const box3i cb = part.whole.cellBounds;
   // A face on the outside of the data is unbounded: null in JSON, "-" in text.
   auto face = [](double v) -> nlohmann::json {
@@ -105,10 +105,10 @@ void runParts(const InfoOptions& o) {
 
 void run(const InfoOptions& o) {
   if (o.fieldsOnly) {
-    parallel::requireOneProcess("info --fields");
+    mpi::requireOneProcess("info --fields");
     return printFields(o);
   }
-  if (parallel::processes().size > 1) return runParts(o);
+  if (mpi::processes().size > 1) return runParts(o);
   Timer total;
   const Model model = loadModel(o.in.input, o.in.loadOptions(true));
   const double loadSeconds = total.seconds();

@@ -1,16 +1,18 @@
 // exabricks movie: one frame per time step and/or frames along a camera path, written as
-// numbered PNGs and encoded with ffmpeg (see docs/movies.md).
+// numbered PNGs and encoded with ffmpeg (see docs/movies.md): plan (the series, the scene and the
+// frames), render (through the library's SeriesRenderer; under MPI each process renders a share)
+// and encode.
 #include "commands.h"
 #include "common.h"
-#include "parallel.h"
+#include "mpi/processes.h"
 #include "scene_options.h"
 
 #include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
-#include "exabricks/io/series.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/series.h"
 
 #include <nlohmann/json.hpp>
 
@@ -19,13 +21,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <future>
 #include <iostream>
 #include <memory>
 #include <sstream>
 #include <sys/wait.h>
 #include <unistd.h>
-#include <unordered_set>
 
 namespace exa::cli {
 namespace {
@@ -51,77 +51,19 @@ struct MovieCmdOptions {
 
 enum class RangeMode { Global, PerStep, Fixed };
 
-/// One loaded time step: the model, its dataset values and the structure its bricks came from.
-struct Step {
-  std::shared_ptr<const Model> model;
-  DatasetInfo info;
-  std::shared_ptr<const ModelStructure> structure;
-  double seconds = 0;
-  bool reused = false;
+/// What the plan decides: the steps, the scene, the frames, and where they go.
+struct MoviePlan {
+  std::vector<std::string> paths;
+  RenderOptions ro; ///< the options, --range's movie words taken out
+  RangeMode rangeMode = RangeMode::Fixed;
+  SceneDocument doc;
+  LoadOptions lo;
+  FramePlan frames;
+  int first = 0, last = 0; ///< the frames this run renders (--frames)
+  bool toFolder = false;   ///< only frames, no movie file
+  std::string ext, framesDir;
+  std::vector<int> todo; ///< this process's frames still to render
 };
-
-Step loadStep(const std::string& path, const LoadOptions& lo, const Step* previous, bool reuse) {
-  Timer timer;
-  Step step;
-  if (detectInput(path) == InputKind::Model) {
-    step.model = std::make_shared<const Model>(loadModel(path, lo));
-  } else {
-    CellSet cells = loadCells(path, lo);
-    if (reuse && previous && previous->structure && previous->structure->matches(cells, lo.build)) {
-      step.model =
-          std::make_shared<const Model>(rebuildValues(*previous->model, *previous->structure, std::move(cells)));
-      step.structure = previous->structure;
-      step.reused = true;
-    } else {
-      auto structure = std::make_shared<ModelStructure>();
-      step.model = std::make_shared<const Model>(buildModel(std::move(cells), lo.build, *structure));
-      if (reuse) step.structure = std::move(structure);
-    }
-  }
-  step.info = DatasetInfo::of(*step.model);
-  step.seconds = timer.seconds();
-  return step;
-}
-
-/// The range of the named field over every step: from metadata where the format records ranges,
-/// else reading only that field.
-range1f seriesRange(const std::vector<std::string>& paths, LoadOptions lo, const std::string& field,
-                    int& fromMetadata) {
-  range1f all;
-  fromMetadata = 0;
-  lo.fields = {field};
-  for (const std::string& path : paths) {
-    if (const std::optional<range1f> r = fieldRangeFromMetadata(path, field)) {
-      all.extend(*r);
-      ++fromMetadata;
-      continue;
-    }
-    if (detectInput(path) == InputKind::Model) {
-      const Model m = loadModel(path, lo);
-      for (float v : m.fieldValues.at(size_t(m.requireField(field))))
-        all.extend(v);
-      continue;
-    }
-    const CellSet cells = loadCells(path, lo);
-    const int f = cells.fieldIndex(field);
-    if (f < 0) fail(path, ": no field '", field, "' (the series' first step has it)");
-    for (float v : cells.fields[size_t(f)].values)
-      all.extend(v);
-  }
-  return all;
-}
-
-/// The movie's steps: inputs in the order given, a glob pattern or a folder expanded into its
-/// datasets in numeric order (explicit files are never re-sorted: `movie b a` plays b, then a);
-/// a dataset named twice plays once, where it first appears.
-std::vector<std::string> seriesSteps(const std::vector<std::string>& inputs) {
-  std::vector<std::string> out;
-  std::unordered_set<std::string> seen;
-  for (const std::string& input : inputs)
-    for (std::string& path : expandSeries({input}))
-      if (seen.insert(path).second) out.push_back(std::move(path));
-  return out;
-}
 
 std::string findProgram(const std::string& name) {
   const char* path = std::getenv("PATH");
@@ -151,341 +93,290 @@ int runProgram(const std::vector<std::string>& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-std::string framePath(const std::string& dir, int frame) {
-  char name[32];
-  std::snprintf(name, sizeof name, "frame_%05d.png", frame);
-  return (fs::path(dir) / name).string();
-}
-
 std::string formatSeconds(double s) {
   if (s < 60) return strCat(int(std::lround(s)), " s");
   const int m = int(s / 60);
   return strCat(m, " min ", int(std::lround(s - 60 * m)), " s");
 }
 
-void run(const MovieCmdOptions& o, const CLI::App& cmd) {
-  auto given = [&](const char* name) { return cmd.count(name) > 0; };
-  if (!(o.fps > 0 && o.fps <= 1000)) failUsage("--fps must be in (0, 1000]");
-  if (o.orbit < 0 || o.flyIn < 0 || o.pathFrames < 0) failUsage("frame counts must not be negative");
-  if ((o.orbit > 0) + (o.flyIn > 0) > 1) failUsage("--orbit and --fly-in exclude each other");
-  if (o.framesPerStep < 1 || o.framesPerStep > 10000) failUsage("--frames-per-step must be in 1..10000");
-
-  // What to encode: a video by its extension, or only frames into a folder.
-  const std::string ext = fs::path(o.output).extension().string();
-  const bool toFolder = ext.empty() || (fs::is_directory(o.output));
-  if (!toFolder && ext != ".mp4" && ext != ".webm")
-    failUsage("-o ", o.output, ": write .mp4 (H.264), .webm (VP9) or a folder for the frames alone");
-  const std::string framesDir = !o.framesDir.empty() ? o.framesDir : toFolder ? o.output : o.output + ".frames";
-
-  // The series and the range mode.
-  const std::vector<std::string> paths = o.inputs.empty() ? std::vector<std::string>{""} : seriesSteps(o.inputs);
-  const int steps = int(paths.size());
-  RenderOptions ro = o.scene;
-  RangeMode rangeMode = RangeMode::Fixed;
-  if (ro.range.size() == 1 && (ro.range[0] == "global" || ro.range[0] == "per-step")) {
-    rangeMode = ro.range[0] == "global" ? RangeMode::Global : RangeMode::PerStep;
-    ro.range.clear();
-  } else if (ro.range.empty()) {
-    rangeMode = steps > 1 ? RangeMode::Global : RangeMode::PerStep;
-  }
-  if (steps > 1 && !given("--frame-all") && !given("--position")) ro.frameAll = true; // the domain stays in view
-  SceneDocument doc = sceneFromOptions(ro, cmd);
-  doc.input.clear();
-  LoadOptions lo = ro.in.loadOptions(false);
-  lo.fields = neededFields(doc.scene);
-
-  // Frames: one per step (times --frames-per-step), or along the camera path of a single step.
-  // An orbit, fly-in or --path-frames with a series sets the frame count, and time advances
-  // across it: the camera moves while the steps play.
-  const bool pathFromScene = !doc.path.empty();
+/// The frame counts: one frame per step (times --frames-per-step), or along the camera path of a
+/// single step. An orbit, fly-in or --path-frames with a series sets the frame count, and time
+/// advances across it: the camera moves while the steps play.
+FramePlan planFrames(const MovieCmdOptions& o, const CLI::App& cmd, int steps, bool pathFromScene) {
   const int pathCount = o.orbit ? o.orbit : o.flyIn ? o.flyIn : o.pathFrames;
   const char* pathOption = o.orbit ? "--orbit" : o.flyIn ? "--fly-in" : "--path-frames";
   if ((o.orbit || o.flyIn) && pathFromScene)
     failUsage("--orbit and --fly-in replace the scene file's camera path: use one");
   if (o.pathFrames && !pathFromScene) failUsage("--path-frames needs a scene file with a camera_path");
   if (steps > 1 && pathCount) {
-    if (given("--frames-per-step"))
+    if (cmd.count("--frames-per-step"))
       failUsage(pathOption, " ", pathCount, " sets the movie's frame count, and the ", steps,
                 " steps are spread over it: leave out --frames-per-step");
     if (pathCount < steps)
       failUsage(pathOption, " ", pathCount, " gives fewer frames than the series has steps (", steps,
                 "): every step needs a frame; use at least ", steps);
+    return FramePlan::spread(steps, pathCount);
   }
-  int frames = steps > 1 ? (pathCount ? pathCount : steps * o.framesPerStep)
-                         : (pathCount ? pathCount : (pathFromScene ? int(std::lround(o.fps * 5)) : 1));
-  frames = std::max(frames, 1);
-  int first = 0, last = frames - 1;
-  if (!o.frames.empty()) {
-    const size_t colon = o.frames.find(':');
-    try {
-      if (colon == std::string::npos) throw std::invalid_argument("");
-      first = o.frames.substr(0, colon).empty() ? 0 : std::stoi(o.frames.substr(0, colon));
-      last = o.frames.substr(colon + 1).empty() ? frames - 1 : std::stoi(o.frames.substr(colon + 1));
-    } catch (...) {
-      failUsage("--frames expects A:B (first and last frame, from 0), got '", o.frames, "'");
-    }
-    if (first < 0 || last < first || first >= frames)
-      failUsage("--frames ", o.frames, " is outside the movie's frames 0..", frames - 1);
-    if (last >= frames) {
-      // A slice past the end (the last batch job of an array sized generously) renders what is there.
-      if (parallel::processes().root())
-        logNote(strCat("--frames ", o.frames, ": the movie has ", frames, " frames (0..", frames - 1,
-                       "), so this renders frames ", first, "..", frames - 1));
-      last = frames - 1;
-    }
-  }
-  auto stepOf = [&](int frame) {
-    if (steps <= 1) return 0;
-    if (pathCount) return std::min(steps - 1, int(int64_t(frame) * steps / frames));
-    return std::min(steps - 1, frame / o.framesPerStep);
-  };
+  if (steps > 1) return FramePlan::perStep(steps, o.framesPerStep);
+  FramePlan plan;
+  plan.frames = std::max(1, pathCount ? pathCount : (pathFromScene ? int(std::lround(o.fps * 5)) : 1));
+  return plan;
+}
 
-  // Step 0 fixes the first picture (field, transfer-function defaults, camera) for every slice
-  // of the movie, whichever frames this process renders.
-  Timer total;
-  const bool reuse = !o.noReuse;
-  Step firstStep;
-  std::string loadError;
+/// --frames A:B (either end may be left out); a slice past the end renders what is there.
+void frameRange(const std::string& text, int frames, int& first, int& last) {
+  first = 0;
+  last = frames - 1;
+  if (text.empty()) return;
+  const size_t colon = text.find(':');
   try {
-    firstStep = loadStep(paths[0], lo, nullptr, reuse);
-  } catch (const std::exception& e) {
-    loadError = e.what();
+    if (colon == std::string::npos) throw std::invalid_argument("");
+    first = text.substr(0, colon).empty() ? 0 : std::stoi(text.substr(0, colon));
+    last = text.substr(colon + 1).empty() ? frames - 1 : std::stoi(text.substr(colon + 1));
+  } catch (...) {
+    failUsage("--frames expects A:B (first and last frame, from 0), got '", text, "'");
   }
-  parallel::agreeOrFail(loadError, "read the first step");
-  const parallel::Processes& procs = parallel::processes();
-  const Model& model0 = *firstStep.model;
-  applyDataDefaults(ro, cmd, doc.scene, model0, firstStep.info);
-  if (rangeMode == RangeMode::Global && steps > 1) {
-    int fromMetadata = 0;
-    const std::string& name = model0.fieldNames[size_t(model0.requireField(doc.scene.layers[0].field))];
-    const range1f r = seriesRange(paths, lo, name, fromMetadata);
-    doc.scene.layers[0].tf.valueRange = r;
-    logNote(strCat("colour range over all ", steps, " steps: [", r.lower, ", ", r.upper, "]",
-                   fromMetadata ? strCat(" (", fromMetadata, " from metadata)") : std::string(),
+  if (first < 0 || last < first || first >= frames)
+    failUsage("--frames ", text, " is outside the movie's frames 0..", frames - 1);
+  if (last >= frames) {
+    // The last batch job of an array sized generously.
+    if (mpi::processes().root())
+      logNote(strCat("--frames ", text, ": the movie has ", frames, " frames (0..", frames - 1,
+                     "), so this renders frames ", first, "..", frames - 1));
+    last = frames - 1;
+  }
+}
+
+/// Plan, first part: the options checked, the series, the range mode, the scene and the frames.
+MoviePlan planMovie(const MovieCmdOptions& o, const CLI::App& cmd) {
+  if (!(o.fps > 0 && o.fps <= 1000)) failUsage("--fps must be in (0, 1000]");
+  if (o.orbit < 0 || o.flyIn < 0 || o.pathFrames < 0) failUsage("frame counts must not be negative");
+  if ((o.orbit > 0) + (o.flyIn > 0) > 1) failUsage("--orbit and --fly-in exclude each other");
+  if (o.framesPerStep < 1 || o.framesPerStep > 10000) failUsage("--frames-per-step must be in 1..10000");
+  MoviePlan p;
+  // What to encode: a video by its extension, or only frames into a folder.
+  p.ext = fs::path(o.output).extension().string();
+  p.toFolder = p.ext.empty() || fs::is_directory(o.output);
+  if (!p.toFolder && p.ext != ".mp4" && p.ext != ".webm")
+    failUsage("-o ", o.output, ": write .mp4 (H.264), .webm (VP9) or a folder for the frames alone");
+  p.framesDir = !o.framesDir.empty() ? o.framesDir : p.toFolder ? o.output : o.output + ".frames";
+
+  p.paths = o.inputs.empty() ? std::vector<std::string>{""} : seriesSteps(o.inputs);
+  const int steps = int(p.paths.size());
+  p.ro = o.scene;
+  std::vector<std::string>& range = p.ro.range;
+  if (range.size() == 1 && (range[0] == "global" || range[0] == "per-step")) {
+    p.rangeMode = range[0] == "global" ? RangeMode::Global : RangeMode::PerStep;
+    range.clear();
+  } else if (range.empty()) {
+    p.rangeMode = steps > 1 ? RangeMode::Global : RangeMode::PerStep;
+  }
+  if (steps > 1 && !cmd.count("--frame-all") && !cmd.count("--position"))
+    p.ro.frameAll = true; // the domain stays in view
+  p.doc = sceneFromOptions(p.ro, cmd);
+  p.doc.input.clear();
+  p.lo = p.ro.in.loadOptions(false);
+  p.lo.fields = neededFields(p.doc.scene);
+  p.frames = planFrames(o, cmd, steps, !p.doc.path.empty());
+  frameRange(o.frames, p.frames.frames, p.first, p.last);
+  return p;
+}
+
+/// Plan, second part: step 0 fixes the first picture (field, transfer-function defaults, value
+/// range, camera) for every slice of the movie, whichever frames this process renders.
+void planFirstPicture(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& p, SeriesRenderer& series) {
+  mpi::onEveryProcess("read the first step", [&] { series.load(0); });
+  const SeriesStep& first = series.current();
+  const Model& model0 = *first.model;
+  Scene& scene = p.doc.scene;
+  RenderOptions& ro = p.ro;
+  applyDataDefaults(ro, cmd, scene, model0, first.info);
+  const int steps = series.size();
+  if (p.rangeMode == RangeMode::Global && steps > 1) {
+    const std::string& name = model0.fieldNames[size_t(model0.requireField(scene.layers[0].field))];
+    const SeriesRange r = seriesRange(p.paths, p.lo, name);
+    scene.layers[0].tf.valueRange = r.range;
+    logNote(strCat("colour range over all ", steps, " steps: [", r.range.lower, ", ", r.range.upper, "]",
+                   r.fromMetadata ? strCat(" (", r.fromMetadata, " from metadata)") : std::string(),
                    "; --range per-step or LOW,HIGH to choose"));
-  } else if (rangeMode == RangeMode::PerStep && !given("--range")) {
-    doc.scene.layers[0].tf.valueRange = range1f();
+  } else if (p.rangeMode == RangeMode::PerStep && !cmd.count("--range")) {
+    scene.layers[0].tf.valueRange = range1f();
   }
-  box3d domain;
-  {
-    const box3i cb = model0.cellBounds();
-    domain = box3d(model0.world.toWorld(vec3d(cb.lower)), model0.world.toWorld(vec3d(cb.upper)));
-  }
-  Renderer framing(model0, firstStep.info);
-  framing.setScene(doc.scene);
+  const box3i cb = model0.cellBounds();
+  const box3d domain(model0.world.toWorld(vec3d(cb.lower)), model0.world.toWorld(vec3d(cb.upper)));
+  Renderer framing(model0, first.info);
+  framing.setScene(scene);
   const box3d target = ro.frameAll || framing.visibleBounds().empty() ? domain : framing.visibleBounds();
-  doc.frame.camera = cameraFromOptions(ro, cmd, doc, model0, framing.visibleBounds());
-  if (o.flyIn) doc.path = flyInPath(target, ro.azimuth, ro.elevation, ro.fov, ro.ortho);
-  doc.frame.validate();
-  doc.hasCamera = true;
+  p.doc.frame.camera = cameraFromOptions(ro, cmd, p.doc, model0, framing.visibleBounds());
+  if (o.flyIn) p.doc.path = flyInPath(target, ro.azimuth, ro.elevation, ro.fov, ro.ortho);
+  p.doc.frame.validate();
+  p.doc.hasCamera = true;
+  if (o.orbit) p.frames.orbit = OrbitView{target, ro.azimuth, ro.elevation, ro.fov, ro.ortho};
+  p.frames.path = p.doc.path;
+}
 
-  auto frameSetup = [&](int i, Scene& scene, Frame& frame) {
-    scene = doc.scene;
-    frame = doc.frame;
-    if (o.orbit) {
-      frame.camera = orbitCamera(target, ro.azimuth, ro.elevation, ro.fov, ro.ortho, i, frames);
-    } else if (!doc.path.empty()) {
-      const double t = doc.path.frameTime(i, frames);
-      frame.camera = doc.path.cameraAt(t);
-      doc.path.applySettings(t, scene);
-    }
-  };
-
-  // Frames already rendered for this very movie are kept (a movie split over several jobs with
-  // --frames is joined by running the command again without it).
-  fs::create_directories(framesDir);
-  nlohmann::json manifest = {{"inputs", nlohmann::json(paths)},
-                             {"scene", nlohmann::json::parse(writeSceneJson(doc))},
-                             {"frames", frames},
-                             {"frames_per_step", o.framesPerStep},
-                             {"orbit", o.orbit},
-                             {"fly_in", o.flyIn},
-                             {"overlays", {ro.colorbar, ro.annotate}}};
-  const std::string manifestPath = (fs::path(framesDir) / "movie.json").string();
+/// Plan, last part: the manifest. Frames already rendered for this very movie are kept (a movie
+/// split over several jobs with --frames is joined by running the command again without it);
+/// under MPI the processes take interleaved frames and the first one records the movie.
+void planFrameShare(const MovieCmdOptions& o, MoviePlan& p) {
+  fs::create_directories(p.framesDir);
+  const nlohmann::json manifest = {{"inputs", nlohmann::json(p.paths)},
+                                   {"scene", nlohmann::json::parse(writeSceneJson(p.doc))},
+                                   {"frames", p.frames.frames},
+                                   {"frames_per_step", o.framesPerStep},
+                                   {"orbit", o.orbit},
+                                   {"fly_in", o.flyIn},
+                                   {"overlays", {p.ro.colorbar, p.ro.annotate}}};
+  const std::string manifestPath = (fs::path(p.framesDir) / "movie.json").string();
   bool sameMovie = false;
-  {
-    std::ifstream in(manifestPath);
-    if (in) {
-      try {
-        sameMovie = nlohmann::json::parse(in) == manifest;
-      } catch (...) {
-        sameMovie = false;
-      }
+  if (std::ifstream in(manifestPath); in) {
+    try {
+      sameMovie = nlohmann::json::parse(in) == manifest;
+    } catch (...) {
+      sameMovie = false;
     }
   }
   std::vector<int> todo;
-  for (int i = first; i <= last; ++i)
-    if (!(sameMovie && fs::exists(framePath(framesDir, i)))) todo.push_back(i);
-  // Under MPI the processes take interleaved frames; the first one records the movie.
-  parallel::barrier();
-  if (procs.root()) {
+  for (int i = p.first; i <= p.last; ++i)
+    if (!(sameMovie && fs::exists(framePath(p.framesDir, i)))) todo.push_back(i);
+  mpi::barrier();
+  if (mpi::processes().root()) {
     const std::string manifestText = manifest.dump(2) + "\n";
     writeFileAtomic(manifestPath, manifestText.data(), manifestText.size());
-    writeSceneFile((fs::path(framesDir) / "scene.json").string(), withAbsolutePaths(doc));
+    writeSceneFile((fs::path(p.framesDir) / "scene.json").string(), withAbsolutePaths(p.doc));
   }
-  if (procs.size > 1) {
-    std::vector<int> mine;
-    for (size_t n = 0; n < todo.size(); ++n)
-      if (int(n % size_t(procs.size)) == procs.rank) mine.push_back(todo[n]);
-    todo = std::move(mine);
-  }
+  p.todo = mpi::shareOf(todo);
+}
 
-  // Render, loading step k+1 while step k renders (at most two steps resident).
+/// Render: this process's frames through the series renderer (the next step loading while one
+/// renders), each with its overlays written as a PNG, with a progress line. A process that fails
+/// stops all of them. Returns the frames rendered.
+int renderMovie(const MoviePlan& p, SeriesRenderer& series) {
   const bool showProgress = logLevel() >= LogLevel::Warning;
   const bool tty = isatty(STDERR_FILENO);
-  double renderSeconds = 0, loadSeconds = firstStep.seconds, waitSeconds = 0;
-  int reusedSteps = 0, loadedSteps = 1;
-  int currentStep = 0;
-  Step current = std::move(firstStep);
-  std::future<Step> next;
-  int nextStep = -1;
-  auto startPrefetch = [&](int step) {
-    if (step >= steps || step == nextStep) return;
-    nextStep = step;
-    const Step* prev = &current;
-    next = std::async(std::launch::async, [&, step, prev] { return loadStep(paths[size_t(step)], lo, prev, reuse); });
-  };
-  std::unique_ptr<Renderer> renderer;
-  RenderOptions overlays = ro; // --annotate names each frame's own step
+  RenderOptions overlays = p.ro; // --annotate names each frame's own step
   int done = 0;
   Timer loop;
-  std::string renderError;
-  try {
-    for (size_t n = 0; n < todo.size(); ++n) {
-      const int i = todo[n];
-      const int step = stepOf(i);
-      if (step != currentStep) {
-        Timer wait;
-        if (nextStep == step) {
-          Step loaded = next.get();
-          nextStep = -1;
-          renderer.reset();
-          current = std::move(loaded);
-        } else {
-          if (next.valid()) next.get();
-          nextStep = -1;
-          renderer.reset();
-          current = loadStep(paths[size_t(step)], lo, &current, reuse);
-        }
-        waitSeconds += wait.seconds();
-        loadSeconds += current.seconds;
-        reusedSteps += current.reused ? 1 : 0;
-        ++loadedSteps;
-        currentStep = step;
-      }
-      if (!renderer) {
-        renderer = std::make_unique<Renderer>(*current.model, current.info);
-        renderer->setOptions(o.march.options());
-      }
-      // The next step this process needs, loaded beside the render.
-      if (!o.noPrefetch)
-        for (size_t m = n + 1; m < todo.size(); ++m)
-          if (stepOf(todo[m]) != step) {
-            startPrefetch(stepOf(todo[m]));
-            break;
-          }
-      Scene scene;
-      Frame frame;
-      frameSetup(i, scene, frame);
-      renderer->setScene(scene);
-      Timer t;
-      Image image = renderer->render(frame);
-      renderSeconds += t.seconds();
-      overlays.in.input = paths[size_t(step)];
-      drawOverlays(overlays, scene, frame, *current.model, current.info,
-                   current.model->requireField(scene.layers[0].field), image);
-      writePng(framePath(framesDir, i), image, scene.keepAlpha, scene.background);
-      ++done;
-      if (showProgress) {
-        const double per = loop.seconds() / done;
-        const std::string line = strCat("frame ", i, " (", done, " of ", todo.size(), ", step ", step + 1, " of ",
-                                        steps, "): ", std::round(per * 100) / 100, " s per frame, ETA ",
-                                        formatSeconds(per * double(todo.size() - size_t(done))));
-        if (tty)
-          std::fprintf(stderr, "\r\033[K%s", line.c_str());
-        else
-          std::fprintf(stderr, "%s\n", line.c_str());
-      }
-    }
-    if (next.valid()) next.get();
-  } catch (const std::exception& e) {
-    renderError = e.what();
+  auto write = [&](int i, const SeriesStep& step, const Scene& scene, const Frame& frame, Image& image) {
+    overlays.in.input = p.paths[size_t(step.index)];
+    drawOverlays(overlays, scene, frame, *step.model, step.info, step.model->requireField(scene.layers[0].field),
+                 image);
+    writePng(framePath(p.framesDir, i), image, scene.keepAlpha, scene.background);
+    ++done;
+    if (!showProgress) return;
+    const double per = loop.seconds() / done;
+    const std::string line = strCat("frame ", i, " (", done, " of ", p.todo.size(), ", step ", step.index + 1, " of ",
+                                    series.size(), "): ", std::round(per * 100) / 100, " s per frame, ETA ",
+                                    formatSeconds(per * double(p.todo.size() - size_t(done))));
+    if (tty)
+      std::fprintf(stderr, "\r\033[K%s", line.c_str());
+    else
+      std::fprintf(stderr, "%s\n", line.c_str());
+  };
+  auto endLine = [&] {
+    if (showProgress && tty && done) std::fprintf(stderr, "\n");
+  };
+  mpi::onEveryProcess("render its frames", [&] {
     try {
-      if (next.valid()) next.get();
+      series.renderFrames(p.frames, p.doc.scene, p.doc.frame, p.todo, write);
     } catch (...) {
+      endLine();
+      throw;
     }
-  }
-  if (showProgress && tty && done) std::fprintf(stderr, "\n");
+    endLine();
+  });
+  return done;
+}
 
-  // Encode when every frame of the movie is there (under MPI, once every process is done; a
-  // process that failed stops all of them).
-  parallel::agreeOrFail(renderError, "render its frames");
-  if (!procs.root()) return;
+/// Encode (on the first process, once every frame of the movie is there): ffmpeg into a temporary
+/// file moved into place. Returns the movie written, or empty (frames only, frames missing, or
+/// no ffmpeg: each says so).
+std::string encodeMovie(const MovieCmdOptions& o, const MoviePlan& p, int missing) {
+  if (p.toFolder) return {};
+  const int frames = p.frames.frames;
+  const std::string pattern = (fs::path(p.framesDir) / "frame_%05d.png").string();
+  const bool webm = p.ext == ".webm";
+  const std::string fpsText = strCat(o.fps);
+  const std::string example =
+      strCat("ffmpeg -framerate ", fpsText, " -i ", pattern,
+             webm ? " -c:v libvpx-vp9 -b:v 0 -crf 32 " : " -c:v libx264 -pix_fmt yuv420p -crf 18 ", o.output);
+  const std::string ffmpeg = findProgram("ffmpeg");
+  if (missing) {
+    logNote(strCat("frames ", p.first, "..", p.last, " are in ", p.framesDir, "; ", missing, " of ", frames,
+                   " frames are still to render (other --frames slices); run this command again without "
+                   "--frames to render what is missing and encode ",
+                   o.output));
+    return {};
+  }
+  if (ffmpeg.empty()) {
+    logWarning(strCat("ffmpeg is not installed, so ", o.output, " was not encoded; the ", frames, " frames are in ",
+                      p.framesDir, ". Install ffmpeg and run this command again, or encode them with: ", example));
+    return {};
+  }
+  const std::string temporary = strCat(o.output, ".encoding-", ::getpid(), p.ext);
+  std::vector<std::string> args{ffmpeg,  "-y", "-loglevel", "error", "-framerate",
+                                fpsText, "-i", pattern,     "-vf",   "pad=ceil(iw/2)*2:ceil(ih/2)*2"};
+  if (webm)
+    args.insert(args.end(), {"-c:v", "libvpx-vp9", "-b:v", "0", "-crf", "32", "-pix_fmt", "yuv420p", "-f", "webm"});
+  else
+    args.insert(args.end(),
+                {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18", "-movflags", "+faststart", "-f", "mp4"});
+  args.push_back(temporary);
+  const int rc = runProgram(args);
+  std::error_code ec;
+  if (rc != 0) {
+    fs::remove(temporary, ec);
+    fail(o.output, ": ffmpeg failed (exit status ", rc, "); the frames are in ", p.framesDir, "; try: ", example);
+  }
+  fs::rename(temporary, o.output, ec);
+  if (ec) {
+    fs::remove(temporary, ec);
+    fail(o.output, ": cannot move the encoded movie into place: ", ec.message());
+  }
+  logInfo(strCat("encoded ", frames, " frames into ", o.output));
+  return o.output;
+}
+
+void printSummary(const MovieCmdOptions& o, const MoviePlan& p, const SeriesRenderer& series, int done,
+                  const std::string& encoded, int missing, double seconds) {
+  const SeriesStats& s = series.stats();
+  const nlohmann::json j{{"frames", p.frames.frames},
+                         {"rendered", done},
+                         {"first", p.first},
+                         {"last", p.last},
+                         {"steps", series.size()},
+                         {"steps_loaded", s.loaded},
+                         {"steps_reused", s.reused},
+                         {"frames_dir", p.framesDir},
+                         {"output", encoded},
+                         {"missing_frames", missing},
+                         {"seconds", seconds},
+                         {"render_seconds", s.renderSeconds},
+                         {"load_seconds", s.loadSeconds},
+                         {"load_wait_seconds", s.waitSeconds},
+                         {"prefetch", !o.noPrefetch},
+                         {"reuse", !o.noReuse}};
+  std::cout << j.dump(2) << "\n";
+}
+
+void run(const MovieCmdOptions& o, const CLI::App& cmd) {
+  MoviePlan plan = planMovie(o, cmd);
+  Timer total;
+  SeriesOptions so;
+  so.load = plan.lo;
+  so.prefetch = !o.noPrefetch;
+  so.reuse = !o.noReuse;
+  so.renderer = o.march.options();
+  SeriesRenderer series(plan.paths, so);
+  planFirstPicture(o, cmd, plan, series);
+  planFrameShare(o, plan);
+  const int done = renderMovie(plan, series);
+  if (!mpi::processes().root()) return;
   int missing = 0;
-  for (int i = 0; i < frames; ++i)
-    missing += fs::exists(framePath(framesDir, i)) ? 0 : 1;
-  std::string encoded;
-  if (!toFolder) {
-    const std::string pattern = (fs::path(framesDir) / "frame_%05d.png").string();
-    const bool webm = ext == ".webm";
-    const std::string fpsText = strCat(o.fps);
-    const std::string example =
-        strCat("ffmpeg -framerate ", fpsText, " -i ", pattern,
-               webm ? " -c:v libvpx-vp9 -b:v 0 -crf 32 " : " -c:v libx264 -pix_fmt yuv420p -crf 18 ", o.output);
-    const std::string ffmpeg = findProgram("ffmpeg");
-    if (missing) {
-      logNote(strCat("frames ", first, "..", last, " are in ", framesDir, "; ", missing, " of ", frames,
-                     " frames are still to render (other --frames slices); run this command again without "
-                     "--frames to render what is missing and encode ",
-                     o.output));
-    } else if (ffmpeg.empty()) {
-      logWarning(strCat("ffmpeg is not installed, so ", o.output, " was not encoded; the ", frames, " frames are in ",
-                        framesDir, ". Install ffmpeg and run this command again, or encode them with: ", example));
-    } else {
-      const std::string temporary = strCat(o.output, ".encoding-", ::getpid(), ext);
-      std::vector<std::string> args{ffmpeg,  "-y", "-loglevel", "error", "-framerate",
-                                    fpsText, "-i", pattern,     "-vf",   "pad=ceil(iw/2)*2:ceil(ih/2)*2"};
-      if (webm)
-        args.insert(args.end(), {"-c:v", "libvpx-vp9", "-b:v", "0", "-crf", "32", "-pix_fmt", "yuv420p", "-f", "webm"});
-      else
-        args.insert(args.end(),
-                    {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18", "-movflags", "+faststart", "-f", "mp4"});
-      args.push_back(temporary);
-      const int rc = runProgram(args);
-      std::error_code ec;
-      if (rc != 0) {
-        fs::remove(temporary, ec);
-        fail(o.output, ": ffmpeg failed (exit status ", rc, "); the frames are in ", framesDir, "; try: ", example);
-      }
-      fs::rename(temporary, o.output, ec);
-      if (ec) {
-        fs::remove(temporary, ec);
-        fail(o.output, ": cannot move the encoded movie into place: ", ec.message());
-      }
-      encoded = o.output;
-      logInfo(strCat("encoded ", frames, " frames into ", o.output));
-    }
-  }
-
-  if (o.json) {
-    nlohmann::json j{{"frames", frames},
-                     {"rendered", done},
-                     {"first", first},
-                     {"last", last},
-                     {"steps", steps},
-                     {"steps_loaded", loadedSteps},
-                     {"steps_reused", reusedSteps},
-                     {"frames_dir", framesDir},
-                     {"output", encoded},
-                     {"missing_frames", missing},
-                     {"seconds", total.seconds()},
-                     {"render_seconds", renderSeconds},
-                     {"load_seconds", loadSeconds},
-                     {"load_wait_seconds", waitSeconds},
-                     {"prefetch", !o.noPrefetch},
-                     {"reuse", reuse}};
-    std::cout << j.dump(2) << "\n";
-  }
+  for (int i = 0; i < plan.frames.frames; ++i)
+    missing += fs::exists(framePath(plan.framesDir, i)) ? 0 : 1;
+  const std::string encoded = encodeMovie(o, plan, missing);
+  if (o.json) printSummary(o, plan, series, done, encoded, missing, total.seconds());
 }
 
 } // namespace

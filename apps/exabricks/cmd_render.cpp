@@ -1,8 +1,8 @@
 // exabricks render: volume rendering of an AMR field to PNG or JPEG (and optionally PFM).
 #include "commands.h"
 #include "common.h"
-#include "distributed.h"
-#include "parallel.h"
+#include "mpi/data_parallel.h"
+#include "mpi/processes.h"
 #include "scene_options.h"
 
 #include "exabricks/amr/basis_batch.h"
@@ -65,21 +65,15 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   // holds its part and the halo. If one process cannot read its data, all of them stop with an
   // error instead of waiting for it.
   std::optional<Model> loaded;
-  std::optional<DataPart> part;
+  std::optional<mpi::DataPart> part;
   if (dataParallel) {
-    part.emplace(loadDataPart(doc.input, lo));
+    part.emplace(mpi::loadDataPart(doc.input, lo));
   } else {
-    std::string loadError;
-    try {
-      loaded.emplace(loadModel(doc.input, lo));
-    } catch (const std::exception& e) {
-      loadError = e.what();
-    }
-    parallel::agreeOrFail(loadError, "read the input");
+    mpi::onEveryProcess("read the input", [&] { loaded.emplace(loadModel(doc.input, lo)); });
   }
   const Model& model = part ? part->model : *loaded;
   const WholeData* whole = part ? &part->whole : nullptr;
-  const bool root = parallel::processes().root();
+  const bool root = mpi::processes().root();
   const double loadSeconds = loadTimer.seconds();
   const DatasetInfo dataset = part ? part->dataset : DatasetInfo::of(model);
   const int field = applyDataDefaults(o.scene, cmd, scene, model, dataset, whole);
@@ -92,7 +86,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(), ", built in ",
                    update.isoSeconds, " s"));
   frame.camera = cameraFromOptions(o.scene, cmd, doc, model,
-                                   part ? agreedVisibleBounds(renderer, *part) : renderer.visibleBounds(), whole);
+                                   part ? mpi::agreedVisibleBounds(renderer, *part) : renderer.visibleBounds(), whole);
   frame.validate();
   const std::vector<int> order = part ? part->order(frame.camera) : std::vector<int>();
   doc.hasCamera = true;
@@ -103,16 +97,16 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   const bool showProgress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
   auto renderFrame = [&](RenderStats& stats) {
     buffer.clear();
-    const uint64_t share = dataParallel ? 1 : uint64_t(parallel::processes().size);
+    const uint64_t share = dataParallel ? 1 : uint64_t(mpi::processes().size);
     Progress progress("rendering",
                       (uint64_t(buffer.tileCount()) + share - 1) / share * uint64_t(frame.samplesPerPixel));
     if (!showProgress) progress.finish();
     PassControl control;
     control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
     if (dataParallel)
-      parallel::renderFrameComposited(&renderer, frame, buffer, order, control);
+      mpi::renderFrameComposited(&renderer, frame, buffer, order, control);
     else
-      parallel::renderFrame(renderer, frame, buffer, control);
+      mpi::renderFrame(renderer, frame, buffer, control);
     progress.finish();
     stats = buffer.stats();
   };
@@ -131,9 +125,9 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   }
   // What each process holds, for the statistics (collectives: every process takes part).
   std::vector<double> partCells, partRss;
-  if (part || parallel::processes().size > 1) {
-    partCells = parallel::allGather(double(model.cellCount()));
-    partRss = parallel::allGather(double(peakRssBytes()));
+  if (part || mpi::processes().size > 1) {
+    partCells = mpi::allGather(double(model.cellCount()));
+    partRss = mpi::allGather(double(peakRssBytes()));
   }
   if (!root) return; // the first process writes the image and the statistics
   Image image = buffer.resolve();
@@ -173,11 +167,11 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     j["iso_regions"] = renderer.isoRegions();
     j["iso_update_seconds"] = update.isoSeconds;
     j["meshes"] = renderer.meshCount();
-    if (parallel::processes().size > 1 || part) {
-      j["processes"] = parallel::processes().size;
+    if (mpi::processes().size > 1 || part) {
+      j["processes"] = mpi::processes().size;
       j["distribute"] = o.distribute;
-      j["composite_seconds"] = parallel::lastCombineSeconds();
-      if (dataParallel) j["composite_wait_seconds"] = parallel::lastWaitSeconds();
+      j["composite_seconds"] = mpi::lastCombineSeconds();
+      if (dataParallel) j["composite_wait_seconds"] = mpi::lastWaitSeconds();
     }
     if (!partCells.empty()) {
       nlohmann::json ranks = nlohmann::json::array();

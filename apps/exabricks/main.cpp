@@ -4,7 +4,7 @@
 // write that failed, including standard output); 2 a usage error (unknown option, bad option
 // value, missing argument); 130 / 143 interrupted by SIGINT / SIGTERM (no temporary file is left).
 #include "commands.h"
-#include "parallel.h"
+#include "mpi/processes.h"
 
 #include "exabricks/amr/basis_batch.h"
 
@@ -49,10 +49,9 @@ bool flushStandardOutput() {
 } // namespace
 
 int main(int argc, char** argv) {
-  exa::cli::parallel::Session processes(argc, argv);
-  const bool root = exa::cli::parallel::processes().root();
-  const std::string who =
-      root ? "exabricks" : "exabricks[" + std::to_string(exa::cli::parallel::processes().rank) + "]";
+  exa::mpi::Session processes(argc, argv);
+  const bool root = exa::mpi::processes().root();
+  const std::string who = root ? "exabricks" : "exabricks[" + std::to_string(exa::mpi::processes().rank) + "]";
   std::signal(SIGINT, onInterrupt);
   std::signal(SIGTERM, onInterrupt);
   CLI::App app{"exabricks: fast, faithful rendering of structured AMR data (ExaBricks method)"};
@@ -70,7 +69,7 @@ int main(int argc, char** argv) {
     // Under MPI only the first process logs; every process reports its own errors.
     exa::setLogLevel(quiet || !root ? exa::LogLevel::Quiet : (verbose ? exa::LogLevel::Info : exa::LogLevel::Warning));
     for (const char* command : {"sample", "build", "generate", "convert", "bench", "view"})
-      if (app.got_subcommand(command)) exa::cli::parallel::requireOneProcess(command);
+      if (app.got_subcommand(command)) exa::mpi::requireOneProcess(command);
     if (!simd.empty() && !exa::useBatchTarget(simd)) {
       std::string known;
       for (const std::string& t : exa::batchTargets())

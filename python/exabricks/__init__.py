@@ -5,7 +5,8 @@ as a whole: Scene.from_yt(sc).
 Rendering: Scene(dataset) with TransferFunction, Camera, iso-surfaces, meshes, clipping and
 ambient occlusion; Scene.render() returns an (H, W, 4) float32 array of linear, premultiplied
 RGBA. Dataset.sample(points) reconstructs values and gradients; Dataset.info() describes the
-model as `exabricks info --json` does. See docs/python.md.
+model as `exabricks info --json` does. Series(paths) renders the steps of a time series and makes
+movies. See docs/python.md.
 """
 
 import copy
@@ -19,13 +20,19 @@ from . import _core
 
 __all__ = [
     "Dataset", "TransferFunction", "Camera", "Scene", "load", "from_cells", "from_grids", "from_yt",
-    "colormap_names", "list_fields", "scene_vocabulary",
+    "colormap_names", "list_fields", "scene_vocabulary", "read_png", "Series",
 ]
 
 
 def colormap_names():
     """Names of the built-in colour maps."""
     return list(_core.colormap_names())
+
+
+def read_png(path):
+    """An 8-bit PNG (such as a movie's frame) as an (H, W, 4) float32 array of linear,
+    premultiplied RGBA, the form Scene.render returns."""
+    return _core.read_png(str(path))
 
 
 def list_fields(path):
@@ -765,3 +772,6 @@ class Scene:
         opacity, iso-value; each change renders a preview, then refines progressively."""
         from .widget import SceneWidget
         return SceneWidget(self, width, height, preview, passes).widget
+
+
+from .series import Series  # noqa: E402  (it uses Dataset and Scene above)

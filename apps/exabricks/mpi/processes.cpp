@@ -1,7 +1,8 @@
-#include "parallel.h"
+#include "processes.h"
 
 #include "exabricks/core/error.h"
 #include "exabricks/render/composite.h"
+#include "exabricks/workflows/frame_plan.h"
 
 #include <algorithm>
 #include <chrono>
@@ -12,7 +13,7 @@
 #include <mpi.h>
 #endif
 
-namespace exa::cli::parallel {
+namespace exa::mpi {
 
 namespace {
 
@@ -279,4 +280,6 @@ void requireOneProcess(const char* command) {
     fail(command, " runs in one process (it has no parallel mode); run it without mpirun or with -np 1");
 }
 
-} // namespace exa::cli::parallel
+std::vector<int> shareOf(const std::vector<int>& frames) { return frameShare(frames, state().rank, state().size); }
+
+} // namespace exa::mpi

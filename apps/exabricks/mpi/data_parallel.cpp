@@ -1,6 +1,6 @@
-#include "distributed.h"
+#include "data_parallel.h"
 
-#include "parallel.h"
+#include "processes.h"
 
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
@@ -9,7 +9,7 @@
 #include <algorithm>
 #include <limits>
 
-namespace exa::cli {
+namespace exa::mpi {
 
 box3d DataPart::worldBox() const {
   return box3d(model.world.toWorld(vec3d(box.lower)), model.world.toWorld(vec3d(box.upper)));
@@ -28,7 +28,7 @@ std::vector<int> DataPart::order(const Camera& camera) const {
 }
 
 DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
-  const parallel::Processes& procs = parallel::processes();
+  const Processes& procs = processes();
   DataPart part;
   // The census and the partition: on the first process, sent to all.
   std::vector<int64_t> encoded;
@@ -45,8 +45,8 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
       error = e.what();
     }
   }
-  parallel::agreeOrFail(error, "read the input");
-  parallel::broadcast(encoded);
+  agreeOrFail(error, "read the input");
+  broadcast(encoded);
   part.coarsestLevel = int(encoded.back());
   encoded.pop_back();
   part.partition = KdPartition::decode(encoded);
@@ -61,7 +61,7 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
   } catch (const std::exception& e) {
     error = e.what();
   }
-  parallel::agreeOrFail(error, "read its part of the input");
+  agreeOrFail(error, "read its part of the input");
   part.model = std::move(*loaded);
   const Model& m = part.model;
 
@@ -82,10 +82,10 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
   for (int l = 0; l <= kMaxLevel; ++l)
     high.push_back(levelHere[size_t(l)] ? 1.0 : 0.0);
   std::vector<double> counts{double(fields)};
-  parallel::allReduce(counts, parallel::Reduce::Max);
+  allReduce(counts, Reduce::Max);
   if (counts[0] != double(fields)) fail("the processes' parts hold different fields");
-  parallel::allReduce(low, parallel::Reduce::Min);
-  parallel::allReduce(high, parallel::Reduce::Max);
+  allReduce(low, Reduce::Min);
+  allReduce(high, Reduce::Max);
   part.whole.cellBounds =
       box3i(vec3i(int(low[1]), int(low[2]), int(low[3])), vec3i(int(high[0]), int(high[1]), int(high[2])));
   std::vector<range1f> ranges(fields);
@@ -95,7 +95,7 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
   for (int l = 0; l <= kMaxLevel; ++l)
     if (high[3 + fields + size_t(l)] > 0.0) part.whole.levels.push_back(l);
   part.whole.histogram.owned = part.box;
-  part.whole.histogram.sumOverParts = [](std::vector<double>& h) { parallel::allReduce(h, parallel::Reduce::Sum); };
+  part.whole.histogram.sumOverParts = [](std::vector<double>& h) { allReduce(h, Reduce::Sum); };
   return part;
 }
 
@@ -113,11 +113,11 @@ box3d agreedVisibleBounds(const Renderer& renderer, const DataPart& part) {
       clipped.lower.z <= clipped.upper.z)
     for (int a = 0; a < 3; ++a)
       low[size_t(a)] = clipped.lower[a], high[size_t(a)] = clipped.upper[a];
-  parallel::allReduce(low, parallel::Reduce::Min);
-  parallel::allReduce(high, parallel::Reduce::Max);
+  allReduce(low, Reduce::Min);
+  allReduce(high, Reduce::Max);
   for (int a = 0; a < 3; ++a)
     if (!(low[size_t(a)] <= high[size_t(a)])) return box3d();
   return box3d(vec3d(low[0], low[1], low[2]), vec3d(high[0], high[1], high[2]));
 }
 
-} // namespace exa::cli
+} // namespace exa::mpi

@@ -1,4 +1,5 @@
-// Processes of an MPI run (`mpirun -np N exabricks render|movie ...`), or one process. Built with
+// The MPI drivers of the command line (apps/exabricks/mpi, namespace exa::mpi): processes of an
+// MPI run (`mpirun -np N exabricks render|movie ...`), or one process. Built with
 // MPI only when EXABRICKS_MPI finds it; MPI starts only when the program was launched by an MPI
 // launcher, so a plain run never initialises it.
 #pragma once
@@ -8,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace exa::cli::parallel {
+namespace exa::mpi {
 
 struct Processes {
   int rank = 0, size = 1;
@@ -70,4 +71,19 @@ void barrier();
 /// Refuses to run a command that has no parallel mode under more than one process.
 void requireOneProcess(const char* command);
 
-} // namespace exa::cli::parallel
+/// Runs `work` on every process, a collective like agreeOrFail: when it fails on any process,
+/// every process stops (with its own error, or "another process could not WHAT").
+template <typename Work> void onEveryProcess(const std::string& what, Work&& work) {
+  std::string error;
+  try {
+    work();
+  } catch (const std::exception& e) {
+    error = e.what();
+  }
+  agreeOrFail(error, what);
+}
+
+/// This process's share of a list of frames: every size-th from the rank-th (all in one process).
+std::vector<int> shareOf(const std::vector<int>& frames);
+
+} // namespace exa::mpi

@@ -3,7 +3,7 @@
 // into it, and the dataset-wide values every process renders with are agreed by reductions.
 #pragma once
 
-#include "scene_options.h"
+#include "../scene_options.h"
 
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/partition.h"
@@ -14,16 +14,16 @@
 #include <string>
 #include <vector>
 
-namespace exa::cli {
+namespace exa::mpi {
 
 /// This process's part of a dataset.
 struct DataPart {
   KdPartition partition;
   int coarsestLevel = 0;
-  box3l box;           ///< this process's part, lattice (faces outside the data unbounded)
-  Model model;         ///< the cells whose supports reach into the part
-  DatasetInfo dataset; ///< the whole dataset's, agreed by every process
-  WholeData whole;     ///< likewise
+  box3l box;            ///< this process's part, lattice (faces outside the data unbounded)
+  Model model;          ///< the cells whose supports reach into the part
+  DatasetInfo dataset;  ///< the whole dataset's, agreed by every process
+  cli::WholeData whole; ///< likewise
 
   /// The part's box in world coordinates (the renderer's domain).
   box3d worldBox() const;
@@ -42,4 +42,4 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options);
 /// The union over the processes of what may be visible in each one's part (what a first view frames).
 box3d agreedVisibleBounds(const Renderer& renderer, const DataPart& part);
 
-} // namespace exa::cli
+} // namespace exa::mpi

@@ -1,0 +1,39 @@
+// What the parts of exabricks._core share: datasets and meshes as the module hands them to Python,
+// and the series binding (series.cpp) registered by the module.
+#pragma once
+
+#include "exabricks/amr/model.h"
+#include "exabricks/core/image.h"
+#include "exabricks/core/mesh.h"
+#include "exabricks/render/renderer.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+
+#include <memory>
+#include <string>
+
+namespace exa::pymod {
+
+/// A built model, shared by every renderer made from it (they keep it alive).
+struct Dataset {
+  std::shared_ptr<const Model> model;
+  DatasetInfo info; ///< computed once, shared by its renderers, defaults and warnings
+  std::string name;
+  double loadSeconds = 0;
+};
+
+/// A triangle mesh made once from numpy arrays or read from a file (`source`, which scene files
+/// record): scenes that keep it are not rebuilt.
+struct Mesh {
+  std::shared_ptr<const TriangleMesh> mesh;
+  std::string source;
+};
+
+/// An image as an (H, W, 4) float32 array of linear, premultiplied RGBA.
+pybind11::array_t<float> imageArray(const Image& image);
+
+/// Registers exabricks._core.Series.
+void bindSeries(pybind11::module_& m);
+
+} // namespace exa::pymod
