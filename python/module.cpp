@@ -335,10 +335,11 @@ public:
     return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
 
-  void save(const std::string& path) const {
+  void save(const std::string& path, int bits) const {
     Image img;
     buffer_.resolve(img);
-    writePng(path, img, scene_.keepAlpha, scene_.background);
+    const ImageFormat format = imageFormatFor(path, bits);
+    writeImage(path, img, format, scene_.keepAlpha, scene_.background);
   }
 
   py::dict stats() const {
@@ -481,7 +482,7 @@ PYBIND11_MODULE(_core, m) {
       .def("render", &PyRenderer::render, py::arg("frame_json"), py::arg("passes") = 0)
       .def("image", &PyRenderer::image)
       .def("png", &PyRenderer::png)
-      .def("save", &PyRenderer::save, py::arg("path"))
+      .def("save", &PyRenderer::save, py::arg("path"), py::arg("bits") = 8)
       .def("stats", &PyRenderer::stats)
       .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"))
       .def("cancel", &PyRenderer::cancel, "Cancels the render in flight (or the next one)")

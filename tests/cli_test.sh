@@ -37,6 +37,26 @@ assert j[\"samples\"] > 0'"
 check "render a model file with a debug view and a float image" "$exe" render s.model -o d.png --float d.pfm --size 32x32 --debug level
 check "scene file reproduces the image" bash -c "'$exe' render s.cells -o a.png --size 40x30 --colormap magma --azimuth 70 --spp 2 --write-scene scene.json && '$exe' render s.cells --scene scene.json -o b.png && cmp a.png b.png"
 check "scene file holds the options" grep -q magma scene.json
+# Publication output: 16-bit PNG and OpenEXR, read back by ffmpeg's own decoders: the EXR holds the
+# float image (its alpha equals the PFM's companion, its colour the PFM's where alpha is 1) and the
+# 16-bit PNG's alpha equals the EXR's within 16-bit quantisation.
+if command -v ffmpeg > /dev/null; then
+  check "render writes OpenEXR and 16-bit PNG that ffmpeg reads" bash -c "'$exe' -q render s.cells -o p.exr --alpha --size 40x30 && '$exe' -q render s.cells -o p16.png --bits 16 --alpha --size 40x30 && '$exe' -q render s.cells -o p8.png --alpha --size 40x30 && ffmpeg -v error -y -i p.exr -f rawvideo -pix_fmt gbrapf32le p_exr.raw && ffmpeg -v error -y -i p16.png -f rawvideo -pix_fmt rgba64le p16.raw && ffmpeg -v error -y -i p8.png -f rawvideo -pix_fmt rgba p8.raw && $py -c '
+import numpy as np
+g, b, r, a = np.fromfile(\"p_exr.raw\", \"<f4\").reshape(4, 30, 40)
+p16 = np.fromfile(\"p16.raw\", \"<u2\").reshape(30, 40, 4) / 65535.0
+p8 = np.fromfile(\"p8.raw\", \"u1\").reshape(30, 40, 4) / 255.0
+assert a.max() > 0.3, a.max()
+assert abs(p16[..., 3] - a).max() <= 0.51 / 65535, abs(p16[..., 3] - a).max()
+assert abs(p8[..., 3] - a).max() <= 0.51 / 255, abs(p8[..., 3] - a).max()
+srgb = lambda c: np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(np.maximum(c, 0), 1 / 2.4) - 0.055)
+shown = a > 0.05
+straight = np.clip(r[shown] / a[shown], 0, 1)
+assert abs(p16[..., 0][shown] - srgb(straight)).max() < 2e-4, abs(p16[..., 0][shown] - srgb(straight)).max()
+'"
+  fails_with "--bits other than 8 or 16" "8 or 16" "$exe" render s.cells -o x.png --bits 12
+  fails_with "--alpha with JPEG" "has no alpha channel" "$exe" render s.cells -o x.jpg --alpha
+fi
 printf '{"colormap": "plasma", "opacity": [[0, 0], [1, 0.5]]}' > tf.json
 check "render with a transfer function file" "$exe" render s.cells -o t.png --size 32x32 --tf tf.json
 fails_with "unknown colour map" "unknown colour map" "$exe" render s.cells -o x.png --colormap rainbow

@@ -1,9 +1,11 @@
 // Image files: sRGB transfer against its defining formula, PNG round trips through 8-bit
 // quantisation, exact PFM round trips and byte layout, and atomic writes.
+#include "exabricks/core/color.h"
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <bit>
 #include <cmath>
@@ -12,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <map>
 #include <random>
 
 using namespace exa;
@@ -286,4 +289,135 @@ TEST(Image, SrgbBytesWithoutPowEqualTheDirectConversion) {
   for (float c : {0.f, -0.f, 1.f, 2.f, std::numeric_limits<float>::infinity(), -1.f,
                   std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::denorm_min()})
     EXPECT_EQ(int(exa::srgbByte(c)), direct(c)) << c;
+}
+
+namespace {
+
+uint32_t big32(const unsigned char* p) {
+  return uint32_t(p[0]) << 24 | uint32_t(p[1]) << 16 | uint32_t(p[2]) << 8 | p[3];
+}
+
+/// The chunks of a PNG (type, data), their CRCs checked with zlib's.
+std::vector<std::pair<std::string, std::vector<unsigned char>>> pngChunks(const std::vector<unsigned char>& png) {
+  const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  EXPECT_EQ(std::memcmp(png.data(), signature, 8), 0);
+  std::vector<std::pair<std::string, std::vector<unsigned char>>> chunks;
+  for (size_t at = 8; at + 12 <= png.size();) {
+    const uint32_t length = big32(png.data() + at);
+    const std::string type(reinterpret_cast<const char*>(png.data() + at + 4), 4);
+    const unsigned char* data = png.data() + at + 8;
+    EXPECT_EQ(big32(data + length), uint32_t(crc32(crc32(0L, Z_NULL, 0), png.data() + at + 4, uInt(length + 4))))
+        << type;
+    chunks.emplace_back(type, std::vector<unsigned char>(data, data + length));
+    at += 12 + length;
+  }
+  return chunks;
+}
+
+} // namespace
+
+TEST(Image, Png16HoldsSixteenBitSrgbWithStraightAlpha) {
+  const Image img = gradientImage();
+  for (bool alpha : {true, false}) {
+    const vec3f background(0.2f, 0.4f, 0.6f);
+    const auto chunks = pngChunks(encodePng16(img, alpha, background));
+    ASSERT_EQ(chunks.size(), 3u);
+    ASSERT_EQ(chunks[0].first, "IHDR");
+    const std::vector<unsigned char>& h = chunks[0].second;
+    EXPECT_EQ(big32(h.data()), uint32_t(img.width));
+    EXPECT_EQ(big32(h.data() + 4), uint32_t(img.height));
+    EXPECT_EQ(h[8], 16);            // bit depth
+    EXPECT_EQ(h[9], alpha ? 6 : 2); // RGBA or RGB
+    EXPECT_EQ(chunks[2].first, "IEND");
+    const int channels = alpha ? 4 : 3;
+    const size_t rowBytes = 1 + size_t(img.width) * size_t(channels) * 2;
+    std::vector<unsigned char> rows(rowBytes * size_t(img.height));
+    uLongf size = uLongf(rows.size());
+    ASSERT_EQ(uncompress(rows.data(), &size, chunks[1].second.data(), uLong(chunks[1].second.size())), Z_OK);
+    ASSERT_EQ(size, rows.size());
+    for (int y = 0; y < img.height; ++y) {
+      const unsigned char* row = rows.data() + size_t(y) * rowBytes;
+      EXPECT_EQ(row[0], 0); // no filter
+      for (int x = 0; x < img.width; ++x) {
+        const vec4f p = img.at(x, y);
+        const float inv = p.w > 0.f ? 1.f / p.w : 0.f;
+        const vec3f c =
+            alpha ? vec3f(p.x * inv, p.y * inv, p.z * inv) : vec3f(p.x, p.y, p.z) + background * (1.f - p.w);
+        const float expected[4] = {linearToSrgb(c.x), linearToSrgb(c.y), linearToSrgb(c.z), p.w};
+        for (int k = 0; k < channels; ++k) {
+          const unsigned char* s = row + 1 + (size_t(x) * size_t(channels) + size_t(k)) * 2;
+          const float got = float(uint32_t(s[0]) << 8 | s[1]) / 65535.f;
+          EXPECT_NEAR(got, std::clamp(expected[k], 0.f, 1.f), 0.5f / 65535.f + 1e-6f) << x << "," << y << " " << k;
+        }
+      }
+    }
+  }
+}
+
+TEST(Image, ExrHoldsTheLinearPremultipliedImageExactly) {
+  Image img = gradientImage();
+  img.at(3, 2) = {2.5f, 1e-8f, 0.f, 0.25f}; // beyond 1 and tiny: kept as they are
+  const std::vector<unsigned char> exr = encodeExr(img);
+  auto i32 = [&](size_t at) {
+    int32_t v;
+    std::memcpy(&v, exr.data() + at, 4);
+    return v;
+  };
+  ASSERT_GT(exr.size(), 8u);
+  EXPECT_EQ(exr[0], 0x76);
+  EXPECT_EQ(exr[1], 0x2f);
+  EXPECT_EQ(exr[2], 0x31);
+  EXPECT_EQ(exr[3], 0x01);
+  EXPECT_EQ(i32(4), 2); // version 2, single-part scan lines
+  // The header's attributes by name, each a type and a size.
+  std::map<std::string, std::pair<std::string, std::vector<unsigned char>>> attributes;
+  size_t at = 8;
+  while (exr.at(at) != 0) {
+    const std::string name(reinterpret_cast<const char*>(exr.data() + at));
+    at += name.size() + 1;
+    const std::string type(reinterpret_cast<const char*>(exr.data() + at));
+    at += type.size() + 1;
+    const int32_t size = i32(at);
+    at += 4;
+    attributes[name] = {type, std::vector<unsigned char>(exr.begin() + long(at), exr.begin() + long(at) + size)};
+    at += size_t(size);
+  }
+  ++at;
+  for (const char* required : {"channels", "compression", "dataWindow", "displayWindow", "lineOrder",
+                               "pixelAspectRatio", "screenWindowCenter", "screenWindowWidth"})
+    EXPECT_EQ(attributes.count(required), 1u) << required;
+  EXPECT_EQ(attributes["compression"].second, std::vector<unsigned char>{0});
+  EXPECT_EQ(attributes["channels"].first, "chlist");
+  EXPECT_EQ(attributes["channels"].second.size(), 4u * 18u + 1u); // A, B, G, R: name, type, flags, sampling
+  // The offset table, then one block per scan line: y, size, A, B, G and R of every pixel.
+  const size_t w = size_t(img.width);
+  for (int y = 0; y < img.height; ++y) {
+    uint64_t offset;
+    std::memcpy(&offset, exr.data() + at + 8 * size_t(y), 8);
+    ASSERT_EQ(i32(offset), y);
+    ASSERT_EQ(i32(offset + 4), int32_t(16 * w));
+    for (size_t x = 0; x < w; ++x) {
+      const vec4f p = img.at(int(x), y);
+      const float expected[4] = {p.w, p.z, p.y, p.x};
+      for (size_t c = 0; c < 4; ++c) {
+        float v;
+        std::memcpy(&v, exr.data() + offset + 8 + 4 * (c * w + x), 4);
+        EXPECT_EQ(std::bit_cast<uint32_t>(v), std::bit_cast<uint32_t>(expected[c])) << x << "," << y;
+      }
+    }
+  }
+  EXPECT_EQ(exr.size(), at + 8 * size_t(img.height) + size_t(img.height) * (8 + 16 * w));
+}
+
+TEST(Image, FormatsFollowTheExtension) {
+  EXPECT_EQ(imageFormatFor("a.png"), ImageFormat::Png);
+  EXPECT_EQ(imageFormatFor("a.PNG", 16), ImageFormat::Png16);
+  EXPECT_EQ(imageFormatFor("a.jpeg"), ImageFormat::Jpeg);
+  EXPECT_EQ(imageFormatFor("a.exr"), ImageFormat::Exr);
+  EXPECT_EQ(imageFormatFor("a.pfm"), ImageFormat::Pfm);
+  EXPECT_EQ(imageFormatFor("/dev/stdout"), ImageFormat::Png);
+  EXPECT_NE(errorOf([] { imageFormatFor("a.gif"); }).find("a.gif: unknown image format '.gif'"), std::string::npos);
+  EXPECT_NE(errorOf([] { imageFormatFor("a.png", 12); }).find("8 or 16"), std::string::npos);
+  EXPECT_TRUE(formatKeepsAlpha(ImageFormat::Exr));
+  EXPECT_FALSE(formatKeepsAlpha(ImageFormat::Jpeg));
 }

@@ -29,6 +29,7 @@ struct RenderCmdOptions {
   MarchFlags march;
   std::string output;
   std::string floatOutput;
+  int bits = 8;
   bool stats = false;
   bool json = false;
   int frames = 1;
@@ -36,21 +37,11 @@ struct RenderCmdOptions {
   std::string distribute = "image";
 };
 
-/// The image format the output's extension names: PNG (also without an extension, as for a
-/// device or a pipe), or JPEG for .jpg / .jpeg.
-bool isJpeg(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  for (char& c : ext)
-    c = char(std::tolower(static_cast<unsigned char>(c)));
-  if (ext == ".png" || ext.empty()) return false;
-  if (ext == ".jpg" || ext == ".jpeg") return true;
-  failUsage("-o ", path, ": unknown image format '", ext, "' (write .png, .jpg or .jpeg)");
-}
-
 void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
-  const bool jpeg = isJpeg(o.output);
-  if (jpeg && cmd.count("--alpha")) failUsage("--alpha needs a PNG output (JPEG has no alpha channel)");
+  const ImageFormat format = imageFormatFor(o.output, o.bits);
+  if (!formatKeepsAlpha(format) && cmd.count("--alpha"))
+    failUsage("--alpha needs a PNG or OpenEXR output (", o.output, " has no alpha channel)");
   SceneDocument doc = sceneFromOptions(o.scene, cmd);
   Scene& scene = doc.scene;
   Frame& frame = doc.frame;
@@ -135,10 +126,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (imageIsEmpty(image))
     logWarning(strCat("the image is empty: nothing in view is visible (", renderer.visibleRegions(), " of ",
                       model.regions.regions.size(), " regions may be; check --range, --opacity and the camera)"));
-  if (jpeg)
-    writeJpeg(o.output, image, scene.background);
-  else
-    writePng(o.output, image, scene.keepAlpha, scene.background);
+  writeImage(o.output, image, format, scene.keepAlpha, scene.background);
   if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, scene.background);
   logInfo(strCat("wrote ", o.output));
 
@@ -209,7 +197,10 @@ void addRender(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand("render", "Volume-render a field to a PNG or JPEG image");
   o->scene.add(*cmd);
   o->march.add(*cmd);
-  cmd->add_option("-o,--output", o->output, "Image to write: .png, or .jpg / .jpeg")->required();
+  cmd->add_option("-o,--output", o->output,
+                  "Image to write: .png, .jpg / .jpeg, .exr (linear, premultiplied alpha, 32-bit float) or .pfm")
+      ->required();
+  cmd->add_option("--bits", o->bits, "Bits per channel of a PNG output: 8 or 16")->capture_default_str();
   cmd->add_option("--float", o->floatOutput, "Also write the float image as PFM");
   cmd->add_flag("--stats", o->stats, "Time the frame after a warm-up and print statistics");
   cmd->add_option("--frames", o->frames, "Frames to time with --stats (median)")->capture_default_str();

@@ -278,6 +278,12 @@ def from_yt(ds, fields=None, max_brick_width=32):
     return from_grids(grids, names, bbox=bbox, max_brick_width=max_brick_width, units=units)
 
 
+def _file_stem(text):
+    """A name fit for a file: letters, digits, '.', '-' and '_' kept, the rest '_'."""
+    stem = "".join(c if c.isalnum() or c in "._-" else "_" for c in str(text)).strip("._")
+    return stem or "picture"
+
+
 def _srgb_encode(linear):
     """sRGB numbers of linear intensities in [0, 1]."""
     c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
@@ -747,10 +753,19 @@ class Scene:
         """Statistics of the passes in the buffer: seconds, rays, samples, regions visited, ..."""
         return dict(self._renderer.stats())
 
-    def save(self, path, width=None, height=None, spp=None):
-        """Renders and writes an 8-bit sRGB PNG (over the background unless `alpha`)."""
+    def save(self, path=None, width=None, height=None, spp=None, bits=8):
+        """Renders and writes the picture; returns its path. The format follows the extension:
+        .png (sRGB, `bits` 8 or 16 per channel, with alpha when `alpha` is set, else over the
+        background), .jpg, .exr (linear, premultiplied alpha, 32-bit float: for compositing) or
+        .pfm (linear RGB over the background). Without a path, DATASET-FIELD-WIDTHxHEIGHT.png in
+        the current folder. Publication sizes work as any other: save("f.png", 4096, 4096, 64)."""
         self.render(width, height, spp)
-        self._renderer.save(str(path))
+        if path is None:
+            w, h = self.width, self.height
+            name = os.path.splitext(os.path.basename(str(self.dataset.name).rstrip("/")))[0]
+            path = "%s-%s-%dx%d.png" % (_file_stem(name), _file_stem(self.field or "volume"), w, h)
+        self._renderer.save(str(path), int(bits))
+        return str(path)
 
     def png(self, width=None, height=None, spp=None):
         """Renders and returns the PNG bytes."""

@@ -171,6 +171,26 @@ def test_render_and_save_equal_the_command_line(cli, tmp_path):
     assert s._repr_png_()[:8] == b"\x89PNG\r\n\x1a\n"
 
 
+def test_publication_output_equals_the_command_line(cli, tmp_path, monkeypatch):
+    """16-bit PNG and OpenEXR from Python are the command line's files byte for byte, and a save
+    without a path is named after the dataset, the field and the size."""
+    subprocess.run([cli, "generate", "-s", "blobs", "-n", "8000", "-o", str(tmp_path / "b.cells")], check=True)
+    for name, extra in (("p16.png", ["--bits", "16", "--alpha"]), ("p.exr", ["--alpha"])):
+        subprocess.run([cli, "render", str(tmp_path / "b.cells"), "-o", str(tmp_path / ("cli-" + name)),
+                        "--size", "64x48", "--spp", "2", "--write-scene", str(tmp_path / "s.json")] + extra,
+                       check=True)
+        s = eb.Scene.from_json(eb.load(tmp_path / "b.cells"), (tmp_path / "s.json").read_text())
+        written = s.save(tmp_path / name, bits=16 if name.endswith(".png") else 8)
+        assert (tmp_path / name).read_bytes() == (tmp_path / ("cli-" + name)).read_bytes(), name
+        assert written == str(tmp_path / name)
+    monkeypatch.chdir(tmp_path)
+    s = eb.Scene(eb.load(tmp_path / "b.cells"), width=32, height=24)
+    assert s.save() == "b-scalar-32x24.png"
+    assert (tmp_path / "b-scalar-32x24.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(Exception, match="unknown image format"):
+        s.save(tmp_path / "x.gif")
+
+
 def test_progressive_passes_equal_one_render():
     ds = eb.load()
     s = eb.Scene(ds, width=40, height=30)

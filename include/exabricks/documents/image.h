@@ -1,5 +1,6 @@
-// Image files: images (core/image.h) written as 8-bit sRGB PNG (with alpha, or composited over a
-// background colour) or as float PFM, and read back.
+// Image files: images (core/image.h) written as 8-bit or 16-bit sRGB PNG (with alpha, or
+// composited over a background colour), JPEG, float PFM or OpenEXR (linear, premultiplied alpha),
+// and the 8-bit PNG and PFM read back.
 #pragma once
 
 #include "exabricks/core/image.h"
@@ -27,6 +28,31 @@ void writeJpeg(const std::string& path, const Image& image, const vec3f& backgro
 
 /// Writes the RGB channels (composited over `background`) as a little-endian float PFM, atomically.
 void writePfm(const std::string& path, const Image& image, const vec3f& background = vec3f(0.f));
+
+/// A 16-bit sRGB PNG in memory: RGBA with straight alpha (keepAlpha), else RGB composited over
+/// `background` (linear RGB).
+std::vector<unsigned char> encodePng16(const Image& image, bool keepAlpha, const vec3f& background = vec3f(0.f));
+/// Writes a 16-bit sRGB PNG atomically (encodePng16).
+void writePng16(const std::string& path, const Image& image, bool keepAlpha, const vec3f& background = vec3f(0.f));
+
+/// An OpenEXR file in memory: the image as it is (linear RGB, premultiplied by alpha, for
+/// compositing), four 32-bit float channels A, B, G, R in uncompressed scan lines.
+std::vector<unsigned char> encodeExr(const Image& image);
+/// Writes an OpenEXR file atomically (encodeExr).
+void writeExr(const std::string& path, const Image& image);
+
+/// The image file formats a picture is saved in.
+enum class ImageFormat { Png, Png16, Jpeg, Exr, Pfm };
+/// The format of an output path by its extension (.png: 8 or 16 bits as `pngBits` says, .jpg /
+/// .jpeg, .exr, .pfm; no extension: PNG); throws exa::UsageError naming the path otherwise, or
+/// when `pngBits` is neither 8 nor 16.
+ImageFormat imageFormatFor(const std::string& path, int pngBits = 8);
+/// Whether the format keeps alpha (PNG when asked, OpenEXR always).
+bool formatKeepsAlpha(ImageFormat format);
+/// Writes the image in the format: PNG with alpha (keepAlpha) or over `background`; JPEG and PFM
+/// over `background`; OpenEXR as it is (premultiplied alpha).
+void writeImage(const std::string& path, const Image& image, ImageFormat format, bool keepAlpha,
+                const vec3f& background = vec3f(0.f));
 
 /// Reads an 8-bit PNG back to linear premultiplied pixels (for regression tests).
 Image readPng(const std::string& path);
