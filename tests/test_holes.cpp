@@ -125,6 +125,8 @@ TEST_F(HolesTest, HolesEqualABruteForceSumOverTheRemainingCells) {
     double value = 0;
     const bool ok = sampleField(m.view(m.fieldIndex("scalar")), p, value);
     EXPECT_EQ(ok, ref.valid) << "hole " << i;
-    if (ok && ref.valid) EXPECT_NEAR(value, ref.value, 1e-6 * std::max(1.0, std::abs(ref.value))) << "hole " << i;
+    if (ok && ref.valid) {
+      EXPECT_NEAR(value, ref.value, 1e-6 * std::max(1.0, std::abs(ref.value))) << "hole " << i;
+    }
   }
 }
