@@ -13,6 +13,7 @@
 #include "exabricks/io/load.h"
 #include "exabricks/io/model_info.h"
 #include "exabricks/render/defaults.h"
+#include "exabricks/render/legends.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene_vocabulary.h"
 
@@ -55,9 +56,10 @@ std::shared_ptr<Dataset> makeDataset(Model&& m, std::string name, double seconds
 }
 
 std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::string>& fields, int maxBrickWidth,
-                              const std::vector<int>& box) {
+                              const std::vector<int>& box, bool nanAsHoles) {
   LoadOptions o;
   o.fields = fields;
+  if (nanAsHoles) o.nonFinite = NonFinite::Holes;
   o.build.bricks.maxBrickWidth = maxBrickWidth;
   if (!box.empty()) {
     if (box.size() != 6) fail("box must hold six integers x0, y0, z0, x1, y1, z1 (finest lattice units)");
@@ -270,6 +272,7 @@ public:
       frameKey_ = key;
       stale_ = false;
     }
+    frame_ = f;
     const int target = passes > 0 ? passes : int(buffer_.passes()) + 1;
     std::atomic<bool> cancel{false}, done{false};
     std::exception_ptr error;
@@ -322,22 +325,26 @@ public:
   /// over at the next render.
   void cancel() { cancelRequested_ = true; }
 
-  py::array_t<float> image() const {
+  /// The accumulated image with the legends the scene asks for.
+  Image resolved() const {
     Image img;
     buffer_.resolve(img);
-    return pymod::imageArray(img);
+    LegendText text;
+    text.dataset = legendDatasetLabel(dataset_->name);
+    drawLegends(scene_, frame_, *dataset_->model, dataset_->info, text, img);
+    return img;
   }
 
+  py::array_t<float> image() const { return pymod::imageArray(resolved()); }
+
   py::bytes png() const {
-    Image img;
-    buffer_.resolve(img);
+    const Image img = resolved();
     const std::vector<unsigned char> bytes = encodePng(img, scene_.keepAlpha, scene_.background);
     return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
 
   void save(const std::string& path, int bits) const {
-    Image img;
-    buffer_.resolve(img);
+    const Image img = resolved();
     const ImageFormat format = imageFormatFor(path, bits);
     writeImage(path, img, format, scene_.keepAlpha, scene_.background);
   }
@@ -392,6 +399,7 @@ private:
   Renderer renderer_;
   FrameBuffer buffer_;
   Scene scene_;
+  Frame frame_;
   std::string frameKey_, sceneKey_;
   bool stale_ = true;
   std::atomic<bool> cancelRequested_{false};
@@ -489,7 +497,7 @@ PYBIND11_MODULE(_core, m) {
       .def("visible_bounds", &PyRenderer::visibleBounds);
 
   m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(), py::arg("max_brick_width") = 32,
-        py::arg("box") = std::vector<int>());
+        py::arg("box") = std::vector<int>(), py::arg("nan_as_holes") = false);
   m.def("from_cells", &fromCells, py::arg("corners"), py::arg("levels"), py::arg("fields"), py::arg("origin"),
         py::arg("spacing"), py::arg("max_brick_width") = 32, py::arg("units") = std::vector<std::string>());
   m.def("from_grids", &fromGrids, py::arg("grids"), py::arg("names"), py::arg("origin"),

@@ -148,6 +148,22 @@ check "a warning for an empty image" bash -c "'$exe' render s.cells -o w.png --s
 fails_with "nothing to draw" "--no-volume leaves nothing to draw" "$exe" render s.cells -o x.png --no-volume
 check "the default field is named on stderr" bash -c "'$exe' render s.cells -o w.png --size 16x16 2>&1 >/dev/null | grep -q \"field 'scalar' (the default\""
 check "a colour bar and annotations are drawn" bash -c "'$exe' render s.cells -o plain.png --size 160x120 && '$exe' render s.cells -o bar.png --size 160x120 --colorbar --annotate && ! cmp -s plain.png bar.png"
+# The legends as scene keys: the same bytes as the flags that set them, with or without the input named.
+"$exe" -q render s.cells -o flags.png --size 160x120 --colorbar --annotate --write-scene flags.json
+"$exe" -q render s.cells -o nokeys.png --size 160x120 --write-scene nokeys.json
+$py -c 'import json; d = json.load(open("nokeys.json")); d["legends"] = {"color_bar": True, "annotation": True}; json.dump(d, open("keys.json", "w"))'
+check "render --scene with the legend keys equals --colorbar --annotate" bash -c "'$exe' -q render s.cells --scene keys.json -o keys.png && cmp flags.png keys.png && '$exe' -q render --scene keys.json -o keys2.png && cmp flags.png keys2.png"
+check "--colorbar and --annotate are recorded as scene keys" $py -c 'import json; assert json.load(open("flags.json"))["legends"] == {"color_bar": True, "annotation": True, "level_legend": False}'
+"$exe" -q render --scene keys.json -o k3.png --write-scene again.json
+check "a scene file round-trips the legend keys" $py -c 'import json; assert json.load(open("again.json"))["legends"] == {"color_bar": True, "annotation": True, "level_legend": False}'
+check "without legend keys the image has none" bash -c "'$exe' -q render --scene nokeys.json -o nokeys2.png && cmp nokeys.png nokeys2.png && ! cmp -s nokeys.png flags.png"
+# NaN written into a .scalars file: refused by default (the record named), holes with --nan-as-holes.
+"$exe" info s.cells --json > s_info.json; cp s.cells nan.cells; cp s.scalars nan.scalars; cp s.radius.scalars nan.radius.scalars
+$py -c 'import numpy as np; v = np.fromfile("nan.scalars", dtype=np.float32); v[[7, 70]] = np.nan; v.tofile("nan.scalars")'
+fails_with "NaN values are refused by default, naming the record" "record 7: value nan of field 'scalar' is not finite" "$exe" info nan.cells
+check "--nan-as-holes counts the holes on stderr" bash -c "'$exe' info nan.cells --nan-as-holes 2>&1 >/dev/null | grep -q \"nan.cells: 2 cells with NaN or infinite values in 'scalar' treated as holes\""
+check "--nan-as-holes reports the holes in info --json" bash -c "'$exe' info nan.cells --nan-as-holes --json 2>/dev/null | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"non_finite_holes\"] == {\"fields\": {\"radius\": 0, \"scalar\": 2}, \"cells\": 2}, j[\"non_finite_holes\"]; assert j[\"cells\"] == json.load(open(\"s_info.json\"))[\"cells\"] - 2'"
+check "render --nan-as-holes renders" "$exe" -q render nan.cells --nan-as-holes -o nan.png --size 48x48
 check "info reports the simulation's time and cycle (null when unknown)" bash -c "'$exe' info s.cells --json | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"simulation\"] == {\"time\": None, \"cycle\": None}'"
 # An interrupted convert leaves no temporary file and either every file of the dataset or none.
 # Interrupts at several moments, so that some land while the files are renamed into place.

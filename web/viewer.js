@@ -1110,6 +1110,39 @@ function fillChoices() {
   }
 }
 
+/// The document's value of a setting ("section.leaf" or "leaf"), and setting it.
+function settingValue(key) {
+  const path = key.split('.');
+  let v = viewer.doc;
+  for (const p of path) v = v && typeof v === 'object' ? v[p] : undefined;
+  return v;
+}
+
+function setSettingValue(key, value) {
+  const path = key.split('.');
+  let o = viewer.doc;
+  for (const p of path.slice(0, -1)) o = o[p] && typeof o[p] === 'object' ? o[p] : (o[p] = {});
+  o[path[path.length - 1]] = value;
+}
+
+/// Checkboxes bound to a boolean setting (data-setting="KEY", such as the legends): shown from
+/// the document, and a change sets it and renders.
+function syncSettingBoxes() {
+  for (const box of document.querySelectorAll('input[type=checkbox][data-setting]'))
+    box.checked = !!settingValue(box.dataset.setting);
+}
+
+function setupSettingBoxes() {
+  for (const box of document.querySelectorAll('input[type=checkbox][data-setting]')) {
+    const setting = viewer.vocabulary.find((s) => s.key === box.dataset.setting);
+    if (setting) box.title = box.title ? `${setting.help} (${box.title})` : setting.help;
+    box.addEventListener('change', () => {
+      setSettingValue(box.dataset.setting, box.checked);
+      requestRender(false);
+    });
+  }
+}
+
 /// Takes a whole scene document (from the server's own JSON writer) as the one being edited.
 function adoptDocument(doc, hasCamera = true) {
   const camera = viewer.doc ? viewer.doc.camera : null;
@@ -1118,6 +1151,7 @@ function adoptDocument(doc, hasCamera = true) {
   viewer.sceneSize = [doc.frame.width, doc.frame.height];
   if (!Array.isArray(doc.layers) || doc.layers.length === 0) doc.layers = [{ field: '' }];
   syncControls();
+  syncSettingBoxes();
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -1145,6 +1179,7 @@ async function start() {
   setupCameraControls();
   setupEditor();
   setupControls();
+  setupSettingBoxes();
   setupRangeBoxes();
   $('banner-close').addEventListener('click', () => showMessage(''));
   readStream();

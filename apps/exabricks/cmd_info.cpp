@@ -110,7 +110,9 @@ void run(const InfoOptions& o) {
   }
   if (mpi::processes().size > 1) return runParts(o);
   Timer total;
-  const Model model = loadModel(o.in.input, o.in.loadOptions(true));
+  LoadOptions lo = o.in.loadOptions(true);
+  lo.report = std::make_shared<LoadReport>();
+  const Model model = loadModel(o.in.input, lo);
   const double loadSeconds = total.seconds();
   const ModelSummary s = summarize(model);
   const box3i lattice = model.cellBounds();
@@ -119,7 +121,15 @@ void run(const InfoOptions& o) {
   const double perCell = s.cells ? 1.0 / double(s.cells) : 0.0;
 
   if (o.json) {
-    std::cout << modelInfoJson(model, o.in.name(), loadSeconds) << "\n";
+    nlohmann::json j = nlohmann::json::parse(modelInfoJson(model, o.in.name(), loadSeconds));
+    if (lo.nonFinite == NonFinite::Holes) {
+      // Cells with NaN or infinite values per field, made holes (--nan-as-holes).
+      nlohmann::json counts = nlohmann::json::object();
+      for (const auto& [field, cells] : lo.report->nonFinite)
+        counts[field] = cells;
+      j["non_finite_holes"] = {{"fields", counts}, {"cells", lo.report->holes}};
+    }
+    std::cout << j.dump(2) << "\n";
     return;
   }
 

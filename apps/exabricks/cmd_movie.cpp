@@ -225,8 +225,7 @@ void planFrameShare(const MovieCmdOptions& o, MoviePlan& p) {
                                    {"frames", p.frames.frames},
                                    {"frames_per_step", o.framesPerStep},
                                    {"orbit", o.orbit},
-                                   {"fly_in", o.flyIn},
-                                   {"overlays", {p.ro.colorbar, p.ro.annotate}}};
+                                   {"fly_in", o.flyIn}};
   const std::string manifestPath = (fs::path(p.framesDir) / "movie.json").string();
   bool sameMovie = false;
   if (std::ifstream in(manifestPath); in) {
@@ -249,18 +248,16 @@ void planFrameShare(const MovieCmdOptions& o, MoviePlan& p) {
 }
 
 /// Render: this process's frames through the series renderer (the next step loading while one
-/// renders), each with its overlays written as a PNG, with a progress line. A process that fails
+/// renders), each with its legends written as a PNG, with a progress line. A process that fails
 /// stops all of them. Returns the frames rendered.
 int renderMovie(const MoviePlan& p, SeriesRenderer& series) {
   const bool showProgress = logLevel() >= LogLevel::Warning;
   const bool tty = isatty(STDERR_FILENO);
-  RenderOptions overlays = p.ro; // --annotate names each frame's own step
   int done = 0;
   Timer loop;
   auto write = [&](int i, const SeriesStep& step, const Scene& scene, const Frame& frame, Image& image) {
-    overlays.in.input = p.paths[size_t(step.index)];
-    drawOverlays(overlays, scene, frame, *step.model, step.info, step.model->requireField(scene.layers[0].field),
-                 image);
+    // The annotation names each frame's own step.
+    drawLegends(scene, frame, *step.model, step.info, legendText(p.paths[size_t(step.index)]), image);
     writePng(framePath(p.framesDir, i), image, scene.keepAlpha, scene.background);
     ++done;
     if (!showProgress) return;

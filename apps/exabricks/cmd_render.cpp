@@ -67,7 +67,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   const bool root = mpi::processes().root();
   const double loadSeconds = loadTimer.seconds();
   const DatasetInfo dataset = part ? part->dataset : DatasetInfo::of(model);
-  const int field = applyDataDefaults(o.scene, cmd, scene, model, dataset, whole);
+  applyDataDefaults(o.scene, cmd, scene, model, dataset, whole);
 
   Renderer renderer(model, dataset);
   renderer.setOptions(o.march.options());
@@ -122,7 +122,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   }
   if (!root) return; // the first process writes the image and the statistics
   Image image = buffer.resolve();
-  drawOverlays(o.scene, scene, frame, model, dataset, field, image, whole);
+  drawLegends(scene, frame, model, dataset, legendText(doc.input, whole), image);
   if (imageIsEmpty(image))
     logWarning(strCat("the image is empty: nothing in view is visible (", renderer.visibleRegions(), " of ",
                       model.regions.regions.size(), " regions may be; check --range, --opacity and the camera)"));

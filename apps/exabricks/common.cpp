@@ -38,6 +38,9 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
       ->check(CLI::NonNegativeNumber);
   cmd.add_option("--raw-max-level", rawMaxLevel, "Raw volume: coarsest merged cells are 2^L voxels wide")
       ->check(CLI::Range(0, 28));
+  cmd.add_flag("--nan-as-holes", nanAsHoles,
+               "Cells with a NaN or infinite value in any loaded field become holes (dropped from every field; "
+               "NAME.cells inputs) instead of an error");
 }
 
 LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
@@ -46,6 +49,7 @@ LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
   o.build.bricks.maxBrickWidth = maxBrickWidth;
   o.build.regions.segmentCost = segmentCost;
   o.partCells = partCells;
+  if (nanAsHoles) o.nonFinite = NonFinite::Holes;
   if (!rawDims.empty()) {
     long long x = 0, y = 0, z = 0;
     char extra = 0;

@@ -23,6 +23,7 @@ struct InputOptions {
   std::string rawType;                    ///< raw volumes: uint8, uint16, float32 or float64
   double rawThreshold = 0.0;              ///< raw volumes: largest value spread of a merged cell
   int rawMaxLevel = 4;                    ///< raw volumes: coarsest merged level
+  bool nanAsHoles = false;                ///< NaN and infinite values make their cells holes
 
   void add(CLI::App& cmd, bool fieldOption = true);
   LoadOptions loadOptions(bool onlySelectedField) const;

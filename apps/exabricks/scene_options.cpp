@@ -123,8 +123,9 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--range", range, "Value range LOW,HIGH mapped by the transfer function")->delimiter(',');
   cmd.add_flag("--log", logScale, "Map values logarithmically (every layer)");
   cmd.add_flag("--linear", linear, "Map values linearly even where the data spans many decades");
-  cmd.add_flag("--colorbar", colorbar, "Draw a labelled colour bar of the first layer");
-  cmd.add_flag("--annotate", annotate, "Write the dataset, field and simulation time, and outline the domain");
+  cmd.add_flag("--colorbar", colorbar, "Draw a labelled colour bar of the first layer (scene key legends.color_bar)");
+  cmd.add_flag("--annotate", annotate,
+               "Write the dataset, field and simulation time, and outline the domain (scene key legends.annotation)");
   cmd.add_flag("--frame-all", frameAll, "Default view: frame the whole data, not only its visible part");
   cmd.add_option("--position", position, "Camera position x,y,z (world)")->delimiter(',');
   cmd.add_option("--look-at", lookAt, "Camera target x,y,z (world)")->delimiter(',');
@@ -234,7 +235,12 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   if (apply("--reconstruction")) in.reconstruction = pick<Reconstruction>("--reconstruction", o.reconstruction);
   if (apply("--no-skip")) in.spaceSkipping = !o.noSkip;
   if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
-  if (apply("--debug")) s.debug = pick<DebugView>("--debug", o.debug);
+  if (apply("--debug")) {
+    s.debug = pick<DebugView>("--debug", o.debug);
+    if (s.debug == DebugView::Level) s.legends.levelLegend = true; // the command line's level view has its legend
+  }
+  if (apply("--colorbar")) s.legends.colorBar = o.colorbar;
+  if (apply("--annotate")) s.legends.annotation = o.annotate;
   if (apply("--light")) {
     s.light.headlight = o.light == "headlight";
     if (!s.light.headlight) {
@@ -385,47 +391,16 @@ SceneDocument withAbsolutePaths(SceneDocument doc) {
   return doc;
 }
 
-std::string datasetLabel(const std::string& input) {
-  if (input.empty()) return kDefaultDatasetName;
-  std::filesystem::path p = std::filesystem::path(input).lexically_normal();
-  if (p.filename().empty()) p = p.parent_path(); // a folder written with a trailing slash
-  const std::string name = p.filename().string();
-  return name.empty() || name == "." || name == ".." ? input : name;
-}
+std::string datasetLabel(const std::string& input) { return legendDatasetLabel(input); }
 
-void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,
-                  const DatasetInfo& dataset, int field, Image& image, const WholeData* whole) {
-  const vec3f bg = scene.background;
-  const float luminance = 0.2126f * bg.x + 0.7152f * bg.y + 0.0722f * bg.z;
-  const vec3f ink = luminance > 0.3f ? vec3f(0.f) : vec3f(1.f);
-  const std::string name = model.fieldNames[size_t(field)];
-  if (scene.debug == DebugView::Level) {
-    std::vector<int> levels;
-    if (whole)
-      levels = whole->levels;
-    else
-      for (const ModelSummary::Level& l : summarize(model).levels)
-        levels.push_back(l.level);
-    drawLevelLegend(image, levels, ink);
+LegendText legendText(const std::string& input, const WholeData* whole) {
+  LegendText t;
+  t.dataset = datasetLabel(input);
+  if (whole) {
+    t.levels = whole->levels;
+    t.cellBounds = whole->cellBounds;
   }
-  if (o.colorbar && scene.debug == DebugView::None && scene.volume) {
-    TransferFunction tf = scene.layers.at(0).tf;
-    if (tf.valueRange.empty()) tf.valueRange = dataset.valueRanges[size_t(field)];
-    const std::string units = model.unitsOf(field);
-    drawColorBar(image, tf, units.empty() ? name : name + " [" + units + "]", ink);
-  }
-  if (o.annotate) {
-    const box3i cb = whole ? whole->cellBounds : model.cellBounds();
-    drawBoxOutline(image, frame.camera,
-                   box3d(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper))), ink * 0.6f);
-    std::vector<std::string> lines{datasetLabel(o.in.input), "field " + name};
-    const SimulationState& sim = model.simulation;
-    if (sim.hasTime() || sim.hasCycle())
-      lines.push_back(strCat(sim.hasTime() ? strCat("time ", sim.time) : std::string(),
-                             sim.hasTime() && sim.hasCycle() ? ", " : "",
-                             sim.hasCycle() ? strCat("cycle ", sim.cycle) : std::string()));
-    drawLines(image, lines, ink);
-  }
+  return t;
 }
 
 } // namespace exa::cli

@@ -6,6 +6,7 @@
 
 #include "exabricks/core/image.h"
 #include "exabricks/render/defaults.h"
+#include "exabricks/render/legends.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
 
@@ -112,9 +113,8 @@ SceneDocument withAbsolutePaths(SceneDocument doc);
 /// The dataset's name as pictures and pages show it: the last component of its path
 /// ("run/plt00100/" is "plt00100"), or the default dataset's description.
 std::string datasetLabel(const std::string& input);
-/// The colour bar, annotations and level legend the options ask for, drawn into the image in a
-/// colour that stands out against the background.
-void drawOverlays(const RenderOptions& o, const Scene& scene, const Frame& frame, const Model& model,
-                  const DatasetInfo& dataset, int field, Image& image, const WholeData* whole = nullptr);
+/// What the legends write of the dataset (its name), and the whole data's levels and domain
+/// where this process holds a part.
+LegendText legendText(const std::string& input, const WholeData* whole = nullptr);
 
 } // namespace exa::cli

@@ -117,12 +117,14 @@ class Dataset:
         return "<exabricks.Dataset %s: %d cells, fields %s>" % (self.name, self.cells, ", ".join(self.fields))
 
 
-def load(path=None, fields=None, max_brick_width=32, box=None):
+def load(path=None, fields=None, max_brick_width=32, box=None, nan_as_holes=False):
     """Reads any input the command line reads (model file, NAME.cells, AMReX, Chombo, FLASH, Enzo,
     VTK AMR, raw volume; the embedded default dataset when path is None) and builds it.
-    `box` (x0, y0, z0, x1, y1, z1, finest lattice units) keeps only the cells that overlap it."""
+    `box` (x0, y0, z0, x1, y1, z1, finest lattice units) keeps only the cells that overlap it.
+    `nan_as_holes`: cells with a NaN or infinite value in any loaded field become holes (dropped
+    from every field, counted on stderr) instead of an error (as `--nan-as-holes`)."""
     return Dataset(_core.load("" if path is None else str(path), list(fields or []), max_brick_width,
-                              list(box) if box is not None else []))
+                              list(box) if box is not None else [], bool(nan_as_holes)))
 
 
 def _units_list(units, names):

@@ -14,6 +14,7 @@
 
 #include "hdf5_file.h"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 
@@ -75,8 +76,8 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
        [](const std::string& p, const ReadRequest& r) { return readRaw(p, r.raw); }},
       {InputKind::Native, "exabricks cells", isNativeName, listNativeFields,
-       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields, r.box); }, nullptr,
-       nativeCensus},
+       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields, r.box, r.keepNonFinite); },
+       nullptr, nativeCensus},
       {InputKind::Grids, ".grids fixture", isGridsName, scalarOnly,
        [](const std::string& p, const ReadRequest&) { return readGrids(p); }},
   };
@@ -109,6 +110,42 @@ InputKind detectInput(const std::string& path) {
        " a VTK .vthb file or a NAME_NXxNYxNZ_TYPE.raw volume)");
 }
 
+namespace {
+
+/// With NonFinite::Holes: drops every cell with a NaN or infinite value in any field from all
+/// fields, says how many per field on stderr and adds them to the options' report.
+void makeNonFiniteHoles(CellSet& set, const std::string& source, const LoadOptions& options) {
+  if (options.nonFinite != NonFinite::Holes) return;
+  std::vector<uint8_t> bad(set.cells.size(), 0);
+  std::vector<uint64_t> perField(set.fields.size(), 0);
+  for (size_t f = 0; f < set.fields.size(); ++f) {
+    const std::vector<float>& v = set.fields[f].values;
+    for (size_t i = 0; i < v.size() && i < bad.size(); ++i)
+      if (!std::isfinite(v[i])) bad[i] = 1, ++perField[f];
+  }
+  const uint64_t holes = uint64_t(std::count(bad.begin(), bad.end(), uint8_t(1)));
+  if (options.report)
+    for (size_t f = 0; f < set.fields.size(); ++f) {
+      auto& counts = options.report->nonFinite;
+      auto it =
+          std::find_if(counts.begin(), counts.end(), [&](const auto& c) { return c.first == set.fields[f].name; });
+      if (it == counts.end()) it = counts.insert(counts.end(), {set.fields[f].name, 0});
+      it->second += perField[f];
+    }
+  if (options.report) options.report->holes += holes;
+  if (holes == 0) return;
+  for (size_t f = 0; f < set.fields.size(); ++f)
+    if (perField[f] > 0)
+      logWarning(strCat(source, ": ", perField[f], " cells with NaN or infinite values in '", set.fields[f].name,
+                        "' treated as holes"));
+  if (set.fields.size() > 1)
+    logNote(strCat(source, ": ", holes, " cells dropped from every field (a cell is a hole in all fields or none)"));
+  size_t i = 0;
+  keepCells(set, [&](const Cell&) { return bad[i++] == 0; });
+}
+
+} // namespace
+
 CellSet loadCells(const std::string& path, const LoadOptions& options) {
   CellSet set;
   const InputKind kind = detectInput(path);
@@ -120,6 +157,7 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     request.fields = options.fields;
     request.box = options.box;
     request.raw = options.raw;
+    request.keepNonFinite = options.nonFinite == NonFinite::Holes;
     const FormatReader* reader = findReader(path);
     set = reader->read(path, request);
     assignConventionalUnits(reader->kind, set);
@@ -127,6 +165,7 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   selectFields(set, options.fields, source);
   if (!options.box.empty()) cropCells(set, options.box);
+  makeNonFiniteHoles(set, source, options);
   validateCells(set, source);
   return set;
 }
@@ -178,13 +217,16 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
     request.fields = options.fields;
     request.box = readBoxOf(box);
     request.raw = options.raw;
+    request.keepNonFinite = options.nonFinite == NonFinite::Holes;
     CellSet set = reader.read(path, request);
     assignConventionalUnits(reader.kind, set);
     selectFields(set, options.fields, path);
     // Keep the cells inside the part: each cell lies in exactly one.
     keepCells(set, [&](const Cell& c) { return centreInside(c.lower, c.level, box); });
-    const size_t kept = set.cells.size();
     progress.advance(1);
+    if (set.cells.empty()) continue;
+    makeNonFiniteHoles(set, path, options);
+    const size_t kept = set.cells.size();
     if (kept == 0) continue;
     validateCells(set, path);
     if (model.fieldNames.empty()) {
@@ -333,12 +375,14 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     request.fields = options.fields;
     request.box = readBox;
     request.raw = options.raw;
+    request.keepNonFinite = options.nonFinite == NonFinite::Holes;
     const FormatReader* reader = findReader(path);
     set = reader->read(path, request);
     assignConventionalUnits(reader->kind, set);
   }
   selectFields(set, options.fields, source);
   keepSupportOf(set, reach);
+  makeNonFiniteHoles(set, source, options);
   if (set.cells.empty()) return std::nullopt;
   validateCells(set, source);
   try {

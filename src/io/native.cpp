@@ -92,7 +92,7 @@ template <typename Use> void streamCells(const std::string& cellsPath, Use&& use
 
 /// The values of the records `keep` (ascending) of a .scalars file of `count` values.
 std::vector<float> readSelectedValues(const std::string& path, const std::string& name, uint64_t count,
-                                      const std::vector<uint64_t>& keep) {
+                                      const std::vector<uint64_t>& keep, bool keepNonFinite) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) fail(path, ": cannot open: ", std::strerror(errno));
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, std::fclose);
@@ -109,7 +109,8 @@ std::vector<float> readSelectedValues(const std::string& path, const std::string
     if (std::fread(chunk.data(), sizeof(float), n, f) != n) fail(path, ": read error (file changed while reading?)");
     for (; next < keep.size() && keep[next] < at + n; ++next) {
       const float v = chunk[size_t(keep[next] - at)];
-      if (!std::isfinite(v)) fail(path, ": record ", keep[next], ": value ", v, " of field '", name, "' is not finite");
+      if (!keepNonFinite && !std::isfinite(v))
+        fail(path, ": record ", keep[next], ": value ", v, " of field '", name, "' is not finite");
       out.push_back(v);
     }
   }
@@ -153,7 +154,8 @@ Census nativeCensus(const std::string& cellsPath) {
   return census.finish();
 }
 
-CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& wanted, const box3i& box) {
+CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& wanted, const box3i& box,
+                   bool keepNonFinite) {
   const std::string stem = stemOf(cellsPath);
   if (!box.empty()) {
     // Only the cells overlapping the box are kept, read in pieces: memory for those alone.
@@ -170,7 +172,7 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
     });
     for (const std::string& name : fieldNamesToRead(cellsPath, stem, wanted)) {
       const std::string path = checkedScalarsPath(cellsPath, stem, name, count);
-      set.fields.push_back(Field{name, readSelectedValues(path, name, count, keep)});
+      set.fields.push_back(Field{name, readSelectedValues(path, name, count, keep, keepNonFinite)});
     }
     return set;
   }
@@ -191,7 +193,7 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
     const uint64_t bytes = set.cells.size() * sizeof(float);
     Field field{name, std::vector<float>(set.cells.size())};
     readInto(path, field.values.data(), bytes);
-    validateFieldValues(field, set.cells.size(), path);
+    if (!keepNonFinite) validateFieldValues(field, set.cells.size(), path);
     set.fields.push_back(std::move(field));
   }
   return set;

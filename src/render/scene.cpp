@@ -440,7 +440,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   Frame& f = doc.frame;
   const Reader r(j, source, "");
   r.only(keysOf("", {"input", "camera", "camera_path", "frame", "layers", "iso", "meshes", "clip", "light",
-                     "ambient_occlusion", "integration", "background"}));
+                     "ambient_occlusion", "integration", "background", "legends"}));
   r.string("input", doc.input);
   if (r.find("camera")) {
     doc.hasCamera = readCamera(r.child("camera"), f.camera);
@@ -470,6 +470,11 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.settings(sceneSettings(), "ambient_occlusion", s);
   }
   if (r.find("integration")) readIntegration(r.child("integration"), source, s);
+  if (r.find("legends")) {
+    const Reader c = r.child("legends");
+    c.only(keysOf("legends", {}));
+    c.settings(sceneSettings(), "legends", s);
+  }
   r.settings(sceneSettings(), "", s);
   r.color("background", s.background);
   try {

@@ -133,6 +133,15 @@ const std::vector<Setting<Scene>>& sceneSettings() {
           "alpha", "alpha", [](S& s) -> bool& { return s.keepAlpha; },
           "Images keep the alpha channel instead of the background"),
       boolean<S>(
+          "legends.color_bar", "color_bar", [](S& s) -> bool& { return s.legends.colorBar; },
+          "A colour bar of the first layer's field at the right edge (with the volume on and no debug view)"),
+      boolean<S>(
+          "legends.annotation", "annotation", [](S& s) -> bool& { return s.legends.annotation; },
+          "Dataset name, field, simulation time and cycle at the top left, and the outline of the domain"),
+      boolean<S>(
+          "legends.level_legend", "level_legend", [](S& s) -> bool& { return s.legends.levelLegend; },
+          "With the level debug view: the level colours and their cell widths at the bottom left"),
+      boolean<S>(
           "clip.meshes", "clip_meshes", [](S& s) -> bool& { return s.clip.meshes; }, "Clip meshes too"),
       boolean<S>(
           "light.headlight", "headlight", [](S& s) -> bool& { return s.light.headlight; },

@@ -530,7 +530,9 @@ void Server::bind() {
     }
     s.port = s.options.port;
   }
-  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options);
+  LegendText legends;
+  legends.dataset = s.content.name;
+  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, std::move(legends));
   s.session->submit(s.content.initial, false); // the first picture renders while the page loads
 }
 

@@ -41,8 +41,10 @@ std::string encodeJpeg(const Image& image, const vec3f& background, int quality,
 
 } // namespace
 
-Session::Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options)
-    : model_(std::move(model)), renderer_(*model_, dataset), options_(options) {
+Session::Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options,
+                 LegendText legends)
+    : model_(std::move(model)), dataset_(dataset), legends_(std::move(legends)), renderer_(*model_, dataset_),
+      options_(options) {
   thread_ = std::thread([this] { loop(); });
 }
 
@@ -202,8 +204,16 @@ void Session::serve(const Request& request) {
   }
 }
 
-void Session::publish(const Request& request, const Image& image, FrameInfo info, bool keepImage, int quality) {
+void Session::publish(const Request& request, const Image& rendered, FrameInfo info, bool keepImage, int quality) {
   const Scene& scene = request.doc.scene;
+  // The legends the scene asks for, drawn into what is sent and saved.
+  const Legends& l = scene.legends;
+  std::optional<Image> withLegends;
+  if (l.colorBar || l.annotation || l.levelLegend) {
+    withLegends = rendered;
+    drawLegends(scene, request.doc.frame, *model_, dataset_, legends_, *withLegends);
+  }
+  const Image& image = withLegends ? *withLegends : rendered;
   auto frame = std::make_shared<PublishedFrame>();
   frame->jpeg = encodeJpeg(image, scene.background, quality, info.final);
   std::shared_ptr<const Image> kept = keepImage ? std::make_shared<const Image>(image) : nullptr;

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "exabricks/core/image.h"
+#include "exabricks/render/legends.h"
 #include "exabricks/render/renderer.h"
 #include "server.h"
 
@@ -26,7 +27,9 @@ struct PublishedFrame {
 
 class Session {
 public:
-  Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options);
+  /// `legends`: what the scene's legends write of the dataset (they are drawn into every frame).
+  Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options,
+          LegendText legends = {});
   ~Session();
 
   /// Accepts a validated scene document; returns its request number. Cancels the request in
@@ -66,6 +69,8 @@ private:
   void publishError(const Request& request, const std::string& message);
 
   std::shared_ptr<const Model> model_;
+  DatasetInfo dataset_;
+  LegendText legends_;
   Renderer renderer_;
   ServerOptions options_;
   mutable std::mutex mutex_;

@@ -7,6 +7,7 @@ import math
 import pathlib
 import subprocess
 
+import numpy as np
 import pytest
 
 import exabricks as eb
@@ -48,6 +49,7 @@ def every_setting(mesh):
         "debug": "level",
         "background": [0.1, 0.2, 0.3],
         "alpha": True,
+        "legends": {"color_bar": True, "annotation": True, "level_legend": True},
     }
 
 
@@ -192,3 +194,28 @@ def test_every_described_setting_survives_write_scene_and_python(cli, dataset_fi
     for s in vocabulary:
         assert_same(at_key(written, s["key"]), getattr(scene, s["name"]), s["name"])
     assert_same(written, json.loads(scene.to_json()))
+
+
+def test_legends_render_as_the_command_line_draws_them(cli, dataset_file, tmp_path):
+    """The legend keys (color_bar, annotation, level_legend): Scene.render and save draw what
+    `render --colorbar --annotate` draws."""
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--size", "160x120", "--colorbar", "--annotate", "-o",
+                    str(tmp_path / "cli.png"), "--write-scene", str(tmp_path / "cli.json")], check=True)
+    ds = eb.load(dataset_file)
+    scene = eb.Scene.from_json(ds, tmp_path / "cli.json")
+    assert scene.color_bar and scene.annotation and not scene.level_legend
+    cli_image = eb.read_png(tmp_path / "cli.png")
+
+    def srgb(a):  # over the black background, as the PNG stores it
+        c = np.clip(a[..., :3].astype(np.float64), 0.0, 1.0)
+        return np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1.0 / 2.4) - 0.055)
+
+    image = scene.render()
+    assert np.abs(srgb(image) - srgb(cli_image)).max() <= 1 / 255 + 1e-6
+    scene.save(tmp_path / "py.png")
+    assert (tmp_path / "py.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
+    # Without the keys: no legends, and the image differs where they were.
+    scene.color_bar = scene.annotation = False
+    plain = scene.render()
+    assert np.abs(srgb(plain) - srgb(cli_image)).max() > 0.5
+    assert json.loads(scene.to_json())["legends"] == {"color_bar": False, "annotation": False, "level_legend": False}

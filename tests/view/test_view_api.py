@@ -315,3 +315,35 @@ def test_the_vocabulary_and_unknown_keys_as_the_command_line_has_them(start_view
     status, data, _ = v.request("POST", "/api/scene", json.dumps(bad))
     assert status == 400
     assert json.loads(data)["error"] == message[len(prefix):].replace(str(path), "uploaded scene", 1)
+
+
+def test_the_snapshot_carries_the_legends_the_scene_asks_for(start_viewer, cli, tmp_path):
+    import io
+
+    from PIL import Image
+
+    v = start_viewer()
+
+    def snapshot(doc):
+        request = v.render(doc)
+        v.wait_final(request)
+        status, png, headers = v.request("GET", "/api/snapshot.png?request=%d" % request, timeout=120)
+        assert status == 200 and headers["X-Exabricks-Request"] == str(request)
+        return png
+
+    doc = small_scene(v, width=200, height=160, samples_per_pixel=1)
+    plain = snapshot(doc)
+    assert v.info()["document"]["legends"] == {"color_bar": False, "annotation": False, "level_legend": False}
+    doc["legends"] = {"color_bar": True}
+    bar = snapshot(doc)
+    # The colour bar sits at the right edge, its title above it: no pixel changes at the left.
+    a = Image.open(io.BytesIO(plain)).convert("RGB")
+    b = Image.open(io.BytesIO(bar)).convert("RGB")
+    changed = [(x, y) for y in range(a.height) for x in range(a.width) if a.getpixel((x, y)) != b.getpixel((x, y))]
+    assert len(changed) > 200
+    assert all(x > a.width // 4 for x, _ in changed)
+    # The same scene given to `render --scene`: the same bytes, legend included.
+    assert bar == cli_png(cli, tmp_path, doc, "bar")
+    # The scene the server reports (what the page saves) keeps the key.
+    status, saved, _ = v.request("GET", "/api/scene")
+    assert status == 200 and json.loads(saved)["legends"]["color_bar"] is True

@@ -5,11 +5,24 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/io/reader.h"
 
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 namespace exa {
+
+/// What loading does with NaN and infinite field values: refuse them (an error naming the first
+/// record, the default), or make every cell that holds one in any loaded field a hole: the cell
+/// is dropped from all fields, as a cell the data lacks, and the basis sums skip it.
+enum class NonFinite { Refuse, Holes };
+
+/// What a load made holes of (NonFinite::Holes): per loaded field, the cells with a NaN or
+/// infinite value in it, and the cells dropped (a cell bad in several fields counts once).
+struct LoadReport {
+  std::vector<std::pair<std::string, uint64_t>> nonFinite;
+  uint64_t holes = 0;
+};
 
 struct LoadOptions {
   std::vector<std::string> fields; ///< fields to load (all when empty)
@@ -21,6 +34,10 @@ struct LoadOptions {
   /// through the reader's box: the build then holds the values of all cells but the records of
   /// one part only. 0: always in one piece.
   uint64_t partCells = uint64_t(1) << 27;
+  NonFinite nonFinite = NonFinite::Refuse;
+  /// Not null: receives what the load made holes of (counts add up over the parts of a build).
+  /// The readers of native NAME.cells inputs keep such values; those of other formats refuse them.
+  std::shared_ptr<LoadReport> report;
 };
 
 /// Determines the kind of input; throws with the path when it is not recognised.

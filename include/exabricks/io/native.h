@@ -18,7 +18,10 @@ namespace exa {
 /// Reads NAME.cells and its fields. `fields` selects fields by name (all when empty). Validates
 /// everything but overlaps; errors name the file, the record and the problem. With a box, only
 /// the cells overlapping it are kept, read in pieces.
-CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& fields = {}, const box3i& box = {});
+/// `keepNonFinite`: NaN and infinite values are returned as read (the caller makes their cells
+/// holes); else the first is refused, naming its file, record and field.
+CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& fields = {}, const box3i& box = {},
+                   bool keepNonFinite = false);
 /// Where the cells of NAME.cells lie, read in pieces (values are not read).
 Census nativeCensus(const std::string& cellsPath);
 

@@ -22,6 +22,9 @@ struct ReadRequest {
   /// can skip the data of whole patches outside it do so).
   box3i box;
   RawOptions raw; ///< dimensions, type and merging of raw volumes
+  /// NaN and infinite values are returned as read (the loader makes their cells holes); readers
+  /// that do not take it refuse them.
+  bool keepNonFinite = false;
 };
 
 struct FormatReader {

@@ -106,6 +106,16 @@ struct Integration {
   friend bool operator==(const Integration&, const Integration&) = default;
 };
 
+/// Legends drawn over the rendered image (render/legends.h): the colour bar of the first layer
+/// (with the volume on and no debug view), the annotation (dataset name, field, simulation time
+/// and cycle, domain outline) and, with the level debug view, the legend of the level colours.
+struct Legends {
+  bool colorBar = false;
+  bool annotation = false;
+  bool levelLegend = false;
+  friend bool operator==(const Legends&, const Legends&) = default;
+};
+
 struct Scene {
   std::vector<VolumeLayer> layers{VolumeLayer{}}; ///< several fields: summed optical depth
   bool volume = true;                             ///< integrate the volume (off: surfaces only)
@@ -121,6 +131,7 @@ struct Scene {
   /// structure shows against black where it vanishes against white.
   vec3f background{0.f};
   bool keepAlpha = false; ///< images keep alpha instead of the background
+  Legends legends;        ///< drawn after rendering, where images are written or shown
 
   /// A scene of one volume layer.
   static Scene volumeOf(const TransferFunction& tf, const std::string& field = {});

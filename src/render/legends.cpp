@@ -1,0 +1,67 @@
+#include "exabricks/render/legends.h"
+
+#include "exabricks/amr/model.h"
+#include "exabricks/amr/scenes.h"
+#include "exabricks/core/error.h"
+#include "exabricks/render/overlay.h"
+
+#include <filesystem>
+
+namespace exa {
+
+std::string legendDatasetLabel(const std::string& input) {
+  if (input.empty()) return kDefaultDatasetName;
+  std::filesystem::path p = std::filesystem::path(input).lexically_normal();
+  if (p.filename().empty()) p = p.parent_path(); // a folder written with a trailing slash
+  const std::string name = p.filename().string();
+  return name.empty() || name == "." || name == ".." ? input : name;
+}
+
+vec3f legendInk(const vec3f& bg) {
+  const float luminance = 0.2126f * bg.x + 0.7152f * bg.y + 0.0722f * bg.z;
+  return luminance > 0.3f ? vec3f(0.f) : vec3f(1.f);
+}
+
+namespace {
+
+std::vector<std::string> annotationLines(const Model& model, const std::string& field, const LegendText& text) {
+  std::vector<std::string> lines{text.dataset, "field " + field};
+  const SimulationState& sim = model.simulation;
+  if (sim.hasTime() || sim.hasCycle())
+    lines.push_back(strCat(sim.hasTime() ? strCat("time ", sim.time) : std::string(),
+                           sim.hasTime() && sim.hasCycle() ? ", " : "",
+                           sim.hasCycle() ? strCat("cycle ", sim.cycle) : std::string()));
+  return lines;
+}
+
+} // namespace
+
+void drawLegends(const Scene& scene, const Frame& frame, const Model& model, const DatasetInfo& dataset,
+                 const LegendText& text, Image& image) {
+  const Legends& want = scene.legends;
+  if (!want.colorBar && !want.annotation && !want.levelLegend) return;
+  const vec3f ink = legendInk(scene.background);
+  const int field = model.requireField(scene.layers.at(0).field);
+  const std::string name = model.fieldNames[size_t(field)];
+  if (want.levelLegend && scene.debug == DebugView::Level) {
+    std::vector<int> levels = text.levels;
+    if (levels.empty())
+      for (const ModelSummary::Level& l : summarize(model).levels)
+        levels.push_back(l.level);
+    drawLevelLegend(image, levels, ink);
+  }
+  if (want.colorBar && scene.debug == DebugView::None && scene.volume) {
+    TransferFunction tf = scene.layers.at(0).tf;
+    if (tf.valueRange.empty()) tf.valueRange = dataset.valueRanges.at(size_t(field));
+    const std::string units = model.unitsOf(field);
+    drawColorBar(image, tf, units.empty() ? name : name + " [" + units + "]", ink);
+  }
+  if (want.annotation) {
+    const box3i cb = text.cellBounds.empty() ? model.cellBounds() : text.cellBounds;
+    drawBoxOutline(image, frame.camera,
+                   box3d(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper))), ink * 0.6f);
+    drawLines(image, annotationLines(model, name, text), ink);
+  }
+}
+
+} // namespace exa
