@@ -134,8 +134,10 @@ async function setupSeries() {
 // Movie
 
 function showMovie(m) {
+  const first = !series.movie || series.movie.id !== m.id;
   series.movie = m;
   $('movie').hidden = false;
+  if (first) $('movie').scrollIntoView({ block: 'nearest' });
   const rendering = m.state === 'rendering' || m.state === 'encoding';
   $('movie-progress').max = Math.max(1, m.frames);
   $('movie-progress').value = m.done;
