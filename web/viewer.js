@@ -743,9 +743,14 @@ function fillSelect(select, options, value) {
   if (value !== undefined) select.value = value;
 }
 
+/// A field as the choosers name it: "name [units]" where the data records units.
+function fieldLabel(f) {
+  return f.units ? `${f.name} [${f.units}]` : f.name;
+}
+
 function syncControls() {
   const doc = viewer.doc;
-  const fields = viewer.info.fields.map((f) => [f.name, f.name]);
+  const fields = viewer.info.fields.map((f) => [f.name, fieldLabel(f)]);
   fillSelect($('field'), fields, layerField());
   const maps = Object.keys(viewer.info.colormaps).map((n) => [n, n]);
   const cm = tf().colormap;
@@ -875,6 +880,7 @@ async function switchField(name) {
     if (Array.isArray(chosen.opacity)) t.opacity = chosen.opacity;
     else delete t.opacity;
     t.opacity_scale = chosen.opacity_scale;
+    if (viewer.adjustRange) await viewer.adjustRange(name); // a series' choice of range
     const note = $('field-note');
     note.textContent = (r.notes || []).join('\n');
     note.hidden = !(r.notes || []).length;
@@ -1184,6 +1190,7 @@ async function start() {
   $('banner-close').addEventListener('click', () => showMessage(''));
   readStream();
   requestRender(false);
+  startSeries();
 }
 
 start();

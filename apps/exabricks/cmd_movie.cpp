@@ -12,6 +12,7 @@
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/encode.h"
 #include "exabricks/workflows/series.h"
 
 #include <nlohmann/json.hpp>
@@ -24,7 +25,6 @@
 #include <iostream>
 #include <memory>
 #include <sstream>
-#include <sys/wait.h>
 #include <unistd.h>
 
 namespace exa::cli {
@@ -64,34 +64,6 @@ struct MoviePlan {
   std::string ext, framesDir;
   std::vector<int> todo; ///< this process's frames still to render
 };
-
-std::string findProgram(const std::string& name) {
-  const char* path = std::getenv("PATH");
-  std::stringstream dirs(path ? path : "/usr/bin:/bin");
-  for (std::string dir; std::getline(dirs, dir, ':');) {
-    const std::string candidate = (dir.empty() ? "." : dir) + "/" + name;
-    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
-  }
-  return {};
-}
-
-/// Runs a program with arguments (no shell); returns its exit status (-1 when it cannot start).
-int runProgram(const std::vector<std::string>& args) {
-  std::vector<char*> argv;
-  for (const std::string& a : args)
-    argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  const pid_t pid = ::fork();
-  if (pid < 0) return -1;
-  if (pid == 0) {
-    ::execv(argv[0], argv.data());
-    ::_exit(127);
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0)
-    if (errno != EINTR) return -1;
-  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
 
 std::string formatSeconds(double s) {
   if (s < 60) return strCat(int(std::lround(s)), " s");
@@ -291,13 +263,10 @@ int renderMovie(const MoviePlan& p, SeriesRenderer& series) {
 std::string encodeMovie(const MovieCmdOptions& o, const MoviePlan& p, int missing) {
   if (p.toFolder) return {};
   const int frames = p.frames.frames;
-  const std::string pattern = (fs::path(p.framesDir) / "frame_%05d.png").string();
-  const bool webm = p.ext == ".webm";
-  const std::string fpsText = strCat(o.fps);
-  const std::string example =
-      strCat("ffmpeg -framerate ", fpsText, " -i ", pattern,
-             webm ? " -c:v libvpx-vp9 -b:v 0 -crf 32 " : " -c:v libx264 -pix_fmt yuv420p -crf 18 ", o.output);
-  const std::string ffmpeg = findProgram("ffmpeg");
+  MovieEncoding e;
+  e.framesDir = p.framesDir;
+  e.fps = o.fps;
+  e.output = o.output;
   if (missing) {
     logNote(strCat("frames ", p.first, "..", p.last, " are in ", p.framesDir, "; ", missing, " of ", frames,
                    " frames are still to render (other --frames slices); run this command again without "
@@ -305,30 +274,11 @@ std::string encodeMovie(const MovieCmdOptions& o, const MoviePlan& p, int missin
                    o.output));
     return {};
   }
-  if (ffmpeg.empty()) {
+  if (!encodeFrames(e)) {
     logWarning(strCat("ffmpeg is not installed, so ", o.output, " was not encoded; the ", frames, " frames are in ",
-                      p.framesDir, ". Install ffmpeg and run this command again, or encode them with: ", example));
+                      p.framesDir,
+                      ". Install ffmpeg and run this command again, or encode them with: ", encodeCommandExample(e)));
     return {};
-  }
-  const std::string temporary = strCat(o.output, ".encoding-", ::getpid(), p.ext);
-  std::vector<std::string> args{ffmpeg,  "-y", "-loglevel", "error", "-framerate",
-                                fpsText, "-i", pattern,     "-vf",   "pad=ceil(iw/2)*2:ceil(ih/2)*2"};
-  if (webm)
-    args.insert(args.end(), {"-c:v", "libvpx-vp9", "-b:v", "0", "-crf", "32", "-pix_fmt", "yuv420p", "-f", "webm"});
-  else
-    args.insert(args.end(),
-                {"-c:v", "libx264", "-pix_fmt", "yuv420p", "-crf", "18", "-movflags", "+faststart", "-f", "mp4"});
-  args.push_back(temporary);
-  const int rc = runProgram(args);
-  std::error_code ec;
-  if (rc != 0) {
-    fs::remove(temporary, ec);
-    fail(o.output, ": ffmpeg failed (exit status ", rc, "); the frames are in ", p.framesDir, "; try: ", example);
-  }
-  fs::rename(temporary, o.output, ec);
-  if (ec) {
-    fs::remove(temporary, ec);
-    fail(o.output, ": cannot move the encoded movie into place: ", ec.message());
   }
   logInfo(strCat("encoded ", frames, " frames into ", o.output));
   return o.output;

@@ -5,6 +5,9 @@
 
 #include "exabricks/core/log.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/series.h"
+
+#include <filesystem>
 
 #ifdef EXABRICKS_HAVE_VIEWER
 #include "view/server.h"
@@ -31,6 +34,7 @@ std::string hostName() {
 
 struct ViewCmdOptions {
   RenderOptions scene;
+  std::vector<std::string> inputs; ///< one dataset, or the steps of a series
   std::string host = "127.0.0.1";
   int port = 8765;
   std::string token;
@@ -40,7 +44,53 @@ struct ViewCmdOptions {
 constexpr int kDefaultViewerPasses = 8;
 
 #ifdef EXABRICKS_HAVE_VIEWER
-void run(const ViewCmdOptions& o, const CLI::App& cmd) {
+/// The datasets the inputs name: one file as itself (as a single input always was), else the
+/// steps of a series as `movie` takes them (files, folders, glob patterns), as absolute paths.
+std::vector<std::string> viewSteps(const std::vector<std::string>& inputs) {
+  namespace fs = std::filesystem;
+  if (inputs.empty()) return {};
+  const bool pattern = inputs[0].find_first_of("*?[") != std::string::npos;
+  if (inputs.size() == 1 && !pattern && !fs::is_directory(inputs[0])) return inputs;
+  std::vector<std::string> steps = seriesSteps(inputs);
+  for (std::string& s : steps)
+    s = fs::absolute(s).lexically_normal().string();
+  return steps;
+}
+
+/// The dataset the viewer opens: step 0 of a series (loaded through the series renderer, which
+/// keeps its structure for the next steps), or the one input.
+struct FirstStep {
+  std::shared_ptr<SeriesRenderer> series;
+  std::shared_ptr<const Model> model;
+  DatasetInfo dataset;
+};
+
+FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo) {
+  FirstStep f;
+  if (steps.size() > 1) {
+    SeriesOptions so;
+    so.load = lo;
+    f.series = std::make_shared<SeriesRenderer>(steps, so);
+    const SeriesStep& first = f.series->load(0);
+    f.model = first.model;
+    f.dataset = first.info;
+  } else {
+    f.model = std::make_shared<const Model>(loadModel(input, lo));
+    f.dataset = DatasetInfo::of(*f.model);
+  }
+  return f;
+}
+
+void run(const ViewCmdOptions& given, const CLI::App& cmd) {
+  ViewCmdOptions o = given;
+  const std::vector<std::string> steps = viewSteps(o.inputs);
+  if (!steps.empty()) o.scene.in.input = steps[0];
+  // A series maps one range over all its steps unless --range says LOW,HIGH or per-step.
+  bool perStep = false;
+  if (o.scene.range.size() == 1 && (o.scene.range[0] == "global" || o.scene.range[0] == "per-step")) {
+    perStep = o.scene.range[0] == "per-step";
+    o.scene.range.clear();
+  }
   // Ctrl-C and SIGTERM are taken by one thread (sigwait) that stops the server cleanly; every
   // thread started from here on inherits the blocked mask.
   sigset_t stopSignals;
@@ -58,9 +108,20 @@ void run(const ViewCmdOptions& o, const CLI::App& cmd) {
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields.clear(); // every field: the page can switch between them
-  auto model = std::make_shared<const Model>(loadModel(doc.input, lo));
-  const DatasetInfo dataset = DatasetInfo::of(*model);
+  const FirstStep first = loadFirst(steps, doc.input, lo);
+  const std::shared_ptr<const Model>& model = first.model;
+  const DatasetInfo& dataset = first.dataset;
   applyDataDefaults(o.scene, cmd, doc.scene, *model, dataset);
+  range1f overSteps;
+  if (first.series && o.scene.range.empty() && perStep) {
+    doc.scene.layers[0].tf.valueRange = range1f();
+  } else if (first.series && o.scene.range.empty()) {
+    const std::string& name = model->fieldNames[size_t(model->requireField(doc.scene.layers[0].field))];
+    overSteps = seriesRange(steps, lo, name).range;
+    doc.scene.layers[0].tf.valueRange = overSteps;
+    logNote(strCat("colour range over all ", steps.size(), " steps: [", overSteps.lower, ", ", overSteps.upper,
+                   "]; --range per-step or LOW,HIGH to choose"));
+  }
   {
     Renderer framing(*model, dataset);
     framing.setScene(doc.scene);
@@ -75,8 +136,13 @@ void run(const ViewCmdOptions& o, const CLI::App& cmd) {
   content.model = model;
   content.dataset = dataset;
   content.input = doc.input;
-  content.name = datasetLabel(o.scene.in.input);
+  content.name = datasetLabel(o.inputs.empty() ? o.scene.in.input : o.inputs[0]);
   content.initial = doc;
+  if (first.series) {
+    content.series = first.series;
+    content.steps = steps;
+    content.seriesRange = overSteps;
+  }
   view::ServerOptions options;
   options.host = o.host;
   options.port = o.port;
@@ -116,6 +182,10 @@ void addView(CLI::App& app) {
   auto o = std::make_shared<ViewCmdOptions>();
   CLI::App* cmd = app.add_subcommand("view", "Explore a dataset interactively in a web browser");
   o->scene.add(*cmd);
+  // A series' steps replace the single INPUT of the render options.
+  cmd->remove_option(cmd->get_option("input"));
+  cmd->add_option("inputs", o->inputs,
+                  "Dataset, or the steps of a time series: files, folders or glob patterns (numeric order)");
   cmd->add_option("--port", o->port, "Port to listen on (0: any free port)")->capture_default_str();
   cmd->add_option("--host", o->host, "Address to listen on (127.0.0.1: this machine only)")->capture_default_str();
   cmd->add_option("--token", o->token, "Access token (default: a random one, printed with the address)");

@@ -9,7 +9,9 @@
 #include "exabricks/render/scene_vocabulary.h"
 #include "exabricks/render/transfer_function.h"
 
+#include "movie.h"
 #include "session.h"
+#include "steps.h"
 #include "web_assets.h"
 
 #include <httplib.h>
@@ -20,6 +22,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <netdb.h>
 #include <random>
 #include <sys/socket.h>
@@ -132,6 +135,8 @@ struct Server::Impl {
   std::string token;
   httplib::Server http;
   std::unique_ptr<Session> session;
+  std::unique_ptr<ViewSteps> steps;
+  std::unique_ptr<MovieMaker> movies;
   std::atomic<int> streams{0};
   std::atomic<int> snapshotWaits{0};
   std::atomic<bool> stopping{false};
@@ -148,7 +153,8 @@ struct Server::Impl {
     }
     if (hasCamera) *hasCamera = doc.hasCamera;
     if (!doc.hasCamera) doc.frame.camera = content.initial.frame.camera;
-    doc.input = content.input;
+    const StepView step = steps->current();
+    doc.input = step.input;
     for (SceneMesh& m : doc.scene.meshes) {
       if (m.mesh) continue; // given inline
       const auto& known = content.initial.scene.meshes;
@@ -171,7 +177,7 @@ struct Server::Impl {
     try {
       doc.scene.validate();
       f.validate();
-      const Model& model = *content.model;
+      const Model& model = *step.model;
       auto check = [&](const std::string& field) {
         if (!field.empty()) model.requireField(field);
       };
@@ -186,13 +192,20 @@ struct Server::Impl {
   }
 
   json info() const {
-    const Model& model = *content.model;
+    const StepView step = steps->current();
+    const Model& model = *step.model;
     json j;
     j["name"] = content.name;
-    j["input"] = content.input;
+    j["input"] = step.input;
+    j["step"] = step.index;
+    j["steps"] = steps->size();
+    j["simulation"] = simulationJson(model.simulation);
+    j["can_encode_movies"] = MovieMaker::canEncode();
     json fields = json::array();
     for (size_t i = 0; i < model.fieldNames.size(); ++i)
-      fields.push_back({{"name", model.fieldNames[i]}, {"range", rangeJson(content.dataset.valueRanges.at(i))}});
+      fields.push_back({{"name", model.fieldNames[i]},
+                        {"units", model.unitsOf(int(i))},
+                        {"range", rangeJson(step.dataset.valueRanges.at(i))}});
     j["fields"] = fields;
     j["default_field"] = model.fieldNames.at(size_t(model.requireField("")));
     const box3i cb = model.cellBounds();
@@ -219,7 +232,7 @@ struct Server::Impl {
     }
     j["colormaps"] = maps;
     j["document"] = json::parse(writeSceneJson(content.initial));
-    j["default_opacity_scale"] = content.dataset.defaultOpacityScale;
+    j["default_opacity_scale"] = step.dataset.defaultOpacityScale;
     j["limits"] = {{"max_image_side", options.maxImageSide},
                    {"max_samples_per_pixel", options.maxSamplesPerPixel},
                    {"max_request_bytes", options.maxRequestBytes}};
@@ -228,14 +241,15 @@ struct Server::Impl {
 
   /// Counts of the field's values over `bins` equal steps of the normalised value.
   json histogram(const httplib::Request& req) const {
-    const Model& model = *content.model;
+    const StepView step = steps->current();
+    const Model& model = *step.model;
     if (!req.has_param("field")) reject(400, "histogram: parameter 'field' is missing");
     const std::string name = req.get_param_value("field");
     const int field = model.fieldIndex(name);
     if (field < 0) reject(400, strCat("histogram: unknown field '", name, "'"));
     const double bins = numberParam(req, "bins", 128);
     if (!(bins >= 1 && bins <= 4096) || bins != std::floor(bins)) reject(400, "histogram: bins must be in 1..4096");
-    const range1f data = content.dataset.valueRanges.at(size_t(field));
+    const range1f data = step.dataset.valueRanges.at(size_t(field));
     const double lo = numberParam(req, "lo", data.empty() ? 0.0 : data.lower);
     const double hi = numberParam(req, "hi", data.empty() ? 1.0 : data.upper);
     const bool logScale = req.has_param("log") && req.get_param_value("log") == "1";
@@ -286,6 +300,8 @@ struct Server::Impl {
   std::string cookieName() const { return strCat("exabricks_token_", port); }
 
   void routes();
+  void seriesRoutes();
+  void movieRoutes();
 };
 
 void Server::Impl::routes() {
@@ -449,13 +465,13 @@ void Server::Impl::routes() {
   // what the page adopts when the user switches fields, so that the new field gets its own
   // mapping, range and opacity instead of the old field's.
   http.Get("/api/first-picture", [this](const httplib::Request& req, httplib::Response& res) {
-    const Model& model = *content.model;
+    const StepView step = steps->current();
+    const Model& model = *step.model;
     if (!req.has_param("field")) reject(400, "first-picture: parameter 'field' is missing");
     const std::string name = req.get_param_value("field");
     const int field = model.fieldIndex(name);
     if (field < 0) reject(400, strCat("first-picture: unknown field '", name, "'"));
-    const DefaultChoices c =
-        adaptTransferFunction(model, content.dataset, field, defaultTransferFunction(), true, true);
+    const DefaultChoices c = adaptTransferFunction(model, step.dataset, field, defaultTransferFunction(), true, true);
     sendJson(res,
              {{"field", name}, {"transfer_function", json::parse(transferFunctionJson(c.tf))}, {"notes", c.notes}});
   });
@@ -478,6 +494,8 @@ void Server::Impl::routes() {
     doc.hasCamera = true;
     sendJson(res, {{"document", json::parse(writeSceneJson(doc))}, {"has_camera", hasCamera}});
   });
+  seriesRoutes();
+  movieRoutes();
   // An uploaded transfer function (ParaView preset or exabricks JSON), returned in exabricks
   // form; a preset's points are rescaled to the data's range as ParaView applies presets.
   http.Post("/api/transfer-function", [](const httplib::Request& req, httplib::Response& res) {
@@ -495,6 +513,129 @@ void Server::Impl::routes() {
     sendJson(
         res,
         {{"transfer_function", json::parse(transferFunctionJson(tf))}, {"preset", preset}, {"name", tf.colorMap.name}});
+  });
+}
+
+/// An integer from a JSON body, or a 400 naming the key.
+static int intOf(const json& body, const char* key, const char* what) {
+  const json& v = body.at(key);
+  if (!v.is_number_integer() && !(v.is_number() && v.get<double>() == std::floor(v.get<double>())))
+    reject(400, strCat(what, ": \"", key, "\" must be a whole number"));
+  const double d = v.get<double>();
+  if (!(d >= -2.0e9 && d <= 2.0e9)) reject(400, strCat(what, ": \"", key, "\" is out of range"));
+  return int(d);
+}
+
+/// The series' routes: its steps (names, simulation time and cycle once loaded, the current one,
+/// with ?field=F the field's range over all steps) and the choice of step among those given at
+/// start; the step's scene renders at once.
+void Server::Impl::seriesRoutes() {
+  http.Get("/api/series", [this](const httplib::Request& req, httplib::Response& res) {
+    json j = steps->describe();
+    if (req.has_param("field")) {
+      const std::string name = req.get_param_value("field");
+      if (steps->current().model->fieldIndex(name) < 0) reject(400, strCat("series: unknown field '", name, "'"));
+      try {
+        j["range"] = rangeJson(steps->rangeOf(name));
+      } catch (const Error& e) {
+        reject(400, strCat("series: ", e.what()));
+      }
+      j["field"] = name;
+    }
+    sendJson(res, j);
+  });
+  http.Post("/api/step", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = parseBody(req);
+    if (!body.is_object() || !body.contains("index"))
+      reject(400, "step: the body must be an object with the step's \"index\" (from 0)");
+    for (const auto& [key, value] : body.items())
+      if (key != "index") reject(400, strCat("step: unknown key '", key, "'"));
+    const int index = intOf(body, "index", "step");
+    if (index < 0 || index >= steps->size())
+      reject(400, strCat("step: index ", index, " is outside the steps 0..", steps->size() - 1, " (", steps->size(),
+                         steps->size() == 1 ? " step" : " steps", " given when the viewer started)"));
+    if (index == steps->current().index) {
+      sendJson(res, steps->describe());
+      return;
+    }
+    StepView step;
+    try {
+      step = steps->select(index);
+    } catch (const Error& e) {
+      reject(500, strCat("step ", index, " could not be loaded: ", e.what()));
+    }
+    LegendText legends;
+    legends.dataset = legendDatasetLabel(step.input);
+    session->setModel(step.model, step.dataset, std::move(legends));
+    SceneDocument doc = session->current().value_or(content.initial);
+    doc.input = step.input;
+    session->submit(doc, false);
+    sendJson(res, steps->describe());
+  });
+}
+
+/// The movie's routes: start one with the scene on screen, follow and cancel it, and fetch the
+/// finished file by the id the server made.
+void Server::Impl::movieRoutes() {
+  http.Post("/api/movie", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = parseBody(req);
+    if (!body.is_object() || !body.contains("scene") || !body["scene"].is_object())
+      reject(400, "movie: the body must be an object with a \"scene\" object (and optionally \"fps\", \"frames\")");
+    MovieInput in;
+    for (const auto& [key, value] : body.items())
+      if (key != "scene" && key != "fps" && key != "frames") reject(400, strCat("movie: unknown key '", key, "'"));
+    if (body.contains("fps")) {
+      if (!body["fps"].is_number() || !(body["fps"].get<double>() > 0 && body["fps"].get<double>() <= 120))
+        reject(400, "movie: \"fps\" must be a number in (0, 120]");
+      in.fps = body["fps"].get<double>();
+    }
+    if (body.contains("frames")) {
+      in.orbitFrames = intOf(body, "frames", "movie");
+      if (in.orbitFrames < 1 || in.orbitFrames > 3600) reject(400, "movie: \"frames\" must be in 1..3600");
+    }
+    in.doc = documentFrom(body["scene"].dump(), "movie scene");
+    in.current = steps->current();
+    if (steps->isSeries()) {
+      in.steps = steps->paths();
+      in.series = content.series->options();
+    }
+    in.series.renderer = content.rendererOptions;
+    if (!MovieMaker::canEncode())
+      reject(503, "ffmpeg is not installed on the machine the viewer runs on, so it cannot encode movies: install "
+                  "ffmpeg and start the viewer again (or use `exabricks movie` with a folder for the frames)");
+    if (movies->busy()) reject(409, "a movie is already being made: wait for it or cancel it");
+    const std::string id = movies->start(std::move(in));
+    sendJson(res, movies->status(id));
+  });
+  auto idOf = [](const httplib::Request& req, const char* what) {
+    if (!req.has_param("id")) reject(400, strCat(what, ": parameter 'id' is missing"));
+    return req.get_param_value("id");
+  };
+  http.Get("/api/movie", [this, idOf](const httplib::Request& req, httplib::Response& res) {
+    const json j = movies->status(idOf(req, "movie"));
+    if (j.is_null()) reject(404, "movie: no movie has that id");
+    sendJson(res, j);
+  });
+  http.Post("/api/movie/cancel", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = parseBody(req);
+    if (!body.is_object() || !body.contains("id") || !body["id"].is_string())
+      reject(400, "movie cancel: the body must be an object with the movie's \"id\"");
+    const std::string id = body["id"].get<std::string>();
+    if (!movies->cancel(id)) reject(404, "movie cancel: no movie has that id");
+    sendJson(res, movies->status(id));
+  });
+  http.Get("/api/movie/file", [this, idOf](const httplib::Request& req, httplib::Response& res) {
+    const std::string id = idOf(req, "movie file");
+    const json j = movies->status(id);
+    if (j.is_null()) reject(404, "movie file: no movie has that id");
+    const std::string path = movies->file(id);
+    if (path.empty()) reject(409, strCat("movie file: the movie is ", j["state"].get<std::string>(), ", not done"));
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in && !in.eof()) reject(500, "movie file: cannot read the movie");
+    res.set_header("Content-Disposition", "attachment; filename=\"exabricks.mp4\"");
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(std::move(bytes), "video/mp4");
   });
 }
 
@@ -530,6 +671,9 @@ void Server::bind() {
     }
     s.port = s.options.port;
   }
+  s.steps = std::make_unique<ViewSteps>(StepView{0, s.content.model, s.content.dataset, s.content.input},
+                                        s.content.series, s.content.steps);
+  s.movies = std::make_unique<MovieMaker>();
   LegendText legends;
   legends.dataset = s.content.name;
   s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, std::move(legends));
@@ -566,6 +710,7 @@ void Server::stop() {
   if (impl_->stopping.exchange(true)) return;
   if (impl_->session) impl_->session->stop();
   impl_->http.stop();
+  impl_->movies.reset(); // a movie in progress stops; the movies' folder is removed
 }
 
 } // namespace exa::view

@@ -17,6 +17,7 @@
 
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
+#include "exabricks/workflows/series.h"
 
 #include <cstdint>
 #include <functional>
@@ -51,6 +52,13 @@ struct ViewContent {
   std::string input; ///< the dataset's path as scene files record it (absolute), or empty
   std::string name;  ///< shown on the page
   SceneDocument initial;
+  /// A time series: the renderer of its steps (the first one loaded), and the steps' absolute
+  /// paths as given at start, the only datasets a request may switch to. Null for one dataset.
+  std::shared_ptr<SeriesRenderer> series;
+  std::vector<std::string> steps;
+  /// The range of the initial field over all steps, which the first scene maps (empty: none).
+  range1f seriesRange;
+  RendererOptions rendererOptions; ///< how movies march
 };
 
 /// Statistics of a published frame (also sent to the page with each frame).

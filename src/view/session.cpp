@@ -43,8 +43,8 @@ std::string encodeJpeg(const Image& image, const vec3f& background, int quality,
 
 Session::Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options,
                  LegendText legends)
-    : model_(std::move(model)), dataset_(dataset), legends_(std::move(legends)), renderer_(*model_, dataset_),
-      options_(options) {
+    : model_(std::move(model)), dataset_(dataset), legends_(std::move(legends)),
+      renderer_(std::make_unique<Renderer>(*model_, dataset_)), options_(options) {
   thread_ = std::thread([this] { loop(); });
 }
 
@@ -59,6 +59,14 @@ void Session::stop() {
   requestReady_.notify_all();
   frameReady_.notify_all();
   if (thread_.joinable() && thread_.get_id() != std::this_thread::get_id()) thread_.join();
+}
+
+void Session::setModel(std::shared_ptr<const Model> model, const DatasetInfo& dataset, LegendText legends) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  pendingModel_ = std::move(model);
+  pendingDataset_ = dataset;
+  pendingLegends_ = std::move(legends);
+  cancel_ = true;
 }
 
 uint64_t Session::submit(const SceneDocument& doc, bool interactive) {
@@ -133,7 +141,19 @@ void Session::loop() {
     const Request request = std::move(*pending_);
     pending_.reset();
     cancel_ = false;
+    std::shared_ptr<const Model> model = std::move(pendingModel_);
+    pendingModel_.reset();
+    const DatasetInfo dataset = pendingDataset_;
+    const LegendText legends = pendingLegends_;
     lock.unlock();
+    if (model) {
+      renderer_.reset(); // it refers to the model it replaces
+      model_ = std::move(model);
+      dataset_ = dataset;
+      legends_ = legends;
+      renderer_ = std::make_unique<Renderer>(*model_, dataset_);
+      lastDraft_.clear();
+    }
     try {
       serve(request);
     } catch (const std::exception& e) {
@@ -146,14 +166,14 @@ void Session::loop() {
 void Session::serve(const Request& request) {
   const Frame& frame = request.doc.frame;
   const Scene& scene = request.doc.scene;
-  renderer_.setScene(scene);
+  renderer_->setScene(scene);
   PassControl control;
   control.cancel = &cancel_;
 
   FrameInfo info;
   info.request = request.id;
   info.targetPasses = frame.samplesPerPixel;
-  info.visibleRegions = renderer_.visibleRegions();
+  info.visibleRegions = renderer_->visibleRegions();
   info.regions = model_->regions.regions.size();
 
   // A draft first: reduced resolution and rate, sized to answer quickly; not when the draft on
@@ -163,7 +183,7 @@ void Session::serve(const Request& request) {
     Frame draft = frame.preview(draftDivisor_, kDraftRate);
     draft.frameIndex = 0;
     draftBuffer_.resize(draft.width, draft.height);
-    if (!renderer_.renderPass(draft, draftBuffer_, control) || superseded(request.id)) return;
+    if (!renderer_->renderPass(draft, draftBuffer_, control) || superseded(request.id)) return;
     const RenderStats& s = draftBuffer_.stats();
     info.draft = true;
     info.width = draft.width;
@@ -192,7 +212,7 @@ void Session::serve(const Request& request) {
     Frame f = frame;
     f.frameIndex = pass;
     const RenderStats before = buffer_.stats();
-    if (!renderer_.renderPass(f, buffer_, control) || superseded(request.id)) return;
+    if (!renderer_->renderPass(f, buffer_, control) || superseded(request.id)) return;
     const RenderStats& after = buffer_.stats();
     info.passes = pass + 1;
     info.final = pass + 1 == frame.samplesPerPixel;

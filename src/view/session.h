@@ -32,6 +32,9 @@ public:
           LegendText legends = {});
   ~Session();
 
+  /// Renders another dataset (a series' step) from the next request on; the request in flight is
+  /// cancelled.
+  void setModel(std::shared_ptr<const Model> model, const DatasetInfo& dataset, LegendText legends = {});
   /// Accepts a validated scene document; returns its request number. Cancels the request in
   /// flight: from now on no frame of an older request is published.
   uint64_t submit(const SceneDocument& doc, bool interactive);
@@ -71,7 +74,10 @@ private:
   std::shared_ptr<const Model> model_;
   DatasetInfo dataset_;
   LegendText legends_;
-  Renderer renderer_;
+  std::unique_ptr<Renderer> renderer_;
+  std::shared_ptr<const Model> pendingModel_; ///< the dataset of the next request (setModel)
+  DatasetInfo pendingDataset_;
+  LegendText pendingLegends_;
   ServerOptions options_;
   mutable std::mutex mutex_;
   mutable std::condition_variable requestReady_, frameReady_;

@@ -147,3 +147,14 @@ def flow_dataset(cli, tmp_path):
     scalar = np.fromfile(folder / "flow.scalars", dtype="<f4")
     ((scalar - 0.5) * 2.6e7).astype("<f4").tofile(folder / "flow.velocity.scalars")
     return path
+
+
+@pytest.fixture
+def series_dataset(cli, tmp_path):
+    """A tiny time series of three steps (s_0000.cells onwards), as the movie tests make it; the
+    glob pattern that names it."""
+    folder = tmp_path / "run"
+    folder.mkdir()
+    subprocess.run([cli, "-q", "generate", "--steps", "3", "-n", "20000", "-o", str(folder / "s.cells")], check=True,
+                   capture_output=True)
+    return str(folder / "s_*.cells")

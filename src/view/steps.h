@@ -1,0 +1,67 @@
+// The datasets a viewer shows: one, or the steps of a time series given at start. The current
+// step is what /api/info, the histogram and new requests use; changing it loads the step (or takes
+// it from the prefetch, which the series renderer keeps one step ahead) and rebuilds only values
+// where the hierarchy is unchanged.
+#pragma once
+
+#include "exabricks/amr/model.h"
+#include "exabricks/workflows/series.h"
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace exa::view {
+
+/// One dataset as the server uses it.
+struct StepView {
+  int index = 0;
+  std::shared_ptr<const Model> model;
+  DatasetInfo dataset;
+  std::string input; ///< the path scene files record (absolute), or empty for the default dataset
+};
+
+/// What is known of a step: its name, and its simulation time and cycle once it was loaded.
+struct StepFacts {
+  std::string path, name;
+  bool loaded = false;
+  SimulationState simulation;
+};
+
+class ViewSteps {
+public:
+  /// A single dataset (no series renderer), or a series whose renderer has its current step
+  /// loaded; `paths` are the steps' absolute paths.
+  ViewSteps(StepView first, std::shared_ptr<SeriesRenderer> series, std::vector<std::string> paths);
+
+  int size() const { return int(facts_.size()); }
+  bool isSeries() const { return series_ != nullptr; }
+  StepView current() const;
+  /// The paths of the steps, in order.
+  std::vector<std::string> paths() const;
+  /// Makes step `index` current and starts loading the one after it (the first after the last,
+  /// as the page's play loops). Throws exa::Error for an index outside the steps.
+  StepView select(int index);
+  /// The steps (name, time, cycle where known) and the current step.
+  nlohmann::json describe() const;
+  /// A field's value range over every step (computed once per field).
+  range1f rangeOf(const std::string& field);
+
+private:
+  void record(const StepView& step);
+
+  mutable std::mutex mutex_;
+  mutable std::mutex loadMutex_; ///< one load at a time (the series renderer is not shared)
+  StepView current_;
+  std::shared_ptr<SeriesRenderer> series_;
+  std::vector<StepFacts> facts_;
+  std::map<std::string, range1f> ranges_;
+};
+
+nlohmann::json simulationJson(const SimulationState& s);
+
+} // namespace exa::view
