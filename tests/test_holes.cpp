@@ -30,7 +30,8 @@ void poke(const fs::path& scalars, size_t record, float value) {
 
 struct HolesTest : ::testing::Test {
   void SetUp() override {
-    dir = fs::path(EXABRICKS_TEST_TMP) / "holes";
+    // A folder per test: ctest runs the tests of this fixture at the same time.
+    dir = fs::path(EXABRICKS_TEST_TMP) / "holes" / ::testing::UnitTest::GetInstance()->current_test_info()->name();
     fs::remove_all(dir);
     fs::create_directories(dir);
     cells = generateScene({"blobs", 3000, 1, 3}); // fields scalar and radius
