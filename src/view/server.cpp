@@ -10,6 +10,7 @@
 #include "exabricks/render/transfer_function.h"
 
 #include "movie.h"
+#include "pictures.h"
 #include "session.h"
 #include "steps.h"
 #include "web_assets.h"
@@ -137,6 +138,7 @@ struct Server::Impl {
   std::unique_ptr<Session> session;
   std::unique_ptr<ViewSteps> steps;
   std::unique_ptr<MovieMaker> movies;
+  std::unique_ptr<PictureMaker> pictures;
   std::atomic<int> streams{0};
   std::atomic<int> snapshotWaits{0};
   std::atomic<bool> stopping{false};
@@ -302,6 +304,7 @@ struct Server::Impl {
   void routes();
   void seriesRoutes();
   void movieRoutes();
+  void pictureRoutes();
 };
 
 void Server::Impl::routes() {
@@ -496,6 +499,7 @@ void Server::Impl::routes() {
   });
   seriesRoutes();
   movieRoutes();
+  pictureRoutes();
   // An uploaded transfer function (ParaView preset or exabricks JSON), returned in exabricks
   // form; a preset's points are rescaled to the data's range as ParaView applies presets.
   http.Post("/api/transfer-function", [](const httplib::Request& req, httplib::Response& res) {
@@ -639,6 +643,75 @@ void Server::Impl::movieRoutes() {
   });
 }
 
+void Server::Impl::pictureRoutes() {
+  http.Post("/api/picture", [this](const httplib::Request& req, httplib::Response& res) {
+    json body = parseBody(req);
+    if (!body.is_object() || !body.contains("scene") || !body["scene"].is_object())
+      reject(400, "picture: the body must be an object with a \"scene\" object and \"width\", \"height\", "
+                  "\"spp\" and \"format\" (png, png16, exr or pfm)");
+    for (const auto& [key, value] : body.items())
+      if (key != "scene" && key != "width" && key != "height" && key != "spp" && key != "format")
+        reject(400, strCat("picture: unknown key '", key, "'"));
+    json& frame = body["scene"]["frame"];
+    if (!frame.is_object()) frame = json::object();
+    frame["width"] = intOf(body, "width", "picture");
+    frame["height"] = intOf(body, "height", "picture");
+    frame["samples_per_pixel"] = intOf(body, "spp", "picture");
+    const std::string format = body.value("format", std::string("png"));
+    PictureInput in;
+    if (format == "png" || format == "png16" || format == "exr" || format == "pfm")
+      in.format = format == "png16" ? ImageFormat::Png16
+                  : format == "exr" ? ImageFormat::Exr
+                  : format == "pfm" ? ImageFormat::Pfm
+                                    : ImageFormat::Png;
+    else
+      reject(400, strCat("picture: format is '", format, "' (choose from: png, png16, exr, pfm)"));
+    in.doc = documentFrom(body["scene"].dump(), "picture scene");
+    in.step = steps->current();
+    in.legends.dataset = legendDatasetLabel(in.step.input);
+    in.renderer = content.rendererOptions;
+    const Model& model = *in.step.model;
+    const std::string& field = model.fieldNames[size_t(
+        model.requireField(in.doc.scene.layers.empty() ? std::string() : in.doc.scene.layers[0].field))];
+    in.name = pictureName(in.step.input.empty() ? "exabricks" : in.step.input, field, in.doc.frame.width,
+                          in.doc.frame.height, in.format);
+    if (pictures->busy()) reject(409, "a picture is already being rendered: wait for it or cancel it");
+    const std::string id = pictures->start(std::move(in));
+    sendJson(res, pictures->status(id));
+  });
+  auto idOf = [](const httplib::Request& req, const char* what) {
+    if (!req.has_param("id")) reject(400, strCat(what, ": parameter 'id' is missing"));
+    return req.get_param_value("id");
+  };
+  http.Get("/api/picture", [this, idOf](const httplib::Request& req, httplib::Response& res) {
+    const json j = pictures->status(idOf(req, "picture"));
+    if (j.is_null()) reject(404, "picture: no picture has that id");
+    sendJson(res, j);
+  });
+  http.Post("/api/picture/cancel", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = parseBody(req);
+    if (!body.is_object() || !body.contains("id") || !body["id"].is_string())
+      reject(400, "picture cancel: the body must be an object with the picture's \"id\"");
+    const std::string id = body["id"].get<std::string>();
+    if (!pictures->cancel(id)) reject(404, "picture cancel: no picture has that id");
+    sendJson(res, pictures->status(id));
+  });
+  http.Get("/api/picture/file", [this, idOf](const httplib::Request& req, httplib::Response& res) {
+    const std::string id = idOf(req, "picture file");
+    const json j = pictures->status(id);
+    if (j.is_null()) reject(404, "picture file: no picture has that id");
+    const auto [path, name] = pictures->file(id);
+    if (path.empty()) reject(409, strCat("picture file: the picture is ", j["state"].get<std::string>(), ", not done"));
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in && !in.eof()) reject(500, "picture file: cannot read the picture");
+    res.set_header("Content-Disposition", strCat("attachment; filename=\"", name, "\""));
+    res.set_header("Cache-Control", "no-store");
+    const bool png = name.size() > 4 && name.substr(name.size() - 4) == ".png";
+    res.set_content(std::move(bytes), png ? "image/png" : "application/octet-stream");
+  });
+}
+
 Server::Server(ViewContent content, ServerOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->content = std::move(content);
   impl_->options = std::move(options);
@@ -674,6 +747,7 @@ void Server::bind() {
   s.steps = std::make_unique<ViewSteps>(StepView{0, s.content.model, s.content.dataset, s.content.input},
                                         s.content.series, s.content.steps);
   s.movies = std::make_unique<MovieMaker>();
+  s.pictures = std::make_unique<PictureMaker>();
   LegendText legends;
   legends.dataset = s.content.name;
   s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, std::move(legends));

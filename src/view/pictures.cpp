@@ -1,0 +1,175 @@
+#include "pictures.h"
+
+#include "exabricks/core/error.h"
+
+#include <atomic>
+#include <cctype>
+#include <filesystem>
+#include <random>
+#include <thread>
+#include <unistd.h>
+
+namespace exa::view {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+struct PictureMaker::Job {
+  std::string id, path, name;
+  int passes = 1;
+  std::atomic<uint64_t> tilesDone{0}, tilesAll{1};
+  std::atomic<bool> cancel{false};
+  mutable std::mutex mutex;
+  std::string state = "rendering"; ///< rendering, done, failed, cancelled
+  std::string error;
+  std::thread thread;
+
+  void set(const std::string& s, const std::string& why = {}) {
+    std::lock_guard<std::mutex> lock(mutex);
+    state = s;
+    error = why;
+  }
+  std::string get() const {
+    std::lock_guard<std::mutex> lock(mutex);
+    return state;
+  }
+};
+
+namespace {
+
+std::string randomId() {
+  std::random_device device;
+  std::string id;
+  static const char* hex = "0123456789abcdef";
+  for (int i = 0; i < 24; ++i)
+    id += hex[device() & 15u];
+  return id;
+}
+
+std::string fileWord(const std::string& text) {
+  std::string out;
+  for (char c : text)
+    out += std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '_' ? c : '_';
+  const size_t b = out.find_first_not_of("._"), e = out.find_last_not_of("._");
+  return b == std::string::npos ? std::string() : out.substr(b, e - b + 1);
+}
+
+} // namespace
+
+std::string pictureName(const std::string& dataset, const std::string& field, int width, int height,
+                        ImageFormat format) {
+  std::string stem = fs::path(dataset).filename().string();
+  if (stem.empty()) stem = fs::path(dataset).parent_path().filename().string(); // "run/plt00100/"
+  stem = fileWord(fs::path(stem).stem().string());
+  const char* ext = format == ImageFormat::Exr ? ".exr" : format == ImageFormat::Pfm ? ".pfm" : ".png";
+  const std::string f = fileWord(field);
+  return strCat(stem.empty() ? "exabricks" : stem, f.empty() ? "" : "-", f, "-", width, "x", height, ext);
+}
+
+PictureMaker::PictureMaker() {
+  folder_ =
+      (fs::temp_directory_path() / ("exabricks-pictures-" + std::to_string(::getpid()) + "-" + randomId())).string();
+}
+
+PictureMaker::~PictureMaker() {
+  std::map<std::string, std::shared_ptr<Job>> jobs;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs.swap(jobs_);
+  }
+  for (auto& [id, job] : jobs) {
+    job->cancel = true;
+    if (job->thread.joinable()) job->thread.join();
+  }
+  std::error_code ec;
+  fs::remove_all(folder_, ec);
+}
+
+bool PictureMaker::busy() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const auto& [id, job] : jobs_)
+    if (job->get() == "rendering") return true;
+  return false;
+}
+
+std::string PictureMaker::start(PictureInput input) {
+  if (busy()) fail("a picture is already being rendered: wait for it or cancel it");
+  auto job = std::make_shared<Job>();
+  job->id = randomId();
+  job->name = input.name;
+  job->passes = input.doc.frame.samplesPerPixel;
+  const fs::path dir = fs::path(folder_) / job->id;
+  fs::create_directories(dir);
+  job->path = (dir / input.name).string();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    jobs_[job->id] = job;
+  }
+  Job* j = job.get();
+  job->thread = std::thread([this, j, in = std::move(input)] { run(*j, in); });
+  return job->id;
+}
+
+void PictureMaker::run(Job& job, const PictureInput& in) {
+  std::error_code ec;
+  try {
+    Renderer renderer(*in.step.model, in.step.dataset);
+    renderer.setOptions(in.renderer);
+    renderer.setScene(in.doc.scene);
+    const Frame& frame = in.doc.frame;
+    FrameBuffer buffer(frame.width, frame.height);
+    job.tilesAll = uint64_t(buffer.tileCount()) * uint64_t(frame.samplesPerPixel);
+    PassControl control;
+    control.cancel = &job.cancel;
+    control.progress = [&](uint64_t, uint64_t) { ++job.tilesDone; };
+    if (!renderer.renderPasses(frame, buffer, frame.samplesPerPixel, control)) {
+      fs::remove_all(fs::path(job.path).parent_path(), ec);
+      job.set("cancelled");
+      return;
+    }
+    Image image = buffer.resolve();
+    drawLegends(in.doc.scene, frame, *in.step.model, in.step.dataset, in.legends, image);
+    writeImage(job.path, image, in.format, in.doc.scene.keepAlpha, in.doc.scene.background);
+    job.set("done");
+  } catch (const std::exception& e) {
+    fs::remove_all(fs::path(job.path).parent_path(), ec);
+    job.set("failed", e.what());
+  }
+}
+
+json PictureMaker::status(const std::string& id) const {
+  std::shared_ptr<Job> job;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const auto it = jobs_.find(id);
+    if (it == jobs_.end()) return nullptr;
+    job = it->second;
+  }
+  std::lock_guard<std::mutex> lock(job->mutex);
+  json j{{"id", job->id},         {"state", job->state},           {"name", job->name},
+         {"passes", job->passes}, {"tiles", job->tilesAll.load()}, {"done", job->tilesDone.load()}};
+  if (!job->error.empty()) j["error"] = job->error;
+  if (job->state == "done") {
+    std::error_code ec;
+    j["bytes"] = fs::file_size(job->path, ec);
+    j["file"] = "/api/picture/file?id=" + job->id;
+  }
+  return j;
+}
+
+bool PictureMaker::cancel(const std::string& id) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = jobs_.find(id);
+  if (it == jobs_.end()) return false;
+  it->second->cancel = true;
+  return true;
+}
+
+std::pair<std::string, std::string> PictureMaker::file(const std::string& id) const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  const auto it = jobs_.find(id);
+  if (it == jobs_.end() || it->second->get() != "done") return {};
+  return {it->second->path, it->second->name};
+}
+
+} // namespace exa::view
