@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
@@ -44,6 +46,7 @@ struct Fixture {
   int ghost = 0;
   int dim = 3;
   int ratio = 4;
+  int64_t nanAt = -1; ///< this level-0 cell's first field is NaN
   fs::path dir;
 
   static float value(int level, int64_t i) { return float(100 * level) + float(i); }
@@ -86,7 +89,8 @@ struct Fixture {
                 x >= ghost && y >= ghost && z >= ghost && x < n.x - ghost && y < n.y - ghost && z < n.z - ghost;
             const vec3i v = hi - lo + vec3i(1);
             const int64_t i = (int64_t(z - ghost) * v.y + (y - ghost)) * v.x + (x - ghost);
-            const double value = inside ? value1(level, i) + 1000.0 * comp : -7.0;
+            double value = inside ? value1(level, i) + 1000.0 * comp : -7.0;
+            if (inside && level == 0 && comp == 0 && i == nanAt) value = std::numeric_limits<double>::quiet_NaN();
             unsigned char b[8];
             if (float32) {
               const float f = float(value);
@@ -166,6 +170,21 @@ TEST(Amrex, SharedPeleLmSampleValuesAtCellCentres) {
     ASSERT_TRUE(sampleField(m.view(0), centre, v));
     EXPECT_NEAR(v, copy.fields[0].values[i], 1e-9 * std::abs(v));
   }
+}
+
+TEST(Amrex, NaNIsRefusedByNameOrKeptAsAHole) {
+  Fixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "amrex-nan";
+  f.nanAt = 5; // a coarse cell that no finer box covers
+  f.write();
+  EXPECT_NE(errorOf(f.dir.string()).find("Cell_D_00000"), std::string::npos) << errorOf(f.dir.string());
+  LoadOptions o;
+  o.nonFinite = NonFinite::Holes;
+  const Model m = loadModel(f.dir.string(), o);
+  EXPECT_EQ(m.cellCount(), 64u - 2 + 2 * 64 - 1); // the cell is a hole in both fields
+  for (const auto& values : m.fieldValues)
+    for (float v : values)
+      EXPECT_TRUE(std::isfinite(v));
 }
 
 TEST(Amrex, FixtureBothPrecisionsByteOrdersAndGhostCells) {

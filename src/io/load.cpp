@@ -13,6 +13,7 @@
 #include "exabricks/io/vtk_amr.h"
 
 #include "hdf5_file.h"
+#include "patches.h"
 
 #include <algorithm>
 #include <cmath>
@@ -63,23 +64,44 @@ bool probesByName(const FormatReader& r) { return r.kind == InputKind::Native ||
 const std::vector<FormatReader>& formatReaders() {
   static const std::vector<FormatReader> readers = {
       {InputKind::Amrex, "AMReX plotfile", isAmrexPlotfile, listAmrexFields,
-       [](const std::string& p, const ReadRequest& r) { return readAmrex(p, r.fields, r.box); }, amrexFieldRange,
-       amrexCensus},
+       [](const std::string& p, const ReadRequest& r) {
+         const io::KeepNonFinite keep(r.keepNonFinite);
+         return readAmrex(p, r.fields, r.box);
+       },
+       amrexFieldRange, amrexCensus},
       {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
-       [](const std::string& p, const ReadRequest& r) { return readChombo(p, r.fields); }},
+       [](const std::string& p, const ReadRequest& r) {
+         const io::KeepNonFinite keep(r.keepNonFinite);
+         return readChombo(p, r.fields);
+       }},
       {InputKind::Flash, "FLASH HDF5 file", isFlashFile, listFlashFields,
-       [](const std::string& p, const ReadRequest& r) { return readFlash(p, r.fields); }},
+       [](const std::string& p, const ReadRequest& r) {
+         const io::KeepNonFinite keep(r.keepNonFinite);
+         return readFlash(p, r.fields);
+       }},
       {InputKind::Enzo, "Enzo output", isEnzoOutput, listEnzoFields,
-       [](const std::string& p, const ReadRequest& r) { return readEnzo(p, r.fields); }},
+       [](const std::string& p, const ReadRequest& r) {
+         const io::KeepNonFinite keep(r.keepNonFinite);
+         return readEnzo(p, r.fields);
+       }},
       {InputKind::VtkAmr, "VTK overlapping AMR file", isVtkAmrFile, listVtkAmrFields,
-       [](const std::string& p, const ReadRequest& r) { return readVtkAmr(p, r.fields); }},
+       [](const std::string& p, const ReadRequest& r) {
+         const io::KeepNonFinite keep(r.keepNonFinite);
+         return readVtkAmr(p, r.fields);
+       }},
       {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
-       [](const std::string& p, const ReadRequest& r) { return readRaw(p, r.raw); }},
+       [](const std::string& p, const ReadRequest& r) {
+         const io::KeepNonFinite keep(r.keepNonFinite);
+         return readRaw(p, r.raw);
+       }},
       {InputKind::Native, "exabricks cells", isNativeName, listNativeFields,
        [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields, r.box, r.keepNonFinite); },
        nullptr, nativeCensus},
       {InputKind::Grids, ".grids fixture", isGridsName, scalarOnly,
-       [](const std::string& p, const ReadRequest&) { return readGrids(p); }},
+       [](const std::string& p, const ReadRequest& r) {
+         const io::KeepNonFinite keep(r.keepNonFinite);
+         return readGrids(p);
+       }},
   };
   return readers;
 }

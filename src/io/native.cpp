@@ -3,6 +3,7 @@
 #include "exabricks/core/error.h"
 
 #include "checked.h"
+#include "patches.h"
 
 #include <algorithm>
 #include <atomic>
@@ -267,7 +268,8 @@ CellSet readGrids(const std::string& path) {
       char* end = nullptr;
       v[i] = std::strtod(tokens[7 + i].c_str(), &end);
       if (*end != 0) fail(path, ": line ", lineNo, ": '", tokens[7 + i], "' is not a number");
-      if (!std::isfinite(v[i]) || std::fabs(v[i]) > 3.4e38)
+      const bool kept = io::tKeepNonFinite && !std::isfinite(v[i]); // its cells become holes
+      if (!kept && (!std::isfinite(v[i]) || std::fabs(v[i]) > 3.4e38))
         fail(path, ": line ", lineNo, ": value ", tokens[7 + i], " is not a finite float");
     }
     const vec3l n(ints[3], ints[4], ints[5]);

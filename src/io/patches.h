@@ -69,10 +69,28 @@ private:
 /// Throws the error for a value that is not a finite float32; `where` names file, record, field.
 [[noreturn]] void badValue(double value, const std::string& where);
 
+/// Whether the reads on this thread keep NaN and infinite values (LoadOptions::nonFinite: the
+/// loader then makes their cells holes); set for a read by KeepNonFinite.
+inline thread_local bool tKeepNonFinite = false;
+
+/// Keeps NaN and infinite values in the reads of this thread while it lives (when `keep`).
+class KeepNonFinite {
+public:
+  explicit KeepNonFinite(bool keep) : before_(tKeepNonFinite) { tKeepNonFinite = keep; }
+  ~KeepNonFinite() { tKeepNonFinite = before_; }
+  KeepNonFinite(const KeepNonFinite&) = delete;
+  KeepNonFinite& operator=(const KeepNonFinite&) = delete;
+
+private:
+  bool before_;
+};
+
 /// Converts a value to float32; NaN, infinities and values outside the float32 range throw
-/// with `where()` (file, record and field) in the message. Inline: it runs once per value.
+/// with `where()` (file, record and field) in the message, except NaN and infinities under
+/// KeepNonFinite, which stay what they are. Inline: it runs once per value.
 template <typename Where> inline float toFloat32(double value, Where&& where) {
   if (std::abs(value) <= 3.4028234663852886e38) return float(value); // false for NaN and inf
+  if (tKeepNonFinite && (std::isnan(value) || std::isinf(value))) return float(value);
   badValue(value, where());
 }
 
