@@ -3,6 +3,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/render/camera_path.h"
+#include "exabricks/render/legends.h"
 #include "exabricks/workflows/encode.h"
 #include "exabricks/workflows/frame_plan.h"
 
@@ -121,8 +122,13 @@ std::string MovieMaker::start(MovieInput input) {
 
 void MovieMaker::run(Job& job, const MovieInput& in) {
   const std::string framesDir = (fs::path(job.dir) / "frames").string();
-  auto write = [&](int i, const Scene& scene, const Image& image) {
+  // Each frame with the legends its scene asks for, labelled with the dataset it shows.
+  auto write = [&](int i, const Scene& scene, const Frame& frame, const Model& model, const DatasetInfo& info,
+                   const std::string& input, Image& image) {
     if (job.cancel) throw Cancelled{};
+    LegendText text;
+    text.dataset = legendDatasetLabel(input);
+    drawLegends(scene, frame, model, info, text, image);
     writePng(framePath(framesDir, i), image, scene.keepAlpha, scene.background);
     ++job.done;
   };
@@ -133,9 +139,10 @@ void MovieMaker::run(Job& job, const MovieInput& in) {
       const FramePlan plan = FramePlan::perStep(int(in.steps.size()));
       std::vector<int> frames(size_t(plan.frames));
       std::iota(frames.begin(), frames.end(), 0);
-      series.renderFrames(
-          plan, in.doc.scene, in.doc.frame, frames,
-          [&](int i, const SeriesStep&, const Scene& s, const Frame&, Image& image) { write(i, s, image); });
+      series.renderFrames(plan, in.doc.scene, in.doc.frame, frames,
+                          [&](int i, const SeriesStep& step, const Scene& s, const Frame& f, Image& image) {
+                            write(i, s, f, *step.model, step.info, in.steps[size_t(step.index)], image);
+                          });
     } else {
       FramePlan plan;
       plan.frames = job.frames;
@@ -148,7 +155,8 @@ void MovieMaker::run(Job& job, const MovieInput& in) {
         Frame f = in.doc.frame;
         plan.view(i, s, f);
         renderer.setScene(s);
-        write(i, s, renderer.render(f));
+        Image image = renderer.render(f);
+        write(i, s, f, *in.current.model, in.current.dataset, in.current.input, image);
       }
     }
     if (job.cancel) throw Cancelled{};

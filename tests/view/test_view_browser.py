@@ -275,3 +275,35 @@ def test_errors_show_over_the_image_and_a_stopped_server_says_so(start_viewer, b
                             "the stopped-server banner")
     assert "stopped" in text and placed, text
     browser.save_screenshot(str(artifacts / "viewer-6-stopped.png"))
+
+
+def test_the_legend_toggles_draw_the_legends_as_the_command_line_does(start_viewer, cli, browser, tmp_path,
+                                                                       artifacts):
+    """The page's colour-bar and annotation boxes set the scene's legends: the refined canvas shows
+    them (it changes where they are drawn) and equals the command line's render of the saved scene,
+    legends and all; unticking them gives the picture without."""
+    v = start_viewer()
+    browser.get(v.url + "&size=%d" % SIZE)
+    first = wait_refined(browser)
+    plain = canvas_pixels(browser)
+    for key in ("legends.color_bar", "legends.annotation"):
+        box = browser.find_element(By.CSS_SELECTOR, "input[data-setting='%s']" % key)
+        assert not box.is_selected()
+        box.click()
+    shown = wait_refined(browser, first["request"])
+    with_legends = canvas_pixels(browser)
+    browser.save_screenshot(str(artifacts / "viewer-legends.png"))
+    changed = np.abs(with_legends.astype(int) - plain.astype(int)).max(axis=2) > 40
+    assert changed.sum() > 200, "the legends did not appear"
+    saved = json.loads(v.request("GET", "/api/scene")[1])
+    assert saved["legends"]["color_bar"] is True and saved["legends"]["annotation"] is True
+    scene = tmp_path / "legends.json"
+    scene.write_text(json.dumps(saved))
+    out = tmp_path / "legends.png"
+    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
+    status, png, _ = v.request("GET", "/api/snapshot.png")
+    assert status == 200 and png == out.read_bytes()
+    for key in ("legends.color_bar", "legends.annotation"):
+        browser.find_element(By.CSS_SELECTOR, "input[data-setting='%s']" % key).click()
+    wait_refined(browser, shown["request"])
+    assert np.abs(canvas_pixels(browser).astype(int) - plain.astype(int)).max() <= 2
