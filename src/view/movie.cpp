@@ -10,7 +10,6 @@
 #include <cmath>
 #include <filesystem>
 #include <numeric>
-#include <random>
 #include <unistd.h>
 
 namespace exa::view {
@@ -18,39 +17,15 @@ namespace exa::view {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-struct MovieMaker::Job {
-  std::string id, dir, output;
+struct MovieMaker::MovieJob : Job {
+  std::string dir, output;
   int frames = 0;
   std::atomic<int> done{0};
-  std::atomic<bool> cancel{false};
-  mutable std::mutex mutex;
-  std::string state = "rendering"; ///< rendering, encoding, done, failed, cancelled
-  std::string error;
-  std::thread thread;
-
-  void set(const std::string& s, const std::string& why = {}) {
-    std::lock_guard<std::mutex> lock(mutex);
-    state = s;
-    error = why;
-  }
-  std::string get() const {
-    std::lock_guard<std::mutex> lock(mutex);
-    return state;
-  }
 };
 
 namespace {
 
 struct Cancelled {};
-
-std::string randomId() {
-  std::random_device device;
-  std::string id;
-  static const char* hex = "0123456789abcdef";
-  for (int i = 0; i < 24; ++i)
-    id += hex[device() & 15u];
-  return id;
-}
 
 /// An orbit around the camera's look-at point at its distance: the box Camera::frame frames that
 /// way, and the camera's azimuth and elevation as the start.
@@ -72,19 +47,12 @@ OrbitView orbitOf(const Camera& c) {
 } // namespace
 
 MovieMaker::MovieMaker() {
-  folder_ = (fs::temp_directory_path() / ("exabricks-view-" + std::to_string(::getpid()) + "-" + randomId())).string();
+  folder_ =
+      (fs::temp_directory_path() / ("exabricks-view-" + std::to_string(::getpid()) + "-" + randomHex(24))).string();
 }
 
 MovieMaker::~MovieMaker() {
-  std::map<std::string, std::shared_ptr<Job>> jobs;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    jobs.swap(jobs_);
-  }
-  for (auto& [id, job] : jobs) {
-    job->cancel = true;
-    if (job->thread.joinable()) job->thread.join();
-  }
+  jobs_.stopAll();
   std::error_code ec;
   fs::remove_all(folder_, ec);
 }
@@ -92,12 +60,7 @@ MovieMaker::~MovieMaker() {
 bool MovieMaker::canEncode() { return !findProgram("ffmpeg").empty(); }
 
 bool MovieMaker::busy() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  for (const auto& [id, job] : jobs_) {
-    const std::string s = job->get();
-    if (s == "rendering" || s == "encoding") return true;
-  }
-  return false;
+  return jobs_.any([](const std::string& s) { return s == "rendering" || s == "encoding"; });
 }
 
 std::string MovieMaker::start(MovieInput input) {
@@ -105,22 +68,18 @@ std::string MovieMaker::start(MovieInput input) {
     fail("ffmpeg is not installed on the machine the viewer runs on, so it cannot encode movies; install ffmpeg "
          "(or use `exabricks movie` with a folder for the frames)");
   if (busy()) fail("a movie is already being made: wait for it or cancel it");
-  auto job = std::make_shared<Job>();
-  job->id = randomId();
+  auto job = std::make_shared<MovieJob>();
   job->dir = (fs::path(folder_) / job->id).string();
   job->output = (fs::path(job->dir) / "movie.mp4").string();
   job->frames = input.steps.size() > 1 ? int(input.steps.size()) : std::max(1, input.orbitFrames);
   fs::create_directories(fs::path(job->dir) / "frames");
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    jobs_[job->id] = job;
-  }
-  Job* j = job.get();
+  jobs_.add(job);
+  MovieJob* j = job.get();
   job->thread = std::thread([this, j, in = std::move(input)] { run(*j, in); });
   return job->id;
 }
 
-void MovieMaker::run(Job& job, const MovieInput& in) {
+void MovieMaker::run(MovieJob& job, const MovieInput& in) {
   const std::string framesDir = (fs::path(job.dir) / "frames").string();
   // Each frame with the legends its scene asks for, labelled with the dataset it shows.
   auto write = [&](int i, const Scene& scene, const Frame& frame, const Model& model, const DatasetInfo& info,
@@ -178,17 +137,12 @@ void MovieMaker::run(Job& job, const MovieInput& in) {
 }
 
 json MovieMaker::status(const std::string& id) const {
-  std::shared_ptr<Job> job;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const auto it = jobs_.find(id);
-    if (it == jobs_.end()) return nullptr;
-    job = it->second;
-  }
-  std::lock_guard<std::mutex> lock(job->mutex);
-  json j{{"id", job->id}, {"state", job->state}, {"frames", job->frames}, {"done", job->done.load()}};
-  if (!job->error.empty()) j["error"] = job->error;
-  if (job->state == "done") {
+  const std::shared_ptr<MovieJob> job = jobs_.find(id);
+  if (!job) return nullptr;
+  const std::string state = job->state(), error = job->error();
+  json j{{"id", job->id}, {"state", state}, {"frames", job->frames}, {"done", job->done.load()}};
+  if (!error.empty()) j["error"] = error;
+  if (state == "done") {
     std::error_code ec;
     j["bytes"] = fs::file_size(job->output, ec);
     j["file"] = "/api/movie/file?id=" + job->id;
@@ -196,19 +150,11 @@ json MovieMaker::status(const std::string& id) const {
   return j;
 }
 
-bool MovieMaker::cancel(const std::string& id) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const auto it = jobs_.find(id);
-  if (it == jobs_.end()) return false;
-  it->second->cancel = true;
-  return true;
-}
+bool MovieMaker::cancel(const std::string& id) { return jobs_.cancel(id); }
 
 std::string MovieMaker::file(const std::string& id) const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const auto it = jobs_.find(id);
-  if (it == jobs_.end() || it->second->get() != "done") return {};
-  return it->second->output;
+  const std::shared_ptr<MovieJob> job = jobs_.find(id);
+  return job && job->state() == "done" ? job->output : std::string();
 }
 
 } // namespace exa::view

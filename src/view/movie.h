@@ -6,6 +6,7 @@
 
 #include "exabricks/render/scene.h"
 #include "exabricks/workflows/series.h"
+#include "jobs.h"
 #include "steps.h"
 
 #include <nlohmann/json.hpp>
@@ -51,12 +52,11 @@ public:
   std::string file(const std::string& id) const;
 
 private:
-  struct Job;
-  void run(Job& job, const MovieInput& input);
+  struct MovieJob;
+  void run(MovieJob& job, const MovieInput& input);
 
   std::string folder_; ///< holds one subfolder per movie
-  mutable std::mutex mutex_;
-  std::map<std::string, std::shared_ptr<Job>> jobs_;
+  JobTable<MovieJob> jobs_;
 };
 
 } // namespace exa::view

@@ -5,7 +5,6 @@
 #include <atomic>
 #include <cctype>
 #include <filesystem>
-#include <random>
 #include <thread>
 #include <unistd.h>
 
@@ -14,37 +13,13 @@ namespace exa::view {
 namespace fs = std::filesystem;
 using json = nlohmann::json;
 
-struct PictureMaker::Job {
-  std::string id, path, name;
+struct PictureMaker::PictureJob : Job {
+  std::string path, name;
   int passes = 1;
   std::atomic<uint64_t> tilesDone{0}, tilesAll{1};
-  std::atomic<bool> cancel{false};
-  mutable std::mutex mutex;
-  std::string state = "rendering"; ///< rendering, done, failed, cancelled
-  std::string error;
-  std::thread thread;
-
-  void set(const std::string& s, const std::string& why = {}) {
-    std::lock_guard<std::mutex> lock(mutex);
-    state = s;
-    error = why;
-  }
-  std::string get() const {
-    std::lock_guard<std::mutex> lock(mutex);
-    return state;
-  }
 };
 
 namespace {
-
-std::string randomId() {
-  std::random_device device;
-  std::string id;
-  static const char* hex = "0123456789abcdef";
-  for (int i = 0; i < 24; ++i)
-    id += hex[device() & 15u];
-  return id;
-}
 
 std::string fileWord(const std::string& text) {
   std::string out;
@@ -68,49 +43,34 @@ std::string pictureName(const std::string& dataset, const std::string& field, in
 
 PictureMaker::PictureMaker() {
   folder_ =
-      (fs::temp_directory_path() / ("exabricks-pictures-" + std::to_string(::getpid()) + "-" + randomId())).string();
+      (fs::temp_directory_path() / ("exabricks-pictures-" + std::to_string(::getpid()) + "-" + randomHex(24))).string();
 }
 
 PictureMaker::~PictureMaker() {
-  std::map<std::string, std::shared_ptr<Job>> jobs;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    jobs.swap(jobs_);
-  }
-  for (auto& [id, job] : jobs) {
-    job->cancel = true;
-    if (job->thread.joinable()) job->thread.join();
-  }
+  jobs_.stopAll();
   std::error_code ec;
   fs::remove_all(folder_, ec);
 }
 
 bool PictureMaker::busy() const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  for (const auto& [id, job] : jobs_)
-    if (job->get() == "rendering") return true;
-  return false;
+  return jobs_.any([](const std::string& s) { return s == "rendering"; });
 }
 
 std::string PictureMaker::start(PictureInput input) {
   if (busy()) fail("a picture is already being rendered: wait for it or cancel it");
-  auto job = std::make_shared<Job>();
-  job->id = randomId();
+  auto job = std::make_shared<PictureJob>();
   job->name = input.name;
   job->passes = input.doc.frame.samplesPerPixel;
   const fs::path dir = fs::path(folder_) / job->id;
   fs::create_directories(dir);
   job->path = (dir / input.name).string();
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    jobs_[job->id] = job;
-  }
-  Job* j = job.get();
+  jobs_.add(job);
+  PictureJob* j = job.get();
   job->thread = std::thread([this, j, in = std::move(input)] { run(*j, in); });
   return job->id;
 }
 
-void PictureMaker::run(Job& job, const PictureInput& in) {
+void PictureMaker::run(PictureJob& job, const PictureInput& in) {
   std::error_code ec;
   try {
     Renderer renderer(*in.step.model, in.step.dataset);
@@ -138,18 +98,17 @@ void PictureMaker::run(Job& job, const PictureInput& in) {
 }
 
 json PictureMaker::status(const std::string& id) const {
-  std::shared_ptr<Job> job;
-  {
-    std::lock_guard<std::mutex> lock(mutex_);
-    const auto it = jobs_.find(id);
-    if (it == jobs_.end()) return nullptr;
-    job = it->second;
-  }
-  std::lock_guard<std::mutex> lock(job->mutex);
-  json j{{"id", job->id},         {"state", job->state},           {"name", job->name},
-         {"passes", job->passes}, {"tiles", job->tilesAll.load()}, {"done", job->tilesDone.load()}};
-  if (!job->error.empty()) j["error"] = job->error;
-  if (job->state == "done") {
+  const std::shared_ptr<PictureJob> job = jobs_.find(id);
+  if (!job) return nullptr;
+  const std::string state = job->state(), error = job->error();
+  json j{{"id", job->id},
+         {"state", state},
+         {"name", job->name},
+         {"passes", job->passes},
+         {"tiles", job->tilesAll.load()},
+         {"done", job->tilesDone.load()}};
+  if (!error.empty()) j["error"] = error;
+  if (state == "done") {
     std::error_code ec;
     j["bytes"] = fs::file_size(job->path, ec);
     j["file"] = "/api/picture/file?id=" + job->id;
@@ -157,19 +116,12 @@ json PictureMaker::status(const std::string& id) const {
   return j;
 }
 
-bool PictureMaker::cancel(const std::string& id) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const auto it = jobs_.find(id);
-  if (it == jobs_.end()) return false;
-  it->second->cancel = true;
-  return true;
-}
+bool PictureMaker::cancel(const std::string& id) { return jobs_.cancel(id); }
 
 std::pair<std::string, std::string> PictureMaker::file(const std::string& id) const {
-  std::lock_guard<std::mutex> lock(mutex_);
-  const auto it = jobs_.find(id);
-  if (it == jobs_.end() || it->second->get() != "done") return {};
-  return {it->second->path, it->second->name};
+  const std::shared_ptr<PictureJob> job = jobs_.find(id);
+  if (!job || job->state() != "done") return {};
+  return {job->path, job->name};
 }
 
 } // namespace exa::view

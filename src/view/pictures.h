@@ -7,13 +7,12 @@
 #include "exabricks/documents/image.h"
 #include "exabricks/render/legends.h"
 #include "exabricks/render/renderer.h"
+#include "jobs.h"
 #include "steps.h"
 
 #include <nlohmann/json.hpp>
 
-#include <map>
 #include <memory>
-#include <mutex>
 #include <string>
 
 namespace exa::view {
@@ -45,12 +44,11 @@ public:
   std::pair<std::string, std::string> file(const std::string& id) const;
 
 private:
-  struct Job;
-  void run(Job& job, const PictureInput& input);
+  struct PictureJob;
+  void run(PictureJob& job, const PictureInput& input);
 
   std::string folder_;
-  mutable std::mutex mutex_;
-  std::map<std::string, std::shared_ptr<Job>> jobs_;
+  JobTable<PictureJob> jobs_;
 };
 
 /// A file name of the dataset, field and size, with the format's extension

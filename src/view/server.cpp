@@ -9,6 +9,7 @@
 #include "exabricks/render/scene_vocabulary.h"
 #include "exabricks/render/transfer_function.h"
 
+#include "jobs.h"
 #include "movie.h"
 #include "pictures.h"
 #include "session.h"
@@ -34,15 +35,6 @@ namespace exa::view {
 using json = nlohmann::json;
 
 namespace {
-
-std::string randomToken() {
-  std::random_device device;
-  std::string token;
-  static const char* hex = "0123456789abcdef";
-  for (int i = 0; i < 48; ++i)
-    token += hex[device() & 15u];
-  return token;
-}
 
 /// Compares in time independent of where the strings differ.
 bool sameToken(const std::string& a, const std::string& b) {
@@ -715,7 +707,7 @@ void Server::Impl::pictureRoutes() {
 Server::Server(ViewContent content, ServerOptions options) : impl_(std::make_unique<Impl>()) {
   impl_->content = std::move(content);
   impl_->options = std::move(options);
-  impl_->token = impl_->options.token.empty() ? randomToken() : impl_->options.token;
+  impl_->token = impl_->options.token.empty() ? randomHex(48) : impl_->options.token;
 }
 
 Server::~Server() { stop(); }
