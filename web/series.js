@@ -246,9 +246,46 @@ function setupKeys() {
   });
 }
 
+// ---------------------------------------------------------------------------------------------
+// NaN and infinite values as holes
+
+/// Reads the step on screen again with NaN and infinite values as holes (or refused), and says
+/// how many cells became holes; a dataset that cannot be read so stays, with the reason.
+async function setHoles(holes) {
+  const box = $('nan-holes');
+  box.disabled = true;
+  try {
+    const info = await postJson('/api/holes', { holes });
+    const counted = info.holes;
+    delete info.holes;
+    viewer.info = info;
+    syncControls();
+    if (series.info) {
+      series.info = await apiJson('/api/series');
+      showStep();
+    }
+    requestRender(false);
+    if (holes) showMessage(`${counted.cells} cells with NaN or infinite values are holes`, 'info');
+    else clearMessage();
+  } catch (e) {
+    box.checked = !holes;
+    if (isNetworkError(e)) serverGone();
+    else showMessage(e.message);
+  } finally {
+    box.disabled = false;
+  }
+}
+
+function setupHoles() {
+  const box = $('nan-holes');
+  box.checked = !!viewer.info.nan_as_holes;
+  box.addEventListener('change', () => setHoles(box.checked));
+}
+
 async function startSeries() {
   setupKeys();
   setupMovie();
+  setupHoles();
   try {
     await setupSeries();
   } catch (e) {

@@ -138,6 +138,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   content.input = doc.input;
   content.name = datasetLabel(o.inputs.empty() ? o.scene.in.input : o.inputs[0]);
   content.initial = doc;
+  content.load = lo;
   if (first.series) {
     content.series = first.series;
     content.steps = steps;

@@ -195,6 +195,7 @@ struct Server::Impl {
     j["steps"] = steps->size();
     j["simulation"] = simulationJson(model.simulation);
     j["can_encode_movies"] = MovieMaker::canEncode();
+    j["nan_as_holes"] = steps->loadOptions().nonFinite == NonFinite::Holes;
     json fields = json::array();
     for (size_t i = 0; i < model.fieldNames.size(); ++i)
       fields.push_back({{"name", model.fieldNames[i]},
@@ -568,6 +569,32 @@ void Server::Impl::seriesRoutes() {
     session->submit(doc, false);
     sendJson(res, steps->describe());
   });
+  // NaN and infinite values as holes, or refused: the current step is read again that way (and
+  // every later one); a step that cannot be read so stays as it was, with the reason.
+  http.Post("/api/holes", [this](const httplib::Request& req, httplib::Response& res) {
+    const json body = parseBody(req);
+    if (!body.is_object() || !body.contains("holes") || !body["holes"].is_boolean() || body.size() != 1)
+      reject(400, "holes: the body must be {\"holes\": true} or {\"holes\": false}");
+    LoadReport report;
+    StepView step;
+    try {
+      step = steps->setNonFinite(body["holes"].get<bool>() ? NonFinite::Holes : NonFinite::Refuse, &report);
+    } catch (const Error& e) {
+      reject(400, strCat("holes: ", e.what()));
+    }
+    LegendText legends;
+    legends.dataset = legendDatasetLabel(step.input);
+    session->setModel(step.model, step.dataset, std::move(legends));
+    SceneDocument doc = session->current().value_or(content.initial);
+    doc.input = step.input;
+    session->submit(doc, false);
+    json j = info();
+    json fields = json::object();
+    for (const auto& [field, count] : report.nonFinite)
+      fields[field] = count;
+    j["holes"] = {{"cells", report.holes}, {"fields", fields}};
+    sendJson(res, j);
+  });
 }
 
 /// The movie's routes: start one with the scene on screen, follow and cancel it, and fetch the
@@ -594,6 +621,7 @@ void Server::Impl::movieRoutes() {
     if (steps->isSeries()) {
       in.steps = steps->paths();
       in.series = content.series->options();
+      in.series.load = steps->loadOptions(); // NaN as holes as the page chose
     }
     in.series.renderer = content.rendererOptions;
     if (!MovieMaker::canEncode())
@@ -737,7 +765,7 @@ void Server::bind() {
     s.port = s.options.port;
   }
   s.steps = std::make_unique<ViewSteps>(StepView{0, s.content.model, s.content.dataset, s.content.input},
-                                        s.content.series, s.content.steps);
+                                        s.content.series, s.content.steps, s.content.load);
   s.movies = std::make_unique<MovieMaker>();
   s.pictures = std::make_unique<PictureMaker>();
   LegendText legends;

@@ -15,6 +15,7 @@
 // request bodies and image sizes are bounded, and malformed requests get a 4xx with a message.
 #pragma once
 
+#include "exabricks/io/load.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
 #include "exabricks/workflows/series.h"
@@ -59,6 +60,7 @@ struct ViewContent {
   /// The range of the initial field over all steps, which the first scene maps (empty: none).
   range1f seriesRange;
   RendererOptions rendererOptions; ///< how movies march
+  LoadOptions load;                ///< how the datasets were read (NaN as holes or not)
 };
 
 /// Statistics of a published frame (also sent to the page with each frame).

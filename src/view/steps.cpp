@@ -25,8 +25,9 @@ json simulationJson(const SimulationState& s) {
           {"cycle", s.hasCycle() ? json(s.cycle) : json(nullptr)}};
 }
 
-ViewSteps::ViewSteps(StepView first, std::shared_ptr<SeriesRenderer> series, std::vector<std::string> paths)
-    : current_(std::move(first)), series_(std::move(series)) {
+ViewSteps::ViewSteps(StepView first, std::shared_ptr<SeriesRenderer> series, std::vector<std::string> paths,
+                     LoadOptions load)
+    : current_(std::move(first)), series_(std::move(series)), load_(std::move(load)) {
   if (paths.empty()) paths.push_back(current_.input);
   for (const std::string& p : paths)
     facts_.push_back(StepFacts{p, stepName(p), false, {}});
@@ -95,6 +96,43 @@ range1f ViewSteps::rangeOf(const std::string& field) {
   std::lock_guard<std::mutex> lock(mutex_);
   ranges_[field] = r;
   return r;
+}
+
+LoadOptions ViewSteps::loadOptions() const {
+  std::lock_guard<std::mutex> load(loadMutex_);
+  return series_ ? series_->options().load : load_;
+}
+
+StepView ViewSteps::setNonFinite(NonFinite policy, LoadReport* report) {
+  std::lock_guard<std::mutex> load(loadMutex_);
+  LoadOptions lo = series_ ? series_->options().load : load_;
+  lo.nonFinite = policy;
+  auto counts = std::make_shared<LoadReport>();
+  lo.report = counts;
+  StepView step = current();
+  std::shared_ptr<SeriesRenderer> fresh;
+  if (series_) {
+    SeriesOptions so = series_->options();
+    so.load = lo;
+    fresh = std::make_shared<SeriesRenderer>(paths(), so);
+    const SeriesStep& s = fresh->load(step.index);
+    step = StepView{step.index, s.model, s.info, step.input};
+  } else {
+    auto model = std::make_shared<const Model>(loadModel(step.input, lo));
+    step = StepView{step.index, model, DatasetInfo::of(*model), step.input};
+  }
+  lo.report.reset();
+  if (report) *report = *counts;
+  if (fresh) {
+    series_ = fresh; // the one it replaces waits for its prefetch
+    if (series_->options().prefetch) series_->prefetch((step.index + 1) % size());
+  }
+  load_ = lo;
+  std::lock_guard<std::mutex> lock(mutex_);
+  current_ = step;
+  ranges_.clear();
+  record(step);
+  return step;
 }
 
 } // namespace exa::view

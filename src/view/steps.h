@@ -5,6 +5,7 @@
 #pragma once
 
 #include "exabricks/amr/model.h"
+#include "exabricks/io/load.h"
 #include "exabricks/workflows/series.h"
 
 #include <nlohmann/json.hpp>
@@ -35,8 +36,9 @@ struct StepFacts {
 class ViewSteps {
 public:
   /// A single dataset (no series renderer), or a series whose renderer has its current step
-  /// loaded; `paths` are the steps' absolute paths.
-  ViewSteps(StepView first, std::shared_ptr<SeriesRenderer> series, std::vector<std::string> paths);
+  /// loaded; `paths` are the steps' absolute paths; `load`: how a single dataset was read.
+  ViewSteps(StepView first, std::shared_ptr<SeriesRenderer> series, std::vector<std::string> paths,
+            LoadOptions load = {});
 
   int size() const { return int(facts_.size()); }
   bool isSeries() const { return series_ != nullptr; }
@@ -50,6 +52,12 @@ public:
   nlohmann::json describe() const;
   /// A field's value range over every step (computed once per field).
   range1f rangeOf(const std::string& field);
+  /// How the steps are read (the series renderer's options for a series).
+  LoadOptions loadOptions() const;
+  /// Reads the current step again with NaN and infinite values refused or made holes, and every
+  /// later step the same way; `report` gets the holes' counts. Throws exa::Error (and keeps the
+  /// current step as it was) when the step cannot be read so.
+  StepView setNonFinite(NonFinite policy, LoadReport* report = nullptr);
 
 private:
   void record(const StepView& step);
@@ -58,6 +66,7 @@ private:
   mutable std::mutex loadMutex_; ///< one load at a time (the series renderer is not shared)
   StepView current_;
   std::shared_ptr<SeriesRenderer> series_;
+  LoadOptions load_; ///< a single dataset's
   std::vector<StepFacts> facts_;
   std::map<std::string, range1f> ranges_;
 };

@@ -114,3 +114,35 @@ def test_a_single_dataset_has_one_step(start_viewer):
     assert step_to(v, 0)["current"] == 0
     status, data, _ = v.request("POST", "/api/step", {"index": 1})
     assert status == 400 and b"outside the steps 0..0" in data
+
+
+def test_nan_as_holes_reads_the_step_again(start_viewer, series_dataset):
+    """A step with a NaN is refused by name until the page asks for holes; then it is read again
+    with the NaN's cell a hole (counted), later steps load the same way, and asking to refuse
+    again keeps the step that cannot be read so."""
+    import glob
+    import struct
+    step1 = sorted(glob.glob(series_dataset))[1].replace(".cells", ".scalars")
+    with open(step1, "r+b") as f:
+        f.seek(7 * 4)
+        f.write(struct.pack("<f", float("nan")))
+    v = start_viewer(series_dataset, "--range", "per-step")  # a range over every step would read step 1 first
+    assert v.info()["nan_as_holes"] is False
+    status, data, _ = v.request("POST", "/api/step", {"index": 1})
+    assert status == 500 and b"record 7" in data, data[:300]
+    holes = v.json("POST", "/api/holes", {"holes": True})
+    assert holes["nan_as_holes"] is True and holes["holes"]["cells"] == 0  # step 0 has no NaN
+    after = step_to(v, 1)
+    assert after["current"] == 1
+    request = v.render(small_scene(v))
+    v.wait_final(request)
+    assert v.request("GET", "/api/snapshot.png")[0] == 200
+    again = v.json("POST", "/api/holes", {"holes": True})
+    assert again["holes"]["cells"] == 1 and again["holes"]["fields"] == {"scalar": 1, "radius": 0}
+    status, data, _ = v.request("POST", "/api/holes", {"holes": False})
+    assert status == 400 and b"record 7" in data, data[:300]
+    assert v.info()["nan_as_holes"] is True and v.info()["step"] == 1
+    for body in [{"holes": "yes"}, {}, {"holes": True, "path": "x"}]:
+        assert v.request("POST", "/api/holes", body)[0] == 400
+    assert v.request("POST", "/api/holes", {"holes": True}, token=False)[0] == 403
+    assert v.alive()
