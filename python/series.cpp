@@ -6,6 +6,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
+#include "exabricks/render/legends.h"
 #include "exabricks/workflows/series.h"
 
 #include <pybind11/stl.h>
@@ -52,6 +53,14 @@ public:
     return d;
   }
 
+  /// The legends the scene asks for, labelled with the step's dataset (as `exabricks movie` draws
+  /// them).
+  void drawStepLegends(const SeriesStep& step, const Scene& scene, const Frame& frame, Image& image) const {
+    LegendText text;
+    text.dataset = legendDatasetLabel(series_.steps()[size_t(step.index)]);
+    drawLegends(scene, frame, *step.model, step.info, text, image);
+  }
+
   /// Step `step` rendered with a scene document (JSON with camera and frame; `range`: "" keeps its
   /// value range, "global" takes the series', "per-step" each step's own).
   py::array_t<float> render(int step, const std::string& json, const MeshList& meshes, const std::string& range,
@@ -61,6 +70,7 @@ public:
     {
       py::gil_scoped_release release;
       image = series_.render(step, doc.scene, doc.frame);
+      drawStepLegends(series_.current(), doc.scene, doc.frame, image);
     }
     return imageArray(image);
   }
@@ -83,7 +93,8 @@ public:
     std::filesystem::create_directories(folder);
     py::gil_scoped_release release;
     series_.renderFrames(plan, doc.scene, doc.frame, all,
-                         [&](int i, const SeriesStep&, const Scene& scene, const Frame&, Image& image) {
+                         [&](int i, const SeriesStep& step, const Scene& scene, const Frame& frame, Image& image) {
+                           drawStepLegends(step, scene, frame, image);
                            written.push_back(framePath(folder, i));
                            writePng(written.back(), image, scene.keepAlpha, scene.background);
                          });

@@ -89,3 +89,20 @@ def test_movie_writes_its_output(series_dir, tmp_path):
 def test_bad_input_names_the_file(tmp_path):
     with pytest.raises(Exception, match="nothing_"):
         exabricks.Series(str(tmp_path / "nothing_*.cells"))
+
+
+def test_frames_carry_the_legends_as_the_movie_command_draws_them(series_dir, tmp_path):
+    from conftest import CLI
+    subprocess.run([CLI, "-q", "movie", str(series_dir / "moving"), "-o", str(tmp_path / "frames"), "--colorbar",
+                    "--annotate"] + LOOK, check=True)
+    s = exabricks.Series(series_dir / "moving")
+    scene_file = tmp_path / "frames" / "scene.json"
+    plain = s.render(1, series_dir / "frames" / "scene.json")
+    for k in range(3):
+        image = s.render(k, scene_file)
+        frame = exabricks.read_png(tmp_path / "frames" / ("frame_%05d.png" % k))
+        assert np.abs(srgb8(image[..., :3]) - srgb8(frame[..., :3])).max() <= 1.0, k
+    assert np.abs(srgb8(s.render(1, scene_file)[..., :3]) - srgb8(plain[..., :3])).max() > 100  # they show
+    written = s.write_frames(tmp_path / "py_frames", scene_file)
+    for k, path in enumerate(written):
+        assert open(path, "rb").read() == open(tmp_path / "frames" / ("frame_%05d.png" % k), "rb").read(), k
