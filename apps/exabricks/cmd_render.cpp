@@ -37,6 +37,115 @@ struct RenderCmdOptions {
   std::string distribute = "image";
 };
 
+/// What a render measured, for --json and --stats.
+struct RenderReport {
+  RenderStats stats;
+  size_t frames = 1; ///< timed frames (the median's)
+  SceneUpdate update;
+  double loadSeconds = 0;
+  bool dataParallel = false, part = false;
+  std::vector<double> partCells, partRss; ///< per process, where several render
+};
+
+/// Renders the frame into the buffer (samplesPerPixel passes, a progress line on a terminal);
+/// with --stats, a warm-up and then --frames timed frames, their median kept.
+void renderTimed(const RenderCmdOptions& o, const Renderer& renderer, const Frame& frame, FrameBuffer& buffer,
+                 bool dataParallel, const std::vector<int>& order, RenderReport& report) {
+  const bool showProgress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
+  auto renderFrame = [&]() {
+    buffer.clear();
+    const uint64_t share = dataParallel ? 1 : uint64_t(mpi::processes().size);
+    Progress progress("rendering",
+                      (uint64_t(buffer.tileCount()) + share - 1) / share * uint64_t(frame.samplesPerPixel));
+    if (!showProgress) progress.finish();
+    PassControl control;
+    control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
+    if (dataParallel)
+      mpi::renderFrameComposited(&renderer, frame, buffer, order, control);
+    else
+      mpi::renderFrame(renderer, frame, buffer, control);
+    progress.finish();
+    return buffer.stats();
+  };
+  if (!o.stats) {
+    report.stats = renderFrame();
+    return;
+  }
+  renderFrame(); // warm-up, not counted
+  std::vector<double> frameSeconds;
+  for (int f = 0; f < o.frames; ++f) {
+    report.stats = renderFrame();
+    frameSeconds.push_back(report.stats.seconds);
+  }
+  std::sort(frameSeconds.begin(), frameSeconds.end());
+  report.stats.seconds = frameSeconds[frameSeconds.size() / 2];
+  report.frames = frameSeconds.size();
+}
+
+/// The statistics as one JSON object on stdout.
+void printJson(const RenderCmdOptions& o, const Frame& frame, const Renderer& renderer, const Model& model,
+               const RenderReport& r) {
+  nlohmann::json j;
+  j["output"] = o.output;
+  j["width"] = frame.width;
+  j["height"] = frame.height;
+  j["samples_per_pixel"] = frame.samplesPerPixel;
+  j["frame_seconds"] = r.stats.seconds;
+  j["frames"] = r.frames;
+  j["rays"] = r.stats.rays;
+  j["samples"] = r.stats.samples;
+  j["regions_visited"] = r.stats.regionsVisited;
+  j["samples_per_second"] = r.stats.samplesPerSecond();
+  j["visible_regions"] = renderer.visibleRegions();
+  j["regions"] = model.regions.regions.size();
+  j["transfer_function_update_seconds"] = r.update.volumeSeconds;
+  j["load_seconds"] = r.loadSeconds;
+  j["traversal"] = nameOf(renderer.traversalInUse());
+  j["simd"] = renderer.options().vectorized ? batchTargetName() : "off";
+  j["surface_hits"] = r.stats.surfaceHits;
+  j["iso_samples"] = r.stats.isoSamples;
+  j["ao_rays"] = r.stats.aoRays;
+  j["iso_regions"] = renderer.isoRegions();
+  j["iso_update_seconds"] = r.update.isoSeconds;
+  j["meshes"] = renderer.meshCount();
+  if (mpi::processes().size > 1 || r.part) {
+    j["processes"] = mpi::processes().size;
+    j["distribute"] = o.distribute;
+    j["composite_seconds"] = mpi::lastCombineSeconds();
+    if (r.dataParallel) j["composite_wait_seconds"] = mpi::lastWaitSeconds();
+  }
+  if (!r.partCells.empty()) {
+    nlohmann::json ranks = nlohmann::json::array();
+    for (size_t k = 0; k < r.partCells.size(); ++k)
+      ranks.push_back(
+          {{"rank", k}, {"resident_cells", uint64_t(r.partCells[k])}, {"peak_rss_bytes", uint64_t(r.partRss[k])}});
+    j["ranks"] = ranks;
+  }
+  std::cout << j.dump(2) << "\n";
+}
+
+/// The statistics as text on stdout.
+void printStats(const RenderCmdOptions& o, const Scene& scene, const Renderer& renderer, const Model& model,
+                const RenderReport& r) {
+  std::printf("frame time       %.4f s (median of %d after one warm-up)\n", r.stats.seconds, o.frames);
+  std::printf("rays             %llu\n", (unsigned long long)r.stats.rays);
+  std::printf("samples          %llu (%.2f per ray)\n", (unsigned long long)r.stats.samples,
+              double(r.stats.samples) / double(std::max<uint64_t>(r.stats.rays, 1)));
+  std::printf("regions visited  %llu (%.2f per ray)\n", (unsigned long long)r.stats.regionsVisited,
+              double(r.stats.regionsVisited) / double(std::max<uint64_t>(r.stats.rays, 1)));
+  std::printf("samples/s        %.3fM\n", r.stats.samplesPerSecond() / 1e6);
+  std::printf("visible regions  %zu of %zu (transfer function update %.4f s)\n", renderer.visibleRegions(),
+              model.regions.regions.size(), r.update.volumeSeconds);
+  std::printf("traversal        %s\n", renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd-tree");
+  if (!scene.iso.values.empty())
+    std::printf("iso regions      %zu of %zu (built in %.4f s), %llu iso samples\n", renderer.isoRegions(),
+                model.regions.regions.size(), r.update.isoSeconds, (unsigned long long)r.stats.isoSamples);
+  if (!scene.iso.values.empty() || !scene.meshes.empty())
+    std::printf("surface hits     %llu, ambient occlusion rays %llu\n", (unsigned long long)r.stats.surfaceHits,
+                (unsigned long long)r.stats.aoRays);
+  std::printf("load + build     %.3f s\n", r.loadSeconds);
+}
+
 void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
   const ImageFormat format = imageFormatFor(o.output, o.bits);
@@ -83,42 +192,17 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   doc.hasCamera = true;
   if (!o.writeScene.empty() && root) writeSceneFile(o.writeScene, withAbsolutePaths(doc));
 
-  // A frame is samplesPerPixel passes into one buffer; a progress line on a terminal.
   FrameBuffer buffer(frame.width, frame.height);
-  const bool showProgress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
-  auto renderFrame = [&](RenderStats& stats) {
-    buffer.clear();
-    const uint64_t share = dataParallel ? 1 : uint64_t(mpi::processes().size);
-    Progress progress("rendering",
-                      (uint64_t(buffer.tileCount()) + share - 1) / share * uint64_t(frame.samplesPerPixel));
-    if (!showProgress) progress.finish();
-    PassControl control;
-    control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
-    if (dataParallel)
-      mpi::renderFrameComposited(&renderer, frame, buffer, order, control);
-    else
-      mpi::renderFrame(renderer, frame, buffer, control);
-    progress.finish();
-    stats = buffer.stats();
-  };
-  RenderStats stats;
-  std::vector<double> frameSeconds;
-  if (o.stats) {
-    renderFrame(stats); // warm-up, not counted
-    for (int f = 0; f < o.frames; ++f) {
-      renderFrame(stats);
-      frameSeconds.push_back(stats.seconds);
-    }
-    std::sort(frameSeconds.begin(), frameSeconds.end());
-    stats.seconds = frameSeconds[frameSeconds.size() / 2];
-  } else {
-    renderFrame(stats);
-  }
+  RenderReport report;
+  report.update = update;
+  report.loadSeconds = loadSeconds;
+  report.dataParallel = dataParallel;
+  report.part = part.has_value();
+  renderTimed(o, renderer, frame, buffer, dataParallel, order, report);
   // What each process holds, for the statistics (collectives: every process takes part).
-  std::vector<double> partCells, partRss;
   if (part || mpi::processes().size > 1) {
-    partCells = mpi::allGather(double(model.cellCount()));
-    partRss = mpi::allGather(double(peakRssBytes()));
+    report.partCells = mpi::allGather(double(model.cellCount()));
+    report.partRss = mpi::allGather(double(peakRssBytes()));
   }
   if (!root) return; // the first process writes the image and the statistics
   Image image = buffer.resolve();
@@ -130,64 +214,10 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, scene.background);
   logInfo(strCat("wrote ", o.output));
 
-  const char* traversal = nameOf(renderer.traversalInUse());
-  if (o.json) {
-    nlohmann::json j;
-    j["output"] = o.output;
-    j["width"] = frame.width;
-    j["height"] = frame.height;
-    j["samples_per_pixel"] = frame.samplesPerPixel;
-    j["frame_seconds"] = stats.seconds;
-    j["frames"] = frameSeconds.empty() ? 1 : frameSeconds.size();
-    j["rays"] = stats.rays;
-    j["samples"] = stats.samples;
-    j["regions_visited"] = stats.regionsVisited;
-    j["samples_per_second"] = stats.samplesPerSecond();
-    j["visible_regions"] = renderer.visibleRegions();
-    j["regions"] = model.regions.regions.size();
-    j["transfer_function_update_seconds"] = update.volumeSeconds;
-    j["load_seconds"] = loadSeconds;
-    j["traversal"] = traversal;
-    j["simd"] = renderer.options().vectorized ? batchTargetName() : "off";
-    j["surface_hits"] = stats.surfaceHits;
-    j["iso_samples"] = stats.isoSamples;
-    j["ao_rays"] = stats.aoRays;
-    j["iso_regions"] = renderer.isoRegions();
-    j["iso_update_seconds"] = update.isoSeconds;
-    j["meshes"] = renderer.meshCount();
-    if (mpi::processes().size > 1 || part) {
-      j["processes"] = mpi::processes().size;
-      j["distribute"] = o.distribute;
-      j["composite_seconds"] = mpi::lastCombineSeconds();
-      if (dataParallel) j["composite_wait_seconds"] = mpi::lastWaitSeconds();
-    }
-    if (!partCells.empty()) {
-      nlohmann::json ranks = nlohmann::json::array();
-      for (size_t r = 0; r < partCells.size(); ++r)
-        ranks.push_back(
-            {{"rank", r}, {"resident_cells", uint64_t(partCells[r])}, {"peak_rss_bytes", uint64_t(partRss[r])}});
-      j["ranks"] = ranks;
-    }
-    std::cout << j.dump(2) << "\n";
-  } else if (o.stats) {
-    std::printf("frame time       %.4f s (median of %d after one warm-up)\n", stats.seconds, o.frames);
-    std::printf("rays             %llu\n", (unsigned long long)stats.rays);
-    std::printf("samples          %llu (%.2f per ray)\n", (unsigned long long)stats.samples,
-                double(stats.samples) / double(std::max<uint64_t>(stats.rays, 1)));
-    std::printf("regions visited  %llu (%.2f per ray)\n", (unsigned long long)stats.regionsVisited,
-                double(stats.regionsVisited) / double(std::max<uint64_t>(stats.rays, 1)));
-    std::printf("samples/s        %.3fM\n", stats.samplesPerSecond() / 1e6);
-    std::printf("visible regions  %zu of %zu (transfer function update %.4f s)\n", renderer.visibleRegions(),
-                model.regions.regions.size(), update.volumeSeconds);
-    std::printf("traversal        %s\n", renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd-tree");
-    if (!scene.iso.values.empty())
-      std::printf("iso regions      %zu of %zu (built in %.4f s), %llu iso samples\n", renderer.isoRegions(),
-                  model.regions.regions.size(), update.isoSeconds, (unsigned long long)stats.isoSamples);
-    if (!scene.iso.values.empty() || !scene.meshes.empty())
-      std::printf("surface hits     %llu, ambient occlusion rays %llu\n", (unsigned long long)stats.surfaceHits,
-                  (unsigned long long)stats.aoRays);
-    std::printf("load + build     %.3f s\n", loadSeconds);
-  }
+  if (o.json)
+    printJson(o, frame, renderer, model, report);
+  else if (o.stats)
+    printStats(o, scene, renderer, model, report);
 }
 
 } // namespace
