@@ -101,6 +101,16 @@ void Server::Impl::routes() {
     if (std::strcmp(a.path, "/index.html") == 0) http.Get("/", asset(a));
   }
 
+  requestRoutes();
+  frameRoutes();
+  sceneRoutes();
+  seriesRoutes();
+  movieRoutes();
+  pictureRoutes();
+}
+
+/// The data and the render requests: the dataset's description, its histogram, a scene to render.
+void Server::Impl::requestRoutes() {
   http.Get("/api/info", [this](const httplib::Request&, httplib::Response& res) { sendJson(res, info()); });
   http.Get("/api/histogram",
            [this](const httplib::Request& req, httplib::Response& res) { sendJson(res, histogram(req)); });
@@ -123,6 +133,10 @@ void Server::Impl::routes() {
 
   // Frames as a stream of records: u32 header length, header JSON, u32 JPEG length, JPEG
   // (lengths little-endian). Only the newest frame is sent: a slow page skips frames.
+}
+
+/// The frames: the stream of drafts and refining frames, the refined image, the first picture.
+void Server::Impl::frameRoutes() {
   http.Get("/api/stream", [this](const httplib::Request& req, httplib::Response& res) {
     if (streams.fetch_add(1) >= options.maxStreams) {
       streams.fetch_sub(1);
@@ -231,6 +245,11 @@ void Server::Impl::routes() {
   });
 
   // The scalar settings of scene files: key, type, default, range, choices and help.
+}
+
+/// Scenes and transfer functions: the vocabulary of scene files, the scene in effect, an uploaded
+/// scene or preset.
+void Server::Impl::sceneRoutes() {
   http.Get("/api/vocabulary",
            [](const httplib::Request&, httplib::Response& res) { sendJson(res, json::parse(sceneVocabularyJson())); });
   // The scene in effect, in the form `exabricks render --scene` reads.
@@ -248,9 +267,6 @@ void Server::Impl::routes() {
     doc.hasCamera = true;
     sendJson(res, {{"document", json::parse(writeSceneJson(doc))}, {"has_camera", hasCamera}});
   });
-  seriesRoutes();
-  movieRoutes();
-  pictureRoutes();
   // An uploaded transfer function (ParaView preset or exabricks JSON), returned in exabricks
   // form; a preset's points are rescaled to the data's range as ParaView applies presets.
   http.Post("/api/transfer-function", [](const httplib::Request& req, httplib::Response& res) {

@@ -259,6 +259,9 @@ struct Server::Impl {
   std::string cookieName() const { return strCat("exabricks_token_", port); }
 
   void routes();
+  void requestRoutes();
+  void frameRoutes();
+  void sceneRoutes();
   void seriesRoutes();
   void movieRoutes();
   void pictureRoutes();
