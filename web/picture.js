@@ -29,22 +29,11 @@ function showPicture(p) {
   }
 }
 
-async function followPicture(id) {
-  while (picture.job && picture.job.id === id) {
-    await sleep(250);
-    let p;
-    try {
-      p = await apiJson(`/api/picture?id=${encodeURIComponent(id)}`);
-    } catch (e) {
-      if (isNetworkError(e)) serverGone();
-      else showMessage(e.message);
-      $('picture-start').disabled = false;
-      return;
-    }
-    showPicture(p);
-    if (p.state === 'failed') showMessage(`The picture could not be rendered: ${p.error}`);
-    if (p.state !== 'rendering') return;
-  }
+function followPicture(id) {
+  return followJob('picture', id, {
+    current: () => picture.job && picture.job.id, every: 250, show: showPicture, button: 'picture-start',
+    failed: 'The picture could not be rendered', running: (state) => state === 'rendering',
+  });
 }
 
 async function startPicture() {

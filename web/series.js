@@ -156,22 +156,32 @@ function showMovie(m) {
   if (m.state === 'done') link.href = m.file;
 }
 
-async function followMovie(id) {
-  while (series.movie && series.movie.id === id) {
-    await sleep(300);
-    let m;
+/// Polls a background job of the server (`kind`: movie or picture) every `job.every` ms while it
+/// runs and is still the one on the page (`job.current()`), showing each state; a failure says
+/// `job.failed` with the reason, and a lost answer re-enables `job.button`.
+async function followJob(kind, id, job) {
+  while (job.current() === id) {
+    await sleep(job.every);
+    let j;
     try {
-      m = await apiJson(`/api/movie?id=${encodeURIComponent(id)}`);
+      j = await apiJson(`/api/${kind}?id=${encodeURIComponent(id)}`);
     } catch (e) {
       if (isNetworkError(e)) serverGone();
       else showMessage(e.message);
-      $('make-movie').disabled = false;
+      $(job.button).disabled = false;
       return;
     }
-    showMovie(m);
-    if (m.state === 'failed') showMessage(`The movie could not be made: ${m.error}`);
-    if (m.state !== 'rendering' && m.state !== 'encoding') return;
+    job.show(j);
+    if (j.state === 'failed') showMessage(`${job.failed}: ${j.error}`);
+    if (!job.running(j.state)) return;
   }
+}
+
+function followMovie(id) {
+  return followJob('movie', id, {
+    current: () => series.movie && series.movie.id, every: 300, show: showMovie, button: 'make-movie',
+    failed: 'The movie could not be made', running: (state) => state === 'rendering' || state === 'encoding',
+  });
 }
 
 async function makeMovie() {

@@ -3,13 +3,17 @@
 // the id made here.
 #pragma once
 
+#include <nlohmann/json.hpp>
+
 #include <atomic>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <random>
 #include <string>
 #include <thread>
+#include <utility>
 
 namespace exa::view {
 
@@ -23,11 +27,28 @@ inline std::string randomHex(int digits) {
   return s;
 }
 
-/// A job on its own thread: its state (set by the job, read by requests), error and cancel flag.
+/// A job on its own thread: its state (set by the job, read by requests), error and cancel flag,
+/// and the file it makes.
 struct Job {
   std::string id = randomHex(24);
+  std::string path; ///< the file it makes (served once the job is done)
+  std::string name; ///< that file's name in a download
   std::atomic<bool> cancel{false};
   std::thread thread;
+
+  /// What requests see of the job: id, state, error, and once it is done the file's size and its
+  /// address (/api/KIND/file?id=ID).
+  nlohmann::json describe(const std::string& kind) const {
+    const std::string s = state(), why = error();
+    nlohmann::json j{{"id", id}, {"state", s}};
+    if (!why.empty()) j["error"] = why;
+    if (s == "done") {
+      std::error_code ec;
+      j["bytes"] = std::filesystem::file_size(path, ec);
+      j["file"] = "/api/" + kind + "/file?id=" + id;
+    }
+    return j;
+  }
 
   void set(const std::string& s, const std::string& why = {}) {
     std::lock_guard<std::mutex> lock(mutex_);
@@ -83,6 +104,13 @@ public:
     for (const auto& [id, job] : jobs_)
       if (running(job->state())) return true;
     return false;
+  }
+  /// The finished job's file and its name in a download; empty for an unknown id or a job that is
+  /// not done.
+  std::pair<std::string, std::string> finishedFile(const std::string& id) const {
+    const std::shared_ptr<J> job = find(id);
+    if (!job || job->state() != "done") return {};
+    return {job->path, job->name};
   }
   /// Asks the job to stop; false for an unknown id.
   bool cancel(const std::string& id) {

@@ -18,7 +18,7 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 struct MovieMaker::MovieJob : Job {
-  std::string dir, output;
+  std::string dir;
   int frames = 0;
   std::atomic<int> done{0};
 };
@@ -70,7 +70,8 @@ std::string MovieMaker::start(MovieInput input) {
   if (busy()) fail("a movie is already being made: wait for it or cancel it");
   auto job = std::make_shared<MovieJob>();
   job->dir = (fs::path(folder_) / job->id).string();
-  job->output = (fs::path(job->dir) / "movie.mp4").string();
+  job->path = (fs::path(job->dir) / "movie.mp4").string();
+  job->name = "exabricks.mp4";
   job->frames = input.steps.size() > 1 ? int(input.steps.size()) : std::max(1, input.orbitFrames);
   fs::create_directories(fs::path(job->dir) / "frames");
   jobs_.add(job);
@@ -123,7 +124,7 @@ void MovieMaker::run(MovieJob& job, const MovieInput& in) {
     MovieEncoding e;
     e.framesDir = framesDir;
     e.fps = in.fps;
-    e.output = job.output;
+    e.output = job.path;
     if (!encodeFrames(e)) fail("ffmpeg is not installed on the machine the viewer runs on: install it to make movies");
     fs::remove_all(framesDir, ec);
     job.set("done");
@@ -139,22 +140,14 @@ void MovieMaker::run(MovieJob& job, const MovieInput& in) {
 json MovieMaker::status(const std::string& id) const {
   const std::shared_ptr<MovieJob> job = jobs_.find(id);
   if (!job) return nullptr;
-  const std::string state = job->state(), error = job->error();
-  json j{{"id", job->id}, {"state", state}, {"frames", job->frames}, {"done", job->done.load()}};
-  if (!error.empty()) j["error"] = error;
-  if (state == "done") {
-    std::error_code ec;
-    j["bytes"] = fs::file_size(job->output, ec);
-    j["file"] = "/api/movie/file?id=" + job->id;
-  }
+  json j = job->describe("movie");
+  j["frames"] = job->frames;
+  j["done"] = job->done.load();
   return j;
 }
 
 bool MovieMaker::cancel(const std::string& id) { return jobs_.cancel(id); }
 
-std::string MovieMaker::file(const std::string& id) const {
-  const std::shared_ptr<MovieJob> job = jobs_.find(id);
-  return job && job->state() == "done" ? job->output : std::string();
-}
+std::pair<std::string, std::string> MovieMaker::file(const std::string& id) const { return jobs_.finishedFile(id); }
 
 } // namespace exa::view

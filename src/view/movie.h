@@ -48,8 +48,8 @@ public:
   nlohmann::json status(const std::string& id) const;
   /// Asks the movie to stop after the frame in progress; false for an unknown id.
   bool cancel(const std::string& id);
-  /// The finished movie's file, or empty (unknown id, or not finished).
-  std::string file(const std::string& id) const;
+  /// The finished movie's file and its name in a download, or empty (unknown id, or not finished).
+  std::pair<std::string, std::string> file(const std::string& id) const;
 
 private:
   struct MovieJob;

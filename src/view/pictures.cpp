@@ -14,7 +14,6 @@ namespace fs = std::filesystem;
 using json = nlohmann::json;
 
 struct PictureMaker::PictureJob : Job {
-  std::string path, name;
   int passes = 1;
   std::atomic<uint64_t> tilesDone{0}, tilesAll{1};
 };
@@ -100,28 +99,16 @@ void PictureMaker::run(PictureJob& job, const PictureInput& in) {
 json PictureMaker::status(const std::string& id) const {
   const std::shared_ptr<PictureJob> job = jobs_.find(id);
   if (!job) return nullptr;
-  const std::string state = job->state(), error = job->error();
-  json j{{"id", job->id},
-         {"state", state},
-         {"name", job->name},
-         {"passes", job->passes},
-         {"tiles", job->tilesAll.load()},
-         {"done", job->tilesDone.load()}};
-  if (!error.empty()) j["error"] = error;
-  if (state == "done") {
-    std::error_code ec;
-    j["bytes"] = fs::file_size(job->path, ec);
-    j["file"] = "/api/picture/file?id=" + job->id;
-  }
+  json j = job->describe("picture");
+  j["name"] = job->name;
+  j["passes"] = job->passes;
+  j["tiles"] = job->tilesAll.load();
+  j["done"] = job->tilesDone.load();
   return j;
 }
 
 bool PictureMaker::cancel(const std::string& id) { return jobs_.cancel(id); }
 
-std::pair<std::string, std::string> PictureMaker::file(const std::string& id) const {
-  const std::shared_ptr<PictureJob> job = jobs_.find(id);
-  if (!job || job->state() != "done") return {};
-  return {job->path, job->name};
-}
+std::pair<std::string, std::string> PictureMaker::file(const std::string& id) const { return jobs_.finishedFile(id); }
 
 } // namespace exa::view

@@ -1,9 +1,61 @@
 #include "server_impl.h"
 
+#include <cstring>
 #include <fstream>
 #include <iterator>
 
 namespace exa::view {
+
+namespace {
+
+/// A download's content type by the file's name.
+const char* contentType(const std::string& name) {
+  const auto ends = [&](const char* ext) {
+    const size_t n = std::strlen(ext);
+    return name.size() > n && name.compare(name.size() - n, n, ext) == 0;
+  };
+  return ends(".png") ? "image/png" : ends(".mp4") ? "video/mp4" : "application/octet-stream";
+}
+
+/// The routes every kind of background job has (movies, pictures): GET /api/KIND?id=ID its state,
+/// POST /api/KIND/cancel {"id": ID}, and GET /api/KIND/file?id=ID the finished file as an
+/// attachment. A job is found only by the id the server made. `maker` gives the jobs' owner when a
+/// request comes (it is made after the routes).
+template <typename Maker> void jobRoutes(httplib::Server& http, const std::string& kind, Maker maker) {
+  const auto idOf = [kind](const httplib::Request& req, const std::string& what) {
+    if (!req.has_param("id")) reject(400, strCat(what, ": parameter 'id' is missing"));
+    return req.get_param_value("id");
+  };
+  http.Get("/api/" + kind, [maker, kind, idOf](const httplib::Request& req, httplib::Response& res) {
+    const json j = maker().status(idOf(req, kind));
+    if (j.is_null()) reject(404, strCat(kind, ": no ", kind, " has that id"));
+    sendJson(res, j);
+  });
+  http.Post("/api/" + kind + "/cancel", [maker, kind](const httplib::Request& req, httplib::Response& res) {
+    const json body = parseBody(req);
+    if (!body.is_object() || !body.contains("id") || !body["id"].is_string())
+      reject(400, strCat(kind, " cancel: the body must be an object with the ", kind, "'s \"id\""));
+    const std::string id = body["id"].get<std::string>();
+    if (!maker().cancel(id)) reject(404, strCat(kind, " cancel: no ", kind, " has that id"));
+    sendJson(res, maker().status(id));
+  });
+  http.Get("/api/" + kind + "/file", [maker, kind, idOf](const httplib::Request& req, httplib::Response& res) {
+    const std::string what = kind + " file";
+    const std::string id = idOf(req, what);
+    const json j = maker().status(id);
+    if (j.is_null()) reject(404, strCat(what, ": no ", kind, " has that id"));
+    const auto [path, name] = maker().file(id);
+    if (path.empty()) reject(409, strCat(what, ": the ", kind, " is ", j["state"].get<std::string>(), ", not done"));
+    std::ifstream in(path, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    if (!in && !in.eof()) reject(500, strCat(what, ": cannot read the ", kind));
+    res.set_header("Content-Disposition", strCat("attachment; filename=\"", name, "\""));
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(std::move(bytes), contentType(name));
+  });
+}
+
+} // namespace
 
 /// The series' routes: its steps (names, simulation time and cycle once loaded, the current one,
 /// with ?field=F the field's range over all steps) and the choice of step among those given at
@@ -113,36 +165,7 @@ void Server::Impl::movieRoutes() {
     const std::string id = movies->start(std::move(in));
     sendJson(res, movies->status(id));
   });
-  auto idOf = [](const httplib::Request& req, const char* what) {
-    if (!req.has_param("id")) reject(400, strCat(what, ": parameter 'id' is missing"));
-    return req.get_param_value("id");
-  };
-  http.Get("/api/movie", [this, idOf](const httplib::Request& req, httplib::Response& res) {
-    const json j = movies->status(idOf(req, "movie"));
-    if (j.is_null()) reject(404, "movie: no movie has that id");
-    sendJson(res, j);
-  });
-  http.Post("/api/movie/cancel", [this](const httplib::Request& req, httplib::Response& res) {
-    const json body = parseBody(req);
-    if (!body.is_object() || !body.contains("id") || !body["id"].is_string())
-      reject(400, "movie cancel: the body must be an object with the movie's \"id\"");
-    const std::string id = body["id"].get<std::string>();
-    if (!movies->cancel(id)) reject(404, "movie cancel: no movie has that id");
-    sendJson(res, movies->status(id));
-  });
-  http.Get("/api/movie/file", [this, idOf](const httplib::Request& req, httplib::Response& res) {
-    const std::string id = idOf(req, "movie file");
-    const json j = movies->status(id);
-    if (j.is_null()) reject(404, "movie file: no movie has that id");
-    const std::string path = movies->file(id);
-    if (path.empty()) reject(409, strCat("movie file: the movie is ", j["state"].get<std::string>(), ", not done"));
-    std::ifstream in(path, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in && !in.eof()) reject(500, "movie file: cannot read the movie");
-    res.set_header("Content-Disposition", "attachment; filename=\"exabricks.mp4\"");
-    res.set_header("Cache-Control", "no-store");
-    res.set_content(std::move(bytes), "video/mp4");
-  });
+  jobRoutes(http, "movie", [this]() -> MovieMaker& { return *movies; });
 }
 
 void Server::Impl::pictureRoutes() {
@@ -181,37 +204,7 @@ void Server::Impl::pictureRoutes() {
     const std::string id = pictures->start(std::move(in));
     sendJson(res, pictures->status(id));
   });
-  auto idOf = [](const httplib::Request& req, const char* what) {
-    if (!req.has_param("id")) reject(400, strCat(what, ": parameter 'id' is missing"));
-    return req.get_param_value("id");
-  };
-  http.Get("/api/picture", [this, idOf](const httplib::Request& req, httplib::Response& res) {
-    const json j = pictures->status(idOf(req, "picture"));
-    if (j.is_null()) reject(404, "picture: no picture has that id");
-    sendJson(res, j);
-  });
-  http.Post("/api/picture/cancel", [this](const httplib::Request& req, httplib::Response& res) {
-    const json body = parseBody(req);
-    if (!body.is_object() || !body.contains("id") || !body["id"].is_string())
-      reject(400, "picture cancel: the body must be an object with the picture's \"id\"");
-    const std::string id = body["id"].get<std::string>();
-    if (!pictures->cancel(id)) reject(404, "picture cancel: no picture has that id");
-    sendJson(res, pictures->status(id));
-  });
-  http.Get("/api/picture/file", [this, idOf](const httplib::Request& req, httplib::Response& res) {
-    const std::string id = idOf(req, "picture file");
-    const json j = pictures->status(id);
-    if (j.is_null()) reject(404, "picture file: no picture has that id");
-    const auto [path, name] = pictures->file(id);
-    if (path.empty()) reject(409, strCat("picture file: the picture is ", j["state"].get<std::string>(), ", not done"));
-    std::ifstream in(path, std::ios::binary);
-    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (!in && !in.eof()) reject(500, "picture file: cannot read the picture");
-    res.set_header("Content-Disposition", strCat("attachment; filename=\"", name, "\""));
-    res.set_header("Cache-Control", "no-store");
-    const bool png = name.size() > 4 && name.substr(name.size() - 4) == ".png";
-    res.set_content(std::move(bytes), png ? "image/png" : "application/octet-stream");
-  });
+  jobRoutes(http, "picture", [this]() -> PictureMaker& { return *pictures; });
 }
 
 } // namespace exa::view
