@@ -60,7 +60,7 @@ def main():
     root = Path(a.root)
     problems, graph = [], {}
     for layer, allowed in BELOW.items():
-        files = sorted((root / "include/exabricks" / layer).glob("*.h")) + sorted((root / "src" / layer).glob("*"))
+        files = sorted((root / "include/exabricks" / layer).glob("*.h")) + sorted(p for p in (root / "src" / layer).rglob("*") if p.is_file())
         if not files:
             problems.append(f"layer {layer}: no files under include/exabricks/{layer} or src/{layer}")
         for f in files:

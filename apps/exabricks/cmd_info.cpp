@@ -14,6 +14,18 @@
 namespace exa::cli {
 namespace {
 
+/// Bytes a GPU renderer holds for the model's structures, and per field (values; smooth shading
+/// adds three gradient fields of the same size).
+nlohmann::json gpuMemoryNeeded(const Model& model) {
+  const uint64_t values = model.fieldValues.empty() ? 0 : model.fieldValues[0].size() * sizeof(float);
+  return {{"bricks", model.bricks.size() * sizeof(Brick)},
+          {"regions", model.regions.regions.size() * sizeof(Region)},
+          {"region brick lists", model.regions.brickIds.size() * sizeof(uint32_t)},
+          {"region k-d tree", model.regions.nodes.size() * sizeof(RegionKdNode)},
+          {"field values", values},
+          {"field gradients", 3 * values}};
+}
+
 struct InfoOptions {
   InputOptions in;
   bool json = false;
@@ -122,6 +134,8 @@ void run(const InfoOptions& o) {
 
   if (o.json) {
     nlohmann::json j = nlohmann::json::parse(modelInfoJson(model, o.in.name(), loadSeconds));
+    j["device"] = cudaJson();
+    j["device"]["memory_needed_bytes"] = gpuMemoryNeeded(model);
     if (lo.nonFinite == NonFinite::Holes) {
       // Cells with NaN or infinite values per field, made holes (--nan-as-holes).
       nlohmann::json counts = nlohmann::json::object();
@@ -134,6 +148,19 @@ void run(const InfoOptions& o) {
   }
 
   std::printf("input            %s\n", o.in.name().c_str());
+  {
+    const CudaStatus cuda = cudaStatus();
+    const nlohmann::json need = gpuMemoryNeeded(model);
+    const double mib = double(need["bricks"].get<uint64_t>() + need["regions"].get<uint64_t>() +
+                              need["region brick lists"].get<uint64_t>() + need["region k-d tree"].get<uint64_t>() +
+                              need["field values"].get<uint64_t>()) /
+                       1048576.0;
+    if (cuda.problem.empty())
+      std::printf("device           cuda: %s, %.1f GiB (this dataset with one field: %.1f MiB)\n", cuda.name.c_str(),
+                  double(cuda.totalBytes) / 1073741824.0, mib);
+    else
+      std::printf("device           cpu (%s)\n", cuda.problem.c_str());
+  }
   if (model.simulation.hasTime() || model.simulation.hasCycle())
     std::printf("simulation       time %s, cycle %s\n",
                 model.simulation.hasTime() ? strCat(model.simulation.time).c_str() : "unknown",

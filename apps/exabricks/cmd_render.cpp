@@ -108,6 +108,8 @@ void printJson(const RenderCmdOptions& o, const Frame& frame, const Renderer& re
   j["iso_regions"] = renderer.isoRegions();
   j["iso_update_seconds"] = r.update.isoSeconds;
   j["meshes"] = renderer.meshCount();
+  j["device"] = deviceJson(renderer);
+  j["device_upload_seconds"] = r.update.deviceSeconds;
   if (mpi::processes().size > 1 || r.part) {
     j["processes"] = mpi::processes().size;
     j["distribute"] = o.distribute;
@@ -137,6 +139,12 @@ void printStats(const RenderCmdOptions& o, const Scene& scene, const Renderer& r
   std::printf("visible regions  %zu of %zu (transfer function update %.4f s)\n", renderer.visibleRegions(),
               model.regions.regions.size(), r.update.volumeSeconds);
   std::printf("traversal        %s\n", renderer.traversalInUse() == TraversalKind::Embree ? "embree" : "kd-tree");
+  if (renderer.device() != Device::Cpu) {
+    const DeviceMemory memory = renderer.deviceMemory();
+    std::printf("device           %s%s, %.1f MiB held, copied in %.4f s\n", deviceName(renderer.device()),
+                renderer.device() == Device::Cuda ? (" (" + cudaStatus().name + ")").c_str() : "",
+                double(memory.total()) / 1048576.0, r.update.deviceSeconds);
+  }
   if (!scene.iso.values.empty())
     std::printf("iso regions      %zu of %zu (built in %.4f s), %llu iso samples\n", renderer.isoRegions(),
                 model.regions.regions.size(), r.update.isoSeconds, (unsigned long long)r.stats.isoSamples);
@@ -181,7 +189,12 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   Renderer renderer(model, dataset);
   renderer.setOptions(o.march.options());
   if (part) renderer.setDomain(part->worldBox());
-  const SceneUpdate update = renderer.setScene(scene);
+  SceneUpdate update = renderer.setScene(scene);
+  {
+    Timer upload;
+    selectDevice(renderer, o.march.device);
+    update.deviceSeconds += upload.seconds();
+  }
   if (!scene.iso.values.empty())
     logInfo(strCat("iso-surface regions: ", renderer.isoRegions(), " of ", model.regions.regions.size(), ", built in ",
                    update.isoSeconds, " s"));

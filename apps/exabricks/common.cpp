@@ -78,4 +78,38 @@ nlohmann::json toJson(const range1f& r) {
   return {{"min", r.lower}, {"max", r.upper}};
 }
 
+nlohmann::json deviceJson(const Renderer& renderer) {
+  nlohmann::json j;
+  j["kind"] = deviceName(renderer.device());
+  if (renderer.device() == Device::Cuda) {
+    const CudaStatus s = cudaStatus();
+    j["name"] = s.name;
+    j["memory_total_bytes"] = s.totalBytes;
+  }
+  const DeviceMemory memory = renderer.deviceMemory();
+  if (!memory.structures.empty()) {
+    nlohmann::json structures = nlohmann::json::object();
+    for (const auto& [name, bytes] : memory.structures)
+      structures[name] = bytes;
+    j["memory_bytes"] = memory.total();
+    j["memory_by_structure"] = structures;
+  }
+  return j;
+}
+
+nlohmann::json cudaJson() {
+  const CudaStatus s = cudaStatus();
+  nlohmann::json j;
+  j["cuda_built"] = s.built;
+  j["gpus"] = s.devices;
+  if (s.devices > 0) {
+    j["name"] = s.name;
+    j["memory_total_bytes"] = s.totalBytes;
+    j["memory_free_bytes"] = s.freeBytes;
+  }
+  if (!s.problem.empty()) j["problem"] = s.problem;
+  j["auto"] = s.problem.empty() ? "cuda" : "cpu";
+  return j;
+}
+
 } // namespace exa::cli

@@ -3,6 +3,7 @@
 
 #include "exabricks/core/error.h"
 #include "exabricks/io/load.h"
+#include "exabricks/render/renderer.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -38,5 +39,12 @@ uint64_t peakRssBytes();
 
 /// JSON for a range; null bounds for an empty range.
 nlohmann::json toJson(const range1f& r);
+
+/// Where a renderer's passes run: {"kind": "cpu" | "cuda" | "portable"} and, on a GPU, its name
+/// and the memory the renderer holds there per structure.
+nlohmann::json deviceJson(const Renderer& renderer);
+/// What this machine and build offer: whether the CUDA back end is built, the GPUs it sees, and
+/// what --device auto would choose.
+nlohmann::json cudaJson();
 
 } // namespace exa::cli

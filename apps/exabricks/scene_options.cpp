@@ -167,7 +167,16 @@ void RenderOptions::add(CLI::App& cmd) {
                  "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
 }
 
+void addDeviceOption(CLI::App& cmd, std::string& device) {
+  cmd.add_option("--device", device,
+                 "Where passes run: cpu, cuda (an NVIDIA GPU), auto (the GPU where one is present and the scene "
+                 "has nothing it lacks, else the CPU) or portable (the GPU's code on CPU threads, for comparisons)")
+      ->check(CLI::IsMember({"cpu", "cuda", "auto", "portable"}))
+      ->capture_default_str();
+}
+
 void MarchFlags::add(CLI::App& cmd) {
+  addDeviceOption(cmd, device);
   cmd.add_flag("--scalar", scalar,
                "Measurement: reconstruct one sample after another (no SIMD batches; the reference loop)");
   cmd.add_flag("--no-lazy-gradients", noLazyGradients,

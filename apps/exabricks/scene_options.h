@@ -76,6 +76,7 @@ struct RenderOptions {
 
 /// The renderer options (how the march computes, for measurements) of render and movie.
 struct MarchFlags {
+  std::string device = "auto"; ///< cpu, cuda, auto or portable
   bool scalar = false;
   bool noLazyGradients = false;
   bool noJoinSegments = false;
@@ -83,6 +84,9 @@ struct MarchFlags {
   void add(CLI::App& cmd);
   RendererOptions options() const;
 };
+
+/// Registers --device (where passes run) on a command.
+void addDeviceOption(CLI::App& cmd, std::string& device);
 
 /// The scene and frame the options describe, over the scene file when one is given: without a
 /// file every option applies (defaults included); with one, only the options given.

@@ -112,10 +112,9 @@ double RegionTraversal::setVisible(const std::vector<uint8_t>& visible) {
   return timer.seconds();
 }
 
-void RegionTraversal::markVisibleSubtrees() {
-  const std::vector<RegionKdNode>& nodes = model_.regions.nodes;
-  subtreeVisible_.assign(nodes.size(), 0);
-  if (nodes.empty()) return;
+std::vector<uint8_t> visibleSubtrees(const std::vector<RegionKdNode>& nodes, const std::vector<uint8_t>& visible) {
+  std::vector<uint8_t> below(nodes.size(), 0);
+  if (nodes.empty()) return below;
   // Post-order with an explicit stack: a node is done once both children are.
   std::vector<std::pair<uint32_t, bool>> stack{{0u, false}};
   while (!stack.empty()) {
@@ -123,16 +122,19 @@ void RegionTraversal::markVisibleSubtrees() {
     stack.pop_back();
     const RegionKdNode& n = nodes[node];
     if (n.axis == kLeafAxis) {
-      subtreeVisible_[node] = n.index != kNoRegion && visible_[n.index];
+      below[node] = n.index != kNoRegion && visible[n.index];
     } else if (childrenDone) {
-      subtreeVisible_[node] = subtreeVisible_[n.index] | subtreeVisible_[n.index + 1];
+      below[node] = below[n.index] | below[n.index + 1];
     } else {
       stack.push_back({node, true});
       stack.push_back({n.index, false});
       stack.push_back({n.index + 1, false});
     }
   }
+  return below;
 }
+
+void RegionTraversal::markVisibleSubtrees() { subtreeVisible_ = visibleSubtrees(model_.regions.nodes, visible_); }
 
 bool RegionTraversal::nextEmbree(const Ray& ray, float tnear, Segment& seg) const {
   if (!embree_ || embree_->primToRegion.empty()) return false;

@@ -22,22 +22,6 @@ Camera Camera::frame(const box3d& box, double azimuthDeg, double elevationDeg, d
   return c;
 }
 
-void Camera::ray(double u, double v, double aspect, vec3d& org, vec3d& dir) const {
-  const vec3d forward = normalize(lookAt - position);
-  const vec3d right = normalize(cross(forward, up));
-  const vec3d trueUp = cross(right, forward);
-  const double x = (2.0 * u - 1.0), y = (1.0 - 2.0 * v);
-  if (orthographic) {
-    const double h = 0.5 * orthoHeight;
-    org = position + right * (x * h * aspect) + trueUp * (y * h);
-    dir = forward;
-    return;
-  }
-  const double t = std::tan(0.5 * fovy * M_PI / 180.0);
-  org = position;
-  dir = normalize(forward + right * (x * t * aspect) + trueUp * (y * t));
-}
-
 bool Camera::project(const vec3d& point, double aspect, double& u, double& v) const {
   const vec3d forward = normalize(lookAt - position);
   const vec3d right = normalize(cross(forward, up));

@@ -1,5 +1,6 @@
 // A ray in world and lattice space at once, with the clip interval and the domain applied:
-// what every stage along a ray (surfaces, volume, ambient occlusion) starts from.
+// what every stage along a ray (surfaces, volume, ambient occlusion) starts from. Host and device
+// code alike (the CPU renderer and the device back ends build their rays here).
 #pragma once
 
 #include "exabricks/accel/traversal.h"
@@ -21,16 +22,96 @@ struct DualRay {
   double domainMin = 0.0, domainMax = std::numeric_limits<double>::infinity();
 };
 
+/// Clipping as plain data: planes (each removes its half-space) and a box (when not empty, only
+/// its inside stays), world space.
+struct ClipView {
+  const ClipPlane* planes = nullptr;
+  int planeCount = 0;
+  box3d box;
+};
+
+inline ClipView clipViewOf(const Clipping& c) { return {c.planes.data(), int(c.planes.size()), c.box}; }
+
+/// The lattice interval of the world interval; an empty one collapses to [0, 0].
+EXA_HOST_DEVICE inline void setLatticeInterval(DualRay& r) {
+  r.lattice.tmin = float(r.sMin * r.kappa);
+  r.lattice.tmax = std::isinf(r.sMax) ? std::numeric_limits<float>::infinity() : float(r.sMax * r.kappa);
+  if (!(r.lattice.tmax >= r.lattice.tmin)) r.lattice.tmax = r.lattice.tmin = 0.f, r.sMax = -1.0;
+}
+
+/// Narrows the world interval by the clip planes and box.
+EXA_HOST_DEVICE inline void clipInterval(DualRay& r, const ClipView& c) {
+  const vec3d& orgW = r.orgW;
+  for (int i = 0; i < c.planeCount; ++i) {
+    const ClipPlane& cp = c.planes[i];
+    const double g0 = dot(orgW - cp.point, cp.normal), dn = dot(r.dirW, cp.normal);
+    if (dn == 0.0) {
+      if (g0 > 0.0) r.sMax = -1.0;
+    } else if (dn > 0.0) {
+      r.sMax = std::min(r.sMax, -g0 / dn);
+    } else {
+      r.sMin = std::max(r.sMin, -g0 / dn);
+    }
+  }
+  if (c.box.empty()) return;
+  for (int a = 0; a < 3; ++a) {
+    if (r.dirW[a] == 0.0) {
+      if (orgW[a] < c.box.lower[a] || orgW[a] > c.box.upper[a]) r.sMax = -1.0;
+      continue;
+    }
+    const double ta = (c.box.lower[a] - orgW[a]) / r.dirW[a];
+    const double tb = (c.box.upper[a] - orgW[a]) / r.dirW[a];
+    r.sMin = std::max(r.sMin, std::min(ta, tb));
+    r.sMax = std::min(r.sMax, std::max(ta, tb));
+  }
+}
+
 /// World ray -> lattice ray, with the clip interval of `clip` (planes and box, world space)
 /// applied unless it is null. The lattice interval may be empty; sMin/sMax keep the clipped
 /// world interval.
-DualRay makeDualRay(const WorldTransform& world, const vec3d& orgW, const vec3d& dirW, const Clipping* clip);
+EXA_HOST_DEVICE inline DualRay makeDualRay(const WorldTransform& world, const vec3d& orgW, const vec3d& dirW,
+                                           const ClipView* clip) {
+  DualRay r;
+  r.orgW = orgW;
+  r.dirW = normalize(dirW);
+  const vec3d orgL = world.toLattice(orgW);
+  const vec3d dL = r.dirW / world.scale;
+  r.kappa = length(dL);
+  r.lattice.org = vec3f(orgL);
+  r.lattice.dir = vec3f(dL / r.kappa);
+  if (clip) clipInterval(r, *clip);
+  setLatticeInterval(r);
+  return r;
+}
+
+inline DualRay makeDualRay(const WorldTransform& world, const vec3d& orgW, const vec3d& dirW, const Clipping* clip) {
+  if (!clip) return makeDualRay(world, orgW, dirW, static_cast<const ClipView*>(nullptr));
+  const ClipView view = clipViewOf(*clip);
+  return makeDualRay(world, orgW, dirW, &view);
+}
 
 /// Restricts a ray to a world box (volume, iso-surfaces and meshes alike); domainMin/domainMax
 /// get the box's own interval.
-void restrictToBox(DualRay& r, const box3d& domain);
+EXA_HOST_DEVICE inline void restrictToBox(DualRay& r, const box3d& domain) {
+  // The domain's interval on its own (meshes that clipping leaves use it), then with the clip.
+  for (int a = 0; a < 3; ++a) {
+    if (r.dirW[a] == 0.0) {
+      if (r.orgW[a] < domain.lower[a] || r.orgW[a] >= domain.upper[a]) r.domainMax = -1.0;
+      continue;
+    }
+    const double ta = (domain.lower[a] - r.orgW[a]) / r.dirW[a];
+    const double tb = (domain.upper[a] - r.orgW[a]) / r.dirW[a];
+    r.domainMin = std::max(r.domainMin, std::min(ta, tb));
+    r.domainMax = std::min(r.domainMax, std::max(ta, tb));
+  }
+  if (r.sMax >= r.sMin) { // not clipped away already
+    r.sMin = std::max(r.sMin, r.domainMin);
+    r.sMax = std::min(r.sMax, r.domainMax);
+  }
+  setLatticeInterval(r);
+}
 
 /// Whether clipping left nothing of the ray.
-inline bool clippedAway(const DualRay& r) { return r.sMax < r.sMin; }
+EXA_HOST_DEVICE inline bool clippedAway(const DualRay& r) { return r.sMax < r.sMin; }
 
 } // namespace exa

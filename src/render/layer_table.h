@@ -33,8 +33,7 @@ struct LayerTable {
   /// logarithmic mapping (or an empty range) the value itself.
   bool fadeByValue() const { return tf.logScale || !(span > 0.f); }
   float fadeWidth(const Region& region, float meanScale) const {
-    const float cellWidth = region.finestWidth() * meanScale;
-    return fadeByValue() ? cellWidth : cellWidth * invSpan;
+    return fadeWidthOf(region.finestWidth() * meanScale, fadeByValue(), invSpan);
   }
   float fade(const Region& region, float meanScale, float value) const {
     return fadeScaleAt(fadeWidth(region, meanScale), fadeByValue(), value);
@@ -43,9 +42,35 @@ struct LayerTable {
 
 /// Lattice step of a region at the given rate: half its finest cell width (adaptive) or half the
 /// dataset's (fixed), over the rate.
-inline float sampleStep(const Region& region, Sampling sampling, float referenceWidth, float rate) {
+EXA_HOST_DEVICE inline float sampleStep(const Region& region, Sampling sampling, float referenceWidth, float rate) {
   const float width = sampling == Sampling::Adaptive ? region.finestWidth() : referenceWidth;
   return 0.5f * width / rate;
+}
+
+/// Central differences at p over half the region's finest width each way; each point
+/// reconstructed from the region's bricks where it lies inside the region, else where it
+/// falls; one-sided where a point has no value. Per lattice unit.
+EXA_HOST_DEVICE inline vec3f centralGradient(const FieldView& view, uint32_t regionIndex, const Region& region,
+                                             const vec3f& p, float value) {
+  vec3f grad;
+  const float h = 0.5f * region.finestWidth();
+  const box3f rb = region.bounds();
+  auto at = [&](const vec3f& q, float& v) {
+    const bool inside = q.x >= rb.lower.x && q.x <= rb.upper.x && q.y >= rb.lower.y && q.y <= rb.upper.y &&
+                        q.z >= rb.lower.z && q.z <= rb.upper.z;
+    return inside ? sampleRegion(view, regionIndex, q, v) : sampleField(view, q, v);
+  };
+  for (int ax = 0; ax < 3; ++ax) {
+    vec3f pp = p, pm = p;
+    pp[ax] += h;
+    pm[ax] -= h;
+    float vp = value, vm = value;
+    if (!at(pp, vp)) vp = value, pp[ax] = p[ax];
+    if (!at(pm, vm)) vm = value, pm[ax] = p[ax];
+    const float span = pp[ax] - pm[ax];
+    grad[ax] = span > 0.f ? (vp - vm) / span : 0.f;
+  }
+  return grad;
 }
 
 } // namespace exa

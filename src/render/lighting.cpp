@@ -5,26 +5,21 @@
 
 namespace exa {
 
-void orthonormalBasis(const vec3f& n, vec3f& u, vec3f& v) {
-  const vec3f a = std::abs(n.x) > 0.9f ? vec3f(0.f, 1.f, 0.f) : vec3f(1.f, 0.f, 0.f);
-  u = normalize(cross(a, n));
-  v = cross(n, u);
+OcclusionLengths occlusionLengths(const AmbientOcclusion& ao, const DatasetInfo& dataset, const WorldTransform& world) {
+  OcclusionLengths l;
+  l.length = ao.length > 0.f ? double(ao.length) : 0.1 * dataset.worldDiagonal;
+  l.eps = std::max(1e-5 * dataset.worldDiagonal, 1e-2 * double(dataset.referenceWidth) * reduceMin(world.scale));
+  return l;
 }
 
 float ambientOcclusion(const SurfaceHit& hit, const AmbientOcclusion& ao, const OcclusionScene& scene,
                        const MarchSettings& march, PixelRandom& rng, FrameBuffer::TileCounters& c) {
-  const DatasetInfo& dataset = scene.dataset;
-  const double lengthW = ao.length > 0.f ? double(ao.length) : 0.1 * dataset.worldDiagonal;
-  const double minScale = reduceMin(scene.model.world.scale);
-  const double eps = std::max(1e-5 * dataset.worldDiagonal, 1e-2 * double(dataset.referenceWidth) * minScale);
-  vec3f u, v;
-  orthonormalBasis(hit.normal, u, v);
+  const OcclusionLengths lengths = occlusionLengths(ao, scene.dataset, scene.model.world);
+  const double lengthW = lengths.length, eps = lengths.eps;
   float open = 0.f;
   for (int i = 0; i < ao.rays; ++i) {
     const float r1 = rng.next(), r2 = rng.next();
-    const float radius = std::sqrt(r1), phi = 6.2831853f * r2;
-    const vec3f d =
-        u * (radius * std::cos(phi)) + v * (radius * std::sin(phi)) + hit.normal * std::sqrt(std::max(0.f, 1.f - r1));
+    const vec3f d = cosineHemisphere(hit.normal, r1, r2);
     ++c.aoRays;
     const DualRay ar = makeDualRay(scene.model.world, hit.position + vec3d(hit.normal) * eps, vec3d(d), &scene.clip);
     const double meshMin = scene.clip.meshes ? ar.sMin : 0.0;

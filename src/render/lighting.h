@@ -21,12 +21,16 @@ struct OcclusionScene {
   bool volume = false; ///< the volume attenuates the rays (scene volume and ao.volume on)
 };
 
+/// The world length of ambient-occlusion rays (the scene's, or a tenth of the data's diagonal)
+/// and how far from the surface they start.
+struct OcclusionLengths {
+  double length = 1.0, eps = 1e-5;
+};
+OcclusionLengths occlusionLengths(const AmbientOcclusion& ao, const DatasetInfo& dataset, const WorldTransform& world);
+
 /// Fraction of unoccluded cosine-weighted rays over the hemisphere of the hit's normal (1 with no
 /// rays); random numbers from rng, rays and samples counted into c.
 float ambientOcclusion(const SurfaceHit& hit, const AmbientOcclusion& ao, const OcclusionScene& scene,
                        const MarchSettings& march, PixelRandom& rng, FrameBuffer::TileCounters& c);
-
-/// Unit vectors perpendicular to n (and to each other).
-void orthonormalBasis(const vec3f& n, vec3f& u, vec3f& v);
 
 } // namespace exa

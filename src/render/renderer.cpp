@@ -5,6 +5,7 @@
 #include "exabricks/render/renderer.h"
 
 #include "debug_views.h"
+#include "device_renderer.h"
 #include "dual_ray.h"
 #include "lighting.h"
 #include "surfaces.h"
@@ -55,6 +56,7 @@ struct Renderer::Impl {
   Surfaces surfaces;
   bool hasDomain = false; ///< primary rays see only the inside of `domain` (world)
   box3d domain;
+  std::unique_ptr<DeviceRenderer> device; ///< set where passes run on a device back end
 
   Impl(const Model& m, const DatasetInfo& d)
       : model(m), dataset(checkedDataset(m, d)), volume(m, dataset), surfaces(m, dataset) {}
@@ -114,6 +116,42 @@ struct Renderer::Impl {
     c.samples += raySamples;
     return acc;
   }
+
+  /// A pass of the tiles begin, begin + stride, ... below end on the device back end.
+  bool devicePass(const Frame& frame, FrameBuffer& buffer, int begin, int end, int stride,
+                  const PassControl& control) const {
+    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) return false;
+    Timer timer;
+    buffer.stepsView_ = false;
+    std::vector<vec4f>& colors = deviceColors;
+    gpu::PassCounts counts;
+    device->pass(frame, hasDomain ? &domain : nullptr, buffer.tilesX_, begin, end, stride, colors, counts);
+    const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
+    tbb::parallel_for(0, passTiles, [&](int i) {
+      const int tile = begin + i * stride;
+      buffer.counters_[size_t(tile)] = Counters();
+      const int tx = tile % buffer.tilesX_, ty = tile / buffer.tilesX_;
+      for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
+        for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x) {
+          const size_t p = size_t(y) * size_t(frame.width) + size_t(x);
+          buffer.sum_[p] += colors[p];
+        }
+      ++buffer.tilePasses_[size_t(tile)];
+    });
+    if (control.progress) control.progress(uint64_t(passTiles), uint64_t(passTiles));
+    RenderStats st;
+    st.seconds = timer.seconds();
+    st.rays = counts.rays;
+    st.samples = counts.samples;
+    st.surfaceHits = counts.surfaceHits;
+    st.isoSamples = counts.isoSamples;
+    st.aoRays = counts.aoRays;
+    st.tiles = uint64_t(passTiles);
+    buffer.stats_ += st;
+    return true;
+  }
+
+  mutable std::vector<vec4f> deviceColors; ///< a device pass's colours (passes do not overlap)
 };
 
 Renderer::Renderer(const Model& model) : Renderer(model, DatasetInfo::of(model)) {}
@@ -121,6 +159,66 @@ Renderer::Renderer(const Model& model) : Renderer(model, DatasetInfo::of(model))
 Renderer::Renderer(const Model& model, const DatasetInfo& dataset) : impl_(std::make_unique<Impl>(model, dataset)) {}
 
 Renderer::~Renderer() = default;
+
+const char* deviceName(Device device) {
+  switch (device) {
+  case Device::Cuda:
+    return "cuda";
+  case Device::Portable:
+    return "portable";
+  default:
+    return "cpu";
+  }
+}
+
+CudaStatus cudaStatus() { return gpu::status(); }
+
+Device resolveDevice(const std::string& name) {
+  if (name == "cpu") return Device::Cpu;
+  if (name == "portable") return Device::Portable;
+  if (name == "cuda" || name == "auto") {
+    const CudaStatus s = gpu::status();
+    if (s.problem.empty()) return Device::Cuda;
+    if (name == "auto") return Device::Cpu;
+    fail("--device cuda: ", s.problem);
+  }
+  fail("unknown device '", name, "' (cpu, cuda, auto or portable)");
+}
+
+Device selectDevice(Renderer& renderer, const std::string& choice) {
+  const Device device = resolveDevice(choice);
+  if (choice != "auto" || device == Device::Cpu) {
+    renderer.setDevice(device);
+    return renderer.device();
+  }
+  try {
+    renderer.setDevice(device);
+  } catch (const Error& e) {
+    logInfo(strCat("rendering on the CPU: ", e.what()));
+    renderer.setDevice(Device::Cpu);
+  }
+  return renderer.device();
+}
+
+void Renderer::setDevice(Device device) {
+  Impl& im = *impl_;
+  if (device == this->device()) return;
+  if (device == Device::Cpu) {
+    im.device.reset();
+    return;
+  }
+  if (im.haveScene) DeviceRenderer::checkSupported(im.scene);
+  auto d = std::make_unique<DeviceRenderer>(device, im.model, im.dataset);
+  if (im.haveScene) {
+    SceneUpdate u;
+    d->sync(im.scene, im.volume, im.surfaces, u);
+  }
+  im.device = std::move(d);
+}
+
+Device Renderer::device() const { return impl_->device ? impl_->device->device() : Device::Cpu; }
+
+DeviceMemory Renderer::deviceMemory() const { return impl_->device ? impl_->device->memory() : DeviceMemory(); }
 
 const Scene& Renderer::scene() const { return impl_->scene; }
 void Renderer::setOptions(const RendererOptions& options) { impl_->options = options; }
@@ -162,6 +260,7 @@ size_t Renderer::meshCount() const { return impl_->surfaces.meshCount(); }
 SceneUpdate Renderer::setScene(const Scene& s) {
   Impl& im = *impl_;
   s.validate();
+  if (im.device) DeviceRenderer::checkSupported(s);
   for (size_t m = 0; m < s.meshes.size(); ++m)
     if (!s.meshes[m].mesh) fail("mesh ", m, " (", s.meshes[m].source, ") has not been read");
   // Resolve every field name first: an unknown one leaves the current scene as it is.
@@ -203,6 +302,7 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     im.surfaces.updateMeshes(s.meshes);
     u.meshSeconds = t.seconds();
   }
+  if (im.device) im.device->sync(s, im.volume, im.surfaces, u);
   return u;
 }
 
@@ -233,6 +333,7 @@ bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassCon
   const int stride = std::max(1, control.tileStride);
   const int begin = std::max(0, control.tileBegin);
   const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
+  if (im.device) return im.devicePass(frame, buffer, begin, end, stride, control);
   const bool steps = im.scene.debug == DebugView::Steps;
   buffer.stepsView_ = steps;
   std::atomic<bool> cancelled{false};

@@ -1,28 +1,13 @@
 #include "surfaces.h"
 
+#include "iso_search.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
 
 namespace exa {
-namespace {
-
-/// Default iso-surface colours (linear RGB), cycled over the iso-values.
-vec3f defaultIsoColor(int index) {
-  switch (index & 3) {
-  case 0:
-    return {0.80f, 0.80f, 0.78f};
-  case 1:
-    return {0.85f, 0.35f, 0.20f};
-  case 2:
-    return {0.20f, 0.45f, 0.85f};
-  default:
-    return {0.35f, 0.70f, 0.30f};
-  }
-}
-
-} // namespace
 
 Surfaces::Surfaces(const Model& model, const DatasetInfo& dataset)
     : model_(model), dataset_(dataset), referenceWidth_(dataset.referenceWidth),
@@ -85,48 +70,10 @@ bool Surfaces::meshOccludes(const DualRay& r, double sMin, double sMax) const {
 
 bool Surfaces::findIso(const Ray& ray, Sampling sampling, float rate, float& tHit, uint32_t& regionHit, int& which,
                        uint64_t& samples) const {
-  if (!isoTraversal_ || isoValues_.empty() || !(ray.tmax > ray.tmin)) return false;
-  bool found = false;
-  isoTraversal_->traverse(ray, [&](const Segment& seg) {
-    const float t0 = std::max(seg.t0, ray.tmin), t1 = std::min(seg.t1, ray.tmax);
-    if (!(t1 > t0)) return true;
-    const Region& region = model_.regions.regions[seg.region];
-    const float dt = sampleStep(region, sampling, referenceWidth_, rate);
-    const float tolerance = 1e-3f * region.finestWidth();
-    auto value = [&](float t, float& v) {
-      ++samples;
-      return sampleRegion(isoView_, seg.region, ray.org + ray.dir * t, v);
-    };
-    const int steps = std::max(1, int(std::ceil((t1 - t0) / dt)));
-    float ta = t0, va = 0.f;
-    bool aValid = value(ta, va);
-    for (int i = 1; i <= steps; ++i) {
-      const float tb = i == steps ? t1 : t0 + (t1 - t0) * float(i) / float(steps);
-      float vb = 0.f;
-      const bool bValid = value(tb, vb);
-      if (aValid && bValid) {
-        float best = std::numeric_limits<float>::infinity();
-        int bestIndex = -1;
-        for (size_t j = 0; j < isoValues_.size(); ++j) {
-          const float c = isoValues_[j];
-          const bool sideA = va >= c, sideB = vb >= c;
-          if (sideA == sideB) continue;
-          const float t = refineCrossing(value, ta, tb, va, vb, c, sideA, tolerance);
-          if (t < best) best = t, bestIndex = int(j);
-        }
-        if (bestIndex >= 0) {
-          tHit = best;
-          regionHit = seg.region;
-          which = bestIndex;
-          found = true;
-          return false;
-        }
-      }
-      ta = tb, va = vb, aValid = bValid;
-    }
-    return true;
-  });
-  return found;
+  if (!isoTraversal_) return false;
+  auto walk = [&](const Ray& r, auto&& emit) { isoTraversal_->traverse(r, emit); };
+  return findIsoCrossing(walk, isoView_, isoValues_.data(), int(isoValues_.size()), ray, sampling, referenceWidth_,
+                         rate, tHit, regionHit, which, samples);
 }
 
 bool Surfaces::nearest(const DualRay& r, bool clipMeshes, Sampling sampling, float rate, SurfaceHit& hit,
@@ -144,20 +91,11 @@ bool Surfaces::nearest(const DualRay& r, bool clipMeshes, Sampling sampling, flo
   uint32_t region;
   int which;
   if (!findIso(lr, sampling, rate, t, region, which, isoSamples)) return have;
-  const vec3f p = lr.org + lr.dir * t;
-  float v;
-  vec3f g;
   hit.kind = SurfaceHit::Iso;
   hit.index = which;
   hit.distance = double(t) / r.kappa;
   hit.position = r.orgW + r.dirW * hit.distance;
-  vec3f n = -vec3f(r.dirW);
-  if (sampleRegion(isoView_, region, p, v, &g)) {
-    const vec3f gw = g * invScale_;
-    if (length(gw) > 1e-30f) n = normalize(gw);
-  }
-  if (dot(vec3d(n), r.dirW) > 0.0) n = -n;
-  hit.normal = n;
+  hit.normal = isoNormal(isoView_, region, lr.org + lr.dir * t, r.dirW, invScale_);
   return true;
 }
 

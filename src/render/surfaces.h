@@ -31,6 +31,10 @@ public:
   const RegionTraversal* isoTraversal() const { return isoTraversal_.get(); }
   const std::vector<uint8_t>& isoVisible() const { return isoVisible_; }
   size_t meshCount() const { return meshColors_.size(); }
+  const std::vector<float>& isoValues() const { return isoValues_; }
+  const FieldView& isoView() const { return isoView_; }
+  /// The iso colour field's table, or null where iso-surfaces are not coloured by a field.
+  const LayerTable* isoColorTable() const { return isoColored_ ? &isoColor_ : nullptr; }
 
   /// Nearest iso-surface crossing along a lattice ray within [ray.tmin, ray.tmax]: each region
   /// is stepped at its step for `rate` (and at its entry and exit), and a sign change of

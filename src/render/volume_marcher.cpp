@@ -17,12 +17,6 @@ namespace {
 /// whose bricks would make it longer starts a new batch.
 constexpr uint32_t kMaxJoinedBricks = 16;
 
-/// Whether p lies in the closed box b.
-bool insideBox(const box3f& b, const vec3f& p) {
-  return p.x >= b.lower.x && p.x <= b.upper.x && p.y >= b.lower.y && p.y <= b.upper.y && p.z >= b.lower.z &&
-         p.z <= b.upper.z;
-}
-
 /// The union of two ascending lists of brick ids into `out` (kMaxJoinedBricks entries), ascending;
 /// false where it would be longer. Without branches on the ids, which neighbouring regions'
 /// lists share unpredictably.
@@ -58,29 +52,6 @@ void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t coun
     for (int i = 0; i < batch.count; ++i)
       out[a][i] = g.valid[i] ? g.value[i] : 0.f;
   }
-}
-
-/// Central differences at p over half the region's finest width each way; each point
-/// reconstructed from the region's bricks where it lies inside the region, else where it
-/// falls; one-sided where a point has no value.
-vec3f centralGradient(const FieldView& view, uint32_t regionIndex, const Region& region, const vec3f& p, float value) {
-  vec3f grad;
-  const float h = 0.5f * region.finestWidth();
-  const box3f rb = region.bounds();
-  auto at = [&](const vec3f& q, float& v) {
-    return insideBox(rb, q) ? sampleRegion(view, regionIndex, q, v) : sampleField(view, q, v);
-  };
-  for (int ax = 0; ax < 3; ++ax) {
-    vec3f pp = p, pm = p;
-    pp[ax] += h;
-    pm[ax] -= h;
-    float vp = value, vm = value;
-    if (!at(pp, vp)) vp = value, pp[ax] = p[ax];
-    if (!at(pm, vm)) vm = value, pm[ax] = p[ax];
-    const float span = pp[ax] - pm[ax];
-    grad[ax] = span > 0.f ? (vp - vm) / span : 0.f;
-  }
-  return grad;
 }
 
 /// The march of one ray in batches: the samples of one segment, or with joinSegments of several

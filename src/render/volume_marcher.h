@@ -50,6 +50,7 @@ public:
   bool attachGradients();
 
   bool empty() const { return layers_.empty(); }
+  const std::vector<LayerTable>& layers() const { return layers_; }
   const RegionTraversal* traversal() const { return traversal_.get(); }
   const std::vector<uint8_t>& visible() const { return visible_; }
 

@@ -123,6 +123,9 @@ EXA_HOST_DEVICE inline void walkRegionTree(const RegionTreeView& tree, const Ray
   }
 }
 
+/// Per k-d node, whether a visible region lies below it (RegionTreeView::subtreeVisible).
+std::vector<uint8_t> visibleSubtrees(const std::vector<RegionKdNode>& nodes, const std::vector<uint8_t>& visible);
+
 enum class TraversalKind { Embree, KdTree };
 
 class RegionTraversal {

@@ -134,8 +134,8 @@ struct range1f {
 struct WorldTransform {
   vec3d origin{0.0};
   vec3d scale{1.0};
-  vec3d toWorld(const vec3d& lattice) const { return origin + scale * lattice; }
-  vec3d toLattice(const vec3d& world) const { return (world - origin) / scale; }
+  EXA_HOST_DEVICE vec3d toWorld(const vec3d& lattice) const { return origin + scale * lattice; }
+  EXA_HOST_DEVICE vec3d toLattice(const vec3d& world) const { return (world - origin) / scale; }
   bool isIdentity() const { return origin == vec3d(0.0) && scale == vec3d(1.0); }
   friend bool operator==(const WorldTransform& a, const WorldTransform& b) = default;
 };

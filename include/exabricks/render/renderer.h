@@ -65,7 +65,50 @@ struct SceneUpdate {
   bool iso = false;    ///< iso region set
   bool meshes = false; ///< mesh BVH
   double volumeSeconds = 0, isoSeconds = 0, meshSeconds = 0;
-  double seconds() const { return volumeSeconds + isoSeconds + meshSeconds; }
+  /// A GPU renderer: bytes copied to the device (only what changed) and the time it took.
+  uint64_t deviceBytes = 0;
+  double deviceSeconds = 0;
+  double seconds() const { return volumeSeconds + isoSeconds + meshSeconds + deviceSeconds; }
+};
+
+/// Where a renderer's passes run.
+enum class Device {
+  Cpu,      ///< CPU threads with the batched, vectorised march (the default)
+  Cuda,     ///< an NVIDIA GPU through CUDA
+  Portable, ///< CPU threads running the GPU's per-ray code (one sample at a time): for comparisons
+};
+
+/// "cpu", "cuda" or "portable"; "auto" is CUDA where a GPU is present, else the CPU. Throws
+/// exa::Error for another name, or for "cuda" where no GPU can be used (saying why).
+Device resolveDevice(const std::string& name);
+const char* deviceName(Device device);
+
+class Renderer;
+/// Moves the renderer to the device `choice` names ("cpu", "cuda", "portable" or "auto") for its
+/// current scene and returns the device in use: "auto" takes the GPU where one is present and the
+/// scene has nothing the GPU lacks (else the CPU, saying why on the log); the others throw where
+/// they cannot be used.
+Device selectDevice(Renderer& renderer, const std::string& choice);
+
+/// What the machine offers for Device::Cuda.
+struct CudaStatus {
+  bool built = false; ///< this build has the CUDA back end
+  int devices = 0;    ///< GPUs the CUDA runtime sees
+  std::string name;   ///< the first one's name
+  uint64_t totalBytes = 0, freeBytes = 0;
+  std::string problem; ///< why Device::Cuda cannot be used (empty when it can)
+};
+CudaStatus cudaStatus();
+
+/// A device renderer's memory: bytes per structure held on the device.
+struct DeviceMemory {
+  std::vector<std::pair<std::string, uint64_t>> structures;
+  uint64_t total() const {
+    uint64_t t = 0;
+    for (const auto& s : structures)
+      t += s.second;
+    return t;
+  }
 };
 
 /// How the renderer computes, not what it shows: switches that benchmarks and tests use to
@@ -110,6 +153,14 @@ public:
   /// How the following passes compute (RendererOptions); takes effect at once, rebuilds nothing.
   void setOptions(const RendererOptions& options);
   const RendererOptions& options() const;
+  /// Where the following passes run. Device::Cuda copies the model (bricks, regions, k-d tree,
+  /// the fields in use) to the GPU once and, at each setScene, only what changed. Throws
+  /// exa::Error where the device cannot be used, or where the current scene needs a feature the
+  /// device does not have (the renderer then stays where it was).
+  void setDevice(Device device);
+  Device device() const;
+  /// Memory the device holds for this renderer (empty on the CPU).
+  DeviceMemory deviceMemory() const;
   const DatasetInfo& dataset() const;
   const Model& model() const;
 

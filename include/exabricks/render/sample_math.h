@@ -7,6 +7,7 @@
 
 #include "exabricks/core/color.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -193,6 +194,49 @@ EXA_HOST_DEVICE inline void compositeOpaqueBehind(vec4f& acc, const vec3f& color
   acc.y += wgt * color.y;
   acc.z += wgt * color.z;
   acc.w = 1.f;
+}
+
+/// Where a segment's samples lie: the positions (k + rho) dt delimit intervals, each sampled at
+/// its midpoint and weighted by its length. The march's state between batches.
+struct SegmentMarch {
+  float a = 0.f;   ///< start of the next interval
+  float k = 0.f;   ///< index of the next position (a whole number)
+  float rho = 0.f; ///< offset of the positions, in steps
+  float dt = 1.f;  ///< step
+  float end = 0.f; ///< end of the segment
+
+  EXA_HOST_DEVICE SegmentMarch(float t0, float t1, float rhoIn, float dtIn)
+      : a(t0), k(std::floor(t0 / dtIn - rhoIn) + 1.f), rho(rhoIn), dt(dtIn), end(t1) {}
+
+  /// End of the interval that starts at a: the next position, or one step on where float
+  /// round-off put that at or before a; not beyond a when float resolution runs out.
+  EXA_HOST_DEVICE float intervalEnd() const {
+    const float b = std::min((k + rho) * dt, end);
+    return b > a ? b : std::min(a + dt, end);
+  }
+};
+
+/// Unit vectors perpendicular to n (and to each other).
+EXA_HOST_DEVICE inline void orthonormalBasis(const vec3f& n, vec3f& u, vec3f& v) {
+  const vec3f a = std::abs(n.x) > 0.9f ? vec3f(0.f, 1.f, 0.f) : vec3f(1.f, 0.f, 0.f);
+  u = normalize(cross(a, n));
+  v = cross(n, u);
+}
+
+/// A cosine-weighted direction over the hemisphere of the unit normal n from two uniform
+/// random numbers in [0, 1).
+EXA_HOST_DEVICE inline vec3f cosineHemisphere(const vec3f& n, float r1, float r2) {
+  vec3f u, v;
+  orthonormalBasis(n, u, v);
+  const float radius = std::sqrt(r1), phi = 6.2831853f * r2;
+  return u * (radius * std::cos(phi)) + v * (radius * std::sin(phi)) + n * std::sqrt(std::max(0.f, 1.f - r1));
+}
+
+/// Width over which a volume sample's gradient shading fades (shadeVolumeSample's fade scale
+/// before fadeScaleAt): the cell width, over the transfer function's value span unless the value
+/// itself is the scale (`byValue`).
+EXA_HOST_DEVICE inline float fadeWidthOf(float cellWidth, bool byValue, float invSpan) {
+  return byValue ? cellWidth : cellWidth * invSpan;
 }
 
 /// Refines a crossing of `level` between lo and hi (values vlo, vhi on opposite sides;

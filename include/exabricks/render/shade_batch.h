@@ -13,26 +13,6 @@
 
 namespace exa {
 
-/// Where a segment's samples lie: the positions (k + rho) dt delimit intervals, each sampled at
-/// its midpoint and weighted by its length. The march's state between batches.
-struct SegmentMarch {
-  float a = 0.f;   ///< start of the next interval
-  float k = 0.f;   ///< index of the next position (a whole number)
-  float rho = 0.f; ///< offset of the positions, in steps
-  float dt = 1.f;  ///< step
-  float end = 0.f; ///< end of the segment
-
-  SegmentMarch(float t0, float t1, float rhoIn, float dtIn)
-      : a(t0), k(std::floor(t0 / dtIn - rhoIn) + 1.f), rho(rhoIn), dt(dtIn), end(t1) {}
-
-  /// End of the interval that starts at a: the next position, or one step on where float
-  /// round-off put that at or before a; not beyond a when float resolution runs out.
-  float intervalEnd() const {
-    const float b = std::min((k + rho) * dt, end);
-    return b > a ? b : std::min(a + dt, end);
-  }
-};
-
 /// Appends the segment's next samples on the ray org + t dir to `batch`, as many as fit (up to
 /// kSampleBatch in all): their positions from index batch.count on (count updated), their
 /// intervals' lengths into `lengths` at the same indices (2 kSampleBatch entries: whole vectors

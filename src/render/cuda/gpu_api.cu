@@ -1,0 +1,103 @@
+// The CUDA back end: device memory, and a pass as one kernel launch with a thread per pixel
+// running traceSample (device_trace.h), the per-ray code the portable back end runs on CPU
+// threads. The pass's TraceView lives in constant memory (every thread reads the same settings).
+#include "gpu_api.h"
+
+#include "exabricks/core/error.h"
+
+#include <cuda_runtime.h>
+
+#include <string>
+
+namespace exa::gpu {
+namespace {
+
+__constant__ alignas(16) unsigned char traceViewBytes[sizeof(TraceView)];
+
+void check(cudaError_t e, const char* what) {
+  if (e != cudaSuccess) fail("CUDA: ", what, ": ", cudaGetErrorString(e));
+}
+
+__global__ void traceKernel(int tilesX, int tileBegin, int tileEnd, int tileStride, vec4f* colors, PassCounts* counts) {
+  const TraceView& v = *reinterpret_cast<const TraceView*>(traceViewBytes);
+  const int x = int(blockIdx.x * blockDim.x + threadIdx.x), y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  const bool first = threadIdx.x == 0 && threadIdx.y == 0;
+  // The block's counts in shared memory, then one atomic per counter and block.
+  __shared__ unsigned long long block[5]; // rays, samples, iso samples, occlusion rays, surface hits
+  if (first)
+    for (int i = 0; i < 5; ++i)
+      block[i] = 0;
+  __syncthreads();
+  if (x < v.width && y < v.height && tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) {
+    TraceCounts c;
+    colors[size_t(y) * size_t(v.width) + size_t(x)] = traceSample(v, x, y, c);
+    atomicAdd(&block[0], 1ull);
+    atomicAdd(&block[1], (unsigned long long)c.samples);
+    if (c.isoSamples) atomicAdd(&block[2], (unsigned long long)c.isoSamples);
+    if (c.aoRays) atomicAdd(&block[3], (unsigned long long)c.aoRays);
+    if (c.surfaceHits) atomicAdd(&block[4], (unsigned long long)c.surfaceHits);
+  }
+  __syncthreads();
+  if (first) {
+    atomicAdd(&counts->rays, block[0]);
+    atomicAdd(&counts->samples, block[1]);
+    atomicAdd(&counts->isoSamples, block[2]);
+    atomicAdd(&counts->aoRays, block[3]);
+    atomicAdd(&counts->surfaceHits, block[4]);
+  }
+}
+
+} // namespace
+
+CudaStatus status() {
+  CudaStatus s;
+  s.built = true;
+  const cudaError_t e = cudaGetDeviceCount(&s.devices);
+  if (e != cudaSuccess || s.devices == 0) {
+    s.devices = 0;
+    s.problem = std::string("no usable CUDA GPU (") +
+                (e != cudaSuccess ? cudaGetErrorString(e) : "the CUDA runtime sees no device") + ")";
+    cudaGetLastError();
+    return s;
+  }
+  cudaDeviceProp prop{};
+  if (cudaGetDeviceProperties(&prop, 0) == cudaSuccess) s.name = prop.name;
+  size_t freeBytes = 0, totalBytes = 0;
+  if (cudaMemGetInfo(&freeBytes, &totalBytes) == cudaSuccess) s.freeBytes = freeBytes, s.totalBytes = totalBytes;
+  return s;
+}
+
+void* allocate(uint64_t bytes, const char* what) {
+  size_t freeBytes = 0, totalBytes = 0;
+  check(cudaMemGetInfo(&freeBytes, &totalBytes), "querying memory");
+  if (bytes + (64u << 20) > freeBytes)
+    fail("the GPU has ", freeBytes >> 20, " MiB free of ", totalBytes >> 20, " MiB, too little for ", what, " (",
+         (bytes + (1u << 20) - 1) >> 20, " MiB)");
+  void* p = nullptr;
+  check(cudaMalloc(&p, bytes > 0 ? bytes : 1), what);
+  return p;
+}
+
+void release(void* p) noexcept {
+  if (p) cudaFree(p);
+}
+
+void copyToDevice(void* device, const void* host, uint64_t bytes) {
+  if (bytes > 0) check(cudaMemcpy(device, host, bytes, cudaMemcpyHostToDevice), "copying to the GPU");
+}
+
+void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, int tileStride, void* deviceColors,
+               void* deviceCounts, vec4f* hostColors, PassCounts& counts) {
+  check(cudaMemcpyToSymbol(traceViewBytes, &view, sizeof(TraceView)), "setting the pass");
+  check(cudaMemset(deviceCounts, 0, sizeof(PassCounts)), "clearing the counters");
+  const dim3 block(8, 8);
+  const dim3 grid(unsigned(view.width + 7) / 8, unsigned(view.height + 7) / 8);
+  traceKernel<<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, static_cast<vec4f*>(deviceColors),
+                               static_cast<PassCounts*>(deviceCounts));
+  check(cudaGetLastError(), "launching the pass");
+  const size_t pixels = size_t(view.width) * size_t(view.height);
+  check(cudaMemcpy(hostColors, deviceColors, pixels * sizeof(vec4f), cudaMemcpyDeviceToHost), "the pass");
+  check(cudaMemcpy(&counts, deviceCounts, sizeof(PassCounts), cudaMemcpyDeviceToHost), "the pass's counters");
+}
+
+} // namespace exa::gpu

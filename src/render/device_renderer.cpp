@@ -1,0 +1,236 @@
+#include "device_renderer.h"
+
+#include "lighting.h"
+
+#include "exabricks/amr/gradients.h"
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+
+#include <tbb/parallel_for.h>
+
+#include <cstring>
+
+namespace exa {
+
+DeviceRenderer::DeviceRenderer(Device device, const Model& model, const DatasetInfo& dataset)
+    : device_(device), model_(model), dataset_(dataset) {
+  if (device == Device::Cuda) {
+    const CudaStatus s = gpu::status();
+    if (!s.problem.empty()) fail("--device cuda: ", s.problem);
+    // The whole model must fit: bricks, regions, k-d tree and one field (values and gradients).
+    const uint64_t need = model.bricks.size() * sizeof(Brick) + model.regions.regions.size() * sizeof(Region) +
+                          model.regions.brickIds.size() * sizeof(uint32_t) +
+                          model.regions.nodes.size() * sizeof(RegionKdNode) +
+                          (model.fieldValues.empty() ? 0 : 4 * model.fieldValues[0].size() * sizeof(float));
+    if (need > s.freeBytes)
+      fail("--device cuda: the dataset needs ", need >> 20, " MiB on the GPU (", model.bricks.size(), " bricks, ",
+           model.regions.regions.size(), " regions, ", model.fieldValues.empty() ? 0 : model.fieldValues[0].size(),
+           " values per field with their gradients); ", s.name, " has ", s.freeBytes >> 20, " MiB free of ",
+           s.totalBytes >> 20, " MiB");
+  }
+}
+
+DeviceRenderer::~DeviceRenderer() {
+  if (device_ != Device::Cuda) return;
+  for (auto& [key, b] : buffers_)
+    gpu::release(b.device);
+  gpu::release(colors_);
+  gpu::release(counts_);
+}
+
+void DeviceRenderer::checkSupported(const Scene& s) {
+  auto refuse = [](const std::string& what) {
+    fail("the GPU back end does not render ", what, " yet; render this scene on the CPU (--device cpu)");
+  };
+  if (!s.meshes.empty()) refuse("triangle meshes");
+  if (s.debug != DebugView::None) refuse("debug views");
+  if (s.integration.reconstruction == Reconstruction::CellLocation) refuse("reconstruction by cell location");
+  if (s.layers.size() > size_t(kTraceMaxLayers)) refuse("more than " + std::to_string(kTraceMaxLayers) + " layers");
+  if (s.iso.values.size() > size_t(kTraceMaxIsoValues))
+    refuse("more than " + std::to_string(kTraceMaxIsoValues) + " iso-values");
+  if (s.iso.colors.size() > size_t(kTraceMaxIsoColors))
+    refuse("more than " + std::to_string(kTraceMaxIsoColors) + " iso colours");
+  if (s.clip.planes.size() > size_t(kTraceMaxClipPlanes))
+    refuse("more than " + std::to_string(kTraceMaxClipPlanes) + " clip planes");
+}
+
+const void* DeviceRenderer::put(const std::string& key, const void* host, uint64_t bytes, bool byContent,
+                                SceneUpdate& update) {
+  if (device_ != Device::Cuda) return host;
+  Buffer& b = buffers_[key];
+  const bool same =
+      b.device && b.bytes == bytes &&
+      (byContent ? b.content.size() == bytes && std::memcmp(b.content.data(), host, bytes) == 0 : b.host == host);
+  if (same) return b.device;
+  if (b.bytes != bytes || !b.device) {
+    gpu::release(b.device);
+    b.device = nullptr;
+    b.device = gpu::allocate(bytes, key.c_str());
+    b.bytes = bytes;
+  }
+  gpu::copyToDevice(b.device, host, bytes);
+  b.host = host;
+  if (byContent) b.content.assign(static_cast<const uint8_t*>(host), static_cast<const uint8_t*>(host) + bytes);
+  update.deviceBytes += bytes;
+  return b.device;
+}
+
+FieldView DeviceRenderer::fieldView(int field, const float* values, const std::string& what, SceneUpdate& update) {
+  FieldView v = model_.view(field);
+  v.bricks = put("bricks", model_.bricks, false, update);
+  v.regions = put("regions", model_.regions.regions, false, update);
+  v.brickIds = put("region brick lists", model_.regions.brickIds, false, update);
+  v.nodes = model_.regions.nodes.empty() ? nullptr : put("region k-d tree", model_.regions.nodes, false, update);
+  const uint64_t count = model_.fieldValues[size_t(field)].size();
+  v.values = static_cast<const float*>(
+      put(what + " " + model_.fieldNames[size_t(field)], values, count * sizeof(float), false, update));
+  return v;
+}
+
+namespace {
+
+TfTableView tableView(const LayerTable& l, const vec4f* entries) {
+  TfTableView t = l.t;
+  t.entries = entries;
+  return t;
+}
+
+} // namespace
+
+void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Surfaces& surfaces, SceneUpdate& update) {
+  Timer timer;
+  TraceView& v = base_;
+  v = TraceView();
+  v.world = model_.world;
+  v.referenceWidth = dataset_.referenceWidth;
+  v.invReferenceWidth = 1.f / dataset_.referenceWidth;
+  v.invScale = vec3f(1.0 / model_.world.scale.x, 1.0 / model_.world.scale.y, 1.0 / model_.world.scale.z);
+  v.meanScale = float((model_.world.scale.x + model_.world.scale.y + model_.world.scale.z) / 3.0);
+  if (!model_.regions.regions.empty()) v.regions = put("regions", model_.regions.regions, false, update);
+
+  const std::vector<LayerTable>& layers = volume.layers();
+  v.volume = s.volume && !layers.empty();
+  v.layerCount = int(layers.size());
+  for (size_t i = 0; i < layers.size(); ++i) {
+    const LayerTable& l = layers[i];
+    TraceLayer& t = v.layers[i];
+    t.view = fieldView(l.field, l.view.values, "field", update);
+    for (int a = 0; a < 3; ++a)
+      t.grad[a] =
+          l.grad[size_t(a)].values && s.shading == Shading::Smooth
+              ? fieldView(l.field, l.grad[size_t(a)].values, std::string("gradient ") + "xyz"[a] + " of", update)
+              : t.view;
+    t.tf = tableView(l, put("transfer function " + std::to_string(i), l.table, true, update));
+    t.byValue = l.fadeByValue();
+    t.invSpan = l.invSpan;
+  }
+  if (!model_.regions.nodes.empty()) {
+    volumeSubtrees_ = visibleSubtrees(model_.regions.nodes, volume.visible());
+    v.volumeTree.nodes = put("region k-d tree", model_.regions.nodes, false, update);
+    v.volumeTree.visible = put("visible regions", volume.visible(), true, update);
+    v.volumeTree.subtreeVisible = put("visible subtrees", volumeSubtrees_, true, update);
+    v.volumeTree.bounds = model_.regions.bounds;
+  }
+  v.shading = s.shading;
+  v.terms = s.light.terms;
+  v.sampling = s.integration.sampling;
+  v.earlyTermination = s.integration.earlyTermination;
+  v.terminationOpacity = s.integration.terminationOpacity;
+
+  const std::vector<float>& isoValues = surfaces.isoValues();
+  v.iso = surfaces.isoTraversal() != nullptr && !isoValues.empty() && !model_.regions.nodes.empty();
+  if (v.iso) {
+    const FieldView& iv = surfaces.isoView();
+    int isoField = 0;
+    for (size_t f = 0; f < model_.fieldValues.size(); ++f)
+      if (model_.fieldValues[f].data() == iv.values) isoField = int(f);
+    v.isoView = fieldView(isoField, iv.values, "field", update);
+    v.isoCount = int(isoValues.size());
+    for (size_t i = 0; i < isoValues.size(); ++i)
+      v.isoValues[i] = isoValues[i];
+    isoSubtrees_ = visibleSubtrees(model_.regions.nodes, surfaces.isoVisible());
+    v.isoTree.nodes = put("region k-d tree", model_.regions.nodes, false, update);
+    v.isoTree.visible = put("iso regions", surfaces.isoVisible(), true, update);
+    v.isoTree.subtreeVisible = put("iso subtrees", isoSubtrees_, true, update);
+    v.isoTree.bounds = model_.regions.bounds;
+    if (const LayerTable* c = surfaces.isoColorTable()) {
+      v.isoColored = true;
+      v.isoColorView = fieldView(c->field, c->view.values, "field", update);
+      v.isoColorTf = tableView(*c, put("iso colour map", c->table, true, update));
+    }
+    v.isoColorCount = int(s.iso.colors.size());
+    for (size_t i = 0; i < s.iso.colors.size(); ++i)
+      v.isoColors[i] = s.iso.colors[i];
+  }
+
+  v.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
+  v.planeCount = int(s.clip.planes.size());
+  for (size_t i = 0; i < s.clip.planes.size(); ++i)
+    v.planes[i] = s.clip.planes[i];
+  v.clipBox = s.clip.box;
+  v.headlight = s.light.headlight;
+  v.lightWorld = normalize(s.light.direction);
+  v.aoRays = s.ao.rays;
+  v.aoVolume = s.volume && s.ao.volume;
+  const OcclusionLengths ol = occlusionLengths(s.ao, dataset_, model_.world);
+  v.aoLength = ol.length;
+  v.aoEps = ol.eps;
+  update.deviceSeconds += timer.seconds();
+}
+
+void DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd,
+                          int tileStride, std::vector<vec4f>& colors, gpu::PassCounts& counts) {
+  TraceView v = base_;
+  v.camera = frame.camera;
+  v.width = frame.width;
+  v.height = frame.height;
+  v.aspect = double(frame.width) / double(frame.height);
+  v.frameIndex = frame.frameIndex;
+  v.seed = frame.seed;
+  v.jitter = frame.jitter;
+  v.pixelJitter = frame.samplesPerPixel > 1 && frame.jitter;
+  v.rate = frame.rate;
+  v.hasDomain = domain != nullptr;
+  if (domain) v.domain = *domain;
+  const size_t pixels = size_t(frame.width) * size_t(frame.height);
+  colors.resize(pixels);
+  counts = gpu::PassCounts();
+  if (device_ == Device::Cuda) {
+    const uint64_t bytes = pixels * sizeof(vec4f);
+    if (bytes > colorBytes_) {
+      gpu::release(colors_);
+      colors_ = nullptr;
+      colors_ = gpu::allocate(bytes, "the frame");
+      colorBytes_ = bytes;
+    }
+    if (!counts_) counts_ = gpu::allocate(sizeof(gpu::PassCounts), "the pass's counters");
+    gpu::tracePass(v, tilesX, tileBegin, tileEnd, tileStride, colors_, counts_, colors.data(), counts);
+    return;
+  }
+  std::atomic<uint64_t> rays{0}, samples{0}, iso{0}, ao{0}, hits{0};
+  tbb::parallel_for(0, frame.height, [&](int y) {
+    TraceCounts c;
+    uint64_t r = 0;
+    for (int x = 0; x < frame.width; ++x) {
+      if (!tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) continue;
+      colors[size_t(y) * size_t(frame.width) + size_t(x)] = traceSample(v, x, y, c);
+      ++r;
+    }
+    rays += r;
+    samples += c.samples;
+    iso += c.isoSamples;
+    ao += c.aoRays;
+    hits += c.surfaceHits;
+  });
+  counts.rays = rays, counts.samples = samples, counts.isoSamples = iso, counts.aoRays = ao, counts.surfaceHits = hits;
+}
+
+DeviceMemory DeviceRenderer::memory() const {
+  DeviceMemory m;
+  for (const auto& [key, b] : buffers_)
+    m.structures.emplace_back(key, b.bytes);
+  if (colorBytes_) m.structures.emplace_back("frame", colorBytes_);
+  return m;
+}
+
+} // namespace exa

@@ -1,0 +1,236 @@
+// One sample of one pixel for the device back ends, host and device code alike: the camera ray,
+// clipping and domain (dual_ray.h), the nearest iso-surface (iso_search.h), the volume one sample
+// after another through the visible regions' k-d tree (walkRegionTree, basis reconstruction,
+// sample_math.h), ambient occlusion and the surface's shading. The same steps as the CPU
+// renderer's tracePixel, over plain views of device-resident arrays (TraceView) instead of the
+// CPU's batches and Embree; the CUDA kernel and the portable back end (CPU threads) run it.
+#pragma once
+
+#include "dual_ray.h"
+#include "iso_search.h"
+#include "layer_table.h"
+
+#include "exabricks/accel/traversal.h"
+#include "exabricks/amr/basis.h"
+#include "exabricks/core/random.h"
+#include "exabricks/render/camera.h"
+#include "exabricks/render/frame_buffer.h"
+#include "exabricks/render/sample_math.h"
+
+#include <cstdint>
+
+namespace exa {
+
+constexpr int kTraceMaxLayers = 8;
+constexpr int kTraceMaxClipPlanes = 16;
+constexpr int kTraceMaxIsoValues = 16;
+constexpr int kTraceMaxIsoColors = 16;
+
+/// One volume layer: its field, its gradient fields (smooth shading) and its transfer function.
+struct TraceLayer {
+  FieldView view;
+  FieldView grad[3];
+  TfTableView tf;
+  bool byValue = false; ///< LayerTable::fadeByValue
+  float invSpan = 0.f;
+};
+
+/// Everything a pass's rays read, as plain data (pointers to arrays where the pass runs).
+struct TraceView {
+  // The data.
+  const Region* regions = nullptr;
+  WorldTransform world;
+  float referenceWidth = 1.f, invReferenceWidth = 1.f;
+  vec3f invScale{1.f};
+  float meanScale = 1.f;
+  // The volume.
+  bool volume = false;
+  RegionTreeView volumeTree;
+  int layerCount = 0;
+  TraceLayer layers[kTraceMaxLayers];
+  Shading shading = Shading::Smooth;
+  ShadingTerms terms;
+  Sampling sampling = Sampling::Adaptive;
+  bool earlyTermination = true;
+  float terminationOpacity = 0.98f;
+  float rate = 1.f;
+  // Iso-surfaces.
+  bool iso = false;
+  RegionTreeView isoTree;
+  FieldView isoView;
+  int isoCount = 0;
+  float isoValues[kTraceMaxIsoValues] = {};
+  bool isoColored = false;
+  FieldView isoColorView;
+  TfTableView isoColorTf;
+  int isoColorCount = 0;
+  vec3f isoColors[kTraceMaxIsoColors];
+  // Clipping and the renderer's domain.
+  bool clipping = false;
+  int planeCount = 0;
+  ClipPlane planes[kTraceMaxClipPlanes];
+  box3d clipBox;
+  bool hasDomain = false;
+  box3d domain;
+  // Light.
+  bool headlight = true;
+  vec3f lightWorld{0.f, 0.f, -1.f};
+  int aoRays = 0;
+  bool aoVolume = false;
+  double aoLength = 1.0, aoEps = 1e-5; ///< world
+  // The frame.
+  Camera camera;
+  int width = 1, height = 1;
+  double aspect = 1.0;
+  int frameIndex = 0;
+  uint64_t seed = 0;
+  bool jitter = true, pixelJitter = false;
+};
+
+/// Counts of one ray.
+struct TraceCounts {
+  uint32_t samples = 0, isoSamples = 0, aoRays = 0, surfaceHits = 0;
+};
+
+/// The volume along a lattice ray within [tmin, tmax], one sample after another, front to back
+/// into acc (premultiplied): the same samples, lookups, shading and compositing as the CPU's
+/// batches. OpacityOnly leaves colour and shading out (occlusion rays).
+template <bool OpacityOnly>
+EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, float rho, const vec3f& light,
+                                        const vec3f& halfVector, vec4f& acc, uint32_t& samples) {
+  if (v.layerCount == 0 || !(ray.tmax > ray.tmin)) return;
+  const bool wantGrad = !OpacityOnly && v.shading == Shading::Analytic;
+  const bool shade = !OpacityOnly && v.shading != Shading::None;
+  walkRegionTree(v.volumeTree, ray, [&](const Segment& seg) {
+    const Region& region = v.regions[seg.region];
+    SegmentMarch sm(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho,
+                    sampleStep(region, v.sampling, v.referenceWidth, v.rate));
+    const float cellWidth = region.finestWidth() * v.meanScale;
+    while (sm.a < sm.end) {
+      const float b = sm.intervalEnd();
+      if (!(b > sm.a)) break;
+      sm.k += 1.f;
+      const float len = b - sm.a;
+      const vec3f p = ray.org + ray.dir * (0.5f * (sm.a + b));
+      sm.a = b;
+      ++samples;
+      float logSum = 0.f, alphaSum = 0.f;
+      vec3f colorSum(0.f), color(0.f);
+      for (int li = 0; li < v.layerCount; ++li) {
+        const TraceLayer& l = v.layers[li];
+        float value;
+        vec3f grad(0.f);
+        if (!sampleRegion(l.view, seg.region, p, value, wantGrad ? &grad : nullptr)) break;
+        const vec4f rgba = tfLookup(l.tf, value);
+        if (rgba.w >= 0.f) continue;
+        logSum += rgba.w;
+        if (OpacityOnly) continue;
+        const float alpha = correctedOpacity(rgba.w, len, v.invReferenceWidth);
+        vec3f c = rgba.rgb();
+        if (shade) {
+          if (v.shading == Shading::Smooth)
+            for (int a = 0; a < 3; ++a)
+              if (!sampleRegion(l.grad[a], seg.region, p, grad[a])) grad[a] = 0.f;
+          if (v.shading == Shading::Central) grad = centralGradient(l.view, seg.region, region, p, value);
+          const float fade = fadeScaleAt(fadeWidthOf(cellWidth, l.byValue, l.invSpan), l.byValue, value);
+          c = shadeVolumeSample(c, grad * v.invScale, light, halfVector, v.terms, fade);
+        }
+        colorSum += c * alpha;
+        alphaSum += alpha;
+        color = c;
+      }
+      if (!(logSum < 0.f)) continue;
+      const float alpha = correctedOpacity(logSum, len, v.invReferenceWidth);
+      if (v.layerCount > 1) color = alphaSum > 0.f ? colorSum * (1.f / alphaSum) : vec3f(0.f);
+      compositeBehind(acc, color, alpha);
+      if (v.earlyTermination && acc.w >= v.terminationOpacity) return false;
+    }
+    return true;
+  });
+}
+
+/// Nearest iso-surface crossing along a lattice ray (see findIsoCrossing).
+EXA_HOST_DEVICE inline bool traceIso(const TraceView& v, const Ray& ray, float& t, uint32_t& region, int& which,
+                                     uint32_t& samples) {
+  if (!v.iso) return false;
+  auto walk = [&](const Ray& r, auto&& emit) { walkRegionTree(v.isoTree, r, emit); };
+  uint64_t n = 0;
+  const bool found = findIsoCrossing(walk, v.isoView, v.isoValues, v.isoCount, ray, v.sampling, v.referenceWidth,
+                                     v.rate, t, region, which, n);
+  samples += uint32_t(n);
+  return found;
+}
+
+/// Fraction of unoccluded cosine-weighted rays over the hemisphere of a surface point's normal.
+EXA_HOST_DEVICE inline float traceOcclusion(const TraceView& v, const vec3d& position, const vec3f& normal,
+                                            PixelRandom& rng, TraceCounts& c) {
+  const ClipView clip{v.planes, v.planeCount, v.clipBox};
+  float open = 0.f;
+  for (int i = 0; i < v.aoRays; ++i) {
+    const float r1 = rng.next(), r2 = rng.next();
+    const vec3f d = cosineHemisphere(normal, r1, r2);
+    ++c.aoRays;
+    const DualRay ar = makeDualRay(v.world, position + vec3d(normal) * v.aoEps, vec3d(d), &clip);
+    Ray lr = ar.lattice;
+    lr.tmax = std::min(lr.tmax, float(v.aoLength * ar.kappa));
+    float t;
+    uint32_t region;
+    int which;
+    if (!clippedAway(ar) && traceIso(v, lr, t, region, which, c.isoSamples)) continue;
+    float visibility = 1.f;
+    if (v.aoVolume && !clippedAway(ar) && lr.tmax > lr.tmin) {
+      vec4f acc;
+      traceVolume<true>(v, lr, 0.5f, vec3f(0.f), vec3f(0.f), acc, c.samples);
+      visibility = 1.f - acc.w;
+    }
+    open += visibility;
+  }
+  return v.aoRays > 0 ? open / float(v.aoRays) : 1.f;
+}
+
+/// One sample of pixel (x, y) for pass v.frameIndex: premultiplied colour.
+EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, TraceCounts& c) {
+  PixelRandom rng(x, y, v.frameIndex, v.seed);
+  const float jx = v.pixelJitter ? rng.next() : 0.5f;
+  const float jy = v.pixelJitter ? rng.next() : 0.5f;
+  const float rho = v.jitter ? rng.next() : 0.5f;
+  vec3d orgW, dirW;
+  v.camera.ray((x + jx) / v.width, (y + jy) / v.height, v.aspect, orgW, dirW);
+  const ClipView clip{v.planes, v.planeCount, v.clipBox};
+  DualRay dr = makeDualRay(v.world, orgW, dirW, v.clipping ? &clip : nullptr);
+  if (v.hasDomain) restrictToBox(dr, v.domain);
+  const vec3f viewW = vec3f(dr.dirW);
+  const vec3f light = v.headlight ? viewW : v.lightWorld;
+  const vec3f halfVector = normalize(light + viewW);
+
+  vec4f acc;
+  float tHit = 0.f;
+  uint32_t region = 0;
+  int which = 0;
+  const bool haveHit = !clippedAway(dr) && traceIso(v, dr.lattice, tHit, region, which, c.isoSamples);
+  const double distance = double(tHit) / dr.kappa;
+  Ray volumeRay = dr.lattice;
+  if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(distance * dr.kappa));
+  if (v.volume && !clippedAway(dr)) traceVolume<false>(v, volumeRay, rho, light, halfVector, acc, c.samples);
+  if (haveHit && acc.w < 1.f) {
+    ++c.surfaceHits;
+    const vec3d position = dr.orgW + dr.dirW * distance;
+    const vec3f normal = isoNormal(v.isoView, region, dr.lattice.org + dr.lattice.dir * tHit, dr.dirW, v.invScale);
+    vec3f base = v.isoColorCount > 0 ? v.isoColors[which % v.isoColorCount] : defaultIsoColor(which);
+    float value;
+    if (v.isoColored && sampleField(v.isoColorView, vec3f(v.world.toLattice(position)), value))
+      base = tfLookup(v.isoColorTf, value).rgb();
+    const float ao = v.aoRays > 0 ? traceOcclusion(v, position, normal, rng, c) : 1.f;
+    compositeOpaqueBehind(acc, shadeSurface(base, normal, light, halfVector, ao, v.terms));
+  }
+  return acc;
+}
+
+/// Whether pixel (x, y) lies in a tile the pass renders (PassControl's selection, kRenderTile
+/// pixels square, row-major).
+EXA_HOST_DEVICE inline bool tileSelected(int x, int y, int tilesX, int tileBegin, int tileEnd, int tileStride) {
+  const int tile = (y / kRenderTile) * tilesX + x / kRenderTile;
+  return tile >= tileBegin && tile < tileEnd && (tile - tileBegin) % tileStride == 0;
+}
+
+} // namespace exa

@@ -1,0 +1,30 @@
+// The CUDA back end's entry points, in plain C++ (no CUDA types): built by nvcc from
+// cuda/gpu_api.cu where the build has CUDA, else answered by gpu_api_none.cpp ("built without
+// CUDA"). Device memory is handed around as opaque pointers.
+#pragma once
+
+#include "device_trace.h"
+
+#include "exabricks/render/renderer.h"
+
+#include <cstdint>
+
+namespace exa::gpu {
+
+/// Whether a GPU can be used, with its name and memory.
+CudaStatus status();
+/// Device memory for `what` (named in the error when the GPU has too little left).
+void* allocate(uint64_t bytes, const char* what);
+void release(void* p) noexcept;
+void copyToDevice(void* device, const void* host, uint64_t bytes);
+/// Counters a pass adds up on the device (TraceCounts summed, and the rays).
+struct PassCounts {
+  unsigned long long rays = 0, samples = 0, isoSamples = 0, aoRays = 0, surfaceHits = 0;
+};
+/// One pass of the selected tiles: traceSample for every pixel into `deviceColors` (width x
+/// height vec4f on the device), copied to `hostColors`; waits for the GPU. `deviceCounts` is a
+/// PassCounts on the device.
+void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, int tileStride, void* deviceColors,
+               void* deviceCounts, vec4f* hostColors, PassCounts& counts);
+
+} // namespace exa::gpu

@@ -1,0 +1,122 @@
+// The device back ends' per-ray path (device_trace.h) on CPU threads (Device::Portable) against
+// the CPU renderer's batches: the same images within the bound the GPU is held to, for every
+// feature; progressive passes and tiles; refusals and device selection.
+#include "device_scenes.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/core/mesh.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+
+namespace exa {
+namespace {
+
+using namespace device_test;
+
+TEST(Device, ThePortablePathDrawsEveryFeatureLikeTheCpu) {
+  const Model m = deviceTestModel();
+  const DatasetInfo info = DatasetInfo::of(m);
+  for (const Variant& v : variants()) {
+    RenderStats stats;
+    const ImageDifference d = compareWithCpu(m, info, Device::Portable, v, &stats);
+    std::printf("%-72s %s\n", v.name.c_str(), describe(d).c_str());
+    EXPECT_TRUE(withinBound(d)) << v.name << ": " << describe(d);
+    EXPECT_GT(d.coverage, 0.01) << v.name << ": nothing drawn";
+    EXPECT_GT(stats.rays, 0u) << v.name;
+  }
+}
+
+TEST(Device, PassesAndTilesAddUpAsOnTheCpu) {
+  const Model m = deviceTestModel();
+  const DatasetInfo info = DatasetInfo::of(m);
+  Scene scene;
+  scene.layers[0].tf.valueRange = info.valueRanges[0];
+  Frame frame = deviceTestFrame(m, 70, 50);
+  frame.samplesPerPixel = 4;
+  Renderer cpu(m, info), dev(m, info);
+  cpu.setScene(scene);
+  dev.setScene(scene);
+  dev.setDevice(Device::Portable);
+  EXPECT_EQ(dev.device(), Device::Portable);
+  // Two passes of every other tile, then two of the rest: the sums of four passes everywhere.
+  FrameBuffer a(frame.width, frame.height), b(frame.width, frame.height);
+  for (int pass = 0; pass < 4; ++pass) {
+    Frame f = frame;
+    f.frameIndex = pass;
+    PassControl even, odd;
+    even.tileStride = odd.tileStride = 2;
+    odd.tileBegin = 1;
+    ASSERT_TRUE(dev.renderPass(f, a, even));
+    ASSERT_TRUE(dev.renderPass(f, a, odd));
+    ASSERT_TRUE(cpu.renderPass(f, b));
+  }
+  const ImageDifference d = difference(a.resolve(), b.resolve());
+  EXPECT_TRUE(withinBound(d)) << describe(d);
+  EXPECT_EQ(a.stats().rays, uint64_t(4) * uint64_t(frame.width) * uint64_t(frame.height));
+  // A cancelled pass adds nothing.
+  std::atomic<bool> cancel{true};
+  PassControl c;
+  c.cancel = &cancel;
+  FrameBuffer e(frame.width, frame.height);
+  EXPECT_FALSE(dev.renderPasses(frame, e, 2, c));
+  EXPECT_EQ(e.passes(), 0u);
+}
+
+TEST(Device, RefusesWhatTheDeviceDoesNotDraw) {
+  const Model m = deviceTestModel();
+  Renderer r(m);
+  Scene scene;
+  r.setScene(scene);
+  r.setDevice(Device::Portable);
+  Scene withMesh = scene;
+  SceneMesh mesh;
+  auto triangle = std::make_shared<TriangleMesh>();
+  triangle->vertices = {{0.f, 0.f, 0.f}, {1.f, 0.f, 0.f}, {0.f, 1.f, 0.f}};
+  triangle->triangles = {{0, 1, 2}};
+  mesh.mesh = triangle;
+  withMesh.meshes.push_back(mesh);
+  try {
+    r.setScene(withMesh);
+    FAIL() << "a mesh scene was accepted on the device";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("triangle meshes"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--device cpu"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(r.scene().meshes.empty()) << "the refused scene replaced the current one";
+  Scene debug = scene;
+  debug.debug = DebugView::Level;
+  EXPECT_THROW(r.setScene(debug), Error);
+  // On the CPU the scene is drawn; moving it to the device is refused and leaves it on the CPU.
+  Renderer cpu(m);
+  cpu.setScene(withMesh);
+  EXPECT_THROW(cpu.setDevice(Device::Portable), Error);
+  EXPECT_EQ(cpu.device(), Device::Cpu);
+}
+
+TEST(Device, DeviceNamesResolveAndCudaWithoutAGpuSaysWhy) {
+  EXPECT_EQ(resolveDevice("cpu"), Device::Cpu);
+  EXPECT_EQ(resolveDevice("portable"), Device::Portable);
+  EXPECT_THROW(resolveDevice("gpu0"), Error);
+  const CudaStatus s = cudaStatus();
+  if (s.problem.empty()) {
+    EXPECT_EQ(resolveDevice("auto"), Device::Cuda);
+    GTEST_SKIP() << "a GPU is present (" << s.name << "): the refusal without one is not testable here";
+  }
+  EXPECT_EQ(resolveDevice("auto"), Device::Cpu);
+  try {
+    resolveDevice("cuda");
+    FAIL() << "--device cuda accepted without a GPU";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("--device cuda"), std::string::npos) << e.what();
+  }
+  const Model m = deviceTestModel();
+  Renderer r(m);
+  EXPECT_THROW(r.setDevice(Device::Cuda), Error);
+  EXPECT_EQ(r.device(), Device::Cpu);
+}
+
+} // namespace
+} // namespace exa
