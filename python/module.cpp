@@ -231,8 +231,12 @@ bool interpreterFinalizing() {
 /// accumulate in the renderer's own buffer until the scene or the frame changes.
 class PyRenderer {
 public:
-  explicit PyRenderer(std::shared_ptr<Dataset> d)
-      : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info) {}
+  PyRenderer(std::shared_ptr<Dataset> d, std::string device)
+      : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info), device_(std::move(device)) {
+    if (device_ != "auto" && device_ != "cpu") resolveDevice(device_); // an unusable device fails here
+  }
+
+  std::string device() const { return deviceName(renderer_.device()); }
 
   py::dict setScene(const std::string& json,
                     const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
@@ -247,7 +251,22 @@ public:
     SceneUpdate u;
     {
       py::gil_scoped_release release;
-      u = renderer_.setScene(doc.scene);
+      if (renderer_.device() != Device::Cpu && device_ == "auto") {
+        try {
+          u = renderer_.setScene(doc.scene);
+        } catch (const Error& e) {
+          // Something the GPU does not draw: on the CPU from now on.
+          logInfo(strCat("rendering on the CPU: ", e.what()));
+          renderer_.setDevice(Device::Cpu);
+          u = renderer_.setScene(doc.scene);
+        }
+      } else {
+        u = renderer_.setScene(doc.scene);
+      }
+      if (!deviceChosen_) {
+        deviceChosen_ = true;
+        selectDevice(renderer_, device_);
+      }
     }
     // Any change of the scene starts the accumulation over.
     if (key != sceneKey_) stale_ = true;
@@ -397,6 +416,8 @@ private:
 
   std::shared_ptr<Dataset> dataset_; ///< declared first: outlives the renderer
   Renderer renderer_;
+  std::string device_;        ///< cpu, cuda, auto or portable
+  bool deviceChosen_ = false; ///< the renderer has been moved to device_
   FrameBuffer buffer_;
   Scene scene_;
   Frame frame_;
@@ -485,7 +506,8 @@ PYBIND11_MODULE(_core, m) {
       .def_property_readonly("triangle_count", [](const Mesh& x) { return x.mesh->triangles.size(); });
 
   py::class_<PyRenderer>(m, "Renderer")
-      .def(py::init<std::shared_ptr<Dataset>>(), py::arg("dataset"))
+      .def(py::init<std::shared_ptr<Dataset>, std::string>(), py::arg("dataset"), py::arg("device") = "auto")
+      .def_property_readonly("device", &PyRenderer::device, "Where passes run: cpu, cuda or portable")
       .def("set_scene", &PyRenderer::setScene, py::arg("scene_json"), py::arg("meshes"))
       .def("render", &PyRenderer::render, py::arg("frame_json"), py::arg("passes") = 0)
       .def("image", &PyRenderer::image)

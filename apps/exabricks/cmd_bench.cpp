@@ -40,6 +40,7 @@ struct BenchOptions {
   std::string csv = "exabricks-orbit.csv";
   std::string plot = "exabricks-orbit.png";
   bool json = false;
+  std::string devices; ///< device study: a comma list of cpu, cuda, portable, auto
 };
 
 int tbbThreads() { return tbb::this_task_arena::max_concurrency(); }
@@ -557,6 +558,138 @@ void runProgressive(const Setup& s, const BenchOptions& o) {
               median(fullChange) / std::max(1e-9, median(firstPreview)));
 }
 
+/// The device study: the same frames on each device of the list, in one run: upload, a
+/// transfer-function change, full-quality frames, the viewer's drafts (full resolution at its
+/// draft rate), an orbit of full-quality frames, memory on the device, and the ratios to the
+/// first device of the list.
+void runDevices(const Setup& s, const BenchOptions& o) {
+  std::vector<std::string> names;
+  std::istringstream in(o.devices);
+  for (std::string part; std::getline(in, part, ',');)
+    if (!part.empty()) names.push_back(part);
+  if (names.empty()) failUsage("--device names no device");
+  Scene scene = s.base;
+  scene.integration = Integration(); // as users render: early termination, automatic traversal
+  Scene changed = scene;
+  changed.layers[0].tf.colorMap = builtinColorMap("inferno");
+  changed.layers[0].tf.opacity = {{0.f, 0.f}, {0.5f, 0.f}, {1.f, 1.f}};
+  Frame full = s.frame;
+  full.camera = Camera::frame(s.worldBox, 30.0, 25.0, 40.0, false);
+  Frame draft = full;
+  draft.rate = o.previewRate;
+  const int views = o.orbitStudy ? o.orbit : 36;
+  if (views < 1 || views > 100000) failUsage("--orbit must be in 1..100000");
+
+  struct Run {
+    std::string name, label;
+    std::unique_ptr<Renderer> renderer;
+    double sceneSeconds = 0, uploadSeconds = 0, changeSeconds = 0;
+    uint64_t changeBytes = 0;
+    std::vector<double> fullSeconds, draftSeconds;
+    double orbitSeconds = 0;
+    RenderStats fullStats;
+    Image image;
+  };
+  std::vector<Run> runs;
+  for (const std::string& name : names) {
+    logInfo(strCat("bench: device ", name));
+    Run r;
+    r.name = name;
+    r.renderer = std::make_unique<Renderer>(s.model);
+    Timer t;
+    r.renderer->setScene(scene);
+    r.sceneSeconds = t.seconds();
+    Timer u;
+    selectDevice(*r.renderer, name);
+    r.uploadSeconds = u.seconds();
+    r.label = deviceName(r.renderer->device());
+    if (r.renderer->device() == Device::Cuda) r.label += " (" + cudaStatus().name + ")";
+    const SceneUpdate change = r.renderer->setScene(changed);
+    r.changeSeconds = change.seconds();
+    r.changeBytes = change.deviceBytes;
+    r.renderer->setScene(scene);
+    r.renderer->render(full); // warm-up
+    r.renderer->render(draft);
+    runs.push_back(std::move(r));
+  }
+  for (int f = 0; f < o.frames; ++f)
+    for (Run& r : runs) {
+      RenderStats st;
+      r.image = r.renderer->render(full, &st);
+      r.fullSeconds.push_back(st.seconds);
+      r.fullStats = st;
+      r.renderer->render(draft, &st);
+      r.draftSeconds.push_back(st.seconds);
+    }
+  const double golden = M_PI * (3.0 - std::sqrt(5.0));
+  for (Run& r : runs) {
+    Frame view = full;
+    Timer t;
+    for (int i = 0; i < views; ++i) {
+      const double z = 1.0 - (2.0 * i + 1.0) / views;
+      view.camera = Camera::frame(s.worldBox, std::fmod(i * golden, 2.0 * M_PI) * 180.0 / M_PI,
+                                  std::asin(z) * 180.0 / M_PI, 40.0, false);
+      r.renderer->render(view);
+    }
+    r.orbitSeconds = t.seconds();
+  }
+
+  nlohmann::json j = describe(s, o);
+  j["frames"] = o.frames;
+  j["orbit_views"] = views;
+  j["draft_rate"] = draft.rate;
+  nlohmann::json list = nlohmann::json::array();
+  const Run& first = runs.front();
+  for (const Run& r : runs) {
+    const double fullS = median(r.fullSeconds), draftS = median(r.draftSeconds);
+    nlohmann::json d;
+    d["device"] = r.name;
+    d["in_use"] = r.label;
+    d["full_frame_seconds"] = fullS;
+    d["draft_frame_seconds"] = draftS;
+    d["draft_frames_per_second"] = 1.0 / std::max(draftS, 1e-9);
+    d["orbit_frames_per_second"] = views / std::max(r.orbitSeconds, 1e-9);
+    d["samples"] = r.fullStats.samples;
+    d["scene_seconds"] = r.sceneSeconds;
+    d["upload_seconds"] = r.uploadSeconds;
+    d["transfer_function_change_seconds"] = r.changeSeconds;
+    d["transfer_function_change_bytes"] = r.changeBytes;
+    d["device_memory"] = deviceJson(*r.renderer);
+    d["full_speedup_over_first"] = median(first.fullSeconds) / std::max(fullS, 1e-9);
+    d["draft_speedup_over_first"] = median(first.draftSeconds) / std::max(draftS, 1e-9);
+    const ImageDiff diff = difference(r.image, first.image);
+    d["image_vs_first"] = {{"rmse", diff.rmse}, {"max_abs", diff.maxAbs}};
+    list.push_back(d);
+  }
+  j["devices"] = list;
+  j["memory"]["peak_rss_bytes"] = peakRssBytes();
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("devices on %s: %llu cells, %llu bricks, %llu regions; %dx%d at 1 sample per pixel, draft at rate "
+              "%.2f, %d CPU threads, median of %d rounds, orbit of %d views\n",
+              o.in.name().c_str(), (unsigned long long)j["cells"].get<uint64_t>(),
+              (unsigned long long)j["bricks"].get<uint64_t>(), (unsigned long long)j["regions"].get<uint64_t>(),
+              full.width, full.height, double(draft.rate), tbbThreads(), o.frames, views);
+  std::printf("%-34s %10s %10s %9s %9s %10s %10s %10s\n", "device", "full ms", "draft ms", "draft fps", "orbit fps",
+              "upload s", "tf change", "memory MiB");
+  for (size_t i = 0; i < runs.size(); ++i) {
+    const nlohmann::json& d = list[i];
+    const nlohmann::json& mem = d["device_memory"];
+    std::printf("%-34s %10.2f %10.2f %9.1f %9.1f %10.3f %7.1f ms %10.1f\n", runs[i].label.c_str(),
+                1e3 * d["full_frame_seconds"].get<double>(), 1e3 * d["draft_frame_seconds"].get<double>(),
+                d["draft_frames_per_second"].get<double>(), d["orbit_frames_per_second"].get<double>(),
+                d["upload_seconds"].get<double>(), 1e3 * d["transfer_function_change_seconds"].get<double>(),
+                mem.contains("memory_bytes") ? double(mem["memory_bytes"].get<uint64_t>()) / 1048576.0 : 0.0);
+  }
+  for (size_t i = 1; i < runs.size(); ++i)
+    std::printf("%s / %s: full frames %.1fx faster, drafts %.1fx; image difference rmse %.2e, max %.2e\n",
+                runs[i].label.c_str(), first.label.c_str(), list[i]["full_speedup_over_first"].get<double>(),
+                list[i]["draft_speedup_over_first"].get<double>(), list[i]["image_vs_first"]["rmse"].get<double>(),
+                list[i]["image_vs_first"]["max_abs"].get<double>());
+}
+
 void run(const BenchOptions& o) {
   Setup s;
   parseSize(o.size, s.frame.width, s.frame.height);
@@ -573,7 +706,9 @@ void run(const BenchOptions& o) {
   s.base.layers = {VolumeLayer{s.model.fieldNames[size_t(s.field)], defaultTransferFunction()}};
   const box3i cb = s.model.cellBounds();
   s.worldBox = box3d(s.model.world.toWorld(vec3d(cb.lower)), s.model.world.toWorld(vec3d(cb.upper)));
-  if (o.progressive > 0)
+  if (!o.devices.empty())
+    runDevices(s, o);
+  else if (o.progressive > 0)
     runProgressive(s, o);
   else if (o.orbitStudy)
     runOrbit(s, o);
@@ -605,6 +740,10 @@ void addBench(CLI::App& app) {
   cmd->add_option("--csv", o->csv, "Orbit study: CSV file to write")->capture_default_str();
   cmd->add_option("--plot", o->plot, "Orbit study: PNG plot to write")->capture_default_str();
   cmd->add_flag("--json", o->json, "Print the results as one JSON object on stdout");
+  cmd->add_option("--device", o->devices,
+                  "Device study instead of the cases: a comma list of cpu, cuda, auto, portable (for example "
+                  "cpu,cuda): full-quality frames, drafts at --preview-rate, an orbit (--orbit views, default 36), "
+                  "upload and memory, ratios to the first");
   cmd->callback([o, orbit] {
     o->orbitStudy = orbit->count() > 0;
     run(*o);

@@ -314,6 +314,7 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   so.prefetch = !o.noPrefetch;
   so.reuse = !o.noReuse;
   so.renderer = o.march.options();
+  so.device = o.march.device;
   SeriesRenderer series(plan.paths, so);
   planFirstPicture(o, cmd, plan, series);
   planFrameShare(o, plan);

@@ -38,6 +38,7 @@ struct ViewCmdOptions {
   std::string host = "127.0.0.1";
   int port = 8765;
   std::string token;
+  std::string device = "auto";
 };
 
 /// Passes the viewer refines to when neither the options nor a scene file say.
@@ -148,6 +149,8 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   options.host = o.host;
   options.port = o.port;
   options.token = o.token;
+  options.device = o.device;
+  if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
   view::Server server(std::move(content), options);
   server.bind();
 
@@ -189,6 +192,7 @@ void addView(CLI::App& app) {
                   "Dataset, or the steps of a time series: files, folders or glob patterns (numeric order)");
   cmd->add_option("--port", o->port, "Port to listen on (0: any free port)")->capture_default_str();
   cmd->add_option("--host", o->host, "Address to listen on (127.0.0.1: this machine only)")->capture_default_str();
+  addDeviceOption(*cmd, o->device);
   cmd->add_option("--token", o->token, "Access token (default: a random one, printed with the address)");
   cmd->callback([o, cmd] { run(*o, *cmd); });
 }

@@ -523,13 +523,16 @@ class Scene:
     occlusion, camera and frame. Every attribute can change between renders; the renderer
     rebuilds only what a change needs."""
 
-    def __init__(self, dataset, field=None, transfer_function=None, **settings):
+    def __init__(self, dataset, field=None, transfer_function=None, device="auto", **settings):
+        """``device``: where passes run: "cpu", "cuda" (an NVIDIA GPU; an error where none can
+        be used), "auto" (the GPU where one is present and the scene has nothing it lacks, else
+        the CPU) or "portable" (the GPU's per-ray code on CPU threads, for comparisons)."""
         if not isinstance(dataset, Dataset):
             raise TypeError("Scene needs an exabricks.Dataset")
         self.dataset = dataset
         # Scene files record the dataset by absolute path, as the command line writes them.
         self._input = "" if dataset.name.startswith("<") else os.path.abspath(dataset.name)
-        self._renderer = _core.Renderer(dataset._core)  # holds the dataset alive
+        self._renderer = _core.Renderer(dataset._core, device)  # holds the dataset alive
         field = field or dataset.default_field
         self.notes = []  # what the defaults chose, as the command line says on stderr
         if transfer_function is None:
@@ -559,6 +562,11 @@ class Scene:
             setattr(self, key, value)
         if self.camera is None:
             self.camera = self.frame_visible()
+
+    @property
+    def device(self):
+        """Where the last render ran: "cpu", "cuda" or "portable" (set by the first render)."""
+        return self._renderer.device
 
     def frame_visible(self, azimuth=30.0, elevation=25.0, fov=40.0):
         """A camera that frames the part of the data the transfer functions show (the whole data

@@ -42,6 +42,7 @@ struct ServerOptions {
   int maxStreams = 8;                ///< concurrent frame streams (pages)
   int jpegQuality = 90;              ///< drafts and refining frames
   int finalJpegQuality = 95;         ///< the frame that completes the refinement
+  std::string device = "auto";       ///< where frames render: cpu, cuda, auto or portable
 };
 
 /// What the viewer shows: the dataset, its name, and the first scene (defaults already adapted

@@ -2,6 +2,7 @@
 
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
 #include "exabricks/documents/image.h"
 
 #include <turbojpeg.h>
@@ -152,6 +153,7 @@ void Session::loop() {
       dataset_ = dataset;
       legends_ = legends;
       renderer_ = std::make_unique<Renderer>(*model_, dataset_);
+      deviceChosen_ = false;
       lastDraft_.clear();
     }
     try {
@@ -163,10 +165,28 @@ void Session::loop() {
   }
 }
 
+void Session::setScene(const Scene& scene) {
+  if (renderer_->device() != Device::Cpu && options_.device == "auto") {
+    try {
+      renderer_->setScene(scene);
+      return;
+    } catch (const Error& e) {
+      // Something the GPU does not draw: this dataset renders on the CPU from now on.
+      logInfo(strCat("rendering on the CPU: ", e.what()));
+      renderer_->setDevice(Device::Cpu);
+    }
+  }
+  renderer_->setScene(scene);
+  if (!deviceChosen_) {
+    deviceChosen_ = true;
+    selectDevice(*renderer_, options_.device);
+  }
+}
+
 void Session::serve(const Request& request) {
   const Frame& frame = request.doc.frame;
   const Scene& scene = request.doc.scene;
-  renderer_->setScene(scene);
+  setScene(scene);
   PassControl control;
   control.cancel = &cancel_;
 

@@ -117,11 +117,13 @@ void SeriesRenderer::prefetch(int step) {
 
 Image SeriesRenderer::render(int step, const Scene& scene, const Frame& frame) {
   load(step);
-  if (!renderer_) {
+  const bool fresh = !renderer_;
+  if (fresh) {
     renderer_ = std::make_unique<Renderer>(*current_.model, current_.info);
     renderer_->setOptions(options_.renderer);
   }
   renderer_->setScene(scene);
+  if (fresh) selectDevice(*renderer_, options_.device);
   Timer t;
   Image image = renderer_->render(frame);
   stats_.renderSeconds += t.seconds();

@@ -47,10 +47,11 @@ struct SeriesStep {
 SeriesStep loadSeriesStep(const std::string& path, const LoadOptions& options, const SeriesStep* previous, bool reuse);
 
 struct SeriesOptions {
-  LoadOptions load;         ///< fields to read (empty: all) and build options
-  bool prefetch = true;     ///< load the next step a frame list needs beside the render
-  bool reuse = true;        ///< rebuild only values when the hierarchy is unchanged
-  RendererOptions renderer; ///< how the march computes
+  LoadOptions load;           ///< fields to read (empty: all) and build options
+  bool prefetch = true;       ///< load the next step a frame list needs beside the render
+  bool reuse = true;          ///< rebuild only values when the hierarchy is unchanged
+  RendererOptions renderer;   ///< how the march computes
+  std::string device = "cpu"; ///< where passes run: cpu, cuda, auto or portable (selectDevice)
 };
 
 struct SeriesStats {

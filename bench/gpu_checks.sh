@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# The GPU checks in one run: the gpu-labelled tests (the CUDA back end against the CPU on every
+# feature), the device study of `exabricks bench` on an AMReX plotfile and on a generated dataset
+# of 100M cells (full-quality 1024x1024 frames, viewer drafts, orbit frames per second, upload
+# time, GPU memory, all against the same machine's CPU cores), and renders to look at. Results go
+# to OUTDIR: gpu_checks.log, the benchmarks' JSON, PNGs.
+#
+#   bench/gpu_checks.sh OUTDIR [BIN] [PLOTFILE_OR_MODEL]
+#
+# BIN holds exabricks and exabricks_gpu_tests (default: build); the dataset defaults to the shared
+# plt_drop plotfile. Where the binaries were built on another machine, bench/gpu_package.sh packs
+# them with their libraries and the dataset and the packed folder's run.sh calls this script.
+set -uo pipefail
+out=${1:?usage: gpu_checks.sh OUTDIR [BIN] [DATASET]}
+bin=${2:-build}
+data=${3:-../shared/data/amrex/advection_3d/plt_drop}
+big_cells=${EXABRICKS_BIG_CELLS:-100000000}
+mkdir -p "$out"
+log="$out/gpu_checks.log"
+say() { echo "== $*" | tee -a "$log"; }
+status=0
+
+say "machine"
+{ nvidia-smi --query-gpu=name,memory.total,driver_version --format=csv; nproc; } >>"$log" 2>&1
+"$bin/exabricks" info "$data" >>"$log" 2>&1
+"$bin/exabricks" info "$data" --json >"$out/info.json" 2>>"$log"
+
+say "gpu tests"
+"$bin/exabricks_gpu_tests" >>"$log" 2>&1 || status=1
+grep -E '^\[  (PASSED|FAILED|SKIPPED) ' "$log"
+
+say "renders of $data"
+for d in cpu cuda; do
+  "$bin/exabricks" render "$data" --device "$d" --size 1024x1024 --stats -o "$out/plt_$d.png" >>"$log" 2>&1 || status=1
+done
+
+say "device study: $data"
+"$bin/exabricks" bench "$data" --device cpu,cuda --size 1024x1024 --frames 5 --json >"$out/bench_plotfile.json" \
+  2>>"$log" || status=1
+say "generated dataset of $big_cells cells"
+start=$SECONDS
+"$bin/exabricks" generate -s blobs -n "$big_cells" -o /tmp/exabricks-big.cells >>"$log" 2>&1 || status=1
+say "generated in $((SECONDS - start)) s"
+say "device study: generated dataset"
+"$bin/exabricks" bench /tmp/exabricks-big.cells --device cpu,cuda --size 1024x1024 --frames 3 --orbit 12 --json \
+  >"$out/bench_generated.json" 2>>"$log" || status=1
+"$bin/exabricks" render /tmp/exabricks-big.cells --device cuda --size 1024x1024 --stats -o "$out/generated_cuda.png" \
+  >>"$log" 2>&1 || status=1
+
+say "summary"
+for f in "$out"/bench_*.json; do
+  env -u LD_LIBRARY_PATH python3 - "$f" <<'PY' | tee -a "$log"
+import json, sys
+j = json.load(open(sys.argv[1]))
+print(f"{j['dataset']}: {j['cells']} cells, {j['width']}x{j['height']}, {j['threads']} CPU threads")
+for d in j["devices"]:
+    mem = d["device_memory"].get("memory_bytes", 0) / 2**20
+    print(f"  {d['in_use']:<40} full {1e3*d['full_frame_seconds']:9.2f} ms  draft {1e3*d['draft_frame_seconds']:8.2f} ms "
+          f"({d['draft_frames_per_second']:.1f} fps)  orbit {d['orbit_frames_per_second']:.1f} fps  "
+          f"upload {d['upload_seconds']:.3f} s  tf change {1e3*d['transfer_function_change_seconds']:.1f} ms "
+          f"({d['transfer_function_change_bytes']} B)  memory {mem:.1f} MiB  x{d['full_speedup_over_first']:.1f} full, "
+          f"x{d['draft_speedup_over_first']:.1f} draft, image rmse {d['image_vs_first']['rmse']:.2e}")
+PY
+done
+say "exit status $status"
+exit $status
