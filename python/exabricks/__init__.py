@@ -732,20 +732,32 @@ class Scene:
     def _update(self):
         return self._renderer.set_scene(self._scene_json(), [(m, c) for m, c in self.meshes])
 
-    def render(self, width=None, height=None, spp=None, rate=None):
+    def render(self, width=None, height=None, spp=None, rate=None, depth_limit=None, depth_limit_planar=False):
         """Renders the scene: an (H, W, 4) float32 array of linear RGB premultiplied by alpha (row 0
-        at the top). The GIL is released while rendering; Ctrl-C cancels."""
-        self.render_progressive(width, height, spp, rate, passes=spp or self.spp)
+        at the top). The GIL is released while rendering; Ctrl-C cancels.
+
+        `depth_limit`: an (H, W) array (float32; other numbers are converted) of world distances
+        per pixel beyond which nothing is drawn, volume, iso-surfaces and meshes alike, as where
+        opaque geometry drawn elsewhere hides the rest (compositing: lay the image over that
+        geometry's); +inf is no limit. A distance is measured along the pixel's rays from their
+        origin (the camera position, or its image plane when orthographic), or with
+        `depth_limit_planar` along the view direction from the camera's plane, as a z-buffer
+        holds depth."""
+        self.render_progressive(width, height, spp, rate, passes=spp or self.spp, depth_limit=depth_limit,
+                                depth_limit_planar=depth_limit_planar)
         return self._renderer.image()
 
-    def render_progressive(self, width=None, height=None, spp=None, rate=None, passes=0):
+    def render_progressive(self, width=None, height=None, spp=None, rate=None, passes=0, depth_limit=None,
+                           depth_limit_planar=False):
         """Adds passes to the scene's accumulation buffer (one pass when `passes` is 0; otherwise
         until it holds `passes`) and returns the passes it holds. The buffer starts over when the
-        scene or the frame changes; `samples_per_pixel` of the frame is `spp` (or `passes`)."""
+        scene, the frame or the depth limit (as render takes it) changes; `samples_per_pixel` of
+        the frame is `spp` (or `passes`)."""
         w, h = int(width or self.width), int(height or self.height)
         target = int(spp or self.spp)
         self._update()
-        return self._renderer.render(self._frame_json(w, h, max(target, passes or 1), rate or self.rate), int(passes))
+        return self._renderer.render(self._frame_json(w, h, max(target, passes or 1), rate or self.rate), int(passes),
+                                     depth_limit, bool(depth_limit_planar))
 
     def image(self):
         """The accumulated image as an (H, W, 4) float32 array (linear, premultiplied)."""

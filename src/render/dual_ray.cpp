@@ -73,4 +73,11 @@ void restrictToBox(DualRay& r, const box3d& domain) {
   setLatticeInterval(r);
 }
 
+void limitDistance(DualRay& r, double s) {
+  if (!(s < std::numeric_limits<double>::infinity())) return;
+  r.domainMax = std::min(r.domainMax, s);
+  if (r.sMax >= r.sMin) r.sMax = std::min(r.sMax, s); // not clipped away already
+  setLatticeInterval(r);
+}
+
 } // namespace exa

@@ -30,6 +30,10 @@ DualRay makeDualRay(const WorldTransform& world, const vec3d& orgW, const vec3d&
 /// get the box's own interval.
 void restrictToBox(DualRay& r, const box3d& domain);
 
+/// Ends the ray at world distance `s` from its origin: nothing beyond it is drawn (volume,
+/// iso-surfaces and meshes, clipped or not). An infinite `s` leaves the ray as it is.
+void limitDistance(DualRay& r, double s);
+
 /// Whether clipping left nothing of the ray.
 inline bool clippedAway(const DualRay& r) { return r.sMax < r.sMin; }
 

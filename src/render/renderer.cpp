@@ -39,6 +39,7 @@ const DatasetInfo& checkedDataset(const Model& m, const DatasetInfo& dataset) {
 struct PassSetup {
   double aspect;
   vec3f lightWorld;
+  vec3d forward; ///< the camera's view direction (planar depth limits)
   bool surfaces, clipping, jitter, pixelJitter;
   MarchSettings march;
 };
@@ -64,6 +65,7 @@ struct Renderer::Impl {
     PassSetup ps;
     ps.aspect = double(frame.width) / double(frame.height);
     ps.lightWorld = normalize(s.light.direction);
+    ps.forward = normalize(frame.camera.lookAt - frame.camera.position);
     ps.surfaces = surfaces.any() && s.debug == DebugView::None;
     ps.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
     ps.jitter = frame.jitter && s.debug == DebugView::None;
@@ -86,6 +88,10 @@ struct Renderer::Impl {
     const bool clip = ps.clipping && scene.debug == DebugView::None;
     DualRay dr = makeDualRay(model.world, orgW, dirW, clip ? &scene.clip : nullptr);
     if (hasDomain) restrictToBox(dr, domain);
+    if (frame.depthLimit) {
+      const double limit = frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)];
+      limitDistance(dr, frame.depthLimitPlanar ? limit / dot(dr.dirW, ps.forward) : limit);
+    }
     const Ray& ray = dr.lattice;
     const vec3f viewW = vec3f(dr.dirW);
     RayLight light;
