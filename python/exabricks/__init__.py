@@ -1,7 +1,7 @@
 """exabricks: fast, seam-free rendering of structured AMR data (the ExaBricks method).
 
 Data in:  load(path), from_cells(corners, levels, fields), from_grids(grids), from_yt(ds); a yt scene
-as a whole: Scene.from_yt(sc).
+as a whole: Scene.from_yt(sc); inside yt's own scenes: exabricks.yt.ExaBricksSource.
 Rendering: Scene(dataset) with TransferFunction, Camera, iso-surfaces, meshes, clipping and
 ambient occlusion; Scene.render() returns an (H, W, 4) float32 array of linear, premultiplied
 RGBA. Dataset.sample(points) reconstructs values and gradients; Dataset.info() describes the
@@ -488,13 +488,18 @@ class Camera:
     def from_yt(cls, camera):
         """The position, focus, north vector and width of a yt camera, in code units (the world
         units of from_yt): orthographic with yt's height when its lens is plane-parallel, else a
-        perspective whose vertical angle is yt's, 2 atan(height / (2 depth width))."""
+        perspective whose vertical angle is yt's, 2 atan(height / (2 depth width)). A
+        plane-parallel lens casts its rays from the near face of a slab one depth width thick
+        around the focus: the orthographic camera sits on that face (Scene.from_yt also clips the
+        far one)."""
         pos = _yt_code(camera.position)
         focus = _yt_code(camera.focus)
         north = np.asarray(camera.north_vector, float)
         width = _yt_code(camera.width)
         ortho = type(camera.lens).__name__ == "PlaneParallelLens"
-        if not ortho:
+        if ortho:
+            pos = focus - _yt_view_direction(camera) * (0.5 * float(width[2]))
+        else:
             # yt's perspective lens makes the height the width times the resolution's aspect
             # when it renders.
             resolution = [float(r) for r in camera.resolution]
@@ -508,6 +513,32 @@ class Camera:
 
     def __repr__(self):
         return "Camera(position=%s, look_at=%s, up=%s, fov=%g)" % (self.position, self.look_at, self.up, self.fov)
+
+
+def _yt_view_direction(camera):
+    """The unit vector from a yt camera's position to its focus."""
+    d = _yt_code(camera.focus) - _yt_code(camera.position)
+    return d / np.linalg.norm(d)
+
+
+def _yt_view(camera, source, dataset):
+    """What a yt camera and volume source give a Scene of `dataset`: the transfer function
+    (TransferFunction.from_yt, converted for the camera) and the settings camera, width, height
+    (yt's resolution is (width, height)) and clip_planes (a plane-parallel lens's slab ends one
+    half depth width beyond the focus)."""
+    width, height = [int(r) for r in camera.resolution]
+    planes = []
+    if type(camera.lens).__name__ == "PlaneParallelLens":
+        w = _yt_code(camera.width)
+        if abs(w[0] * height - w[1] * width) > 1e-6 * abs(w[0] * height):
+            raise ValueError("the yt camera's width %g x %g does not have the aspect of its resolution %d x %d: "
+                             "exabricks renders square pixels (set the width to the resolution's aspect)"
+                             % (w[0], w[1], width, height))
+        n = _yt_view_direction(camera)
+        far = _yt_code(camera.focus) + n * (0.5 * float(w[2]))
+        planes.append((tuple(map(float, far)), tuple(map(float, n))))
+    tf = TransferFunction.from_yt(source, camera=camera, dataset=dataset)
+    return tf, {"camera": Camera.from_yt(camera), "width": width, "height": height, "clip_planes": planes}
 
 
 class Layer:
@@ -707,11 +738,8 @@ class Scene:
         field = source.field
         if dataset is None:
             dataset = from_yt(source.data_source.ds, [field])
-        camera = scene.camera
-        tf = TransferFunction.from_yt(source, camera=camera, dataset=dataset)
-        resolution = [int(r) for r in camera.resolution]
-        defaults = {"shading": "none", "camera": Camera.from_yt(camera), "width": resolution[0],
-                    "height": resolution[1]}
+        tf, defaults = _yt_view(scene.camera, source, dataset)
+        defaults["shading"] = "none"
         defaults.update(settings)
         return cls(dataset, field=_yt_field_name(field), transfer_function=tf, **defaults)
 
