@@ -281,11 +281,34 @@ public:
   }
 
   /// Adds passes until the buffer holds `passes` (or one more pass when 0) for the frame;
-  /// returns the passes in the buffer. Ctrl-C cancels between tiles.
-  int render(const std::string& frameJson, int passes) {
-    const Frame f = parseFrame(frameJson);
+  /// returns the passes in the buffer. Ctrl-C cancels between tiles. `depthLimit`: None, or an
+  /// (H, W) array of distances per pixel beyond which nothing is drawn (along the rays, or with
+  /// `planar` along the view direction; Frame::depthLimit).
+  int render(const std::string& frameJson, int passes, const py::object& depthLimit, bool planar) {
+    Frame f = parseFrame(frameJson);
+    std::vector<float> limit;
+    if (!depthLimit.is_none()) {
+      const auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(depthLimit);
+      if (!a) fail("depth_limit must be an array of numbers");
+      if (a.ndim() != 2 || a.shape(0) != f.height || a.shape(1) != f.width) {
+        std::string shape;
+        for (py::ssize_t i = 0; i < a.ndim(); ++i)
+          shape += strCat(i ? ", " : "", a.shape(i));
+        fail("depth_limit must be an (H, W) = (", f.height, ", ", f.width, ") array like the image, not (", shape, ")");
+      }
+      limit.assign(a.data(), a.data() + a.size());
+    }
+    const bool limited = !depthLimit.is_none();
+    const bool sameLimit = limited == hasDepthLimit_ && (!limited || (planar == depthLimitPlanar_ && limit == depth_));
+    depth_ = std::move(limit);
+    hasDepthLimit_ = limited;
+    depthLimitPlanar_ = planar;
+    if (limited) {
+      f.depthLimit = depth_.data();
+      f.depthLimitPlanar = planar;
+    }
     const std::string key = frameJson;
-    if (stale_ || key != frameKey_ || buffer_.width() != f.width || buffer_.height() != f.height) {
+    if (stale_ || !sameLimit || key != frameKey_ || buffer_.width() != f.width || buffer_.height() != f.height) {
       if (buffer_.width() != f.width || buffer_.height() != f.height) buffer_.resize(f.width, f.height);
       buffer_.clear();
       frameKey_ = key;
@@ -421,6 +444,8 @@ private:
   FrameBuffer buffer_;
   Scene scene_;
   Frame frame_;
+  std::vector<float> depth_; ///< the depth limit of the frame in the buffer
+  bool hasDepthLimit_ = false, depthLimitPlanar_ = false;
   std::string frameKey_, sceneKey_;
   bool stale_ = true;
   std::atomic<bool> cancelRequested_{false};
@@ -470,7 +495,14 @@ PYBIND11_MODULE(_core, m) {
             return double(d.info.referenceWidth) * (s.x + s.y + s.z) / 3.0;
           },
           "World length opacity is given per: the finest cell width (averaged over the axes)")
-      .def("info_json", [](const Dataset& d) { return modelInfoJson(*d.model, d.name, d.loadSeconds); })
+      .def("info_json",
+           [](const Dataset& d) {
+             // The command line's `info --json`: the model's description and the device object.
+             std::string j = modelInfoJson(*d.model, d.name, d.loadSeconds);
+             const size_t end = j.find_last_of('}');
+             if (end == std::string::npos) fail("internal: model information is not a JSON object");
+             return j.substr(0, end) + ",\"device\":" + deviceInfoJson(*d.model) + "}";
+           })
       .def("sample", &sample, py::arg("points"), py::arg("field") = "")
       .def(
           "adapt_transfer_function",
@@ -509,7 +541,8 @@ PYBIND11_MODULE(_core, m) {
       .def(py::init<std::shared_ptr<Dataset>, std::string>(), py::arg("dataset"), py::arg("device") = "auto")
       .def_property_readonly("device", &PyRenderer::device, "Where passes run: cpu, cuda or portable")
       .def("set_scene", &PyRenderer::setScene, py::arg("scene_json"), py::arg("meshes"))
-      .def("render", &PyRenderer::render, py::arg("frame_json"), py::arg("passes") = 0)
+      .def("render", &PyRenderer::render, py::arg("frame_json"), py::arg("passes") = 0,
+           py::arg("depth_limit") = py::none(), py::arg("depth_limit_planar") = false)
       .def("image", &PyRenderer::image)
       .def("png", &PyRenderer::png)
       .def("save", &PyRenderer::save, py::arg("path"), py::arg("bits") = 8)

@@ -7,12 +7,14 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/image.h"
+#include "exabricks/core/mesh.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/transfer_function.h"
 
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -55,10 +57,30 @@ inline std::string describe(const ImageDifference& d) {
          std::to_string(d.p999 * 255) + "/255, max " + std::to_string(d.max * 255) + "/255";
 }
 
+/// A UV sphere of the given world centre and radius.
+inline std::shared_ptr<const TriangleMesh> sphereMesh(const vec3d& centre, double radius, int rings = 12,
+                                                      int segments = 24) {
+  auto m = std::make_shared<TriangleMesh>();
+  for (int i = 0; i <= rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const double theta = M_PI * i / rings, phi = 2.0 * M_PI * j / segments;
+      m->vertices.push_back(vec3f(
+          centre + vec3d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi), std::cos(theta)) * radius));
+    }
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const int a = i * segments + j, b = i * segments + (j + 1) % segments;
+      m->triangles.push_back({a, a + segments, b});
+      m->triangles.push_back({b, a + segments, b + segments});
+    }
+  return m;
+}
+
 struct Variant {
   std::string name;
   std::function<void(Scene&, Frame&, const DatasetInfo&, const box3d&)> set;
-  bool domain = false; ///< render with a domain box (the data's lower half along x)
+  bool domain = false;     ///< render with a domain box (the data's lower half along x)
+  bool depthLimit = false; ///< render with a planar depth limit that cuts through the data
 };
 
 inline std::vector<Variant> variants() {
@@ -113,6 +135,30 @@ inline std::vector<Variant> variants() {
          f.camera.orthographic = true;
        }},
       {"a domain box", [](Scene&, Frame&, const DatasetInfo&, const box3d&) {}, true},
+      {"meshes in the volume, ambient occlusion",
+       [](Scene& s, Frame&, const DatasetInfo&, const box3d& bounds) {
+         const vec3d centre = (bounds.lower + bounds.upper) * 0.5, size = bounds.upper - bounds.lower;
+         s.meshes.push_back({sphereMesh(centre, 0.25 * size.x), {0.8f, 0.3f, 0.2f}, ""});
+         s.meshes.push_back({sphereMesh(centre + size * 0.3, 0.1 * size.x), {0.2f, 0.6f, 0.9f}, ""});
+         s.ao.rays = 3;
+         s.ao.volume = true;
+       }},
+      {"a clipped mesh with an iso-surface",
+       [](Scene& s, Frame&, const DatasetInfo& d, const box3d& bounds) {
+         const vec3d centre = (bounds.lower + bounds.upper) * 0.5, size = bounds.upper - bounds.lower;
+         s.meshes.push_back({sphereMesh(centre, 0.3 * size.x, 20, 40), {0.7f, 0.7f, 0.2f}, ""});
+         s.clip.planes.push_back({centre, normalize(vec3d(-0.2, 1.0, 0.3))});
+         s.clip.meshes = true;
+         const range1f r = d.valueRanges[0];
+         s.iso.values = {r.lower + 0.6f * (r.upper - r.lower)};
+         s.ao.rays = 2;
+       }},
+      {"a depth limit through the data, with an iso-surface",
+       [](Scene& s, Frame&, const DatasetInfo& d, const box3d&) {
+         const range1f r = d.valueRanges[0];
+         s.iso.values = {r.lower + 0.3f * (r.upper - r.lower)};
+       },
+       false, true},
       {"one sample, no jitter",
        [](Scene&, Frame& f, const DatasetInfo&, const box3d&) { f.samplesPerPixel = 1, f.jitter = false; }},
   };
@@ -157,6 +203,16 @@ inline ImageDifference compareWithCpu(const Model& m, const DatasetInfo& info, D
   scene.layers[0].tf.valueRange = info.valueRanges[0];
   Frame frame = deviceTestFrame(m);
   v.set(scene, frame, info, worldBounds(m));
+  std::vector<float> depth;
+  if (v.depthLimit) {
+    // A z-buffer that slants through the data: from 0.8 to 1.2 times the distance to its centre.
+    const double centre = length(frame.camera.lookAt - frame.camera.position);
+    for (int y = 0; y < frame.height; ++y)
+      for (int x = 0; x < frame.width; ++x)
+        depth.push_back(float(centre * (0.8 + 0.4 * double(x) / frame.width)));
+    frame.depthLimit = depth.data();
+    frame.depthLimitPlanar = true;
+  }
   Renderer cpu(m, info), dev(m, info);
   if (v.domain) cpu.setDomain(deviceTestDomain(m)), dev.setDomain(deviceTestDomain(m));
   cpu.setScene(scene);

@@ -4,7 +4,6 @@
 #include "device_scenes.h"
 
 #include "exabricks/core/error.h"
-#include "exabricks/core/mesh.h"
 
 #include <gtest/gtest.h>
 
@@ -71,29 +70,26 @@ TEST(Device, RefusesWhatTheDeviceDoesNotDraw) {
   Scene scene;
   r.setScene(scene);
   r.setDevice(Device::Portable);
-  Scene withMesh = scene;
-  SceneMesh mesh;
-  auto triangle = std::make_shared<TriangleMesh>();
-  triangle->vertices = {{0.f, 0.f, 0.f}, {1.f, 0.f, 0.f}, {0.f, 1.f, 0.f}};
-  triangle->triangles = {{0, 1, 2}};
-  mesh.mesh = triangle;
-  withMesh.meshes.push_back(mesh);
-  try {
-    r.setScene(withMesh);
-    FAIL() << "a mesh scene was accepted on the device";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("triangle meshes"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("--device cpu"), std::string::npos) << e.what();
-  }
-  EXPECT_TRUE(r.scene().meshes.empty()) << "the refused scene replaced the current one";
   Scene debug = scene;
   debug.debug = DebugView::Level;
-  EXPECT_THROW(r.setScene(debug), Error);
-  // On the CPU the scene is drawn; moving it to the device is refused and leaves it on the CPU.
+  try {
+    r.setScene(debug);
+    FAIL() << "a debug view was accepted on the device";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("debug views"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--device cpu"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(r.scene().debug, DebugView::None) << "the refused scene replaced the current one";
+  Scene cells = scene;
+  cells.integration.reconstruction = Reconstruction::CellLocation;
+  EXPECT_THROW(r.setScene(cells), Error);
+  // On the CPU the scene is drawn; moving it to the device is refused and leaves it on the CPU,
+  // and "auto" falls back to the CPU.
   Renderer cpu(m);
-  cpu.setScene(withMesh);
+  cpu.setScene(debug);
   EXPECT_THROW(cpu.setDevice(Device::Portable), Error);
   EXPECT_EQ(cpu.device(), Device::Cpu);
+  EXPECT_EQ(selectDevice(cpu, "auto"), Device::Cpu);
 }
 
 TEST(Device, DeviceNamesResolveAndCudaWithoutAGpuSaysWhy) {

@@ -14,18 +14,6 @@
 namespace exa::cli {
 namespace {
 
-/// Bytes a GPU renderer holds for the model's structures, and per field (values; smooth shading
-/// adds three gradient fields of the same size).
-nlohmann::json gpuMemoryNeeded(const Model& model) {
-  const uint64_t values = model.fieldValues.empty() ? 0 : model.fieldValues[0].size() * sizeof(float);
-  return {{"bricks", model.bricks.size() * sizeof(Brick)},
-          {"regions", model.regions.regions.size() * sizeof(Region)},
-          {"region brick lists", model.regions.brickIds.size() * sizeof(uint32_t)},
-          {"region k-d tree", model.regions.nodes.size() * sizeof(RegionKdNode)},
-          {"field values", values},
-          {"field gradients", 3 * values}};
-}
-
 struct InfoOptions {
   InputOptions in;
   bool json = false;
@@ -134,8 +122,7 @@ void run(const InfoOptions& o) {
 
   if (o.json) {
     nlohmann::json j = nlohmann::json::parse(modelInfoJson(model, o.in.name(), loadSeconds));
-    j["device"] = cudaJson();
-    j["device"]["memory_needed_bytes"] = gpuMemoryNeeded(model);
+    j["device"] = nlohmann::json::parse(deviceInfoJson(model));
     if (lo.nonFinite == NonFinite::Holes) {
       // Cells with NaN or infinite values per field, made holes (--nan-as-holes).
       nlohmann::json counts = nlohmann::json::object();
@@ -150,7 +137,7 @@ void run(const InfoOptions& o) {
   std::printf("input            %s\n", o.in.name().c_str());
   {
     const CudaStatus cuda = cudaStatus();
-    const nlohmann::json need = gpuMemoryNeeded(model);
+    const nlohmann::json need = nlohmann::json::parse(deviceInfoJson(model))["memory_needed_bytes"];
     const double mib = double(need["bricks"].get<uint64_t>() + need["regions"].get<uint64_t>() +
                               need["region brick lists"].get<uint64_t>() + need["region k-d tree"].get<uint64_t>() +
                               need["field values"].get<uint64_t>()) /

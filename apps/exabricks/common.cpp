@@ -97,19 +97,4 @@ nlohmann::json deviceJson(const Renderer& renderer) {
   return j;
 }
 
-nlohmann::json cudaJson() {
-  const CudaStatus s = cudaStatus();
-  nlohmann::json j;
-  j["cuda_built"] = s.built;
-  j["gpus"] = s.devices;
-  if (s.devices > 0) {
-    j["name"] = s.name;
-    j["memory_total_bytes"] = s.totalBytes;
-    j["memory_free_bytes"] = s.freeBytes;
-  }
-  if (!s.problem.empty()) j["problem"] = s.problem;
-  j["auto"] = s.problem.empty() ? "cuda" : "cpu";
-  return j;
-}
-
 } // namespace exa::cli

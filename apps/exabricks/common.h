@@ -43,8 +43,5 @@ nlohmann::json toJson(const range1f& r);
 /// Where a renderer's passes run: {"kind": "cpu" | "cuda" | "portable"} and, on a GPU, its name
 /// and the memory the renderer holds there per structure.
 nlohmann::json deviceJson(const Renderer& renderer);
-/// What this machine and build offer: whether the CUDA back end is built, the GPUs it sees, and
-/// what --device auto would choose.
-nlohmann::json cudaJson();
 
 } // namespace exa::cli

@@ -1,7 +1,7 @@
 """exabricks: fast, seam-free rendering of structured AMR data (the ExaBricks method).
 
 Data in:  load(path), from_cells(corners, levels, fields), from_grids(grids), from_yt(ds); a yt scene
-as a whole: Scene.from_yt(sc).
+as a whole: Scene.from_yt(sc); inside yt's own scenes: exabricks.yt.ExaBricksSource.
 Rendering: Scene(dataset) with TransferFunction, Camera, iso-surfaces, meshes, clipping and
 ambient occlusion; Scene.render() returns an (H, W, 4) float32 array of linear, premultiplied
 RGBA. Dataset.sample(points) reconstructs values and gradients; Dataset.info() describes the
@@ -488,13 +488,18 @@ class Camera:
     def from_yt(cls, camera):
         """The position, focus, north vector and width of a yt camera, in code units (the world
         units of from_yt): orthographic with yt's height when its lens is plane-parallel, else a
-        perspective whose vertical angle is yt's, 2 atan(height / (2 depth width))."""
+        perspective whose vertical angle is yt's, 2 atan(height / (2 depth width)). A
+        plane-parallel lens casts its rays from the near face of a slab one depth width thick
+        around the focus: the orthographic camera sits on that face (Scene.from_yt also clips the
+        far one)."""
         pos = _yt_code(camera.position)
         focus = _yt_code(camera.focus)
         north = np.asarray(camera.north_vector, float)
         width = _yt_code(camera.width)
         ortho = type(camera.lens).__name__ == "PlaneParallelLens"
-        if not ortho:
+        if ortho:
+            pos = focus - _yt_view_direction(camera) * (0.5 * float(width[2]))
+        else:
             # yt's perspective lens makes the height the width times the resolution's aspect
             # when it renders.
             resolution = [float(r) for r in camera.resolution]
@@ -508,6 +513,32 @@ class Camera:
 
     def __repr__(self):
         return "Camera(position=%s, look_at=%s, up=%s, fov=%g)" % (self.position, self.look_at, self.up, self.fov)
+
+
+def _yt_view_direction(camera):
+    """The unit vector from a yt camera's position to its focus."""
+    d = _yt_code(camera.focus) - _yt_code(camera.position)
+    return d / np.linalg.norm(d)
+
+
+def _yt_view(camera, source, dataset):
+    """What a yt camera and volume source give a Scene of `dataset`: the transfer function
+    (TransferFunction.from_yt, converted for the camera) and the settings camera, width, height
+    (yt's resolution is (width, height)) and clip_planes (a plane-parallel lens's slab ends one
+    half depth width beyond the focus)."""
+    width, height = [int(r) for r in camera.resolution]
+    planes = []
+    if type(camera.lens).__name__ == "PlaneParallelLens":
+        w = _yt_code(camera.width)
+        if abs(w[0] * height - w[1] * width) > 1e-6 * abs(w[0] * height):
+            raise ValueError("the yt camera's width %g x %g does not have the aspect of its resolution %d x %d: "
+                             "exabricks renders square pixels (set the width to the resolution's aspect)"
+                             % (w[0], w[1], width, height))
+        n = _yt_view_direction(camera)
+        far = _yt_code(camera.focus) + n * (0.5 * float(w[2]))
+        planes.append((tuple(map(float, far)), tuple(map(float, n))))
+    tf = TransferFunction.from_yt(source, camera=camera, dataset=dataset)
+    return tf, {"camera": Camera.from_yt(camera), "width": width, "height": height, "clip_planes": planes}
 
 
 class Layer:
@@ -715,11 +746,8 @@ class Scene:
         field = source.field
         if dataset is None:
             dataset = from_yt(source.data_source.ds, [field])
-        camera = scene.camera
-        tf = TransferFunction.from_yt(source, camera=camera, dataset=dataset)
-        resolution = [int(r) for r in camera.resolution]
-        defaults = {"shading": "none", "camera": Camera.from_yt(camera), "width": resolution[0],
-                    "height": resolution[1]}
+        tf, defaults = _yt_view(scene.camera, source, dataset)
+        defaults["shading"] = "none"
         defaults.update(settings)
         return cls(dataset, field=_yt_field_name(field), transfer_function=tf, **defaults)
 
@@ -740,20 +768,32 @@ class Scene:
     def _update(self):
         return self._renderer.set_scene(self._scene_json(), [(m, c) for m, c in self.meshes])
 
-    def render(self, width=None, height=None, spp=None, rate=None):
+    def render(self, width=None, height=None, spp=None, rate=None, depth_limit=None, depth_limit_planar=False):
         """Renders the scene: an (H, W, 4) float32 array of linear RGB premultiplied by alpha (row 0
-        at the top). The GIL is released while rendering; Ctrl-C cancels."""
-        self.render_progressive(width, height, spp, rate, passes=spp or self.spp)
+        at the top). The GIL is released while rendering; Ctrl-C cancels.
+
+        `depth_limit`: an (H, W) array (float32; other numbers are converted) of world distances
+        per pixel beyond which nothing is drawn, volume, iso-surfaces and meshes alike, as where
+        opaque geometry drawn elsewhere hides the rest (compositing: lay the image over that
+        geometry's); +inf is no limit. A distance is measured along the pixel's rays from their
+        origin (the camera position, or its image plane when orthographic), or with
+        `depth_limit_planar` along the view direction from the camera's plane, as a z-buffer
+        holds depth."""
+        self.render_progressive(width, height, spp, rate, passes=spp or self.spp, depth_limit=depth_limit,
+                                depth_limit_planar=depth_limit_planar)
         return self._renderer.image()
 
-    def render_progressive(self, width=None, height=None, spp=None, rate=None, passes=0):
+    def render_progressive(self, width=None, height=None, spp=None, rate=None, passes=0, depth_limit=None,
+                           depth_limit_planar=False):
         """Adds passes to the scene's accumulation buffer (one pass when `passes` is 0; otherwise
         until it holds `passes`) and returns the passes it holds. The buffer starts over when the
-        scene or the frame changes; `samples_per_pixel` of the frame is `spp` (or `passes`)."""
+        scene, the frame or the depth limit (as render takes it) changes; `samples_per_pixel` of
+        the frame is `spp` (or `passes`)."""
         w, h = int(width or self.width), int(height or self.height)
         target = int(spp or self.spp)
         self._update()
-        return self._renderer.render(self._frame_json(w, h, max(target, passes or 1), rate or self.rate), int(passes))
+        return self._renderer.render(self._frame_json(w, h, max(target, passes or 1), rate or self.rate), int(passes),
+                                     depth_limit, bool(depth_limit_planar))
 
     def image(self):
         """The accumulated image as an (H, W, 4) float32 array (linear, premultiplied)."""

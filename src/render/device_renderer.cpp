@@ -6,6 +6,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
+#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
 #include <cstring>
@@ -36,13 +37,13 @@ DeviceRenderer::~DeviceRenderer() {
     gpu::release(b.device);
   gpu::release(colors_);
   gpu::release(counts_);
+  gpu::releaseHost(pinned_);
 }
 
 void DeviceRenderer::checkSupported(const Scene& s) {
   auto refuse = [](const std::string& what) {
     fail("the GPU back end does not render ", what, " yet; render this scene on the CPU (--device cpu)");
   };
-  if (!s.meshes.empty()) refuse("triangle meshes");
   if (s.debug != DebugView::None) refuse("debug views");
   if (s.integration.reconstruction == Reconstruction::CellLocation) refuse("reconstruction by cell location");
   if (s.layers.size() > size_t(kTraceMaxLayers)) refuse("more than " + std::to_string(kTraceMaxLayers) + " layers");
@@ -82,9 +83,34 @@ FieldView DeviceRenderer::fieldView(int field, const float* values, const std::s
   v.brickIds = put("region brick lists", model_.regions.brickIds, false, update);
   v.nodes = model_.regions.nodes.empty() ? nullptr : put("region k-d tree", model_.regions.nodes, false, update);
   const uint64_t count = model_.fieldValues[size_t(field)].size();
+  if (!values) {
+    v.values = nullptr;
+    return v;
+  }
   v.values = static_cast<const float*>(
       put(what + " " + model_.fieldNames[size_t(field)], values, count * sizeof(float), false, update));
   return v;
+}
+
+const vec4f* DeviceRenderer::withGradients(const LayerTable& l, SceneUpdate& update) {
+  const std::string key = "field and gradients " + model_.fieldNames[size_t(l.field)];
+  auto fill = [&](std::vector<vec4f>& out) {
+    const auto& values = model_.fieldValues[size_t(l.field)];
+    out.resize(values.size());
+    tbb::parallel_for(size_t(0), values.size(), [&](size_t i) {
+      out[i] = {values[i], l.grad[0].values[i], l.grad[1].values[i], l.grad[2].values[i]};
+    });
+  };
+  if (device_ != Device::Cuda) {
+    std::vector<vec4f>& v = interleaved_[l.field];
+    if (v.empty()) fill(v);
+    return v.data();
+  }
+  // The model's data never change: made and copied once.
+  if (auto it = buffers_.find(key); it != buffers_.end()) return static_cast<const vec4f*>(it->second.device);
+  std::vector<vec4f> interleaved;
+  fill(interleaved);
+  return put(key, interleaved, false, update);
 }
 
 namespace {
@@ -114,12 +140,12 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
   for (size_t i = 0; i < layers.size(); ++i) {
     const LayerTable& l = layers[i];
     TraceLayer& t = v.layers[i];
-    t.view = fieldView(l.field, l.view.values, "field", update);
+    // Smooth shading reads the values with the gradients (TraceLayer::withGradients).
+    const bool smooth = s.shading == Shading::Smooth && l.grad[0].values;
+    t.view = fieldView(l.field, smooth ? nullptr : l.view.values, "field", update);
+    if (smooth) t.withGradients = withGradients(l, update);
     for (int a = 0; a < 3; ++a)
-      t.grad[a] =
-          l.grad[size_t(a)].values && s.shading == Shading::Smooth
-              ? fieldView(l.field, l.grad[size_t(a)].values, std::string("gradient ") + "xyz"[a] + " of", update)
-              : t.view;
+      t.grad[a] = t.view;
     t.tf = tableView(l, put("transfer function " + std::to_string(i), l.table, true, update));
     t.byValue = l.fadeByValue();
     t.invSpan = l.invSpan;
@@ -163,6 +189,30 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
       v.isoColors[i] = s.iso.colors[i];
   }
 
+  // Meshes: the hierarchy built again where the meshes or their colours changed.
+  std::vector<std::pair<const TriangleMesh*, vec3f>> meshKey;
+  for (const SceneMesh& m : s.meshes)
+    meshKey.emplace_back(m.mesh.get(), m.color);
+  if (meshKey != meshKey_) {
+    std::vector<const TriangleMesh*> list;
+    meshColors_.clear();
+    for (const SceneMesh& m : s.meshes)
+      list.push_back(m.mesh.get()), meshColors_.push_back(m.color);
+    meshBvh_.build(list);
+    meshKey_ = meshKey;
+    for (const char* key : {"mesh hierarchy", "mesh triangles", "mesh colours"})
+      if (auto it = buffers_.find(key); it != buffers_.end()) {
+        if (device_ == Device::Cuda) gpu::release(it->second.device);
+        buffers_.erase(it);
+      }
+  }
+  v.meshes = !meshBvh_.empty();
+  if (v.meshes) {
+    v.meshBvh.nodes = put("mesh hierarchy", meshBvh_.nodes(), false, update);
+    v.meshBvh.triangles = put("mesh triangles", meshBvh_.triangles(), false, update);
+    v.meshColors = put("mesh colours", meshColors_, false, update);
+  }
+  v.clipMeshes = s.clip.meshes;
   v.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
   v.planeCount = int(s.clip.planes.size());
   for (size_t i = 0; i < s.clip.planes.size(); ++i)
@@ -178,8 +228,8 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
   update.deviceSeconds += timer.seconds();
 }
 
-void DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd,
-                          int tileStride, std::vector<vec4f>& colors, gpu::PassCounts& counts) {
+const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd,
+                                  int tileStride, gpu::PassCounts& counts) {
   TraceView v = base_;
   v.camera = frame.camera;
   v.width = frame.width;
@@ -190,10 +240,11 @@ void DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, i
   v.jitter = frame.jitter;
   v.pixelJitter = frame.samplesPerPixel > 1 && frame.jitter;
   v.rate = frame.rate;
+  v.depthLimitPlanar = frame.depthLimitPlanar;
+  v.forward = normalize(frame.camera.lookAt - frame.camera.position);
   v.hasDomain = domain != nullptr;
   if (domain) v.domain = *domain;
   const size_t pixels = size_t(frame.width) * size_t(frame.height);
-  colors.resize(pixels);
   counts = gpu::PassCounts();
   if (device_ == Device::Cuda) {
     const uint64_t bytes = pixels * sizeof(vec4f);
@@ -204,16 +255,38 @@ void DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, i
       colorBytes_ = bytes;
     }
     if (!counts_) counts_ = gpu::allocate(sizeof(gpu::PassCounts), "the pass's counters");
-    gpu::tracePass(v, tilesX, tileBegin, tileEnd, tileStride, colors_, counts_, colors.data(), counts);
-    return;
+    if (frame.depthLimit) {
+      const uint64_t depthBytes = pixels * sizeof(float);
+      Buffer& b = buffers_["depth limit"];
+      if (b.bytes != depthBytes) {
+        gpu::release(b.device);
+        b.device = nullptr;
+        b.device = gpu::allocate(depthBytes, "the depth limit");
+        b.bytes = depthBytes;
+      }
+      gpu::copyToDevice(b.device, frame.depthLimit, depthBytes);
+      v.depthLimit = static_cast<const float*>(b.device);
+    }
+    if (bytes > pinnedBytes_) {
+      gpu::releaseHost(pinned_);
+      pinned_ = nullptr;
+      pinned_ = static_cast<vec4f*>(gpu::allocateHost(bytes));
+      pinnedBytes_ = bytes;
+    }
+    gpu::tracePass(v, tilesX, tileBegin, tileEnd, tileStride, colors_, counts_, pinned_, counts);
+    return pinned_;
   }
+  std::vector<vec4f>& colors = hostColors_;
+  colors.resize(pixels);
+  v.depthLimit = frame.depthLimit;
   std::atomic<uint64_t> rays{0}, samples{0}, iso{0}, ao{0}, hits{0};
   tbb::parallel_for(0, frame.height, [&](int y) {
     TraceCounts c;
     uint64_t r = 0;
     for (int x = 0; x < frame.width; ++x) {
       if (!tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) continue;
-      colors[size_t(y) * size_t(frame.width) + size_t(x)] = traceSample(v, x, y, c);
+      colors[size_t(y) * size_t(frame.width) + size_t(x)] =
+          v.iso || v.meshes ? traceSample<true>(v, x, y, c) : traceSample<false>(v, x, y, c);
       ++r;
     }
     rays += r;
@@ -223,6 +296,7 @@ void DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, i
     hits += c.surfaceHits;
   });
   counts.rays = rays, counts.samples = samples, counts.isoSamples = iso, counts.aoRays = ao, counts.surfaceHits = hits;
+  return colors.data();
 }
 
 DeviceMemory DeviceRenderer::memory() const {
@@ -231,6 +305,28 @@ DeviceMemory DeviceRenderer::memory() const {
     m.structures.emplace_back(key, b.bytes);
   if (colorBytes_) m.structures.emplace_back("frame", colorBytes_);
   return m;
+}
+
+std::string deviceInfoJson(const Model& model) {
+  const CudaStatus s = cudaStatus();
+  nlohmann::json j;
+  j["cuda_built"] = s.built;
+  j["gpus"] = s.devices;
+  if (s.devices > 0) {
+    j["name"] = s.name;
+    j["memory_total_bytes"] = s.totalBytes;
+    j["memory_free_bytes"] = s.freeBytes;
+  }
+  if (!s.problem.empty()) j["problem"] = s.problem;
+  j["auto"] = s.problem.empty() ? "cuda" : "cpu";
+  const uint64_t values = model.fieldValues.empty() ? 0 : model.fieldValues[0].size() * sizeof(float);
+  j["memory_needed_bytes"] = {{"bricks", model.bricks.size() * sizeof(Brick)},
+                              {"regions", model.regions.regions.size() * sizeof(Region)},
+                              {"region brick lists", model.regions.brickIds.size() * sizeof(uint32_t)},
+                              {"region k-d tree", model.regions.nodes.size() * sizeof(RegionKdNode)},
+                              {"field values", values},
+                              {"field with smooth-shading gradients", 4 * values}};
+  return j.dump();
 }
 
 } // namespace exa

@@ -5,6 +5,7 @@
 // what a new scene changed.
 #pragma once
 
+#include "exabricks/accel/triangle_bvh.h"
 #include "gpu_api.h"
 #include "surfaces.h"
 #include "volume_marcher.h"
@@ -28,9 +29,10 @@ public:
   /// Brings the device's copies up to date with the renderer's units for `scene`; adds the bytes
   /// copied and the time to `update`.
   void sync(const Scene& scene, const VolumeMarcher& volume, const Surfaces& surfaces, SceneUpdate& update);
-  /// One pass of the selected tiles: colours of the selected pixels into `colors` (width x height).
-  void pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd, int tileStride,
-            std::vector<vec4f>& colors, gpu::PassCounts& counts);
+  /// One pass of the selected tiles: returns the colours (width x height; those of the selected
+  /// pixels set), valid until the next pass.
+  const vec4f* pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd, int tileStride,
+                    gpu::PassCounts& counts);
   DeviceMemory memory() const;
 
 private:
@@ -41,8 +43,12 @@ private:
   const T* put(const std::string& key, const std::vector<T>& v, bool byContent, SceneUpdate& update) {
     return static_cast<const T*>(put(key, v.data(), v.size() * sizeof(T), byContent, update));
   }
-  /// A field's view on the device, its values (or a gradient field of it) at `values`.
+  /// A field's view on the device, its values (or a gradient field of it) at `values` (null: the
+  /// view without values).
   FieldView fieldView(int field, const float* values, const std::string& what, SceneUpdate& update);
+  /// A smooth-shaded layer's field and gradient fields interleaved (TraceLayer::withGradients),
+  /// made once per field.
+  const vec4f* withGradients(const LayerTable& layer, SceneUpdate& update);
 
   struct Buffer {
     void* device = nullptr;
@@ -55,10 +61,17 @@ private:
   const DatasetInfo& dataset_;
   std::map<std::string, Buffer> buffers_;
   std::vector<uint8_t> volumeSubtrees_, isoSubtrees_;
-  TraceView base_; ///< what the scene sets; pass() adds the frame
+  std::map<int, std::vector<vec4f>> interleaved_;
+  TriangleBvh meshBvh_; ///< the scene's meshes (the CPU renderer's are Embree's)
+  std::vector<vec3f> meshColors_;
+  std::vector<std::pair<const TriangleMesh*, vec3f>> meshKey_; ///< withGradients' arrays where passes run on the host
+  TraceView base_;                                             ///< what the scene sets; pass() adds the frame
   void* colors_ = nullptr;
   uint64_t colorBytes_ = 0;
   void* counts_ = nullptr;
+  vec4f* pinned_ = nullptr; ///< the GPU's colours on the host (page-locked)
+  uint64_t pinnedBytes_ = 0;
+  std::vector<vec4f> hostColors_; ///< the portable back end's colours
 };
 
 } // namespace exa

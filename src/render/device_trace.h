@@ -11,6 +11,7 @@
 #include "layer_table.h"
 
 #include "exabricks/accel/traversal.h"
+#include "exabricks/accel/triangle_bvh.h"
 #include "exabricks/amr/basis.h"
 #include "exabricks/core/random.h"
 #include "exabricks/render/camera.h"
@@ -30,6 +31,9 @@ constexpr int kTraceMaxIsoColors = 16;
 struct TraceLayer {
   FieldView view;
   FieldView grad[3];
+  /// Smooth shading: the field and its gradient fields interleaved per cell (value, gx, gy, gz),
+  /// reconstructed at once (sampleRegion4); null: `grad` serves.
+  const vec4f* withGradients = nullptr;
   TfTableView tf;
   bool byValue = false; ///< LayerTable::fadeByValue
   float invSpan = 0.f;
@@ -65,6 +69,11 @@ struct TraceView {
   TfTableView isoColorTf;
   int isoColorCount = 0;
   vec3f isoColors[kTraceMaxIsoColors];
+  // Triangle meshes.
+  bool meshes = false;
+  TriangleBvhView meshBvh;
+  const vec3f* meshColors = nullptr; ///< per mesh, linear RGB
+  bool clipMeshes = false;           ///< Clipping::meshes
   // Clipping and the renderer's domain.
   bool clipping = false;
   int planeCount = 0;
@@ -85,6 +94,10 @@ struct TraceView {
   int frameIndex = 0;
   uint64_t seed = 0;
   bool jitter = true, pixelJitter = false;
+  /// Frame::depthLimit (per pixel, where the pass runs) and how to read it.
+  const float* depthLimit = nullptr;
+  bool depthLimitPlanar = false;
+  vec3d forward{0.0, 0.0, -1.0}; ///< the camera's view direction (planar depth limits)
 };
 
 /// Counts of one ray.
@@ -120,7 +133,13 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
         const TraceLayer& l = v.layers[li];
         float value;
         vec3f grad(0.f);
-        if (!sampleRegion(l.view, seg.region, p, value, wantGrad ? &grad : nullptr)) break;
+        if (l.withGradients) {
+          vec4f r;
+          if (!sampleRegion4(l.view, l.withGradients, seg.region, p, r)) break;
+          value = r.x, grad = vec3f(r.y, r.z, r.w);
+        } else if (!sampleRegion(l.view, seg.region, p, value, wantGrad ? &grad : nullptr)) {
+          break;
+        }
         const vec4f rgba = tfLookup(l.tf, value);
         if (rgba.w >= 0.f) continue;
         logSum += rgba.w;
@@ -128,7 +147,7 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
         const float alpha = correctedOpacity(rgba.w, len, v.invReferenceWidth);
         vec3f c = rgba.rgb();
         if (shade) {
-          if (v.shading == Shading::Smooth)
+          if (v.shading == Shading::Smooth && !l.withGradients)
             for (int a = 0; a < 3; ++a)
               if (!sampleRegion(l.grad[a], seg.region, p, grad[a])) grad[a] = 0.f;
           if (v.shading == Shading::Central) grad = centralGradient(l.view, seg.region, region, p, value);
@@ -171,6 +190,14 @@ EXA_HOST_DEVICE inline float traceOcclusion(const TraceView& v, const vec3d& pos
     const vec3f d = cosineHemisphere(normal, r1, r2);
     ++c.aoRays;
     const DualRay ar = makeDualRay(v.world, position + vec3d(normal) * v.aoEps, vec3d(d), &clip);
+    if (v.meshes) {
+      const double s0 = v.clipMeshes ? ar.sMin : 0.0;
+      const double s1 = v.clipMeshes ? std::min(ar.sMax, v.aoLength) : v.aoLength;
+      TriangleHit th;
+      if (s1 > s0 &&
+          intersectTriangles(v.meshBvh, vec3f(ar.orgW), vec3f(ar.dirW), float(std::max(s0, 0.0)), float(s1), true, th))
+        continue;
+    }
     Ray lr = ar.lattice;
     lr.tmax = std::min(lr.tmax, float(v.aoLength * ar.kappa));
     float t;
@@ -188,8 +215,9 @@ EXA_HOST_DEVICE inline float traceOcclusion(const TraceView& v, const vec3d& pos
   return v.aoRays > 0 ? open / float(v.aoRays) : 1.f;
 }
 
-/// One sample of pixel (x, y) for pass v.frameIndex: premultiplied colour.
-EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, TraceCounts& c) {
+/// One sample of pixel (x, y) for pass v.frameIndex: premultiplied colour. `Surfaces`: the scene
+/// may have iso-surfaces (false compiles the volume alone, which needs fewer registers on a GPU).
+template <bool Surfaces> EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, TraceCounts& c) {
   PixelRandom rng(x, y, v.frameIndex, v.seed);
   const float jx = v.pixelJitter ? rng.next() : 0.5f;
   const float jy = v.pixelJitter ? rng.next() : 0.5f;
@@ -199,27 +227,64 @@ EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, Trace
   const ClipView clip{v.planes, v.planeCount, v.clipBox};
   DualRay dr = makeDualRay(v.world, orgW, dirW, v.clipping ? &clip : nullptr);
   if (v.hasDomain) restrictToBox(dr, v.domain);
+  if (v.depthLimit) {
+    const double limit = v.depthLimit[size_t(y) * size_t(v.width) + size_t(x)];
+    limitDistance(dr, v.depthLimitPlanar ? limit / dot(dr.dirW, v.forward) : limit);
+  }
   const vec3f viewW = vec3f(dr.dirW);
   const vec3f light = v.headlight ? viewW : v.lightWorld;
   const vec3f halfVector = normalize(light + viewW);
 
   vec4f acc;
-  float tHit = 0.f;
-  uint32_t region = 0;
+  // The nearest surface: a mesh (within the clip interval, or with meshes unclipped the domain's),
+  // then an iso-surface in front of it.
+  bool haveHit = false, isoHit = false;
+  double distance = 0.0;
   int which = 0;
-  const bool haveHit = !clippedAway(dr) && traceIso(v, dr.lattice, tHit, region, which, c.isoSamples);
-  const double distance = double(tHit) / dr.kappa;
+  vec3f normal(0.f);
+  if constexpr (Surfaces) {
+    if (v.meshes) {
+      const double s0 = v.clipMeshes ? dr.sMin : dr.domainMin, s1 = v.clipMeshes ? dr.sMax : dr.domainMax;
+      TriangleHit th;
+      if (s1 >= s0 &&
+          intersectTriangles(v.meshBvh, vec3f(dr.orgW), vec3f(dr.dirW), float(std::max(s0, 0.0)),
+                             std::isinf(s1) ? std::numeric_limits<float>::infinity() : float(s1), false, th)) {
+        haveHit = true;
+        distance = th.t;
+        which = th.mesh;
+        normal = th.normal;
+      }
+    }
+    if (v.iso && !clippedAway(dr)) {
+      Ray lr = dr.lattice;
+      if (haveHit) lr.tmax = std::min(lr.tmax, float(distance * dr.kappa));
+      float tHit = 0.f;
+      uint32_t region = 0;
+      int index = 0;
+      if (traceIso(v, lr, tHit, region, index, c.isoSamples)) {
+        haveHit = isoHit = true;
+        distance = double(tHit) / dr.kappa;
+        which = index;
+        normal = isoNormal(v.isoView, region, lr.org + lr.dir * tHit, dr.dirW, v.invScale);
+      }
+    }
+  }
   Ray volumeRay = dr.lattice;
   if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(distance * dr.kappa));
   if (v.volume && !clippedAway(dr)) traceVolume<false>(v, volumeRay, rho, light, halfVector, acc, c.samples);
+  if constexpr (!Surfaces) return acc;
   if (haveHit && acc.w < 1.f) {
     ++c.surfaceHits;
     const vec3d position = dr.orgW + dr.dirW * distance;
-    const vec3f normal = isoNormal(v.isoView, region, dr.lattice.org + dr.lattice.dir * tHit, dr.dirW, v.invScale);
-    vec3f base = v.isoColorCount > 0 ? v.isoColors[which % v.isoColorCount] : defaultIsoColor(which);
-    float value;
-    if (v.isoColored && sampleField(v.isoColorView, vec3f(v.world.toLattice(position)), value))
-      base = tfLookup(v.isoColorTf, value).rgb();
+    vec3f base;
+    if (!isoHit) {
+      base = v.meshColors[which];
+    } else {
+      base = v.isoColorCount > 0 ? v.isoColors[which % v.isoColorCount] : defaultIsoColor(which);
+      float value;
+      if (v.isoColored && sampleField(v.isoColorView, vec3f(v.world.toLattice(position)), value))
+        base = tfLookup(v.isoColorTf, value).rgb();
+    }
     const float ao = v.aoRays > 0 ? traceOcclusion(v, position, normal, rng, c) : 1.f;
     compositeOpaqueBehind(acc, shadeSurface(base, normal, light, halfVector, ao, v.terms));
   }

@@ -111,6 +111,15 @@ EXA_HOST_DEVICE inline void restrictToBox(DualRay& r, const box3d& domain) {
   setLatticeInterval(r);
 }
 
+/// Ends the ray at world distance `s` from its origin: nothing beyond it is drawn (volume,
+/// iso-surfaces and meshes, clipped or not). An infinite `s` leaves the ray as it is.
+EXA_HOST_DEVICE inline void limitDistance(DualRay& r, double s) {
+  if (!(s < std::numeric_limits<double>::infinity())) return;
+  r.domainMax = std::min(r.domainMax, s);
+  if (r.sMax >= r.sMin) r.sMax = std::min(r.sMax, s); // not clipped away already
+  setLatticeInterval(r);
+}
+
 /// Whether clipping left nothing of the ray.
 EXA_HOST_DEVICE inline bool clippedAway(const DualRay& r) { return r.sMax < r.sMin; }
 

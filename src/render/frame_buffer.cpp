@@ -16,6 +16,7 @@ RenderStats& RenderStats::operator+=(const RenderStats& o) {
   isoSamples += o.isoSamples;
   aoRays += o.aoRays;
   tiles += o.tiles;
+  deviceSeconds += o.deviceSeconds;
   return *this;
 }
 

@@ -16,10 +16,14 @@ CudaStatus status();
 /// Device memory for `what` (named in the error when the GPU has too little left).
 void* allocate(uint64_t bytes, const char* what);
 void release(void* p) noexcept;
+/// Page-locked host memory (the GPU copies into it at full speed), and its release.
+void* allocateHost(uint64_t bytes);
+void releaseHost(void* p) noexcept;
 void copyToDevice(void* device, const void* host, uint64_t bytes);
 /// Counters a pass adds up on the device (TraceCounts summed, and the rays).
 struct PassCounts {
   unsigned long long rays = 0, samples = 0, isoSamples = 0, aoRays = 0, surfaceHits = 0;
+  double kernelSeconds = 0; ///< measured with events around the kernel
 };
 /// One pass of the selected tiles: traceSample for every pixel into `deviceColors` (width x
 /// height vec4f on the device), copied to `hostColors`; waits for the GPU. `deviceCounts` is a

@@ -14,6 +14,8 @@ CudaStatus status() {
 
 void* allocate(uint64_t, const char*) { fail("this exabricks was built without CUDA"); }
 void release(void*) noexcept {}
+void* allocateHost(uint64_t) { fail("this exabricks was built without CUDA"); }
+void releaseHost(void*) noexcept {}
 void copyToDevice(void*, const void*, uint64_t) { fail("this exabricks was built without CUDA"); }
 void tracePass(const TraceView&, int, int, int, int, void*, void*, vec4f*, PassCounts&) {
   fail("this exabricks was built without CUDA");

@@ -40,6 +40,7 @@ const DatasetInfo& checkedDataset(const Model& m, const DatasetInfo& dataset) {
 struct PassSetup {
   double aspect;
   vec3f lightWorld;
+  vec3d forward; ///< the camera's view direction (planar depth limits)
   bool surfaces, clipping, jitter, pixelJitter;
   MarchSettings march;
 };
@@ -66,6 +67,7 @@ struct Renderer::Impl {
     PassSetup ps;
     ps.aspect = double(frame.width) / double(frame.height);
     ps.lightWorld = normalize(s.light.direction);
+    ps.forward = normalize(frame.camera.lookAt - frame.camera.position);
     ps.surfaces = surfaces.any() && s.debug == DebugView::None;
     ps.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
     ps.jitter = frame.jitter && s.debug == DebugView::None;
@@ -88,6 +90,10 @@ struct Renderer::Impl {
     const bool clip = ps.clipping && scene.debug == DebugView::None;
     DualRay dr = makeDualRay(model.world, orgW, dirW, clip ? &scene.clip : nullptr);
     if (hasDomain) restrictToBox(dr, domain);
+    if (frame.depthLimit) {
+      const double limit = frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)];
+      limitDistance(dr, frame.depthLimitPlanar ? limit / dot(dr.dirW, ps.forward) : limit);
+    }
     const Ray& ray = dr.lattice;
     const vec3f viewW = vec3f(dr.dirW);
     RayLight light;
@@ -123,9 +129,9 @@ struct Renderer::Impl {
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) return false;
     Timer timer;
     buffer.stepsView_ = false;
-    std::vector<vec4f>& colors = deviceColors;
     gpu::PassCounts counts;
-    device->pass(frame, hasDomain ? &domain : nullptr, buffer.tilesX_, begin, end, stride, colors, counts);
+    const vec4f* colors =
+        device->pass(frame, hasDomain ? &domain : nullptr, buffer.tilesX_, begin, end, stride, counts);
     const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
     tbb::parallel_for(0, passTiles, [&](int i) {
       const int tile = begin + i * stride;
@@ -147,11 +153,10 @@ struct Renderer::Impl {
     st.isoSamples = counts.isoSamples;
     st.aoRays = counts.aoRays;
     st.tiles = uint64_t(passTiles);
+    st.deviceSeconds = counts.kernelSeconds;
     buffer.stats_ += st;
     return true;
   }
-
-  mutable std::vector<vec4f> deviceColors; ///< a device pass's colours (passes do not overlap)
 };
 
 Renderer::Renderer(const Model& model) : Renderer(model, DatasetInfo::of(model)) {}

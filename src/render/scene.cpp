@@ -51,6 +51,7 @@ Frame Frame::preview(int divisor, float previewRate) const {
   f.width = std::max(1, width / divisor);
   f.height = std::max(1, height / divisor);
   f.rate = previewRate;
+  if (f.width != width || f.height != height) f.depthLimit = nullptr;
   return f;
 }
 
@@ -65,6 +66,13 @@ void Frame::validate() const {
     fail("degenerate camera: position equals look-at, or up is parallel to the view direction");
   if (c.orthographic ? !(c.orthoHeight > 0 && std::isfinite(c.orthoHeight)) : !(c.fovy > 0 && c.fovy < 180))
     fail(c.orthographic ? "orthographic height must be positive" : "field of view must be in (0, 180) degrees");
+  if (depthLimit)
+    for (int y = 0; y < height; ++y)
+      for (int x = 0; x < width; ++x) {
+        const float d = depthLimit[size_t(y) * size_t(width) + size_t(x)];
+        if (!(d >= 0.f))
+          fail("the depth limit of pixel (", x, ", ", y, ") is ", d, "; it must be a distance >= 0 (+inf: no limit)");
+      }
 }
 
 // ---------------------------------------------------------------------------------------------

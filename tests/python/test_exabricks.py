@@ -220,6 +220,38 @@ def test_meshes_clipping_and_pick():
     assert s.render().shape == (48, 48, 4)
 
 
+
+def test_a_depth_limit_ends_the_rays_like_a_clip_plane():
+    ds = eb.load()
+    (lo, hi) = ds.bounds
+    centre = 0.5 * (np.asarray(lo) + np.asarray(hi))
+    s = eb.Scene(ds, width=40, height=30, shading="none", jitter=False)
+    s.camera = eb.Camera(centre + np.array([0.0, 0.0, 200.0]), centre, (0, 1, 0), orthographic=True,
+                         ortho_height=1.2 * float(np.max(np.asarray(hi) - np.asarray(lo))))
+    whole = s.render()
+    depth = 200.0  # the plane through the centre, across the view
+    limit = np.full((30, 40), depth, dtype=np.float32)
+    limit[:, :10] = np.inf  # no limit in the left quarter
+    limited = s.render(depth_limit=limit)
+    s.add_clip_plane(centre, (0, 0, -1))
+    clipped = s.render()
+    assert np.abs(limited[:, 10:] - clipped[:, 10:]).max() < 1e-6
+    np.testing.assert_array_equal(limited[:, :10], whole[:, :10])
+    assert np.abs(limited - whole).max() > 0.05
+    # The same along the view direction (a z-buffer's depth), float64 converted.
+    s.clip_planes = []
+    np.testing.assert_array_equal(s.render(depth_limit=limit.astype(np.float64), depth_limit_planar=True), limited)
+    # Progressive passes start over when the limit changes.
+    assert s.render_progressive(spp=2, passes=2, depth_limit=limit) == 2
+    assert s.render_progressive(spp=2, passes=2, depth_limit=limit + 1) == 2
+    assert s.render_progressive(spp=2, passes=1, depth_limit=limit) == 1
+    with pytest.raises(ValueError, match=r"depth_limit must be an \(H, W\) = \(30, 40\) array like the image, not \(40, 30\)"):
+        s.render(depth_limit=limit.T)
+    limit[3, 7] = np.nan
+    with pytest.raises(ValueError, match=r"depth limit of pixel \(7, 3\) is nan"):
+        s.render(depth_limit=limit)
+
+
 def test_errors_arrive_with_the_libraries_messages(cli, tmp_path):
     ds = eb.load()
     with pytest.raises(ValueError, match="unknown field 'nope'"):

@@ -16,6 +16,7 @@
 #pragma once
 
 #include "exabricks/amr/regions.h"
+#include "exabricks/core/color.h"
 
 #include <cstring>
 
@@ -40,20 +41,15 @@ EXA_HOST_DEVICE inline float inverseWidth(int level) {
   return w;
 }
 
-/// Running sums of the quotient B = sumWV / sumW and of their derivatives.
-template <typename Real> struct BasisAccumulator {
-  Real sumW = 0, sumWV = 0; ///< sum H, sum H (v - v0)
-  vec3<Real> dSumW{Real(0)}, dSumWV{Real(0)};
-  Real v0 = 0; ///< reference value: the first cell's
-  bool haveReference = false;
+/// Where a point falls in a brick: per axis the (at most two) cells whose hat holds it, with
+/// their hat factors h and derivatives dh (paper eq. 1).
+template <typename Real> struct BrickStencil {
+  int idx[3][2];
+  Real h[3][2], dh[3][2];
+  int count[3];
 
-  /// Adds every cell of `brick` whose support holds p (lattice units).
-  EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const float* brickValues, const vec3<Real>& p,
-                                       bool withGradient) {
+  EXA_HOST_DEVICE inline BrickStencil(const Brick& brick, const vec3<Real>& p) {
     const Real invW = Real(inverseWidth(brick.level));
-    int idx[3][2];
-    Real h[3][2], dh[3][2];
-    int count[3];
     for (int a = 0; a < 3; ++a) {
       // Position in cell-centre units: cell i has its centre at q = i.
       const Real q = (p[a] - Real(brick.lower[a])) * invW - Real(0.5);
@@ -77,15 +73,33 @@ template <typename Real> struct BasisAccumulator {
       }
       count[a] = n;
     }
+  }
+  EXA_HOST_DEVICE inline bool empty() const { return count[0] == 0 || count[1] == 0 || count[2] == 0; }
+  /// Index within the brick's values of the row (iy, iz) of the stencil.
+  EXA_HOST_DEVICE inline size_t row(const Brick& brick, int iy, int iz) const {
+    return size_t(brick.size.x) * (size_t(idx[1][iy]) + size_t(brick.size.y) * idx[2][iz]);
+  }
+};
+
+/// Running sums of the quotient B = sumWV / sumW and of their derivatives.
+template <typename Real> struct BasisAccumulator {
+  Real sumW = 0, sumWV = 0; ///< sum H, sum H (v - v0)
+  vec3<Real> dSumW{Real(0)}, dSumWV{Real(0)};
+  Real v0 = 0; ///< reference value: the first cell's
+  bool haveReference = false;
+
+  /// Adds every cell of `brick` whose support holds p (lattice units).
+  EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const float* brickValues, const vec3<Real>& p,
+                                       bool withGradient) {
+    const BrickStencil<Real> st(brick, p);
     const float* values = brickValues + brick.valueOffset;
-    if (!haveReference && count[0] > 0 && count[1] > 0 && count[2] > 0)
-      setReference(Real(
-          values[size_t(idx[0][0]) + size_t(brick.size.x) * (size_t(idx[1][0]) + size_t(brick.size.y) * idx[2][0])]));
-    for (int iz = 0; iz < count[2]; ++iz)
-      for (int iy = 0; iy < count[1]; ++iy) {
-        const float* row = values + size_t(brick.size.x) * (size_t(idx[1][iy]) + size_t(brick.size.y) * idx[2][iz]);
-        for (int ix = 0; ix < count[0]; ++ix)
-          addCell(Real(row[idx[0][ix]]), h[0][ix], h[1][iy], h[2][iz], dh[0][ix], dh[1][iy], dh[2][iz], withGradient);
+    if (!haveReference && !st.empty()) setReference(Real(values[st.row(brick, 0, 0) + size_t(st.idx[0][0])]));
+    for (int iz = 0; iz < st.count[2]; ++iz)
+      for (int iy = 0; iy < st.count[1]; ++iy) {
+        const float* row = values + st.row(brick, iy, iz);
+        for (int ix = 0; ix < st.count[0]; ++ix)
+          addCell(Real(row[st.idx[0][ix]]), st.h[0][ix], st.h[1][iy], st.h[2][iz], st.dh[0][ix], st.dh[1][iy],
+                  st.dh[2][iz], withGradient);
       }
   }
 
@@ -116,6 +130,52 @@ template <typename Real> struct BasisAccumulator {
   /// Gradient in lattice units (per finest-level cell width).
   EXA_HOST_DEVICE inline vec3<Real> gradient() const { return (dSumWV * sumW - dSumW * sumWV) / (sumW * sumW); }
 };
+
+/// A field and three more that share its bricks (smooth shading's gradient fields) reconstructed
+/// at once: cell values interleaved (value, gx, gy, gz), the same weights and, per channel, the
+/// same sums in the same order as BasisAccumulator's (without derivatives).
+struct BasisAccumulator4 {
+  float sumW = 0.f;
+  vec4f sumWV, v0;
+  bool haveReference = false;
+
+  EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const vec4f* brickValues, const vec3f& p) {
+    const BrickStencil<float> st(brick, p);
+    const vec4f* values = brickValues + brick.valueOffset;
+    if (!haveReference && !st.empty()) {
+      v0 = values[st.row(brick, 0, 0) + size_t(st.idx[0][0])];
+      haveReference = true;
+    }
+    for (int iz = 0; iz < st.count[2]; ++iz)
+      for (int iy = 0; iy < st.count[1]; ++iy) {
+        const vec4f* row = values + st.row(brick, iy, iz);
+        const float hyz = st.h[1][iy] * st.h[2][iz];
+        for (int ix = 0; ix < st.count[0]; ++ix) {
+          const vec4f v = row[st.idx[0][ix]] - v0;
+          const float weight = st.h[0][ix] * hyz;
+          sumW += weight;
+          sumWV += weight * v;
+        }
+      }
+  }
+  EXA_HOST_DEVICE inline bool valid() const { return sumW > 0.f; }
+  EXA_HOST_DEVICE inline vec4f value() const {
+    return {v0.x + sumWV.x / sumW, v0.y + sumWV.y / sumW, v0.z + sumWV.z / sumW, v0.w + sumWV.w / sumW};
+  }
+};
+
+/// Reconstructs four interleaved fields (BasisAccumulator4) at p from the bricks of region
+/// `regionIndex` of `view`; false where no cell has weight.
+EXA_HOST_DEVICE inline bool sampleRegion4(const FieldView& view, const vec4f* values, uint32_t regionIndex,
+                                          const vec3f& p, vec4f& out) {
+  const Region& region = view.regions[regionIndex];
+  BasisAccumulator4 acc;
+  for (uint32_t k = 0; k < region.brickCount; ++k)
+    acc.addBrick(view.bricks[view.brickIds[region.brickBegin + k]], values, p);
+  if (!acc.valid()) return false;
+  out = acc.value();
+  return true;
+}
 
 /// Index of the region that holds p (lattice units), or kNoRegion. Points on a split plane go
 /// to the upper side, which holds every cell whose support contains them.

@@ -17,7 +17,8 @@ struct RenderStats {
   uint64_t surfaceHits = 0;    ///< primary rays that ended on a mesh or iso-surface
   uint64_t isoSamples = 0;     ///< samples taken to find iso-surfaces (incl. root finding)
   uint64_t aoRays = 0;
-  uint64_t tiles = 0; ///< tiles rendered
+  uint64_t tiles = 0;       ///< tiles rendered
+  double deviceSeconds = 0; ///< a GPU renderer: the time its kernels ran (within `seconds`)
   double samplesPerSecond() const { return seconds > 0 ? double(samples) / double(seconds) : 0; }
   RenderStats& operator+=(const RenderStats& o);
 };

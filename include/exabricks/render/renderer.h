@@ -99,6 +99,9 @@ struct CudaStatus {
   std::string problem; ///< why Device::Cuda cannot be used (empty when it can)
 };
 CudaStatus cudaStatus();
+/// The "device" object of `info --json`: whether the CUDA back end is built, the GPUs it sees,
+/// what "auto" chooses, and the bytes a GPU renderer holds for `model`'s structures and per field.
+std::string deviceInfoJson(const Model& model);
 
 /// A device renderer's memory: bytes per structure held on the device.
 struct DeviceMemory {

@@ -152,9 +152,17 @@ struct Frame {
   float rate = 1.f;   ///< quality factor: step = region's finest width x 0.5 / rate
   bool jitter = true; ///< random offsets of the sample positions
   uint64_t seed = 0;
+  /// Optional per-pixel depth limit, width x height values row by row (row 0 at the top), which
+  /// the caller keeps alive while rendering: nothing farther along a pixel's rays is drawn
+  /// (volume, iso-surfaces, meshes), as where opaque geometry drawn by others hides the rest.
+  /// A value is a world distance along the ray from its origin, or with depthLimitPlanar the
+  /// depth along the view direction from the camera's plane (what a z-buffer holds); +inf is no
+  /// limit. Never part of scene files.
+  const float* depthLimit = nullptr;
+  bool depthLimitPlanar = false;
 
   /// A cheap draft of this frame: 1/divisor of the resolution per axis (at least one pixel)
-  /// and the given sampling rate.
+  /// and the given sampling rate (without the depth limit when the resolution changes).
   Frame preview(int divisor, float previewRate) const;
   /// Throws exa::Error naming the first invalid setting.
   void validate() const;

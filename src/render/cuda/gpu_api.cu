@@ -18,7 +18,11 @@ void check(cudaError_t e, const char* what) {
   if (e != cudaSuccess) fail("CUDA: ", what, ": ", cudaGetErrorString(e));
 }
 
-__global__ void traceKernel(int tilesX, int tileBegin, int tileEnd, int tileStride, vec4f* colors, PassCounts* counts) {
+// 64 threads a block and at least 8 blocks an SM: at most 128 registers a thread (the volume
+// needs about 120, surfaces more; measured on an H100, fewer registers with spills were slower).
+template <bool Surfaces>
+__global__ void __launch_bounds__(64, 8)
+    traceKernel(int tilesX, int tileBegin, int tileEnd, int tileStride, vec4f* colors, PassCounts* counts) {
   const TraceView& v = *reinterpret_cast<const TraceView*>(traceViewBytes);
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x), y = int(blockIdx.y * blockDim.y + threadIdx.y);
   const bool first = threadIdx.x == 0 && threadIdx.y == 0;
@@ -30,7 +34,7 @@ __global__ void traceKernel(int tilesX, int tileBegin, int tileEnd, int tileStri
   __syncthreads();
   if (x < v.width && y < v.height && tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) {
     TraceCounts c;
-    colors[size_t(y) * size_t(v.width) + size_t(x)] = traceSample(v, x, y, c);
+    colors[size_t(y) * size_t(v.width) + size_t(x)] = traceSample<Surfaces>(v, x, y, c);
     atomicAdd(&block[0], 1ull);
     atomicAdd(&block[1], (unsigned long long)c.samples);
     if (c.isoSamples) atomicAdd(&block[2], (unsigned long long)c.isoSamples);
@@ -82,6 +86,16 @@ void release(void* p) noexcept {
   if (p) cudaFree(p);
 }
 
+void* allocateHost(uint64_t bytes) {
+  void* p = nullptr;
+  check(cudaMallocHost(&p, bytes > 0 ? bytes : 1), "page-locked host memory");
+  return p;
+}
+
+void releaseHost(void* p) noexcept {
+  if (p) cudaFreeHost(p);
+}
+
 void copyToDevice(void* device, const void* host, uint64_t bytes) {
   if (bytes > 0) check(cudaMemcpy(device, host, bytes, cudaMemcpyHostToDevice), "copying to the GPU");
 }
@@ -92,12 +106,26 @@ void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, in
   check(cudaMemset(deviceCounts, 0, sizeof(PassCounts)), "clearing the counters");
   const dim3 block(8, 8);
   const dim3 grid(unsigned(view.width + 7) / 8, unsigned(view.height + 7) / 8);
-  traceKernel<<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, static_cast<vec4f*>(deviceColors),
-                               static_cast<PassCounts*>(deviceCounts));
+  auto* colors = static_cast<vec4f*>(deviceColors);
+  auto* passCounts = static_cast<PassCounts*>(deviceCounts);
+  cudaEvent_t start, stop;
+  check(cudaEventCreate(&start), "timing the pass");
+  check(cudaEventCreate(&stop), "timing the pass");
+  cudaEventRecord(start);
+  if (view.iso || view.meshes)
+    traceKernel<true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+  else
+    traceKernel<false><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+  cudaEventRecord(stop);
   check(cudaGetLastError(), "launching the pass");
   const size_t pixels = size_t(view.width) * size_t(view.height);
   check(cudaMemcpy(hostColors, deviceColors, pixels * sizeof(vec4f), cudaMemcpyDeviceToHost), "the pass");
   check(cudaMemcpy(&counts, deviceCounts, sizeof(PassCounts), cudaMemcpyDeviceToHost), "the pass's counters");
+  float ms = 0.f;
+  cudaEventElapsedTime(&ms, start, stop);
+  counts.kernelSeconds = 1e-3 * ms;
+  cudaEventDestroy(start);
+  cudaEventDestroy(stop);
 }
 
 } // namespace exa::gpu

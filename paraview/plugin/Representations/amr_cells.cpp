@@ -1,0 +1,55 @@
+#include "amr_cells.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/io/grids.h"
+
+#include <vtkCellData.h>
+#include <vtkDataArray.h>
+#include <vtkOverlappingAMR.h>
+#include <vtkUniformGrid.h>
+
+namespace exa::paraview {
+
+CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name) {
+  if (!amr) fail("ExaBricks: the input is not overlapping AMR data");
+  std::vector<GridPatch> grids;
+  for (unsigned level = 0; level < amr->GetNumberOfLevels(); ++level)
+    for (unsigned id = 0; id < amr->GetNumberOfDataSets(level); ++id) {
+      vtkUniformGrid* grid = amr->GetDataSet(level, id);
+      if (!grid) continue; // held by another process
+      int dims[3];
+      double origin[3], spacing[3];
+      grid->GetDimensions(dims);
+      grid->GetOrigin(origin);
+      grid->GetSpacing(spacing);
+      GridPatch p;
+      for (int a = 0; a < 3; ++a) {
+        if (dims[a] < 2)
+          fail("ExaBricks renders 3D AMR data; block ", id, " of level ", level, " has ", dims[a],
+               " points along axis ", a);
+        p.cells[a] = dims[a] - 1;
+        p.lower[a] = origin[a];
+        p.upper[a] = origin[a] + spacing[a] * double(dims[a] - 1);
+      }
+      vtkDataArray* values = grid->GetCellData()->GetArray(name.c_str());
+      if (!values)
+        fail("ExaBricks renders cell arrays; block ", id, " of level ", level, " has no cell array '", name, "'");
+      if (values->GetNumberOfComponents() != 1)
+        fail("ExaBricks renders one-component arrays; '", name, "' has ", values->GetNumberOfComponents());
+      const vtkIdType n = grid->GetNumberOfCells();
+      if (values->GetNumberOfTuples() != n)
+        fail("block ", id, " of level ", level, ": '", name, "' has ", values->GetNumberOfTuples(), " values for ", n,
+             " cells");
+      std::vector<double> v(static_cast<size_t>(n));
+      for (vtkIdType i = 0; i < n; ++i)
+        v[static_cast<size_t>(i)] = values->GetComponent(i, 0);
+      p.values.push_back(std::move(v));
+      grids.push_back(std::move(p));
+    }
+  if (grids.empty()) fail("ExaBricks: the AMR data holds no blocks here");
+  const double* o = amr->GetOrigin();
+  const vec3d origin(o[0], o[1], o[2]);
+  return cellsFromGrids(grids, {name}, "ParaView AMR data", &origin);
+}
+
+} // namespace exa::paraview
