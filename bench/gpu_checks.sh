@@ -37,6 +37,11 @@ done
 say "device study: $data"
 "$bin/exabricks" bench "$data" --device cpu,cuda --size 1024x1024 --frames 5 --json >"$out/bench_plotfile.json" \
   2>>"$log" || status=1
+say "the viewer's refinement: a transfer-function change, drafts and 8 full passes at 1060x807"
+for d in cpu cuda; do
+  "$bin/exabricks" bench "$data" --device "$d" --progressive 8 --size 1060x807 --preview-divisor 1 >>"$log" 2>&1 ||
+    status=1
+done
 say "generated dataset of $big_cells cells"
 start=$SECONDS
 "$bin/exabricks" generate -s blobs -n "$big_cells" -o /tmp/exabricks-big.cells >>"$log" 2>&1 || status=1
@@ -55,7 +60,7 @@ j = json.load(open(sys.argv[1]))
 print(f"{j['dataset']}: {j['cells']} cells, {j['width']}x{j['height']}, {j['threads']} CPU threads")
 for d in j["devices"]:
     mem = d["device_memory"].get("memory_bytes", 0) / 2**20
-    print(f"  {d['in_use']:<40} full {1e3*d['full_frame_seconds']:9.2f} ms  draft {1e3*d['draft_frame_seconds']:8.2f} ms "
+    print(f"  {d['in_use']:<40} full {1e3*d['full_frame_seconds']:9.2f} ms (kernel {1e3*d['full_frame_kernel_seconds']:.2f} ms)  draft {1e3*d['draft_frame_seconds']:8.2f} ms "
           f"({d['draft_frames_per_second']:.1f} fps)  orbit {d['orbit_frames_per_second']:.1f} fps  "
           f"upload {d['upload_seconds']:.3f} s  tf change {1e3*d['transfer_function_change_seconds']:.1f} ms "
           f"({d['transfer_function_change_bytes']} B)  memory {mem:.1f} MiB  x{d['full_speedup_over_first']:.1f} full, "

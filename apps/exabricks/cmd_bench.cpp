@@ -496,6 +496,7 @@ void runProgressive(const Setup& s, const BenchOptions& o) {
 
   // Warm-up with the first scene, then time the change and the passes after it.
   renderer.setScene(a);
+  if (!o.devices.empty()) selectDevice(renderer, o.devices);
   renderer.renderPass(preview, previewBuffer);
   renderer.renderPass(full, fullBuffer);
   const int rounds = std::max(3, o.frames);
@@ -538,13 +539,15 @@ void runProgressive(const Setup& s, const BenchOptions& o) {
   j["full_frame_after_change_seconds"] = median(fullChange);
   j["traversal"] = nameOf(renderer.traversalInUse());
   j["visible_regions"] = renderer.visibleRegions();
+  j["device"] = deviceJson(renderer);
   if (o.json) {
     std::cout << j.dump(2) << "\n";
     return;
   }
-  std::printf("progressive passes on %s: preview %dx%d at rate %.2f, full %dx%d (%d threads, median of %d rounds)\n",
-              o.in.name().c_str(), preview.width, preview.height, double(preview.rate), full.width, full.height,
-              tbbThreads(), rounds);
+  std::printf("progressive passes on %s (%s): preview %dx%d at rate %.2f, full %dx%d (%d threads, median of %d "
+              "rounds)\n",
+              o.in.name().c_str(), deviceName(renderer.device()), preview.width, preview.height, double(preview.rate),
+              full.width, full.height, tbbThreads(), rounds);
   std::printf("load average (1 min): %.2f at the start, %.2f at the end\n", j["load_average_at_start"].get<double>(),
               j["load_average_at_end"].get<double>());
   std::printf("transfer-function change          %8.2f ms (%zu of %zu regions visible, %s traversal)\n",
@@ -650,6 +653,7 @@ void runDevices(const Setup& s, const BenchOptions& o) {
     d["draft_frames_per_second"] = 1.0 / std::max(draftS, 1e-9);
     d["orbit_frames_per_second"] = views / std::max(r.orbitSeconds, 1e-9);
     d["samples"] = r.fullStats.samples;
+    d["full_frame_kernel_seconds"] = r.fullStats.deviceSeconds; // the last round's, on a GPU
     d["scene_seconds"] = r.sceneSeconds;
     d["upload_seconds"] = r.uploadSeconds;
     d["transfer_function_change_seconds"] = r.changeSeconds;
@@ -706,10 +710,10 @@ void run(const BenchOptions& o) {
   s.base.layers = {VolumeLayer{s.model.fieldNames[size_t(s.field)], defaultTransferFunction()}};
   const box3i cb = s.model.cellBounds();
   s.worldBox = box3d(s.model.world.toWorld(vec3d(cb.lower)), s.model.world.toWorld(vec3d(cb.upper)));
-  if (!o.devices.empty())
+  if (o.progressive > 0)
+    runProgressive(s, o); // on the one device --device names, if any
+  else if (!o.devices.empty())
     runDevices(s, o);
-  else if (o.progressive > 0)
-    runProgressive(s, o);
   else if (o.orbitStudy)
     runOrbit(s, o);
   else

@@ -143,7 +143,7 @@ struct BasisAccumulator4 {
     const BrickStencil<float> st(brick, p);
     const vec4f* values = brickValues + brick.valueOffset;
     if (!haveReference && !st.empty()) {
-      v0 = values[st.row(brick, 0, 0) + size_t(st.idx[0][0])];
+      v0 = loadVec4(values + st.row(brick, 0, 0) + size_t(st.idx[0][0]));
       haveReference = true;
     }
     for (int iz = 0; iz < st.count[2]; ++iz)
@@ -151,7 +151,7 @@ struct BasisAccumulator4 {
         const vec4f* row = values + st.row(brick, iy, iz);
         const float hyz = st.h[1][iy] * st.h[2][iz];
         for (int ix = 0; ix < st.count[0]; ++ix) {
-          const vec4f v = row[st.idx[0][ix]] - v0;
+          const vec4f v = loadVec4(row + st.idx[0][ix]) - v0;
           const float weight = st.h[0][ix] * hyz;
           sumW += weight;
           sumWV += weight * v;

@@ -29,6 +29,17 @@ EXA_HOST_DEVICE constexpr vec4f& operator+=(vec4f& a, const vec4f& b) {
   return a;
 }
 
+/// Four floats read at once where the target can: on the GPU one 16-byte load through the
+/// read-only cache (`p` must be 16-byte aligned there, as device allocations of vec4f are).
+EXA_HOST_DEVICE inline vec4f loadVec4(const vec4f* p) {
+#ifdef __CUDA_ARCH__
+  const float4 q = __ldg(reinterpret_cast<const float4*>(p));
+  return {q.x, q.y, q.z, q.w};
+#else
+  return *p;
+#endif
+}
+
 /// Linear -> sRGB transfer for one channel, clamped to [0, 1] (NaN gives 0).
 float linearToSrgb(float c);
 /// sRGB -> linear for one channel, clamped to [0, 1].

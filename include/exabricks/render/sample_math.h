@@ -60,8 +60,8 @@ EXA_HOST_DEVICE inline vec4f tfTableAt(const TfTableView& t, float n) {
   int i = int(x);
   i = i < 0 ? 0 : (i > kTfTableSize - 2 ? kTfTableSize - 2 : i);
   const float f = clamp01(x - float(i));
-  const vec4f& a = t.entries[i];
-  const vec4f& b = t.entries[i + 1];
+  const vec4f a = loadVec4(t.entries + i);
+  const vec4f b = loadVec4(t.entries + i + 1);
   return {a.x + (b.x - a.x) * f, a.y + (b.y - a.y) * f, a.z + (b.z - a.z) * f, a.w + (b.w - a.w) * f};
 }
 
