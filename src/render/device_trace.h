@@ -107,13 +107,15 @@ struct TraceCounts {
 
 /// The volume along a lattice ray within [tmin, tmax], one sample after another, front to back
 /// into acc (premultiplied): the same samples, lookups, shading and compositing as the CPU's
-/// batches. OpacityOnly leaves colour and shading out (occlusion rays).
-template <bool OpacityOnly>
+/// batches. OpacityOnly leaves colour and shading out (occlusion rays). SmoothOne: the scene is
+/// one layer with smooth shading (smoothOneLayer), compiled without the other cases' code.
+template <bool OpacityOnly, bool SmoothOne = false>
 EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, float rho, const vec3f& light,
                                         const vec3f& halfVector, vec4f& acc, uint32_t& samples) {
   if (v.layerCount == 0 || !(ray.tmax > ray.tmin)) return;
-  const bool wantGrad = !OpacityOnly && v.shading == Shading::Analytic;
-  const bool shade = !OpacityOnly && v.shading != Shading::None;
+  const int layerCount = SmoothOne ? 1 : v.layerCount;
+  const bool wantGrad = !SmoothOne && !OpacityOnly && v.shading == Shading::Analytic;
+  const bool shade = !OpacityOnly && (SmoothOne || v.shading != Shading::None);
   walkRegionTree(v.volumeTree, ray, [&](const Segment& seg) {
     const Region& region = v.regions[seg.region];
     SegmentMarch sm(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho,
@@ -129,11 +131,11 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
       ++samples;
       float logSum = 0.f, alphaSum = 0.f;
       vec3f colorSum(0.f), color(0.f);
-      for (int li = 0; li < v.layerCount; ++li) {
+      for (int li = 0; li < layerCount; ++li) {
         const TraceLayer& l = v.layers[li];
         float value;
         vec3f grad(0.f);
-        if (l.withGradients) {
+        if (SmoothOne || l.withGradients) {
           vec4f r;
           if (!sampleRegion4(l.view, l.withGradients, seg.region, p, r)) break;
           value = r.x, grad = vec3f(r.y, r.z, r.w);
@@ -147,10 +149,10 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
         const float alpha = correctedOpacity(rgba.w, len, v.invReferenceWidth);
         vec3f c = rgba.rgb();
         if (shade) {
-          if (v.shading == Shading::Smooth && !l.withGradients)
+          if (!SmoothOne && v.shading == Shading::Smooth && !l.withGradients)
             for (int a = 0; a < 3; ++a)
               if (!sampleRegion(l.grad[a], seg.region, p, grad[a])) grad[a] = 0.f;
-          if (v.shading == Shading::Central) grad = centralGradient(l.view, seg.region, region, p, value);
+          if (!SmoothOne && v.shading == Shading::Central) grad = centralGradient(l.view, seg.region, region, p, value);
           const float fade = fadeScaleAt(fadeWidthOf(cellWidth, l.byValue, l.invSpan), l.byValue, value);
           c = shadeVolumeSample(c, grad * v.invScale, light, halfVector, v.terms, fade);
         }
@@ -160,7 +162,7 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
       }
       if (!(logSum < 0.f)) continue;
       const float alpha = correctedOpacity(logSum, len, v.invReferenceWidth);
-      if (v.layerCount > 1) color = alphaSum > 0.f ? colorSum * (1.f / alphaSum) : vec3f(0.f);
+      if (!SmoothOne && layerCount > 1) color = alphaSum > 0.f ? colorSum * (1.f / alphaSum) : vec3f(0.f);
       compositeBehind(acc, color, alpha);
       if (v.earlyTermination && acc.w >= v.terminationOpacity) return false;
     }
@@ -217,7 +219,8 @@ EXA_HOST_DEVICE inline float traceOcclusion(const TraceView& v, const vec3d& pos
 
 /// One sample of pixel (x, y) for pass v.frameIndex: premultiplied colour. `Surfaces`: the scene
 /// may have iso-surfaces (false compiles the volume alone, which needs fewer registers on a GPU).
-template <bool Surfaces> EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, TraceCounts& c) {
+template <bool Surfaces, bool SmoothOne = false>
+EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, TraceCounts& c) {
   PixelRandom rng(x, y, v.frameIndex, v.seed);
   const float jx = v.pixelJitter ? rng.next() : 0.5f;
   const float jy = v.pixelJitter ? rng.next() : 0.5f;
@@ -271,7 +274,7 @@ template <bool Surfaces> EXA_HOST_DEVICE inline vec4f traceSample(const TraceVie
   }
   Ray volumeRay = dr.lattice;
   if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(distance * dr.kappa));
-  if (v.volume && !clippedAway(dr)) traceVolume<false>(v, volumeRay, rho, light, halfVector, acc, c.samples);
+  if (v.volume && !clippedAway(dr)) traceVolume<false, SmoothOne>(v, volumeRay, rho, light, halfVector, acc, c.samples);
   if constexpr (!Surfaces) return acc;
   if (haveHit && acc.w < 1.f) {
     ++c.surfaceHits;
@@ -289,6 +292,12 @@ template <bool Surfaces> EXA_HOST_DEVICE inline vec4f traceSample(const TraceVie
     compositeOpaqueBehind(acc, shadeSurface(base, normal, light, halfVector, ao, v.terms));
   }
   return acc;
+}
+
+/// Whether the scene is one layer with smooth shading read with its values (the common case,
+/// which traceVolume<..., true> serves with less code).
+EXA_HOST_DEVICE inline bool smoothOneLayer(const TraceView& v) {
+  return v.layerCount == 1 && v.shading == Shading::Smooth && v.layers[0].withGradients != nullptr;
 }
 
 /// Whether pixel (x, y) lies in a tile the pass renders (PassControl's selection, kRenderTile

@@ -18,10 +18,11 @@ void check(cudaError_t e, const char* what) {
   if (e != cudaSuccess) fail("CUDA: ", what, ": ", cudaGetErrorString(e));
 }
 
-// 64 threads a block and at least 8 blocks an SM: at most 128 registers a thread (the volume
-// needs about 120, surfaces more; measured on an H100, fewer registers with spills were slower).
-template <bool Surfaces>
-__global__ void __launch_bounds__(64, 8)
+// 64 threads a block and at least 8 blocks an SM: at most 128 registers a thread; 10 blocks (96
+// registers, no spills) for the common one-layer smooth volume. Measured on an H100, fewer
+// registers with spills were slower.
+template <bool Surfaces, bool SmoothOne>
+__global__ void __launch_bounds__(64, (SmoothOne && !Surfaces) ? 10 : 8)
     traceKernel(int tilesX, int tileBegin, int tileEnd, int tileStride, vec4f* colors, PassCounts* counts) {
   const TraceView& v = *reinterpret_cast<const TraceView*>(traceViewBytes);
   const int x = int(blockIdx.x * blockDim.x + threadIdx.x), y = int(blockIdx.y * blockDim.y + threadIdx.y);
@@ -34,7 +35,7 @@ __global__ void __launch_bounds__(64, 8)
   __syncthreads();
   if (x < v.width && y < v.height && tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) {
     TraceCounts c;
-    colors[size_t(y) * size_t(v.width) + size_t(x)] = traceSample<Surfaces>(v, x, y, c);
+    colors[size_t(y) * size_t(v.width) + size_t(x)] = traceSample<Surfaces, SmoothOne>(v, x, y, c);
     atomicAdd(&block[0], 1ull);
     atomicAdd(&block[1], (unsigned long long)c.samples);
     if (c.isoSamples) atomicAdd(&block[2], (unsigned long long)c.isoSamples);
@@ -112,10 +113,15 @@ void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, in
   check(cudaEventCreate(&start), "timing the pass");
   check(cudaEventCreate(&stop), "timing the pass");
   cudaEventRecord(start);
-  if (view.iso || view.meshes)
-    traceKernel<true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+  const bool surfaces = view.iso || view.meshes, smooth = smoothOneLayer(view);
+  if (surfaces && smooth)
+    traceKernel<true, true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+  else if (surfaces)
+    traceKernel<true, false><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+  else if (smooth)
+    traceKernel<false, true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
   else
-    traceKernel<false><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+    traceKernel<false, false><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
   cudaEventRecord(stop);
   check(cudaGetLastError(), "launching the pass");
   const size_t pixels = size_t(view.width) * size_t(view.height);
