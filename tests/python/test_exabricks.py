@@ -406,3 +406,19 @@ def test_from_yt_without_fields_takes_the_mesh_field_the_command_line_would():
     plotfile = yt.load(str(path))
     ds = eb.from_yt(plotfile)
     assert ds.fields == [eb.load(path).default_field] == ["density"]
+
+
+def test_the_device_path_renders_like_the_cpu():
+    ds = eb.load()
+    cpu = eb.Scene(ds, width=64, height=48, device="cpu")
+    cpu.iso_values = [0.5]
+    portable = eb.Scene(ds, width=64, height=48, device="portable")
+    portable.iso_values = [0.5]
+    a, b = cpu.render(spp=2), portable.render(spp=2)
+    assert cpu.device == "cpu" and portable.device == "portable"
+    assert np.abs(a - b).max() < 2e-3
+    info = ds.info()["device"]
+    if info["gpus"] == 0:
+        with pytest.raises(Exception, match="--device cuda"):
+            eb.Scene(ds, device="cuda")
+        assert eb.Scene(ds, width=16, height=16).render() is not None  # "auto" falls back to the CPU
