@@ -222,18 +222,14 @@ EXA_HOST_DEVICE inline float traceOcclusion(const TraceView& v, const vec3d& pos
 template <bool Surfaces, bool SmoothOne = false>
 EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, TraceCounts& c) {
   PixelRandom rng(x, y, v.frameIndex, v.seed);
-  const float jx = v.pixelJitter ? rng.next() : 0.5f;
-  const float jy = v.pixelJitter ? rng.next() : 0.5f;
-  const float rho = v.jitter ? rng.next() : 0.5f;
+  float rho;
   vec3d orgW, dirW;
-  v.camera.ray((x + jx) / v.width, (y + jy) / v.height, v.aspect, orgW, dirW);
+  primaryRay(v.camera, x, y, v.width, v.height, v.aspect, v.pixelJitter, v.jitter, rng, rho, orgW, dirW);
   const ClipView clip{v.planes, v.planeCount, v.clipBox};
   DualRay dr = makeDualRay(v.world, orgW, dirW, v.clipping ? &clip : nullptr);
   if (v.hasDomain) restrictToBox(dr, v.domain);
-  if (v.depthLimit) {
-    const double limit = v.depthLimit[size_t(y) * size_t(v.width) + size_t(x)];
-    limitDistance(dr, v.depthLimitPlanar ? limit / dot(dr.dirW, v.forward) : limit);
-  }
+  if (v.depthLimit)
+    applyDepthLimit(dr, v.depthLimit[size_t(y) * size_t(v.width) + size_t(x)], v.depthLimitPlanar, v.forward);
   const vec3f viewW = vec3f(dr.dirW);
   const vec3f light = v.headlight ? viewW : v.lightWorld;
   const vec3f halfVector = normalize(light + viewW);

@@ -5,6 +5,8 @@
 
 #include "exabricks/accel/traversal.h"
 #include "exabricks/core/math.h"
+#include "exabricks/core/random.h"
+#include "exabricks/render/camera.h"
 #include "exabricks/render/scene.h"
 
 #include <limits>
@@ -118,6 +120,24 @@ EXA_HOST_DEVICE inline void limitDistance(DualRay& r, double s) {
   r.domainMax = std::min(r.domainMax, s);
   if (r.sMax >= r.sMin) r.sMax = std::min(r.sMax, s); // not clipped away already
   setLatticeInterval(r);
+}
+
+/// The primary ray of pixel (x, y) for one pass, from its random numbers: the offset within the
+/// pixel (its centre without pixel jitter) and the sample offset rho along the ray (0.5 without
+/// jitter), world origin and direction; `rng` continues for what the ray needs next.
+EXA_HOST_DEVICE inline void primaryRay(const Camera& camera, int x, int y, int width, int height, double aspect,
+                                       bool pixelJitter, bool jitter, PixelRandom& rng, float& rho, vec3d& orgW,
+                                       vec3d& dirW) {
+  const float jx = pixelJitter ? rng.next() : 0.5f;
+  const float jy = pixelJitter ? rng.next() : 0.5f;
+  rho = jitter ? rng.next() : 0.5f;
+  camera.ray((x + jx) / width, (y + jy) / height, aspect, orgW, dirW);
+}
+
+/// Ends the ray at a pixel's depth limit: a distance along the ray, or with `planar` a depth
+/// along the view direction `forward`.
+EXA_HOST_DEVICE inline void applyDepthLimit(DualRay& r, double limit, bool planar, const vec3d& forward) {
+  limitDistance(r, planar ? limit / dot(r.dirW, forward) : limit);
 }
 
 /// Whether clipping left nothing of the ray.

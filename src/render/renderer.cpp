@@ -80,20 +80,18 @@ struct Renderer::Impl {
   /// samples taken.
   vec4f tracePixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& c, uint64_t& raySamples) const {
     PixelRandom rng(x, y, frame.frameIndex, frame.seed);
-    const float jx = ps.pixelJitter ? rng.next() : 0.5f;
-    const float jy = ps.pixelJitter ? rng.next() : 0.5f;
-    const float rho = ps.jitter ? rng.next() : 0.5f;
+    float rho;
     vec3d orgW, dirW;
-    frame.camera.ray((x + jx) / frame.width, (y + jy) / frame.height, ps.aspect, orgW, dirW);
+    primaryRay(frame.camera, x, y, frame.width, frame.height, ps.aspect, ps.pixelJitter, ps.jitter, rng, rho, orgW,
+               dirW);
     // March in lattice space with a unit-length lattice direction: t is in finest-level lattice
     // units.
     const bool clip = ps.clipping && scene.debug == DebugView::None;
     DualRay dr = makeDualRay(model.world, orgW, dirW, clip ? &scene.clip : nullptr);
     if (hasDomain) restrictToBox(dr, domain);
-    if (frame.depthLimit) {
-      const double limit = frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)];
-      limitDistance(dr, frame.depthLimitPlanar ? limit / dot(dr.dirW, ps.forward) : limit);
-    }
+    if (frame.depthLimit)
+      applyDepthLimit(dr, frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)], frame.depthLimitPlanar,
+                      ps.forward);
     const Ray& ray = dr.lattice;
     const vec3f viewW = vec3f(dr.dirW);
     RayLight light;

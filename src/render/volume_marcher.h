@@ -58,8 +58,8 @@ public:
   /// rho (in steps), compositing front to back into acc (premultiplied). OpacityOnly skips colour
   /// and shading (shadow-like rays). Adds the samples taken and the segments visited. One march
   /// for every case: batches of consecutive samples, reconstructed from their regions' bricks or
-  /// by the cell locator, for one layer or several (tests/reference_march.h holds the
-  /// one-sample-at-a-time reference it is tested against).
+  /// by the cell locator, for one layer or several (the device back ends' one-sample-at-a-time
+  /// march, device_trace.h, is the reference it is tested against).
   template <bool OpacityOnly>
   void march(const Ray& ray, float rho, const RayLight& light, const MarchSettings& s, vec4f& acc, uint64_t& raySamples,
              uint64_t& regionCount) const;
