@@ -326,7 +326,8 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
   Piece piece;
   piece.path = path;
   const std::string data = readFile(path, "piece");
-  size_t xmlEnd = data.size(), appendedAt = std::string::npos;
+  size_t xmlEnd = data.size(), appendedAt = std::string::npos, appendedEnd = data.size();
+  bool appendedBase64 = false;
   const size_t app = data.find("<AppendedData");
   if (app != std::string::npos) {
     xmlEnd = app;
@@ -334,9 +335,10 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
     const size_t underscore = close == std::string::npos ? close : data.find('_', close);
     if (underscore == std::string::npos) fail(path, ": AppendedData without its '_' marker (truncated file?)");
     const std::string tag = data.substr(app, close - app);
-    if (tag.find("encoding=\"base64\"") != std::string::npos)
-      fail(path, ": base64-encoded appended data is not supported (raw appended, inline binary and ascii are)");
+    // VTK's XML writers encode appended data in base64 unless told to write it raw.
+    appendedBase64 = tag.find("encoding=\"base64\"") != std::string::npos;
     appendedAt = underscore + 1;
+    if (appendedBase64) appendedEnd = std::min(data.size(), data.find("</AppendedData>", appendedAt));
   }
   const std::vector<Tag> tags = scanTags(path, data, xmlEnd);
   const auto vtkFile = std::find_if(tags.begin(), tags.end(), [](const Tag& t) { return t.name == "VTKFile"; });
@@ -393,8 +395,15 @@ Piece readPiece(const std::string& path, const std::vector<std::string>* wanted)
           char* endp = nullptr;
           const unsigned long long o = std::strtoull(off.c_str(), &endp, 10);
           if (off.empty() || *endp) fail(path, ": ", what, ": bad offset '", off, "'");
-          RawSource src(path, what, data, appendedAt + size_t(o));
-          bytes = readBlock(path, what, src, enc, expected);
+          if (appendedBase64) {
+            if (o > appendedEnd - appendedAt) fail(path, ": ", what, ": offset ", o, " lies beyond the appended data");
+            const std::string text = data.substr(appendedAt + size_t(o), appendedEnd - appendedAt - size_t(o));
+            Base64Source src(path, what, text);
+            bytes = readBlock(path, what, src, enc, expected);
+          } else {
+            RawSource src(path, what, data, appendedAt + size_t(o));
+            bytes = readBlock(path, what, src, enc, expected);
+          }
         }
         const size_t ts = typeSize(type);
         io::reserveMore(values, bytes.size() / ts, [&] { return strCat(path, ": ", what); });
