@@ -349,9 +349,14 @@ void vtkExaBricksVolumeMapper::RenderStill(exa::paraview::Engine& e, vtkOpenGLRe
     f.depthLimitPlanar = true;
   }
   const int target = frame.samplesPerPixel;
+  // Renders asked of the interactor come only where an event loop runs whenever the application
+  // is idle: Qt's interactor (ParaView's GUI), or a generic one whose application serves its
+  // timers (its CreateOneShotTimer fails otherwise, as in pvbatch). pvpython's X interactor has a
+  // loop only inside Interact(): a script's still render there refines in one go.
   vtkRenderWindowInteractor* interactor = window->GetInteractor();
-  const bool later =
-      !this->CompleteStillRenders && interactor && interactor->GetInitialized() && interactor->GetEnabled();
+  const bool later = !this->CompleteStillRenders && interactor && interactor->GetInitialized() &&
+                     interactor->GetEnabled() &&
+                     (interactor->IsA("QVTKInteractor") || interactor->IsA("vtkGenericRenderWindowInteractor"));
   a.valid = false; // until the passes are in
   if (int(a.buffer.passes()) < target) {
     if (later) {
