@@ -275,16 +275,23 @@ void vtkExaBricksVolumeMapper::Draw(vtkOpenGLRenderWindow* window, const exa::Im
 void vtkExaBricksVolumeMapper::UpdateRenderer(exa::paraview::Engine& e, const exa::Scene& scene) {
   exa::Renderer& renderer = *e.renderer;
   const std::string& choice = this->Options.device;
+  exa::SceneUpdate update;
   try {
-    renderer.setScene(scene);
-  } catch (const exa::Error&) {
-    // A GPU chosen by "auto" may lack what the new scene needs: the CPU renders it.
-    if (renderer.device() == exa::Device::Cpu || choice != "auto") throw;
+    update = renderer.setScene(scene);
+  } catch (const exa::Error& error) {
+    if (renderer.device() == exa::Device::Cpu) throw;
+    // The GPU lacks what this scene needs: the CPU renders it (said once for an explicit choice).
+    if (choice != "auto")
+      vtkErrorMacro("ExaBricks: the GPU cannot render this scene (" << error.what() << "); rendering on the CPU");
     renderer.setDevice(exa::Device::Cpu);
     renderer.setScene(scene);
-    this->DeviceChoice.clear();
+    this->DeviceAwaitsScene = true;
+    this->DeviceInUse = exa::deviceName(renderer.device());
+    return;
   }
-  if (this->DeviceEngine == &e && this->DeviceChoice == choice) return;
+  // Back on the CPU for an earlier scene: a new scene may suit the GPU again.
+  const bool retry = this->DeviceAwaitsScene && (update.volume || update.iso || update.meshes);
+  if (this->DeviceEngine == &e && this->DeviceChoice == choice && !retry) return;
   this->DeviceEngine = &e;
   this->DeviceChoice = choice;
   try {
@@ -293,6 +300,9 @@ void vtkExaBricksVolumeMapper::UpdateRenderer(exa::paraview::Engine& e, const ex
     renderer.setDevice(exa::Device::Cpu);
     vtkErrorMacro("ExaBricks: Device '" << choice << "' cannot be used (" << error.what() << "); rendering on the CPU");
   }
+  // On the CPU while a GPU could be used: the scene is why, and the next one is tried again.
+  this->DeviceAwaitsScene =
+      renderer.device() == exa::Device::Cpu && choice != "cpu" && exa::cudaStatus().problem.empty();
   this->DeviceInUse = exa::deviceName(renderer.device());
 }
 

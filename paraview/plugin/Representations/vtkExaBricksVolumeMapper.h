@@ -127,6 +127,7 @@ private:
   exa::paraview::Engine* DeviceEngine = nullptr;
   std::string DeviceChoice;
   std::string DeviceInUse = "cpu";
+  bool DeviceAwaitsScene = false; ///< on the CPU because a scene needed it, with a GPU at hand
 
   // The accumulated still image and what it was rendered for.
   struct Accumulation;
