@@ -3,117 +3,37 @@
     pvbatch check_paraview.py PLUGIN EXABRICKS_CLI WORK_DIR [DATA_DIR]
 
 1. plt_small through ParaView's AMReX reader, shown as "ExaBricks" with a two-point colour map
-   and opacity ramp, equals `exabricks render` of the same file, camera and transfer function
-   (its linear .pfm against ParaView's 8-bit screenshot, within one 8-bit step plus rounding);
+   and opacity ramp, equals `exabricks render --spp 8` of the same file, camera and transfer
+   function (its linear .pfm against ParaView's 8-bit screenshot, within one 8-bit step plus
+   rounding): a still render refines to the default 8 samples per pixel;
 2. an opaque plane in front of the data covers it with its own colour, and one behind shows
    only through the volume: red and blue stay the volume's, green grows by at most the
    plane's.
 
 Prints "skipped: ..." (and exits 0) where the shared sample is absent."""
-import json
 import math
 import os
-import subprocess
 import sys
 
 import numpy as np
 import paraview.simple
-from paraview.simple import (AMReXBoxLibGridReader, ColorBy, CreateView, GetColorTransferFunction,
-                             GetOpacityTransferFunction, Hide, LoadPlugin, Plane, Render, SaveScreenshot, Show)
-from vtkmodules.util.numpy_support import vtk_to_numpy
-from vtkmodules.vtkIOImage import vtkPNGReader
+from paraview.simple import Hide, LoadPlugin, Plane, Show
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pv_common import (ANGLE, FOCUS, HEIGHT, POSITION, UP, WIDTH, exabricks_render, finest_cell,  # noqa: E402
+                       plotfile_or_skip, screenshot, setup_view)
 
 plugin, cli, work = sys.argv[1:4]
-data_dir = sys.argv[4] if len(sys.argv) > 4 else os.environ.get(
-    "EXABRICKS_DATA", os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data"))
-plotfile = os.path.abspath(os.path.join(data_dir, "amrex", "advection_3d", "plt_small"))
-if not os.path.isdir(plotfile):
-    print("skipped: shared sample %s is absent (set EXABRICKS_DATA to the folder of shared samples)" % plotfile)
-    sys.exit(0)
+plotfile = plotfile_or_skip(sys.argv[4] if len(sys.argv) > 4 else None)
 os.makedirs(work, exist_ok=True)
 LoadPlugin(plugin, ns=globals())
 paraview.simple._DisableFirstRenderCameraReset()  # the camera is the one set below
 
-WIDTH, HEIGHT = 160, 120
-POSITION, FOCUS, UP, ANGLE = (1.9, -1.1, 1.4), (0.5, 0.5, 0.5), (0.0, 0.0, 1.0), 30.0
-RANGE = (1.0, 2.0)
-COLORS = ((0.1, 0.2, 0.9), (1.0, 0.8, 0.1))  # the colour map's two ends, as VTK blends them
-ALPHA = (0.0, 0.8)  # opacity per finest cell width at the ends
-
-
-def read_png(path):
-    r = vtkPNGReader()
-    r.SetFileName(path)
-    r.Update()
-    image = r.GetOutput()
-    w, h, _ = image.GetDimensions()
-    pixels = vtk_to_numpy(image.GetPointData().GetScalars()).reshape(h, w, -1)
-    return pixels[::-1, :, :3].astype(np.float64) / 255.0  # row 0 at the top
-
-
-def read_pfm(path):
-    with open(path, "rb") as f:
-        assert f.readline().strip() == b"PF"
-        w, h = map(int, f.readline().split())
-        scale = float(f.readline())
-        values = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
-    return values.reshape(h, w, 3)[::-1].astype(np.float64)
-
-
-def srgb(c):
-    return [12.92 * v if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055 for v in c]
-
-
-# The finest cell width: ParaView's opacity is per ScalarOpacityUnitDistance, exabricks' per
-# finest cell; with that unit distance the two opacity functions are the same numbers.
-info = json.loads(subprocess.run([cli, "info", "--json", plotfile], check=True, capture_output=True).stdout)
-world, lattice = info["bounds"]["world"], info["bounds"]["lattice"]
-cell = (world["upper"][0] - world["lower"][0]) / (lattice["upper"][0] - lattice["lower"][0])
-
-reader = AMReXBoxLibGridReader(FileNames=[plotfile])
-reader.CellArrayStatus = ["phi"]
-reader.Level = 10  # every level (the reader's default reads levels 0 and 1 only)
-view = CreateView("RenderView")
-view.ViewSize = [WIDTH, HEIGHT]
-view.OrientationAxesVisibility = 0
-view.UseColorPaletteForBackground = 0
-view.Background = [0.0, 0.0, 0.0]
-display = Show(reader, view)
-display.Representation = "ExaBricks"
-ColorBy(display, ("CELLS", "phi"))
-lut = GetColorTransferFunction("phi")
-lut.ColorSpace = "RGB"
-lut.Discretize = 0
-lut.RGBPoints = [RANGE[0], *COLORS[0], RANGE[1], *COLORS[1]]
-lut.AutomaticRescaleRangeMode = "Never"
-pwf = GetOpacityTransferFunction("phi")
-pwf.Points = [RANGE[0], ALPHA[0], 0.5, 0.0, RANGE[1], ALPHA[1], 0.5, 0.0]
-display.ScalarOpacityUnitDistance = cell
-view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = POSITION, FOCUS, UP
-view.CameraViewAngle = ANGLE
-
-
-def screenshot(name):
-    path = os.path.join(work, name)
-    Render(view)
-    SaveScreenshot(path, view, ImageResolution=[WIDTH, HEIGHT])
-    return read_png(path)
-
-
-volume = screenshot("paraview.png")
-
-tf = {"colormap": {"points": [[0.0, *srgb(COLORS[0])], [1.0, *srgb(COLORS[1])]]},
-      "opacity": [[0.0, ALPHA[0]], [1.0, ALPHA[1]]], "range": list(RANGE), "log": False, "opacity_scale": 1.0}
-tf_path = os.path.join(work, "tf.json")
-with open(tf_path, "w") as f:
-    json.dump(tf, f)
-reference_path = os.path.join(work, "exabricks.pfm")
-subprocess.run([cli, "render", plotfile, "--field", "phi", "--tf", tf_path, "--size", "%dx%d" % (WIDTH, HEIGHT),
-                "--position", ",".join(map(str, POSITION)), "--look-at", ",".join(map(str, FOCUS)),
-                "--up", ",".join(map(str, UP)), "--fov", str(ANGLE), "--shading", "none", "--spp", "1",
-                "-o", reference_path], check=True, capture_output=True)
-reference = read_pfm(reference_path)
-difference = np.abs(volume - np.clip(reference, 0.0, 1.0))
+reader, view, display = setup_view(plotfile, finest_cell(cli, plotfile))
+volume = screenshot(view, work, "paraview.png")
+# The representation's default: 8 samples per pixel, unlit.
+reference = exabricks_render(cli, plotfile, work, "exabricks.pfm", "--spp", "8")
+difference = np.abs(volume - reference)
 shown = (reference.max(axis=-1) > 0.02).mean()
 print("ParaView against exabricks render: max %.4f, mean %.5f over %dx%d pixels, %.0f%% showing data"
       % (difference.max(), difference.mean(), WIDTH, HEIGHT, 100 * shown))
@@ -143,9 +63,9 @@ for depth, (u0, u1) in ((distance - 1.0, (-0.05, SPLIT)), (distance + 1.0, (SPLI
     plane.ColorArrayName = ["POINTS", ""]
     plane.AmbientColor = plane.DiffuseColor = [0.0, 1.0, 0.0]
     plane.Ambient, plane.Diffuse, plane.Specular = 1.0, 0.0, 0.0
-both = screenshot("paraview-planes.png")
+both = screenshot(view, work, "paraview-planes.png")
 Hide(reader, view)
-alone = screenshot("planes.png")
+alone = screenshot(view, work, "planes.png")
 Show(reader, view)
 columns = np.arange(WIDTH)[None, :].repeat(HEIGHT, axis=0)
 front = columns < SPLIT * WIDTH - 2

@@ -18,18 +18,35 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 
+#include <cmath>
 #include <memory>
 #include <string>
 
 class vtkExaBricksRepresentation::vtkInternals {
 public:
   vtkSmartPointer<vtkOverlappingAMR> Data; ///< the input as RequestData last took it
-  unsigned long Generation = 0;            ///< counts the inputs taken
+  unsigned long Generation = 0;            ///< counts the inputs taken that differ from the last
+  vtkOverlappingAMR* Source = nullptr;     ///< the input last taken, and its modification time
+  vtkMTimeType SourceTime = 0;
   double Bounds[6] = {0, 0, 0, 0, 0, 0};
   std::shared_ptr<exa::paraview::Engine> Engine;
   std::string BuiltField;
   unsigned long BuiltGeneration = 0;
+  int Builds = 0;
 };
+
+namespace {
+const char* const kShadingNames[] = {"Smooth", "Analytic", "Central", "None"};
+const exa::Shading kShadings[] = {exa::Shading::Smooth, exa::Shading::Analytic, exa::Shading::Central,
+                                  exa::Shading::None};
+const char* const kDevices[] = {"auto", "cpu", "cuda"};
+
+// Whether the view is capturing a screenshot: vtkPVView keeps the flag for its subclasses, and a
+// member pointer formed through a subclass reads it.
+struct ScreenshotFlag : vtkPVView {
+  static bool of(vtkPVView* view) { return view && (view->*&ScreenshotFlag::GetInCaptureScreenshot)(); }
+};
+} // namespace
 
 vtkStandardNewMacro(vtkExaBricksRepresentation);
 
@@ -47,7 +64,15 @@ vtkExaBricksRepresentation::~vtkExaBricksRepresentation() {
 
 void vtkExaBricksRepresentation::PrintSelf(ostream& os, vtkIndent indent) {
   this->Superclass::PrintSelf(os, indent);
+  const exa::paraview::Settings& s = this->Mapper->GetSettings();
   os << indent << "Field: " << this->Internals->BuiltField << "\n";
+  os << indent << "Model builds: " << this->Internals->Builds << "\n";
+  os << indent << "Sampling rate: " << s.rate << "\n";
+  os << indent << "Shading: " << kShadingNames[this->GetShading()] << "\n";
+  os << indent << "Ambient occlusion rays: " << s.aoRays << "\n";
+  os << indent << "Iso values: " << s.isoValues.size() << "\n";
+  os << indent << "Samples per pixel: " << s.samplesPerPixel << "\n";
+  os << indent << "Device: " << s.device << " (in use: " << this->Mapper->GetDeviceInUse() << ")\n";
 }
 
 int vtkExaBricksRepresentation::FillInputPortInformation(int, vtkInformation* info) {
@@ -59,16 +84,22 @@ int vtkExaBricksRepresentation::FillInputPortInformation(int, vtkInformation* in
 int vtkExaBricksRepresentation::RequestData(vtkInformation* request, vtkInformationVector** inputs,
                                             vtkInformationVector* outputs) {
   vtkInternals& in = *this->Internals;
-  vtkMath::UninitializeBounds(in.Bounds);
-  in.Data = nullptr;
-  if (inputs[0]->GetNumberOfInformationObjects() == 1) {
-    if (vtkOverlappingAMR* amr = vtkOverlappingAMR::GetData(inputs[0], 0)) {
+  vtkOverlappingAMR* amr =
+      inputs[0]->GetNumberOfInformationObjects() == 1 ? vtkOverlappingAMR::GetData(inputs[0], 0) : nullptr;
+  // The representation re-executes for reasons other than new data (a representation switch,
+  // for one): the model is rebuilt only for an input that is another one or was modified.
+  if (!amr || amr != in.Source || amr->GetMTime() != in.SourceTime || !in.Data) {
+    vtkMath::UninitializeBounds(in.Bounds);
+    in.Data = nullptr;
+    if (amr) {
       in.Data = vtkSmartPointer<vtkOverlappingAMR>::New();
       in.Data->ShallowCopy(amr);
       amr->GetBounds(in.Bounds);
     }
+    in.Source = amr;
+    in.SourceTime = amr ? amr->GetMTime() : 0;
+    ++in.Generation;
   }
-  ++in.Generation;
   return this->Superclass::RequestData(request, inputs, outputs);
 }
 
@@ -81,6 +112,8 @@ int vtkExaBricksRepresentation::ProcessViewRequest(vtkInformationRequestKey* req
     vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
   } else if (request == vtkPVView::REQUEST_RENDER()) {
     this->UpdateEngine();
+    // A screenshot takes the refined image at once.
+    this->Mapper->SetCompleteStillRenders(ScreenshotFlag::of(vtkPVView::SafeDownCast(this->GetView())));
   }
   return 1;
 }
@@ -105,6 +138,7 @@ void vtkExaBricksRepresentation::UpdateEngine() {
     return;
   }
   try {
+    ++in.Builds;
     auto engine = std::make_shared<exa::paraview::Engine>();
     engine->field = name;
     engine->model = std::make_unique<exa::Model>(exa::buildModel(exa::paraview::amrLeafCells(in.Data, name)));
@@ -135,6 +169,108 @@ void vtkExaBricksRepresentation::SetScalarOpacityUnitDistance(double distance) {
 }
 
 void vtkExaBricksRepresentation::SetShade(bool shade) { this->Actor->GetProperty()->SetShade(shade); }
+
+void vtkExaBricksRepresentation::SetSamplingRate(double rate) {
+  if (!(rate > 0.0 && rate <= 1024.0)) {
+    vtkErrorMacro("ExaBricks: Sampling Rate must be above 0 and at most 1024, not " << rate);
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.rate = float(rate);
+  this->Mapper->SetSettings(s);
+}
+
+double vtkExaBricksRepresentation::GetSamplingRate() { return this->Mapper->GetSettings().rate; }
+
+void vtkExaBricksRepresentation::SetShading(int shading) {
+  if (shading < 0 || shading > 3) {
+    vtkErrorMacro("ExaBricks: Shading is 0 (Smooth), 1 (Analytic), 2 (Central) or 3 (None), not " << shading);
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.shading = kShadings[shading];
+  this->Mapper->SetSettings(s);
+}
+
+int vtkExaBricksRepresentation::GetShading() {
+  for (int i = 0; i < 4; ++i)
+    if (kShadings[i] == this->Mapper->GetSettings().shading) return i;
+  return 0;
+}
+
+void vtkExaBricksRepresentation::SetAmbientOcclusionRays(int rays) {
+  if (rays < 0 || rays > 1024) {
+    vtkErrorMacro("ExaBricks: Ambient Occlusion Rays must be 0 (off) to 1024, not " << rays);
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.aoRays = rays;
+  this->Mapper->SetSettings(s);
+}
+
+int vtkExaBricksRepresentation::GetAmbientOcclusionRays() { return this->Mapper->GetSettings().aoRays; }
+
+void vtkExaBricksRepresentation::SetNumberOfIsoValues(int count) {
+  if (count < 0) {
+    vtkErrorMacro("ExaBricks: the number of Iso Values cannot be negative (" << count << ")");
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.isoValues.resize(size_t(count), 0.f);
+  this->Mapper->SetSettings(s);
+}
+
+void vtkExaBricksRepresentation::SetIsoValue(int index, double value) {
+  if (index < 0 || !std::isfinite(value)) {
+    vtkErrorMacro("ExaBricks: Iso Values must be finite numbers, not " << value << " (value " << index << ")");
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  if (size_t(index) >= s.isoValues.size()) s.isoValues.resize(size_t(index) + 1, 0.f);
+  s.isoValues[size_t(index)] = float(value);
+  this->Mapper->SetSettings(s);
+}
+
+int vtkExaBricksRepresentation::GetNumberOfIsoValues() { return int(this->Mapper->GetSettings().isoValues.size()); }
+
+double vtkExaBricksRepresentation::GetIsoValue(int index) {
+  const std::vector<float>& v = this->Mapper->GetSettings().isoValues;
+  return index >= 0 && size_t(index) < v.size() ? v[size_t(index)] : 0.0;
+}
+
+void vtkExaBricksRepresentation::SetSamplesPerPixel(int samples) {
+  if (samples < 1 || samples > 65536) {
+    vtkErrorMacro("ExaBricks: Samples Per Pixel must be 1 to 65536, not " << samples);
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.samplesPerPixel = samples;
+  this->Mapper->SetSettings(s);
+}
+
+int vtkExaBricksRepresentation::GetSamplesPerPixel() { return this->Mapper->GetSettings().samplesPerPixel; }
+
+void vtkExaBricksRepresentation::SetDevice(int device) {
+  if (device < 0 || device > 2) {
+    vtkErrorMacro("ExaBricks: Device is 0 (auto), 1 (cpu) or 2 (cuda), not " << device);
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.device = kDevices[device];
+  this->Mapper->SetSettings(s);
+}
+
+int vtkExaBricksRepresentation::GetDevice() {
+  for (int i = 0; i < 3; ++i)
+    if (this->Mapper->GetSettings().device == kDevices[i]) return i;
+  return 0;
+}
+
+int vtkExaBricksRepresentation::GetModelBuilds() { return this->Internals->Builds; }
+
+int vtkExaBricksRepresentation::GetRefinementPasses() { return this->Mapper->GetRefinementPasses(); }
+
+const char* vtkExaBricksRepresentation::GetDeviceInUse() { return this->Mapper->GetDeviceInUse(); }
 
 bool vtkExaBricksRepresentation::AddToView(vtkView* view) {
   vtkPVRenderView* renderView = vtkPVRenderView::SafeDownCast(view);

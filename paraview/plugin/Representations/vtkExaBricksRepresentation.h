@@ -5,7 +5,10 @@
  * The leaf cells of the chosen cell array (every block's cells less those a finer block
  * covers) become an exabricks model, built once per input and array. It is drawn as a volume
  * with the view's camera and size, the colour map and opacity function of the representation,
- * and the opaque geometry's depth: each ray ends where that geometry begins.
+ * and the opaque geometry's depth: each ray ends where that geometry begins. The renderer's
+ * settings (sampling rate, shading, ambient occlusion, iso-values, samples per pixel, device)
+ * change the scene or the frame, never the model: interactive renders draw a draft, still
+ * renders refine up to the samples per pixel.
  */
 #pragma once
 
@@ -34,6 +37,35 @@ public:
   void SetScalarOpacity(vtkPiecewiseFunction* opacity);
   void SetScalarOpacityUnitDistance(double distance);
   void SetShade(bool shade);
+  ///@}
+
+  ///@{
+  /// The renderer's settings. Invalid values are refused with an error and leave the setting as
+  /// it was.
+  void SetSamplingRate(double rate);
+  double GetSamplingRate();
+  /// 0 Smooth, 1 Analytic, 2 Central, 3 None: how the volume is lit while Shade is on.
+  void SetShading(int shading);
+  int GetShading();
+  void SetAmbientOcclusionRays(int rays);
+  int GetAmbientOcclusionRays();
+  void SetNumberOfIsoValues(int count);
+  void SetIsoValue(int index, double value);
+  int GetNumberOfIsoValues();
+  double GetIsoValue(int index);
+  void SetSamplesPerPixel(int samples);
+  int GetSamplesPerPixel();
+  /// 0 auto (the GPU where one can be used), 1 cpu, 2 cuda.
+  void SetDevice(int device);
+  int GetDevice();
+  ///@}
+
+  ///@{
+  /// What the representation did: the models it built (one per input and array), the passes in
+  /// the image last drawn (0 for a draft), and where the renderer runs.
+  int GetModelBuilds();
+  int GetRefinementPasses();
+  const char* GetDeviceInUse();
   ///@}
 
 protected:

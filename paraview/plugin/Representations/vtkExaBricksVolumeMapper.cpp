@@ -1,6 +1,7 @@
 #include "vtkExaBricksVolumeMapper.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
 
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
@@ -13,6 +14,7 @@
 #include "vtkOpenGLShaderCache.h"
 #include "vtkOpenGLState.h"
 #include "vtkPiecewiseFunction.h"
+#include "vtkRenderWindowInteractor.h"
 #include "vtkRenderer.h"
 #include "vtkShaderProgram.h"
 #include "vtkTextureObject.h"
@@ -23,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <sstream>
 
 namespace exa::paraview {
 
@@ -72,9 +75,53 @@ Camera cameraOf(vtkCamera* camera, double aspect) {
   return c;
 }
 
+Scene sceneOf(const std::string& field, const TransferFunction& tf, vtkColorTransferFunction* color, bool shade,
+              const Settings& settings) {
+  Scene scene = Scene::volumeOf(tf, field);
+  scene.shading = shade ? settings.shading : Shading::None;
+  scene.ao.rays = settings.aoRays;
+  scene.iso.values = settings.isoValues;
+  if (color)
+    for (float v : settings.isoValues) {
+      double rgb[3] = {1.0, 1.0, 1.0};
+      color->GetColor(v, rgb);
+      scene.iso.colors.push_back(vec3f(float(rgb[0]), float(rgb[1]), float(rgb[2])));
+    }
+  return scene;
+}
+
 } // namespace exa::paraview
 
 namespace {
+
+// Renders whose window asks for more frames per second than this are interactive (ParaView asks
+// for 5 while the user drags, 0.002 for still renders; VTK's interactor for 15 and 0.0001).
+constexpr double kInteractiveUpdateRate = 1.0;
+// A still render that may ask for the next one adds passes for about this long.
+constexpr double kStillPassSeconds = 0.15;
+// Drafts: the coarsest divisor of the resolution, and the sampling rate's factor.
+constexpr int kMaxDraftDivisor = 16;
+constexpr float kDraftRateFactor = 0.5f;
+
+bool sameCamera(const exa::Camera& a, const exa::Camera& b) {
+  return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovy == b.fovy &&
+         a.orthographic == b.orthographic && a.orthoHeight == b.orthoHeight;
+}
+
+// The smallest depth over each block of the full-resolution depth that a draft pixel covers: the
+// draft's rays end no farther than the nearest opaque geometry of their block.
+std::vector<float> blockDepth(const std::vector<float>& depth, int width, int height, int dw, int dh) {
+  std::vector<float> out(size_t(dw) * size_t(dh), std::numeric_limits<float>::infinity());
+  for (int y = 0; y < height; ++y) {
+    const int by = std::min(dh - 1, int(int64_t(y) * dh / height));
+    for (int x = 0; x < width; ++x) {
+      const int bx = std::min(dw - 1, int(int64_t(x) * dw / width));
+      float& d = out[size_t(by) * size_t(dw) + size_t(bx)];
+      d = std::min(d, depth[size_t(y) * size_t(width) + size_t(x)]);
+    }
+  }
+  return out;
+}
 
 // The image, premultiplied, laid over the viewport as it is.
 const char* const kFragmentShader = R"(//VTK::System::Dec
@@ -86,9 +133,35 @@ void main() { gl_FragData[0] = texture(image, texCoord); }
 
 } // namespace
 
+struct vtkExaBricksVolumeMapper::Accumulation {
+  // What the passes were rendered for: any change starts over.
+  const exa::paraview::Engine* engine = nullptr;
+  exa::Scene scene;
+  exa::Camera camera;
+  int width = 0, height = 0, samplesPerPixel = 0;
+  float rate = 0.f;
+  exa::Device device = exa::Device::Cpu;
+  std::vector<float> depth;
+  bool valid = false;
+
+  exa::FrameBuffer buffer;
+  exa::Image image; ///< the buffer resolved
+  uint32_t resolvedPasses = 0;
+
+  bool matches(const exa::paraview::Engine* e, const exa::Scene& s, const exa::Frame& f, exa::Device d,
+               const std::vector<float>& z) const {
+    return valid && engine == e && sameCamera(camera, f.camera) && width == f.width && height == f.height &&
+           samplesPerPixel == f.samplesPerPixel && rate == f.rate && device == d && depth == z && sameScene(scene, s);
+  }
+  static bool sameScene(const exa::Scene& a, const exa::Scene& b) {
+    return a.layers == b.layers && a.iso == b.iso && a.shading == b.shading && a.ao.rays == b.ao.rays &&
+           a.ao.length == b.ao.length && a.ao.volume == b.ao.volume && a.volume == b.volume;
+  }
+};
+
 vtkStandardNewMacro(vtkExaBricksVolumeMapper);
 
-vtkExaBricksVolumeMapper::vtkExaBricksVolumeMapper() {
+vtkExaBricksVolumeMapper::vtkExaBricksVolumeMapper() : Still(std::make_unique<Accumulation>()) {
   // The data comes with the engine, not through the pipeline; vtkVolume draws only mappers with
   // an input, so the mapper has an empty one.
   vtkNew<vtkImageData> placeholder;
@@ -96,6 +169,8 @@ vtkExaBricksVolumeMapper::vtkExaBricksVolumeMapper() {
 }
 
 vtkExaBricksVolumeMapper::~vtkExaBricksVolumeMapper() {
+  this->CancelScheduledRender();
+  if (this->TimerInteractor && this->TimerObserver) this->TimerInteractor->RemoveObserver(this->TimerObserver);
   delete this->Quad;
   if (this->Texture) this->Texture->Delete();
 }
@@ -107,6 +182,13 @@ void vtkExaBricksVolumeMapper::PrintSelf(ostream& os, vtkIndent indent) {
 
 void vtkExaBricksVolumeMapper::SetEngine(std::shared_ptr<exa::paraview::Engine> engine) {
   this->Engine = std::move(engine);
+  this->Still->valid = false;
+  this->Modified();
+}
+
+void vtkExaBricksVolumeMapper::SetSettings(const exa::paraview::Settings& settings) {
+  if (settings == this->Options) return;
+  this->Options = settings;
   this->Modified();
 }
 
@@ -149,7 +231,7 @@ std::vector<float> vtkExaBricksVolumeMapper::ViewDepth(vtkCamera* camera, double
   return depth;
 }
 
-void vtkExaBricksVolumeMapper::Draw(vtkOpenGLRenderWindow* window, const exa::Image& image) {
+void vtkExaBricksVolumeMapper::Draw(vtkOpenGLRenderWindow* window, const exa::Image& image, bool smooth) {
   // OpenGL's rows start at the bottom.
   std::vector<float> rows(image.pixels.size() * 4);
   for (int y = 0; y < image.height; ++y)
@@ -160,6 +242,12 @@ void vtkExaBricksVolumeMapper::Draw(vtkOpenGLRenderWindow* window, const exa::Im
     }
   if (!this->Texture) this->Texture = vtkTextureObject::New();
   this->Texture->SetContext(window);
+  // A draft is smaller than the viewport: blend its pixels linearly as it is stretched over it.
+  const int filter = smooth ? vtkTextureObject::Linear : vtkTextureObject::Nearest;
+  this->Texture->SetMinificationFilter(filter);
+  this->Texture->SetMagnificationFilter(filter);
+  this->Texture->SetWrapS(vtkTextureObject::ClampToEdge);
+  this->Texture->SetWrapT(vtkTextureObject::ClampToEdge);
   this->Texture->Create2DFromRaw(unsigned(image.width), unsigned(image.height), 4, VTK_FLOAT, rows.data());
   if (!this->Quad)
     this->Quad = new vtkOpenGLQuadHelper(window, nullptr, kFragmentShader, "");
@@ -184,6 +272,150 @@ void vtkExaBricksVolumeMapper::Draw(vtkOpenGLRenderWindow* window, const exa::Im
   this->Texture->Deactivate();
 }
 
+void vtkExaBricksVolumeMapper::UpdateRenderer(exa::paraview::Engine& e, const exa::Scene& scene) {
+  exa::Renderer& renderer = *e.renderer;
+  const std::string& choice = this->Options.device;
+  exa::SceneUpdate update;
+  try {
+    update = renderer.setScene(scene);
+  } catch (const exa::Error& error) {
+    if (renderer.device() == exa::Device::Cpu) throw;
+    // The GPU lacks what this scene needs: the CPU renders it (said once for an explicit choice).
+    if (choice != "auto")
+      vtkErrorMacro("ExaBricks: the GPU cannot render this scene (" << error.what() << "); rendering on the CPU");
+    renderer.setDevice(exa::Device::Cpu);
+    renderer.setScene(scene);
+    this->DeviceAwaitsScene = true;
+    this->DeviceInUse = exa::deviceName(renderer.device());
+    return;
+  }
+  // Back on the CPU for an earlier scene: a new scene may suit the GPU again.
+  const bool retry = this->DeviceAwaitsScene && (update.volume || update.iso || update.meshes);
+  if (this->DeviceEngine == &e && this->DeviceChoice == choice && !retry) return;
+  this->DeviceEngine = &e;
+  this->DeviceChoice = choice;
+  try {
+    exa::selectDevice(renderer, choice);
+  } catch (const exa::Error& error) {
+    renderer.setDevice(exa::Device::Cpu);
+    vtkErrorMacro("ExaBricks: Device '" << choice << "' cannot be used (" << error.what() << "); rendering on the CPU");
+  }
+  // On the CPU while a GPU could be used: the scene is why, and the next one is tried again.
+  this->DeviceAwaitsScene =
+      renderer.device() == exa::Device::Cpu && choice != "cpu" && exa::cudaStatus().problem.empty();
+  this->DeviceInUse = exa::deviceName(renderer.device());
+}
+
+void vtkExaBricksVolumeMapper::RenderDraft(exa::paraview::Engine& e, vtkOpenGLRenderWindow* window,
+                                           const exa::Frame& frame, const std::vector<float>& depth,
+                                           double targetSeconds) {
+  exa::Frame draft = frame.preview(this->DraftDivisor, frame.rate * kDraftRateFactor);
+  draft.samplesPerPixel = 1;
+  draft.frameIndex = 0;
+  std::vector<float> coarse;
+  if (!depth.empty()) {
+    coarse = draft.width == frame.width && draft.height == frame.height
+                 ? depth
+                 : blockDepth(depth, frame.width, frame.height, draft.width, draft.height);
+    draft.depthLimit = coarse.data();
+    draft.depthLimitPlanar = true;
+  }
+  exa::RenderStats stats;
+  const exa::Image image = e.renderer->render(draft, &stats);
+  this->Draw(window, image, true);
+  this->ShownPasses = 0;
+  this->ShownDraft = true;
+  // The next draft's divisor: as many pixels as fit the time the view allows a frame, at the
+  // time per pixel this one took.
+  const double pixels = double(draft.width) * double(draft.height);
+  if (stats.seconds > 0.0 && targetSeconds > 0.0) {
+    const double affordable = pixels * targetSeconds / stats.seconds;
+    const double divisor = std::sqrt(double(frame.width) * double(frame.height) / std::max(affordable, 1.0));
+    this->DraftDivisor = std::clamp(int(std::ceil(divisor)), 1, kMaxDraftDivisor);
+  }
+}
+
+void vtkExaBricksVolumeMapper::RenderStill(exa::paraview::Engine& e, vtkOpenGLRenderWindow* window,
+                                           const exa::Frame& frame, std::vector<float> depth) {
+  Accumulation& a = *this->Still;
+  const exa::Device device = e.renderer->device();
+  if (!a.matches(&e, e.renderer->scene(), frame, device, depth)) {
+    a.engine = &e;
+    a.scene = e.renderer->scene();
+    a.camera = frame.camera;
+    a.width = frame.width;
+    a.height = frame.height;
+    a.samplesPerPixel = frame.samplesPerPixel;
+    a.rate = frame.rate;
+    a.device = device;
+    a.depth = std::move(depth);
+    a.buffer.resize(frame.width, frame.height);
+    a.resolvedPasses = 0;
+    a.valid = true;
+  }
+  exa::Frame f = frame;
+  if (!a.depth.empty()) {
+    f.depthLimit = a.depth.data();
+    f.depthLimitPlanar = true;
+  }
+  const int target = frame.samplesPerPixel;
+  // Renders asked of the interactor come only where an event loop runs whenever the application
+  // is idle: Qt's interactor (ParaView's GUI), or a generic one whose application serves its
+  // timers (its CreateOneShotTimer fails otherwise, as in pvbatch). pvpython's X interactor has a
+  // loop only inside Interact(): a script's still render there refines in one go.
+  vtkRenderWindowInteractor* interactor = window->GetInteractor();
+  const bool later = !this->CompleteStillRenders && interactor && interactor->GetInitialized() &&
+                     interactor->GetEnabled() &&
+                     (interactor->IsA("QVTKInteractor") || interactor->IsA("vtkGenericRenderWindowInteractor"));
+  a.valid = false; // until the passes are in
+  if (int(a.buffer.passes()) < target) {
+    if (later) {
+      // Passes for a moment, then the next render adds more: the view stays responsive.
+      exa::Timer timer;
+      do {
+        f.frameIndex = int(a.buffer.passes());
+        e.renderer->renderPass(f, a.buffer);
+      } while (int(a.buffer.passes()) < target && timer.seconds() < kStillPassSeconds);
+    }
+    // Without an event loop to ask for the next render (pvbatch, a server), finish here.
+    if (int(a.buffer.passes()) < target && !(later && this->ScheduleRender(interactor)))
+      e.renderer->renderPasses(f, a.buffer, target);
+  }
+  a.valid = true;
+  if (a.resolvedPasses != a.buffer.passes() || a.image.width != frame.width || a.image.height != frame.height) {
+    a.buffer.resolve(a.image);
+    a.resolvedPasses = a.buffer.passes();
+  }
+  this->Draw(window, a.image, false);
+  this->ShownPasses = int(a.buffer.passes());
+  this->ShownDraft = false;
+}
+
+bool vtkExaBricksVolumeMapper::ScheduleRender(vtkRenderWindowInteractor* interactor) {
+  if (!interactor) return false;
+  if (this->TimerInteractor != interactor) {
+    this->CancelScheduledRender();
+    if (this->TimerInteractor && this->TimerObserver) this->TimerInteractor->RemoveObserver(this->TimerObserver);
+    this->TimerInteractor = interactor;
+    this->TimerObserver = interactor->AddObserver(vtkCommand::TimerEvent, this, &vtkExaBricksVolumeMapper::OnTimer);
+  }
+  if (!this->TimerId) this->TimerId = interactor->CreateOneShotTimer(1);
+  return this->TimerId != 0;
+}
+
+void vtkExaBricksVolumeMapper::CancelScheduledRender() {
+  if (this->TimerInteractor && this->TimerId) this->TimerInteractor->DestroyTimer(this->TimerId);
+  this->TimerId = 0;
+}
+
+void vtkExaBricksVolumeMapper::OnTimer(vtkObject*, unsigned long, void* data) {
+  if (!data || !this->TimerId || *static_cast<int*>(data) != this->TimerId) return;
+  this->TimerId = 0;
+  // The interactor's render goes through the view (ParaView's interactor helper turns it into a
+  // still render of the view proxy), which lets the representations update as usual.
+  if (this->TimerInteractor) this->TimerInteractor->Render();
+}
+
 void vtkExaBricksVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol) {
   if (!this->Engine || !this->Engine->renderer) return;
   auto* window = vtkOpenGLRenderWindow::SafeDownCast(ren->GetRenderWindow());
@@ -196,28 +428,34 @@ void vtkExaBricksVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol) {
   if (width < 1 || height < 1) return;
   const double aspect = double(width) / double(height);
   vtkCamera* camera = ren->GetActiveCamera();
+  const double updateRate = window->GetDesiredUpdateRate();
+  const bool interactive = updateRate > kInteractiveUpdateRate;
+  if (interactive) this->CancelScheduledRender();
   try {
     exa::paraview::Engine& e = *this->Engine;
     vtkVolumeProperty* property = vol->GetProperty();
     const exa::Model& model = *e.model;
     const exa::vec3d& s = model.world.scale; // opacity is per finest cell (averaged over the axes)
     const double cellWidth = double(e.renderer->dataset().referenceWidth) * (s.x + s.y + s.z) / 3.0;
-    exa::Scene scene = exa::Scene::volumeOf(
-        exa::paraview::transferFunctionOf(property->GetRGBTransferFunction(0), property->GetScalarOpacity(0),
-                                          property->GetScalarOpacityUnitDistance(0), cellWidth),
-        e.field);
-    scene.shading = property->GetShade(0) ? exa::Shading::Smooth : exa::Shading::None;
-    e.renderer->setScene(scene);
+    vtkColorTransferFunction* color = property->GetRGBTransferFunction(0);
+    const exa::Scene scene =
+        exa::paraview::sceneOf(e.field,
+                               exa::paraview::transferFunctionOf(color, property->GetScalarOpacity(0),
+                                                                 property->GetScalarOpacityUnitDistance(0), cellWidth),
+                               color, property->GetShade(0) != 0, this->Options);
+    this->UpdateRenderer(e, scene);
     std::vector<float> depth = this->ViewDepth(camera, aspect, x0, y0, width, height);
     exa::Frame frame;
     frame.camera = exa::paraview::cameraOf(camera, aspect);
     frame.width = width;
     frame.height = height;
-    if (!depth.empty()) {
-      frame.depthLimit = depth.data();
-      frame.depthLimitPlanar = true;
-    }
-    this->Draw(window, e.renderer->render(frame));
+    frame.rate = this->Options.rate;
+    frame.samplesPerPixel = this->Options.samplesPerPixel;
+    frame.validate();
+    if (interactive)
+      this->RenderDraft(e, window, frame, depth, 1.0 / updateRate);
+    else
+      this->RenderStill(e, window, frame, std::move(depth));
   } catch (const std::exception& error) {
     vtkErrorMacro(<< error.what());
   }

@@ -1,13 +1,18 @@
 // A volume mapper that renders the leaf cells of AMR data with exabricks into the render view:
 // the camera, view size and transfer function are the view's and the volume property's, every
 // ray ends at the depth of the opaque geometry drawn before it, and the image is blended over
-// the view's (premultiplied alpha).
+// the view's (premultiplied alpha). Interactive renders (the render window asks for more than
+// one frame per second) draw a draft at a fraction of the resolution, upscaled; still renders
+// add passes to an accumulation that lasts while the camera, size, scene and depth stay the same,
+// up to the samples per pixel asked for.
 #pragma once
 
 #include "vtkAbstractVolumeMapper.h"
 
 #include "exabricks/amr/model.h"
 #include "exabricks/render/renderer.h"
+
+#include "vtkWeakPointer.h"
 
 #include <memory>
 #include <string>
@@ -18,6 +23,7 @@ class vtkColorTransferFunction;
 class vtkOpenGLQuadHelper;
 class vtkOpenGLRenderWindow;
 class vtkPiecewiseFunction;
+class vtkRenderWindowInteractor;
 class vtkTextureObject;
 
 namespace exa::paraview {
@@ -30,6 +36,17 @@ struct Engine {
   double bounds[6] = {0, 0, 0, 0, 0, 0};
 };
 
+/// What the representation's properties ask of the renderer, besides the transfer function.
+struct Settings {
+  float rate = 1.f;                  ///< Frame::rate
+  Shading shading = Shading::Smooth; ///< the volume's lighting while Shade is on
+  int aoRays = 0;                    ///< ambient occlusion rays per iso-surface hit
+  std::vector<float> isoValues;      ///< iso-surfaces of the rendered array
+  int samplesPerPixel = 8;           ///< the passes a still image accumulates
+  std::string device = "auto";       ///< "auto", "cpu" or "cuda" (exa::selectDevice)
+  friend bool operator==(const Settings&, const Settings&) = default;
+};
+
 /// The exabricks transfer function of ParaView's colour map and opacity function over the colour
 /// map's range (sampled at `samples` values; log10 positions for a logarithmic map). ParaView's
 /// opacity is per `unitDistance` world units, exabricks' per finest cell (`cellWidth`); colours
@@ -40,6 +57,12 @@ TransferFunction transferFunctionOf(vtkColorTransferFunction* color, vtkPiecewis
 /// The exabricks camera of a VTK camera for a viewport of the given aspect (width / height).
 Camera cameraOf(vtkCamera* camera, double aspect);
 
+/// The scene of one field: its transfer function, the volume lit by `shading` when `shade` is
+/// on, and iso-surfaces at the settings' values, each in the colour the colour map gives its
+/// value (the renderer's default colours without a colour map).
+Scene sceneOf(const std::string& field, const TransferFunction& tf, vtkColorTransferFunction* color, bool shade,
+              const Settings& settings);
+
 } // namespace exa::paraview
 
 class vtkExaBricksVolumeMapper : public vtkAbstractVolumeMapper {
@@ -49,6 +72,20 @@ public:
   void PrintSelf(ostream& os, vtkIndent indent) override;
 
   void SetEngine(std::shared_ptr<exa::paraview::Engine> engine);
+  void SetSettings(const exa::paraview::Settings& settings);
+  const exa::paraview::Settings& GetSettings() const { return this->Options; }
+  /// Still renders add every missing pass at once (screenshots, and views without an event loop
+  /// that could ask for the next render).
+  void SetCompleteStillRenders(bool complete) { this->CompleteStillRenders = complete; }
+
+  ///@{
+  /// What the last render drew: the passes its image holds (0 for a draft), whether it was a
+  /// draft and at what divisor of the resolution, and where the renderer runs ("cpu", "cuda").
+  int GetRefinementPasses() const { return this->ShownPasses; }
+  bool GetLastRenderWasDraft() const { return this->ShownDraft; }
+  int GetDraftDivisor() const { return this->DraftDivisor; }
+  const char* GetDeviceInUse() const { return this->DeviceInUse.c_str(); }
+  ///@}
 
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
   double* GetBounds() override;
@@ -66,10 +103,43 @@ private:
   /// The opaque depth of the viewport as exabricks' planar depth (row 0 at the top; +inf where
   /// nothing opaque was drawn); empty when the depth buffer cannot be read.
   std::vector<float> ViewDepth(vtkCamera* camera, double aspect, int x0, int y0, int width, int height);
-  void Draw(vtkOpenGLRenderWindow* window, const exa::Image& image);
+  /// Makes the scene current and the renderer run where the Device setting asks.
+  void UpdateRenderer(exa::paraview::Engine& engine, const exa::Scene& scene);
+  void RenderDraft(exa::paraview::Engine& engine, vtkOpenGLRenderWindow* window, const exa::Frame& frame,
+                   const std::vector<float>& depth, double targetSeconds);
+  void RenderStill(exa::paraview::Engine& engine, vtkOpenGLRenderWindow* window, const exa::Frame& frame,
+                   std::vector<float> depth);
+  void Draw(vtkOpenGLRenderWindow* window, const exa::Image& image, bool smooth);
+  /// Asks the render window's interactor for another render soon (refinement), where it has an
+  /// event loop; false where it cannot.
+  bool ScheduleRender(vtkRenderWindowInteractor* interactor);
+  void CancelScheduledRender();
+  void OnTimer(vtkObject* caller, unsigned long event, void* data);
 
   std::shared_ptr<exa::paraview::Engine> Engine;
+  exa::paraview::Settings Options;
+  bool CompleteStillRenders = false;
   vtkTextureObject* Texture = nullptr;
   vtkOpenGLQuadHelper* Quad = nullptr;
   bool WarnedDepth = false;
+
+  // Where the renderer runs: the choice applied to the engine in use and what it gave.
+  exa::paraview::Engine* DeviceEngine = nullptr;
+  std::string DeviceChoice;
+  std::string DeviceInUse = "cpu";
+  bool DeviceAwaitsScene = false; ///< on the CPU because a scene needed it, with a GPU at hand
+
+  // The accumulated still image and what it was rendered for.
+  struct Accumulation;
+  std::unique_ptr<Accumulation> Still;
+
+  // Drafts: the divisor of the resolution, adapted to the time the view allows a frame.
+  int DraftDivisor = 4;
+  int ShownPasses = 0;
+  bool ShownDraft = false;
+
+  // A render asked of the interactor while the still image is refined.
+  vtkWeakPointer<vtkRenderWindowInteractor> TimerInteractor;
+  unsigned long TimerObserver = 0;
+  int TimerId = 0;
 };

@@ -1,0 +1,134 @@
+"""What the pvbatch checks of the ExaBricks representation share: the shared sample, its finest
+cell, the view and transfer function they use, images read back, and `exabricks render` of the
+same camera and transfer function."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkIOImage import vtkPNGReader
+
+WIDTH, HEIGHT = 160, 120
+POSITION, FOCUS, UP, ANGLE = (1.9, -1.1, 1.4), (0.5, 0.5, 0.5), (0.0, 0.0, 1.0), 30.0
+RANGE = (1.0, 2.0)
+COLORS = ((0.1, 0.2, 0.9), (1.0, 0.8, 0.1))  # the colour map's two ends, as VTK blends them
+ALPHA = (0.0, 0.8)  # opacity per finest cell width at the ends
+
+
+def plotfile_or_skip(data_dir):
+    """The shared plt_small, or exits with "skipped: ..." where it is absent."""
+    if data_dir is None:
+        data_dir = os.environ.get("EXABRICKS_DATA",
+                                  os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data"))
+    plotfile = os.path.abspath(os.path.join(data_dir, "amrex", "advection_3d", "plt_small"))
+    if not os.path.isdir(plotfile):
+        print("skipped: shared sample %s is absent (set EXABRICKS_DATA to the folder of shared samples)" % plotfile)
+        sys.exit(0)
+    return plotfile
+
+
+def finest_cell(cli, plotfile):
+    """ParaView's opacity is per ScalarOpacityUnitDistance, exabricks' per finest cell: with this
+    unit distance the two opacity functions are the same numbers."""
+    info = json.loads(subprocess.run([cli, "info", "--json", plotfile], check=True, capture_output=True).stdout)
+    world, lattice = info["bounds"]["world"], info["bounds"]["lattice"]
+    return (world["upper"][0] - world["lower"][0]) / (lattice["upper"][0] - lattice["lower"][0])
+
+
+def read_png(path):
+    r = vtkPNGReader()
+    r.SetFileName(path)
+    r.Update()
+    return image_pixels(r.GetOutput())
+
+
+def image_pixels(image):
+    """A vtkImageData's RGB as floats in [0, 1], row 0 at the top."""
+    w, h, _ = image.GetDimensions()
+    pixels = vtk_to_numpy(image.GetPointData().GetScalars()).reshape(h, w, -1)
+    return pixels[::-1, :, :3].astype(np.float64) / 255.0
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        assert f.readline().strip() == b"PF"
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        values = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    return values.reshape(h, w, 3)[::-1].astype(np.float64)
+
+
+def srgb(c):
+    return [12.92 * v if v <= 0.0031308 else 1.055 * v ** (1 / 2.4) - 0.055 for v in c]
+
+
+def map_color(value):
+    """The two-point colour map at a value, as VTK blends it (RGB space)."""
+    t = min(1.0, max(0.0, (value - RANGE[0]) / (RANGE[1] - RANGE[0])))
+    return [a + t * (b - a) for a, b in zip(*COLORS)]
+
+
+def write_tf(work):
+    tf = {"colormap": {"points": [[0.0, *srgb(COLORS[0])], [1.0, *srgb(COLORS[1])]]},
+          "opacity": [[0.0, ALPHA[0]], [1.0, ALPHA[1]]], "range": list(RANGE), "log": False, "opacity_scale": 1.0}
+    path = os.path.join(work, "tf.json")
+    with open(path, "w") as f:
+        json.dump(tf, f)
+    return path
+
+
+def exabricks_render(cli, plotfile, work, name, *options):
+    """`exabricks render` of phi with the shared camera and transfer function (unlit unless the
+    options say otherwise), read back as linear RGB clipped to [0, 1]."""
+    path = os.path.join(work, name)
+    subprocess.run([cli, "render", plotfile, "--field", "phi", "--tf", write_tf(work),
+                    "--size", "%dx%d" % (WIDTH, HEIGHT), "--position", ",".join(map(str, POSITION)),
+                    "--look-at", ",".join(map(str, FOCUS)), "--up", ",".join(map(str, UP)), "--fov", str(ANGLE),
+                    *([] if "--shading" in options else ["--shading", "none"]), *options, "-o", path],
+                   check=True, capture_output=True)
+    return np.clip(read_pfm(path), 0.0, 1.0)
+
+
+def setup_view(plotfile, cell):
+    """plt_small through ParaView's AMReX reader at every level, shown as ExaBricks with the
+    shared colour map, opacity ramp and camera. Returns (reader, view, display)."""
+    from paraview.simple import (AMReXBoxLibGridReader, ColorBy, CreateView, GetColorTransferFunction,
+                                 GetOpacityTransferFunction, Show)
+    reader = AMReXBoxLibGridReader(FileNames=[plotfile])
+    reader.CellArrayStatus = ["phi"]
+    reader.Level = 10  # every level (the reader's default reads levels 0 and 1 only)
+    view = CreateView("RenderView")
+    view.ViewSize = [WIDTH, HEIGHT]
+    view.OrientationAxesVisibility = 0
+    view.UseColorPaletteForBackground = 0
+    view.Background = [0.0, 0.0, 0.0]
+    display = Show(reader, view)
+    display.Representation = "ExaBricks"
+    ColorBy(display, ("CELLS", "phi"))
+    lut = GetColorTransferFunction("phi")
+    lut.ColorSpace = "RGB"
+    lut.Discretize = 0
+    lut.RGBPoints = [RANGE[0], *COLORS[0], RANGE[1], *COLORS[1]]
+    lut.AutomaticRescaleRangeMode = "Never"
+    pwf = GetOpacityTransferFunction("phi")
+    pwf.Points = [RANGE[0], ALPHA[0], 0.5, 0.0, RANGE[1], ALPHA[1], 0.5, 0.0]
+    display.ScalarOpacityUnitDistance = cell
+    view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = POSITION, FOCUS, UP
+    view.CameraViewAngle = ANGLE
+    return reader, view, display
+
+
+def screenshot(view, work, name):
+    from paraview.simple import Render, SaveScreenshot
+    path = os.path.join(work, name)
+    Render(view)
+    SaveScreenshot(path, view, ImageResolution=[WIDTH, HEIGHT])
+    return read_png(path)
+
+
+def information(display, name):
+    """An information property of the representation (Model Builds, Refinement Passes, ...)."""
+    display.SMProxy.UpdatePropertyInformation()
+    return display.SMProxy.GetProperty(name).GetElement(0)
