@@ -139,20 +139,41 @@ struct BasisAccumulator4 {
   vec4f sumWV, v0;
   bool haveReference = false;
 
+  /// Adds every cell of `brick` whose support holds p. Both cells of each axis's stencil are
+  /// visited, the second one again with weight 0 where only one lies in the brick: the sums gain
+  /// exact zeros, so they equal BasisAccumulator's, with a fixed loop of eight cells (fewer
+  /// branches for a GPU's warps) and 32-bit indices within the brick.
   EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const vec4f* brickValues, const vec3f& p) {
-    const BrickStencil<float> st(brick, p);
+    const float invW = inverseWidth(brick.level);
+    int cell[3][2];
+    float h[3][2];
+    for (int a = 0; a < 3; ++a) {
+      // As BrickStencil: the position in cell-centre units and the cells on either side.
+      const float q = (p[a] - float(brick.lower[a])) * invW - 0.5f;
+      const int truncated = int(q);
+      const int i0 = truncated - (q < float(truncated) ? 1 : 0);
+      const float f = q - float(i0);
+      const int n = brick.size[a];
+      const bool first = i0 >= 0 && i0 < n, second = i0 + 1 >= 0 && i0 + 1 < n;
+      if (!first && !second) return;
+      cell[a][0] = first ? i0 : i0 + 1;
+      h[a][0] = first ? 1.f - f : f;
+      cell[a][1] = first && second ? i0 + 1 : cell[a][0];
+      h[a][1] = first && second ? f : 0.f;
+    }
     const vec4f* values = brickValues + brick.valueOffset;
-    if (!haveReference && !st.empty()) {
-      v0 = loadVec4(values + st.row(brick, 0, 0) + size_t(st.idx[0][0]));
+    const uint32_t nx = uint32_t(brick.size.x), nxy = nx * uint32_t(brick.size.y);
+    if (!haveReference) {
+      v0 = loadVec4(values + (uint32_t(cell[0][0]) + nx * uint32_t(cell[1][0]) + nxy * uint32_t(cell[2][0])));
       haveReference = true;
     }
-    for (int iz = 0; iz < st.count[2]; ++iz)
-      for (int iy = 0; iy < st.count[1]; ++iy) {
-        const vec4f* row = values + st.row(brick, iy, iz);
-        const float hyz = st.h[1][iy] * st.h[2][iz];
-        for (int ix = 0; ix < st.count[0]; ++ix) {
-          const vec4f v = loadVec4(row + st.idx[0][ix]) - v0;
-          const float weight = st.h[0][ix] * hyz;
+    for (int iz = 0; iz < 2; ++iz)
+      for (int iy = 0; iy < 2; ++iy) {
+        const vec4f* row = values + (nx * uint32_t(cell[1][iy]) + nxy * uint32_t(cell[2][iz]));
+        const float hyz = h[1][iy] * h[2][iz];
+        for (int ix = 0; ix < 2; ++ix) {
+          const vec4f v = loadVec4(row + cell[0][ix]) - v0;
+          const float weight = h[0][ix] * hyz;
           sumW += weight;
           sumWV += weight * v;
         }

@@ -18,9 +18,9 @@ void check(cudaError_t e, const char* what) {
   if (e != cudaSuccess) fail("CUDA: ", what, ": ", cudaGetErrorString(e));
 }
 
-// 64 threads a block and at least 8 blocks an SM: at most 128 registers a thread; 10 blocks (96
-// registers, no spills) for the common one-layer smooth volume. Measured on an H100, fewer
-// registers with spills were slower.
+// 64 threads a block and at least 8 blocks an SM: at most 128 registers a thread; 10 blocks (94
+// registers, no spills) for the common one-layer smooth volume. Measured on an H100 and an H200,
+// fewer registers with spills were slower or no faster.
 template <bool Surfaces, bool SmoothOne>
 __global__ void __launch_bounds__(64, (SmoothOne && !Surfaces) ? 10 : 8)
     traceKernel(int tilesX, int tileBegin, int tileEnd, int tileStride, vec4f* colors, PassCounts* counts) {
