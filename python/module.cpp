@@ -251,22 +251,7 @@ public:
     SceneUpdate u;
     {
       py::gil_scoped_release release;
-      if (renderer_.device() != Device::Cpu && device_ == "auto") {
-        try {
-          u = renderer_.setScene(doc.scene);
-        } catch (const Error& e) {
-          // Something the GPU does not draw: on the CPU from now on.
-          logInfo(strCat("rendering on the CPU: ", e.what()));
-          renderer_.setDevice(Device::Cpu);
-          u = renderer_.setScene(doc.scene);
-        }
-      } else {
-        u = renderer_.setScene(doc.scene);
-      }
-      if (!deviceChosen_) {
-        deviceChosen_ = true;
-        selectDevice(renderer_, device_);
-      }
+      u = setSceneOnDevice(renderer_, doc.scene, device_, deviceChosen_);
     }
     // Any change of the scene starts the accumulation over.
     if (key != sceneKey_) stale_ = true;

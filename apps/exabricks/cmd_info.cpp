@@ -137,11 +137,8 @@ void run(const InfoOptions& o) {
   std::printf("input            %s\n", o.in.name().c_str());
   {
     const CudaStatus cuda = cudaStatus();
-    const nlohmann::json need = nlohmann::json::parse(deviceInfoJson(model))["memory_needed_bytes"];
-    const double mib = double(need["bricks"].get<uint64_t>() + need["regions"].get<uint64_t>() +
-                              need["region brick lists"].get<uint64_t>() + need["region k-d tree"].get<uint64_t>() +
-                              need["field values"].get<uint64_t>()) /
-                       1048576.0;
+    const DeviceFootprint need = deviceFootprint(model);
+    const double mib = double(need.model.total() + need.fieldBytes) / 1048576.0;
     if (cuda.problem.empty())
       std::printf("device           cuda: %s, %.1f GiB (this dataset with one field: %.1f MiB)\n", cuda.name.c_str(),
                   double(cuda.totalBytes) / 1073741824.0, mib);

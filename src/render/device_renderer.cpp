@@ -18,11 +18,9 @@ DeviceRenderer::DeviceRenderer(Device device, const Model& model, const DatasetI
   if (device == Device::Cuda) {
     const CudaStatus s = gpu::status();
     if (!s.problem.empty()) fail("--device cuda: ", s.problem);
-    // The whole model must fit: bricks, regions, k-d tree and one field (values and gradients).
-    const uint64_t need = model.bricks.size() * sizeof(Brick) + model.regions.regions.size() * sizeof(Region) +
-                          model.regions.brickIds.size() * sizeof(uint32_t) +
-                          model.regions.nodes.size() * sizeof(RegionKdNode) +
-                          (model.fieldValues.empty() ? 0 : 4 * model.fieldValues[0].size() * sizeof(float));
+    // The whole model must fit: its structures and one field (values and gradients).
+    const DeviceFootprint f = deviceFootprint(model);
+    const uint64_t need = f.model.total() + 4 * f.fieldBytes;
     if (need > s.freeBytes)
       fail("--device cuda: the dataset needs ", need >> 20, " MiB on the GPU (", model.bricks.size(), " bricks, ",
            model.regions.regions.size(), " regions, ", model.fieldValues.empty() ? 0 : model.fieldValues[0].size(),
@@ -35,9 +33,19 @@ DeviceRenderer::~DeviceRenderer() {
   if (device_ != Device::Cuda) return;
   for (auto& [key, b] : buffers_)
     gpu::release(b.device);
-  gpu::release(colors_);
-  gpu::release(counts_);
+  gpu::release(frame_.device);
+  gpu::release(counts_.device);
   gpu::releaseHost(pinned_);
+}
+
+void DeviceRenderer::reserve(Buffer& b, uint64_t bytes, const std::string& what) {
+  if (!b.device || bytes > b.capacity) {
+    gpu::release(b.device);
+    b.device = nullptr;
+    b.device = gpu::allocate(bytes, what.c_str());
+    b.capacity = bytes;
+  }
+  b.bytes = bytes;
 }
 
 void DeviceRenderer::checkSupported(const Scene& s) {
@@ -63,12 +71,7 @@ const void* DeviceRenderer::put(const std::string& key, const void* host, uint64
       b.device && b.bytes == bytes &&
       (byContent ? b.content.size() == bytes && std::memcmp(b.content.data(), host, bytes) == 0 : b.host == host);
   if (same) return b.device;
-  if (b.bytes != bytes || !b.device) {
-    gpu::release(b.device);
-    b.device = nullptr;
-    b.device = gpu::allocate(bytes, key.c_str());
-    b.bytes = bytes;
-  }
+  reserve(b, bytes, key);
   gpu::copyToDevice(b.device, host, bytes);
   b.host = host;
   if (byContent) b.content.assign(static_cast<const uint8_t*>(host), static_cast<const uint8_t*>(host) + bytes);
@@ -248,23 +251,13 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
   counts = gpu::PassCounts();
   if (device_ == Device::Cuda) {
     const uint64_t bytes = pixels * sizeof(vec4f);
-    if (bytes > colorBytes_) {
-      gpu::release(colors_);
-      colors_ = nullptr;
-      colors_ = gpu::allocate(bytes, "the frame");
-      colorBytes_ = bytes;
-    }
-    if (!counts_) counts_ = gpu::allocate(sizeof(gpu::PassCounts), "the pass's counters");
+    reserve(frame_, bytes, "the frame");
+    reserve(counts_, sizeof(gpu::PassCounts), "the pass's counters");
     if (frame.depthLimit) {
-      const uint64_t depthBytes = pixels * sizeof(float);
+      // Copied every pass: the caller may change the limit in place.
       Buffer& b = buffers_["depth limit"];
-      if (b.bytes != depthBytes) {
-        gpu::release(b.device);
-        b.device = nullptr;
-        b.device = gpu::allocate(depthBytes, "the depth limit");
-        b.bytes = depthBytes;
-      }
-      gpu::copyToDevice(b.device, frame.depthLimit, depthBytes);
+      reserve(b, pixels * sizeof(float), "the depth limit");
+      gpu::copyToDevice(b.device, frame.depthLimit, b.bytes);
       v.depthLimit = static_cast<const float*>(b.device);
     }
     if (bytes > pinnedBytes_) {
@@ -273,7 +266,7 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
       pinned_ = static_cast<vec4f*>(gpu::allocateHost(bytes));
       pinnedBytes_ = bytes;
     }
-    gpu::tracePass(v, tilesX, tileBegin, tileEnd, tileStride, colors_, counts_, pinned_, counts);
+    gpu::tracePass(v, tilesX, tileBegin, tileEnd, tileStride, frame_.device, counts_.device, pinned_, counts);
     return pinned_;
   }
   std::vector<vec4f>& colors = hostColors_;
@@ -302,8 +295,8 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
 DeviceMemory DeviceRenderer::memory() const {
   DeviceMemory m;
   for (const auto& [key, b] : buffers_)
-    m.structures.emplace_back(key, b.bytes);
-  if (colorBytes_) m.structures.emplace_back("frame", colorBytes_);
+    m.structures.emplace_back(key, b.capacity);
+  if (frame_.capacity) m.structures.emplace_back("frame", frame_.capacity);
   return m;
 }
 
@@ -319,14 +312,24 @@ std::string deviceInfoJson(const Model& model) {
   }
   if (!s.problem.empty()) j["problem"] = s.problem;
   j["auto"] = s.problem.empty() ? "cuda" : "cpu";
-  const uint64_t values = model.fieldValues.empty() ? 0 : model.fieldValues[0].size() * sizeof(float);
-  j["memory_needed_bytes"] = {{"bricks", model.bricks.size() * sizeof(Brick)},
-                              {"regions", model.regions.regions.size() * sizeof(Region)},
-                              {"region brick lists", model.regions.brickIds.size() * sizeof(uint32_t)},
-                              {"region k-d tree", model.regions.nodes.size() * sizeof(RegionKdNode)},
-                              {"field values", values},
-                              {"field with smooth-shading gradients", 4 * values}};
+  const DeviceFootprint f = deviceFootprint(model);
+  nlohmann::json need = nlohmann::json::object();
+  for (const auto& [name, bytes] : f.model.structures)
+    need[name] = bytes;
+  need["field values"] = f.fieldBytes;
+  need["field with smooth-shading gradients"] = 4 * f.fieldBytes;
+  j["memory_needed_bytes"] = need;
   return j.dump();
+}
+
+DeviceFootprint deviceFootprint(const Model& model) {
+  DeviceFootprint f;
+  f.model.structures = {{"bricks", model.bricks.size() * sizeof(Brick)},
+                        {"regions", model.regions.regions.size() * sizeof(Region)},
+                        {"region brick lists", model.regions.brickIds.size() * sizeof(uint32_t)},
+                        {"region k-d tree", model.regions.nodes.size() * sizeof(RegionKdNode)}};
+  f.fieldBytes = model.fieldValues.empty() ? 0 : model.fieldValues[0].size() * sizeof(float);
+  return f;
 }
 
 } // namespace exa

@@ -52,10 +52,13 @@ private:
 
   struct Buffer {
     void* device = nullptr;
-    uint64_t bytes = 0;
+    uint64_t capacity = 0; ///< bytes allocated
+    uint64_t bytes = 0;    ///< bytes in use
     const void* host = nullptr;
     std::vector<uint8_t> content; ///< byContent: what was copied
   };
+  /// Makes `b` hold `bytes` on the device: allocated anew only when it needs more than it has.
+  static void reserve(Buffer& b, uint64_t bytes, const std::string& what);
   Device device_;
   const Model& model_;
   const DatasetInfo& dataset_;
@@ -66,10 +69,8 @@ private:
   std::vector<vec3f> meshColors_;
   std::vector<std::pair<const TriangleMesh*, vec3f>> meshKey_; ///< withGradients' arrays where passes run on the host
   TraceView base_;                                             ///< what the scene sets; pass() adds the frame
-  void* colors_ = nullptr;
-  uint64_t colorBytes_ = 0;
-  void* counts_ = nullptr;
-  vec4f* pinned_ = nullptr; ///< the GPU's colours on the host (page-locked)
+  Buffer frame_, counts_;                                      ///< a pass's colours and counters on the device
+  vec4f* pinned_ = nullptr;                                    ///< the GPU's colours on the host (page-locked)
   uint64_t pinnedBytes_ = 0;
   std::vector<vec4f> hostColors_; ///< the portable back end's colours
 };

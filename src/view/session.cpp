@@ -165,28 +165,10 @@ void Session::loop() {
   }
 }
 
-void Session::setScene(const Scene& scene) {
-  if (renderer_->device() != Device::Cpu && options_.device == "auto") {
-    try {
-      renderer_->setScene(scene);
-      return;
-    } catch (const Error& e) {
-      // Something the GPU does not draw: this dataset renders on the CPU from now on.
-      logInfo(strCat("rendering on the CPU: ", e.what()));
-      renderer_->setDevice(Device::Cpu);
-    }
-  }
-  renderer_->setScene(scene);
-  if (!deviceChosen_) {
-    deviceChosen_ = true;
-    selectDevice(*renderer_, options_.device);
-  }
-}
-
 void Session::serve(const Request& request) {
   const Frame& frame = request.doc.frame;
   const Scene& scene = request.doc.scene;
-  setScene(scene);
+  setSceneOnDevice(*renderer_, scene, options_.device, deviceChosen_);
   PassControl control;
   control.cancel = &cancel_;
 

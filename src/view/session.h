@@ -75,9 +75,7 @@ private:
   DatasetInfo dataset_;
   LegendText legends_;
   std::unique_ptr<Renderer> renderer_;
-  bool deviceChosen_ = false; ///< the renderer has been moved to options_.device (once per model)
-  /// Makes `scene` current, on the device the options name where it can draw it.
-  void setScene(const Scene& scene);
+  bool deviceChosen_ = false;                 ///< the renderer has been moved to options_.device (once per model)
   std::shared_ptr<const Model> pendingModel_; ///< the dataset of the next request (setModel)
   DatasetInfo pendingDataset_;
   LegendText pendingLegends_;

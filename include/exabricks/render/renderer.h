@@ -90,6 +90,12 @@ class Renderer;
 /// they cannot be used.
 Device selectDevice(Renderer& renderer, const std::string& choice);
 
+/// Makes `scene` current for a renderer that follows the device `choice` over many scenes (a
+/// viewer, a Python scene): the first call moves it there (selectDevice; `chosen` records that it
+/// did); under "auto" a scene the device cannot draw moves it to the CPU for good, saying why on
+/// the log. Other choices throw as setScene does.
+SceneUpdate setSceneOnDevice(Renderer& renderer, const Scene& scene, const std::string& choice, bool& chosen);
+
 /// What the machine offers for Device::Cuda.
 struct CudaStatus {
   bool built = false; ///< this build has the CUDA back end
@@ -113,6 +119,14 @@ struct DeviceMemory {
     return t;
   }
 };
+
+/// What a GPU renderer holds for a model: its structures, and one field's values (smooth shading
+/// holds four times as many: the values with their gradients).
+struct DeviceFootprint {
+  DeviceMemory model; ///< bricks, regions, region brick lists, region k-d tree
+  uint64_t fieldBytes = 0;
+};
+DeviceFootprint deviceFootprint(const Model& model);
 
 /// How the renderer computes, not what it shows: switches that benchmarks and tests use to
 /// compare variants of the volume march. Images are the same whatever they are set to, to float
