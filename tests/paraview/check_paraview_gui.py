@@ -55,8 +55,9 @@ def passes():
 def verdict():
     say("passes after each render: %s" % history)
     # The view may change while the GUI settles (the first render resets the camera): the
-    # passes start over there. From the last start they rise to SPP, and no render follows.
-    restart = max([i + 1 for i in range(len(history) - 1) if history[i + 1] < history[i]] + [0])
+    # passes start over there, and a render that starts over may end with as many passes as the
+    # one before it. From the last start they rise to SPP, and no render follows.
+    restart = max([i + 1 for i in range(len(history) - 1) if history[i] < SPP and history[i + 1] <= history[i]] + [0])
     tail = history[restart:]
     ok = (len(tail) > 2 and tail[0] < SPP and all(b > a for a, b in zip(tail, tail[1:])) and tail[-1] == SPP)
     say("%d renders, %d of them asked for by the representation, %.1f s"
