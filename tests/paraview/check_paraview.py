@@ -8,11 +8,15 @@
    rounding): a still render refines to the default 8 samples per pixel;
 2. an opaque plane in front of the data covers it with its own colour, and one behind shows
    only through the volume: red and blue stay the volume's, green grows by at most the
-   plane's.
+   plane's;
+3. the three-level PeleLM plotfile's mag_vort (every level covers the domain; a 0.016 world) equals
+   `exabricks render` within the same bound.
 
 Prints "skipped: ..." (and exits 0) where the shared sample is absent."""
+import json
 import math
 import os
+import subprocess
 import sys
 
 import numpy as np
@@ -89,6 +93,35 @@ if rb > 1.0 / 255 + 1e-9:
     failures.append("behind the data the volume's red and blue changed by %.4f" % rb)
 if gain.max() > 0.9 or gain.min() < -1.0 / 255:
     failures.append("the plane behind the data is not attenuated by it (gain %.3f..%.3f)" % (gain.min(), gain.max()))
+
+# 3. Three levels that each cover the whole domain (ParaView blanks the covered cells), a small
+# world (0.016 on a side) and a field other than phi: the same bound.
+pelelm = os.path.join(os.path.dirname(os.path.dirname(plotfile)),
+                      "pelelm_3lev_3d", "example_plt_3d")
+if os.path.isdir(pelelm):
+    Hide(reader, view)
+    info = json.loads(subprocess.run([cli, "info", "--json", pelelm], check=True, capture_output=True).stdout)
+    lower, upper = (np.asarray(info["bounds"]["world"][k]) for k in ("lower", "upper"))
+    vorticity = [f["range"] for f in info["fields"] if f["name"] == "mag_vort"][0]
+    value_range = (vorticity["min"], vorticity["max"])
+    centre = (lower + upper) / 2
+    camera = (tuple(centre + np.linalg.norm(upper - lower) * np.array([1.2, -0.8, 0.9])), tuple(centre))
+    alpha = (0.0, 0.08)  # per finest cell: the flame shows through the hot gas
+    _, pelelm_view, _ = setup_view(pelelm, finest_cell(cli, pelelm), "mag_vort", value_range, alpha, camera)
+    pelelm_image = screenshot(pelelm_view, work, "paraview-pelelm.png")
+    pelelm_reference = exabricks_render(cli, pelelm, work, "exabricks-pelelm.pfm", "--spp", "8", field="mag_vort",
+                                        value_range=value_range, alpha=alpha, camera=camera)
+    difference = np.abs(pelelm_image - pelelm_reference)
+    shown = (pelelm_reference.max(axis=-1) > 0.02).mean()
+    print("three-level PeleLM plotfile, mag_vort: max %.4f, mean %.5f, %.0f%% showing data"
+          % (difference.max(), difference.mean(), 100 * shown))
+    if not 0.1 < shown < 0.9:
+        failures.append("the PeleLM reference shows data in %.0f%% of the pixels" % (100 * shown))
+    if difference.max() > 1.5 / 255:
+        failures.append("ParaView's picture of the PeleLM plotfile differs from exabricks render by %.4f"
+                        " (bound 1.5/255)" % difference.max())
+else:
+    print("the three-level PeleLM sample is absent (%s): that part is not checked" % pelelm)
 
 if failures:
     print("FAILED:\n  " + "\n  ".join(failures))

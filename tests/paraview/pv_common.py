@@ -70,34 +70,38 @@ def map_color(value):
     return [a + t * (b - a) for a, b in zip(*COLORS)]
 
 
-def write_tf(work):
+def write_tf(work, value_range=RANGE, alpha=ALPHA):
     tf = {"colormap": {"points": [[0.0, *srgb(COLORS[0])], [1.0, *srgb(COLORS[1])]]},
-          "opacity": [[0.0, ALPHA[0]], [1.0, ALPHA[1]]], "range": list(RANGE), "log": False, "opacity_scale": 1.0}
+          "opacity": [[0.0, alpha[0]], [1.0, alpha[1]]], "range": list(value_range), "log": False,
+          "opacity_scale": 1.0}
     path = os.path.join(work, "tf.json")
     with open(path, "w") as f:
         json.dump(tf, f)
     return path
 
 
-def exabricks_render(cli, plotfile, work, name, *options):
-    """`exabricks render` of phi with the shared camera and transfer function (unlit unless the
+def exabricks_render(cli, plotfile, work, name, *options, field="phi", value_range=RANGE, alpha=ALPHA,
+                     camera=(POSITION, FOCUS)):
+    """`exabricks render` of a field (phi unless told) with the shared camera and transfer function
+    (or the given camera position and focus, value range and opacity ramp; unlit unless the
     options say otherwise), read back as linear RGB clipped to [0, 1]."""
     path = os.path.join(work, name)
-    subprocess.run([cli, "render", plotfile, "--field", "phi", "--tf", write_tf(work),
-                    "--size", "%dx%d" % (WIDTH, HEIGHT), "--position", ",".join(map(str, POSITION)),
-                    "--look-at", ",".join(map(str, FOCUS)), "--up", ",".join(map(str, UP)), "--fov", str(ANGLE),
+    subprocess.run([cli, "render", plotfile, "--field", field, "--tf", write_tf(work, value_range, alpha),
+                    "--size", "%dx%d" % (WIDTH, HEIGHT), "--position", ",".join(map(str, camera[0])),
+                    "--look-at", ",".join(map(str, camera[1])), "--up", ",".join(map(str, UP)), "--fov", str(ANGLE),
                     *([] if "--shading" in options else ["--shading", "none"]), *options, "-o", path],
                    check=True, capture_output=True)
     return np.clip(read_pfm(path), 0.0, 1.0)
 
 
-def setup_view(plotfile, cell):
-    """plt_small through ParaView's AMReX reader at every level, shown as ExaBricks with the
-    shared colour map, opacity ramp and camera. Returns (reader, view, display)."""
+def setup_view(plotfile, cell, field="phi", value_range=RANGE, alpha=ALPHA, camera=(POSITION, FOCUS)):
+    """A plotfile (plt_small) through ParaView's AMReX reader at every level, its field (phi)
+    shown as ExaBricks with the shared colour map and opacity ramp (or the given one) over the
+    value range, and the shared camera (or the given position and focus). Returns (reader, view, display)."""
     from paraview.simple import (AMReXBoxLibGridReader, ColorBy, CreateView, GetColorTransferFunction,
                                  GetOpacityTransferFunction, Show)
     reader = AMReXBoxLibGridReader(FileNames=[plotfile])
-    reader.CellArrayStatus = ["phi"]
+    reader.CellArrayStatus = [field]
     reader.Level = 10  # every level (the reader's default reads levels 0 and 1 only)
     view = CreateView("RenderView")
     view.ViewSize = [WIDTH, HEIGHT]
@@ -106,16 +110,16 @@ def setup_view(plotfile, cell):
     view.Background = [0.0, 0.0, 0.0]
     display = Show(reader, view)
     display.Representation = "ExaBricks"
-    ColorBy(display, ("CELLS", "phi"))
-    lut = GetColorTransferFunction("phi")
+    ColorBy(display, ("CELLS", field))
+    lut = GetColorTransferFunction(field)
     lut.ColorSpace = "RGB"
     lut.Discretize = 0
-    lut.RGBPoints = [RANGE[0], *COLORS[0], RANGE[1], *COLORS[1]]
+    lut.RGBPoints = [value_range[0], *COLORS[0], value_range[1], *COLORS[1]]
     lut.AutomaticRescaleRangeMode = "Never"
-    pwf = GetOpacityTransferFunction("phi")
-    pwf.Points = [RANGE[0], ALPHA[0], 0.5, 0.0, RANGE[1], ALPHA[1], 0.5, 0.0]
+    pwf = GetOpacityTransferFunction(field)
+    pwf.Points = [value_range[0], alpha[0], 0.5, 0.0, value_range[1], alpha[1], 0.5, 0.0]
     display.ScalarOpacityUnitDistance = cell
-    view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = POSITION, FOCUS, UP
+    view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = camera[0], camera[1], UP
     view.CameraViewAngle = ANGLE
     return reader, view, display
 
