@@ -521,6 +521,11 @@ def _yt_view_direction(camera):
     return d / np.linalg.norm(d)
 
 
+# The settings of a scene converted from yt unless told otherwise: yt does not light volumes, and
+# its pictures show no sampling noise.
+_YT_DEFAULTS = {"shading": "none", "spp": 8}
+
+
 def _yt_view(camera, source, dataset):
     """What a yt camera and volume source give a Scene of `dataset`: the transfer function
     (TransferFunction.from_yt, converted for the camera) and the settings camera, width, height
@@ -736,8 +741,10 @@ class Scene:
         """The scene of a yt Scene: the field of its volume source (the first unless `source` is
         given) as a dataset (from_yt, unless `dataset` is given), its transfer function with the
         opacity converted for its camera (TransferFunction.from_yt), its camera and resolution,
-        and no shading (yt's volume rendering does not light). `settings` are set on the result.
-        Its render's image array agrees in exposure with the one yt's render returns."""
+        no shading (yt's volume rendering does not light) and 8 samples per pixel (yt's pictures
+        show no sampling noise; 8 jittered passes hide it at yt's resolutions). The settings of an
+        exabricks.yt.ExaBricksSource apply over these, and `settings` over all. Its render's image
+        array agrees in exposure with the one yt's render returns."""
         if source is None:
             volumes = [s for s in scene.sources.values() if hasattr(s, "transfer_function") and hasattr(s, "field")]
             if not volumes:
@@ -747,7 +754,8 @@ class Scene:
         if dataset is None:
             dataset = from_yt(source.data_source.ds, [field])
         tf, defaults = _yt_view(scene.camera, source, dataset)
-        defaults["shading"] = "none"
+        defaults.update(_YT_DEFAULTS)
+        defaults.update(getattr(source, "exabricks_settings", {}))
         defaults.update(settings)
         return cls(dataset, field=_yt_field_name(field), transfer_function=tf, **defaults)
 

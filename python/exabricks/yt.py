@@ -23,7 +23,7 @@ from yt.visualization.volume_rendering.render_source import VolumeSource
 from yt.visualization.volume_rendering.transfer_functions import ProjectionTransferFunction
 from yt.visualization.volume_rendering.zbuffer_array import ZBuffer
 
-from . import Scene, _yt_code, _yt_field_name, _yt_view, _yt_view_direction, from_yt
+from . import _YT_DEFAULTS, Scene, _yt_code, _yt_field_name, _yt_view, _yt_view_direction, from_yt
 
 __all__ = ["ExaBricksSource"]
 
@@ -66,8 +66,9 @@ class ExaBricksSource(VolumeSource):
     camera and transfer function as Scene.from_yt does (TransferFunction.from_yt, Camera.from_yt)
     and renders at the camera's resolution. The exabricks dataset of a field is built once, on
     the first render, and kept: later renders with another camera or transfer function only
-    render again. `settings` (spp, rate, shading, ...) are those of exabricks.Scene; the scene
-    itself is `exabricks_scene` after the first render.
+    render again. `settings` (spp, rate, shading, ...) are those of exabricks.Scene, over the
+    defaults of a scene converted from yt (Scene.from_yt): 8 samples per pixel and no shading.
+    The scene itself is `exabricks_scene` after the first render.
 
     The image is yt's: (width, height, 4) float64, i along the camera's east vector, linear RGB
     premultiplied by alpha (alpha 1 unless the transfer function has grey_opacity, as yt's
@@ -116,7 +117,7 @@ class ExaBricksSource(VolumeSource):
         view["clip_planes"] = list(self.exabricks_settings.get("clip_planes", [])) + view["clip_planes"]
         name = _yt_field_name(self.field)
         if self._scene is None or self._scene.dataset is not dataset:
-            settings = {"shading": "none"}
+            settings = dict(_YT_DEFAULTS)
             settings.update(self.exabricks_settings)
             settings.update(view)
             self._scene = Scene(dataset, field=name, transfer_function=tf, **settings)
