@@ -98,8 +98,7 @@ def setup_view(plotfile, cell, field="phi", value_range=RANGE, alpha=ALPHA, came
     """A plotfile (plt_small) through ParaView's AMReX reader at every level, its field (phi)
     shown as ExaBricks with the shared colour map and opacity ramp (or the given one) over the
     value range, and the shared camera (or the given position and focus). Returns (reader, view, display)."""
-    from paraview.simple import (AMReXBoxLibGridReader, ColorBy, CreateView, GetColorTransferFunction,
-                                 GetOpacityTransferFunction, Show)
+    from paraview.simple import AMReXBoxLibGridReader, CreateView, Show
     reader = AMReXBoxLibGridReader(FileNames=[plotfile])
     reader.CellArrayStatus = [field]
     reader.Level = 10  # every level (the reader's default reads levels 0 and 1 only)
@@ -109,6 +108,16 @@ def setup_view(plotfile, cell, field="phi", value_range=RANGE, alpha=ALPHA, came
     view.UseColorPaletteForBackground = 0
     view.Background = [0.0, 0.0, 0.0]
     display = Show(reader, view)
+    show_exabricks(display, field, value_range, alpha, cell)
+    view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = camera[0], camera[1], UP
+    view.CameraViewAngle = ANGLE
+    return reader, view, display
+
+
+def show_exabricks(display, field, value_range, alpha, cell):
+    """Shows a display as ExaBricks coloured by a cell field with the shared colour map and the
+    opacity ramp over the value range, unit distance `cell`."""
+    from paraview.simple import ColorBy, GetColorTransferFunction, GetOpacityTransferFunction
     display.Representation = "ExaBricks"
     ColorBy(display, ("CELLS", field))
     lut = GetColorTransferFunction(field)
@@ -119,9 +128,6 @@ def setup_view(plotfile, cell, field="phi", value_range=RANGE, alpha=ALPHA, came
     pwf = GetOpacityTransferFunction(field)
     pwf.Points = [value_range[0], alpha[0], 0.5, 0.0, value_range[1], alpha[1], 0.5, 0.0]
     display.ScalarOpacityUnitDistance = cell
-    view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = camera[0], camera[1], UP
-    view.CameraViewAngle = ANGLE
-    return reader, view, display
 
 
 def screenshot(view, work, name):
