@@ -10,7 +10,7 @@ from conftest import shared
 yt = pytest.importorskip("yt", reason="yt is not installed (Debian: python3-yt)")
 yt.set_log_level(50)
 
-from yt.visualization.volume_rendering.api import BoxSource, LineSource, Scene  # noqa: E402
+from yt.visualization.volume_rendering.api import BoxSource, GridSource, LineSource, Scene  # noqa: E402
 
 from exabricks.yt import ExaBricksSource  # noqa: E402
 
@@ -267,3 +267,39 @@ def test_an_amrex_plotfile_with_its_domain_outline(tmp_path):
     assert np.all(got[on][:, :3] >= alone[on][:, :3] - 1e-6) and got[on][:, :3].mean() > 0.9
     np.testing.assert_array_equal(got[~on], alone[~on])
     sc.save(str(tmp_path / "plt_small.png"))
+
+
+def test_yt_grid_annotations_composite_with_the_volume():
+    # plt_small's grid boxes (yt's GridSource: opaque lines in each level's colour) over a volume
+    # with a real alpha channel (grey opacity).
+    ds = yt.load(str(shared("amrex/advection_3d/plt_small")))
+    field = ("boxlib", "phi")
+    sc = yt.create_scene(ds, field)
+    src = ExaBricksSource(ds, field)
+    src.log_field = False
+    tf = yt.ColorTransferFunction((0.99, 2.0), grey_opacity=True)
+    tf.add_layers(4, w=0.01, colormap="viridis", alpha=[5.0, 10.0, 20.0, 40.0])
+    src.transfer_function = tf
+    sc.sources[list(sc.sources)[0]] = src
+    sc.camera.resolution = (96, 96)
+    alone = exabricks_layout(sc.render())
+    sc.annotate_grids(ds, alpha=1.0)
+    got = exabricks_layout(sc.render())
+    grids = Scene()
+    grids.camera = sc.camera
+    grids.add_source(GridSource(ds.all_data(), alpha=1.0))
+    lines = exabricks_layout(grids.render())
+    on = lines[..., 3] > 0
+    assert on.sum() > 1000
+    # Off the lines the picture is the volume's.
+    np.testing.assert_array_equal(got[~on], alone[~on])
+    # On them it is the volume in front of the line (a part of the whole ray: no more than it,
+    # and at most as opaque) over the line: between (1 - alpha) x line and volume + line.
+    line, volume, both = lines[on], alone[on], got[on]
+    assert np.all(both >= (1.0 - volume[:, 3:4]) * line - 1e-6)
+    assert np.all(both <= volume + line + 1e-6)
+    # Neither drawn over the volume nor behind all of it: the lines inside the data hide what lies
+    # beyond them, and the data in front of them dims them.
+    behind_all = volume + (1.0 - volume[:, 3:4]) * line
+    differs = lambda a, b: (np.abs(a - b).max(axis=-1) > 0.02).sum()
+    assert differs(both, behind_all) > 0.5 * on.sum() and differs(both, line) > 0.5 * on.sum()
