@@ -11,8 +11,11 @@
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/transfer_function.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <memory>
 #include <string>
@@ -178,20 +181,13 @@ inline Frame deviceTestFrame(const Model& m, int width = 96, int height = 80) {
   frame.height = height;
   frame.samplesPerPixel = 3;
   frame.seed = 11;
-  const box3i cb = m.cellBounds();
-  frame.camera =
-      Camera::frame(box3d(m.world.toWorld(vec3d(cb.lower)), m.world.toWorld(vec3d(cb.upper))), 35, 25, 40, false);
+  frame.camera = Camera::frame(m.worldBounds(), 35, 25, 40, false);
   return frame;
 }
 
 /// The domain box of the variant that has one: the lower half of the data along x.
-inline box3d worldBounds(const Model& m) {
-  const box3i cb = m.cellBounds();
-  return box3d(m.world.toWorld(vec3d(cb.lower)), m.world.toWorld(vec3d(cb.upper)));
-}
-
 inline box3d deviceTestDomain(const Model& m) {
-  box3d b = worldBounds(m);
+  box3d b = m.worldBounds();
   b.upper.x = 0.5 * (b.lower.x + b.upper.x);
   return b;
 }
@@ -202,7 +198,7 @@ inline ImageDifference compareWithCpu(const Model& m, const DatasetInfo& info, D
   Scene scene;
   scene.layers[0].tf.valueRange = info.valueRanges[0];
   Frame frame = deviceTestFrame(m);
-  v.set(scene, frame, info, worldBounds(m));
+  v.set(scene, frame, info, m.worldBounds());
   std::vector<float> depth;
   if (v.depthLimit) {
     // A z-buffer that slants through the data: from 0.8 to 1.2 times the distance to its centre.
@@ -219,6 +215,21 @@ inline ImageDifference compareWithCpu(const Model& m, const DatasetInfo& info, D
   dev.setScene(scene);
   dev.setDevice(device);
   return difference(dev.render(frame, deviceStats), cpu.render(frame));
+}
+
+/// Every variant on `device` against the CPU: within the bound, something drawn, and work the
+/// device reports (`work` of its stats) above zero.
+inline void expectEveryVariantLikeTheCpu(Device device, uint64_t (*work)(const RenderStats&)) {
+  const Model m = deviceTestModel();
+  const DatasetInfo info = DatasetInfo::of(m);
+  for (const Variant& v : variants()) {
+    RenderStats stats;
+    const ImageDifference d = compareWithCpu(m, info, device, v, &stats);
+    std::printf("%-72s %s\n", v.name.c_str(), describe(d).c_str());
+    EXPECT_TRUE(withinBound(d)) << v.name << ": " << describe(d);
+    EXPECT_GT(d.coverage, 0.01) << v.name << ": nothing drawn";
+    EXPECT_GT(work(stats), 0u) << v.name;
+  }
 }
 
 } // namespace exa::device_test

@@ -325,9 +325,7 @@ Frame referenceFrame(const Model& m) {
   frame.width = 120;
   frame.height = 96;
   frame.samplesPerPixel = 2;
-  const box3i cb = m.cellBounds();
-  frame.camera =
-      Camera::frame(box3d(m.world.toWorld(vec3d(cb.lower)), m.world.toWorld(vec3d(cb.upper))), 30, 20, 40, false);
+  frame.camera = Camera::frame(m.worldBounds(), 30, 20, 40, false);
   return frame;
 }
 

@@ -16,16 +16,7 @@ namespace {
 using namespace device_test;
 
 TEST(Device, ThePortablePathDrawsEveryFeatureLikeTheCpu) {
-  const Model m = deviceTestModel();
-  const DatasetInfo info = DatasetInfo::of(m);
-  for (const Variant& v : variants()) {
-    RenderStats stats;
-    const ImageDifference d = compareWithCpu(m, info, Device::Portable, v, &stats);
-    std::printf("%-72s %s\n", v.name.c_str(), describe(d).c_str());
-    EXPECT_TRUE(withinBound(d)) << v.name << ": " << describe(d);
-    EXPECT_GT(d.coverage, 0.01) << v.name << ": nothing drawn";
-    EXPECT_GT(stats.rays, 0u) << v.name;
-  }
+  expectEveryVariantLikeTheCpu(Device::Portable, [](const RenderStats& s) { return s.rays; });
 }
 
 TEST(Device, PassesAndTilesAddUpAsOnTheCpu) {

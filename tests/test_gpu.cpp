@@ -23,16 +23,7 @@ using namespace device_test;
 
 TEST(Gpu, EveryFeatureEqualsTheCpu) {
   REQUIRE_GPU();
-  const Model m = deviceTestModel();
-  const DatasetInfo info = DatasetInfo::of(m);
-  for (const Variant& v : variants()) {
-    RenderStats stats;
-    const ImageDifference d = compareWithCpu(m, info, Device::Cuda, v, &stats);
-    std::printf("%-72s %s\n", v.name.c_str(), describe(d).c_str());
-    EXPECT_TRUE(withinBound(d)) << v.name << ": " << describe(d);
-    EXPECT_GT(d.coverage, 0.01) << v.name << ": nothing drawn";
-    EXPECT_GT(stats.samples + stats.isoSamples, 0u) << v.name;
-  }
+  expectEveryVariantLikeTheCpu(Device::Cuda, [](const RenderStats& s) { return s.samples + s.isoSamples; });
 }
 
 TEST(Gpu, PassesEqualTheCpuPasses) {

@@ -376,8 +376,7 @@ Image renderInParts(const CellSet& cells, const KdPartition& p, const Scene& sce
   for (int k = 0; k < p.parts(); ++k) {
     renderers.push_back(std::make_unique<Renderer>(models[size_t(k)], dataset));
     const box3l& b = p.box(k);
-    renderers.back()->setDomain(
-        box3d(models[size_t(k)].world.toWorld(vec3d(b.lower)), models[size_t(k)].world.toWorld(vec3d(b.upper))));
+    renderers.back()->setDomain(models[size_t(k)].world.toWorld(b));
     renderers.back()->setScene(scene);
   }
   const Camera& cam = frame.camera;
@@ -445,8 +444,7 @@ void checkPartsComposited(const CellSet& cells, const BuildOptions& build, doubl
   frame.width = 96;
   frame.height = 80;
   frame.samplesPerPixel = 2;
-  const box3i cb = whole.cellBounds();
-  const box3d wb(whole.world.toWorld(vec3d(cb.lower)), whole.world.toWorld(vec3d(cb.upper)));
+  const box3d wb = whole.worldBounds();
   frame.camera = Camera::frame(wb, 35, 25, 40, false);
   Renderer serial(whole, dataset);
   for (int variant = 0; variant < 3; ++variant) {

@@ -708,8 +708,7 @@ void run(const BenchOptions& o) {
   s.peakAfterLoad = peakRssBytes();
   s.field = s.model.requireField(o.in.field);
   s.base.layers = {VolumeLayer{s.model.fieldNames[size_t(s.field)], defaultTransferFunction()}};
-  const box3i cb = s.model.cellBounds();
-  s.worldBox = box3d(s.model.world.toWorld(vec3d(cb.lower)), s.model.world.toWorld(vec3d(cb.upper)));
+  s.worldBox = s.model.worldBounds();
   if (o.progressive > 0)
     runProgressive(s, o); // on the one device --device names, if any
   else if (!o.devices.empty())

@@ -174,8 +174,7 @@ void planFirstPicture(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& 
   } else if (p.rangeMode == RangeMode::PerStep && !cmd.count("--range")) {
     scene.layers[0].tf.valueRange = range1f();
   }
-  const box3i cb = model0.cellBounds();
-  const box3d domain(model0.world.toWorld(vec3d(cb.lower)), model0.world.toWorld(vec3d(cb.upper)));
+  const box3d domain = model0.worldBounds();
   Renderer framing(model0, first.info);
   framing.setScene(scene);
   const box3d target = ro.frameAll || framing.visibleBounds().empty() ? domain : framing.visibleBounds();

@@ -357,7 +357,7 @@ Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const Scen
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
   if (!(o.fov > 0 && o.fov < 180)) failUsage("--fov must be in (0, 180) degrees");
   const box3i cb = whole ? whole->cellBounds : model.cellBounds();
-  const box3d all(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper)));
+  const box3d all = model.world.toWorld(cb);
   const box3d target = o.frameAll || visible.empty() ? all : visible;
   const bool reframe = given("--azimuth") || given("--elevation") || given("--fov") || given("--ortho");
   Camera camera =

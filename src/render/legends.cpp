@@ -58,8 +58,7 @@ void drawLegends(const Scene& scene, const Frame& frame, const Model& model, con
   }
   if (want.annotation) {
     const box3i cb = text.cellBounds.empty() ? model.cellBounds() : text.cellBounds;
-    drawBoxOutline(image, frame.camera,
-                   box3d(model.world.toWorld(vec3d(cb.lower)), model.world.toWorld(vec3d(cb.upper))), ink * 0.6f);
+    drawBoxOutline(image, frame.camera, model.world.toWorld(cb), ink * 0.6f);
     drawLines(image, annotationLines(model, name, text), ink);
   }
 }

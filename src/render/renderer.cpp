@@ -270,7 +270,7 @@ box3d Renderer::visibleBounds() const {
   for (size_t i = 0; i < isoVisible.size(); ++i)
     if (isoVisible[i]) lattice.extend(im.model.regions.regions[i].bounds());
   if (lattice.empty()) return box3d();
-  return box3d(im.model.world.toWorld(vec3d(lattice.lower)), im.model.world.toWorld(vec3d(lattice.upper)));
+  return im.model.world.toWorld(lattice);
 }
 
 size_t Renderer::isoRegions() const {

@@ -167,9 +167,8 @@ struct Server::Impl {
                         {"range", rangeJson(step.dataset.valueRanges.at(i))}});
     j["fields"] = fields;
     j["default_field"] = model.fieldNames.at(size_t(model.requireField("")));
-    const box3i cb = model.cellBounds();
-    const vec3d lo = model.world.toWorld(vec3d(cb.lower)), hi = model.world.toWorld(vec3d(cb.upper));
-    j["bounds"] = {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z};
+    const box3d wb = model.worldBounds();
+    j["bounds"] = {wb.lower.x, wb.lower.y, wb.lower.z, wb.upper.x, wb.upper.y, wb.upper.z};
     const ModelSummary summary = summarize(model);
     j["cells"] = summary.cells;
     j["regions"] = summary.regions;

@@ -97,7 +97,8 @@ def exabricks_render(cli, plotfile, work, name, *options, field="phi", value_ran
 def setup_view(plotfile, cell, field="phi", value_range=RANGE, alpha=ALPHA, camera=(POSITION, FOCUS)):
     """A plotfile (plt_small) through ParaView's AMReX reader at every level, its field (phi)
     shown as ExaBricks with the shared colour map and opacity ramp (or the given one) over the
-    value range, and the shared camera (or the given position and focus). Returns (reader, view, display)."""
+    value range, and the shared camera (or the given position and focus). Returns (reader, view,
+    display)."""
     from paraview.simple import AMReXBoxLibGridReader, CreateView, Show
     reader = AMReXBoxLibGridReader(FileNames=[plotfile])
     reader.CellArrayStatus = [field]

@@ -11,9 +11,7 @@
 
 namespace exa::mpi {
 
-box3d DataPart::worldBox() const {
-  return box3d(model.world.toWorld(vec3d(box.lower)), model.world.toWorld(vec3d(box.upper)));
-}
+box3d DataPart::worldBox() const { return model.world.toWorld(box); }
 
 uint64_t DataPart::ownedCells() const {
   uint64_t n = 0;

@@ -73,6 +73,8 @@ struct Model {
   FieldView view(int field) const;
   /// Lattice box covered by cells (upper exclusive).
   box3i cellBounds() const;
+  /// The box covered by cells in world coordinates.
+  box3d worldBounds() const { return world.toWorld(cellBounds()); }
   /// Reconstructs field `field` at a world position: value and gradient per world unit; false
   /// where no cell has weight (or the position is not finite).
   bool sampleWorld(int field, const vec3d& position, double& value, vec3d& gradient) const;

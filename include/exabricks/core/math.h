@@ -136,6 +136,10 @@ struct WorldTransform {
   vec3d scale{1.0};
   EXA_HOST_DEVICE vec3d toWorld(const vec3d& lattice) const { return origin + scale * lattice; }
   EXA_HOST_DEVICE vec3d toLattice(const vec3d& world) const { return (world - origin) / scale; }
+  /// A lattice box in world coordinates.
+  template <typename T> EXA_HOST_DEVICE box3d toWorld(const box3<T>& lattice) const {
+    return box3d(toWorld(vec3d(lattice.lower)), toWorld(vec3d(lattice.upper)));
+  }
   bool isIdentity() const { return origin == vec3d(0.0) && scale == vec3d(1.0); }
   friend bool operator==(const WorldTransform& a, const WorldTransform& b) = default;
 };
