@@ -26,6 +26,7 @@ CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<st
       finest[a] = std::min(finest[a], d);
       lowest[a] = std::min(lowest[a], p.lower[a]);
     }
+    if (p.elsewhere) continue;
     if (p.values.size() != fieldNames.size())
       fail(source, ": grid ", g, " holds ", p.values.size(), " fields, expected ", fieldNames.size());
     for (size_t f = 0; f < p.values.size(); ++f)
@@ -66,7 +67,10 @@ CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<st
   CellSet set;
   for (const std::string& name : fieldNames)
     set.fields.push_back({name, {}});
+  bool anyElsewhere = false;
   for (size_t g = 0; g < grids.size(); ++g) {
+    anyElsewhere = anyElsewhere || grids[g].elsewhere;
+    if (grids[g].elsewhere) continue;
     std::vector<std::vector<float>> values(fieldNames.size());
     for (size_t f = 0; f < fieldNames.size(); ++f) {
       values[f].reserve(grids[g].values[f].size());
@@ -79,6 +83,7 @@ CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<st
   }
   set.world.origin = origin;
   set.world.scale = finest;
+  if (anyElsewhere && set.cells.empty()) return set; // the cells are all held elsewhere
   validateCells(set, source);
   return set;
 }

@@ -15,6 +15,7 @@ POSITION, FOCUS, UP, ANGLE = (1.9, -1.1, 1.4), (0.5, 0.5, 0.5), (0.0, 0.0, 1.0),
 RANGE = (1.0, 2.0)
 COLORS = ((0.1, 0.2, 0.9), (1.0, 0.8, 0.1))  # the colour map's two ends, as VTK blends them
 ALPHA = (0.0, 0.8)  # opacity per finest cell width at the ends
+TERMINATION_OPACITY = 1.0 - 0.5 / 255.0  # where the representation ends rays (8-bit images)
 
 
 def plotfile_or_skip(data_dir):
@@ -86,7 +87,11 @@ def exabricks_render(cli, plotfile, work, name, *options, field="phi", value_ran
     (or the given camera position and focus, value range and opacity ramp; unlit unless the
     options say otherwise), read back as linear RGB clipped to [0, 1]."""
     path = os.path.join(work, name)
-    subprocess.run([cli, "render", plotfile, "--field", field, "--tf", write_tf(work, value_range, alpha),
+    scene = os.path.join(work, "termination.json")
+    with open(scene, "w") as f:
+        json.dump({"integration": {"termination_opacity": TERMINATION_OPACITY}}, f)
+    subprocess.run([cli, "render", plotfile, "--scene", scene, "--field", field,
+                    "--tf", write_tf(work, value_range, alpha),
                     "--size", "%dx%d" % (WIDTH, HEIGHT), "--position", ",".join(map(str, camera[0])),
                     "--look-at", ",".join(map(str, camera[1])), "--up", ",".join(map(str, UP)), "--fov", str(ANGLE),
                     *([] if "--shading" in options else ["--shading", "none"]), *options, "-o", path],

@@ -14,12 +14,16 @@ struct GridPatch {
   vec3d lower, upper;                      ///< world box of the grid
   vec3l cells;                             ///< cells per axis
   std::vector<std::vector<double>> values; ///< per field, x fastest, one per cell
+  /// Held by another process (no values): it takes part in the lattice (the finest spacing) and
+  /// covers coarser cells, but gives no cells here.
+  bool elsewhere = false;
 };
 
 /// Leaf cells of the grids. The finest cell spacing defines the lattice, whose origin is
 /// `origin` (default: the lowest grid corner); every grid's spacing must be a power-of-two
 /// multiple of it, equal on all axes in lattice units, and its corner must lie on the lattice.
-/// Errors name `source`, the grid and the problem.
+/// Errors name `source`, the grid and the problem. With grids held elsewhere, the cells of the
+/// others may be none (a process whose grids are all covered or that holds no grids).
 CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<std::string>& fieldNames,
                        const std::string& source, const vec3d* origin = nullptr);
 

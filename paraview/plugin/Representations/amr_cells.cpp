@@ -10,9 +10,11 @@
 
 namespace exa::paraview {
 
-CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name) {
+namespace {
+
+// Calls visit(level, id, grid, patch) for every block this process holds, its box in `patch`.
+template <typename Visit> void forBlocks(vtkOverlappingAMR* amr, Visit&& visit) {
   if (!amr) fail("ExaBricks: the input is not overlapping AMR data");
-  std::vector<GridPatch> grids;
   for (unsigned level = 0; level < amr->GetNumberOfLevels(); ++level)
     for (unsigned id = 0; id < amr->GetNumberOfDataSets(level); ++id) {
       vtkUniformGrid* grid = amr->GetDataSet(level, id);
@@ -31,22 +33,41 @@ CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name) {
         p.lower[a] = origin[a];
         p.upper[a] = origin[a] + spacing[a] * double(dims[a] - 1);
       }
-      vtkDataArray* values = grid->GetCellData()->GetArray(name.c_str());
-      if (!values)
-        fail("ExaBricks renders cell arrays; block ", id, " of level ", level, " has no cell array '", name, "'");
-      if (values->GetNumberOfComponents() != 1)
-        fail("ExaBricks renders one-component arrays; '", name, "' has ", values->GetNumberOfComponents());
-      const vtkIdType n = grid->GetNumberOfCells();
-      if (values->GetNumberOfTuples() != n)
-        fail("block ", id, " of level ", level, ": '", name, "' has ", values->GetNumberOfTuples(), " values for ", n,
-             " cells");
-      std::vector<double> v(static_cast<size_t>(n));
-      for (vtkIdType i = 0; i < n; ++i)
-        v[static_cast<size_t>(i)] = values->GetComponent(i, 0);
-      p.values.push_back(std::move(v));
-      grids.push_back(std::move(p));
+      visit(level, id, grid, p);
     }
-  if (grids.empty()) fail("ExaBricks: the AMR data holds no blocks here");
+}
+
+} // namespace
+
+std::vector<GridPatch> amrBlockBoxes(vtkOverlappingAMR* amr) {
+  std::vector<GridPatch> boxes;
+  forBlocks(amr, [&](unsigned, unsigned, vtkUniformGrid*, GridPatch& p) {
+    p.elsewhere = true;
+    boxes.push_back(std::move(p));
+  });
+  return boxes;
+}
+
+CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name, const std::vector<GridPatch>& elsewhere) {
+  std::vector<GridPatch> grids;
+  forBlocks(amr, [&](unsigned level, unsigned id, vtkUniformGrid* grid, GridPatch& p) {
+    vtkDataArray* values = grid->GetCellData()->GetArray(name.c_str());
+    if (!values)
+      fail("ExaBricks renders cell arrays; block ", id, " of level ", level, " has no cell array '", name, "'");
+    if (values->GetNumberOfComponents() != 1)
+      fail("ExaBricks renders one-component arrays; '", name, "' has ", values->GetNumberOfComponents());
+    const vtkIdType n = grid->GetNumberOfCells();
+    if (values->GetNumberOfTuples() != n)
+      fail("block ", id, " of level ", level, ": '", name, "' has ", values->GetNumberOfTuples(), " values for ", n,
+           " cells");
+    std::vector<double> v(static_cast<size_t>(n));
+    for (vtkIdType i = 0; i < n; ++i)
+      v[static_cast<size_t>(i)] = values->GetComponent(i, 0);
+    p.values.push_back(std::move(v));
+    grids.push_back(std::move(p));
+  });
+  if (grids.empty() && elsewhere.empty()) fail("ExaBricks: the AMR data holds no blocks here");
+  grids.insert(grids.end(), elsewhere.begin(), elsewhere.end());
   const double* o = amr->GetOrigin();
   const vec3d origin(o[0], o[1], o[2]);
   return cellsFromGrids(grids, {name}, "ParaView AMR data", &origin);

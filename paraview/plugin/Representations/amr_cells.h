@@ -3,8 +3,10 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/io/grids.h"
 
 #include <string>
+#include <vector>
 
 class vtkOverlappingAMR;
 
@@ -13,7 +15,12 @@ namespace exa::paraview {
 /// The leaf cells of the blocks of `amr` with the values of its cell array `name` (one
 /// component). Throws exa::Error naming the level, the block and the problem: an array that is
 /// missing or has several components, blocks that are not 3D, spacings that are not power-of-two
-/// multiples of the finest.
-CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name);
+/// multiples of the finest. `elsewhere`: the blocks other processes hold (boxes only), which set
+/// the lattice and cover coarser cells here; with them, this process may give no cells.
+CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name, const std::vector<GridPatch>& elsewhere = {});
+
+/// The boxes of the blocks this process holds (no values), marked as held elsewhere: what the
+/// other processes need of them.
+std::vector<GridPatch> amrBlockBoxes(vtkOverlappingAMR* amr);
 
 } // namespace exa::paraview

@@ -1,6 +1,7 @@
 #include "vtkExaBricksRepresentation.h"
 
 #include "amr_cells.h"
+#include "parallel_parts.h"
 #include "vtkExaBricksVolumeMapper.h"
 
 #include "exabricks/amr/model.h"
@@ -10,13 +11,17 @@
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
 #include "vtkMath.h"
+#include "vtkMultiProcessController.h"
 #include "vtkObjectFactory.h"
 #include "vtkOverlappingAMR.h"
 #include "vtkPVRenderView.h"
+#include "vtkPolyData.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
+
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <memory>
@@ -33,7 +38,19 @@ public:
   std::string BuiltField;
   unsigned long BuiltGeneration = 0;
   int Builds = 0;
+  // Several processes: each renders one convex part of the data (parallel_parts.h).
+  double PartBounds[6] = {0, 0, 0, 0, 0, 0}; ///< this process's part, clipped to the data
+  std::string PartsJson = "[]";              ///< what every process holds
+  vtkNew<vtkPolyData> Placeholder;           ///< the view's handle on the part's bounds
 };
+
+namespace {
+// The processes that render together (a render server's or pvbatch's), or null for one.
+vtkMultiProcessController* renderingProcesses() {
+  vtkMultiProcessController* c = vtkMultiProcessController::GetGlobalController();
+  return c && c->GetNumberOfProcesses() > 1 ? c : nullptr;
+}
+} // namespace
 
 namespace {
 const char* const kShadingNames[] = {"Smooth", "Analytic", "Central", "None"};
@@ -106,12 +123,25 @@ int vtkExaBricksRepresentation::RequestData(vtkInformation* request, vtkInformat
 int vtkExaBricksRepresentation::ProcessViewRequest(vtkInformationRequestKey* request, vtkInformation* inInfo,
                                                    vtkInformation* outInfo) {
   if (!this->Superclass::ProcessViewRequest(request, inInfo, outInfo)) return 0;
+  vtkInternals& in = *this->Internals;
   if (request == vtkPVView::REQUEST_UPDATE()) {
-    vtkPVRenderView::SetGeometryBounds(inInfo, this, this->Internals->Bounds);
     // The cells stay where they were read: render there.
     vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
+    if (renderingProcesses()) {
+      // Every process builds its convex part (a collective, so here, where every process comes
+      // at once) and tells the view the part's bounds: IceT composites the processes' images in
+      // the visibility order of these boxes, and other data is redistributed to match.
+      this->UpdateEngine();
+      vtkPVView::SetPiece(inInfo, this, in.Placeholder);
+      vtkPVRenderView::SetGeometryBounds(inInfo, this, in.PartBounds);
+      vtkPVRenderView::SetOrderedCompositingConfiguration(inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION,
+                                                          in.PartBounds);
+      outInfo->Set(vtkPVRenderView::NEED_ORDERED_COMPOSITING(), 1);
+    } else {
+      vtkPVRenderView::SetGeometryBounds(inInfo, this, in.Bounds);
+    }
   } else if (request == vtkPVView::REQUEST_RENDER()) {
-    this->UpdateEngine();
+    if (!renderingProcesses()) this->UpdateEngine();
     // A screenshot takes the refined image at once.
     this->Mapper->SetCompleteStillRenders(ScreenshotFlag::of(vtkPVView::SafeDownCast(this->GetView())));
   }
@@ -122,12 +152,22 @@ void vtkExaBricksRepresentation::UpdateEngine() {
   vtkInternals& in = *this->Internals;
   vtkInformation* info = this->GetInputArrayInformation(0);
   const char* name = info && info->Has(vtkDataObject::FIELD_NAME()) ? info->Get(vtkDataObject::FIELD_NAME()) : nullptr;
-  if (!in.Data || !name || !*name) {
+  vtkMultiProcessController* processes = renderingProcesses();
+  bool rebuild = !in.Engine || !name || in.BuiltField != name || in.BuiltGeneration != in.Generation;
+  bool drop = !in.Data || !name || !*name;
+  if (processes) {
+    // The processes decide together: a build is a collective.
+    int mine[2] = {rebuild ? 1 : 0, drop ? 1 : 0}, any[2] = {0, 0};
+    processes->AllReduce(mine, any, 2, vtkCommunicator::MAX_OP);
+    rebuild = any[0] != 0;
+    drop = any[1] != 0;
+  }
+  if (drop) {
     in.Engine.reset();
     this->Mapper->SetEngine(nullptr);
     return;
   }
-  if (in.Engine && in.BuiltField == name && in.BuiltGeneration == in.Generation) return;
+  if (!rebuild) return;
   in.Engine.reset();
   this->Mapper->SetEngine(nullptr);
   in.BuiltField = name;
@@ -141,9 +181,28 @@ void vtkExaBricksRepresentation::UpdateEngine() {
     ++in.Builds;
     auto engine = std::make_shared<exa::paraview::Engine>();
     engine->field = name;
-    engine->model = std::make_unique<exa::Model>(exa::buildModel(exa::paraview::amrLeafCells(in.Data, name)));
-    engine->renderer = std::make_unique<exa::Renderer>(*engine->model);
-    std::copy(in.Bounds, in.Bounds + 6, engine->bounds);
+    if (processes) {
+      exa::paraview::ControllerCollectives comm(processes);
+      exa::paraview::ProcessPart part = exa::paraview::buildProcessPart(in.Data, name, comm);
+      engine->model = std::move(part.model);
+      if (engine->model) {
+        engine->renderer = std::make_unique<exa::Renderer>(*engine->model, part.dataset);
+        engine->renderer->setDomain(part.domain);
+      }
+      std::copy(part.bounds, part.bounds + 6, in.PartBounds);
+      std::copy(part.bounds, part.bounds + 6, engine->bounds);
+      in.PartsJson = part.partsJson;
+    } else {
+      engine->model = std::make_unique<exa::Model>(exa::buildModel(exa::paraview::amrLeafCells(in.Data, name)));
+      engine->renderer = std::make_unique<exa::Renderer>(*engine->model);
+      std::copy(in.Bounds, in.Bounds + 6, engine->bounds);
+      const exa::ModelSummary summary = exa::summarize(*engine->model);
+      in.PartsJson = nlohmann::json::array({{{"rank", 0},
+                                             {"cells", summary.cells},
+                                             {"owned_cells", summary.cells},
+                                             {"bytes", summary.brickBytes + summary.valueBytes + summary.regionBytes}}})
+                         .dump();
+    }
     in.Engine = engine;
     this->Mapper->SetEngine(engine);
   } catch (const std::exception& error) {
@@ -267,6 +326,8 @@ int vtkExaBricksRepresentation::GetDevice() {
 }
 
 int vtkExaBricksRepresentation::GetModelBuilds() { return this->Internals->Builds; }
+
+const char* vtkExaBricksRepresentation::GetPartsInformation() { return this->Internals->PartsJson.c_str(); }
 
 int vtkExaBricksRepresentation::GetRefinementPasses() { return this->Mapper->GetRefinementPasses(); }
 

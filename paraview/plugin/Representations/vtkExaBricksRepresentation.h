@@ -64,6 +64,9 @@ public:
   /// What the representation did: the models it built (one per input and array), the passes in
   /// the image last drawn (0 for a draft), and where the renderer runs.
   int GetModelBuilds();
+  /// What each process holds, as a JSON array of {"rank", "cells" (its part with the halo),
+  /// "owned_cells" (cells whose centres lie in its part), "bytes" (bricks, values and regions)}.
+  const char* GetPartsInformation();
   int GetRefinementPasses();
   const char* GetDeviceInUse();
   ///@}

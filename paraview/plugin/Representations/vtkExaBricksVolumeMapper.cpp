@@ -78,6 +78,7 @@ Camera cameraOf(vtkCamera* camera, double aspect) {
 Scene sceneOf(const std::string& field, const TransferFunction& tf, vtkColorTransferFunction* color, bool shade,
               const Settings& settings) {
   Scene scene = Scene::volumeOf(tf, field);
+  scene.integration.terminationOpacity = kTerminationOpacity;
   scene.shading = shade ? settings.shading : Shading::None;
   scene.ao.rays = settings.aoRays;
   scene.iso.values = settings.isoValues;

@@ -57,6 +57,11 @@ TransferFunction transferFunctionOf(vtkColorTransferFunction* color, vtkPiecewis
 /// The exabricks camera of a VTK camera for a viewport of the given aspect (width / height).
 Camera cameraOf(vtkCamera* camera, double aspect);
 
+/// ParaView shows 8-bit images: rays end at this opacity, where what is left behind can change a
+/// pixel by half a step at most. So can what a part behind adds when several processes render
+/// parts of the data and IceT composites them (a ray is ended per part there).
+constexpr float kTerminationOpacity = 1.f - 0.5f / 255.f;
+
 /// The scene of one field: its transfer function, the volume lit by `shading` when `shade` is
 /// on, and iso-surfaces at the settings' values, each in the colour the colour map gives its
 /// value (the renderer's default colours without a colour map).
