@@ -17,18 +17,17 @@
 
 Prints "skipped: ..." (and exits 0) where the shared sample is absent."""
 import json
-import math
 import os
 import subprocess
 import sys
 
 import numpy as np
 import paraview.simple
-from paraview.simple import Hide, LoadPlugin, Plane, Show, XMLUniformGridAMRReader, XMLUniformGridAMRWriter
+from paraview.simple import Hide, LoadPlugin, Show, XMLUniformGridAMRReader, XMLUniformGridAMRWriter
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pv_common import (ALPHA, ANGLE, FOCUS, HEIGHT, POSITION, RANGE, UP, WIDTH, exabricks_render,  # noqa: E402
-                       finest_cell, plotfile_or_skip, screenshot, setup_view, show_exabricks)
+from pv_common import (ALPHA, HEIGHT, RANGE, WIDTH, exabricks_render, finest_cell,  # noqa: E402
+                       plotfile_or_skip, screenshot, setup_view, show_exabricks, show_planes)
 
 plugin, cli, work = sys.argv[1:4]
 plotfile = plotfile_or_skip(sys.argv[4] if len(sys.argv) > 4 else None)
@@ -54,24 +53,7 @@ if difference.max() > 1.5 / 255:
 # view, one beyond the data over the right part, meeting across the column the data shows; flat
 # green (ambient light only).
 SPLIT = 0.53  # where the planes meet, as a fraction of the view's width
-forward = np.subtract(FOCUS, POSITION)
-distance = float(np.linalg.norm(forward))
-forward /= distance
-right = np.cross(forward, UP)
-right /= np.linalg.norm(right)
-up = np.cross(right, forward)
-slabs = []
-for depth, (u0, u1) in ((distance - 1.0, (-0.05, SPLIT)), (distance + 1.0, (SPLIT, 1.05))):
-    half = math.tan(math.radians(ANGLE / 2)) * depth  # half the view's height at that depth
-    x0, x1 = [(2 * u - 1) * half * WIDTH / HEIGHT for u in (u0, u1)]
-    corner = np.asarray(POSITION) + forward * depth + right * x0 - up * 1.1 * half
-    slab = Plane(Origin=list(corner), Point1=list(corner + right * (x1 - x0)), Point2=list(corner + up * 2.2 * half))
-    slabs.append(slab)
-    plane = Show(slab, view)
-    plane.Representation = "Surface"
-    plane.ColorArrayName = ["POINTS", ""]
-    plane.AmbientColor = plane.DiffuseColor = [0.0, 1.0, 0.0]
-    plane.Ambient, plane.Diffuse, plane.Specular = 1.0, 0.0, 0.0
+slabs = show_planes(view, SPLIT)
 both = screenshot(view, work, "paraview-planes.png")
 Hide(reader, view)
 alone = screenshot(view, work, "planes.png")
@@ -103,7 +85,8 @@ if gain.max() > 0.9 or gain.min() < -1.0 / 255:
 # levels: it reads one by default): the same picture; and exabricks render of that file equals its
 # render of the plotfile.
 vthb = os.path.join(work, "plt_small.vthb")
-XMLUniformGridAMRWriter(Input=reader, FileName=vthb).UpdatePipeline()
+# Inline base64 (valid XML): Debian 12's current expat refuses raw appended data in VTK 9.2's reader.
+XMLUniformGridAMRWriter(Input=reader, FileName=vthb, DataMode="Binary").UpdatePipeline()
 xml = XMLUniformGridAMRReader(FileName=[vthb])
 xml.DefaultNumberOfLevels = 10
 Hide(reader, view)

@@ -2,6 +2,7 @@
 cell, the view and transfer function they use, images read back, and `exabricks render` of the
 same camera and transfer function."""
 import json
+import math
 import os
 import subprocess
 import sys
@@ -134,6 +135,33 @@ def show_exabricks(display, field, value_range, alpha, cell):
     pwf = GetOpacityTransferFunction(field)
     pwf.Points = [value_range[0], alpha[0], 0.5, 0.0, value_range[1], alpha[1], 0.5, 0.0]
     display.ScalarOpacityUnitDistance = cell
+
+
+def show_planes(view, split=0.53):
+    """Two opaque, flat green planes across the view: one between the camera and the data over
+    the left of the view, one beyond the data over the right, meeting at `split` of the view's
+    width across the column the data shows. Returns their sources."""
+    from paraview.simple import Plane, Show
+    forward = np.subtract(FOCUS, POSITION)
+    distance = float(np.linalg.norm(forward))
+    forward /= distance
+    right = np.cross(forward, UP)
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    slabs = []
+    for depth, (u0, u1) in ((distance - 1.0, (-0.05, split)), (distance + 1.0, (split, 1.05))):
+        half = math.tan(math.radians(ANGLE / 2)) * depth  # half the view's height at that depth
+        x0, x1 = [(2 * u - 1) * half * WIDTH / HEIGHT for u in (u0, u1)]
+        corner = np.asarray(POSITION) + forward * depth + right * x0 - up * 1.1 * half
+        slab = Plane(Origin=list(corner), Point1=list(corner + right * (x1 - x0)),
+                     Point2=list(corner + up * 2.2 * half))
+        slabs.append(slab)
+        plane = Show(slab, view)
+        plane.Representation = "Surface"
+        plane.ColorArrayName = ["POINTS", ""]
+        plane.AmbientColor = plane.DiffuseColor = [0.0, 1.0, 0.0]
+        plane.Ambient, plane.Diffuse, plane.Specular = 1.0, 0.0, 0.0
+    return slabs
 
 
 def screenshot(view, work, name):

@@ -1,0 +1,83 @@
+"""The ExaBricks representation on several processes (pvbatch under mpirun; IceT composites):
+
+    pvpython check_paraview_parallel.py PLUGIN EXABRICKS_CLI WORK_DIR MPIEXEC PVBATCH [DATA_DIR]
+
+Renders the cases of render_parallel.py on 1, 2 and 3 processes (4 with EXABRICKS_PV_RANKS=4)
+and compares each picture with the one-process picture: plt_small as a volume, with lit
+iso-surfaces, with opaque geometry (outline, slice, planes in front of and behind the data), a
+turned view after an interactive render, and the three-level PeleLM plotfile. The bounds: mean
+difference below 0.5/255, at most 0.5 % of the pixels beyond 1.5/255 (IceT composites 8-bit
+colour: each part's image is rounded before it is blended) and none beyond 4.5/255. Each
+process builds only its part with its halo: the most cells a process holds falls with the
+number of processes, and the cells they own add up to the whole. Prints "skipped: ..." where the
+shared sample is absent."""
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from pv_common import plotfile_or_skip, read_png  # noqa: E402
+
+plugin, cli, work, mpiexec, pvbatch = sys.argv[1:6]
+plotfile = plotfile_or_skip(sys.argv[6] if len(sys.argv) > 6 else None)
+pelelm = os.path.join(os.path.dirname(os.path.dirname(plotfile)), "pelelm_3lev_3d", "example_plt_3d")
+script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "render_parallel.py")
+counts = [1, 2, 3] + ([4] if os.environ.get("EXABRICKS_PV_RANKS") == "4" else [])
+failures = []
+records = {}
+for n in counts:
+    out = os.path.join(work, "np%d" % n)
+    command = [mpiexec, "--oversubscribe", "-np", str(n)]
+    if os.geteuid() == 0:
+        command.append("--allow-run-as-root")
+    command += [pvbatch, script, plugin, cli, out, plotfile] + ([pelelm] if os.path.isdir(pelelm) else [])
+    run = subprocess.run(command, capture_output=True, text=True, timeout=600)
+    if run.returncode != 0 or not os.path.exists(os.path.join(out, "parts.json")):
+        print(run.stdout[-3000:], run.stderr[-3000:])
+        failures.append("%d processes: pvbatch failed (exit %d)" % (n, run.returncode))
+        continue
+    with open(os.path.join(out, "parts.json")) as f:
+        records[n] = json.load(f)
+
+cases = ["volume", "iso", "geometry", "turned"] + (["pelelm"] if os.path.isdir(pelelm) else [])
+if 1 in records:
+    for n in sorted(records):
+        if n == 1:
+            continue
+        for case in cases:
+            one = read_png(os.path.join(work, "np1", case + ".png"))
+            many = read_png(os.path.join(work, "np%d" % n, case + ".png"))
+            d = np.abs(one - many).max(axis=-1)
+            shown = (one.max(axis=-1) > 0.02).mean()
+            beyond = (d > 1.5 / 255 + 1e-9).mean()
+            print("%-8s %d processes against 1: max %.1f/255, mean %.3f/255, %.3f%% of pixels beyond 1.5/255 "
+                  "(%.0f%% showing data)" % (case, n, 255 * d.max(), 255 * d.mean(), 100 * beyond, 100 * shown))
+            if shown < 0.05:
+                failures.append("%s: the picture shows almost nothing (%.0f%%)" % (case, 100 * shown))
+            if d.mean() > 0.5 / 255 or beyond > 0.005 or d.max() > 4.5 / 255 + 1e-9:
+                failures.append("%s on %d processes differs from one process (max %.1f/255, mean %.3f/255, "
+                                "%.3f%% beyond 1.5/255)" % (case, n, 255 * d.max(), 255 * d.mean(), 100 * beyond))
+        parts = records[n]["volume"]["parts"]
+        whole = records[1]["volume"]["parts"][0]["cells"]
+        most = max(p["cells"] for p in parts)
+        owned = sum(p["owned_cells"] for p in parts)
+        print("%d processes: cells per process (with halo) %s, owned %s, bytes %s; one process %d cells"
+              % (n, [p["cells"] for p in parts], [p["owned_cells"] for p in parts], [p["bytes"] for p in parts],
+                 whole))
+        if len(parts) != n or owned != whole or not most < whole:
+            failures.append("%d processes: parts %s do not split the %d cells" % (n, parts, whole))
+        if records[n]["draft_passes"] != 0 or records[n]["turned"]["passes"] != 8:
+            failures.append("%d processes: the interactive render drew %d passes (a draft draws 0), the still "
+                            "render after it %d (8)" % (n, records[n]["draft_passes"], records[n]["turned"]["passes"]))
+    if len(records) > 2:
+        most = [max(p["cells"] for p in records[n]["volume"]["parts"]) for n in sorted(records)]
+        if any(b >= a for a, b in zip(most, most[1:])):
+            failures.append("the most cells a process holds does not fall with the processes: %s" % most)
+
+if failures:
+    print("FAILED:\n  " + "\n  ".join(failures))
+    sys.exit(1)
+print("passed")
