@@ -23,6 +23,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -189,7 +190,11 @@ void vtkExaBricksRepresentation::UpdateEngine() {
         engine->renderer = std::make_unique<exa::Renderer>(*engine->model, part.dataset);
         engine->renderer->setDomain(part.domain);
       }
-      std::copy(part.bounds, part.bounds + 6, in.PartBounds);
+      if (!std::equal(part.bounds, part.bounds + 6, in.PartBounds)) {
+        std::copy(part.bounds, part.bounds + 6, in.PartBounds);
+        // The view builds its cuts anew only when the data it was handed changed.
+        in.Placeholder->Modified();
+      }
       std::copy(part.bounds, part.bounds + 6, engine->bounds);
       in.PartsJson = part.partsJson;
     } else {
