@@ -4,7 +4,9 @@
 
 Renders the cases of render_parallel.py on 1, 2, 3 and 4 processes
 and compares each picture with the one-process picture: plt_small as a volume, with lit
-iso-surfaces, a turned view after an interactive render, and the three-level PeleLM plotfile.
+iso-surfaces, a turned view after an interactive render, the three-level PeleLM plotfile, and
+with opaque geometry (the blocks' outlines, a slice, planes in front of and behind the data)
+where ParaView can move geometry between processes (see exchange_works).
 The bounds: mean difference below 0.5/255, at most 8 % of the pixels beyond 1.5/255 (IceT
 composites 8-bit colour: each part's image is rounded before it is blended, one step at most)
 and at most 0.1 % beyond 4.5/255 (pixels where a part's face is seen edge-on; 0.5 % with
@@ -57,7 +59,42 @@ for n in counts:
     with open(os.path.join(out, "parts.json")) as f:
         records[n] = json.load(f)
 
-cases = ["volume", "iso", "turned"] + (["pelelm"] if os.path.isdir(pelelm) else [])
+
+
+def exchange_works():
+    """Whether VTK's XML round trip of a dataset with raw appended data works: ParaView moves
+    geometry between processes that way, and Debian 12's expat since its 2.5.0-1+deb12u2 update
+    refuses the binary part ("not well-formed (invalid token)"), so the geometry a process should
+    receive is lost (with or without ExaBricks: ParaView's own Volume of a Wavelet shows the
+    same)."""
+    from vtkmodules.vtkFiltersCore import vtkAppendFilter
+    from vtkmodules.vtkFiltersSources import vtkSphereSource
+    from vtkmodules.vtkIOXML import vtkXMLUnstructuredGridReader, vtkXMLUnstructuredGridWriter
+    sphere = vtkSphereSource()
+    sphere.SetThetaResolution(128)
+    sphere.SetPhiResolution(128)
+    grid = vtkAppendFilter()
+    grid.SetInputConnection(sphere.GetOutputPort())
+    grid.Update()
+    writer = vtkXMLUnstructuredGridWriter()
+    writer.SetInputData(grid.GetOutput())
+    writer.WriteToOutputStringOn()
+    writer.SetDataModeToAppended()
+    writer.EncodeAppendedDataOff()
+    writer.Write()
+    reader = vtkXMLUnstructuredGridReader()
+    reader.ReadFromInputStringOn()
+    reader.SetInputString(writer.GetOutputString())
+    reader.Update()
+    return reader.GetOutput().GetNumberOfCells() == grid.GetOutput().GetNumberOfCells()
+cases = ["volume", "iso", "turned"]
+if exchange_works():
+    cases.append("geometry")
+else:
+    print("geometry (outline, slice, planes) on several processes: not checked: VTK's XML round trip of raw "
+          "appended data fails with this expat, so ParaView loses the geometry it moves between processes")
+if os.path.isdir(pelelm):
+    cases.append("pelelm")
 if 1 in records:
     for n in sorted(records):
         if n == 1:

@@ -13,10 +13,10 @@ import sys
 import traceback
 
 import paraview.simple
-from paraview.simple import LoadPlugin, Render, SaveScreenshot
+from paraview.simple import Hide, LoadPlugin, Outline, Render, SaveScreenshot, Show, Slice
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pv_common import HEIGHT, WIDTH, information, setup_view  # noqa: E402
+from pv_common import HEIGHT, WIDTH, information, setup_view, show_planes  # noqa: E402
 
 plugin, settings, out = sys.argv[1:4]
 with open(settings) as f:
@@ -45,6 +45,26 @@ def main():
     shot(view, display, "iso")
     display.IsoValues = []
     display.Shade = 0
+
+    # Opaque geometry in front of and behind the data, and through it: the blocks' outlines, a
+    # slice across the column, and two planes (one between the camera and the data, one beyond
+    # it). ParaView moves these between the processes into its cuts.
+    box = Outline(Input=reader)
+    outline = Show(box, view)
+    outline.Representation = "Surface"
+    outline.ColorArrayName = ["POINTS", ""]
+    outline.AmbientColor = outline.DiffuseColor = [0.9, 0.9, 0.9]
+    cut = Slice(Input=reader)
+    cut.SliceType.Origin = [0.5, 0.5, 0.62]
+    cut.SliceType.Normal = [0.0, 0.0, 1.0]
+    flat = Show(cut, view)
+    flat.Representation = "Surface"
+    flat.ColorArrayName = ["POINTS", ""]
+    flat.AmbientColor = flat.DiffuseColor = [0.8, 0.3, 0.3]
+    slabs = show_planes(view)
+    shot(view, display, "geometry")
+    for source in slabs + [cut, box]:
+        Hide(source, view)
 
     # Drafts while interacting: an interactive render after the camera turned, then a still one.
     view.CameraPosition = [1.9, -1.0, 1.5]

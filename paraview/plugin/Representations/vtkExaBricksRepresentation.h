@@ -16,6 +16,9 @@
 
 #include "ExaBricksRepresentationsModule.h" // for export macro
 
+#include <vector> // for std::vector
+
+class vtkBoundingBox;
 class vtkColorTransferFunction;
 class vtkExaBricksVolumeMapper;
 class vtkOverlappingAMR;
@@ -84,8 +87,14 @@ private:
   vtkExaBricksRepresentation(const vtkExaBricksRepresentation&) = delete;
   void operator=(const vtkExaBricksRepresentation&) = delete;
 
-  /// Builds the model of the chosen array when the input or the array changed.
+  /// Builds the model of the chosen array when the input or the array changed (one process).
   void UpdateEngine();
+  /// Several processes: agree on whether the data or the array changed (a collective) and hand
+  /// the view where the blocks lie, for its cuts.
+  void PrepareParts();
+  /// Several processes: builds this process's part of the cells for the view's cuts when they or
+  /// the data changed (a collective).
+  void BuildParts(const std::vector<vtkBoundingBox>& cuts);
 
   class vtkInternals;
   vtkInternals* Internals;
