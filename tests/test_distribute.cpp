@@ -166,36 +166,6 @@ TEST(Distribute, EveryPartHoldsExactlyTheCellsItsHaloNeeds) {
   }
 }
 
-TEST(Distribute, PartsGivenByTheCallerAreHonoured) {
-  // A compositor's own partition: slabs across x at planes that need not lie on cell faces.
-  const test::NamedCells d = test::smallDatasets()[0];
-  const box3l b = d.cells.bounds();
-  const int n = 3;
-  std::vector<box3l> boxes;
-  for (int p = 0; p < n; ++p) {
-    box3l box(vec3l(-kUnboundedLattice), vec3l(kUnboundedLattice));
-    if (p > 0) box.lower.x = b.lower.x + (b.upper.x - b.lower.x) * p / n + 1;
-    if (p < n - 1) box.upper.x = b.lower.x + (b.upper.x - b.lower.x) * (p + 1) / n + 1;
-    boxes.push_back(box);
-  }
-  const std::vector<CellSet> shares = randomShares(d.cells, n, 5);
-  std::vector<CellPart> parts(static_cast<size_t>(n));
-  const std::vector<std::string> errors = onThreads(n, [&](Collectives& comm) {
-    CellSet mine = shares[size_t(comm.rank())];
-    parts[size_t(comm.rank())] = distributeCells(std::move(mine), comm, boxes);
-  });
-  uint64_t owned = 0;
-  for (int p = 0; p < n; ++p) {
-    ASSERT_EQ(errors[size_t(p)], "");
-    EXPECT_EQ(parts[size_t(p)].box, boxes[size_t(p)]);
-    CellSet truth = d.cells;
-    keepSupportOf(truth, shadingReach(boxes[size_t(p)], parts[size_t(p)].coarsestLevel));
-    EXPECT_EQ(keyed(parts[size_t(p)].cells), keyed(truth)) << "part " << p;
-    owned += parts[size_t(p)].ownedCells;
-  }
-  EXPECT_EQ(owned, d.cells.size());
-}
-
 TEST(Distribute, AFailureOnOneProcessStopsEveryProcess) {
   const std::vector<std::string> errors = onThreads(3, [](Collectives& comm) {
     onEveryProcess(comm, [&] {

@@ -135,9 +135,7 @@ void appendDecodedCells(CellSet& set, const std::vector<uint8_t>& bytes) {
   if (!in.done()) fail("exabricks: a message of cells has bytes after its values");
 }
 
-namespace {
-
-CellPart distribute(CellSet&& mine, Collectives& comm, const std::vector<box3l>* given) {
+CellPart distributeCells(CellSet&& mine, Collectives& comm) {
   CellPart part;
   // Where the cells lie: every process's census, merged and split the same way everywhere.
   std::vector<uint8_t> census;
@@ -189,17 +187,8 @@ CellPart distribute(CellSet&& mine, Collectives& comm, const std::vector<box3l>*
   }
   for (size_t f = 0; f < low.size(); ++f)
     if (low[f] <= high[f]) part.valueRanges[f] = range1f{low[f], high[f]};
-  std::vector<box3l> boxes;
-  if (given) {
-    if (int(given->size()) != comm.size())
-      fail("exabricks: ", given->size(), " parts given for ", comm.size(), " processes");
-    boxes = *given;
-  } else {
-    part.partition = KdPartition::balance(merged, comm.size());
-    for (int p = 0; p < comm.size(); ++p)
-      boxes.push_back(part.partition.box(p));
-  }
-  part.box = boxes[size_t(comm.rank())];
+  part.partition = KdPartition::balance(merged, comm.size());
+  part.box = part.partition.box(comm.rank());
 
   // Each process sends every part the cells whose supports reach its shading reach.
   std::vector<std::vector<uint8_t>> outgoing(size_t(comm.size()));
@@ -209,7 +198,7 @@ CellPart distribute(CellSet&& mine, Collectives& comm, const std::vector<box3l>*
       share.fields.resize(mine.fields.size());
       for (size_t f = 0; f < mine.fields.size(); ++f)
         share.fields[f].name = mine.fields[f].name;
-      const box3l reach = shadingReach(boxes[size_t(p)], part.coarsestLevel);
+      const box3l reach = shadingReach(part.partition.box(p), part.coarsestLevel);
       for (size_t i = 0; i < mine.cells.size(); ++i) {
         const Cell& c = mine.cells[i];
         if (!supportReaches(c.bounds(), c.level, reach)) continue;
@@ -234,14 +223,6 @@ CellPart distribute(CellSet&& mine, Collectives& comm, const std::vector<box3l>*
       if (centreInside(c.lower, c.level, part.box)) ++part.ownedCells;
   });
   return part;
-}
-
-} // namespace
-
-CellPart distributeCells(CellSet&& mine, Collectives& comm) { return distribute(std::move(mine), comm, nullptr); }
-
-CellPart distributeCells(CellSet&& mine, Collectives& comm, const std::vector<box3l>& parts) {
-  return distribute(std::move(mine), comm, &parts);
 }
 
 } // namespace exa

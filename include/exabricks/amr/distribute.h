@@ -56,7 +56,7 @@ void appendDecodedCells(CellSet& set, const std::vector<uint8_t>& bytes);
 
 /// One process's part of cells spread over the processes.
 struct CellPart {
-  KdPartition partition; ///< one part per process, part p for rank p (when exabricks chose them)
+  KdPartition partition; ///< one part per process, part p for rank p
   int coarsestLevel = 0;
   box3l box;                        ///< this process's part, lattice (faces outside the data unbounded)
   box3l dataBounds;                 ///< the lattice bounds of every process's cells together
@@ -73,9 +73,5 @@ struct CellPart {
 /// halo need. Every process throws when any fails. A part may hold no cells (more processes than
 /// the data can be split into): its process has nothing to draw.
 CellPart distributeCells(CellSet&& mine, Collectives& comm);
-
-/// The same into parts given by the caller (one lattice box per process, tiling the lattice, as
-/// a compositor's own partition); `partition` of the result is then unset.
-CellPart distributeCells(CellSet&& mine, Collectives& comm, const std::vector<box3l>& parts);
 
 } // namespace exa

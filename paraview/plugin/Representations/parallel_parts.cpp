@@ -6,17 +6,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include <vtkBoundingBox.h>
-#include <vtkCellArray.h>
 #include <vtkCommunicator.h>
 #include <vtkMultiProcessController.h>
-#include <vtkNew.h>
 #include <vtkOverlappingAMR.h>
-#include <vtkPoints.h>
-#include <vtkPolyData.h>
 
 #include <algorithm>
-#include <cmath>
 #include <cstring>
 
 namespace exa::paraview {
@@ -114,71 +108,20 @@ void decodeBoxes(const std::vector<uint8_t>& bytes, std::vector<GridPatch>& out)
 
 } // namespace
 
-void balancePoints(vtkOverlappingAMR* amr, vtkPolyData* out) {
-  vtkNew<vtkPoints> points;
-  for (const GridPatch& p : amrBlockBoxes(amr)) {
-    vec3l chunks;
-    for (int a = 0; a < 3; ++a)
-      chunks[a] = (p.cells[a] + 7) / 8;
-    for (int64_t z = 0; z < chunks.z; ++z)
-      for (int64_t y = 0; y < chunks.y; ++y)
-        for (int64_t x = 0; x < chunks.x; ++x) {
-          const vec3d t((double(x) + 0.5) / double(chunks.x), (double(y) + 0.5) / double(chunks.y),
-                        (double(z) + 0.5) / double(chunks.z));
-          const vec3d c = p.lower + (p.upper - p.lower) * t;
-          points->InsertNextPoint(c.x, c.y, c.z);
-        }
-  }
-  vtkNew<vtkCellArray> vertices;
-  for (vtkIdType i = 0; i < points->GetNumberOfPoints(); ++i)
-    vertices->InsertNextCell(1, &i);
-  out->Initialize();
-  out->SetPoints(points);
-  out->SetVerts(vertices);
-}
-
-ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Collectives& comm,
-                             const std::vector<vtkBoundingBox>& cuts) {
-  if (int(cuts.size()) != comm.size())
-    fail("ExaBricks: ParaView cut the view into ", cuts.size(), " parts for ", comm.size(), " processes");
+ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Collectives& comm) {
   // The boxes of every other process's blocks: they set the lattice and cover coarser cells here.
   std::vector<uint8_t> mine;
   onEveryProcess(comm, [&] { mine = encodeBoxes(amrBlockBoxes(amr)); });
-  const std::vector<std::vector<uint8_t>> blockBoxes = comm.allGather(mine);
+  const std::vector<std::vector<uint8_t>> boxes = comm.allGather(mine);
   CellSet cells;
   onEveryProcess(comm, [&] {
     std::vector<GridPatch> elsewhere;
     for (int r = 0; r < comm.size(); ++r)
-      if (r != comm.rank()) decodeBoxes(blockBoxes[size_t(r)], elsewhere);
+      if (r != comm.rank()) decodeBoxes(boxes[size_t(r)], elsewhere);
     cells = amrLeafCells(amr, name, elsewhere);
   });
   const WorldTransform world = cells.world;
-  // The cuts on the lattice: a face inside the union of the cuts at the nearest lattice plane (the
-  // neighbour's face is the same plane, so the boxes tile; the halo reaches well beyond half a
-  // lattice unit); a face on the outside reaches to infinity.
-  vtkBoundingBox whole;
-  for (const vtkBoundingBox& c : cuts)
-    whole.AddBox(c);
-  const double* u = whole.GetMinPoint();
-  const double* v = whole.GetMaxPoint();
-  std::vector<box3l> boxes;
-  std::vector<box3d> domains;
-  for (const vtkBoundingBox& c : cuts) {
-    box3l lattice;
-    box3d domain;
-    for (int a = 0; a < 3; ++a) {
-      const double lo = c.GetMinPoint()[a], hi = c.GetMaxPoint()[a];
-      const double tolerance = 1e-9 * std::max(1.0, v[a] - u[a]);
-      const bool outerLow = lo <= u[a] + tolerance, outerHigh = hi >= v[a] - tolerance;
-      lattice.lower[a] = outerLow ? -kUnboundedLattice : std::llround((lo - world.origin[a]) / world.scale[a]);
-      lattice.upper[a] = outerHigh ? kUnboundedLattice : std::llround((hi - world.origin[a]) / world.scale[a]);
-      domain.lower[a] = outerLow ? world.toWorld(vec3d(double(-kUnboundedLattice)))[a] : lo;
-      domain.upper[a] = outerHigh ? world.toWorld(vec3d(double(kUnboundedLattice)))[a] : hi;
-    }
-    boxes.push_back(lattice);
-    domains.push_back(domain);
-  }
-  CellPart part = distributeCells(std::move(cells), comm, boxes);
+  CellPart part = distributeCells(std::move(cells), comm);
 
   ProcessPart out;
   const uint64_t held = part.cells.size();
@@ -190,7 +133,7 @@ ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Co
                                   box3i(vec3i(int(b.lower.x), int(b.lower.y), int(b.lower.z)),
                                         vec3i(int(b.upper.x), int(b.upper.y), int(b.upper.z))),
                                   world.scale, part.valueRanges);
-  out.domain = domains[size_t(comm.rank())];
+  out.domain = world.toWorld(part.box);
   const box3d data = world.toWorld(part.dataBounds);
   for (int a = 0; a < 3; ++a) {
     out.bounds[2 * a] = std::clamp(out.domain.lower[a], data.lower[a], data.upper[a]);

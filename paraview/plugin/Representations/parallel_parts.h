@@ -1,10 +1,8 @@
 // ParaView's processes as exabricks' collectives, and the part of AMR data a process renders when
 // ParaView runs on several (pvbatch or pvserver under mpirun, Catalyst): the blocks the reader or
-// the simulation gave each process are redistributed into the boxes ParaView's view cut space
-// into for ordered compositing (a k-d tree, one box per process), each with its halo (exabricks'
-// distributeCells). ParaView redistributes the other data of the view (outlines, slices,
-// surfaces) into the same boxes and IceT composites the processes' images in their visibility
-// order, so that the volume, iso-surfaces and opaque geometry combine as on one process.
+// the simulation gave each process are redistributed into the convex parts of a k-d partition
+// with their halos (exabricks' distributeCells), so that IceT can composite the parts' images in
+// visibility order.
 #pragma once
 
 #include "exabricks/amr/distribute.h"
@@ -14,10 +12,8 @@
 #include <memory>
 #include <string>
 
-class vtkBoundingBox;
 class vtkMultiProcessController;
 class vtkOverlappingAMR;
-class vtkPolyData;
 
 namespace exa::paraview {
 
@@ -46,14 +42,8 @@ struct ProcessPart {
 };
 
 /// A collective over the processes of `comm`: the leaf cells of array `name` of the blocks every
-/// process holds, split into the world boxes `cuts` (one per process, tiling the data; faces on
-/// the outside of their union reach to infinity) with their halos, and this process's part
+/// process holds, split into one k-d part per process with its halo, and this process's part
 /// built. Throws on every process when any fails ("process R: ...").
-ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Collectives& comm,
-                             const std::vector<vtkBoundingBox>& cuts);
-
-/// Points where this process's blocks hold cells (the centres of blocks of at most 8^3 cells): what
-/// ParaView balances its cuts by.
-void balancePoints(vtkOverlappingAMR* amr, vtkPolyData* out);
+ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Collectives& comm);
 
 } // namespace exa::paraview

@@ -7,7 +7,6 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
 
-#include "vtkBoundingBox.h"
 #include "vtkDataObject.h"
 #include "vtkInformation.h"
 #include "vtkInformationVector.h"
@@ -16,7 +15,6 @@
 #include "vtkObjectFactory.h"
 #include "vtkOverlappingAMR.h"
 #include "vtkPVRenderView.h"
-#include "vtkPVRenderViewDataDeliveryManager.h"
 #include "vtkPolyData.h"
 #include "vtkRenderer.h"
 #include "vtkSmartPointer.h"
@@ -29,7 +27,6 @@
 #include <cmath>
 #include <memory>
 #include <string>
-#include <vector>
 
 class vtkExaBricksRepresentation::vtkInternals {
 public:
@@ -42,11 +39,10 @@ public:
   std::string BuiltField;
   unsigned long BuiltGeneration = 0;
   int Builds = 0;
-  // Several processes: each renders the cells of the box ParaView's view cut for it.
-  std::vector<vtkBoundingBox> BuiltCuts; ///< the cuts the engine was built for
-  bool PartsPending = false;             ///< new data or array: build at the next render
-  std::string PartsJson = "[]";          ///< what every process holds
-  vtkNew<vtkPolyData> Balance;           ///< where this process's blocks lie (for the view's cuts)
+  // Several processes: each renders one convex part of the data (parallel_parts.h).
+  double PartBounds[6] = {0, 0, 0, 0, 0, 0}; ///< this process's part, clipped to the data
+  std::string PartsJson = "[]";              ///< what every process holds
+  vtkNew<vtkPolyData> Placeholder;           ///< the view's handle on the part's bounds
 };
 
 namespace {
@@ -133,56 +129,52 @@ int vtkExaBricksRepresentation::ProcessViewRequest(vtkInformationRequestKey* req
     // The cells stay where they were read: render there.
     vtkPVRenderView::SetRequiresDistributedRendering(inInfo, this, true);
     if (renderingProcesses()) {
-      // Several processes: ParaView cuts space into one box per process, balanced by points where
-      // the blocks lie, redistributes the view's other data into the boxes and composites the
-      // processes' images in their visibility order; each process renders the AMR cells of its
-      // box (built at the render, when the cuts are known).
-      this->PrepareParts();
-      vtkPVView::SetPiece(inInfo, this, in.Balance);
-      vtkPVRenderView::SetOrderedCompositingConfiguration(inInfo, this, vtkPVRenderView::USE_DATA_FOR_LOAD_BALANCING);
-      outInfo->Set(vtkPVRenderView::NEED_ORDERED_COMPOSITING(), 1);
-    }
-    vtkPVRenderView::SetGeometryBounds(inInfo, this, in.Bounds);
-  } else if (request == vtkPVView::REQUEST_RENDER()) {
-    if (renderingProcesses()) {
-      vtkPVView* view = vtkPVView::SafeDownCast(this->GetView());
-      auto* delivery = vtkPVRenderViewDataDeliveryManager::SafeDownCast(view ? view->GetDeliveryManager() : nullptr);
-      this->BuildParts(delivery ? delivery->GetCuts() : std::vector<vtkBoundingBox>());
-    } else {
+      // Every process builds its convex part (a collective, so here, where every process comes
+      // at once) and tells the view the part's bounds: IceT composites the processes' images in
+      // the visibility order of these boxes, and other data is redistributed to match.
       this->UpdateEngine();
+      vtkPVView::SetPiece(inInfo, this, in.Placeholder);
+      vtkPVRenderView::SetGeometryBounds(inInfo, this, in.PartBounds);
+      vtkPVRenderView::SetOrderedCompositingConfiguration(inInfo, this, vtkPVRenderView::USE_BOUNDS_FOR_REDISTRIBUTION,
+                                                          in.PartBounds);
+      outInfo->Set(vtkPVRenderView::NEED_ORDERED_COMPOSITING(), 1);
+    } else {
+      vtkPVRenderView::SetGeometryBounds(inInfo, this, in.Bounds);
     }
+  } else if (request == vtkPVView::REQUEST_RENDER()) {
+    if (!renderingProcesses()) this->UpdateEngine();
     // A screenshot takes the refined image at once.
     this->Mapper->SetCompleteStillRenders(ScreenshotFlag::of(vtkPVView::SafeDownCast(this->GetView())));
   }
   return 1;
 }
 
-namespace {
-// The array to render, or null; an error where it is not a cell array.
-const char* renderedArray(vtkInformation* info) {
-  return info && info->Has(vtkDataObject::FIELD_NAME()) ? info->Get(vtkDataObject::FIELD_NAME()) : nullptr;
-}
-bool isCellArray(vtkInformation* info) {
-  return !info->Has(vtkDataObject::FIELD_ASSOCIATION()) ||
-         info->Get(vtkDataObject::FIELD_ASSOCIATION()) == vtkDataObject::FIELD_ASSOCIATION_CELLS;
-}
-} // namespace
-
 void vtkExaBricksRepresentation::UpdateEngine() {
   vtkInternals& in = *this->Internals;
   vtkInformation* info = this->GetInputArrayInformation(0);
-  const char* name = renderedArray(info);
-  if (!in.Data || !name || !*name) {
+  const char* name = info && info->Has(vtkDataObject::FIELD_NAME()) ? info->Get(vtkDataObject::FIELD_NAME()) : nullptr;
+  vtkMultiProcessController* processes = renderingProcesses();
+  bool rebuild = !in.Engine || !name || in.BuiltField != name || in.BuiltGeneration != in.Generation;
+  bool drop = !in.Data || !name || !*name;
+  if (processes) {
+    // The processes decide together: a build is a collective.
+    int mine[2] = {rebuild ? 1 : 0, drop ? 1 : 0}, any[2] = {0, 0};
+    processes->AllReduce(mine, any, 2, vtkCommunicator::MAX_OP);
+    rebuild = any[0] != 0;
+    drop = any[1] != 0;
+  }
+  if (drop) {
     in.Engine.reset();
     this->Mapper->SetEngine(nullptr);
     return;
   }
-  if (in.Engine && in.BuiltField == name && in.BuiltGeneration == in.Generation) return;
+  if (!rebuild) return;
   in.Engine.reset();
   this->Mapper->SetEngine(nullptr);
   in.BuiltField = name;
   in.BuiltGeneration = in.Generation;
-  if (!isCellArray(info)) {
+  if (info->Has(vtkDataObject::FIELD_ASSOCIATION()) &&
+      info->Get(vtkDataObject::FIELD_ASSOCIATION()) != vtkDataObject::FIELD_ASSOCIATION_CELLS) {
     vtkErrorMacro("ExaBricks renders cell arrays; '" << name << "' is not one");
     return;
   }
@@ -190,67 +182,32 @@ void vtkExaBricksRepresentation::UpdateEngine() {
     ++in.Builds;
     auto engine = std::make_shared<exa::paraview::Engine>();
     engine->field = name;
-    engine->model = std::make_unique<exa::Model>(exa::buildModel(exa::paraview::amrLeafCells(in.Data, name)));
-    engine->renderer = std::make_unique<exa::Renderer>(*engine->model);
-    std::copy(in.Bounds, in.Bounds + 6, engine->bounds);
-    const exa::ModelSummary summary = exa::summarize(*engine->model);
-    in.PartsJson = nlohmann::json::array({{{"rank", 0},
-                                           {"cells", summary.cells},
-                                           {"owned_cells", summary.cells},
-                                           {"bytes", summary.brickBytes + summary.valueBytes + summary.regionBytes}}})
-                       .dump();
-    in.Engine = engine;
-    this->Mapper->SetEngine(engine);
-  } catch (const std::exception& error) {
-    vtkErrorMacro(<< error.what());
-  }
-}
-
-void vtkExaBricksRepresentation::PrepareParts() {
-  vtkInternals& in = *this->Internals;
-  vtkInformation* info = this->GetInputArrayInformation(0);
-  const char* name = renderedArray(info);
-  bool rebuild = !name || in.BuiltField != name || in.BuiltGeneration != in.Generation;
-  bool drop = !in.Data || !name || !*name || !isCellArray(info);
-  // The processes decide together: the build at the next render is a collective.
-  int mine[2] = {rebuild ? 1 : 0, drop ? 1 : 0}, any[2] = {0, 0};
-  renderingProcesses()->AllReduce(mine, any, 2, vtkCommunicator::MAX_OP);
-  if (!any[0] && !any[1]) return;
-  in.Engine.reset();
-  this->Mapper->SetEngine(nullptr);
-  in.BuiltCuts.clear();
-  in.BuiltField = any[1] ? "" : name;
-  in.BuiltGeneration = in.Generation;
-  in.PartsPending = !any[1];
-  if (name && *name && !isCellArray(info)) vtkErrorMacro("ExaBricks renders cell arrays; '" << name << "' is not one");
-  // Where the cells lie, for the view's cuts (changed data: new cuts).
-  if (in.Data)
-    exa::paraview::balancePoints(in.Data, in.Balance);
-  else
-    in.Balance->Initialize();
-  in.Balance->Modified();
-}
-
-void vtkExaBricksRepresentation::BuildParts(const std::vector<vtkBoundingBox>& cuts) {
-  vtkInternals& in = *this->Internals;
-  if (in.BuiltField.empty() || (!in.PartsPending && cuts == in.BuiltCuts)) return;
-  in.PartsPending = false;
-  in.BuiltCuts = cuts;
-  in.Engine.reset();
-  this->Mapper->SetEngine(nullptr);
-  try {
-    ++in.Builds;
-    auto engine = std::make_shared<exa::paraview::Engine>();
-    engine->field = in.BuiltField;
-    exa::paraview::ControllerCollectives comm(renderingProcesses());
-    exa::paraview::ProcessPart part = exa::paraview::buildProcessPart(in.Data, in.BuiltField, comm, cuts);
-    engine->model = std::move(part.model);
-    if (engine->model) {
-      engine->renderer = std::make_unique<exa::Renderer>(*engine->model, part.dataset);
-      engine->renderer->setDomain(part.domain);
+    if (processes) {
+      exa::paraview::ControllerCollectives comm(processes);
+      exa::paraview::ProcessPart part = exa::paraview::buildProcessPart(in.Data, name, comm);
+      engine->model = std::move(part.model);
+      if (engine->model) {
+        engine->renderer = std::make_unique<exa::Renderer>(*engine->model, part.dataset);
+        engine->renderer->setDomain(part.domain);
+      }
+      if (!std::equal(part.bounds, part.bounds + 6, in.PartBounds)) {
+        std::copy(part.bounds, part.bounds + 6, in.PartBounds);
+        // The view builds its cuts anew only when the data it was handed changed.
+        in.Placeholder->Modified();
+      }
+      std::copy(part.bounds, part.bounds + 6, engine->bounds);
+      in.PartsJson = part.partsJson;
+    } else {
+      engine->model = std::make_unique<exa::Model>(exa::buildModel(exa::paraview::amrLeafCells(in.Data, name)));
+      engine->renderer = std::make_unique<exa::Renderer>(*engine->model);
+      std::copy(in.Bounds, in.Bounds + 6, engine->bounds);
+      const exa::ModelSummary summary = exa::summarize(*engine->model);
+      in.PartsJson = nlohmann::json::array({{{"rank", 0},
+                                             {"cells", summary.cells},
+                                             {"owned_cells", summary.cells},
+                                             {"bytes", summary.brickBytes + summary.valueBytes + summary.regionBytes}}})
+                         .dump();
     }
-    std::copy(part.bounds, part.bounds + 6, engine->bounds);
-    in.PartsJson = part.partsJson;
     in.Engine = engine;
     this->Mapper->SetEngine(engine);
   } catch (const std::exception& error) {

@@ -16,9 +16,6 @@
 
 #include "ExaBricksRepresentationsModule.h" // for export macro
 
-#include <vector> // for std::vector
-
-class vtkBoundingBox;
 class vtkColorTransferFunction;
 class vtkExaBricksVolumeMapper;
 class vtkOverlappingAMR;
@@ -87,14 +84,8 @@ private:
   vtkExaBricksRepresentation(const vtkExaBricksRepresentation&) = delete;
   void operator=(const vtkExaBricksRepresentation&) = delete;
 
-  /// Builds the model of the chosen array when the input or the array changed (one process).
+  /// Builds the model of the chosen array when the input or the array changed.
   void UpdateEngine();
-  /// Several processes: agree on whether the data or the array changed (a collective) and hand
-  /// the view where the blocks lie, for its cuts.
-  void PrepareParts();
-  /// Several processes: builds this process's part of the cells for the view's cuts when they or
-  /// the data changed (a collective).
-  void BuildParts(const std::vector<vtkBoundingBox>& cuts);
 
   class vtkInternals;
   vtkInternals* Internals;
