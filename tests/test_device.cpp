@@ -9,6 +9,9 @@
 
 #include <atomic>
 #include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
 
 namespace exa {
 namespace {
@@ -103,6 +106,34 @@ TEST(Device, DeviceNamesResolveAndCudaWithoutAGpuSaysWhy) {
   Renderer r(m);
   EXPECT_THROW(r.setDevice(Device::Cuda), Error);
   EXPECT_EQ(r.device(), Device::Cpu);
+}
+
+TEST(Device, ProcessesOfANodeSplitItsGpus) {
+  const char* names[] = {"EXABRICKS_CUDA_DEVICE", "OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "PMI_LOCAL_RANK",
+                         "SLURM_LOCALID"};
+  std::vector<std::pair<std::string, std::string>> saved;
+  for (const char* n : names)
+    if (const char* v = std::getenv(n)) saved.emplace_back(n, v);
+  for (const char* n : names)
+    unsetenv(n);
+  EXPECT_EQ(cudaDeviceOfProcess(4), 0); // one process
+  setenv("OMPI_COMM_WORLD_LOCAL_RANK", "5", 1);
+  EXPECT_EQ(cudaDeviceOfProcess(4), 1); // local rank 5 of a node with 4 GPUs
+  EXPECT_EQ(cudaDeviceOfProcess(1), 0);
+  EXPECT_EQ(cudaDeviceOfProcess(0), 0);
+  unsetenv("OMPI_COMM_WORLD_LOCAL_RANK");
+  setenv("SLURM_LOCALID", "2", 1);
+  EXPECT_EQ(cudaDeviceOfProcess(2), 0);
+  EXPECT_EQ(cudaDeviceOfProcess(3), 2);
+  setenv("SLURM_LOCALID", "x", 1); // not a number: ignored
+  EXPECT_EQ(cudaDeviceOfProcess(3), 0);
+  setenv("EXABRICKS_CUDA_DEVICE", "1", 1); // the user's choice first
+  setenv("SLURM_LOCALID", "2", 1);
+  EXPECT_EQ(cudaDeviceOfProcess(3), 1);
+  for (const char* n : names)
+    unsetenv(n);
+  for (const auto& [n, v] : saved)
+    setenv(n.c_str(), v.c_str(), 1);
 }
 
 } // namespace

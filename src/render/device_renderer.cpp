@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
+#include <cstdlib>
 #include <cstring>
 
 namespace exa {
@@ -330,6 +331,21 @@ DeviceFootprint deviceFootprint(const Model& model) {
                         {"region k-d tree", model.regions.nodes.size() * sizeof(RegionKdNode)}};
   f.fieldBytes = model.fieldValues.empty() ? 0 : model.fieldValues[0].size() * sizeof(float);
   return f;
+}
+
+int cudaDeviceOfProcess(int devices) {
+  if (devices <= 1) return 0;
+  auto number = [](const char* name) -> long {
+    const char* v = std::getenv(name);
+    if (!v || !*v) return -1;
+    char* end = nullptr;
+    const long n = std::strtol(v, &end, 10);
+    return end && *end == '\0' && n >= 0 ? n : -1;
+  };
+  if (const long d = number("EXABRICKS_CUDA_DEVICE"); d >= 0) return int(d % devices);
+  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_RANK", "MPI_LOCALRANKID", "PMI_LOCAL_RANK", "SLURM_LOCALID"})
+    if (const long k = number(name); k >= 0) return int(k % devices);
+  return 0;
 }
 
 } // namespace exa

@@ -11,7 +11,8 @@
 
 namespace exa::gpu {
 
-/// Whether a GPU can be used, with its name and memory.
+/// Whether a GPU can be used, with its name and memory (of the GPU this process uses,
+/// cudaDeviceOfProcess).
 CudaStatus status();
 /// Device memory for `what` (named in the error when the GPU has too little left).
 void* allocate(uint64_t bytes, const char* what);

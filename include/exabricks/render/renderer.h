@@ -105,6 +105,10 @@ struct CudaStatus {
   std::string problem; ///< why Device::Cuda cannot be used (empty when it can)
 };
 CudaStatus cudaStatus();
+/// The GPU this process uses of `devices`: EXABRICKS_CUDA_DEVICE where set; else, where an MPI
+/// launcher started several processes on the node (its local rank: Open MPI, MPICH / PMI, Slurm),
+/// local rank k takes GPU k mod devices, so that the processes of a node split its GPUs; else 0.
+int cudaDeviceOfProcess(int devices);
 /// The "device" object of `info --json`: whether the CUDA back end is built, the GPUs it sees,
 /// what "auto" chooses, and the bytes a GPU renderer holds for `model`'s structures and per field.
 std::string deviceInfoJson(const Model& model);

@@ -18,6 +18,21 @@ void check(cudaError_t e, const char* what) {
   if (e != cudaSuccess) fail("CUDA: ", what, ": ", cudaGetErrorString(e));
 }
 
+// The GPU this process uses, made current on the calling thread (CUDA's current device is per
+// host thread, and the renderer is reached from several).
+int useDevice() {
+  static const int device = [] {
+    int count = 0;
+    if (cudaGetDeviceCount(&count) != cudaSuccess) {
+      cudaGetLastError();
+      return 0;
+    }
+    return cudaDeviceOfProcess(count);
+  }();
+  cudaSetDevice(device);
+  return device;
+}
+
 // 64 threads a block and at least 8 blocks an SM: at most 128 registers a thread; 10 blocks (94
 // registers, no spills) for the common one-layer smooth volume. Measured on an H100 and an H200,
 // fewer registers with spills were slower or no faster.
@@ -65,14 +80,17 @@ CudaStatus status() {
     cudaGetLastError();
     return s;
   }
+  const int device = useDevice();
   cudaDeviceProp prop{};
-  if (cudaGetDeviceProperties(&prop, 0) == cudaSuccess) s.name = prop.name;
+  if (cudaGetDeviceProperties(&prop, device) == cudaSuccess) s.name = prop.name;
+  if (s.devices > 1) s.name += " (GPU " + std::to_string(device) + " of " + std::to_string(s.devices) + ")";
   size_t freeBytes = 0, totalBytes = 0;
   if (cudaMemGetInfo(&freeBytes, &totalBytes) == cudaSuccess) s.freeBytes = freeBytes, s.totalBytes = totalBytes;
   return s;
 }
 
 void* allocate(uint64_t bytes, const char* what) {
+  useDevice();
   size_t freeBytes = 0, totalBytes = 0;
   check(cudaMemGetInfo(&freeBytes, &totalBytes), "querying memory");
   if (bytes + (64u << 20) > freeBytes)
@@ -84,25 +102,30 @@ void* allocate(uint64_t bytes, const char* what) {
 }
 
 void release(void* p) noexcept {
+  useDevice();
   if (p) cudaFree(p);
 }
 
 void* allocateHost(uint64_t bytes) {
+  useDevice();
   void* p = nullptr;
   check(cudaMallocHost(&p, bytes > 0 ? bytes : 1), "page-locked host memory");
   return p;
 }
 
 void releaseHost(void* p) noexcept {
+  useDevice();
   if (p) cudaFreeHost(p);
 }
 
 void copyToDevice(void* device, const void* host, uint64_t bytes) {
+  useDevice();
   if (bytes > 0) check(cudaMemcpy(device, host, bytes, cudaMemcpyHostToDevice), "copying to the GPU");
 }
 
 void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, int tileStride, void* deviceColors,
                void* deviceCounts, vec4f* hostColors, PassCounts& counts) {
+  useDevice();
   check(cudaMemcpyToSymbol(traceViewBytes, &view, sizeof(TraceView)), "setting the pass");
   check(cudaMemset(deviceCounts, 0, sizeof(PassCounts)), "clearing the counters");
   const dim3 block(8, 8);
