@@ -27,6 +27,7 @@ public:
     return value;
   }
   void take(void* out, size_t n) {
+    if (n == 0) return; // an empty vector's data() may be null
     if (n > bytes_.size() - at_) fail("exabricks: a message of ", what_, " ends early (", bytes_.size(), " bytes)");
     std::memcpy(out, bytes_.data() + at_, n);
     at_ += n;
