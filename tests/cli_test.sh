@@ -99,7 +99,27 @@ head -c 32768 /dev/zero > zero_32x32x32_uint8.raw
 check "raw volume merges to 16^3 cells" bash -c "[ \"\$('$exe' info zero_32x32x32_uint8.raw --json | $py -c 'import json,sys; print(json.load(sys.stdin)[\"cells\"])')\" = 8 ]"
 fails_with "raw volume without dimensions" "--raw-dims" bash -c "cp zero_32x32x32_uint8.raw anon.raw && '$exe' info anon.raw"
 fails_with "unknown option" "--bogus" "$exe" info --bogus
-fails_with "unknown subcommand" "subcommand" "$exe" nope
+fails_with "unknown subcommand" "unknown command 'nope'" "$exe" nope
+# Usage errors: exit 2 and one "exabricks: error:" line, whatever the parser found.
+one_usage_line() { out=$("$@" 2>&1 >/dev/null); rc=$?; [ $rc -eq 2 ] && [ "$(printf '%s\n' "$out" | wc -l)" -eq 1 ] &&
+  printf '%s\n' "$out" | grep -q '^exabricks: error: '; }
+check "an unknown option: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --bogus
+check "a missing -o: exit 2, one line" one_usage_line "$exe" render s.cells
+check "--threads 0: exit 2, one line" one_usage_line "$exe" --threads 0 info s.cells
+check "a misspelt command: exit 2, one line" one_usage_line "$exe" rendr s.cells
+fails_with "a misspelt command gets a suggestion" "did you mean 'render'" "$exe" rendr s.cells -o x.png
+check "global flags after the command" bash -c "'$exe' info s.cells -q --threads 1 > /dev/null"
+fails_with "--rate nan names the value" "not nan" "$exe" render s.cells -o x.png --rate nan
+fails_with "--elevation beyond the pole" "must be in [-90, 90]" "$exe" render s.cells -o x.png --elevation 100
+check "--elevation beyond the pole: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --elevation 100
+fails_with "a missing output folder, before rendering" "the folder nofolder does not exist" "$exe" render s.cells -o nofolder/x.png
+check "no output for a missing folder" test ! -e nofolder
+mkdir -p empty.d stray.d && echo stray > stray.d/Header
+fails_with "an empty folder says what is missing" "without a Header file" "$exe" info empty.d
+fails_with "a stray Header says what is wrong" "Header is not an AMReX plotfile's" "$exe" info stray.d
+mkfifo input.cells
+fails_with "a FIFO as input is refused" "not a regular file or a folder" timeout 20 "$exe" info input.cells
+rm -f input.cells
 fails_with "missing input" "nothing.cells" "$exe" info nothing.cells
 fails_with "unknown field" "unknown field 'nope'" "$exe" sample s.cells -f nope -p pts.txt
 fails_with "bad point line" "line 2" bash -c "printf '1 2 3\n1 2\n' | '$exe' sample s.cells"

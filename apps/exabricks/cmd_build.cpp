@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "common.h"
 
+#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/model_file.h"
 
@@ -17,6 +18,7 @@ struct BuildCmdOptions {
 };
 
 void run(const BuildCmdOptions& o) {
+  checkOutputFolder(o.output);
   LoadOptions load = o.in.loadOptions(false);
   load.fields = o.fields;
   Timer timer;

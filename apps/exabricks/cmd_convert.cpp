@@ -2,6 +2,7 @@
 #include "commands.h"
 #include "common.h"
 
+#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/native.h"
 
@@ -15,6 +16,7 @@ struct ConvertOptions {
 };
 
 void run(const ConvertOptions& o) {
+  checkOutputFolder(o.output);
   LoadOptions load = o.in.loadOptions(false);
   load.fields = o.fields;
   const CellSet cells = loadCells(o.in.input, load);

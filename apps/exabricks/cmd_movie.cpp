@@ -132,6 +132,7 @@ MoviePlan planMovie(const MovieCmdOptions& o, const CLI::App& cmd) {
   if (!p.toFolder && p.ext != ".mp4" && p.ext != ".webm")
     failUsage("-o ", o.output, ": write .mp4 (H.264), .webm (VP9) or a folder for the frames alone");
   p.framesDir = !o.framesDir.empty() ? o.framesDir : p.toFolder ? o.output : o.output + ".frames";
+  if (!p.toFolder) checkOutputFolder(o.output);
 
   p.paths = o.inputs.empty() ? std::vector<std::string>{""} : seriesSteps(o.inputs);
   const int steps = int(p.paths.size());

@@ -6,6 +6,7 @@
 #include "scene_options.h"
 
 #include "exabricks/amr/basis_batch.h"
+#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
@@ -157,6 +158,7 @@ void printStats(const RenderCmdOptions& o, const Scene& scene, const Renderer& r
 void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
   const ImageFormat format = imageFormatFor(o.output, o.bits);
+  checkOutputFolder(o.output);
   if (!formatKeepsAlpha(format) && cmd.count("--alpha"))
     failUsage("--alpha needs a PNG or OpenEXR output (", o.output, " has no alpha channel)");
   SceneDocument doc = sceneFromOptions(o.scene, cmd);

@@ -14,6 +14,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -22,6 +23,8 @@
 #include <iostream>
 #include <memory>
 #include <new>
+#include <string>
+#include <vector>
 
 #ifndef EXABRICKS_VERSION
 #define EXABRICKS_VERSION "unknown"
@@ -44,6 +47,42 @@ bool flushStandardOutput() {
     return false;
   }
   return true;
+}
+
+/// Edits (insertions, deletions, substitutions, swaps of neighbours) between two words.
+size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::vector<size_t>> d(a.size() + 1, std::vector<size_t>(b.size() + 1));
+  for (size_t i = 0; i <= a.size(); ++i)
+    d[i][0] = i;
+  for (size_t j = 0; j <= b.size(); ++j)
+    d[0][j] = j;
+  for (size_t i = 1; i <= a.size(); ++i)
+    for (size_t j = 1; j <= b.size(); ++j) {
+      d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      if (i > 1 && j > 1 && a[i - 1] == b[j - 2] && a[i - 2] == b[j - 1])
+        d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
+    }
+  return d[a.size()][b.size()];
+}
+
+/// The message of a usage error: where no command was recognised, "unknown command 'WORD'" for
+/// the first word that is not an option, with the command within two edits of it.
+std::string usageMessage(CLI::App& app, int argc, char** argv, const CLI::ParseError& e) {
+  for (CLI::App* command : app.get_subcommands({}))
+    if (command->parsed()) return e.what();
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') continue;
+    std::string best;
+    size_t bestDistance = 3;
+    for (CLI::App* command : app.get_subcommands({}))
+      if (const size_t d = editDistance(word, command->get_name()); d < bestDistance) {
+        bestDistance = d;
+        best = command->get_name();
+      }
+    return "unknown command '" + word + "'" + (best.empty() ? "" : " (did you mean '" + best + "'?)");
+  }
+  return e.what();
 }
 
 } // namespace
@@ -89,10 +128,21 @@ int main(int argc, char** argv) {
   exa::cli::addBench(app);
   exa::cli::addView(app);
   exa::cli::addMovie(app);
+  // The global flags may follow the command too (exabricks render -q ...).
+  for (CLI::App* command : app.get_subcommands({}))
+    command->fallthrough();
   try {
     app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    return app.exit(e); // usage errors: 2 (help and version: 0)
+    // Usage errors: one line, exit 2, with the command meant where a word is close to one.
+    std::fprintf(stderr, "%s: error: %s\n", who.c_str(), usageMessage(app, argc, argv, e).c_str());
+    return 2;
   } catch (const exa::UsageError& e) {
     std::fprintf(stderr, "%s: error: %s\n", who.c_str(), e.what());
     return 2;

@@ -132,8 +132,22 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--up", up, "Camera up vector x,y,z")->delimiter(',');
   cmd.add_option("--fov", fov, "Vertical field of view in degrees")->capture_default_str();
   cmd.add_flag("--ortho", ortho, "Orthographic projection");
-  cmd.add_option("--azimuth", azimuth, "Default view: degrees around +z")->capture_default_str();
-  cmd.add_option("--elevation", elevation, "Default view: degrees above the x-y plane")->capture_default_str();
+  const CLI::Validator finite(
+      [](std::string& text) {
+        const double v = std::strtod(text.c_str(), nullptr);
+        return std::isfinite(v) ? std::string() : "must be a finite number, not " + text;
+      },
+      "FINITE");
+  cmd.add_option("--azimuth", azimuth, "Default view: degrees around +z")->capture_default_str()->check(finite);
+  const CLI::Validator latitude(
+      [](std::string& text) {
+        const double v = std::strtod(text.c_str(), nullptr);
+        return v >= -90.0 && v <= 90.0 ? std::string() : "must be in [-90, 90] degrees, not " + text;
+      },
+      "DEGREES");
+  cmd.add_option("--elevation", elevation, "Default view: degrees above the x-y plane (-90 to 90)")
+      ->capture_default_str()
+      ->check(latitude);
   cmd.add_option("--background", background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
   cmd.add_flag("--alpha", alpha, "Keep the alpha channel instead of a background");
   cmd.add_option("--shading", shading, sceneSettingHelp("shading"))->capture_default_str();

@@ -118,6 +118,14 @@ void syncDirectory(const std::string& target) {
 
 } // namespace
 
+void checkOutputFolder(const std::string& path) {
+  const fs::path p(path);
+  const fs::path folder = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  std::error_code ec;
+  if (!fs::exists(folder, ec)) fail(path, ": cannot write: the folder ", folder.string(), " does not exist");
+  if (!fs::is_directory(folder, ec)) fail(path, ": cannot write: ", folder.string(), " is not a folder");
+}
+
 std::string temporaryPath(const std::string& target, size_t index) {
   return target + ".tmp" + std::to_string(::getpid()) + "." + std::to_string(index);
 }

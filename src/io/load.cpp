@@ -125,8 +125,21 @@ InputKind detectInput(const std::string& path) {
   if (path.empty()) return InputKind::Default;
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) fail(path, ": no such file or directory");
-  if (!std::filesystem::is_directory(path, ec) && isModelFile(path)) return InputKind::Model;
+  const bool folder = std::filesystem::is_directory(path, ec);
+  // A FIFO, socket or device would block or stream forever: inputs are files and folders.
+  if (!folder && !std::filesystem::is_regular_file(path, ec))
+    fail(path, ": not a regular file or a folder (a pipe, socket or device cannot be read as data)");
+  if (!folder && isModelFile(path)) return InputKind::Model;
   if (const FormatReader* r = findReader(path)) return r->kind;
+  if (folder) {
+    // The only folder input is an AMReX plotfile: say what it lacks.
+    const std::filesystem::path header = std::filesystem::path(path) / "Header";
+    if (!std::filesystem::exists(header, ec))
+      fail(path, ": a folder without a Header file, so not an AMReX plotfile (the only folder exabricks reads;",
+           " a time series is named by its steps, as in 'run/plt*')");
+    fail(path, ": a folder whose Header is not an AMReX plotfile's (its first line should name the plotfile",
+         " format, such as HyperCLaw-V1.1)");
+  }
   fail(path, ": unknown input format (expected an exabricks model file, NAME.cells, a .grids",
        " fixture, an AMReX plotfile directory, a Chombo or FLASH HDF5 file, an Enzo parameter file,",
        " a VTK .vthb file or a NAME_NXxNYxNZ_TYPE.raw volume)");

@@ -224,7 +224,9 @@ namespace {
 
 /// A number as a message shows it: integers without a fraction.
 std::string shown(double v) {
-  if (std::isfinite(v) && v == std::floor(v) && std::abs(v) < 1e15) return std::to_string(int64_t(v));
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  if (v == std::floor(v) && std::abs(v) < 1e15) return std::to_string(int64_t(v));
   return nlohmann::json(v).dump();
 }
 

@@ -37,6 +37,10 @@ private:
   std::vector<Pending> pending_;
 };
 
+/// Fails ("PATH: cannot write: ...") unless the folder `path` is to be written into exists: a
+/// command checks its outputs before it loads and renders, not after.
+void checkOutputFolder(const std::string& path);
+
 /// Writes `size` bytes to `path` atomically (AtomicFiles with one file).
 void writeFileAtomic(const std::string& path, const void* data, size_t size);
 
