@@ -282,6 +282,61 @@ std::string textPixels(const std::string& text, bool glyphByGlyph) {
 
 } // namespace
 
+TEST(Overlay, TickLabelsAreDistinctAndNearTheirTicks) {
+  // Narrow, wide, negative and logarithmic ranges: every label distinct from its neighbours and
+  // nearer its tick than half the way to the next; 2 to 7 ticks on a linear bar, 2 to 5 on a log
+  // bar under two decades.
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> exponent(-12.0, 12.0), unit(-1.0, 1.0), decades(0.02, 1.99);
+  std::vector<std::pair<range1f, bool>> cases = {{{1500.f, 1500.5f}, false},
+                                                 {{101325.f, std::nextafter(101325.f, 2e5f)}, false},
+                                                 {{298.f, 1529.f}, true},
+                                                 {{-8.8e-4f, -8e-4f}, false}};
+  for (int i = 0; i < 2000; ++i) {
+    const double a = unit(rng) * std::pow(10.0, exponent(rng));
+    const double width = std::abs(a) * std::pow(10.0, -std::abs(exponent(rng)) / 2) + 1e-30;
+    cases.push_back({range1f{float(a), float(a + width)}, false});
+    const double lo = std::pow(10.0, exponent(rng));
+    cases.push_back({range1f{float(lo), float(lo * std::pow(10.0, decades(rng)))}, true});
+  }
+  for (const auto& [range, logScale] : cases) {
+    if (!(range.upper > range.lower)) continue;
+    const std::vector<double> ticks = colorBarTicks(range, logScale);
+    const std::vector<std::string> labels = colorBarLabels(ticks, logScale);
+    const std::string what = strCat(logScale ? "log " : "", "[", range.lower, ", ", range.upper, "]");
+    ASSERT_EQ(labels.size(), ticks.size()) << what;
+    ASSERT_GE(ticks.size(), 2u) << what;
+    if (logScale && std::log10(double(range.upper) / double(range.lower)) < 2.0) {
+      EXPECT_LE(ticks.size(), 5u) << what;
+    } else if (!logScale) {
+      EXPECT_LE(ticks.size(), 7u) << what;
+    }
+    auto at = [&](double v) { return logScale ? std::log10(v) : v; };
+    const double slack = 1e-5 * (double(range.upper) - double(range.lower)) +
+                         1e-6 * std::max(std::abs(double(range.lower)), std::abs(double(range.upper)));
+    for (size_t i = 0; i < ticks.size(); ++i) {
+      EXPECT_GE(ticks[i], double(range.lower) - slack) << what;
+      EXPECT_LE(ticks[i], double(range.upper) + slack) << what;
+      if (i > 0) {
+        EXPECT_NE(labels[i], labels[i - 1]) << what;
+      }
+      const double shown = std::strtod(labels[i].c_str(), nullptr);
+      const double step = at(ticks[std::min(i + 1, ticks.size() - 1)]) - at(ticks[i > 0 ? i - 1 : 0]);
+      const double gap = i > 0 && i + 1 < ticks.size() ? step / 2 : step;
+      EXPECT_LT(std::abs(at(shown) - at(ticks[i])), gap / 2) << what << ": '" << labels[i] << "' for " << ticks[i];
+    }
+  }
+  // The cases users met: six ticks of a half-unit range, a field over one float32 step, a
+  // temperature over less than a decade.
+  EXPECT_EQ(colorBarLabels(colorBarTicks({1500.f, 1500.5f}, false), false),
+            (std::vector<std::string>{"1500.0", "1500.1", "1500.2", "1500.3", "1500.4", "1500.5"}));
+  EXPECT_EQ(colorBarLabels(colorBarTicks({0.f, 1.f}, false), false),
+            (std::vector<std::string>{"0.0", "0.2", "0.4", "0.6", "0.8", "1.0"}));
+  EXPECT_EQ(colorBarLabels(colorBarTicks({-3.f, 7.f}, false), false),
+            (std::vector<std::string>{"-2", "0", "2", "4", "6"}));
+  EXPECT_EQ(colorBarLabels(colorBarTicks({298.f, 1529.f}, true), true), (std::vector<std::string>{"500", "1000"}));
+}
+
 TEST(Overlay, EveryTickLabelIsDrawnWhole) {
   // Ranges over many magnitudes, both signs, linear and logarithmic: each tick label drawn as
   // one string must light exactly the pixels of its glyphs drawn one by one.
@@ -298,8 +353,8 @@ TEST(Overlay, EveryTickLabelIsDrawnWhole) {
   std::set<std::string> labels = {"-8.88e+38", "888", "-0.000888", "1e-308", "-inf", "nan"};
   for (const range1f& r : ranges)
     for (bool logScale : {false, true})
-      for (double t : colorBarTicks(r, logScale))
-        labels.insert(colorBarLabel(t));
+      for (const std::string& label : colorBarLabels(colorBarTicks(r, logScale), logScale))
+        labels.insert(label);
   EXPECT_GT(labels.size(), 300u);
   for (const std::string& label : labels) {
     const std::string whole = textPixels(label, false), glyphs = textPixels(label, true);

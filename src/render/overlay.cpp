@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace exa {
 namespace {
@@ -65,34 +66,97 @@ int drawText(Image& image, int x, int y, const std::string& text, const vec3f& c
   return textWidth(text, scale);
 }
 
+namespace {
+
+/// Multiples of `step` in [lo, hi] (at most 64).
+std::vector<double> multiplesIn(double lo, double hi, double step) {
+  std::vector<double> ticks;
+  // (float ranges: an end a float rounding away from a multiple still has its tick)
+  const int64_t k0 = int64_t(std::ceil(lo / step - 1e-4)), k1 = int64_t(std::floor(hi / step + 1e-4));
+  for (int64_t k = k0; k <= k1 && ticks.size() < 64; ++k)
+    ticks.push_back(double(k) * step);
+  return ticks;
+}
+
+/// About `parts` + 1 ticks at 1-2-5 steps over [lo, hi].
+std::vector<double> linearTicks(double lo, double hi, double parts = 5.0) {
+  const double rough = (hi - lo) / parts;
+  const double mag = std::pow(10.0, std::floor(std::log10(rough)));
+  double step = mag;
+  for (double m : {1.0, 2.0, 5.0, 10.0})
+    if (m * mag >= rough * (1 - 1e-6)) {
+      step = m * mag;
+      break;
+    }
+  return multiplesIn(lo, hi, step);
+}
+
+} // namespace
+
 std::vector<double> colorBarTicks(const range1f& range, bool logScale) {
   std::vector<double> ticks;
   if (range.empty() || !(range.upper >= range.lower)) return ticks;
   double lo = range.lower, hi = range.upper;
+  if (!(hi > lo)) return {lo};
   if (logScale) {
     if (!(hi > 0.0)) return ticks;
     if (!(lo > 0.0)) lo = hi * 1e-6;
     // (float ranges: 1e-3f is 1.0000000475e-3, a decade within 1e-6 of an end counts)
     const int d0 = int(std::ceil(std::log10(lo) - 1e-6)), d1 = int(std::floor(std::log10(hi) + 1e-6));
-    const int every = std::max(1, (d1 - d0 + 1 + 5) / 6);
-    for (int d = d0; d <= d1; d += every)
-      ticks.push_back(std::pow(10.0, d));
-    if (ticks.empty()) ticks = {lo, hi};
-    return ticks;
-  }
-  if (!(hi > lo)) return {lo};
-  const double rough = (hi - lo) / 5.0;
-  const double mag = std::pow(10.0, std::floor(std::log10(rough)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * mag >= rough) {
-      step = m * mag;
-      break;
+    if (d1 - d0 + 1 >= 2) {
+      const int every = std::max(1, (d1 - d0 + 1 + 5) / 6);
+      for (int d = d0; d <= d1; d += every)
+        ticks.push_back(std::pow(10.0, d));
+      return ticks;
     }
-  const int64_t k0 = int64_t(std::ceil(lo / step - 1e-6)), k1 = int64_t(std::floor(hi / step + 1e-6));
-  for (int64_t k = k0; k <= k1 && ticks.size() < 64; ++k)
-    ticks.push_back(double(k) * step);
-  return ticks;
+    // Under two decades: 1, 2 and 5 times the powers of ten where that gives two ticks, else 1-2-5
+    // steps over the range (two to five ticks).
+    for (int d = d0 - 1; d <= d1; ++d)
+      for (double m : {1.0, 2.0, 5.0}) {
+        const double t = m * std::pow(10.0, d);
+        if (t >= lo * (1 - 1e-6) && t <= hi * (1 + 1e-6)) ticks.push_back(t);
+      }
+    if (ticks.size() >= 2) return ticks;
+    ticks = linearTicks(lo, hi, 3.0);
+    return ticks.size() >= 2 ? ticks : std::vector<double>{lo, hi};
+  }
+  return linearTicks(lo, hi);
+}
+
+std::vector<std::string> colorBarLabels(const std::vector<double>& ticks, bool logScale) {
+  // The fewest significant digits (but every digit of the integer part below a million) that keep
+  // each label distinct and nearer its own tick than half the way to a neighbour.
+  double largest = 0.0;
+  for (double t : ticks)
+    largest = std::max(largest, std::abs(t));
+  const int integerDigits = largest >= 1.0 && largest < 1e6 ? int(std::floor(std::log10(largest))) + 1 : 1;
+  auto position = [&](double v) { return logScale && v > 0.0 ? std::log10(v) : v; };
+  std::vector<std::string> labels(ticks.size());
+  // Linear bars of moderate values: one number of decimals for all, those of the step.
+  double step = std::numeric_limits<double>::infinity();
+  for (size_t i = 1; i < ticks.size(); ++i)
+    step = std::min(step, ticks[i] - ticks[i - 1]);
+  const bool fixed = !logScale && largest < 1e6 && (largest >= 1e-3 || largest == 0.0) && step > 0.0;
+  const int first = fixed && std::isfinite(step) ? std::max(0, -int(std::floor(std::log10(step) + 1e-9))) : 0;
+  for (int digits = fixed ? first : std::max(3, integerDigits); digits <= 17; ++digits) {
+    bool ok = true;
+    for (size_t i = 0; i < ticks.size() && ok; ++i) {
+      char buf[40];
+      if (fixed)
+        std::snprintf(buf, sizeof buf, "%.*f", digits, ticks[i] == 0.0 ? 0.0 : ticks[i]);
+      else
+        std::snprintf(buf, sizeof buf, "%.*g", digits, ticks[i]);
+      labels[i] = buf;
+      double gap = std::numeric_limits<double>::infinity();
+      if (i > 0) gap = std::min(gap, std::abs(position(ticks[i]) - position(ticks[i - 1])));
+      if (i + 1 < ticks.size()) gap = std::min(gap, std::abs(position(ticks[i + 1]) - position(ticks[i])));
+      const double shown = std::strtod(buf, nullptr);
+      ok = (std::isinf(gap) || std::abs(position(shown) - position(ticks[i])) < gap / 2) &&
+           (i == 0 || labels[i] != labels[i - 1]);
+    }
+    if (ok) return labels;
+  }
+  return labels;
 }
 
 void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor) {
@@ -100,9 +164,10 @@ void drawColorBar(Image& image, const TransferFunction& tf, const std::string& t
   const int s = overlayScale(image);
   const int barW = std::max(6, image.width / 40), barH = std::max(20, image.height * 3 / 5);
   const std::vector<double> ticks = colorBarTicks(tf.valueRange, tf.logScale);
+  const std::vector<std::string> labels = colorBarLabels(ticks, tf.logScale);
   int labelW = 0;
-  for (double t : ticks)
-    labelW = std::max(labelW, textWidth(colorBarLabel(t), s));
+  for (const std::string& label : labels)
+    labelW = std::max(labelW, textWidth(label, s));
   const int x1 = image.width - labelW - 6 * s - 4, x0 = x1 - barW;
   const int y0 = (image.height - barH) / 2, y1 = y0 + barH;
   for (int y = y0; y < y1; ++y) {
@@ -114,11 +179,11 @@ void drawColorBar(Image& image, const TransferFunction& tf, const std::string& t
   drawLine(image, x0 - 1, y1, x1, y1, textColor);
   drawLine(image, x0 - 1, y0 - 1, x0 - 1, y1, textColor);
   drawLine(image, x1, y0 - 1, x1, y1, textColor);
-  for (double t : ticks) {
-    const float n = tf.normalize(float(t));
+  for (size_t i = 0; i < ticks.size(); ++i) {
+    const float n = tf.normalize(float(ticks[i]));
     const int y = y1 - int(std::lround(double(n) * barH));
     drawLine(image, x1, y, x1 + 3 * s, y, textColor);
-    drawText(image, x1 + 5 * s, y - 4 * s, colorBarLabel(t), textColor, s);
+    drawText(image, x1 + 5 * s, y - 4 * s, labels[i], textColor, s);
   }
   const std::string head = tf.logScale ? title + " (log)" : title;
   drawText(image, std::max(0, x1 - textWidth(head, s)), y0 - 14 * s, head, textColor, s);

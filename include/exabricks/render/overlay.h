@@ -19,9 +19,14 @@ int overlayScale(const Image& image);
 int drawText(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale);
 int textWidth(const std::string& text, int scale);
 
-/// Ticks in data values for a colour bar over `range`: 1-2-5 steps (about five ticks), or the
-/// decades (every n-th when there are many) for logarithmic mapping.
+/// Ticks in data values for a colour bar over `range`: 1-2-5 steps (about five ticks), or for
+/// logarithmic mapping the decades (every n-th when there are many), under two decades 1, 2 and 5
+/// (or every digit) times the powers of ten, so that there are at least two ticks.
 std::vector<double> colorBarTicks(const range1f& range, bool logScale);
+
+/// The labels of the ticks with the digits they need: each distinct from its neighbours and
+/// nearer its own tick than half the way to the next (in log10 for logarithmic bars).
+std::vector<std::string> colorBarLabels(const std::vector<double>& ticks, bool logScale);
 
 /// The text drawn beside a colour-bar tick at value v (three significant digits).
 std::string colorBarLabel(double v);
