@@ -183,7 +183,7 @@ Device resolveDevice(const std::string& name) {
     const CudaStatus s = gpu::status();
     if (s.problem.empty()) return Device::Cuda;
     if (name == "auto") return Device::Cpu;
-    fail("--device cuda: ", s.problem);
+    fail("the cuda device cannot be used: ", s.problem);
   }
   fail("unknown device '", name, "' (cpu, cuda, auto or portable)");
 }

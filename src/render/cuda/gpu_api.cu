@@ -75,8 +75,16 @@ CudaStatus status() {
   const cudaError_t e = cudaGetDeviceCount(&s.devices);
   if (e != cudaSuccess || s.devices == 0) {
     s.devices = 0;
-    s.problem = std::string("no usable CUDA GPU (") +
-                (e != cudaSuccess ? cudaGetErrorString(e) : "the CUDA runtime sees no device") + ")";
+    // Say what is missing in words: without a driver the runtime reports an "insufficient"
+    // driver version, which reads as if an update would do.
+    std::string why;
+    if (e == cudaErrorInsufficientDriver)
+      why = "no NVIDIA driver was found, or it is older than this build's CUDA runtime needs";
+    else if (e == cudaErrorNoDevice || e == cudaSuccess)
+      why = "no NVIDIA GPU was found";
+    else
+      why = cudaGetErrorString(e);
+    s.problem = "no usable CUDA GPU (" + why + ")";
     cudaGetLastError();
     return s;
   }
