@@ -258,10 +258,16 @@ def test_an_amrex_plotfile_with_its_domain_outline(tmp_path):
     assert np.abs(alone[..., :3] - want[..., :3]).max() < 1e-6
     sc.annotate_domain(ds, color=[1, 1, 1, 1])
     got = exabricks_layout(sc.render())
+    # The outline's pixels: where yt's lines left a depth in the z-buffer the source composited
+    # with. yt's own render of the outline alone puts the same lines there, give or take a pixel
+    # where a line runs along pixel boundaries (seen on some machines): most pixels agree.
+    depth = np.asarray(sc.sources[key].zbuffer.z)[::-1, ::-1]  # the sources' layout, turned as the image
+    on = np.isfinite(exabricks_layout(depth))
+    assert on.sum() > 300
     outline = scene_of(ds, "plane-parallel", BoxSource(ds.domain_left_edge, ds.domain_right_edge, color=[1, 1, 1, 1]))
     outline.camera = sc.camera
-    on = np.all(exabricks_layout(outline.render()) == 1.0, axis=-1)
-    assert on.sum() > 300
+    alone_outline = np.all(exabricks_layout(outline.render()) == 1.0, axis=-1)
+    assert (on & alone_outline).sum() > 0.75 * on.sum()
     # The outline adds its light where it shows (through the data, or in front of it); off the
     # outline the picture is the same.
     assert np.all(got[on][:, :3] >= alone[on][:, :3] - 1e-6) and got[on][:, :3].mean() > 0.9
