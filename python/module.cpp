@@ -316,6 +316,21 @@ public:
         }
         done = true;
       });
+      // Taking the GIL as the interpreter finalizes ends this (daemon) thread by unwinding it,
+      // even just after the check below said it was not finalizing: the worker is then stopped
+      // and joined on the way out instead of leaving a joinable thread, and the GIL is not taken
+      // again by the release's end (either would be std::terminate).
+      struct StopOnUnwind {
+        std::atomic<bool>& cancel;
+        std::thread& worker;
+        py::gil_scoped_release& release;
+        ~StopOnUnwind() {
+          if (!worker.joinable()) return;
+          cancel = true;
+          worker.join();
+          if (interpreterFinalizing()) release.disarm();
+        }
+      } stopOnUnwind{cancel, worker, release};
       while (!done) {
         std::this_thread::sleep_for(std::chrono::milliseconds(20));
         if (cancelRequested_.exchange(false)) {

@@ -419,6 +419,6 @@ def test_the_device_path_renders_like_the_cpu():
     assert np.abs(a - b).max() < 2e-3
     info = ds.info()["device"]
     if info["gpus"] == 0:
-        with pytest.raises(Exception, match="--device cuda"):
+        with pytest.raises(Exception, match="the cuda device cannot be used"):
             eb.Scene(ds, device="cuda")
         assert eb.Scene(ds, width=16, height=16).render() is not None  # "auto" falls back to the CPU
