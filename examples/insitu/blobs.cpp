@@ -1,5 +1,5 @@
 // A small AMR simulation handing every step to ParaView Catalyst: Gaussian blobs that move on
-// circles through the unit cube, sampled on a three-level hierarchy (32^3 cells at level 0,
+// circles through the unit cube, sampled on a four-level hierarchy (32^3 cells at level 0,
 // ratio 2) that follows the blobs and is rebuilt every few steps. The blocks are dealt out
 // round-robin over the MPI processes; each process computes its blocks only. Every step goes to
 // Catalyst as a vtkOverlappingAMR (the metadata of every block on every process, the cells of a
@@ -35,7 +35,7 @@
 
 namespace {
 
-constexpr int kLevels = 3;
+constexpr int kLevels = 4;
 constexpr int kBlock = 8;   // cells per block side, every level
 constexpr int kCoarse = 32; // level-0 cells per side of the unit cube
 constexpr int kBlobs = 3;
@@ -72,7 +72,7 @@ std::vector<Block> regrid(double t) {
     for (int y = 0; y < n; ++y)
       for (int x = 0; x < n; ++x)
         blocks.push_back({0, {x * kBlock, y * kBlock, z * kBlock}});
-  const double reach[kLevels] = {0.16, 0.07, 0.0};
+  const double reach[kLevels] = {0.16, 0.08, 0.04, 0.0};
   for (int level = 0; level + 1 < kLevels; ++level) {
     std::vector<Block> children;
     for (const Block& b : blocks) {

@@ -16,7 +16,7 @@ from paraview.simple import (ColorBy, CreateView, GetColorTransferFunction, GetO
 view_settings = {
     "size": [480, 360], "position": [1.75, -0.85, 1.3], "focus": [0.5, 0.5, 0.5], "up": [0, 0, 1], "angle": 30.0,
     "range": [0.0, 1.0], "colors": [[0.1, 0.2, 0.9], [1.0, 0.8, 0.1]], "alpha": [0.0, 0.3],
-    "unit": 1.0 / 128, "samples": 8, "every": 5,
+    "unit": 1.0 / 256, "samples": 8, "every": 5,
 }
 if os.environ.get("EXABRICKS_INSITU_VIEW"):
     with open(os.environ["EXABRICKS_INSITU_VIEW"]) as f:

@@ -23,7 +23,7 @@ simulation, script, plugin, cli, work, mpiexec = sys.argv[1:7]
 os.makedirs(work, exist_ok=True)
 POSITION, FOCUS, RANGE = (1.75, -0.85, 1.3), (0.5, 0.5, 0.5), (0.0, 1.0)
 view = {"size": [WIDTH, HEIGHT], "position": POSITION, "focus": FOCUS, "up": UP, "angle": ANGLE, "range": RANGE,
-        "colors": COLORS, "alpha": ALPHA, "unit": 1.0 / 128, "samples": 8, "every": 3}
+        "colors": COLORS, "alpha": ALPHA, "unit": 1.0 / 256, "samples": 8, "every": 3}
 view_path = os.path.join(work, "view.json")
 with open(view_path, "w") as f:
     json.dump(view, f)

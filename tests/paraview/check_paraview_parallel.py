@@ -1,10 +1,13 @@
 """The ExaBricks representation on several processes (pvbatch under mpirun; IceT composites):
 
-    pvpython check_paraview_parallel.py PLUGIN EXABRICKS_CLI WORK_DIR MPIEXEC PVBATCH [DATA_DIR]
+    python3 check_paraview_parallel.py PLUGIN EXABRICKS_CLI WORK_DIR MPIEXEC PVBATCH [DATA_DIR]
+        [--generated SIMULATION SCRIPT]
 
 Renders the cases of render_parallel.py on 1, 2, 3 and 4 processes
 and compares each picture with the one-process picture: plt_small as a volume, with lit
-iso-surfaces, a turned view after an interactive render, the three-level PeleLM plotfile, and
+iso-surfaces, a turned view after an interactive render, the three-level PeleLM plotfile, a
+generated four-level .vthb (with --generated: one step of the in situ example's data, read by
+ParaView's XML AMR reader), and
 with opaque geometry (the blocks' outlines, a slice, planes in front of and behind the data)
 where ParaView can move geometry between processes (see exchange_works).
 The bounds: mean difference below 0.5/255, at most 8 % of the pixels beyond 1.5/255 (IceT
@@ -25,8 +28,14 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from pv_common import finest_cell, plotfile_or_skip, read_png  # noqa: E402
 
-plugin, cli, work, mpiexec, pvbatch = sys.argv[1:6]
-plotfile = plotfile_or_skip(sys.argv[6] if len(sys.argv) > 6 else None)
+args = sys.argv[1:]
+generated = None
+if "--generated" in args:
+    at = args.index("--generated")
+    generated = args[at + 1:at + 3]
+    del args[at:at + 3]
+plugin, cli, work, mpiexec, pvbatch = args[0:5]
+plotfile = plotfile_or_skip(args[5] if len(args) > 5 else None)
 pelelm = os.path.join(os.path.dirname(os.path.dirname(plotfile)), "pelelm_3lev_3d", "example_plt_3d")
 script = os.path.join(os.path.dirname(os.path.abspath(__file__)), "render_parallel.py")
 os.makedirs(work, exist_ok=True)
@@ -39,6 +48,23 @@ if os.path.isdir(pelelm):
     camera = (list(centre + np.linalg.norm(upper - lower) * np.array([1.2, -0.8, 0.9])), list(centre))
     settings["pelelm"] = {"path": pelelm, "cell": finest_cell(cli, pelelm), "camera": camera,
                           "range": [vorticity["min"], vorticity["max"]]}
+if generated:
+    # One step of the in situ example, written as .vthb by its Catalyst script (one process).
+    out = os.path.join(work, "generated")
+    view = os.path.join(work, "generated-view.json")
+    with open(view, "w") as f:
+        json.dump({"every": 1, "size": [32, 24]}, f)
+    env = dict(os.environ, EXABRICKS_INSITU_VIEW=view, EXABRICKS_PV_PLUGIN=plugin)
+    run = subprocess.run([mpiexec, "-np", "1"] + (["--allow-run-as-root"] if os.geteuid() == 0 else []) +
+                         [generated[0], generated[1], "--steps", "1", "--out", out],
+                         capture_output=True, text=True, timeout=300, env=env)
+    vthb = os.path.join(out, "step_0000.vthb")
+    if run.returncode != 0 or not os.path.exists(vthb):
+        print(run.stdout[-2000:], run.stderr[-2000:])
+        print("FAILED:\n  the in situ example wrote no data to check")
+        sys.exit(1)
+    settings["vthb"] = {"path": vthb, "cell": finest_cell(cli, vthb), "range": [0.0, 1.0],
+                        "camera": [[1.75, -0.85, 1.3], [0.5, 0.5, 0.5]]}
 settings_path = os.path.join(work, "settings.json")
 with open(settings_path, "w") as f:
     json.dump(settings, f)
@@ -95,6 +121,8 @@ else:
           "appended data fails with this expat, so ParaView loses the geometry it moves between processes")
 if os.path.isdir(pelelm):
     cases.append("pelelm")
+if generated:
+    cases.append("vthb")
 if 1 in records:
     for n in sorted(records):
         if n == 1:

@@ -4,7 +4,8 @@ mpirun started (docs/paraview.md, "Several processes"):
     mpirun -np N pvbatch render_parallel.py PLUGIN SETTINGS_JSON OUT_DIR
 
 SETTINGS_JSON holds what the driver learnt with `exabricks info` (which cannot run inside an MPI
-job): {"plotfile", "cell", and optionally "pelelm": {"path", "cell", "range", "camera"}}. Writes
+job): {"plotfile", "cell", and optionally "pelelm" and "vthb": {"path", "cell", "range",
+"camera"}}. Writes
 OUT_DIR/CASE.png for every case and OUT_DIR/parts.json (the Parts information of each case and
 the passes of the still and interactive renders). Any error ends every process (no hang)."""
 import json
@@ -13,10 +14,12 @@ import sys
 import traceback
 
 import paraview.simple
-from paraview.simple import Hide, LoadPlugin, Outline, Render, SaveScreenshot, Show, Slice
+from paraview.simple import (CreateView, Hide, LoadPlugin, Outline, Render, SaveScreenshot, Show, Slice,
+                             XMLUniformGridAMRReader)
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pv_common import HEIGHT, WIDTH, information, setup_view, show_planes  # noqa: E402
+from pv_common import (ALPHA, ANGLE, HEIGHT, UP, WIDTH, information, setup_view, show_exabricks,  # noqa: E402
+                       show_planes)
 
 plugin, settings, out = sys.argv[1:4]
 with open(settings) as f:
@@ -71,6 +74,23 @@ def main():
     view.InteractiveRender()
     record["draft_passes"] = information(display, "RefinementPasses")
     shot(view, display, "turned")
+
+    if "vthb" in settings:
+        # A generated four-level hierarchy (the in situ example's data) through ParaView's XML AMR
+        # reader, every level.
+        v = settings["vthb"]
+        xml = XMLUniformGridAMRReader(FileName=[v["path"]])
+        xml.DefaultNumberOfLevels = 10
+        vthb_view = CreateView("RenderView")
+        vthb_view.ViewSize = [WIDTH, HEIGHT]
+        vthb_view.OrientationAxesVisibility = 0
+        vthb_view.UseColorPaletteForBackground = 0
+        vthb_view.Background = [0.0, 0.0, 0.0]
+        vthb_display = Show(xml, vthb_view)
+        show_exabricks(vthb_display, "density", tuple(v["range"]), ALPHA, v["cell"])
+        vthb_view.CameraPosition, vthb_view.CameraFocalPoint = v["camera"]
+        vthb_view.CameraViewUp, vthb_view.CameraViewAngle = UP, ANGLE
+        shot(vthb_view, vthb_display, "vthb")
 
     if "pelelm" in settings:
         p = settings["pelelm"]
