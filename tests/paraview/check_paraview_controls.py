@@ -93,6 +93,16 @@ print("ambient occlusion darkens %d pixels (by %.3f at most), lightens %d"
       % ((darker > 1.5 / 255).sum(), darker.max(), (darker < -1.5 / 255).sum()))
 expect((darker > 1.5 / 255).sum() > 50, "ambient occlusion darkens only %d pixels" % (darker > 1.5 / 255).sum())
 display.AmbientOcclusionRays = 0
+# A clip plane through the column: the half-space its normal points into is gone, volume and
+# iso-surface alike.
+PLANE = [0.55, 0.5, 0.5, 0.6, -0.8, 0.0]
+display.ClipPlanes = PLANE
+clipped = compare("Clip Planes %s" % PLANE, "clip", ["--spp", "3", "--iso", str(ISO), "--iso-color", color,
+                                                    "--clip-plane", ",".join(map(str, PLANE))])
+cut = (np.abs(clipped - iso).max(axis=-1) > 0.05).sum()
+print("the clip plane changes %d pixels" % cut)
+expect(cut > 200, "the clip plane changes only %d pixels" % cut)
+display.ClipPlanes = []
 display.IsoValues = []
 
 # 4. Lighting.

@@ -3,13 +3,12 @@
     python3 check_paraview_parallel.py PLUGIN EXABRICKS_CLI WORK_DIR MPIEXEC PVBATCH [DATA_DIR]
         [--generated SIMULATION SCRIPT]
 
-Renders the cases of render_parallel.py on 1, 2, 3 and 4 processes
-and compares each picture with the one-process picture: plt_small as a volume, with lit
-iso-surfaces, a turned view after an interactive render, the three-level PeleLM plotfile, a
-generated four-level .vthb (with --generated: one step of the in situ example's data, read by
-ParaView's XML AMR reader), and
-with opaque geometry (the blocks' outlines, a slice, planes in front of and behind the data)
-where ParaView can move geometry between processes (see exchange_works).
+Renders the cases of render_parallel.py on 1, 2, 3 and 4 processes and compares each picture
+with the one-process picture: plt_small as a volume, with lit iso-surfaces, with those and a clip
+plane, a turned view after an interactive render, the three-level PeleLM plotfile, a generated
+four-level .vthb (with --generated: one step of the in situ example's data, read by ParaView's
+XML AMR reader), and with opaque geometry (the blocks' outlines, a slice, planes in front of and
+behind the data) where ParaView can move geometry between processes (see exchange_works).
 The bounds: mean difference below 0.5/255, at most 8 % of the pixels beyond 1.5/255 (IceT
 composites 8-bit colour: each part's image is rounded before it is blended, one step at most)
 and at most 0.1 % beyond 4.5/255 (pixels where a part's face is seen edge-on; 0.5 % with
@@ -113,7 +112,7 @@ def exchange_works():
     reader.SetInputString(writer.GetOutputString())
     reader.Update()
     return reader.GetOutput().GetNumberOfCells() == grid.GetOutput().GetNumberOfCells()
-cases = ["volume", "iso", "turned"]
+cases = ["volume", "iso", "clip", "turned"]
 if exchange_works():
     cases.append("geometry")
 else:
@@ -139,7 +138,7 @@ if 1 in records:
                   % (case, n, 255 * d.max(), 255 * d.mean(), 100 * beyond, 100 * far, 100 * shown))
             if shown < 0.05:
                 failures.append("%s: the picture shows almost nothing (%.0f%%)" % (case, 100 * shown))
-            if d.mean() > 0.5 / 255 or beyond > 0.08 or far > (0.005 if case == "iso" else 0.001):
+            if d.mean() > 0.5 / 255 or beyond > 0.08 or far > (0.005 if case in ("iso", "clip") else 0.001):
                 failures.append("%s on %d processes differs from one process (mean %.3f/255, %.2f%% beyond "
                                 "1.5/255, %.3f%% beyond 4.5/255)" % (case, n, 255 * d.mean(), 100 * beyond, 100 * far))
         parts = records[n]["volume"]["parts"]

@@ -46,6 +46,10 @@ def main():
     display.IsoValues = [1.1, 1.5]
     display.Shade = 1
     shot(view, display, "iso")
+    # The same with a clip plane through the column.
+    display.ClipPlanes = [0.55, 0.5, 0.5, 0.6, -0.8, 0.0]
+    shot(view, display, "clip")
+    display.ClipPlanes = []
     display.IsoValues = []
     display.Shade = 0
 

@@ -302,6 +302,33 @@ double vtkExaBricksRepresentation::GetIsoValue(int index) {
   return index >= 0 && size_t(index) < v.size() ? v[size_t(index)] : 0.0;
 }
 
+void vtkExaBricksRepresentation::SetNumberOfClipPlanes(int count) {
+  if (count < 0 || count > 64) {
+    vtkErrorMacro("ExaBricks: 0 to 64 Clip Planes, not " << count);
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.clipPlanes.resize(size_t(count));
+  this->Mapper->SetSettings(s);
+}
+
+void vtkExaBricksRepresentation::SetClipPlane(int index, double ox, double oy, double oz, double nx, double ny,
+                                              double nz) {
+  const double values[6] = {ox, oy, oz, nx, ny, nz};
+  const bool finite = std::all_of(values, values + 6, [](double v) { return std::isfinite(v); });
+  if (index < 0 || index >= 64 || !finite || (nx == 0.0 && ny == 0.0 && nz == 0.0)) {
+    vtkErrorMacro("ExaBricks: a Clip Plane is a point and a normal that is not zero, all finite (plane " << index
+                                                                                                         << ")");
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  if (size_t(index) >= s.clipPlanes.size()) s.clipPlanes.resize(size_t(index) + 1);
+  s.clipPlanes[size_t(index)] = exa::ClipPlane{exa::vec3d(ox, oy, oz), exa::normalize(exa::vec3d(nx, ny, nz))};
+  this->Mapper->SetSettings(s);
+}
+
+int vtkExaBricksRepresentation::GetNumberOfClipPlanes() { return int(this->Mapper->GetSettings().clipPlanes.size()); }
+
 void vtkExaBricksRepresentation::SetSamplesPerPixel(int samples) {
   if (samples < 1 || samples > 65536) {
     vtkErrorMacro("ExaBricks: Samples Per Pixel must be 1 to 65536, not " << samples);

@@ -53,6 +53,11 @@ public:
   void SetIsoValue(int index, double value);
   int GetNumberOfIsoValues();
   double GetIsoValue(int index);
+  /// Clip planes: each removes the half-space its normal points into (world coordinates), from
+  /// the volume and the iso-surfaces.
+  void SetNumberOfClipPlanes(int count);
+  void SetClipPlane(int index, double ox, double oy, double oz, double nx, double ny, double nz);
+  int GetNumberOfClipPlanes();
   void SetSamplesPerPixel(int samples);
   int GetSamplesPerPixel();
   /// 0 auto (the GPU where one can be used), 1 cpu, 2 cuda.

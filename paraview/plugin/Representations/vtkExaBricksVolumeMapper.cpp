@@ -82,6 +82,7 @@ Scene sceneOf(const std::string& field, const TransferFunction& tf, vtkColorTran
   scene.shading = shade ? settings.shading : Shading::None;
   scene.ao.rays = settings.aoRays;
   scene.iso.values = settings.isoValues;
+  scene.clip.planes = settings.clipPlanes;
   if (color)
     for (float v : settings.isoValues) {
       double rgb[3] = {1.0, 1.0, 1.0};
@@ -156,7 +157,8 @@ struct vtkExaBricksVolumeMapper::Accumulation {
   }
   static bool sameScene(const exa::Scene& a, const exa::Scene& b) {
     return a.layers == b.layers && a.iso == b.iso && a.shading == b.shading && a.ao.rays == b.ao.rays &&
-           a.ao.length == b.ao.length && a.ao.volume == b.ao.volume && a.volume == b.volume;
+           a.ao.length == b.ao.length && a.ao.volume == b.ao.volume && a.volume == b.volume && a.clip == b.clip &&
+           a.integration == b.integration;
   }
 };
 

@@ -42,6 +42,7 @@ struct Settings {
   Shading shading = Shading::Smooth; ///< the volume's lighting while Shade is on
   int aoRays = 0;                    ///< ambient occlusion rays per iso-surface hit
   std::vector<float> isoValues;      ///< iso-surfaces of the rendered array
+  std::vector<ClipPlane> clipPlanes; ///< each removes the half-space its normal points into
   int samplesPerPixel = 8;           ///< the passes a still image accumulates
   std::string device = "auto";       ///< "auto", "cpu" or "cuda" (exa::selectDevice)
   friend bool operator==(const Settings&, const Settings&) = default;
