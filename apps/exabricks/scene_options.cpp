@@ -390,6 +390,8 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
   if (first.field.empty() && model.fieldNames.size() > 1)
     logNote(strCat("field '", model.fieldNames[size_t(field)], "' (the default; -f chooses another of ",
                    model.fieldNames.size(), ")"));
+  // The default field by its name: a scene file written from here says which field it shows.
+  if (first.field.empty()) first.field = model.fieldNames[size_t(field)];
   if (o.sceneFile.empty() && o.tfFile.empty()) {
     const DefaultChoices c =
         adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
