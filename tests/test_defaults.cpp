@@ -50,6 +50,49 @@ TEST(Defaults, TheDefaultFieldIsTheDensity) {
   EXPECT_EQ(uniformModel({"radius", "scalar"}, one).requireField(""), 1);
 }
 
+TEST(Defaults, AwkwardFieldsGetPicturesThatShowThem) {
+  auto first = [](const DefaultChoices& c) { return c.notes.empty() ? std::string() : c.notes[0]; };
+  // Constant (exactly, and within a float step of 101325): nothing drawn, and said.
+  const Model exact = uniformModel({"RhoRT"}, [](int, int, int) { return 101325.f; });
+  const Model oneStep =
+      uniformModel({"RhoRT"}, [](int x, int, int) { return x < 16 ? 101325.f : std::nextafter(101325.f, 2e5f); });
+  for (const Model* model : {&exact, &oneStep}) {
+    const Model& constant = *model;
+    const DefaultChoices c =
+        adaptTransferFunction(constant, DatasetInfo::of(constant), 0, defaultTransferFunction(), true, true);
+    EXPECT_NE(first(c).find("'RhoRT' is constant (101325)"), std::string::npos) << first(c);
+    for (const OpacityPoint& p : c.tf.opacity)
+      EXPECT_EQ(p.alpha, 0.f);
+  }
+  // Both signs: a diverging map centred on zero, opaque at both ends, transparent at zero.
+  const Model signedField = uniformModel({"velx"}, [](int x, int, int) { return float(x - 12); });
+  DefaultChoices c =
+      adaptTransferFunction(signedField, DatasetInfo::of(signedField), 0, defaultTransferFunction(), true, true);
+  EXPECT_EQ(c.tf.colorMap.name, "cool-to-warm");
+  EXPECT_EQ(c.tf.valueRange.lower, -c.tf.valueRange.upper);
+  EXPECT_EQ(c.tf.valueRange.upper, 19.f);
+  EXPECT_GT(c.tf.atNormalized(0.f).w, 0.f);
+  EXPECT_GT(c.tf.atNormalized(1.f).w, 0.f);
+  EXPECT_EQ(c.tf.atNormalized(0.5f).w, 0.f);
+  // Not with a colour map asked for, nor for one sign far weaker than the other.
+  c = adaptTransferFunction(signedField, DatasetInfo::of(signedField), 0, defaultTransferFunction(), true, true,
+                            nullptr, false);
+  EXPECT_EQ(c.tf.colorMap.name, "viridis");
+  const Model mostlyPositive = uniformModel({"f"}, [](int x, int, int) { return x == 0 ? -0.01f : float(x); });
+  c = adaptTransferFunction(mostlyPositive, DatasetInfo::of(mostlyPositive), 0, defaultTransferFunction(), true, true);
+  EXPECT_EQ(c.tf.colorMap.name, "viridis");
+  // Exact zeros beside positive values over four decades: logarithmic over the positive values.
+  const Model dark = uniformModel({"Dark_Matter_Density"}, [](int x, int y, int z) {
+    if ((x * 7 + y * 3 + z) % 97 == 0) return 0.f;
+    const float r2 = float((x - 16) * (x - 16) + (y - 16) * (y - 16) + (z - 16) * (z - 16));
+    return std::pow(10.f, 4.f * std::exp(-r2 / 40.f));
+  });
+  c = adaptTransferFunction(dark, DatasetInfo::of(dark), 0, defaultTransferFunction(), true, true);
+  EXPECT_TRUE(c.tf.logScale) << first(c);
+  EXPECT_NE(first(c).find("besides exact zeros"), std::string::npos) << first(c);
+  EXPECT_GT(c.tf.valueRange.lower, 0.f);
+}
+
 TEST(Defaults, TransparentOverTheBackgroundAndLogWhereTheDataAsksForIt) {
   // A low background (0.1) filling most of the volume, a sphere of higher values.
   const Model low = uniformModel({"f"}, [](int x, int y, int z) {

@@ -395,7 +395,7 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
   if (o.sceneFile.empty() && o.tfFile.empty()) {
     const DefaultChoices c =
         adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
-                              !given("--opacity"), whole ? &whole->histogram : nullptr);
+                              !given("--opacity"), whole ? &whole->histogram : nullptr, !given("--colormap"));
     first.tf = c.tf;
     for (const std::string& note : c.notes)
       logNote(note);

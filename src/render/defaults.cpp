@@ -5,6 +5,7 @@
 #include "exabricks/core/error.h"
 
 #include <cmath>
+#include <limits>
 
 namespace exa {
 
@@ -80,13 +81,44 @@ float exposureScale(const Model& model, int field, const TransferFunction& tf, c
 
 DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
                                      const TransferFunction& tfIn, bool autoLog, bool autoOpacity,
-                                     const PartialData* part) {
+                                     const PartialData* part, bool autoColorMap) {
   DefaultChoices out;
   out.tf = tfIn;
   TransferFunction& tf = out.tf;
   const std::string& name = model.fieldNames.at(size_t(field));
-  const range1f range = tf.valueRange.empty() ? dataset.valueRanges.at(size_t(field)) : tf.valueRange;
+  range1f range = tf.valueRange.empty() ? dataset.valueRanges.at(size_t(field)) : tf.valueRange;
   if (range.empty()) return out;
+  const bool chooseRange = autoOpacity && tfIn.valueRange.empty();
+  // A constant field (to a few float steps): nothing invented to draw, and said so.
+  const float scale = std::max(std::abs(range.lower), std::abs(range.upper));
+  if (chooseRange && range.upper - range.lower <= 4.f * std::numeric_limits<float>::epsilon() * scale) {
+    tf.opacity = {{0.f, 0.f}, {1.f, 0.f}};
+    out.notes.push_back(strCat("'", name, "' is constant (", range.lower,
+                               "): nothing to draw (--range and --opacity draw it all the same)"));
+    return out;
+  }
+  // Signed values (velocities, fluctuations): a diverging colour map centred on zero, opaque
+  // towards both ends, both signs shown.
+  const float negative = -range.lower, positive = range.upper;
+  if (chooseRange && autoColorMap && !tf.logScale && negative > 0.f && positive > 0.f &&
+      std::min(negative, positive) >= 0.1f * std::max(negative, positive)) {
+    const float m = std::max(negative, positive);
+    tf.colorMap = builtinColorMap("cool-to-warm");
+    tf.valueRange = range1f{-m, m};
+    tf.opacity = {{0.f, 1.f}, {0.25f, 0.25f}, {0.5f, 0.f}, {0.75f, 0.25f}, {1.f, 1.f}};
+    if (tfIn.opacityScale == 0.f) tf.opacityScale = exposureScale(model, field, tf, dataset, part);
+    out.notes.push_back(strCat("'", name, "' takes both signs: a diverging colour map over [", -m, ", ", m,
+                               "], transparent at zero (--colormap, --range, --opacity to choose)"));
+    return out;
+  }
+  // Exact zeros beside positive values over decades (a density with empty cells): the positive
+  // values decide, and zeros sit below the range.
+  if (autoLog && !tf.logScale && range.lower == 0.f && range.upper > 0.f && !model.fieldValues.empty()) {
+    float smallest = std::numeric_limits<float>::infinity();
+    for (float v : model.fieldValues.at(size_t(field)))
+      if (v > 0.f) smallest = std::min(smallest, v);
+    if (smallest < range.upper * 1e-3f) range.lower = smallest;
+  }
   TransferFunction norm = tf;
   norm.valueRange = range;
   std::vector<double> hist;
@@ -99,10 +131,16 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
       medianBin(hist, total, false) < kBins / 100) {
     tf.logScale = norm.logScale = true;
     total = histogram(model, field, norm, hist, part);
-    out.notes.push_back(strCat("'", name, "' is positive, spans ",
-                               std::lround(std::log10(double(range.upper) / double(range.lower))),
+    const bool zeros = dataset.valueRanges.at(size_t(field)).lower == 0.f;
+    out.notes.push_back(strCat("'", name, "' is positive", zeros ? " (besides exact zeros, drawn as the lowest)" : "",
+                               ", spans ", std::lround(std::log10(double(range.upper) / double(range.lower))),
                                " decades and half its volume lies in the lowest percent of the range: ",
                                "logarithmic colour mapping (--linear to refuse)"));
+    if (zeros && tfIn.valueRange.empty()) tf.valueRange = range;
+  } else if (range.lower != dataset.valueRanges.at(size_t(field)).lower && tfIn.valueRange.empty()) {
+    range.lower = dataset.valueRanges.at(size_t(field)).lower; // zeros, but no log: the whole range
+    norm.valueRange = range;
+    total = histogram(model, field, norm, hist, part);
   }
   if (!autoOpacity || !tfIn.valueRange.empty()) return out; // a range given is kept
 

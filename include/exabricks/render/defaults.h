@@ -33,9 +33,14 @@ struct DefaultChoices {
 ///   range becomes the rest, so that colours and a linear opacity ramp span what lies beyond
 ///   the background (towards high values unless a dominant background, a fifth of the volume or
 ///   more, sits in the upper third, then towards low values).
+/// Awkward fields first (with `autoOpacity` and no range given): a constant field (to a few
+/// float steps) draws nothing and says so; with `autoColorMap`, a field of both signs (each at
+/// least a tenth of the other) gets a diverging colour map over a range centred on zero, opaque
+/// towards both ends; exact zeros beside positive values over more than three decades map
+/// logarithmically over the positive values, zeros at the bottom.
 DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
                                      const TransferFunction& tf, bool autoLog, bool autoOpacity,
-                                     const PartialData* part = nullptr);
+                                     const PartialData* part = nullptr, bool autoColorMap = true);
 
 /// What in a scene can never show anything, said before rendering: nothing to draw at all (no
 /// volume, iso-surface or mesh), iso-values outside their field's range, a value range that
