@@ -100,20 +100,27 @@ def exabricks_render(cli, plotfile, work, name, *options, field="phi", value_ran
     return np.clip(read_pfm(path), 0.0, 1.0)
 
 
-def setup_view(plotfile, cell, field="phi", value_range=RANGE, alpha=ALPHA, camera=(POSITION, FOCUS)):
-    """A plotfile (plt_small) through ParaView's AMReX reader at every level, its field (phi)
-    shown as ExaBricks with the shared colour map and opacity ramp (or the given one) over the
-    value range, and the shared camera (or the given position and focus). Returns (reader, view,
-    display)."""
-    from paraview.simple import AMReXBoxLibGridReader, CreateView, Show
-    reader = AMReXBoxLibGridReader(FileNames=[plotfile])
-    reader.CellArrayStatus = [field]
-    reader.Level = 10  # every level (the reader's default reads levels 0 and 1 only)
+def new_view():
+    """A render view of the checks' size on black, without the orientation axes."""
+    from paraview.simple import CreateView
     view = CreateView("RenderView")
     view.ViewSize = [WIDTH, HEIGHT]
     view.OrientationAxesVisibility = 0
     view.UseColorPaletteForBackground = 0
     view.Background = [0.0, 0.0, 0.0]
+    return view
+
+
+def setup_view(plotfile, cell, field="phi", value_range=RANGE, alpha=ALPHA, camera=(POSITION, FOCUS)):
+    """A plotfile (plt_small) through ParaView's AMReX reader at every level, its field (phi)
+    shown as ExaBricks with the shared colour map and opacity ramp (or the given one) over the
+    value range, and the shared camera (or the given position and focus). Returns (reader, view,
+    display)."""
+    from paraview.simple import AMReXBoxLibGridReader, Show
+    reader = AMReXBoxLibGridReader(FileNames=[plotfile])
+    reader.CellArrayStatus = [field]
+    reader.Level = 10  # every level (the reader's default reads levels 0 and 1 only)
+    view = new_view()
     display = Show(reader, view)
     show_exabricks(display, field, value_range, alpha, cell)
     view.CameraPosition, view.CameraFocalPoint, view.CameraViewUp = camera[0], camera[1], UP

@@ -14,12 +14,11 @@ import sys
 import traceback
 
 import paraview.simple
-from paraview.simple import (CreateView, Hide, LoadPlugin, Outline, Render, SaveScreenshot, Show, Slice,
-                             XMLUniformGridAMRReader)
+from paraview.simple import Hide, LoadPlugin, Outline, Render, SaveScreenshot, Show, Slice, XMLUniformGridAMRReader
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from pv_common import (ALPHA, ANGLE, HEIGHT, UP, WIDTH, information, setup_view, show_exabricks,  # noqa: E402
-                       show_planes)
+from pv_common import (ALPHA, ANGLE, HEIGHT, UP, WIDTH, information, new_view, setup_view,  # noqa: E402
+                       show_exabricks, show_planes)
 
 plugin, settings, out = sys.argv[1:4]
 with open(settings) as f:
@@ -85,11 +84,7 @@ def main():
         v = settings["vthb"]
         xml = XMLUniformGridAMRReader(FileName=[v["path"]])
         xml.DefaultNumberOfLevels = 10
-        vthb_view = CreateView("RenderView")
-        vthb_view.ViewSize = [WIDTH, HEIGHT]
-        vthb_view.OrientationAxesVisibility = 0
-        vthb_view.UseColorPaletteForBackground = 0
-        vthb_view.Background = [0.0, 0.0, 0.0]
+        vthb_view = new_view()
         vthb_display = Show(xml, vthb_view)
         show_exabricks(vthb_display, "density", tuple(v["range"]), ALPHA, v["cell"])
         vthb_view.CameraPosition, vthb_view.CameraFocalPoint = v["camera"]
