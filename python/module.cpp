@@ -385,8 +385,18 @@ public:
     return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
 
-  void save(const std::string& path, int bits) const {
-    const Image img = resolved();
+  /// Writes the image; `brightest` rescales its colour so that the brightest channel of any
+  /// pixel reaches 1 (as yt's own save does), alpha unchanged.
+  void save(const std::string& path, int bits, bool brightest) const {
+    Image img = resolved();
+    if (brightest) {
+      float top = 0.f;
+      for (const vec4f& p : img.pixels)
+        top = std::max({top, p.x, p.y, p.z});
+      if (top > 0.f)
+        for (vec4f& p : img.pixels)
+          p.x /= top, p.y /= top, p.z /= top;
+    }
     const ImageFormat format = imageFormatFor(path, bits);
     writeImage(path, img, format, scene_.keepAlpha, scene_.background);
   }
@@ -545,7 +555,7 @@ PYBIND11_MODULE(_core, m) {
            py::arg("depth_limit") = py::none(), py::arg("depth_limit_planar") = false)
       .def("image", &PyRenderer::image)
       .def("png", &PyRenderer::png)
-      .def("save", &PyRenderer::save, py::arg("path"), py::arg("bits") = 8)
+      .def("save", &PyRenderer::save, py::arg("path"), py::arg("bits") = 8, py::arg("brightest") = false)
       .def("stats", &PyRenderer::stats)
       .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"))
       .def("cancel", &PyRenderer::cancel, "Cancels the render in flight (or the next one)")

@@ -811,18 +811,20 @@ class Scene:
         """Statistics of the passes in the buffer: seconds, rays, samples, regions visited, ..."""
         return dict(self._renderer.stats())
 
-    def save(self, path=None, width=None, height=None, spp=None, bits=8):
+    def save(self, path=None, width=None, height=None, spp=None, bits=8, normalize=False):
         """Renders and writes the picture; returns its path. The format follows the extension:
         .png (sRGB, `bits` 8 or 16 per channel, with alpha when `alpha` is set, else over the
         background), .jpg, .exr (linear, premultiplied alpha, 32-bit float: for compositing) or
         .pfm (linear RGB over the background). Without a path, DATASET-FIELD-WIDTHxHEIGHT.png in
-        the current folder. Publication sizes work as any other: save("f.png", 4096, 4096, 64)."""
+        the current folder. Publication sizes work as any other: save("f.png", 4096, 4096, 64).
+        `normalize`: rescale the colours so that the brightest channel of any pixel reaches 1,
+        as yt's own Scene.save does (a scene converted from yt then looks as yt saves it)."""
         self.render(width, height, spp)
         if path is None:
             w, h = self.width, self.height
             name = os.path.splitext(os.path.basename(str(self.dataset.name).rstrip("/")))[0]
             path = "%s-%s-%dx%d.png" % (_file_stem(name), _file_stem(self.field or "volume"), w, h)
-        self._renderer.save(str(path), int(bits))
+        self._renderer.save(str(path), int(bits), bool(normalize))
         return str(path)
 
     def png(self, width=None, height=None, spp=None):

@@ -189,6 +189,20 @@ def test_publication_output_equals_the_command_line(cli, tmp_path, monkeypatch):
     assert (tmp_path / "b-scalar-32x24.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     with pytest.raises(Exception, match="unknown image format"):
         s.save(tmp_path / "x.gif")
+    # normalize: the brightest channel reaches 1 (yt's save), the picture's proportions kept.
+    plain = read_pfm(s.save(tmp_path / "plain.pfm"))
+    bright = read_pfm(s.save(tmp_path / "bright.pfm", normalize=True))
+    assert plain.max() < 0.99 and abs(bright.max() - 1.0) < 1e-6
+    np.testing.assert_allclose(bright, plain / plain.max(), rtol=1e-5, atol=1e-6)
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        assert f.readline().strip() == b"PF"
+        w, h = map(int, f.readline().split())
+        scale = float(f.readline())
+        values = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    return values.reshape(h, w, 3)[::-1].astype(np.float64)
 
 
 def test_progressive_passes_equal_one_render():
