@@ -184,7 +184,7 @@ fails_with "NaN values are refused by default, naming the record" "record 7: val
 check "--nan-as-holes counts the holes on stderr" bash -c "'$exe' info nan.cells --nan-as-holes 2>&1 >/dev/null | grep -q \"nan.cells: 2 cells with NaN or infinite values in 'scalar' treated as holes\""
 check "--nan-as-holes reports the holes in info --json" bash -c "'$exe' info nan.cells --nan-as-holes --json 2>/dev/null | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"non_finite_holes\"] == {\"fields\": {\"radius\": 0, \"scalar\": 2}, \"cells\": 2}, j[\"non_finite_holes\"]; assert j[\"cells\"] == json.load(open(\"s_info.json\"))[\"cells\"] - 2'"
 check "render --nan-as-holes renders" "$exe" -q render nan.cells --nan-as-holes -o nan.png --size 48x48
-check "info reports the simulation's time and cycle (null when unknown)" bash -c "'$exe' info s.cells --json | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"simulation\"] == {\"time\": None, \"cycle\": None}'"
+check "info reports the simulation's time and cycle (null when unknown)" bash -c "'$exe' info s.cells --json | $py -c 'import json,sys; j=json.load(sys.stdin); assert j[\"simulation\"] == {\"time\": None, \"cycle\": None, \"redshift\": None}'"
 # An interrupted convert leaves no temporary file and either every file of the dataset or none.
 # Interrupts at several moments, so that some land while the files are renamed into place.
 "$exe" -q generate -s blobs -n 3000000 -o big.cells

@@ -52,7 +52,7 @@ struct EnzoFixture {
   void write() const {
     fs::remove_all(dir);
     fs::create_directories(dir);
-    std::ofstream(parameterFile()) << "InitialTime = 0.5\nTopGridRank = " << rank
+    std::ofstream(parameterFile()) << "InitialTime = 0.5\nCosmologyCurrentRedshift = 3.25\nTopGridRank = " << rank
                                    << "\nTopGridDimensions = 8 8 8\nRefineBy = " << refineBy
                                    << "\nDomainLeftEdge = 0 0 0\nDomainRightEdge = 1 1 1\nWriteGhostZones = "
                                    << ghostArrays << "\n";
@@ -123,6 +123,9 @@ TEST(Enzo, LeafCellsGhostZonesSeveralFilesBothPrecisions) {
     EXPECT_EQ(s.fields.at(1).units, "K");
     EXPECT_EQ(s.world.scale, vec3d(1.0 / 32));
     EXPECT_EQ(s.world.origin, vec3d(0.0));
+    EXPECT_EQ(s.simulation.time, 0.5);
+    EXPECT_EQ(s.simulation.timeUnits, "code units");
+    EXPECT_EQ(s.simulation.redshift, 3.25);
     // Independent truth: a cell of grid g is a leaf unless a grid one level finer contains it.
     std::map<std::tuple<int, int, int, int>, int> expected;
     for (const EGrid& g : f.grids) {

@@ -145,10 +145,12 @@ void run(const InfoOptions& o) {
     else
       std::printf("device           cpu (%s)\n", cuda.problem.c_str());
   }
-  if (model.simulation.hasTime() || model.simulation.hasCycle())
-    std::printf("simulation       time %s, cycle %s\n",
-                model.simulation.hasTime() ? strCat(model.simulation.time).c_str() : "unknown",
-                model.simulation.hasCycle() ? std::to_string(model.simulation.cycle).c_str() : "unknown");
+  const SimulationState& sim = model.simulation;
+  if (sim.hasTime() || sim.hasCycle())
+    std::printf("simulation       time %s%s, cycle %s%s\n", sim.hasTime() ? strCat(sim.time).c_str() : "unknown",
+                sim.timeUnits.empty() ? "" : (" (" + sim.timeUnits + ")").c_str(),
+                sim.hasCycle() ? std::to_string(sim.cycle).c_str() : "unknown",
+                sim.hasRedshift() ? strCat(", redshift ", sim.redshift).c_str() : "");
   std::printf("lattice bounds   [%d %d %d] - [%d %d %d] (finest-level units, upper exclusive)\n", lattice.lower.x,
               lattice.lower.y, lattice.lower.z, lattice.upper.x, lattice.upper.y, lattice.upper.z);
   std::printf("world bounds     [%g %g %g] - [%g %g %g]\n", worldLo.x, worldLo.y, worldLo.z, worldHi.x, worldHi.y,

@@ -124,6 +124,10 @@ Parameters readParameters(const std::string& path) {
     } else if (k.key == "InitialTime") {
       const double t = numbersOf(path, k, 1)[0];
       if (std::isfinite(t)) p.simulation.time = t;
+      p.simulation.timeUnits = "code units"; // Enzo's time unit is the run's own (TimeUnits, cosmology)
+    } else if (k.key == "CosmologyCurrentRedshift") {
+      const double z = numbersOf(path, k, 1)[0];
+      if (std::isfinite(z) && z > -1.0) p.simulation.redshift = z;
     } else if (k.key == "InitialCycleNumber") {
       int64_t c = 0;
       if (io::integerIn(numbersOf(path, k, 1)[0], 0, INT64_MAX, c)) p.simulation.cycle = c;

@@ -30,7 +30,8 @@ std::string modelInfoJson(const Model& model, const std::string& input, double l
       {"world", {{"lower", {worldLo.x, worldLo.y, worldLo.z}}, {"upper", {worldHi.x, worldHi.y, worldHi.z}}}}};
   j["simulation"] = {
       {"time", model.simulation.hasTime() ? nlohmann::json(model.simulation.time) : nlohmann::json()},
-      {"cycle", model.simulation.hasCycle() ? nlohmann::json(model.simulation.cycle) : nlohmann::json()}};
+      {"cycle", model.simulation.hasCycle() ? nlohmann::json(model.simulation.cycle) : nlohmann::json()},
+      {"redshift", model.simulation.hasRedshift() ? nlohmann::json(model.simulation.redshift) : nlohmann::json()}};
   j["world"] = {{"origin", {model.world.origin.x, model.world.origin.y, model.world.origin.z}},
                 {"scale", {model.world.scale.x, model.world.scale.y, model.world.scale.z}}};
   nlohmann::json levels = nlohmann::json::array();

@@ -27,10 +27,15 @@ namespace {
 std::vector<std::string> annotationLines(const Model& model, const std::string& field, const LegendText& text) {
   std::vector<std::string> lines{text.dataset, "field " + field};
   const SimulationState& sim = model.simulation;
-  if (sim.hasTime() || sim.hasCycle())
-    lines.push_back(strCat(sim.hasTime() ? strCat("time ", sim.time) : std::string(),
-                           sim.hasTime() && sim.hasCycle() ? ", " : "",
-                           sim.hasCycle() ? strCat("cycle ", sim.cycle) : std::string()));
+  std::vector<std::string> parts;
+  if (sim.hasRedshift()) parts.push_back(strCat("redshift ", sim.redshift));
+  if (sim.hasTime())
+    parts.push_back(strCat("time ", sim.time, sim.timeUnits.empty() ? "" : " (" + sim.timeUnits + ")"));
+  if (sim.hasCycle()) parts.push_back(strCat("cycle ", sim.cycle));
+  std::string line;
+  for (const std::string& p : parts)
+    line += (line.empty() ? "" : ", ") + p;
+  if (!line.empty()) lines.push_back(line);
   return lines;
 }
 

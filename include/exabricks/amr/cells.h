@@ -46,10 +46,13 @@ struct Field {
 /// When the data was written, as the simulation counts: its time and step (cycle), where the
 /// file says.
 struct SimulationState {
-  double time = std::numeric_limits<double>::quiet_NaN(); ///< NaN: unknown
-  int64_t cycle = -1;                                     ///< -1: unknown
+  double time = std::numeric_limits<double>::quiet_NaN();     ///< NaN: unknown
+  int64_t cycle = -1;                                         ///< -1: unknown
+  double redshift = std::numeric_limits<double>::quiet_NaN(); ///< cosmology runs; NaN: unknown or none
+  std::string timeUnits; ///< as the format states them ("code units"); empty where unknown
   bool hasTime() const { return time == time; }
   bool hasCycle() const { return cycle >= 0; }
+  bool hasRedshift() const { return redshift == redshift; }
 };
 
 struct CellSet {
