@@ -259,6 +259,37 @@ TEST(Defaults, DefaultRendersOfRealDataShowTheData) {
   }
 }
 
+TEST(Overlay, LegendsKeepClearOfEachOtherAtSmallSizes) {
+  // 200 x 150 with three annotation lines, one far too long, the outline drawn first across the
+  // whole image: the lines fit the width, the colour bar (title included) starts below them, and
+  // no outline pixel is left on the bar's panel.
+  Image img(200, 150);
+  const std::string longLine = "<default: blobs scene, 200000 cells, seed 1> and more words than fit";
+  const std::string fitted = fitText(longLine, img.width - 12, 1);
+  EXPECT_LE(textWidth(fitted, 1), img.width - 12);
+  EXPECT_EQ(fitted.substr(fitted.size() - 3), "...");
+  EXPECT_EQ(fitText("short", 100, 1), "short");
+  for (int x = 0; x < img.width; ++x) // an outline crossing where the bar goes
+    for (int y = 0; y < img.height; y += 10)
+      img.at(x, y) = vec4f(0.5f, 0.5f, 0.5f, 1.f);
+  const int top = linesHeight(3, img);
+  TransferFunction tf = defaultTransferFunction();
+  tf.valueRange = range1f{0.f, 1.f};
+  drawColorBar(img, tf, "a long field title", vec3f(1.f), top);
+  int barLeft = img.width, firstRow = img.height;
+  for (int y = 0; y < img.height; ++y)
+    for (int x = img.width / 2; x < img.width; ++x) {
+      const vec4f& p = img.at(x, y);
+      if (p.w > 0.f && !(p.x == 0.5f && p.y == 0.5f && p.z == 0.5f)) {
+        barLeft = std::min(barLeft, x);
+        firstRow = std::min(firstRow, y);
+      }
+    }
+  EXPECT_GE(firstRow, top);
+  for (int y = firstRow; y < img.height - 10; y += 10)
+    EXPECT_NE(img.at(img.width - 2, y).x, 0.5f) << "the outline crosses the bar's panel at row " << y;
+}
+
 TEST(Overlay, TicksTextColourBarOutlineAndProjection) {
   auto near = [](const std::vector<double>& a, const std::vector<double>& b) {
     if (a.size() != b.size()) return false;

@@ -55,17 +55,21 @@ void drawLegends(const Scene& scene, const Frame& frame, const Model& model, con
         levels.push_back(l.level);
     drawLevelLegend(image, levels, ink);
   }
+  // The domain's outline first, the colour bar over it (below the annotation's lines), the
+  // lines last.
+  const std::vector<std::string> lines =
+      want.annotation ? annotationLines(model, name, text) : std::vector<std::string>();
+  if (want.annotation) {
+    const box3i cb = text.cellBounds.empty() ? model.cellBounds() : text.cellBounds;
+    drawBoxOutline(image, frame.camera, model.world.toWorld(cb), ink * 0.6f);
+  }
   if (want.colorBar && scene.debug == DebugView::None && scene.volume) {
     TransferFunction tf = scene.layers.at(0).tf;
     if (tf.valueRange.empty()) tf.valueRange = dataset.valueRanges.at(size_t(field));
     const std::string units = model.unitsOf(field);
-    drawColorBar(image, tf, units.empty() ? name : name + " [" + units + "]", ink);
+    drawColorBar(image, tf, units.empty() ? name : name + " [" + units + "]", ink, linesHeight(lines.size(), image));
   }
-  if (want.annotation) {
-    const box3i cb = text.cellBounds.empty() ? model.cellBounds() : text.cellBounds;
-    drawBoxOutline(image, frame.camera, model.world.toWorld(cb), ink * 0.6f);
-    drawLines(image, annotationLines(model, name, text), ink);
-  }
+  if (want.annotation) drawLines(image, lines, ink);
 }
 
 } // namespace exa

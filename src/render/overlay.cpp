@@ -159,17 +159,29 @@ std::vector<std::string> colorBarLabels(const std::vector<double>& ticks, bool l
   return labels;
 }
 
-void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor) {
+void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor, int top) {
   if (tf.valueRange.empty()) fail("a colour bar needs the transfer function's value range");
   const int s = overlayScale(image);
-  const int barW = std::max(6, image.width / 40), barH = std::max(20, image.height * 3 / 5);
   const std::vector<double> ticks = colorBarTicks(tf.valueRange, tf.logScale);
   const std::vector<std::string> labels = colorBarLabels(ticks, tf.logScale);
   int labelW = 0;
   for (const std::string& label : labels)
     labelW = std::max(labelW, textWidth(label, s));
+  const int barW = std::max(6, image.width / 40);
   const int x1 = image.width - labelW - 6 * s - 4, x0 = x1 - barW;
-  const int y0 = (image.height - barH) / 2, y1 = y0 + barH;
+  // Centred, below `top` (what is drawn above it, its title included), inside the bottom margin.
+  const int titleH = 14 * s;
+  int barH = std::max(20, image.height * 3 / 5);
+  const int y0 = std::max((image.height - barH) / 2, top + titleH + 2 * s);
+  barH = std::max(8 * s, std::min(barH, image.height - 6 * s - y0));
+  const int y1 = y0 + barH;
+  const std::string head = tf.logScale ? title + " (log)" : title;
+  const int headX = std::max(0, x1 - textWidth(head, s));
+  // The bar's panel is cleared first: lines drawn before it (the domain's outline) stay off it.
+  const int panelX = std::min(x0 - 3 * s, headX - s);
+  for (int y = std::max(0, y0 - titleH - s); y < std::min(image.height, y1 + 6 * s); ++y)
+    for (int x = std::max(0, panelX); x < image.width; ++x)
+      image.at(x, y) = vec4f(0.f, 0.f, 0.f, 0.f);
   for (int y = y0; y < y1; ++y) {
     const float t = 1.f - (float(y - y0) + 0.5f) / float(barH);
     fillRect(image, x0, y, x1, y + 1, tf.colorMap.at(t));
@@ -185,14 +197,26 @@ void drawColorBar(Image& image, const TransferFunction& tf, const std::string& t
     drawLine(image, x1, y, x1 + 3 * s, y, textColor);
     drawText(image, x1 + 5 * s, y - 4 * s, labels[i], textColor, s);
   }
-  const std::string head = tf.logScale ? title + " (log)" : title;
-  drawText(image, std::max(0, x1 - textWidth(head, s)), y0 - 14 * s, head, textColor, s);
+  drawText(image, headX, y0 - titleH, head, textColor, s);
+}
+
+std::string fitText(const std::string& text, int width, int scale) {
+  if (textWidth(text, scale) <= width) return text;
+  std::string cut = text;
+  while (!cut.empty() && textWidth(cut + "...", scale) > width)
+    cut.pop_back();
+  return cut + "...";
+}
+
+int linesHeight(size_t lines, const Image& image) {
+  const int s = overlayScale(image);
+  return lines == 0 ? 0 : 6 * s + int(lines) * 12 * s;
 }
 
 void drawLines(Image& image, const std::vector<std::string>& lines, const vec3f& color) {
   const int s = overlayScale(image);
   for (size_t i = 0; i < lines.size(); ++i)
-    drawText(image, 6 * s, 6 * s + int(i) * 12 * s, lines[i], color, s);
+    drawText(image, 6 * s, 6 * s + int(i) * 12 * s, fitText(lines[i], image.width - 12 * s, s), color, s);
 }
 
 void drawBoxOutline(Image& image, const Camera& camera, const box3d& box, const vec3f& color) {

@@ -32,10 +32,19 @@ std::vector<std::string> colorBarLabels(const std::vector<double>& ticks, bool l
 std::string colorBarLabel(double v);
 
 /// A vertical colour bar at the right edge: the colour map over the transfer function's value
-/// range (which must be set), ticks with their values, and `title` above it (the field name).
-void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor);
+/// range (which must be set), ticks with their values, and `title` above it (the field name);
+/// its title starts below row `top` (what is written above it), and its panel is cleared first
+/// so that lines drawn before it do not cross it.
+void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor,
+                  int top = 0);
 
-/// Lines of text at the top-left corner.
+/// `text`, cut and ended with "..." where it is wider than `width` pixels.
+std::string fitText(const std::string& text, int width, int scale);
+
+/// Rows that drawLines takes for this many lines (margins included).
+int linesHeight(size_t lines, const Image& image);
+
+/// Lines of text at the top-left corner, each cut to the image's width.
 void drawLines(Image& image, const std::vector<std::string>& lines, const vec3f& color);
 
 /// The edges of a world box as seen by the camera.
