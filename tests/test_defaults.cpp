@@ -385,7 +385,8 @@ TEST(Overlay, TickLabelsAreDistinctAndNearTheirTicks) {
     } else if (!logScale) {
       EXPECT_LE(ticks.size(), 7u) << what;
     }
-    auto at = [&](double v) { return logScale ? std::log10(v) : v; };
+    const bool logMapped = logScale; // (Clang 14 cannot capture a structured binding)
+    auto at = [logMapped](double v) { return logMapped ? std::log10(v) : v; };
     const double slack = 1e-5 * (double(range.upper) - double(range.lower)) +
                          1e-6 * std::max(std::abs(double(range.lower)), std::abs(double(range.upper)));
     for (size_t i = 0; i < ticks.size(); ++i) {
