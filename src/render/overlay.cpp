@@ -32,12 +32,6 @@ void drawLine(Image& image, double x0, double y0, double x1, double y1, const ve
 
 } // namespace
 
-std::string colorBarLabel(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.3g", v);
-  return buf;
-}
-
 int overlayScale(const Image& image) { return 1 + std::max(0, (std::min(image.width, image.height) - 1) / 400); }
 
 int textWidth(const std::string& text, int scale) {

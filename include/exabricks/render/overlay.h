@@ -28,9 +28,6 @@ std::vector<double> colorBarTicks(const range1f& range, bool logScale);
 /// nearer its own tick than half the way to the next (in log10 for logarithmic bars).
 std::vector<std::string> colorBarLabels(const std::vector<double>& ticks, bool logScale);
 
-/// The text drawn beside a colour-bar tick at value v (three significant digits).
-std::string colorBarLabel(double v);
-
 /// A vertical colour bar at the right edge: the colour map over the transfer function's value
 /// range (which must be set), ticks with their values, and `title` above it (the field name);
 /// its title starts below row `top` (what is written above it), and its panel is cleared first
