@@ -108,6 +108,25 @@ void decodeBoxes(const std::vector<uint8_t>& bytes, std::vector<GridPatch>& out)
 
 } // namespace
 
+PartNumbers partNumbers(const Model* model, uint64_t ownedCells) {
+  PartNumbers n;
+  n.ownedCells = ownedCells;
+  if (model) {
+    const ModelSummary s = summarize(*model);
+    n.cells = s.cells;
+    n.bytes = s.brickBytes + s.valueBytes + s.regionBytes;
+  }
+  return n;
+}
+
+std::string partsJson(const std::vector<PartNumbers>& parts) {
+  nlohmann::json out = nlohmann::json::array();
+  for (size_t r = 0; r < parts.size(); ++r)
+    out.push_back(
+        {{"rank", r}, {"cells", parts[r].cells}, {"owned_cells", parts[r].ownedCells}, {"bytes", parts[r].bytes}});
+  return out.dump();
+}
+
 ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Collectives& comm) {
   // The boxes of every other process's blocks: they set the lattice and cover coarser cells here.
   std::vector<uint8_t> mine;
@@ -124,9 +143,8 @@ ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Co
   CellPart part = distributeCells(std::move(cells), comm);
 
   ProcessPart out;
-  const uint64_t held = part.cells.size();
   onEveryProcess(comm, [&] {
-    if (held) out.model = std::make_unique<Model>(buildModel(std::move(part.cells)));
+    if (!part.cells.cells.empty()) out.model = std::make_unique<Model>(buildModel(std::move(part.cells)));
   });
   const box3l& b = part.dataBounds;
   out.dataset = DatasetInfo::from(part.finestLevel,
@@ -141,22 +159,16 @@ ProcessPart buildProcessPart(vtkOverlappingAMR* amr, const std::string& name, Co
   }
 
   // What each process holds, for the representation's information.
-  uint64_t bytes = 0;
-  if (out.model) {
-    const ModelSummary s = summarize(*out.model);
-    bytes = s.brickBytes + s.valueBytes + s.regionBytes;
+  const PartNumbers mineNumbers = partNumbers(out.model.get(), part.ownedCells);
+  std::vector<uint8_t> numbers(sizeof(PartNumbers));
+  std::memcpy(numbers.data(), &mineNumbers, sizeof(PartNumbers));
+  std::vector<PartNumbers> all;
+  for (const std::vector<uint8_t>& bytes : comm.allGather(numbers)) {
+    PartNumbers n;
+    if (bytes.size() == sizeof(n)) std::memcpy(&n, bytes.data(), sizeof(n));
+    all.push_back(n);
   }
-  std::vector<uint8_t> numbers(3 * 8);
-  const uint64_t values[3] = {held, part.ownedCells, bytes};
-  std::memcpy(numbers.data(), values, sizeof(values));
-  nlohmann::json parts = nlohmann::json::array();
-  const std::vector<std::vector<uint8_t>> all = comm.allGather(numbers);
-  for (size_t r = 0; r < all.size(); ++r) {
-    uint64_t v[3] = {0, 0, 0};
-    if (all[r].size() == sizeof(v)) std::memcpy(v, all[r].data(), sizeof(v));
-    parts.push_back({{"rank", r}, {"cells", v[0]}, {"owned_cells", v[1]}, {"bytes", v[2]}});
-  }
-  out.partsJson = parts.dump();
+  out.partsJson = partsJson(all);
   return out;
 }
 

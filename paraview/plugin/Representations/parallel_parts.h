@@ -41,6 +41,17 @@ struct ProcessPart {
   std::string partsJson;
 };
 
+/// What one process holds, as the Parts information lists it.
+struct PartNumbers {
+  uint64_t cells = 0;      ///< with the halo
+  uint64_t ownedCells = 0; ///< whose centres lie in the part
+  uint64_t bytes = 0;      ///< bricks, values and regions
+};
+/// The numbers of a built model (null: nothing held).
+PartNumbers partNumbers(const Model* model, uint64_t ownedCells);
+/// The Parts information: a JSON array of {"rank", "cells", "owned_cells", "bytes"} in rank order.
+std::string partsJson(const std::vector<PartNumbers>& parts);
+
 /// A collective over the processes of `comm`: the leaf cells of array `name` of the blocks every
 /// process holds, split into one k-d part per process with its halo, and this process's part
 /// built. Throws on every process when any fails ("process R: ...").

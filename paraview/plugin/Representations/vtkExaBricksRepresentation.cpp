@@ -21,8 +21,6 @@
 #include "vtkVolume.h"
 #include "vtkVolumeProperty.h"
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <memory>
@@ -51,9 +49,8 @@ vtkMultiProcessController* renderingProcesses() {
   vtkMultiProcessController* c = vtkMultiProcessController::GetGlobalController();
   return c && c->GetNumberOfProcesses() > 1 ? c : nullptr;
 }
-} // namespace
 
-namespace {
+constexpr int kMaxClipPlanes = 64;
 const char* const kShadingNames[] = {"Smooth", "Analytic", "Central", "None"};
 const exa::Shading kShadings[] = {exa::Shading::Smooth, exa::Shading::Analytic, exa::Shading::Central,
                                   exa::Shading::None};
@@ -201,12 +198,8 @@ void vtkExaBricksRepresentation::UpdateEngine() {
       engine->model = std::make_unique<exa::Model>(exa::buildModel(exa::paraview::amrLeafCells(in.Data, name)));
       engine->renderer = std::make_unique<exa::Renderer>(*engine->model);
       std::copy(in.Bounds, in.Bounds + 6, engine->bounds);
-      const exa::ModelSummary summary = exa::summarize(*engine->model);
-      in.PartsJson = nlohmann::json::array({{{"rank", 0},
-                                             {"cells", summary.cells},
-                                             {"owned_cells", summary.cells},
-                                             {"bytes", summary.brickBytes + summary.valueBytes + summary.regionBytes}}})
-                         .dump();
+      const exa::paraview::PartNumbers whole = exa::paraview::partNumbers(engine->model.get(), 0);
+      in.PartsJson = exa::paraview::partsJson({{whole.cells, whole.cells, whole.bytes}});
     }
     in.Engine = engine;
     this->Mapper->SetEngine(engine);
@@ -303,8 +296,8 @@ double vtkExaBricksRepresentation::GetIsoValue(int index) {
 }
 
 void vtkExaBricksRepresentation::SetNumberOfClipPlanes(int count) {
-  if (count < 0 || count > 64) {
-    vtkErrorMacro("ExaBricks: 0 to 64 Clip Planes, not " << count);
+  if (count < 0 || count > kMaxClipPlanes) {
+    vtkErrorMacro("ExaBricks: 0 to " << kMaxClipPlanes << " Clip Planes, not " << count);
     return;
   }
   exa::paraview::Settings s = this->Mapper->GetSettings();
@@ -316,7 +309,7 @@ void vtkExaBricksRepresentation::SetClipPlane(int index, double ox, double oy, d
                                               double nz) {
   const double values[6] = {ox, oy, oz, nx, ny, nz};
   const bool finite = std::all_of(values, values + 6, [](double v) { return std::isfinite(v); });
-  if (index < 0 || index >= 64 || !finite || (nx == 0.0 && ny == 0.0 && nz == 0.0)) {
+  if (index < 0 || index >= kMaxClipPlanes || !finite || (nx == 0.0 && ny == 0.0 && nz == 0.0)) {
     vtkErrorMacro("ExaBricks: a Clip Plane is a point and a normal that is not zero, all finite (plane " << index
                                                                                                          << ")");
     return;
