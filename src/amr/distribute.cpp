@@ -162,15 +162,14 @@ CellPart distributeCells(CellSet&& mine, Collectives& comm) {
   for (int a = 0; a < 3; ++a)
     put(summary, bounds.lower[a]), put(summary, bounds.upper[a]);
   for (const Field& f : mine.fields) {
-    float lo = std::numeric_limits<float>::infinity(), hi = -lo;
+    range1f r;
     for (float v : f.values)
-      if (std::isfinite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
-    put(summary, lo);
-    put(summary, hi);
+      if (std::isfinite(v)) r.extend(v);
+    put(summary, r.lower);
+    put(summary, r.upper);
   }
   part.finestLevel = std::numeric_limits<int>::max();
   part.valueRanges.assign(mine.fields.size(), range1f());
-  std::vector<float> low(mine.fields.size(), std::numeric_limits<float>::infinity()), high(low.size(), -low[0]);
   for (const std::vector<uint8_t>& bytes : comm.allGather(summary)) {
     Reader in(bytes, "a summary");
     part.finestLevel = std::min(part.finestLevel, int(in.get<int32_t>()));
@@ -181,13 +180,11 @@ CellPart distributeCells(CellSet&& mine, Collectives& comm) {
       part.dataBounds.lower[a] = std::min(part.dataBounds.lower[a], b.lower[a]);
       part.dataBounds.upper[a] = std::max(part.dataBounds.upper[a], b.upper[a]);
     }
-    for (size_t f = 0; f < low.size(); ++f) {
-      low[f] = std::min(low[f], in.get<float>());
-      high[f] = std::max(high[f], in.get<float>());
+    for (range1f& r : part.valueRanges) {
+      const float lo = in.get<float>(), hi = in.get<float>();
+      r.extend(range1f{lo, hi}); // an empty range (no finite value there) extends nothing
     }
   }
-  for (size_t f = 0; f < low.size(); ++f)
-    if (low[f] <= high[f]) part.valueRanges[f] = range1f{low[f], high[f]};
   part.partition = KdPartition::balance(merged, comm.size());
   part.box = part.partition.box(comm.rank());
 
