@@ -465,6 +465,8 @@ private:
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "exabricks: ExaBricks rendering of structured AMR data (C++ core)";
+  m.attr("DEFAULT_DATASET_NAME") = kDefaultDatasetName;
+  m.attr("EMBEDDED_INPUT") = kEmbeddedInput;
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

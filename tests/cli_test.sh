@@ -114,6 +114,14 @@ fails_with "--elevation beyond the pole" "must be in [-90, 90]" "$exe" render s.
 check "--elevation beyond the pole: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --elevation 100
 fails_with "a missing output folder, before rendering" "the folder nofolder does not exist" "$exe" render s.cells -o nofolder/x.png
 check "no output for a missing folder" test ! -e nofolder
+# A scene names its input; the default dataset's scene says so, and one without an input is refused.
+"$exe" -q render -o emb.png --size 24x16 --write-scene emb.json
+check "the default dataset's scene names it" $py -c 'import json; assert json.load(open("emb.json"))["input"] == "<embedded>"'
+check "the default dataset's scene renders again" bash -c "'$exe' -q render --scene emb.json -o emb2.png && cmp emb.png emb2.png"
+$py -c 'import json; d = json.load(open("emb.json")); del d["input"]; json.dump(d, open("noinput.json", "w"))'
+fails_with "a scene without an input, and none given" "noinput.json names no input" "$exe" render --scene noinput.json -o x.png
+check "a scene without an input: exit 2, one line" one_usage_line "$exe" render --scene noinput.json -o x.png
+check "a scene without an input renders the input given" bash -c "'$exe' -q render s.cells --scene noinput.json -o given.png"
 mkdir -p empty.d stray.d && echo stray > stray.d/Header
 fails_with "an empty folder says what is missing" "without a Header file" "$exe" info empty.d
 fails_with "a stray Header says what is wrong" "Header is not an AMReX plotfile's" "$exe" info stray.d

@@ -180,11 +180,62 @@ TEST(Defaults, ExposureShowsTheTopOfTheColourMapThroughWhatSurroundsIt) {
       if (dot(d, d) < best) best = dot(d, d), nearest = k / 100.f;
     }
     EXPECT_GE(nearest, 0.8f) << "the centre shows the colour map at " << nearest << ", not its top";
-    // Through the shell, half-way out: translucent.
+    // Through the shell, three quarters out: translucent, and less opaque than the centre.
     const vec4f shell = img.at(16 + r * 3 / 4, 16);
-    EXPECT_LT(shell.w, 0.9f);
+    EXPECT_LT(shell.w, 0.95f);
+    EXPECT_LT(shell.w, centre.w - 0.02f);
     EXPECT_GT(shell.w, 0.01f);
   }
+}
+
+TEST(Defaults, ManySmallDenseStructuresReachTheEndOfTheColourMap) {
+  // Eight 2-cell haloes over a smooth background: their few central cells reach 1000, the
+  // rest of the volume stays near 1. The colour map ends where the densest sight lines reach,
+  // below the very highest value, and says so.
+  const Model web = uniformModel({"density"}, [](int x, int y, int z) {
+    const int cx = (x % 16) - 8, cy = (y % 16) - 8, cz = (z % 16) - 8;
+    const float d2 = float(cx * cx + cy * cy + cz * cz);
+    return 1.f + 0.5f * std::sin(0.3f * float(x + 2 * y)) + 1000.f * std::exp(-d2);
+  });
+  const DatasetInfo info = DatasetInfo::of(web);
+  const DefaultChoices c = adaptTransferFunction(web, info, 0, defaultTransferFunction(), true, true);
+  EXPECT_LT(c.tf.valueRange.upper, 0.9f * info.valueRanges[0].upper);
+  EXPECT_GT(c.tf.valueRange.upper, c.tf.valueRange.lower);
+  bool said = false;
+  for (const std::string& n : c.notes)
+    said = said || n.find("the colour map ends at") != std::string::npos;
+  EXPECT_TRUE(said);
+}
+
+TEST(Defaults, ASeriesRangeKeepsEachStepsBackgroundTransparent) {
+  // A step adapted to [1, 2] with the background below 1.2 (transparent low end): a series
+  // reaching 0.5 .. 3 moves the opaque end out by the series' excess and keeps the low end.
+  TransferFunction step = defaultTransferFunction();
+  step.valueRange = range1f{1.2f, 1.8f};
+  step.opacity = {{0.f, 0.f}, {1.f, 1.f}};
+  TransferFunction w = widenedForSeries(step, range1f{1.f, 2.f}, range1f{0.5f, 3.f});
+  EXPECT_EQ(w.valueRange.lower, 1.2f);
+  EXPECT_FLOAT_EQ(w.valueRange.upper, 2.8f);
+  // Opaque towards low values: the low end moves, the high (background) end stays.
+  step.opacity = {{0.f, 1.f}, {1.f, 0.f}};
+  w = widenedForSeries(step, range1f{1.f, 2.f}, range1f{0.5f, 3.f});
+  EXPECT_FLOAT_EQ(w.valueRange.lower, 0.7f);
+  EXPECT_EQ(w.valueRange.upper, 1.8f);
+  // Ends left at the step's own ends take the series' ends; logarithmic: by the same factor.
+  step.valueRange = range1f{1.f, 2.f};
+  w = widenedForSeries(step, range1f{1.f, 2.f}, range1f{0.5f, 3.f});
+  EXPECT_EQ(w.valueRange, (range1f{0.5f, 3.f}));
+  step.logScale = true;
+  step.opacity = {{0.f, 0.f}, {1.f, 1.f}};
+  step.valueRange = range1f{10.f, 1000.f};
+  w = widenedForSeries(step, range1f{1.f, 1e4f}, range1f{0.5f, 1e5f});
+  EXPECT_EQ(w.valueRange.lower, 10.f);
+  EXPECT_FLOAT_EQ(w.valueRange.upper, 1e4f);
+  // Centred on zero stays centred.
+  step = defaultTransferFunction();
+  step.valueRange = range1f{-2.f, 2.f};
+  w = widenedForSeries(step, range1f{-1.f, 2.f}, range1f{-5.f, 3.f});
+  EXPECT_EQ(w.valueRange, (range1f{-5.f, 5.f}));
 }
 
 TEST(Defaults, RequestsThatCanNeverShowAnythingAreNamed) {

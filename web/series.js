@@ -24,6 +24,23 @@ function formatTime(t) {
   return `t = ${Math.abs(t) >= 1e4 || (t !== 0 && Math.abs(t) < 1e-3) ? t.toExponential(4) : Number(t.toPrecision(6))}`;
 }
 
+/// A step as the page names it: its file name, marked where it cannot be read (the reason in
+/// the tooltip).
+function showStepName(step) {
+  $('step-name').textContent = step.error ? `${step.name} (unreadable)` : step.name;
+  $('step-name').title = step.error || '';
+}
+
+/// The step after step i that can be read (i itself when no other can).
+function nextReadable(i) {
+  const steps = series.info.steps;
+  for (let k = 1; k <= steps.length; k++) {
+    const j = (i + k) % steps.length;
+    if (!steps[j].error) return j;
+  }
+  return i;
+}
+
 /// The step on screen: its number, name, simulation time and cycle (from the step's own data).
 function showStep() {
   const steps = series.info.steps;
@@ -31,7 +48,7 @@ function showStep() {
   $('step').max = steps.length - 1;
   $('step').value = i;
   $('step-out').textContent = `${i + 1}/${steps.length}`;
-  $('step-name').textContent = steps[i].name;
+  showStepName(steps[i]);
   const sim = viewer.info.simulation || {};
   $('step-time').textContent = formatTime(sim.time);
   $('step-cycle').textContent = sim.cycle === null || sim.cycle === undefined ? 'cycle unknown' : `cycle ${sim.cycle}`;
@@ -68,6 +85,12 @@ async function goToStep(i) {
     if (isNetworkError(e)) serverGone();
     else showMessage(e.message);
     pause();
+    try {
+      series.info = await apiJson('/api/series'); // the step that failed is marked now
+      showStep();
+    } catch (again) {
+      // the message above says enough
+    }
   } finally {
     series.moving = false;
   }
@@ -93,7 +116,7 @@ async function play() {
     await waitShown(3000);
     await sleep(150);
     if (!series.playing) break;
-    await goToStep(series.info.current + 1);
+    await goToStep(nextReadable(series.info.current));
   }
 }
 
@@ -110,7 +133,7 @@ async function setupSeries() {
   $('step').addEventListener('input', () => {
     const i = Number($('step').value);
     $('step-out').textContent = `${i + 1}/${series.info.steps.length}`;
-    $('step-name').textContent = series.info.steps[i].name;
+    showStepName(series.info.steps[i]);
   });
   $('step').addEventListener('change', () => {
     pause();

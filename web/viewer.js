@@ -738,10 +738,18 @@ function fillSelect(select, options, value) {
     const o = document.createElement('option');
     o.value = v;
     o.textContent = text;
+    o.title = text; // the whole name, where the panel shows its start
     select.append(o);
   }
   if (value !== undefined) select.value = value;
+  select.title = select.selectedOptions.length ? select.selectedOptions[0].title : '';
 }
+
+// A chooser's tooltip names its choice in full (the panel may show only its start).
+document.addEventListener('change', (e) => {
+  const t = e.target;
+  if (t instanceof HTMLSelectElement && t.selectedOptions.length) t.title = t.selectedOptions[0].title;
+});
 
 /// A field as the choosers name it: "name [units]" where the data records units.
 function fieldLabel(f) {
@@ -1029,7 +1037,7 @@ function setupControls() {
   on('save-image', 'click', saveImage);
   on('save-scene', 'click', async () => {
     const r = await api('/api/scene');
-    download(new Blob([await r.text()], { type: 'application/json' }), 'scene.json');
+    download(new Blob([await r.text()], { type: 'application/json' }), attachmentName(r, 'scene.json'));
   });
   on('load-scene', 'change', async () => {
     const file = $('load-scene').files[0];
@@ -1075,7 +1083,7 @@ async function saveImage() {
       }
       if (r.ok) {
         if (viewer.messageKind === 'info') showMessage('');
-        download(await r.blob(), 'exabricks.png');
+        download(await r.blob(), attachmentName(r, 'exabricks.png'));
         viewer.metrics.saved.push(Number(r.headers.get('X-Exabricks-Request')));
         return;
       }
@@ -1093,6 +1101,12 @@ async function saveImage() {
   } finally {
     button.disabled = false;
   }
+}
+
+/// The file name a response's Content-Disposition gives (the dataset, field and size), else `fallback`.
+function attachmentName(response, fallback) {
+  const match = /filename="([^"]+)"/.exec(response.headers.get('Content-Disposition') || '');
+  return match ? match[1] : fallback;
 }
 
 function download(blob, name) {

@@ -146,7 +146,9 @@ MoviePlan planMovie(const MovieCmdOptions& o, const CLI::App& cmd) {
   }
   if (steps > 1 && !cmd.count("--frame-all") && !cmd.count("--position"))
     p.ro.frameAll = true; // the domain stays in view
+  if (!o.inputs.empty()) p.ro.in.input = p.paths[0];
   p.doc = sceneFromOptions(p.ro, cmd);
+  if (o.inputs.empty()) p.paths = {p.doc.input}; // the scene file's input, or the default dataset
   p.doc.input.clear();
   p.lo = p.ro.in.loadOptions(false);
   p.lo.fields = neededFields(p.doc.scene);
@@ -166,10 +168,12 @@ void planFirstPicture(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& 
   applyDataDefaults(ro, cmd, scene, model0, first.info);
   const int steps = series.size();
   if (p.rangeMode == RangeMode::Global && steps > 1) {
-    const std::string& name = model0.fieldNames[size_t(model0.requireField(scene.layers[0].field))];
-    const SeriesRange r = seriesRange(p.paths, p.lo, name);
-    scene.layers[0].tf.valueRange = r.range;
-    logNote(strCat("colour range over all ", steps, " steps: [", r.range.lower, ", ", r.range.upper, "]",
+    const int field = model0.requireField(scene.layers[0].field);
+    const SeriesRange r = seriesRange(p.paths, p.lo, model0.fieldNames[size_t(field)]);
+    TransferFunction& tf = scene.layers[0].tf;
+    tf = widenedForSeries(tf, first.info.valueRanges.at(size_t(field)), r.range);
+    logNote(strCat("colour range over all ", steps, " steps: [", tf.valueRange.lower, ", ", tf.valueRange.upper,
+                   "] (values over [", r.range.lower, ", ", r.range.upper, "])",
                    r.fromMetadata ? strCat(" (", r.fromMetadata, " from metadata)") : std::string(),
                    "; --range per-step or LOW,HIGH to choose"));
   } else if (p.rangeMode == RangeMode::PerStep && !cmd.count("--range")) {

@@ -3,6 +3,7 @@
 #include "common.h"
 #include "scene_options.h"
 
+#include "exabricks/amr/scenes.h"
 #include "exabricks/core/log.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/workflows/series.h"
@@ -64,17 +65,32 @@ struct FirstStep {
   std::shared_ptr<SeriesRenderer> series;
   std::shared_ptr<const Model> model;
   DatasetInfo dataset;
+  int index = 0;                                       ///< the step shown first
+  std::vector<std::pair<int, std::string>> unreadable; ///< steps before it that could not be read
 };
 
+/// The dataset, or the first readable step of a series (a step that cannot be read is said on
+/// stderr and skipped; when none can be read, the first one's error).
 FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo) {
   FirstStep f;
   if (steps.size() > 1) {
     SeriesOptions so;
     so.load = lo;
     f.series = std::make_shared<SeriesRenderer>(steps, so);
-    const SeriesStep& first = f.series->load(0);
-    f.model = first.model;
-    f.dataset = first.info;
+    for (f.index = 0; f.index < int(steps.size()); ++f.index) {
+      try {
+        const SeriesStep& first = f.series->load(f.index);
+        f.model = first.model;
+        f.dataset = first.info;
+        break;
+      } catch (const Error& e) {
+        if (f.index + 1 == int(steps.size()))
+          fail("no step of the series can be read; the first: ",
+               f.unreadable.empty() ? e.what() : f.unreadable[0].second);
+        logWarning(strCat("step ", f.index, " cannot be read, skipped: ", e.what()));
+        f.unreadable.emplace_back(f.index, e.what());
+      }
+    }
   } else {
     f.model = std::make_shared<const Model>(loadModel(input, lo));
     f.dataset = DatasetInfo::of(*f.model);
@@ -110,18 +126,29 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields.clear(); // every field: the page can switch between them
   const FirstStep first = loadFirst(steps, doc.input, lo);
+  if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
   applyDataDefaults(o.scene, cmd, doc.scene, *model, dataset);
   range1f overSteps;
+  std::vector<std::pair<int, std::string>> unreadable = first.unreadable;
   if (first.series && o.scene.range.empty() && perStep) {
     doc.scene.layers[0].tf.valueRange = range1f();
   } else if (first.series && o.scene.range.empty()) {
-    const std::string& name = model->fieldNames[size_t(model->requireField(doc.scene.layers[0].field))];
-    overSteps = seriesRange(steps, lo, name).range;
-    doc.scene.layers[0].tf.valueRange = overSteps;
-    logNote(strCat("colour range over all ", steps.size(), " steps: [", overSteps.lower, ", ", overSteps.upper,
-                   "]; --range per-step or LOW,HIGH to choose"));
+    const int field = model->requireField(doc.scene.layers[0].field);
+    const SeriesRange r = seriesRange(steps, lo, model->fieldNames[size_t(field)], true);
+    overSteps = r.range;
+    for (size_t k = 0; k < r.unreadable.size(); ++k)
+      if (std::none_of(first.unreadable.begin(), first.unreadable.end(),
+                       [&](const auto& u) { return u.first == r.unreadable[k]; })) {
+        logWarning(strCat("step ", r.unreadable[k], " cannot be read, marked on the page: ", r.reasons[k]));
+        unreadable.emplace_back(r.unreadable[k], r.reasons[k]);
+      }
+    TransferFunction& tf = doc.scene.layers[0].tf;
+    tf = widenedForSeries(tf, dataset.valueRanges.at(size_t(field)), overSteps);
+    logNote(strCat("colour range over all ", steps.size(), " steps: [", tf.valueRange.lower, ", ", tf.valueRange.upper,
+                   "] (values over [", overSteps.lower, ", ", overSteps.upper,
+                   "]); --range per-step or LOW,HIGH to choose"));
   }
   {
     Renderer framing(*model, dataset);
@@ -136,14 +163,15 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   view::ViewContent content;
   content.model = model;
   content.dataset = dataset;
-  content.input = doc.input;
+  content.input = doc.input == kEmbeddedInput ? std::string() : doc.input;
   content.name = datasetLabel(o.inputs.empty() ? o.scene.in.input : o.inputs[0]);
   content.initial = doc;
   content.load = lo;
   if (first.series) {
     content.series = first.series;
     content.steps = steps;
-    content.seriesRange = overSteps;
+    content.firstStep = first.index;
+    content.unreadable = unreadable;
   }
   view::ServerOptions options;
   options.host = o.host;

@@ -214,7 +214,12 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   auto apply = [&](const char* name) { return !fromFile || given(name); };
   Scene& s = doc.scene;
   Frame& f = doc.frame;
-  if (!o.in.input.empty()) doc.input = o.in.input;
+  if (!o.in.input.empty())
+    doc.input = o.in.input;
+  else if (fromFile && doc.input.empty())
+    failUsage(o.sceneFile, " names no input: give the dataset it shows (exabricks ", cmd.get_name(), " INPUT --scene ",
+              o.sceneFile, ")");
+  if (doc.input == kEmbeddedInput) doc.input.clear(); // the default dataset
 
   if (apply("--size")) parseSize(o.size, f.width, f.height);
   if (apply("--spp")) f.samplesPerPixel = checked("--spp", "frame.samples_per_pixel", o.spp);
@@ -397,7 +402,7 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
         adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
                               !given("--opacity"), whole ? &whole->histogram : nullptr, !given("--colormap"));
     first.tf = c.tf;
-    for (const std::string& note : c.notes)
+    for (const std::string& note : c.commandLineNotes())
       logNote(note);
   }
   if (given("--linear"))
@@ -410,7 +415,7 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
 
 SceneDocument withAbsolutePaths(SceneDocument doc) {
   std::error_code ec;
-  if (!doc.input.empty()) doc.input = std::filesystem::absolute(doc.input, ec).lexically_normal().string();
+  doc.input = doc.input.empty() ? kEmbeddedInput : std::filesystem::absolute(doc.input, ec).lexically_normal().string();
   for (SceneMesh& m : doc.scene.meshes)
     if (!m.source.empty()) m.source = std::filesystem::absolute(m.source, ec).lexically_normal().string();
   return doc;

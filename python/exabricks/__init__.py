@@ -13,6 +13,7 @@ import copy
 import json
 import math
 import os
+import warnings
 
 import numpy as np
 
@@ -277,7 +278,87 @@ def from_yt(ds, fields=None, max_brick_width=32):
     left = _yt_code(ds.domain_left_edge)
     right = _yt_code(ds.domain_right_edge)
     bbox = [[left[a], right[a]] for a in range(3)]
-    return from_grids(grids, names, bbox=bbox, max_brick_width=max_brick_width, units=units)
+    dataset = from_grids(grids, names, bbox=bbox, max_brick_width=max_brick_width, units=units)
+    dataset._yt_origin = _yt_origin(ds, fields, names, units)
+    return dataset
+
+
+def _yt_origin(ds, fields, names, units):
+    """What the command line reads for a dataset made from yt: the output's path, and per field
+    (by its name here) the field's name in the file and the factor from the file's values to
+    yt's (yt converts code units; the command line reads the file's numbers). A field yt derives
+    (no field of the file behind it) maps to None."""
+    path = getattr(ds, "parameter_filename", None)
+    origin = {"input": os.path.abspath(path) if path and os.path.exists(path) else None, "fields": {}}
+    on_disk = set(ds.field_list)
+    for f, name in zip(fields, names):
+        entry = None
+        try:
+            info = ds._get_field_info(f)
+            disk = info.alias_name if getattr(info, "is_alias", False) else info.name
+            if disk in on_disk:
+                disk_units = str(ds._get_field_info(disk).units or "") or "dimensionless"
+                factor = float(ds.quan(1.0, disk_units).to(units.get(name) or "dimensionless").d)
+                if factor > 0 and np.isfinite(factor):
+                    entry = (_yt_field_name(disk), factor)
+        except Exception:  # yt cannot say: the field stays yt's
+            entry = None
+        origin["fields"][name] = entry
+    return origin
+
+
+def _yt_scene_units(d, origin, to_file):
+    """A scene document of a dataset made from yt, with yt's field names and units (to_file
+    False) or the file's (to_file True, with the output's path as its input): field names
+    mapped, value ranges and iso-values scaled. Where a field the scene shows has no field of the
+    file behind it (yt derives it), or the output's path is unknown, the document is returned as
+    it is (to_file: with a warning, since the command line cannot read it)."""
+    fields = origin["fields"]
+    if to_file:
+        table = {name: entry for name, entry in fields.items() if entry is not None}
+    else:
+        table = {entry[0]: (name, entry[1]) for name, entry in fields.items() if entry is not None}
+    d = copy.deepcopy(d)
+    layers = d.get("layers", [])
+    iso = d.get("iso", {})
+    first = layers[0]["field"] if layers else ""
+    shown = [l["field"] for l in layers]
+    if iso.get("values"):
+        shown.append(iso.get("field") or first)
+    if iso.get("color_field"):
+        shown.append(iso["color_field"])
+    missing = [n for n in shown if n and n not in table]
+    if missing or (to_file and not origin["input"]):
+        if to_file:
+            why = ("yt derives %s: no field of the file lies behind it" % ", ".join("'%s'" % n for n in missing)
+                   if missing else "yt does not say which file the data came from")
+            warnings.warn("the scene file names no input the command line can read (%s)" % why, stacklevel=3)
+        return d
+
+    def scale(name):
+        factor = table[name][1]
+        return 1.0 / factor if to_file else factor
+
+    def scaled_range(tf, name):
+        if tf.get("range") is not None:
+            tf["range"] = [float(v) * scale(name) for v in tf["range"]]
+
+    for layer in layers:
+        if layer["field"]:
+            scaled_range(layer["transfer_function"], layer["field"])
+            layer["field"] = table[layer["field"]][0]
+    if iso.get("values"):
+        name = iso.get("field") or first
+        if name:
+            iso["values"] = [float(v) * scale(name) for v in iso["values"]]
+            if iso.get("field"):
+                iso["field"] = table[iso["field"]][0]
+    if iso.get("color_field"):
+        scaled_range(iso["color_map"], iso["color_field"])
+        iso["color_field"] = table[iso["color_field"]][0]
+    if to_file:
+        d["input"] = origin["input"]
+    return d
 
 
 def _file_stem(text):
@@ -567,7 +648,10 @@ class Scene:
             raise TypeError("Scene needs an exabricks.Dataset")
         self.dataset = dataset
         # Scene files record the dataset by absolute path, as the command line writes them.
-        self._input = "" if dataset.name.startswith("<") else os.path.abspath(dataset.name)
+        if dataset.name == _core.DEFAULT_DATASET_NAME:
+            self._input = _core.EMBEDDED_INPUT
+        else:
+            self._input = "" if dataset.name.startswith("<") else os.path.abspath(dataset.name)
         self._renderer = _core.Renderer(dataset._core, device)  # holds the dataset alive
         field = field or dataset.default_field
         self.notes = []  # what the defaults chose, as the command line says on stderr
@@ -684,8 +768,14 @@ class Scene:
         return d
 
     def to_json(self):
-        """The scene file's text, as the command line writes it (every setting; checked by its reader)."""
-        return _core.scene_json(json.dumps(self.to_dict()), "scene")
+        """The scene file's text, as the command line writes it (every setting; checked by its
+        reader). For a dataset made from yt (from_yt), the file names what the command line reads:
+        the output's path, the file's field names and values in the file's units."""
+        d = self.to_dict()
+        origin = getattr(self.dataset, "_yt_origin", None)
+        if origin is not None and not self._input:
+            d = _yt_scene_units(d, origin, to_file=True)
+        return _core.scene_json(json.dumps(d), "scene")
 
     def save_json(self, path):
         """Writes the scene file `exabricks render --scene` reads."""
@@ -708,6 +798,9 @@ class Scene:
             with open(source, encoding="utf-8") as f:
                 text = f.read()
         d = json.loads(_core.scene_json(text, source))  # checked, with every setting
+        origin = getattr(dataset, "_yt_origin", None)
+        if origin is not None:
+            d = _yt_scene_units(d, origin, to_file=False)
         given = set(json.loads(text))
         s = cls(dataset)
         if "camera" in given:

@@ -12,8 +12,6 @@ namespace exa {
 namespace {
 
 constexpr int kBins = 256;
-/// The optical depth a ray across the data gathers at the data's mean opacity (exposure).
-constexpr double kExposureDepth = 2.0;
 
 /// Volume-weighted histogram of the normalised value; returns the total volume. For a model
 /// that holds part of the data, only the cells the part owns count, and the parts' histograms
@@ -56,14 +54,96 @@ int medianBin(const std::vector<double>& hist, double total, bool fromHigh) {
   return fromHigh ? 0 : kBins - 1;
 }
 
-/// The opacity scale of the first picture's exposure (see adaptTransferFunction).
-float exposureScale(const Model& model, int field, const TransferFunction& tf, const DatasetInfo& dataset,
-                    const PartialData* part) {
-  TransferFunction ramp = tf;
-  ramp.opacityScale = 1.f;
+/// Rays cast through the data's lattice box along each axis, kRays x kRays per axis at the centres
+/// of a grid over the other two axes: a small picture of what every view of the data sees.
+constexpr int kRays = 128;
+constexpr size_t kRayCount = size_t(3) * kRays * kRays;
+
+/// Calls visit(ray, value index, cell width) for every cell and every ray that crosses it (along
+/// its whole width); for a model that holds part of the data, only the cells the part owns.
+template <typename Visit>
+void castAxisRays(const Model& model, const box3i& bounds, const PartialData* part, Visit&& visit) {
+  double pitch[3];
+  for (int a = 0; a < 3; ++a)
+    pitch[a] = double(std::max(bounds.upper[a] - bounds.lower[a], 1)) / kRays;
+  // The rays whose centres fall into [lo, lo + w) along axis a.
+  auto span = [&](int a, int lo, int w, int& first, int& end) {
+    first = std::max(0, int(std::ceil(double(lo - bounds.lower[a]) / pitch[a] - 0.5)));
+    end = std::min(kRays, int(std::ceil(double(lo + w - bounds.lower[a]) / pitch[a] - 0.5)));
+  };
+  for (const Brick& b : model.bricks) {
+    const int w = b.cellWidth();
+    uint32_t slot = b.valueOffset;
+    for (int z = 0; z < b.size.z; ++z)
+      for (int y = 0; y < b.size.y; ++y)
+        for (int x = 0; x < b.size.x; ++x, ++slot) {
+          const vec3i lo = b.lower + vec3i(x, y, z) * w;
+          if (part && !centreInside(lo, b.level, part->owned)) continue;
+          for (int a = 0; a < 3; ++a) {
+            const int i = (a + 1) % 3, j = (a + 2) % 3;
+            int i0, i1, j0, j1;
+            span(i, lo[i], w, i0, i1);
+            span(j, lo[j], w, j0, j1);
+            for (int rj = j0; rj < j1; ++rj)
+              for (int ri = i0; ri < i1; ++ri)
+                visit((size_t(a) * kRays + size_t(rj)) * kRays + size_t(ri), slot, w);
+          }
+        }
+  }
+}
+
+box3i wholeBounds(const Model& model, const PartialData* part) {
+  return part && !part->bounds.empty() ? part->bounds : model.cellBounds();
+}
+
+/// The normalised values the axis rays meet: per ray, in which of kTopBins bins of [0, 1] it met
+/// cells (counts, summed over the parts).
+constexpr int kTopBins = 32;
+std::vector<double> valuesMet(const Model& model, int field, const TransferFunction& norm, const PartialData* part) {
+  std::vector<double> counts(kRayCount * kTopBins, 0.0);
+  const ValueArray& values = model.fieldValues.at(size_t(field));
+  castAxisRays(model, wholeBounds(model, part), part, [&](size_t ray, uint32_t slot, int) {
+    const float t = norm.normalize(values[slot]);
+    if (t == t) counts[ray * kTopBins + size_t(std::clamp(int(t * kTopBins), 0, kTopBins - 1))] += 1.0;
+  });
+  if (part && part->sumOverParts) part->sumOverParts(counts);
+  return counts;
+}
+
+/// The value (normalised) that the highest (or, with fromLow, the lowest) value met along a
+/// ray reaches on the given share of the rays that meet data.
+float extremeMetOnShare(const std::vector<double>& counts, bool fromLow, double share) {
+  std::vector<int> extremes;
+  for (size_t ray = 0; ray < kRayCount; ++ray) {
+    const double* c = &counts[ray * kTopBins];
+    int bin = -1;
+    for (int k = 0; k < kTopBins; ++k)
+      if (c[fromLow ? k : kTopBins - 1 - k] > 0.0) {
+        bin = fromLow ? k : kTopBins - 1 - k;
+        break;
+      }
+    if (bin >= 0) extremes.push_back(bin);
+  }
+  if (extremes.empty()) return fromLow ? 0.f : 1.f;
+  const size_t n = size_t(double(extremes.size()) * share);
+  const size_t k = fromLow ? std::min(n, extremes.size() - 1) : extremes.size() - 1 - std::min(n, extremes.size() - 1);
+  std::nth_element(extremes.begin(), extremes.begin() + std::ptrdiff_t(k), extremes.end());
+  return float(extremes[k] + (fromLow ? 0 : 1)) / kTopBins;
+}
+
+/// The share of the rays that should show the end of the colour map and gather the optical
+/// depth kExposureDepth (the exposure).
+constexpr double kTopShare = 0.01;
+constexpr double kExposureDepth = 2.0;
+
+/// The optical depth at opacity scale 1 into the highest values of a compact structure: each
+/// value's cells taken as one blob (the cells at t or above span (volume at t or above)^(1/3)
+/// finest cells).
+double depthIntoStructure(const Model& model, int field, const TransferFunction& ramp, const DatasetInfo& dataset,
+                          const PartialData* part) {
   std::vector<double> hist;
   const double volume = histogram(model, field, ramp, hist, part);
-  if (!(volume > 0.0)) return dataset.defaultOpacityScale;
+  if (!(volume > 0.0)) return 0.0;
   // Finest cells per lattice unit cubed: the histogram counts lattice volume.
   const double cellVolume = std::pow(double(dataset.referenceWidth), 3.0);
   double depth = 0.0, above = 0.0, outer = 0.0;
@@ -73,6 +153,41 @@ float exposureScale(const Model& model, int field, const TransferFunction& tf, c
     depth += double(ramp.atNormalized((float(k) + 0.5f) / kBins).w) * (span - outer);
     outer = span;
   }
+  return depth;
+}
+
+/// The optical depth at opacity scale 1 that the kTopShare of the axis rays which see anything
+/// (gather some depth) and gather the most reach (each cell crossed along its width; summed in
+/// fixed point, so that the sum over parts equals the whole data's).
+double depthOfDensestSightLines(const Model& model, int field, const TransferFunction& ramp, const DatasetInfo& dataset,
+                                const PartialData* part) {
+  constexpr double kFixed = 1 << 20;
+  std::vector<double> depth(kRayCount, 0.0); // in kFixed units
+  const ValueArray& values = model.fieldValues.at(size_t(field));
+  castAxisRays(model, wholeBounds(model, part), part, [&](size_t ray, uint32_t slot, int width) {
+    const double alpha = std::round(double(ramp.lookup(values[slot]).w) * kFixed);
+    depth[ray] += alpha * std::ldexp(1.0, int(std::lround(std::log2(double(width) / dataset.referenceWidth))));
+  });
+  if (part && part->sumOverParts) part->sumOverParts(depth);
+  std::vector<double> seeing;
+  for (double d : depth)
+    if (d > 0.0) seeing.push_back(d / kFixed);
+  if (seeing.empty()) return 0.0;
+  const size_t k = seeing.size() - 1 - std::min(seeing.size() - 1, size_t(double(seeing.size()) * kTopShare));
+  std::nth_element(seeing.begin(), seeing.begin() + std::ptrdiff_t(k), seeing.end());
+  return seeing[k];
+}
+
+/// The opacity scale of the first picture's exposure: both the densest lines of sight and the
+/// path into a compact structure's highest values gather at least kExposureDepth (the first
+/// keeps a web of thin structures from staying faint, the second a solid body from turning
+/// translucent).
+float exposureScale(const Model& model, int field, const TransferFunction& tf, const DatasetInfo& dataset,
+                    const PartialData* part) {
+  TransferFunction ramp = tf;
+  ramp.opacityScale = 1.f;
+  const double depth = std::min(depthOfDensestSightLines(model, field, ramp, dataset, part),
+                                depthIntoStructure(model, field, ramp, dataset, part));
   if (!(depth > 0.0)) return dataset.defaultOpacityScale;
   return float(std::clamp(kExposureDepth / depth, 1e-6, 1.0));
 }
@@ -93,8 +208,8 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
   const float scale = std::max(std::abs(range.lower), std::abs(range.upper));
   if (chooseRange && range.upper - range.lower <= 4.f * std::numeric_limits<float>::epsilon() * scale) {
     tf.opacity = {{0.f, 0.f}, {1.f, 0.f}};
-    out.notes.push_back(strCat("'", name, "' is constant (", range.lower,
-                               "): nothing to draw (--range and --opacity draw it all the same)"));
+    out.note(strCat("'", name, "' is constant (", range.lower, "): nothing to draw"),
+             "--range and --opacity draw it all the same");
     return out;
   }
   // Signed values (velocities, fluctuations): a diverging colour map centred on zero, opaque
@@ -107,8 +222,9 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
     tf.valueRange = range1f{-m, m};
     tf.opacity = {{0.f, 1.f}, {0.25f, 0.25f}, {0.5f, 0.f}, {0.75f, 0.25f}, {1.f, 1.f}};
     if (tfIn.opacityScale == 0.f) tf.opacityScale = exposureScale(model, field, tf, dataset, part);
-    out.notes.push_back(strCat("'", name, "' takes both signs: a diverging colour map over [", -m, ", ", m,
-                               "], transparent at zero (--colormap, --range, --opacity to choose)"));
+    out.note(
+        strCat("'", name, "' takes both signs: a diverging colour map over [", -m, ", ", m, "], transparent at zero"),
+        "--colormap, --range, --opacity to choose");
     return out;
   }
   // Exact zeros beside positive values over decades (a density with empty cells): the positive
@@ -132,10 +248,11 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
     tf.logScale = norm.logScale = true;
     total = histogram(model, field, norm, hist, part);
     const bool zeros = dataset.valueRanges.at(size_t(field)).lower == 0.f;
-    out.notes.push_back(strCat("'", name, "' is positive", zeros ? " (besides exact zeros, drawn as the lowest)" : "",
-                               ", spans ", std::lround(std::log10(double(range.upper) / double(range.lower))),
-                               " decades and half its volume lies in the lowest percent of the range: ",
-                               "logarithmic colour mapping (--linear to refuse)"));
+    out.note(
+        strCat("'", name, "' is positive", zeros ? " (besides exact zeros, drawn as the lowest)" : "", ", spans ",
+               std::lround(std::log10(double(range.upper) / double(range.lower))),
+               " decades and half its volume lies in the lowest percent of the range: ", "logarithmic colour mapping"),
+        "--linear to refuse");
     if (zeros && tfIn.valueRange.empty()) tf.valueRange = range;
   } else if (range.lower != dataset.valueRanges.at(size_t(field)).lower && tfIn.valueRange.empty()) {
     range.lower = dataset.valueRanges.at(size_t(field)).lower; // zeros, but no log: the whole range
@@ -167,37 +284,90 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
     if (!(l > 0.0)) l = h * 1e-6;
     return float(std::pow(10.0, std::log10(l) + (std::log10(h) - std::log10(l)) * double(t)));
   };
+  // The far end of the colour map: the value that the most extreme structures reach along
+  // kTopShare of the axis rays that meet data, where that lies a tenth of the range or more
+  // inside it (a few small dense haloes do not stretch the colour map so far that the picture
+  // never shows its end); values beyond it show the end colour.
+  const float tFar = extremeMetOnShare(valuesMet(model, field, norm, part), backgroundHigh, kTopShare);
+  std::string farNote;
   if (backgroundHigh && tLo > 0.f) {
-    tf.valueRange = range1f{range.lower, valueAt(tLo)};
+    const float tEnd = tFar > 0.1f && tFar < 0.75f * tLo ? tFar : 0.f;
+    tf.valueRange = range1f{valueAt(tEnd), valueAt(tLo)};
     tf.opacity = {{0.f, 1.f}, {0.25f, 0.5625f}, {0.5f, 0.25f}, {0.75f, 0.0625f}, {1.f, 0.f}};
+    if (tEnd > 0.f) farNote = "the lowest";
   } else if (!backgroundHigh && tHi < 1.f) {
-    tf.valueRange = range1f{valueAt(tHi), range.upper};
+    const float tEnd = tFar < 0.9f && tFar > tHi + 0.25f * (1.f - tHi) ? tFar : 1.f;
+    tf.valueRange = range1f{valueAt(tHi), valueAt(tEnd)};
     tf.opacity = {{0.f, 0.f}, {0.25f, 0.0625f}, {0.5f, 0.25f}, {0.75f, 0.5625f}, {1.f, 1.f}};
+    if (tEnd < 1.f) farNote = "the highest";
   } else {
     return out;
   }
+  if (!farNote.empty())
+    out.note(strCat("the colour map ends at ", backgroundHigh ? tf.valueRange.lower : tf.valueRange.upper, ", which ",
+                    farNote, " values reach along ", 100.0 * kTopShare,
+                    " % of the lines of sight (beyond it: the end colour)"),
+             "--range to choose");
   if (!(tf.valueRange.upper > tf.valueRange.lower)) {
     tf.valueRange = tfIn.valueRange;
     tf.opacity = tfIn.opacity;
     return out;
   }
-  // Exposure: the optical depth along a ray from outside the structure to its highest values,
-  // each value's cells taken as one compact blob (the cells at t or above span
-  // (volume at t or above)^(1/3) cells), is kExposureDepth; the structure's top shows the top of
-  // the colour map, seen through what lies around it.
+  // Exposure: the lines of sight that gather the most reach optical depth kExposureDepth.
   if (tfIn.opacityScale == 0.f) {
     tf.opacityScale = exposureScale(model, field, tf, dataset, part);
-    out.notes.push_back(strCat("exposure: opacity scale ", tf.opacityScale, " (optical depth ", kExposureDepth,
-                               " to the highest values; --opacity-scale to choose)"));
+    out.note(strCat("exposure: opacity scale ", tf.opacityScale, " (optical depth ", kExposureDepth,
+                    " along the densest ", 100.0 * kTopShare, " % of the lines of sight and into the highest values)"),
+             "--opacity-scale to choose");
   }
   if (dominant)
-    out.notes.push_back(strCat(std::lround(100.0 * share), " % of the volume holds '", name,
-                               "' near one value (the background): transparent there; colours and opacity span [",
-                               tf.valueRange.lower, ", ", tf.valueRange.upper, "] (--range, --opacity to choose)"));
+    out.note(strCat(std::lround(100.0 * share), " % of the volume holds '", name,
+                    "' near one value (the background): transparent there; colours and opacity span [",
+                    tf.valueRange.lower, ", ", tf.valueRange.upper, "]"),
+             "--range, --opacity to choose");
   else
-    out.notes.push_back(strCat("transparent over the ", backgroundHigh ? "upper" : "lower", " half of the volume of '",
-                               name, "'; colours and opacity span [", tf.valueRange.lower, ", ", tf.valueRange.upper,
-                               "] (--range, --opacity to choose)"));
+    out.note(strCat("transparent over the ", backgroundHigh ? "upper" : "lower", " half of the volume of '", name,
+                    "'; colours and opacity span [", tf.valueRange.lower, ", ", tf.valueRange.upper, "]"),
+             "--range, --opacity to choose");
+  return out;
+}
+
+TransferFunction widenedForSeries(const TransferFunction& adapted, const range1f& step, const range1f& series) {
+  TransferFunction tf = adapted;
+  range1f& r = tf.valueRange;
+  if (r.empty() || step.empty() || series.empty()) {
+    r = series;
+    return tf;
+  }
+  if (r.lower < 0.f && r.lower == -r.upper) { // centred on zero
+    const float m = std::max({r.upper, -series.lower, series.upper});
+    r = range1f{-m, m};
+    return tf;
+  }
+  TransferFunction unit = adapted;
+  unit.opacityScale = 1.f;
+  const float opacityLow = unit.atNormalized(0.f).w, opacityHigh = unit.atNormalized(1.f).w;
+  const bool ratios = tf.logScale && step.lower > 0.f && series.lower > 0.f;
+  if (r.lower <= step.lower)
+    r.lower = std::min(r.lower, series.lower);
+  else if (opacityLow > opacityHigh && series.lower < step.lower)
+    r.lower = ratios ? r.lower * (series.lower / step.lower) : r.lower - (step.lower - series.lower);
+  if (r.upper >= step.upper)
+    r.upper = std::max(r.upper, series.upper);
+  else if (opacityHigh > opacityLow && series.upper > step.upper)
+    r.upper = ratios ? r.upper * (series.upper / step.upper) : r.upper + (series.upper - step.upper);
+  return tf;
+}
+
+void DefaultChoices::note(std::string text, std::string hint) {
+  notes.push_back(std::move(text));
+  hints.push_back(std::move(hint));
+}
+
+std::vector<std::string> DefaultChoices::commandLineNotes() const {
+  std::vector<std::string> out;
+  for (size_t i = 0; i < notes.size(); ++i)
+    out.push_back(i < hints.size() && !hints[i].empty() ? strCat(notes[i], " (", hints[i], ")") : notes[i]);
   return out;
 }
 

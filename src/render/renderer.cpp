@@ -17,6 +17,7 @@
 #include "exabricks/core/random.h"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <atomic>
@@ -259,18 +260,70 @@ size_t Renderer::visibleRegions() const {
   return t ? t->visibleCount() : 0;
 }
 
+namespace {
+
+/// Lattice box of the cells inside `within` whose value some layer draws with at least a tenth of
+/// that layer's largest opacity: where the volume shows, tighter than the regions that may show
+/// it (a faint haze around a structure fills whole regions).
+box3f opaqueCellBounds(const Model& model, const std::vector<LayerTable>& layers, const box3f& within) {
+  constexpr float kShare = 0.1f;
+  std::vector<float> threshold;
+  for (const LayerTable& layer : layers) {
+    float peak = 0.f;
+    for (const vec4f& entry : layer.table)
+      peak = std::max(peak, 1.f - std::exp2(entry.w));
+    threshold.push_back(kShare * peak);
+  }
+  auto boxOf = [&](const tbb::blocked_range<size_t>& r, box3f box) {
+    for (size_t i = r.begin(); i != r.end(); ++i) {
+      const Brick& b = model.bricks[i];
+      const box3i bb = b.bounds();
+      if (bb.upper.x <= within.lower.x || bb.upper.y <= within.lower.y || bb.upper.z <= within.lower.z ||
+          bb.lower.x >= within.upper.x || bb.lower.y >= within.upper.y || bb.lower.z >= within.upper.z)
+        continue;
+      const int w = b.cellWidth();
+      uint32_t slot = b.valueOffset;
+      for (int z = 0; z < b.size.z; ++z)
+        for (int y = 0; y < b.size.y; ++y)
+          for (int x = 0; x < b.size.x; ++x, ++slot)
+            for (size_t l = 0; l < layers.size(); ++l)
+              if (1.f - std::exp2(layers[l].lookup(layers[l].view.values[slot]).w) >= threshold[l]) {
+                const vec3f lo(b.lower + vec3i(x, y, z) * w);
+                box.extend(box3f(lo, lo + vec3f(float(w))));
+                break;
+              }
+    }
+    return box;
+  };
+  auto join = [](box3f a, const box3f& b) {
+    a.extend(b);
+    return a;
+  };
+  box3f cells = tbb::parallel_reduce(tbb::blocked_range<size_t>(0, model.bricks.size(), 64), box3f(), boxOf, join);
+  cells.lower = max(cells.lower, within.lower);
+  cells.upper = min(cells.upper, within.upper);
+  return cells;
+}
+
+} // namespace
+
 box3d Renderer::visibleBounds() const {
   const Impl& im = *impl_;
-  box3f lattice;
+  box3f volume, iso;
   const std::vector<uint8_t>& visible = im.volume.visible();
   if (im.scene.volume)
     for (size_t i = 0; i < visible.size(); ++i)
-      if (visible[i]) lattice.extend(im.model.regions.regions[i].bounds());
+      if (visible[i]) volume.extend(im.model.regions.regions[i].bounds());
+  if (!volume.empty() && im.scene.debug == DebugView::None) {
+    const box3f opaque = opaqueCellBounds(im.model, im.volume.layers(), volume);
+    if (!opaque.empty()) volume = opaque;
+  }
   const std::vector<uint8_t>& isoVisible = im.surfaces.isoVisible();
   for (size_t i = 0; i < isoVisible.size(); ++i)
-    if (isoVisible[i]) lattice.extend(im.model.regions.regions[i].bounds());
-  if (lattice.empty()) return box3d();
-  return im.model.world.toWorld(lattice);
+    if (isoVisible[i]) iso.extend(im.model.regions.regions[i].bounds());
+  volume.extend(iso);
+  if (volume.empty()) return box3d();
+  return im.model.world.toWorld(volume);
 }
 
 size_t Renderer::isoRegions() const {

@@ -57,6 +57,11 @@ MovieMaker::~MovieMaker() {
   fs::remove_all(folder_, ec);
 }
 
+int heldFrames(int steps, double fps) {
+  const int hold = int(std::ceil(4.0 * fps / double(std::max(steps, 1))));
+  return std::clamp(hold, 1, std::max(1, int(std::ceil(fps))));
+}
+
 bool MovieMaker::canEncode() { return !findProgram("ffmpeg").empty(); }
 
 bool MovieMaker::busy() const {
@@ -95,13 +100,19 @@ void MovieMaker::run(MovieJob& job, const MovieInput& in) {
   std::error_code ec;
   try {
     if (in.steps.size() > 1) {
+      // Each step rendered once and held for several frames, so that a short series plays for a
+      // visible time.
       SeriesRenderer series(in.steps, in.series);
       const FramePlan plan = FramePlan::perStep(int(in.steps.size()));
+      const int hold = heldFrames(plan.steps, in.fps);
       std::vector<int> frames(size_t(plan.frames));
       std::iota(frames.begin(), frames.end(), 0);
       series.renderFrames(plan, in.doc.scene, in.doc.frame, frames,
                           [&](int i, const SeriesStep& step, const Scene& s, const Frame& f, Image& image) {
-                            write(i, s, f, *step.model, step.info, in.steps[size_t(step.index)], image);
+                            write(i * hold, s, f, *step.model, step.info, in.steps[size_t(step.index)], image);
+                            for (int k = 1; k < hold; ++k)
+                              fs::copy_file(framePath(framesDir, i * hold), framePath(framesDir, i * hold + k),
+                                            fs::copy_options::overwrite_existing);
                           });
     } else {
       FramePlan plan;

@@ -2,6 +2,8 @@
 
 #include "web_assets.h"
 
+#include "exabricks/amr/scenes.h"
+
 #include <cerrno>
 #include <cstring>
 #include <netdb.h>
@@ -225,6 +227,7 @@ void Server::Impl::frameRoutes() {
     const std::vector<unsigned char> png = encodePng(*s.image, s.keepAlpha, s.background);
     res.set_header("X-Exabricks-Request", std::to_string(s.request));
     res.set_header("X-Exabricks-Passes", std::to_string(s.passes));
+    res.set_header("Content-Disposition", attachment(s.image->width, s.image->height, ".png"));
     res.set_header("Cache-Control", "no-store");
     res.set_content(std::string(png.begin(), png.end()), "image/png");
   });
@@ -257,6 +260,8 @@ void Server::Impl::sceneRoutes() {
     const std::optional<SceneDocument> doc = session->current();
     SceneDocument d = doc ? *doc : content.initial;
     d.hasCamera = true;
+    if (d.input.empty()) d.input = kEmbeddedInput; // the default dataset
+    res.set_header("Content-Disposition", attachment(d.frame.width, d.frame.height, ".json"));
     res.set_header("Cache-Control", "no-store");
     res.set_content(writeSceneJson(d), "application/json");
   });
@@ -319,8 +324,11 @@ void Server::bind() {
     }
     s.port = s.options.port;
   }
-  s.steps = std::make_unique<ViewSteps>(StepView{0, s.content.model, s.content.dataset, s.content.input},
-                                        s.content.series, s.content.steps, s.content.load);
+  s.steps =
+      std::make_unique<ViewSteps>(StepView{s.content.firstStep, s.content.model, s.content.dataset, s.content.input},
+                                  s.content.series, s.content.steps, s.content.load);
+  for (const auto& [index, why] : s.content.unreadable)
+    s.steps->markUnreadable(index, why);
   s.movies = std::make_unique<MovieMaker>();
   s.pictures = std::make_unique<PictureMaker>();
   LegendText legends;

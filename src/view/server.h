@@ -58,10 +58,10 @@ struct ViewContent {
   /// paths as given at start, the only datasets a request may switch to. Null for one dataset.
   std::shared_ptr<SeriesRenderer> series;
   std::vector<std::string> steps;
-  /// The range of the initial field over all steps, which the first scene maps (empty: none).
-  range1f seriesRange;
-  RendererOptions rendererOptions; ///< how movies march
-  LoadOptions load;                ///< how the datasets were read (NaN as holes or not)
+  int firstStep = 0;                                   ///< the step shown first (the first readable one)
+  std::vector<std::pair<int, std::string>> unreadable; ///< steps that could not be read, and why
+  RendererOptions rendererOptions;                     ///< how movies march
+  LoadOptions load;                                    ///< how the datasets were read (NaN as holes or not)
 };
 
 /// Statistics of a published frame (also sent to the page with each frame).

@@ -100,6 +100,22 @@ struct Server::Impl {
   std::atomic<bool> stopping{false};
   int port = 0;
 
+  /// The name a download of the view takes, as Save picture names its files: the dataset shown,
+  /// the first layer's field and the size (`extension` replaces the picture's), in a
+  /// Content-Disposition header.
+  std::string attachment(int width, int height, const std::string& extension) const {
+    const std::optional<SceneDocument> doc = session->current();
+    const SceneDocument& d = doc ? *doc : content.initial;
+    const StepView step = steps->current();
+    std::string field;
+    const int index = step.model->fieldIndex(d.scene.layers.empty() ? std::string() : d.scene.layers[0].field);
+    if (index >= 0) field = step.model->fieldNames[size_t(index)];
+    std::string name =
+        pictureName(step.input.empty() ? "exabricks" : step.input, field, width, height, ImageFormat::Png);
+    name = name.substr(0, name.size() - 4) + extension;
+    return strCat("attachment; filename=\"", name, "\"");
+  }
+
   /// A scene document from a request: parsed, its meshes resolved to the meshes loaded at start,
   /// its settings and fields checked, sizes bounded. Throws RequestError.
   SceneDocument documentFrom(const std::string& text, const char* what, bool* hasCamera = nullptr) {

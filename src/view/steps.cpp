@@ -30,14 +30,20 @@ ViewSteps::ViewSteps(StepView first, std::shared_ptr<SeriesRenderer> series, std
     : current_(std::move(first)), series_(std::move(series)), load_(std::move(load)) {
   if (paths.empty()) paths.push_back(current_.input);
   for (const std::string& p : paths)
-    facts_.push_back(StepFacts{p, stepName(p), false, {}});
+    facts_.push_back(StepFacts{p, stepName(p), false, {}, {}});
   record(current_);
   if (series_ && series_->options().prefetch) series_->prefetch((current_.index + 1) % size());
+}
+
+void ViewSteps::markUnreadable(int index, const std::string& why) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  facts_.at(size_t(index)).error = why;
 }
 
 void ViewSteps::record(const StepView& step) {
   StepFacts& f = facts_.at(size_t(step.index));
   f.loaded = true;
+  f.error.clear();
   f.simulation = step.model->simulation;
 }
 
@@ -58,7 +64,14 @@ StepView ViewSteps::select(int index) {
     fail("step ", index, " is outside the series' steps 0..", size() - 1, " (", size(), " given at start)");
   std::lock_guard<std::mutex> load(loadMutex_);
   if (!series_ || index == current().index) return current();
-  const SeriesStep& s = series_->load(index);
+  const SeriesStep* loaded = nullptr;
+  try {
+    loaded = &series_->load(index);
+  } catch (const Error& e) {
+    markUnreadable(index, e.what());
+    throw;
+  }
+  const SeriesStep& s = *loaded;
   StepView step{index, s.model, s.info, facts_.at(size_t(index)).path};
   if (series_->options().prefetch) series_->prefetch((index + 1) % size());
   std::lock_guard<std::mutex> lock(mutex_);
@@ -75,6 +88,7 @@ json ViewSteps::describe() const {
     json j = simulationJson(f.simulation);
     j["name"] = f.name;
     j["loaded"] = f.loaded;
+    if (!f.error.empty()) j["error"] = f.error;
     steps.push_back(j);
   }
   json out{{"steps", steps}, {"current", current_.index}, {"series", series_ != nullptr}};
@@ -92,7 +106,7 @@ range1f ViewSteps::rangeOf(const std::string& field) {
     if (!series_) return current_.dataset.valueRanges.at(size_t(current_.model->requireField(field)));
   }
   LoadOptions options = series_->options().load;
-  const range1f r = seriesRange(paths(), options, field).range;
+  const range1f r = seriesRange(paths(), options, field, true).range; // unreadable steps left out
   std::lock_guard<std::mutex> lock(mutex_);
   ranges_[field] = r;
   return r;

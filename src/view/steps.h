@@ -31,10 +31,13 @@ struct StepFacts {
   std::string path, name;
   bool loaded = false;
   SimulationState simulation;
+  std::string error; ///< why the step could not be read (empty: readable, or not tried)
 };
 
 class ViewSteps {
 public:
+  /// Marks a step that could not be read: the page shows it as such and playing skips it.
+  void markUnreadable(int index, const std::string& why);
   /// A single dataset (no series renderer), or a series whose renderer has its current step
   /// loaded; `paths` are the steps' absolute paths; `load`: how a single dataset was read.
   ViewSteps(StepView first, std::shared_ptr<SeriesRenderer> series, std::vector<std::string> paths,

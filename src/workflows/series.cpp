@@ -17,26 +17,43 @@ std::vector<std::string> seriesSteps(const std::vector<std::string>& inputs) {
   return out;
 }
 
-SeriesRange seriesRange(const std::vector<std::string>& steps, LoadOptions options, const std::string& field) {
+namespace {
+
+/// The range of one step's field (counted in `fromMetadata` where the format records it).
+range1f stepRange(const std::string& path, const LoadOptions& options, const std::string& field, int& fromMetadata) {
+  if (const std::optional<range1f> r = fieldRangeFromMetadata(path, field)) {
+    ++fromMetadata;
+    return *r;
+  }
+  range1f range;
+  if (detectInput(path) == InputKind::Model) {
+    const Model m = loadModel(path, options);
+    for (float v : m.fieldValues.at(size_t(m.requireField(field))))
+      range.extend(v);
+    return range;
+  }
+  const CellSet cells = loadCells(path, options);
+  const int f = cells.fieldIndex(field);
+  if (f < 0) fail(path, ": no field '", field, "' (the series' first step has it)");
+  for (float v : cells.fields[size_t(f)].values)
+    range.extend(v);
+  return range;
+}
+
+} // namespace
+
+SeriesRange seriesRange(const std::vector<std::string>& steps, LoadOptions options, const std::string& field,
+                        bool skipUnreadable) {
   SeriesRange out;
   options.fields = {field};
-  for (const std::string& path : steps) {
-    if (const std::optional<range1f> r = fieldRangeFromMetadata(path, field)) {
-      out.range.extend(*r);
-      ++out.fromMetadata;
-      continue;
+  for (size_t i = 0; i < steps.size(); ++i) {
+    try {
+      out.range.extend(stepRange(steps[i], options, field, out.fromMetadata));
+    } catch (const Error& e) {
+      if (!skipUnreadable) throw;
+      out.unreadable.push_back(int(i));
+      out.reasons.push_back(e.what());
     }
-    if (detectInput(path) == InputKind::Model) {
-      const Model m = loadModel(path, options);
-      for (float v : m.fieldValues.at(size_t(m.requireField(field))))
-        out.range.extend(v);
-      continue;
-    }
-    const CellSet cells = loadCells(path, options);
-    const int f = cells.fieldIndex(field);
-    if (f < 0) fail(path, ": no field '", field, "' (the series' first step has it)");
-    for (float v : cells.fields[size_t(f)].values)
-      out.range.extend(v);
   }
   return out;
 }

@@ -117,3 +117,48 @@ def test_yt_default_scene_renders_with_the_exposure_of_yt():
     # optical depth is small they agree; here within 25 %.
     for w, g in zip(exposure(want, mask)["brightness"], exposure(got, mask)["brightness"]):
         assert g == pytest.approx(w, rel=0.25), (exposure(want, mask), exposure(got, mask))
+
+
+def test_a_scene_made_from_yt_renders_in_the_command_line(tmp_path, cli):
+    """A scene converted from yt and saved names what the command line reads: the output's path,
+    the file's field name (Enzo's Density, not yt's density) and a range in the file's units (code
+    units, not g/cm^3); the command line's picture equals the Python one, and reading the file
+    back with the yt dataset gives yt's names and units again."""
+    import json
+    import subprocess
+
+    import enzo_output
+    from PIL import Image
+
+    yt = import_yt()
+    pytest.importorskip("h5py", reason="h5py is not installed (Debian: python3-h5py)")
+    parameter_file = enzo_output.write(tmp_path / "DD0003")
+    ds = yt.load(parameter_file)
+    scene = eb.Scene.from_yt(yt.create_scene(ds, ("gas", "density")))
+    scene.width, scene.height, scene.spp = 64, 48, 2
+    yt_range = scene.transfer_function.range
+    path = tmp_path / "s.json"
+    scene.save_json(path)
+    d = json.loads(path.read_text())
+    assert d["input"] == parameter_file
+    assert d["layers"][0]["field"] == "Density"
+    lo, hi = d["layers"][0]["transfer_function"]["range"]
+    assert lo == pytest.approx(yt_range[0] / enzo_output.DENSITY_UNITS, rel=1e-5)
+    assert hi == pytest.approx(yt_range[1] / enzo_output.DENSITY_UNITS, rel=1e-5)
+
+    subprocess.run([cli, "-q", "render", "--scene", str(path), "-o", str(tmp_path / "cli.png")], check=True)
+    scene.save(str(tmp_path / "py.png"))
+    a = np.asarray(Image.open(tmp_path / "cli.png"), dtype=np.float64)
+    b = np.asarray(Image.open(tmp_path / "py.png"), dtype=np.float64)
+    assert a.shape == b.shape and a[..., :3].max() > 50
+    assert np.abs(a - b).mean() < 0.5 and np.abs(a - b).max() <= 2
+
+    again = eb.Scene.from_json(scene.dataset, path)
+    assert again.field == "density"
+    assert again.transfer_function.range == pytest.approx(yt_range, rel=1e-5)
+
+    # A field yt derives has no field of the file behind it: the file names no input, and says why.
+    derived = eb.Scene.from_yt(yt.create_scene(ds, ("gas", "number_density")))
+    with pytest.warns(UserWarning, match="yt derives 'number_density'"):
+        text = derived.to_json()
+    assert "input" not in json.loads(text)

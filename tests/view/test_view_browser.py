@@ -7,6 +7,7 @@ test-artifacts folder."""
 import base64
 import json
 import os
+import re
 import shutil
 import subprocess
 import time
@@ -57,6 +58,17 @@ def wait_for(driver, predicate, timeout=90, what="the condition"):
         time.sleep(0.05)
     raise AssertionError("timed out waiting for %s; errors on the page: %s" % (
         what, driver.execute_script("return window.exabricksViewer && window.exabricksViewer.metrics.errors")))
+
+
+def wait_download(driver, folder, suffix, timeout, what, stem="exabricks"):
+    """The file the page downloaded ending in `suffix`, named as Save picture names its files:
+    the dataset (`stem`; "exabricks" for the embedded one), the field and the size."""
+    def found():
+        names = [n for n in os.listdir(folder) if n.endswith(suffix)] if folder.exists() else []
+        return folder / names[0] if names else None
+    path = wait_for(driver, found, timeout, what)
+    assert re.fullmatch(re.escape(stem) + r"-scalar-\d+x\d+" + re.escape(suffix), path.name), path.name
+    return path
 
 
 def wait_refined(driver, after_request=0):
@@ -156,8 +168,7 @@ def test_orbit_edit_and_refine_match_the_command_line(start_viewer, cli, browser
     # Save the scene the way the page does (the button downloads it) and render it on the
     # command line: the displayed image matches within JPEG's error.
     browser.find_element(By.ID, "save-scene").click()
-    saved = tmp_path / "downloads" / "scene.json"
-    wait_for(browser, saved.exists, 20, "the saved scene")
+    saved = wait_download(browser, tmp_path / "downloads", ".json", 20, "the saved scene")
     time.sleep(0.2)
     doc = json.loads(saved.read_text())
     assert doc["iso"]["values"] == pytest.approx([new_value], rel=1e-5)
@@ -236,12 +247,10 @@ def test_save_png_saves_the_view_on_screen(start_viewer, cli, browser, tmp_path)
     browser.find_element(By.ID, "save-image").click()
     at_click = latest(browser)
     assert not (at_click["final"] and at_click["request"] > first["request"]), "refinement ended before the click"
-    saved_png = tmp_path / "downloads" / "exabricks.png"
-    wait_for(browser, saved_png.exists, 120, "the saved PNG")
+    saved_png = wait_download(browser, tmp_path / "downloads", ".png", 120, "the saved PNG")
     time.sleep(0.3)
     browser.find_element(By.ID, "save-scene").click()
-    saved_scene = tmp_path / "downloads" / "scene.json"
-    wait_for(browser, saved_scene.exists, 20, "the saved scene")
+    saved_scene = wait_download(browser, tmp_path / "downloads", ".json", 20, "the saved scene")
     time.sleep(0.2)
     out = tmp_path / "cli.png"
     subprocess.run([cli, "render", "--scene", str(saved_scene), "-o", str(out)], check=True, capture_output=True)
@@ -260,6 +269,18 @@ def test_errors_show_over_the_image_and_a_stopped_server_says_so(start_viewer, b
             "const r = b.getBoundingClientRect(), v = document.getElementById('view').getBoundingClientRect();"
             "return [b.textContent, r.top >= v.top && r.bottom <= v.bottom && r.left >= v.left && r.right <= v.right"
             "  && r.bottom <= window.innerHeight && r.height > 0];")
+
+    # A long field name and note stay inside the side panel (it does not widen or scroll sideways).
+    overflow = browser.execute_script(
+        "const f = document.getElementById('field'); f.options[0].textContent = 'Y(' + 'C2H4'.repeat(40) + ')';"
+        "const n = document.getElementById('field-note'); n.hidden = false; n.textContent = 'x'.repeat(300);"
+        "const p = document.getElementById('panel'); return [p.scrollWidth, p.clientWidth, p.offsetWidth];")
+    wide = browser.execute_script(
+        "const p = document.getElementById('panel').getBoundingClientRect(); const out = [];"
+        "for (const e of document.querySelectorAll('#panel *')) { const r = e.getBoundingClientRect();"
+        " if (r.right > p.right + 1 && r.width > 0) out.push(e.tagName + '#' + e.id + '.' + e.className + ' ' + r.right); }"
+        "return out.slice(0, 8);")
+    assert overflow[0] <= overflow[1] and overflow[2] <= 341, (overflow, wide)
 
     lo = browser.find_element(By.ID, "range-lo")
     lo.clear()

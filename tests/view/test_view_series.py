@@ -71,7 +71,7 @@ def wait_movie(v, movie_id, states, timeout=120):
 
 
 @pytest.mark.skipif(shutil.which("ffmpeg") is None, reason="ffmpeg is not installed")
-def test_a_movie_of_the_series_is_made_and_downloaded_by_its_id(start_viewer, series_dataset):
+def test_a_movie_of_the_series_is_made_and_downloaded_by_its_id(start_viewer, series_dataset, tmp_path):
     v = start_viewer(series_dataset)
     m = v.json("POST", "/api/movie", {"scene": small_scene(v, samples_per_pixel=1)})
     assert m["frames"] == 3 and m["state"] in ("rendering", "encoding", "done")
@@ -80,6 +80,12 @@ def test_a_movie_of_the_series_is_made_and_downloaded_by_its_id(start_viewer, se
     status, data, headers = v.request("GET", done["file"])
     assert status == 200 and data[4:8] == b"ftyp" and len(data) == done["bytes"]
     assert "attachment" in headers["Content-Disposition"]
+    # Each of the three steps holds for a second (24 frames at 24 frames per second), not 1/24 s.
+    movie = tmp_path / "series.mp4"
+    movie.write_bytes(data)
+    probe = subprocess.run(["ffprobe", "-v", "error", "-show_entries", "format=duration", "-of", "csv=p=0",
+                            str(movie)], capture_output=True, text=True, check=True)
+    assert float(probe.stdout) == pytest.approx(3.0, abs=0.1), probe.stdout
     # Only ids the server made name movies.
     for path in ["/api/movie?id=nothere", "/api/movie/file?id=../../etc/passwd"]:
         assert v.request("GET", path)[0] == 404
@@ -146,3 +152,29 @@ def test_nan_as_holes_reads_the_step_again(start_viewer, series_dataset):
         assert v.request("POST", "/api/holes", body)[0] == 400
     assert v.request("POST", "/api/holes", {"holes": True}, token=False)[0] == 403
     assert v.alive()
+
+
+def test_a_truncated_step_is_marked_and_the_others_open(start_viewer, series_dataset, cli):
+    """One step cut short (its values file truncated) does not keep the series from opening: the
+    viewer starts on the readable steps, the page's step list marks the bad one with the reason,
+    and asking for it answers the reason without losing the step on screen. When the first step
+    is the bad one, the viewer opens on the next."""
+    import glob
+    import os
+
+    paths = sorted(glob.glob(series_dataset))
+    for bad in (1, 0):
+        values = paths[bad].replace(".cells", ".scalars")
+        with open(values, "r+b") as f:
+            f.truncate(os.path.getsize(values) // 2)
+        v = start_viewer(series_dataset)
+        s = v.json("GET", "/api/series")
+        assert len(s["steps"]) == 3 and s["current"] == (1 if bad == 0 else 0)
+        assert "error" in s["steps"][bad] and "scalars" in s["steps"][bad]["error"], s["steps"][bad]
+        assert all("error" not in s["steps"][k] for k in range(3) if k != bad)
+        status, data, _ = v.request("POST", "/api/step", {"index": bad})
+        assert status >= 400 and b"scalars" in data, data
+        assert v.json("GET", "/api/series")["current"] == s["current"]
+        v.stop()
+        subprocess.run([cli, "-q", "generate", "--steps", "3", "-n", "20000",
+                        "-o", paths[0].replace("_0000.cells", ".cells")], check=True, capture_output=True)

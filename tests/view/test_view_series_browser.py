@@ -10,7 +10,7 @@ import time
 import numpy as np
 import pytest
 
-from test_view_browser import (SIZE, browser, canvas_pixels, latest, read_pfm, srgb8,  # noqa: F401
+from test_view_browser import (SIZE, browser, canvas_pixels, latest, read_pfm, srgb8, wait_download,  # noqa: F401
                                wait_for, wait_refined)
 
 from selenium.webdriver.common.action_chains import ActionChains  # noqa: E402
@@ -49,8 +49,7 @@ def test_slider_and_play_step_through_the_series_as_the_command_line_renders(
 
     # The scene the page saves names the step; the command line renders what the page shows.
     browser.find_element(By.ID, "save-scene").click()
-    saved = tmp_path / "downloads" / "scene.json"
-    wait_for(browser, saved.exists, 20, "the saved scene")
+    saved = wait_download(browser, tmp_path / "downloads", ".json", 20, "the saved scene", stem="s_0002")
     time.sleep(0.2)
     doc = json.loads(saved.read_text())
     assert doc["input"].endswith("s_0002.cells")

@@ -93,6 +93,7 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
   for (int l = 0; l <= kMaxLevel; ++l)
     if (high[3 + fields + size_t(l)] > 0.0) part.whole.levels.push_back(l);
   part.whole.histogram.owned = part.box;
+  part.whole.histogram.bounds = part.whole.cellBounds;
   part.whole.histogram.sumOverParts = [](std::vector<double>& h) { allReduce(h, Reduce::Sum); };
   return part;
 }

@@ -46,5 +46,7 @@ SceneOptions resolveSceneSize(const SceneOptions& options);
 /// The dataset commands use when given no input.
 CellSet defaultDataset();
 constexpr const char* kDefaultDatasetName = "<default: blobs scene, 200000 cells, seed 1>";
+/// The input a scene file records for the default dataset (a scene without an input names none).
+constexpr const char* kEmbeddedInput = "<embedded>";
 
 } // namespace exa

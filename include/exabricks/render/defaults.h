@@ -16,12 +16,19 @@ namespace exa {
 /// element by element (an all-reduce), so that every part chooses what the whole data would.
 struct PartialData {
   box3l owned;
+  box3i bounds; ///< lattice bounds of the whole data's cells
+
   std::function<void(std::vector<double>&)> sumOverParts;
 };
 
 struct DefaultChoices {
   TransferFunction tf;
-  std::vector<std::string> notes; ///< one line per choice, for stderr or a log
+  std::vector<std::string> notes; ///< one line per choice, for stderr, a log or a page
+  std::vector<std::string> hints; ///< per note: the command-line options that change it ("" for none)
+
+  void note(std::string text, std::string hint);
+  /// The notes with their command-line hints, as the command line prints them.
+  std::vector<std::string> commandLineNotes() const;
 };
 
 /// Adapts `tf` (whose value range may be empty: the field's) to field `field`:
@@ -41,6 +48,14 @@ struct DefaultChoices {
 DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
                                      const TransferFunction& tf, bool autoLog, bool autoOpacity,
                                      const PartialData* part = nullptr, bool autoColorMap = true);
+
+/// A transfer function adapted to one step of a series (`adapted`, chosen from the step's value
+/// range `step`), widened to the values `series` of every step: an end that the adaptation left
+/// at the step's own end moves to the series' end; the transparent (background) end stays where
+/// the step's background ends, so that every step keeps its background transparent; the opaque
+/// end moves out by as much as the series reaches beyond the step (by the same factor under
+/// logarithmic mapping). A range centred on zero stays centred.
+TransferFunction widenedForSeries(const TransferFunction& adapted, const range1f& step, const range1f& series);
 
 /// What in a scene can never show anything, said before rendering: nothing to draw at all (no
 /// volume, iso-surface or mesh), iso-values outside their field's range, a value range that

@@ -25,12 +25,16 @@ namespace exa {
 std::vector<std::string> seriesSteps(const std::vector<std::string>& inputs);
 
 /// The range of a field over every step: from metadata where the format records ranges, else
-/// reading only that field. Throws exa::Error naming a step that lacks the field.
+/// reading only that field. Throws exa::Error naming a step that lacks the field or cannot be
+/// read, unless `skipUnreadable`: then such steps are left out and listed.
 struct SeriesRange {
   range1f range;
-  int fromMetadata = 0; ///< steps whose range came from metadata
+  int fromMetadata = 0;             ///< steps whose range came from metadata
+  std::vector<int> unreadable;      ///< with skipUnreadable: the steps left out
+  std::vector<std::string> reasons; ///< and why, one message each
 };
-SeriesRange seriesRange(const std::vector<std::string>& steps, LoadOptions options, const std::string& field);
+SeriesRange seriesRange(const std::vector<std::string>& steps, LoadOptions options, const std::string& field,
+                        bool skipUnreadable = false);
 
 /// One loaded step: the model, its dataset values and the structure its bricks came from.
 struct SeriesStep {
