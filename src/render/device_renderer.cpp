@@ -18,15 +18,15 @@ DeviceRenderer::DeviceRenderer(Device device, const Model& model, const DatasetI
     : device_(device), model_(model), dataset_(dataset) {
   if (device == Device::Cuda) {
     const CudaStatus s = gpu::status();
-    if (!s.problem.empty()) fail("--device cuda: ", s.problem);
+    if (!s.problem.empty()) fail("the cuda device cannot be used: ", s.problem);
     // The whole model must fit: its structures and one field (values and gradients).
     const DeviceFootprint f = deviceFootprint(model);
     const uint64_t need = f.model.total() + 4 * f.fieldBytes;
     if (need > s.freeBytes)
-      fail("--device cuda: the dataset needs ", need >> 20, " MiB on the GPU (", model.bricks.size(), " bricks, ",
-           model.regions.regions.size(), " regions, ", model.fieldValues.empty() ? 0 : model.fieldValues[0].size(),
-           " values per field with their gradients); ", s.name, " has ", s.freeBytes >> 20, " MiB free of ",
-           s.totalBytes >> 20, " MiB");
+      fail("the cuda device cannot take the dataset: it needs ", need >> 20, " MiB on the GPU (", model.bricks.size(),
+           " bricks, ", model.regions.regions.size(), " regions, ",
+           model.fieldValues.empty() ? 0 : model.fieldValues[0].size(), " values per field with their gradients); ",
+           s.name, " has ", s.freeBytes >> 20, " MiB free of ", s.totalBytes >> 20, " MiB");
   }
 }
 
@@ -51,7 +51,7 @@ void DeviceRenderer::reserve(Buffer& b, uint64_t bytes, const std::string& what)
 
 void DeviceRenderer::checkSupported(const Scene& s) {
   auto refuse = [](const std::string& what) {
-    fail("the GPU back end does not render ", what, " yet; render this scene on the CPU (--device cpu)");
+    fail("the GPU back end does not render ", what, " yet; render this scene on the CPU (device cpu)");
   };
   if (s.debug != DebugView::None) refuse("debug views");
   if (s.integration.reconstruction == Reconstruction::CellLocation) refuse("reconstruction by cell location");

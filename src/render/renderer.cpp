@@ -198,7 +198,7 @@ Device selectDevice(Renderer& renderer, const std::string& choice) {
   try {
     renderer.setDevice(device);
   } catch (const Error& e) {
-    logInfo(strCat("rendering on the CPU: ", e.what()));
+    logNote(strCat("device auto: rendering on the CPU, since ", e.what()));
     renderer.setDevice(Device::Cpu);
   }
   return renderer.device();
@@ -212,7 +212,7 @@ SceneUpdate setSceneOnDevice(Renderer& renderer, const Scene& scene, const std::
       u = renderer.setScene(scene);
       set = true;
     } catch (const Error& e) {
-      logInfo(strCat("rendering on the CPU: ", e.what()));
+      logNote(strCat("device auto: rendering on the CPU, since ", e.what()));
       renderer.setDevice(Device::Cpu);
     }
   }
