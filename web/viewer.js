@@ -1147,9 +1147,15 @@ function setSettingValue(key, value) {
 
 /// Checkboxes bound to a boolean setting (data-setting="KEY", such as the legends): shown from
 /// the document, and a change sets it and renders.
+/// Number fields and choices bound the same way (the path tracer's settings): their limits and
+/// help from the server's description of the setting.
 function syncSettingBoxes() {
   for (const box of document.querySelectorAll('input[type=checkbox][data-setting]'))
     box.checked = !!settingValue(box.dataset.setting);
+  for (const input of document.querySelectorAll('input[type=number][data-setting], select[data-setting]:not(#shading)')) {
+    const v = settingValue(input.dataset.setting);
+    if (v !== undefined) input.value = v;
+  }
 }
 
 function setupSettingBoxes() {
@@ -1158,6 +1164,24 @@ function setupSettingBoxes() {
     if (setting) box.title = box.title ? `${setting.help} (${box.title})` : setting.help;
     box.addEventListener('change', () => {
       setSettingValue(box.dataset.setting, box.checked);
+      requestRender(false);
+    });
+  }
+  for (const input of document.querySelectorAll('input[type=number][data-setting], select[data-setting]:not(#shading)')) {
+    const setting = viewer.vocabulary.find((s) => s.key === input.dataset.setting);
+    if (!setting) continue;
+    input.title = setting.help;
+    if (input.type === 'number') {
+      if (setting.min !== undefined) input.min = setting.min;
+      if (setting.max !== undefined) input.max = setting.max;
+    }
+    input.addEventListener('change', () => {
+      const value = input.type === 'number' ? Number(input.value) : input.value;
+      if (input.type === 'number' && !input.checkValidity()) {
+        showMessage(`${setting.key} must be in [${input.min}, ${input.max}]`);
+        return;
+      }
+      setSettingValue(input.dataset.setting, value);
       requestRender(false);
     });
   }

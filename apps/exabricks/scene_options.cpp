@@ -177,6 +177,18 @@ void RenderOptions::add(CLI::App& cmd) {
   cmd.add_option("--ao", aoRays, sceneSettingHelp("ambient_occlusion.rays"))->capture_default_str();
   cmd.add_option("--ao-length", aoLength, sceneSettingHelp("ambient_occlusion.length"));
   cmd.add_flag("--ao-volume", aoVolume, sceneSettingHelp("ambient_occlusion.volume"));
+  cmd.add_option("--integrator", integrator, sceneSettingHelp("integration.integrator"))->capture_default_str();
+  cmd.add_option("--albedo", albedo, sceneSettingHelp("pathtrace.albedo"))->capture_default_str();
+  cmd.add_option("--anisotropy", anisotropy, sceneSettingHelp("pathtrace.anisotropy"))->capture_default_str();
+  cmd.add_option("--bounces", bounces, sceneSettingHelp("pathtrace.bounces"))->capture_default_str();
+  cmd.add_option("--emission", emission, sceneSettingHelp("pathtrace.emission"))->capture_default_str();
+  cmd.add_option("--environment", environment,
+                 "Path tracing: uniform environment radiance r,g,b (linear; default 1,1,1)")
+      ->delimiter(',');
+  cmd.add_option("--sun", sun,
+                 "Path tracing: a sun light travelling along dx,dy,dz (world) with irradiance INTENSITY and an "
+                 "angular diameter ANGLE in degrees (default 0.53): dx,dy,dz,INTENSITY[,ANGLE]")
+      ->delimiter(',');
   cmd.add_option("--scene", sceneFile,
                  "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
 }
@@ -317,6 +329,29 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   if (apply("--ao")) s.ao.rays = checked("--ao", "ambient_occlusion.rays", o.aoRays);
   if (apply("--ao-length")) s.ao.length = checked("--ao-length", "ambient_occlusion.length", o.aoLength);
   if (apply("--ao-volume")) s.ao.volume = o.aoVolume;
+
+  // Path tracing.
+  if (apply("--integrator")) s.integration.integrator = pick<Integrator>("--integrator", o.integrator);
+  PathTracing& pt = s.pathTracing;
+  if (apply("--albedo")) pt.albedo = checked("--albedo", "pathtrace.albedo", o.albedo);
+  if (apply("--anisotropy")) pt.anisotropy = checked("--anisotropy", "pathtrace.anisotropy", o.anisotropy);
+  if (apply("--bounces")) pt.bounces = checked("--bounces", "pathtrace.bounces", o.bounces);
+  if (apply("--emission")) pt.emission = checked("--emission", "pathtrace.emission", o.emission);
+  if (given("--environment")) {
+    const auto& e = o.environment;
+    if (e.size() != 3 || !(e[0] >= 0.f && e[1] >= 0.f && e[2] >= 0.f) || !std::isfinite(e[0] + e[1] + e[2]))
+      failUsage("--environment expects a radiance r,g,b of finite numbers >= 0");
+    pt.environment = vec3f(e[0], e[1], e[2]);
+  }
+  if (given("--sun")) {
+    const auto& v = o.sun;
+    if (v.size() != 4 && v.size() != 5) failUsage("--sun expects dx,dy,dz,INTENSITY[,ANGLE]");
+    const vec3f d(v[0], v[1], v[2]);
+    if (!(length(d) > 0.f) || !std::isfinite(length(d))) failUsage("--sun: the direction must be finite and non-zero");
+    pt.sunDirection = d;
+    pt.sunIntensity = checked("--sun", "pathtrace.sun_intensity", v[3]);
+    if (v.size() == 5) pt.sunAngle = checked("--sun", "pathtrace.sun_angle", v[4]);
+  }
 
   // Iso-surfaces.
   if (!o.isoColorRange.empty() && (o.isoColorRange.size() != 2 || !(o.isoColorRange[0] < o.isoColorRange[1])))

@@ -68,6 +68,13 @@ struct RenderOptions {
   int aoRays = 0;
   float aoLength = 0.f;
   bool aoVolume = false;
+  std::string integrator = "march";
+  float albedo = PathTracing().albedo;
+  float anisotropy = PathTracing().anisotropy;
+  int bounces = PathTracing().bounces;
+  float emission = PathTracing().emission;
+  std::vector<float> environment; ///< r,g,b linear radiance
+  std::vector<float> sun;         ///< dx,dy,dz,intensity[,angle]
   std::string sceneFile;
 
   /// Registers every option above on a command.

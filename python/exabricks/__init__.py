@@ -673,6 +673,9 @@ class Scene:
         self.clip_planes = []  # (point, normal)
         self.clip_box = None
         self.light_direction = tuple(_DEFAULT_DOCUMENT["light"]["direction"])
+        # Path tracing (integrator "pathtrace"): linear environment radiance, the sun's direction of travel.
+        self.environment = tuple(_DEFAULT_DOCUMENT["pathtrace"]["environment"])
+        self.sun_direction = tuple(_DEFAULT_DOCUMENT["pathtrace"]["sun_direction"])
         self.camera_path = None  # movies: {"keyframes": [...], "constant_speed": bool}, as in the scene file
         self.background = (0.0, 0.0, 0.0)
         self.camera = None
@@ -749,6 +752,8 @@ class Scene:
                     "color_map": self.iso_color_map.to_dict()},
             "clip": {"planes": [{"point": list(map(float, p)), "normal": list(map(float, n))} for p, n in self.clip_planes]},
             "light": {"direction": list(map(float, self.light_direction))},
+            "pathtrace": {"environment": list(map(float, self.environment)),
+                          "sun_direction": list(map(float, self.sun_direction))},
             "background": _srgb(self.background),
         }
         for setting in _VOCABULARY:
@@ -825,6 +830,8 @@ class Scene:
         s.clip_planes = [(tuple(p["point"]), tuple(p["normal"])) for p in clip["planes"]]
         s.clip_box = tuple(clip["box"]) if clip.get("box") else None
         s.light_direction = tuple(d["light"]["direction"])
+        s.environment = tuple(d["pathtrace"]["environment"])
+        s.sun_direction = tuple(d["pathtrace"]["sun_direction"])
         s.background = tuple(d["background"])
         s.camera_path = d.get("camera_path")
         return s

@@ -54,6 +54,7 @@ void DeviceRenderer::checkSupported(const Scene& s) {
     fail("the GPU back end does not render ", what, " yet; render this scene on the CPU (device cpu)");
   };
   if (s.debug != DebugView::None) refuse("debug views");
+  if (s.integration.integrator == Integrator::PathTrace) refuse("path tracing");
   if (s.integration.reconstruction == Reconstruction::CellLocation) refuse("reconstruction by cell location");
   if (s.layers.size() > size_t(kTraceMaxLayers)) refuse("more than " + std::to_string(kTraceMaxLayers) + " layers");
   if (s.iso.values.size() > size_t(kTraceMaxIsoValues))

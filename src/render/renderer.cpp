@@ -8,6 +8,7 @@
 #include "device_renderer.h"
 #include "dual_ray.h"
 #include "lighting.h"
+#include "path_trace.h"
 #include "surfaces.h"
 #include "volume_marcher.h"
 
@@ -44,6 +45,7 @@ struct PassSetup {
   vec3d forward; ///< the camera's view direction (planar depth limits)
   bool surfaces, clipping, jitter, pixelJitter;
   MarchSettings march;
+  PathSettings path;
 };
 
 } // namespace
@@ -59,6 +61,9 @@ struct Renderer::Impl {
   bool hasDomain = false; ///< primary rays see only the inside of `domain` (world)
   box3d domain;
   std::unique_ptr<DeviceRenderer> device; ///< set where passes run on a device back end
+  /// The path tracer's medium: the volume's layers and a majorant per region.
+  std::vector<MediumLayer> mediumLayers;
+  std::vector<float> majorants;
 
   Impl(const Model& m, const DatasetInfo& d)
       : model(m), dataset(checkedDataset(m, d)), volume(m, dataset), surfaces(m, dataset) {}
@@ -74,7 +79,67 @@ struct Renderer::Impl {
     ps.jitter = frame.jitter && s.debug == DebugView::None;
     ps.pixelJitter = frame.samplesPerPixel > 1 && ps.jitter;
     ps.march = MarchSettings::of(s, options, frame.rate);
+    ps.path = pathSettings();
     return ps;
+  }
+
+  /// The path tracer's medium for the volume's current layers: per region, the largest
+  /// extinction its value ranges reach through every layer's table, summed.
+  void updateMedium() {
+    mediumLayers.clear();
+    for (const LayerTable& layer : volume.layers())
+      mediumLayers.push_back({layer.view, layer.t});
+    const float perLog2 = float(std::log(2.0)) / dataset.referenceWidth;
+    majorants.assign(model.regions.regions.size(), 0.f);
+    const std::vector<uint8_t>& visible = volume.visible();
+    tbb::parallel_for(size_t(0), majorants.size(), [&](size_t i) {
+      if (i < visible.size() && !visible[i]) return;
+      float sum = 0.f;
+      for (const LayerTable& layer : volume.layers())
+        sum += tableMaxExtinction(layer.t, model.regions.valueRanges[size_t(layer.field)][i], perLog2);
+      majorants[i] = sum;
+    });
+  }
+
+  MediumView medium() const {
+    return {mediumLayers.data(), int(mediumLayers.size()), majorants.data(),
+            float(std::log(2.0)) / dataset.referenceWidth};
+  }
+
+  PathSettings pathSettings() const {
+    const PathTracing& p = scene.pathTracing;
+    PathSettings s;
+    s.albedo = p.albedo;
+    s.anisotropy = p.anisotropy;
+    s.emission = p.emission;
+    s.bounces = p.bounces;
+    s.environment = p.environment;
+    s.towardsSun = -normalize(vec3d(p.sunDirection));
+    s.sunIntensity = p.sunIntensity;
+    s.sunCosHalfAngle = float(std::cos(0.5 * double(p.sunAngle) * M_PI / 180.0));
+    return s;
+  }
+
+  /// One path-traced sample of pixel (x, y): premultiplied radiance and whether the path met the
+  /// medium.
+  vec4f tracePathPixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& c, uint64_t& raySamples) const {
+    PixelRandom rng(x, y, frame.frameIndex, frame.seed);
+    float rho;
+    vec3d orgW, dirW;
+    primaryRay(frame.camera, x, y, frame.width, frame.height, ps.aspect, ps.pixelJitter, ps.jitter, rng, rho, orgW,
+               dirW);
+    const ClipView clip = clipViewOf(scene.clip);
+    DualRay dr = makeDualRay(model.world, orgW, dirW, &clip);
+    if (hasDomain) restrictToBox(dr, domain);
+    if (frame.depthLimit)
+      applyDepthLimit(dr, frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)], frame.depthLimitPlanar,
+                      ps.forward);
+    ++c.rays;
+    raySamples = 0;
+    if (!scene.volume || mediumLayers.empty()) return vec4f();
+    const RegionTraversal& traversal = *volume.traversal();
+    auto traverse = [&](const Ray& ray, auto&& emit) { traversal.traverse(ray, emit); };
+    return tracePath(medium(), traverse, model.world, &clip, dr, ps.path, rng, raySamples);
   }
 
   /// One sample of pixel (x, y) for pass frame.frameIndex: premultiplied colour and volume
@@ -336,6 +401,9 @@ size_t Renderer::meshCount() const { return impl_->surfaces.meshCount(); }
 SceneUpdate Renderer::setScene(const Scene& s) {
   Impl& im = *impl_;
   s.validate();
+  if (im.hasDomain && s.integration.integrator == Integrator::PathTrace)
+    fail("path tracing does not yet render data split over processes (its scattered light would need the other "
+         "parts): render the whole data in one process, or ray-march it");
   if (im.device) DeviceRenderer::checkSupported(s);
   for (size_t m = 0; m < s.meshes.size(); ++m)
     if (!s.meshes[m].mesh) fail("mesh ", m, " (", s.meshes[m].source, ") has not been read");
@@ -362,6 +430,7 @@ SceneUpdate Renderer::setScene(const Scene& s) {
   if (u.volume) {
     Timer t;
     im.volume.update(s.layers, fields, s.integration, s.integration.spaceSkipping && s.debug == DebugView::None);
+    if (s.integration.integrator == Integrator::PathTrace) im.updateMedium();
     u.volumeSeconds = t.seconds();
   }
   if (s.shading == Shading::Smooth) {
@@ -411,6 +480,7 @@ bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassCon
   const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
   if (im.device) return im.devicePass(frame, buffer, begin, end, stride, control);
   const bool steps = im.scene.debug == DebugView::Steps;
+  const bool pathTraced = im.scene.integration.integrator == Integrator::PathTrace && im.scene.debug == DebugView::None;
   buffer.stepsView_ = steps;
   std::atomic<bool> cancelled{false};
   std::atomic<uint64_t> done{0};
@@ -428,7 +498,9 @@ bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassCon
     for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
       for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x) {
         uint64_t raySamples = 0;
-        const vec4f acc = im.tracePixel(x, y, frame, ps, c, raySamples);
+        const vec4f acc = pathTraced ? im.tracePathPixel(x, y, frame, ps, c, raySamples)
+                                     : im.tracePixel(x, y, frame, ps, c, raySamples);
+        if (pathTraced) c.samples += raySamples;
         const size_t p = size_t(y) * size_t(frame.width) + size_t(x);
         buffer.sum_[p] += acc;
         if (steps) buffer.steps_[p] += float(raySamples);

@@ -26,6 +26,11 @@ void Scene::validate() const {
     if (!std::isfinite(v)) fail("iso-values must be finite numbers");
   if (!light.headlight && !(length(light.direction) > 0.f && std::isfinite(length(light.direction))))
     fail("the light direction must be finite and non-zero");
+  const vec3f& env = pathTracing.environment;
+  if (!(env.x >= 0.f && env.y >= 0.f && env.z >= 0.f) || !std::isfinite(env.x + env.y + env.z))
+    fail("\"pathtrace.environment\" must be a finite radiance r,g,b >= 0");
+  const float sun = length(pathTracing.sunDirection);
+  if (!(sun > 0.f) || !std::isfinite(sun)) fail("\"pathtrace.sun_direction\" must be finite and non-zero");
   for (size_t m = 0; m < meshes.size(); ++m) {
     if (!meshes[m].mesh) {
       if (meshes[m].source.empty()) fail("mesh ", m, " has no data");
@@ -284,6 +289,8 @@ std::string writeSceneJson(const SceneDocument& doc) {
     j["clip"]["box"] = {s.clip.box.lower.x, s.clip.box.lower.y, s.clip.box.lower.z,
                         s.clip.box.upper.x, s.clip.box.upper.y, s.clip.box.upper.z};
   j["light"] = {{"direction", vec(s.light.direction)}};
+  j["pathtrace"] = {{"environment", vec(s.pathTracing.environment)},
+                    {"sun_direction", vec(s.pathTracing.sunDirection)}};
   j["background"] = srgb(s.background);
   writeSettings(frameSettings(), f, j);
   writeSettings(sceneSettings(), s, j);
@@ -447,7 +454,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   Scene& s = doc.scene;
   Frame& f = doc.frame;
   const Reader r(j, source, "");
-  r.only(keysOf("", {"input", "camera", "camera_path", "frame", "layers", "iso", "meshes", "clip", "light",
+  r.only(keysOf("", {"input", "camera", "camera_path", "frame", "layers", "iso", "meshes", "clip", "light", "pathtrace",
                      "ambient_occlusion", "integration", "background", "legends"}));
   r.string("input", doc.input);
   if (r.find("camera")) {
@@ -471,6 +478,14 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
     c.settings(sceneSettings(), "light", s);
     vec3d d;
     if (c.vec3("direction", d)) s.light.direction = vec3f(d);
+  }
+  if (r.find("pathtrace")) {
+    const Reader c = r.child("pathtrace");
+    c.only(keysOf("pathtrace", {"environment", "sun_direction"}));
+    c.settings(sceneSettings(), "pathtrace", s);
+    vec3d v;
+    if (c.vec3("environment", v)) s.pathTracing.environment = vec3f(v);
+    if (c.vec3("sun_direction", v)) s.pathTracing.sunDirection = vec3f(v);
   }
   if (r.find("ambient_occlusion")) {
     const Reader c = r.child("ambient_occlusion");

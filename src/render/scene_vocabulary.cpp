@@ -46,6 +46,11 @@ std::span<const EnumName<Reconstruction>> enumNames(Reconstruction) {
   return names;
 }
 
+std::span<const EnumName<Integrator>> enumNames(Integrator) {
+  static const EnumName<Integrator> names[] = {{"march", Integrator::March}, {"pathtrace", Integrator::PathTrace}};
+  return names;
+}
+
 std::span<const EnumName<TraversalSetting>> enumNames(TraversalSetting) {
   static const EnumName<TraversalSetting> names[] = {
       {"auto", TraversalSetting::Auto}, {"kd", TraversalSetting::KdTree}, {"embree", TraversalSetting::Embree}};
@@ -194,6 +199,28 @@ const std::vector<Setting<Scene>>& sceneSettings() {
           "integration.termination_opacity", "termination_opacity",
           [](S& s) -> float& { return s.integration.terminationOpacity; }, 0.0, 1.0,
           "Opacity at which early termination ends a ray", true),
+      choice<S, Integrator>(
+          "integration.integrator", "integrator", [](S& s) -> Integrator& { return s.integration.integrator; },
+          "march (emission and absorption, local shading) or pathtrace (volume path tracing: shadows and "
+          "multiple scattering from the environment and the sun; one sample per pixel and pass)"),
+      number<S>(
+          "pathtrace.albedo", "albedo", [](S& s) -> float& { return s.pathTracing.albedo; }, 0.0, 1.0,
+          "Path tracing: the share of extinction that scatters (0: absorption and emission only)"),
+      number<S>(
+          "pathtrace.anisotropy", "anisotropy", [](S& s) -> float& { return s.pathTracing.anisotropy; }, -1.0, 1.0,
+          "Path tracing: Henyey-Greenstein anisotropy g (0: isotropic, > 0: forward scattering)", true, true),
+      number<S>(
+          "pathtrace.bounces", "bounces", [](S& s) -> int& { return s.pathTracing.bounces; }, 0, 1024,
+          "Path tracing: scattering events per path at most (Russian roulette ends dim paths earlier)"),
+      number<S>(
+          "pathtrace.emission", "emission", [](S& s) -> float& { return s.pathTracing.emission; }, 0.0, kInf,
+          "Path tracing: light the absorbing part of the medium emits, times the transfer function's colour"),
+      number<S>(
+          "pathtrace.sun_intensity", "sun_intensity", [](S& s) -> float& { return s.pathTracing.sunIntensity; }, 0.0,
+          kInf, "Path tracing: the sun's irradiance (0: no sun)"),
+      number<S>(
+          "pathtrace.sun_angle", "sun_angle", [](S& s) -> float& { return s.pathTracing.sunAngle; }, 0.0, 90.0,
+          "Path tracing: the sun's angular diameter in degrees (0: a point; soft shadows grow with it)"),
   };
   return table;
 }

@@ -10,7 +10,9 @@ ParaView screenshot against `exabricks render` of the same file, camera and sett
 2. Sampling Rate 2 changes the image a little and equals --rate 2;
 3. Iso Values [1.1] add a surface in the colour map's colour at 1.1, equal to --iso 1.1
    --iso-color (that colour); Ambient Occlusion Rays 4 darken it, equal to --ao 4;
-4. Shade with Shading Analytic and Smooth equals --shading analytic and smooth;
+4. Shade with Shading Analytic and Smooth equals --shading analytic and smooth; Integrator Path
+   Tracing with its albedo, sun and environment equals --integrator pathtrace with the same, and
+   an albedo out of range is refused (the image stays);
 5. none of that, nor a new colour map or opacity function, rebuilt the model (Model Builds 1);
 6. an interactive render draws a draft (Refinement Passes 0) that is close to the still image,
    the next still render refines again, and a second still render of the same view adds no pass;
@@ -112,6 +114,24 @@ compare("Shade, Shading Analytic", "analytic", ["--spp", "3", "--shading", "anal
 display.Shading = "Smooth"
 compare("Shade, Shading Smooth", "smooth", ["--spp", "3", "--shading", "smooth"])
 display.Shade = 0
+
+# 4b. Path tracing: the same paths as the command line's (same pixels, passes and seed).
+display.Integrator = "Path Tracing"
+display.Albedo = 0.6
+display.SunIntensity = 3.0
+display.SunDirection = [1.0, -0.5, -1.0]
+display.Environment = [0.2, 0.25, 0.3]
+traced = compare("Integrator Path Tracing", "pathtrace",
+                 ["--spp", "3", "--integrator", "pathtrace", "--albedo", "0.6", "--sun", "1,-0.5,-1,3",
+                  "--environment", "0.2,0.25,0.3"])
+expect(np.abs(traced - spp3).mean() > 0.005, "path tracing did not change the picture")
+display.Albedo = 1.5  # refused: the setting stays 0.6
+compare("Albedo 1.5 refused", "pathtrace_refused",
+        ["--spp", "3", "--integrator", "pathtrace", "--albedo", "0.6", "--sun", "1,-0.5,-1,3",
+         "--environment", "0.2,0.25,0.3"])
+display.Albedo = 0.8
+display.SunIntensity = 0.0
+display.Integrator = "Ray Marching"
 
 # 5. The model was built once, whatever changed since; a new colour map and opacity function
 # change the picture, not the model.

@@ -31,6 +31,9 @@ enum class Sampling { Adaptive, Fixed };
 /// How a sample's value is reconstructed: from the bricks its region lists (the method), or by
 /// locating every contributing cell in a k-d tree over the bricks (the paper's baseline).
 enum class Reconstruction { Regions, CellLocation };
+/// How light is computed: the ray marcher (emission and absorption with local shading), or the
+/// volume path tracer (delta tracking, single and multiple scattering, environment and sun).
+enum class Integrator { March, PathTrace };
 
 /// One volume field and its transfer function. An empty field name is the dataset's default
 /// field ("scalar", else the first); an empty value range is the field's range, and an opacity
@@ -103,7 +106,26 @@ struct Integration {
   bool spaceSkipping = true;
   bool earlyTermination = true;
   float terminationOpacity = 0.98f;
+  Integrator integrator = Integrator::March;
   friend bool operator==(const Integration&, const Integration&) = default;
+};
+
+/// The volume path tracer's medium and lights (Integrator::PathTrace). The transfer function's
+/// opacity gives the extinction, its colour the scattering colour; `albedo` is the share of
+/// extinction that scatters (Henyey-Greenstein phase function of anisotropy `anisotropy`), the
+/// rest absorbs and emits `emission` times the colour. Light comes from a uniform environment
+/// (linear RGB radiance) and a sun: a directional light travelling along `sunDirection` (world)
+/// with irradiance `sunIntensity`, its disc `sunAngle` degrees across (0: a point).
+struct PathTracing {
+  float albedo = 0.8f;
+  float anisotropy = 0.f;
+  int bounces = 4;
+  float emission = 0.f;
+  vec3f environment{1.f, 1.f, 1.f};
+  vec3f sunDirection{-1.f, -1.f, -1.f};
+  float sunIntensity = 0.f;
+  float sunAngle = 0.53f;
+  friend bool operator==(const PathTracing&, const PathTracing&) = default;
 };
 
 /// Legends drawn over the rendered image (render/legends.h): the colour bar of the first layer
@@ -126,6 +148,7 @@ struct Scene {
   Shading shading = Shading::Smooth;
   AmbientOcclusion ao;
   Integration integration;
+  PathTracing pathTracing;
   DebugView debug = DebugView::None;
   /// Linear RGB, used when images are written. Black: the volume emits light, and faint
   /// structure shows against black where it vanishes against white.

@@ -30,6 +30,7 @@ std::span<const EnumName<Shading>> enumNames(Shading);
 std::span<const EnumName<DebugView>> enumNames(DebugView);
 std::span<const EnumName<Sampling>> enumNames(Sampling);
 std::span<const EnumName<Reconstruction>> enumNames(Reconstruction);
+std::span<const EnumName<Integrator>> enumNames(Integrator);
 std::span<const EnumName<TraversalSetting>> enumNames(TraversalSetting);
 /// The traversal a renderer uses (statistics name it so): kd or embree.
 std::span<const EnumName<TraversalKind>> enumNames(TraversalKind);

@@ -6,6 +6,7 @@
 
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
+#include "exabricks/render/scene_vocabulary.h"
 
 #include "vtkDataObject.h"
 #include "vtkInformation.h"
@@ -266,6 +267,89 @@ void vtkExaBricksRepresentation::SetAmbientOcclusionRays(int rays) {
 }
 
 int vtkExaBricksRepresentation::GetAmbientOcclusionRays() { return this->Mapper->GetSettings().aoRays; }
+
+namespace {
+
+/// Whether a value is valid for a scene setting; otherwise the library's message (which names
+/// the key, as every front end says it).
+bool validSetting(vtkObject* self, const char* key, double value) {
+  try {
+    exa::checkSceneSetting(key, value);
+    return true;
+  } catch (const exa::Error& e) {
+    vtkErrorWithObjectMacro(self, "ExaBricks: " << e.what());
+    return false;
+  }
+}
+
+/// Sets a number of the path tracer after checking it against the scene vocabulary.
+void setPathNumber(vtkObject* self, vtkExaBricksVolumeMapper* mapper, const char* key, double value,
+                   float exa::PathTracing::*member) {
+  if (!validSetting(self, key, value)) return;
+  exa::paraview::Settings s = mapper->GetSettings();
+  s.pathTracing.*member = float(value);
+  mapper->SetSettings(s);
+}
+
+} // namespace
+
+void vtkExaBricksRepresentation::SetIntegrator(int integrator) {
+  if (integrator != 0 && integrator != 1) {
+    vtkErrorMacro("ExaBricks: Integrator is 0 (ray marching) or 1 (path tracing), not " << integrator);
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.integrator = integrator == 1 ? exa::Integrator::PathTrace : exa::Integrator::March;
+  this->Mapper->SetSettings(s);
+}
+
+int vtkExaBricksRepresentation::GetIntegrator() {
+  return this->Mapper->GetSettings().integrator == exa::Integrator::PathTrace ? 1 : 0;
+}
+
+void vtkExaBricksRepresentation::SetAlbedo(double v) {
+  setPathNumber(this, this->Mapper, "pathtrace.albedo", v, &exa::PathTracing::albedo);
+}
+void vtkExaBricksRepresentation::SetAnisotropy(double v) {
+  setPathNumber(this, this->Mapper, "pathtrace.anisotropy", v, &exa::PathTracing::anisotropy);
+}
+void vtkExaBricksRepresentation::SetEmission(double v) {
+  setPathNumber(this, this->Mapper, "pathtrace.emission", v, &exa::PathTracing::emission);
+}
+void vtkExaBricksRepresentation::SetSunIntensity(double v) {
+  setPathNumber(this, this->Mapper, "pathtrace.sun_intensity", v, &exa::PathTracing::sunIntensity);
+}
+void vtkExaBricksRepresentation::SetSunAngle(double v) {
+  setPathNumber(this, this->Mapper, "pathtrace.sun_angle", v, &exa::PathTracing::sunAngle);
+}
+
+void vtkExaBricksRepresentation::SetBounces(int bounces) {
+  if (!validSetting(this, "pathtrace.bounces", bounces)) return;
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.pathTracing.bounces = bounces;
+  this->Mapper->SetSettings(s);
+}
+
+void vtkExaBricksRepresentation::SetEnvironment(double r, double g, double b) {
+  if (!(r >= 0.0 && g >= 0.0 && b >= 0.0) || !std::isfinite(r + g + b)) {
+    vtkErrorMacro("ExaBricks: \"pathtrace.environment\" must be a finite radiance r,g,b >= 0");
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.pathTracing.environment = exa::vec3f(float(r), float(g), float(b));
+  this->Mapper->SetSettings(s);
+}
+
+void vtkExaBricksRepresentation::SetSunDirection(double x, double y, double z) {
+  const double n = std::sqrt(x * x + y * y + z * z);
+  if (!(n > 0.0) || !std::isfinite(n)) {
+    vtkErrorMacro("ExaBricks: \"pathtrace.sun_direction\" must be finite and non-zero");
+    return;
+  }
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.pathTracing.sunDirection = exa::vec3f(float(x), float(y), float(z));
+  this->Mapper->SetSettings(s);
+}
 
 void vtkExaBricksRepresentation::SetNumberOfIsoValues(int count) {
   if (count < 0) {

@@ -63,6 +63,18 @@ public:
   /// 0 auto (the GPU where one can be used), 1 cpu, 2 cuda.
   void SetDevice(int device);
   int GetDevice();
+  /// 0 the ray marcher, 1 the volume path tracer (scene key integration.integrator), with its
+  /// medium and lights (the scene's pathtrace keys).
+  void SetIntegrator(int integrator);
+  int GetIntegrator();
+  void SetAlbedo(double albedo);
+  void SetAnisotropy(double g);
+  void SetBounces(int bounces);
+  void SetEmission(double emission);
+  void SetEnvironment(double r, double g, double b);
+  void SetSunDirection(double x, double y, double z);
+  void SetSunIntensity(double intensity);
+  void SetSunAngle(double degrees);
   ///@}
 
   ///@{

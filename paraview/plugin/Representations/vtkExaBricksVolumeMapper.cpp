@@ -81,6 +81,8 @@ Scene sceneOf(const std::string& field, const TransferFunction& tf, vtkColorTran
   scene.integration.terminationOpacity = kTerminationOpacity;
   scene.shading = shade ? settings.shading : Shading::None;
   scene.ao.rays = settings.aoRays;
+  scene.integration.integrator = settings.integrator;
+  scene.pathTracing = settings.pathTracing;
   scene.iso.values = settings.isoValues;
   scene.clip.planes = settings.clipPlanes;
   if (color)
@@ -158,7 +160,7 @@ struct vtkExaBricksVolumeMapper::Accumulation {
   static bool sameScene(const exa::Scene& a, const exa::Scene& b) {
     return a.layers == b.layers && a.iso == b.iso && a.shading == b.shading && a.ao.rays == b.ao.rays &&
            a.ao.length == b.ao.length && a.ao.volume == b.ao.volume && a.volume == b.volume && a.clip == b.clip &&
-           a.integration == b.integration;
+           a.integration == b.integration && a.pathTracing == b.pathTracing;
   }
 };
 

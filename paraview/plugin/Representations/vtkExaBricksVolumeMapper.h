@@ -38,13 +38,15 @@ struct Engine {
 
 /// What the representation's properties ask of the renderer, besides the transfer function.
 struct Settings {
-  float rate = 1.f;                  ///< Frame::rate
-  Shading shading = Shading::Smooth; ///< the volume's lighting while Shade is on
-  int aoRays = 0;                    ///< ambient occlusion rays per iso-surface hit
-  std::vector<float> isoValues;      ///< iso-surfaces of the rendered array
-  std::vector<ClipPlane> clipPlanes; ///< each removes the half-space its normal points into
-  int samplesPerPixel = 8;           ///< the passes a still image accumulates
-  std::string device = "auto";       ///< "auto", "cpu" or "cuda" (exa::selectDevice)
+  float rate = 1.f;                          ///< Frame::rate
+  Shading shading = Shading::Smooth;         ///< the volume's lighting while Shade is on
+  int aoRays = 0;                            ///< ambient occlusion rays per iso-surface hit
+  std::vector<float> isoValues;              ///< iso-surfaces of the rendered array
+  std::vector<ClipPlane> clipPlanes;         ///< each removes the half-space its normal points into
+  int samplesPerPixel = 8;                   ///< the passes a still image accumulates
+  std::string device = "auto";               ///< "auto", "cpu" or "cuda" (exa::selectDevice)
+  Integrator integrator = Integrator::March; ///< the ray marcher or the volume path tracer
+  PathTracing pathTracing;                   ///< the path tracer's medium and lights
   friend bool operator==(const Settings&, const Settings&) = default;
 };
 

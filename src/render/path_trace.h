@@ -1,0 +1,214 @@
+// Volume path tracing of the AMR data (Integrator::PathTrace), host and device code: free-flight
+// sampling by delta tracking and transmittance by ratio tracking against a majorant per active
+// brick region (the largest extinction its value range can reach through the transfer
+// functions), through the same region traversal and basis reconstruction as the ray marcher;
+// single and multiple scattering with a Henyey-Greenstein phase function, Russian roulette, an
+// environment light and a sun with next-event estimation. A back end supplies the traversal (a
+// callable `traverse(ray, emit)` that emits region segments front to back, as
+// RegionTraversal::traverse and walkRegionTree do) and the random numbers.
+#pragma once
+
+#include "dual_ray.h"
+
+#include "exabricks/accel/traversal.h"
+#include "exabricks/amr/basis.h"
+#include "exabricks/core/random.h"
+#include "exabricks/render/sample_math.h"
+
+#include <cmath>
+
+namespace exa {
+
+/// One field of the medium and its tabulated transfer function (log2 transmittance per
+/// reference width in w, colour in xyz).
+struct MediumLayer {
+  FieldView view;
+  TfTableView table;
+};
+
+/// The medium as plain data: the layers (their extinctions add), a majorant per region
+/// (extinction per lattice unit; 0 where nothing can be seen), and the factor from a table's
+/// -log2 transmittance to extinction per lattice unit (ln 2 over the reference width).
+struct MediumView {
+  const MediumLayer* layers = nullptr;
+  int layerCount = 0;
+  const float* majorant = nullptr;
+  float extinctionPerLog2 = 1.f;
+};
+
+/// The path tracer's settings for one pass, from the scene (directions world, unit).
+struct PathSettings {
+  float albedo = 0.8f, anisotropy = 0.f, emission = 0.f;
+  int bounces = 4;
+  vec3f environment{1.f};
+  vec3d towardsSun{0.0, 0.0, 1.0};
+  float sunIntensity = 0.f;
+  float sunCosHalfAngle = 1.f;
+};
+
+/// Extinction per lattice unit at p (lattice) in `region`, summed over the layers; `color` gets
+/// the extinction-weighted colour of the layers there.
+EXA_HOST_DEVICE inline float mediumAt(const MediumView& m, uint32_t region, const vec3f& p, vec3f& color) {
+  float total = 0.f;
+  vec3f c(0.f);
+  for (int i = 0; i < m.layerCount; ++i) {
+    float v;
+    if (!sampleRegion(m.layers[i].view, region, p, v)) continue;
+    const vec4f e = tfLookup(m.layers[i].table, v);
+    const float s = -e.w * m.extinctionPerLog2;
+    total += s;
+    c = c + vec3f(e.x, e.y, e.z) * s;
+  }
+  color = total > 0.f ? c * (1.f / total) : vec3f(0.f);
+  return total;
+}
+
+/// The largest extinction (per lattice unit) a table gives any value in r: its log2
+/// transmittance is piecewise linear between entries, so the extremes lie at entries or ends.
+EXA_HOST_DEVICE inline float tableMaxExtinction(const TfTableView& t, const range1f& r, float extinctionPerLog2) {
+  if (r.empty()) return 0.f;
+  const float n0 = tfNormalized(t, r.lower), n1 = tfNormalized(t, r.upper);
+  float w = fminf(tfTableAt(t, n0).w, tfTableAt(t, n1).w);
+  const int first = int(ceilf(n0 * float(kTfTableSize - 1)));
+  const int last = int(floorf(n1 * float(kTfTableSize - 1)));
+  for (int i = first < 0 ? 0 : first; i <= (last > kTfTableSize - 1 ? kTfTableSize - 1 : last); ++i)
+    w = fminf(w, t.entries[i].w);
+  return -w * extinctionPerLog2;
+}
+
+/// A unit vector at angle acos(cosTheta) from `axis` (unit), turned by phi around it.
+EXA_HOST_DEVICE inline vec3d aroundAxis(const vec3d& axis, double cosTheta, double phi) {
+  const vec3d helper = fabs(axis.x) < 0.9 ? vec3d(1.0, 0.0, 0.0) : vec3d(0.0, 1.0, 0.0);
+  const vec3d u = normalize(cross(helper, axis));
+  const vec3d v = cross(axis, u);
+  const double sinTheta = sqrt(fmax(0.0, 1.0 - cosTheta * cosTheta));
+  return normalize(u * (sinTheta * cos(phi)) + v * (sinTheta * sin(phi)) + axis * cosTheta);
+}
+
+/// Henyey-Greenstein phase function (per steradian) at the cosine between the direction light
+/// travelled and the one it leaves along.
+EXA_HOST_DEVICE inline float henyeyGreenstein(float g, float cosTheta) {
+  const float denom = 1.f + g * g - 2.f * g * cosTheta;
+  return (1.f - g * g) / (4.f * 3.14159265f * denom * sqrtf(fmaxf(denom, 1e-12f)));
+}
+
+/// A direction drawn from the phase function around `dir` (the direction of travel), exactly
+/// (its weight is one).
+EXA_HOST_DEVICE inline vec3d sampleHenyeyGreenstein(const vec3d& dir, float g, PixelRandom& rng) {
+  const float u = rng.next(), phi = 6.28318531f * rng.next();
+  float cosTheta;
+  if (fabsf(g) < 1e-3f) {
+    cosTheta = 1.f - 2.f * u;
+  } else {
+    const float s = (1.f - g * g) / (1.f + g - 2.f * g * u);
+    cosTheta = (1.f + g * g - s * s) / (2.f * g);
+  }
+  return aroundAxis(dir, fmin(1.0, fmax(-1.0, double(cosTheta))), phi);
+}
+
+/// Delta tracking along a lattice ray (unit direction): the first real collision's t, region
+/// and colour; false when the ray leaves the medium. `samples` counts the tentative collisions.
+template <typename Traverse>
+EXA_HOST_DEVICE inline bool freeFlight(const MediumView& m, Traverse&& traverse, const Ray& ray, PixelRandom& rng,
+                                       float& tHit, vec3f& color, uint64_t& samples) {
+  bool hit = false;
+  traverse(ray, [&](const Segment& seg) {
+    const float majorant = m.majorant[seg.region];
+    if (!(majorant > 0.f)) return true;
+    float t = seg.t0;
+    for (;;) {
+      t -= logf(1.f - rng.next()) / majorant;
+      if (t >= seg.t1) return true;
+      ++samples;
+      vec3f c;
+      const float s = mediumAt(m, seg.region, ray.org + ray.dir * t, c);
+      if (rng.next() * majorant < s) {
+        tHit = t;
+        color = c;
+        hit = true;
+        return false;
+      }
+    }
+  });
+  return hit;
+}
+
+/// Ratio tracking: an unbiased estimate of the transmittance along a lattice ray, with Russian
+/// roulette once it falls below a tenth.
+template <typename Traverse>
+EXA_HOST_DEVICE inline float transmittance(const MediumView& m, Traverse&& traverse, const Ray& ray, PixelRandom& rng,
+                                           uint64_t& samples) {
+  float T = 1.f;
+  traverse(ray, [&](const Segment& seg) {
+    const float majorant = m.majorant[seg.region];
+    if (!(majorant > 0.f)) return true;
+    float t = seg.t0;
+    for (;;) {
+      t -= logf(1.f - rng.next()) / majorant;
+      if (t >= seg.t1) return true;
+      ++samples;
+      vec3f c;
+      T *= 1.f - fminf(1.f, mediumAt(m, seg.region, ray.org + ray.dir * t, c) / majorant);
+      if (T < 0.1f) {
+        if (rng.next() < 0.5f) {
+          T = 0.f;
+          return false;
+        }
+        T *= 2.f;
+      }
+    }
+  });
+  return T;
+}
+
+/// One path from a primary ray: premultiplied radiance in xyz, and in w whether the path met the
+/// medium (its average over passes is the pixel's opacity). Secondary rays are clipped as the
+/// primary one (`clip`, may be null) and stay inside the world transform's lattice.
+template <typename Traverse>
+EXA_HOST_DEVICE inline vec4f tracePath(const MediumView& m, Traverse&& traverse, const WorldTransform& world,
+                                       const ClipView* clip, const DualRay& primary, const PathSettings& s,
+                                       PixelRandom& rng, uint64_t& samples) {
+  vec3f radiance(0.f), throughput(1.f);
+  float met = 0.f;
+  DualRay ray = primary;
+  for (int bounce = 0;; ++bounce) {
+    float t;
+    vec3f color;
+    if (clippedAway(ray) || !freeFlight(m, traverse, ray.lattice, rng, t, color, samples)) {
+      if (bounce > 0)
+        radiance = radiance + vec3f(throughput.x * s.environment.x, throughput.y * s.environment.y,
+                                    throughput.z * s.environment.z);
+      break;
+    }
+    met = 1.f;
+    // Absorption emits; the rest scatters (expected values of both, one path).
+    if (s.emission > 0.f) {
+      const float e = (1.f - s.albedo) * s.emission;
+      radiance = radiance + vec3f(throughput.x * color.x, throughput.y * color.y, throughput.z * color.z) * e;
+    }
+    if (!(s.albedo > 0.f) || bounce >= s.bounces) break;
+    throughput = vec3f(throughput.x * color.x, throughput.y * color.y, throughput.z * color.z) * s.albedo;
+    const vec3d at = ray.orgW + ray.dirW * (double(t) / ray.kappa);
+    // The sun by next-event estimation: a direction within its disc, shadowed by ratio tracking.
+    if (s.sunIntensity > 0.f) {
+      const double cosTheta = 1.0 - double(rng.next()) * (1.0 - double(s.sunCosHalfAngle));
+      const vec3d towards = aroundAxis(s.towardsSun, cosTheta, 6.283185307 * double(rng.next()));
+      const DualRay shadow = makeDualRay(world, at, towards, clip);
+      if (!clippedAway(shadow)) {
+        const float phase = henyeyGreenstein(s.anisotropy, float(dot(towards, ray.dirW)));
+        const float T = transmittance(m, traverse, shadow.lattice, rng, samples);
+        radiance = radiance + throughput * (phase * s.sunIntensity * T);
+      }
+    }
+    // Russian roulette after the first bounces.
+    if (bounce >= 2) {
+      const float q = fminf(1.f, fmaxf(throughput.x, fmaxf(throughput.y, throughput.z)));
+      if (rng.next() >= q) break;
+      throughput = throughput * (1.f / q);
+    }
+    ray = makeDualRay(world, at, sampleHenyeyGreenstein(ray.dirW, s.anisotropy, rng), clip);
+  }
+  return {radiance.x, radiance.y, radiance.z, met};
+}
+
+} // namespace exa

@@ -1,0 +1,242 @@
+// The volume path tracer against independent truth: transmittance through a homogeneous slab
+// (analytic) and through a two-level field (quadrature of the reconstruction), a white furnace
+// (albedo 1 returns the environment's radiance), and without scattering the ray marcher's image;
+// bad settings refused with the key named.
+#include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
+#include "exabricks/render/renderer.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+using namespace exa;
+
+namespace {
+
+/// 32 x 32 x 32 lattice units of cells whose value depends on z only: finest cells below
+/// z = split, cells of width 2 above it.
+Model slab(const std::function<float(float)>& valueAtZ, int split = 32) {
+  CellSet s;
+  s.fields.push_back({"f", {}});
+  for (int z = 0; z < 32; ++z)
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x)
+        if (z < split) {
+          s.cells.push_back({vec3i(x, y, z), 0});
+          s.fields[0].values.push_back(valueAtZ(float(z) + 0.5f));
+        } else if (x % 2 == 0 && y % 2 == 0 && (z - split) % 2 == 0) {
+          s.cells.push_back({vec3i(x, y, z), 1});
+          s.fields[0].values.push_back(valueAtZ(float(z) + 1.f));
+        }
+  return buildModel(std::move(s));
+}
+
+/// Opacity per finest cell rising linearly from `low` at value 0 to `high` at value 1 (scale 1),
+/// colour white.
+TransferFunction ramp(float low, float high) {
+  TransferFunction tf;
+  tf.colorMap.positions = {0.f, 1.f};
+  tf.colorMap.colors = {vec3f(1.f), vec3f(1.f)};
+  tf.opacity = {{0.f, low}, {1.f, high}};
+  tf.valueRange = range1f{0.f, 1.f};
+  tf.opacityScale = 1.f;
+  return tf;
+}
+
+/// Looking down -z through the slab, orthographic, 64 x 64 pixels over the inner 24 x 24 units.
+Frame downZ(int spp) {
+  Frame f;
+  f.width = f.height = 64;
+  f.samplesPerPixel = spp;
+  f.camera.orthographic = true;
+  f.camera.position = vec3d(16.0, 16.0, 80.0);
+  f.camera.lookAt = vec3d(16.0, 16.0, 16.0);
+  f.camera.up = vec3d(0.0, 1.0, 0.0);
+  f.camera.orthoHeight = 12.0;
+  return f;
+}
+
+Scene pathScene(const TransferFunction& tf) {
+  Scene s = Scene::volumeOf(tf, "f");
+  s.shading = Shading::None;
+  s.integration.integrator = Integrator::PathTrace;
+  s.pathTracing.albedo = 0.f;
+  s.pathTracing.environment = vec3f(0.f);
+  return s;
+}
+
+double meanAlpha(const Image& img) {
+  double sum = 0.0;
+  for (const vec4f& p : img.pixels)
+    sum += p.w;
+  return sum / double(img.pixels.size());
+}
+
+} // namespace
+
+TEST(PathTrace, TransmittanceThroughAHomogeneousSlabIsAnalytic) {
+  // Every cell absorbs 5 % per finest width. The basis reaches half a cell beyond the outer cells'
+  // faces (hat radius one width around each centre), so the ray crosses 33 widths: 0.95^33 stays.
+  const Model m = slab([](float) { return 0.5f; });
+  Renderer r(m, DatasetInfo::of(m));
+  r.setScene(pathScene(ramp(0.05f, 0.05f)));
+  const int spp = 8;
+  const Image img = r.render(downZ(spp));
+  const double want = 1.0 - std::pow(0.95, 33.0);
+  const double n = double(img.pixels.size()) * spp;
+  const double sigma = std::sqrt(want * (1.0 - want) / n);
+  EXPECT_NEAR(meanAlpha(img), want, 4.0 * sigma) << "want " << want << " +- " << sigma;
+}
+
+TEST(PathTrace, TransmittanceThroughTwoLevelsEqualsAQuadratureOfTheReconstruction) {
+  // Finest cells below z = 16 with a value rising along z, cells of width 2 above it with
+  // another; the extinction follows the reconstruction (blended across the level boundary).
+  auto value = [](float z) { return z < 16.f ? 0.2f + 0.02f * z : 0.9f; };
+  const Model m = slab(value, 16);
+  const DatasetInfo info = DatasetInfo::of(m);
+  const TransferFunction tf = ramp(0.01f, 0.12f);
+  Renderer r(m, info);
+  r.setScene(pathScene(tf));
+  const int spp = 8;
+  const Image img = r.render(downZ(spp));
+  // The optical depth along the slab's axis by the midpoint rule on the reconstruction, over
+  // z in [-2, 34] (the basis reaches beyond the cells' faces; no value beyond it).
+  double depth = 0.0;
+  const int steps = 36000;
+  const double dz = 36.0 / steps;
+  for (int k = 0; k < steps; ++k) {
+    const double z = -2.0 + (k + 0.5) * dz;
+    double v;
+    vec3d g;
+    if (!m.sampleWorld(0, vec3d(16.0, 16.0, z), v, g)) continue;
+    const double alpha = tf.lookup(float(v)).w;
+    depth += -std::log(1.0 - alpha) / double(info.referenceWidth) * dz;
+  }
+  const double want = 1.0 - std::exp(-depth);
+  const double n = double(img.pixels.size()) * spp;
+  const double sigma = std::sqrt(want * (1.0 - want) / n);
+  EXPECT_NEAR(meanAlpha(img), want, 4.0 * sigma) << "want " << want << " +- " << sigma;
+}
+
+TEST(PathTrace, SingleScatteringOfTheSunIsAnalytic) {
+  // A homogeneous slab lit by the sun from straight above and seen from above, one scattering
+  // event (bounces 1), isotropic: L = albedo I / (4 pi) (1 - exp(-2 sigma D)) / 2 over the
+  // slab's depth D (33 widths, as above). The sun's shadow rays are ratio-tracked.
+  const Model m = slab([](float) { return 0.5f; });
+  const DatasetInfo info = DatasetInfo::of(m);
+  Renderer r(m, info);
+  Scene s = pathScene(ramp(0.05f, 0.05f));
+  s.pathTracing.albedo = 0.7f;
+  s.pathTracing.bounces = 1;
+  s.pathTracing.sunDirection = vec3f(0.f, 0.f, -1.f);
+  s.pathTracing.sunIntensity = 10.f;
+  s.pathTracing.sunAngle = 0.f;
+  r.setScene(s);
+  const Image img = r.render(downZ(16));
+  double sum = 0.0;
+  for (const vec4f& p : img.pixels)
+    sum += p.x;
+  const double sigma = -std::log(0.95) / double(info.referenceWidth);
+  const double want = 0.7 * 10.0 / (4.0 * M_PI) * (1.0 - std::exp(-2.0 * sigma * 33.0)) / 2.0;
+  EXPECT_NEAR(sum / double(img.pixels.size()), want, 0.02 * want);
+}
+
+TEST(PathTrace, AWhiteFurnaceReturnsTheEnvironment) {
+  // Albedo 1, white medium of any density, uniform environment: every path that meets the
+  // medium leaves it with the environment's radiance.
+  const Model m = slab([](float z) { return z / 32.f; });
+  Renderer r(m, DatasetInfo::of(m));
+  Scene s = pathScene(ramp(0.02f, 0.3f));
+  s.pathTracing.albedo = 1.f;
+  s.pathTracing.bounces = 1000;
+  s.pathTracing.environment = vec3f(0.5f, 0.25f, 1.f);
+  s.pathTracing.anisotropy = 0.5f;
+  r.setScene(s);
+  const Image img = r.render(downZ(16));
+  vec3d sum(0.0);
+  double alpha = 0.0;
+  for (const vec4f& p : img.pixels) {
+    sum = sum + vec3d(p.x, p.y, p.z);
+    alpha += p.w;
+  }
+  ASSERT_GT(alpha, 0.5 * double(img.pixels.size()));
+  EXPECT_NEAR(sum.x / alpha, 0.5, 0.01);
+  EXPECT_NEAR(sum.y / alpha, 0.25, 0.005);
+  EXPECT_NEAR(sum.z / alpha, 1.0, 0.02);
+}
+
+TEST(PathTrace, WithoutScatteringItConvergesToTheRayMarcher) {
+  // Emission and absorption only (albedo 0, emission 1, black environment): the expected
+  // radiance is the marcher's integral; a blob of varying colour and opacity.
+  CellSet cells;
+  cells.fields.push_back({"f", {}});
+  for (int z = 0; z < 32; ++z)
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        const float d2 = float((x - 16) * (x - 16) + (y - 14) * (y - 14) + (z - 16) * (z - 16));
+        cells.cells.push_back({vec3i(x, y, z), 0});
+        cells.fields[0].values.push_back(std::exp(-d2 / 60.f));
+      }
+  const Model m = buildModel(std::move(cells));
+  TransferFunction tf = defaultTransferFunction();
+  tf.valueRange = range1f{0.f, 1.f};
+  tf.opacity = {{0.f, 0.f}, {1.f, 0.25f}};
+  tf.opacityScale = 1.f;
+  Scene march = Scene::volumeOf(tf, "f");
+  march.shading = Shading::None;
+  march.integration.earlyTermination = false;
+  Frame f;
+  f.width = f.height = 48;
+  f.camera.position = vec3d(60.0, 40.0, 30.0);
+  f.camera.lookAt = vec3d(16.0, 16.0, 16.0);
+  f.camera.up = vec3d(0.0, 0.0, 1.0);
+  f.camera.fovy = 35.0;
+  f.rate = 8.f;
+  Renderer r(m, DatasetInfo::of(m));
+  r.setScene(march);
+  const Image want = r.render(f);
+  Scene path = march;
+  path.integration.integrator = Integrator::PathTrace;
+  path.pathTracing.albedo = 0.f;
+  path.pathTracing.emission = 1.f;
+  path.pathTracing.environment = vec3f(0.f);
+  r.setScene(path);
+  f.samplesPerPixel = 256;
+  f.rate = 1.f;
+  const Image got = r.render(f);
+  double diff = 0.0, signedDiff = 0.0;
+  for (size_t i = 0; i < want.pixels.size(); ++i) {
+    const vec4f& a = got.pixels[i];
+    const vec4f& b = want.pixels[i];
+    for (const double d : {a.x - b.x, a.y - b.y, a.z - b.z, a.w - b.w}) {
+      diff += std::abs(d);
+      signedDiff += d;
+    }
+  }
+  const double n = 4.0 * double(want.pixels.size());
+  EXPECT_LT(255.0 * diff / n, 1.5) << "mean |difference| in 1/255";
+  EXPECT_LT(std::abs(255.0 * signedDiff / n), 0.3) << "mean difference (bias) in 1/255";
+}
+
+TEST(PathTrace, BadSettingsNameTheirKey) {
+  auto refused = [](const std::function<void(Scene&)>& change, const char* key) {
+    Scene s;
+    change(s);
+    try {
+      s.validate();
+      ADD_FAILURE() << key << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  };
+  refused([](Scene& s) { s.pathTracing.albedo = 1.5f; }, "pathtrace.albedo");
+  refused([](Scene& s) { s.pathTracing.albedo = -0.1f; }, "pathtrace.albedo");
+  refused([](Scene& s) { s.pathTracing.anisotropy = 1.f; }, "pathtrace.anisotropy");
+  refused([](Scene& s) { s.pathTracing.anisotropy = -1.f; }, "pathtrace.anisotropy");
+  refused([](Scene& s) { s.pathTracing.bounces = -1; }, "pathtrace.bounces");
+  refused([](Scene& s) { s.pathTracing.sunIntensity = -2.f; }, "pathtrace.sun_intensity");
+  refused([](Scene& s) { s.pathTracing.environment = vec3f(1.f, -1.f, 0.f); }, "pathtrace.environment");
+  refused([](Scene& s) { s.pathTracing.sunDirection = vec3f(0.f); }, "pathtrace.sun_direction");
+}
