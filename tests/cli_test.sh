@@ -114,6 +114,15 @@ fails_with "--elevation beyond the pole" "must be in [-90, 90]" "$exe" render s.
 check "--elevation beyond the pole: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --elevation 100
 fails_with "a missing output folder, before rendering" "the folder nofolder does not exist" "$exe" render s.cells -o nofolder/x.png
 check "no output for a missing folder" test ! -e nofolder
+# Path tracing: its flags, their checks, and a scene file that reproduces the picture.
+check "a path-traced scene file reproduces the image" bash -c "'$exe' -q render s.cells -o pt1.png --size 32x24 --spp 2 --integrator pathtrace --albedo 0.6 --anisotropy 0.3 --bounces 3 --environment 0.2,0.3,0.4 --sun 1,-1,-1,2,1 --write-scene pt.json && '$exe' -q render s.cells --scene pt.json -o pt2.png && cmp pt1.png pt2.png && ! cmp -s pt1.png flags.png"
+check "the path tracer's settings are scene keys" $py -c 'import json; d = json.load(open("pt.json")); assert d["integration"]["integrator"] == "pathtrace" and d["pathtrace"]["bounces"] == 3 and d["pathtrace"]["sun_direction"] == [1, -1, -1] and abs(d["pathtrace"]["sun_angle"] - 1) < 1e-6, d["pathtrace"]'
+check "--albedo 2: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --integrator pathtrace --albedo 2
+fails_with "--albedo 2 names the key" 'pathtrace.albedo" must be in [0, 1], not 2' "$exe" render s.cells -o x.png --albedo 2
+fails_with "--anisotropy 1 names the key" 'pathtrace.anisotropy" must be in (-1, 1), not 1' "$exe" render s.cells -o x.png --anisotropy 1
+fails_with "a negative sun" 'pathtrace.sun_intensity" must be a finite number >= 0' "$exe" render s.cells -o x.png --sun 0,0,-1,-3
+fails_with "a sun without intensity" "--sun expects dx,dy,dz,INTENSITY" "$exe" render s.cells -o x.png --sun 0,0,-1
+fails_with "an unknown integrator" "pathtrace" "$exe" render s.cells -o x.png --integrator photon
 # A scene names its input; the default dataset's scene says so, and one without an input is refused.
 "$exe" -q render -o emb.png --size 24x16 --write-scene emb.json
 check "the default dataset's scene names it" $py -c 'import json; assert json.load(open("emb.json"))["input"] == "<embedded>"'
