@@ -167,6 +167,41 @@ TEST(PathTrace, AWhiteFurnaceReturnsTheEnvironment) {
   EXPECT_NEAR(sum.z / alpha, 1.0, 0.02);
 }
 
+TEST(PathTrace, AConvexDiffuseSurfaceReflectsItsAlbedoTimesTheEnvironment) {
+  // An iso-surface sphere, grey (albedo 0.5) and diffuse, under a uniform environment and
+  // nothing else: every bounce off a convex surface sees the sky, so it shows 0.5 times the
+  // environment's radiance.
+  CellSet cells;
+  cells.fields.push_back({"r", {}});
+  for (int z = 0; z < 32; ++z)
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        cells.cells.push_back({vec3i(x, y, z), 0});
+        const vec3f d = vec3f(float(x), float(y), float(z)) + vec3f(0.5f) - vec3f(16.f);
+        cells.fields[0].values.push_back(length(d));
+      }
+  const Model m = buildModel(std::move(cells));
+  Renderer r(m, DatasetInfo::of(m));
+  Scene s = pathScene(ramp(0.f, 0.f));
+  s.layers[0].field = "r";
+  s.volume = false;
+  s.iso.values = {9.f};
+  s.iso.colors = {vec3f(0.5f)};
+  s.pathTracing.environment = vec3f(1.f, 0.5f, 0.25f);
+  r.setScene(s);
+  const Image img = r.render(downZ(8));
+  vec3d sum(0.0);
+  double alpha = 0.0;
+  for (const vec4f& p : img.pixels) {
+    sum = sum + vec3d(p.x, p.y, p.z);
+    alpha += p.w;
+  }
+  ASSERT_GT(alpha, 0.3 * double(img.pixels.size()));
+  EXPECT_NEAR(sum.x / alpha, 0.5, 0.01);
+  EXPECT_NEAR(sum.y / alpha, 0.25, 0.005);
+  EXPECT_NEAR(sum.z / alpha, 0.125, 0.003);
+}
+
 TEST(PathTrace, WithoutScatteringItConvergesToTheRayMarcher) {
   // Emission and absorption only (albedo 0, emission 1, black environment): the expected
   // radiance is the marcher's integral; a blob of varying colour and opacity.

@@ -44,6 +44,15 @@ struct PathSettings {
   vec3d towardsSun{0.0, 0.0, 1.0};
   float sunIntensity = 0.f;
   float sunCosHalfAngle = 1.f;
+  double surfaceOffset = 1e-6; ///< world distance rays leave a surface from, along its normal
+};
+
+/// The nearest opaque surface along a ray (an iso-surface or a mesh), as the back end finds it:
+/// world distance and normal (facing the ray's origin), and its diffuse colour.
+struct PathSurface {
+  double distance = 0.0;
+  vec3d normal{0.0};
+  vec3f color{0.f};
 };
 
 /// Extinction per lattice unit at p (lattice) in `region`, summed over the layers; `color` gets
@@ -83,6 +92,12 @@ EXA_HOST_DEVICE inline vec3d aroundAxis(const vec3d& axis, double cosTheta, doub
   const vec3d v = cross(axis, u);
   const double sinTheta = sqrt(fmax(0.0, 1.0 - cosTheta * cosTheta));
   return normalize(u * (sinTheta * cos(phi)) + v * (sinTheta * sin(phi)) + axis * cosTheta);
+}
+
+/// A direction drawn with density cos(theta) / pi around the unit normal n.
+EXA_HOST_DEVICE inline vec3d sampleCosine(const vec3d& n, PixelRandom& rng) {
+  const double u = double(rng.next());
+  return aroundAxis(n, sqrt(1.0 - u), 6.283185307 * double(rng.next()));
 }
 
 /// Henyey-Greenstein phase function (per steradian) at the cosine between the direction light
@@ -161,23 +176,63 @@ EXA_HOST_DEVICE inline float transmittance(const MediumView& m, Traverse&& trave
   return T;
 }
 
+/// The sun's light reaching `at` along a direction within its disc (returned in `towards`):
+/// irradiance times the transmittance of the medium, zero behind a surface.
+template <typename Traverse, typename Nearest>
+EXA_HOST_DEVICE inline float sunlight(const MediumView& m, Traverse&& traverse, Nearest&& nearest,
+                                      const WorldTransform& world, const ClipView* clip, const vec3d& at,
+                                      const PathSettings& s, PixelRandom& rng, vec3d& towards, uint64_t& samples) {
+  const double cosTheta = 1.0 - double(rng.next()) * (1.0 - double(s.sunCosHalfAngle));
+  towards = aroundAxis(s.towardsSun, cosTheta, 6.283185307 * double(rng.next()));
+  const DualRay shadow = makeDualRay(world, at, towards, clip);
+  PathSurface blocker;
+  if (nearest(shadow, blocker)) return 0.f;
+  if (clippedAway(shadow)) return s.sunIntensity;
+  return s.sunIntensity * transmittance(m, traverse, shadow.lattice, rng, samples);
+}
+
 /// One path from a primary ray: premultiplied radiance in xyz, and in w whether the path met the
-/// medium (its average over passes is the pixel's opacity). Secondary rays are clipped as the
-/// primary one (`clip`, may be null) and stay inside the world transform's lattice.
-template <typename Traverse>
-EXA_HOST_DEVICE inline vec4f tracePath(const MediumView& m, Traverse&& traverse, const WorldTransform& world,
-                                       const ClipView* clip, const DualRay& primary, const PathSettings& s,
-                                       PixelRandom& rng, uint64_t& samples) {
+/// medium or a surface (its average over passes is the pixel's opacity). Surfaces are opaque and
+/// diffuse (Lambertian, their colour as albedo); `nearest(const DualRay&, PathSurface&)` finds
+/// them. Secondary rays are clipped as the primary one (`clip`, may be null).
+template <typename Traverse, typename Nearest>
+EXA_HOST_DEVICE inline vec4f tracePath(const MediumView& m, Traverse&& traverse, Nearest&& nearest,
+                                       const WorldTransform& world, const ClipView* clip, const DualRay& primary,
+                                       const PathSettings& s, PixelRandom& rng, uint64_t& samples) {
   vec3f radiance(0.f), throughput(1.f);
   float met = 0.f;
   DualRay ray = primary;
+  auto times = [](const vec3f& a, const vec3f& b) { return vec3f(a.x * b.x, a.y * b.y, a.z * b.z); };
   for (int bounce = 0;; ++bounce) {
     float t;
     vec3f color;
-    if (clippedAway(ray) || !freeFlight(m, traverse, ray.lattice, rng, t, color, samples)) {
-      if (bounce > 0)
-        radiance = radiance + vec3f(throughput.x * s.environment.x, throughput.y * s.environment.y,
-                                    throughput.z * s.environment.z);
+    PathSurface surface;
+    const bool haveSurface = nearest(ray, surface);
+    Ray lattice = ray.lattice;
+    if (haveSurface) lattice.tmax = fminf(lattice.tmax, float(surface.distance * ray.kappa));
+    const bool inMedium = !clippedAway(ray) && freeFlight(m, traverse, lattice, rng, t, color, samples);
+    if (!inMedium && haveSurface) {
+      // A diffuse surface: the sun by next-event estimation, then a cosine-weighted bounce.
+      met = 1.f;
+      if (bounce >= s.bounces) break;
+      throughput = times(throughput, surface.color);
+      const vec3d at = ray.orgW + ray.dirW * surface.distance + surface.normal * s.surfaceOffset;
+      if (s.sunIntensity > 0.f && dot(s.towardsSun, surface.normal) > 0.0) {
+        vec3d towards;
+        const float light = sunlight(m, traverse, nearest, world, clip, at, s, rng, towards, samples);
+        const float cosine = float(fmax(0.0, dot(towards, surface.normal)));
+        radiance = radiance + throughput * (light * cosine / 3.14159265f);
+      }
+      if (bounce >= 2) {
+        const float q = fminf(1.f, fmaxf(throughput.x, fmaxf(throughput.y, throughput.z)));
+        if (rng.next() >= q) break;
+        throughput = throughput * (1.f / q);
+      }
+      ray = makeDualRay(world, at, sampleCosine(surface.normal, rng), clip);
+      continue;
+    }
+    if (!inMedium) {
+      if (bounce > 0) radiance = radiance + times(throughput, s.environment);
       break;
     }
     met = 1.f;
@@ -191,14 +246,9 @@ EXA_HOST_DEVICE inline vec4f tracePath(const MediumView& m, Traverse&& traverse,
     const vec3d at = ray.orgW + ray.dirW * (double(t) / ray.kappa);
     // The sun by next-event estimation: a direction within its disc, shadowed by ratio tracking.
     if (s.sunIntensity > 0.f) {
-      const double cosTheta = 1.0 - double(rng.next()) * (1.0 - double(s.sunCosHalfAngle));
-      const vec3d towards = aroundAxis(s.towardsSun, cosTheta, 6.283185307 * double(rng.next()));
-      const DualRay shadow = makeDualRay(world, at, towards, clip);
-      if (!clippedAway(shadow)) {
-        const float phase = henyeyGreenstein(s.anisotropy, float(dot(towards, ray.dirW)));
-        const float T = transmittance(m, traverse, shadow.lattice, rng, samples);
-        radiance = radiance + throughput * (phase * s.sunIntensity * T);
-      }
+      vec3d towards;
+      const float light = sunlight(m, traverse, nearest, world, clip, at, s, rng, towards, samples);
+      radiance = radiance + throughput * (henyeyGreenstein(s.anisotropy, float(dot(towards, ray.dirW))) * light);
     }
     // Russian roulette after the first bounces.
     if (bounce >= 2) {

@@ -117,6 +117,7 @@ struct Renderer::Impl {
     s.towardsSun = -normalize(vec3d(p.sunDirection));
     s.sunIntensity = p.sunIntensity;
     s.sunCosHalfAngle = float(std::cos(0.5 * double(p.sunAngle) * M_PI / 180.0));
+    s.surfaceOffset = 1e-5 * dataset.worldDiagonal;
     return s;
   }
 
@@ -136,10 +137,22 @@ struct Renderer::Impl {
                       ps.forward);
     ++c.rays;
     raySamples = 0;
-    if (!scene.volume || mediumLayers.empty()) return vec4f();
-    const RegionTraversal& traversal = *volume.traversal();
-    auto traverse = [&](const Ray& ray, auto&& emit) { traversal.traverse(ray, emit); };
-    return tracePath(medium(), traverse, model.world, &clip, dr, ps.path, rng, raySamples);
+    const bool inMedium = scene.volume && !mediumLayers.empty();
+    if (!inMedium && !ps.surfaces) return vec4f();
+    const RegionTraversal* traversal = volume.traversal();
+    auto traverse = [&](const Ray& ray, auto&& emit) {
+      if (inMedium) traversal->traverse(ray, emit);
+    };
+    auto nearest = [&](const DualRay& r, PathSurface& out) {
+      SurfaceHit hit;
+      if (!ps.surfaces || !surfaces.nearest(r, scene.clip.meshes, ps.march.sampling, frame.rate, hit, c.isoSamples))
+        return false;
+      out.distance = hit.distance;
+      out.normal = vec3d(hit.normal);
+      out.color = surfaces.color(hit, scene.iso.colors);
+      return true;
+    };
+    return tracePath(medium(), traverse, nearest, model.world, &clip, dr, ps.path, rng, raySamples);
   }
 
   /// One sample of pixel (x, y) for pass frame.frameIndex: premultiplied colour and volume
