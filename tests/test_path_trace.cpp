@@ -279,7 +279,7 @@ TEST(PathTrace, WithoutScatteringItConvergesToTheRayMarcher) {
   const double n = 4.0 * double(want.pixels.size());
   std::printf("path tracer against the marcher: mean |difference| %.3f/255, mean difference %.3f/255\n",
               255.0 * diff / n, 255.0 * signedDiff / n);
-  EXPECT_LT(255.0 * diff / n, 1.5) << "mean |difference| in 1/255";
+  EXPECT_LT(255.0 * diff / n, 2.0) << "mean |difference| in 1/255 (the paths' noise)";
   EXPECT_LT(std::abs(255.0 * signedDiff / n), 0.3) << "mean difference (bias) in 1/255";
 }
 
