@@ -54,6 +54,8 @@ inline ImageDifference difference(const Image& a, const Image& b) {
 /// channels within 2/255 (the paths differ in float round-off, which can move a sample across a
 /// region face or an iso crossing by a step in a few pixels).
 inline bool withinBound(const ImageDifference& d) { return d.mean < 0.5 / 255 && d.p999 <= 2.0 / 255; }
+/// Path-traced images: the mean within a fraction of the paths' noise at a few samples.
+inline bool withinNoise(const ImageDifference& d) { return d.mean < 2.0 / 255; }
 
 inline std::string describe(const ImageDifference& d) {
   return "coverage " + std::to_string(d.coverage) + ", mean " + std::to_string(d.mean * 255) + "/255, 99.9% " +
@@ -84,6 +86,9 @@ struct Variant {
   std::function<void(Scene&, Frame&, const DatasetInfo&, const box3d&)> set;
   bool domain = false;     ///< render with a domain box (the data's lower half along x)
   bool depthLimit = false; ///< render with a planar depth limit that cuts through the data
+  /// Path traced: the same paths where every float decision agrees; a GPU's arithmetic may turn
+  /// a rare one, so the bound is the paths' noise (withinNoise) rather than a marcher's.
+  bool pathTraced = false;
 };
 
 inline std::vector<Variant> variants() {
@@ -164,6 +169,34 @@ inline std::vector<Variant> variants() {
        false, true},
       {"one sample, no jitter",
        [](Scene&, Frame& f, const DatasetInfo&, const box3d&) { f.samplesPerPixel = 1, f.jitter = false; }},
+      {"path tracing: two layers, sun and environment, anisotropic, clipped",
+       [tf](Scene& s, Frame& f, const DatasetInfo&, const box3d& bounds) {
+         s.integration.integrator = Integrator::PathTrace;
+         s.pathTracing.sunIntensity = 3.f;
+         s.pathTracing.anisotropy = 0.4f;
+         s.pathTracing.environment = vec3f(0.3f, 0.35f, 0.4f);
+         s.layers[0].tf.opacityScale = 0.5f;
+         VolumeLayer radius{"radius", tf("plasma")};
+         radius.tf.opacity = {{0.f, 0.f}, {0.6f, 0.f}, {1.f, 0.3f}};
+         s.layers.push_back(radius);
+         const vec3d centre = (bounds.lower + bounds.upper) * 0.5;
+         s.clip.planes.push_back({centre, normalize(vec3d(1.0, 0.3, 0.1))});
+         f.samplesPerPixel = 4;
+       },
+       false, false, true},
+      {"path tracing: iso-surfaces and a mesh in the medium, emission",
+       [](Scene& s, Frame& f, const DatasetInfo& d, const box3d& bounds) {
+         s.integration.integrator = Integrator::PathTrace;
+         s.pathTracing.sunIntensity = 2.f;
+         s.pathTracing.emission = 0.5f;
+         s.pathTracing.albedo = 0.6f;
+         const range1f r = d.valueRanges[0];
+         s.iso.values = {r.lower + 0.6f * (r.upper - r.lower)};
+         const vec3d centre = (bounds.lower + bounds.upper) * 0.5, size = bounds.upper - bounds.lower;
+         s.meshes.push_back({sphereMesh(centre + size * 0.3, 0.1 * size.x), {0.2f, 0.6f, 0.9f}, ""});
+         f.samplesPerPixel = 4;
+       },
+       false, false, true},
   };
 }
 
@@ -226,7 +259,8 @@ inline void expectEveryVariantLikeTheCpu(Device device, uint64_t (*work)(const R
     RenderStats stats;
     const ImageDifference d = compareWithCpu(m, info, device, v, &stats);
     std::printf("%-72s %s\n", v.name.c_str(), describe(d).c_str());
-    EXPECT_TRUE(withinBound(d)) << v.name << ": " << describe(d);
+    EXPECT_TRUE(v.pathTraced && device == Device::Cuda ? withinNoise(d) : withinBound(d))
+        << v.name << ": " << describe(d);
     EXPECT_GT(d.coverage, 0.01) << v.name << ": nothing drawn";
     EXPECT_GT(work(stats), 0u) << v.name;
   }

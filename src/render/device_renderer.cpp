@@ -54,7 +54,6 @@ void DeviceRenderer::checkSupported(const Scene& s) {
     fail("the GPU back end does not render ", what, " yet; render this scene on the CPU (device cpu)");
   };
   if (s.debug != DebugView::None) refuse("debug views");
-  if (s.integration.integrator == Integrator::PathTrace) refuse("path tracing");
   if (s.integration.reconstruction == Reconstruction::CellLocation) refuse("reconstruction by cell location");
   if (s.layers.size() > size_t(kTraceMaxLayers)) refuse("more than " + std::to_string(kTraceMaxLayers) + " layers");
   if (s.iso.values.size() > size_t(kTraceMaxIsoValues))
@@ -141,12 +140,13 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
 
   const std::vector<LayerTable>& layers = volume.layers();
   v.volume = s.volume && !layers.empty();
+  v.pathTrace = s.integration.integrator == Integrator::PathTrace; // lit by its paths: no gradients
   v.layerCount = int(layers.size());
   for (size_t i = 0; i < layers.size(); ++i) {
     const LayerTable& l = layers[i];
     TraceLayer& t = v.layers[i];
     // Smooth shading reads the values with the gradients (TraceLayer::withGradients).
-    const bool smooth = s.shading == Shading::Smooth && l.grad[0].values;
+    const bool smooth = s.shading == Shading::Smooth && l.grad[0].values && !v.pathTrace;
     t.view = fieldView(l.field, smooth ? nullptr : l.view.values, "field", update);
     if (smooth) t.withGradients = withGradients(l, update);
     for (int a = 0; a < 3; ++a)
@@ -161,6 +161,13 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
     v.volumeTree.visible = put("visible regions", volume.visible(), true, update);
     v.volumeTree.subtreeVisible = put("visible subtrees", volumeSubtrees_, true, update);
     v.volumeTree.bounds = model_.regions.bounds;
+  }
+  if (v.pathTrace) {
+    for (size_t i = 0; i < layers.size(); ++i)
+      v.mediumLayers[i] = {v.layers[i].view, v.layers[i].tf};
+    v.majorants = put("majorants", volume.majorants(), true, update);
+    v.extinctionPerLog2 = volume.extinctionPerLog2();
+    v.path = pathSettingsOf(s.pathTracing, dataset_.worldDiagonal);
   }
   v.shading = s.shading;
   v.terms = s.light.terms;
@@ -280,8 +287,10 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
     uint64_t r = 0;
     for (int x = 0; x < frame.width; ++x) {
       if (!tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) continue;
+      const bool surfaces = v.iso || v.meshes;
       colors[size_t(y) * size_t(frame.width) + size_t(x)] =
-          v.iso || v.meshes ? traceSample<true>(v, x, y, c) : traceSample<false>(v, x, y, c);
+          v.pathTrace ? (surfaces ? tracePathSample<true>(v, x, y, c) : tracePathSample<false>(v, x, y, c))
+                      : (surfaces ? traceSample<true>(v, x, y, c) : traceSample<false>(v, x, y, c));
       ++r;
     }
     rays += r;

@@ -9,6 +9,7 @@
 #include "dual_ray.h"
 #include "iso_search.h"
 #include "layer_table.h"
+#include "path_trace.h"
 
 #include "exabricks/accel/traversal.h"
 #include "exabricks/accel/triangle_bvh.h"
@@ -58,6 +59,12 @@ struct TraceView {
   bool earlyTermination = true;
   float terminationOpacity = 0.98f;
   float rate = 1.f;
+  // Path tracing (Integrator::PathTrace): the layers as the medium, with a majorant per region.
+  bool pathTrace = false;
+  MediumLayer mediumLayers[kTraceMaxLayers];
+  const float* majorants = nullptr;
+  float extinctionPerLog2 = 1.f;
+  PathSettings path;
   // Iso-surfaces.
   bool iso = false;
   RegionTreeView isoTree;
@@ -288,6 +295,66 @@ EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, Trace
     compositeOpaqueBehind(acc, shadeSurface(base, normal, light, halfVector, ao, v.terms));
   }
   return acc;
+}
+
+/// One path-traced sample of pixel (x, y) for pass v.frameIndex (tracePath, path_trace.h): the
+/// same primary ray, medium and surfaces as the CPU renderer's, over the device arrays.
+template <bool Surfaces>
+EXA_HOST_DEVICE inline vec4f tracePathSample(const TraceView& v, int x, int y, TraceCounts& c) {
+  PixelRandom rng(x, y, v.frameIndex, v.seed);
+  float rho;
+  vec3d orgW, dirW;
+  primaryRay(v.camera, x, y, v.width, v.height, v.aspect, v.pixelJitter, v.jitter, rng, rho, orgW, dirW);
+  const ClipView clip{v.planes, v.planeCount, v.clipBox};
+  DualRay dr = makeDualRay(v.world, orgW, dirW, &clip);
+  if (v.hasDomain) restrictToBox(dr, v.domain);
+  if (v.depthLimit)
+    applyDepthLimit(dr, v.depthLimit[size_t(y) * size_t(v.width) + size_t(x)], v.depthLimitPlanar, v.forward);
+  const MediumView medium{v.mediumLayers, v.volume ? v.layerCount : 0, v.majorants, v.extinctionPerLog2};
+  auto traverse = [&](const Ray& ray, auto&& emit) {
+    if (v.volume) walkRegionTree(v.volumeTree, ray, emit);
+  };
+  auto nearest = [&](const DualRay& r, PathSurface& out) {
+    if constexpr (!Surfaces) {
+      return false;
+    } else {
+      bool hit = false;
+      if (v.meshes) {
+        const double s0 = v.clipMeshes ? r.sMin : r.domainMin, s1 = v.clipMeshes ? r.sMax : r.domainMax;
+        TriangleHit th;
+        if (s1 >= s0 &&
+            intersectTriangles(v.meshBvh, vec3f(r.orgW), vec3f(r.dirW), float(std::max(s0, 0.0)),
+                               std::isinf(s1) ? std::numeric_limits<float>::infinity() : float(s1), false, th)) {
+          hit = true;
+          out.distance = th.t;
+          out.normal = vec3d(th.normal);
+          out.color = v.meshColors[th.mesh];
+        }
+      }
+      if (v.iso && !clippedAway(r)) {
+        Ray lr = r.lattice;
+        if (hit) lr.tmax = std::min(lr.tmax, float(out.distance * r.kappa));
+        float t = 0.f;
+        uint32_t region = 0;
+        int which = 0;
+        if (traceIso(v, lr, t, region, which, c.isoSamples)) {
+          hit = true;
+          out.distance = double(t) / r.kappa;
+          out.normal = vec3d(isoNormal(v.isoView, region, lr.org + lr.dir * t, r.dirW, v.invScale));
+          out.color = v.isoColorCount > 0 ? v.isoColors[which % v.isoColorCount] : defaultIsoColor(which);
+          float value;
+          if (v.isoColored &&
+              sampleField(v.isoColorView, vec3f(v.world.toLattice(r.orgW + r.dirW * out.distance)), value))
+            out.color = tfLookup(v.isoColorTf, value).rgb();
+        }
+      }
+      return hit;
+    }
+  };
+  uint64_t samples = 0;
+  const vec4f out = tracePath(medium, traverse, nearest, v.world, &clip, dr, v.path, rng, samples);
+  c.samples += uint32_t(samples);
+  return out;
 }
 
 /// Whether the scene is one layer with smooth shading read with its values (the common case,

@@ -47,6 +47,22 @@ struct PathSettings {
   double surfaceOffset = 1e-6; ///< world distance rays leave a surface from, along its normal
 };
 
+/// The settings of a scene's path tracing; rays leave surfaces a small fraction of the data's
+/// world diagonal away.
+inline PathSettings pathSettingsOf(const PathTracing& p, double worldDiagonal) {
+  PathSettings s;
+  s.albedo = p.albedo;
+  s.anisotropy = p.anisotropy;
+  s.emission = p.emission;
+  s.bounces = p.bounces;
+  s.environment = p.environment;
+  s.towardsSun = -normalize(vec3d(p.sunDirection));
+  s.sunIntensity = p.sunIntensity;
+  s.sunCosHalfAngle = float(std::cos(0.5 * double(p.sunAngle) * 3.14159265358979 / 180.0));
+  s.surfaceOffset = 1e-5 * worldDiagonal;
+  return s;
+}
+
 /// The nearest opaque surface along a ray (an iso-surface or a mesh), as the back end finds it:
 /// world distance and normal (facing the ray's origin), and its diffuse colour.
 struct PathSurface {

@@ -61,9 +61,8 @@ struct Renderer::Impl {
   bool hasDomain = false; ///< primary rays see only the inside of `domain` (world)
   box3d domain;
   std::unique_ptr<DeviceRenderer> device; ///< set where passes run on a device back end
-  /// The path tracer's medium: the volume's layers and a majorant per region.
+  /// The path tracer's medium: the volume's layers (their majorants are the volume's).
   std::vector<MediumLayer> mediumLayers;
-  std::vector<float> majorants;
 
   Impl(const Model& m, const DatasetInfo& d)
       : model(m), dataset(checkedDataset(m, d)), volume(m, dataset), surfaces(m, dataset) {}
@@ -79,46 +78,20 @@ struct Renderer::Impl {
     ps.jitter = frame.jitter && s.debug == DebugView::None;
     ps.pixelJitter = frame.samplesPerPixel > 1 && ps.jitter;
     ps.march = MarchSettings::of(s, options, frame.rate);
-    ps.path = pathSettings();
+    ps.path = pathSettingsOf(s.pathTracing, dataset.worldDiagonal);
     return ps;
   }
 
-  /// The path tracer's medium for the volume's current layers: per region, the largest
-  /// extinction its value ranges reach through every layer's table, summed.
+  /// The path tracer's medium for the volume's current layers, with their majorants.
   void updateMedium() {
     mediumLayers.clear();
     for (const LayerTable& layer : volume.layers())
       mediumLayers.push_back({layer.view, layer.t});
-    const float perLog2 = float(std::log(2.0)) / dataset.referenceWidth;
-    majorants.assign(model.regions.regions.size(), 0.f);
-    const std::vector<uint8_t>& visible = volume.visible();
-    tbb::parallel_for(size_t(0), majorants.size(), [&](size_t i) {
-      if (i < visible.size() && !visible[i]) return;
-      float sum = 0.f;
-      for (const LayerTable& layer : volume.layers())
-        sum += tableMaxExtinction(layer.t, model.regions.valueRanges[size_t(layer.field)][i], perLog2);
-      majorants[i] = sum;
-    });
+    volume.updateMajorants();
   }
 
   MediumView medium() const {
-    return {mediumLayers.data(), int(mediumLayers.size()), majorants.data(),
-            float(std::log(2.0)) / dataset.referenceWidth};
-  }
-
-  PathSettings pathSettings() const {
-    const PathTracing& p = scene.pathTracing;
-    PathSettings s;
-    s.albedo = p.albedo;
-    s.anisotropy = p.anisotropy;
-    s.emission = p.emission;
-    s.bounces = p.bounces;
-    s.environment = p.environment;
-    s.towardsSun = -normalize(vec3d(p.sunDirection));
-    s.sunIntensity = p.sunIntensity;
-    s.sunCosHalfAngle = float(std::cos(0.5 * double(p.sunAngle) * M_PI / 180.0));
-    s.surfaceOffset = 1e-5 * dataset.worldDiagonal;
-    return s;
+    return {mediumLayers.data(), int(mediumLayers.size()), volume.majorants().data(), volume.extinctionPerLog2()};
   }
 
   /// One path-traced sample of pixel (x, y): premultiplied radiance and whether the path met the
@@ -446,7 +419,7 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     if (s.integration.integrator == Integrator::PathTrace) im.updateMedium();
     u.volumeSeconds = t.seconds();
   }
-  if (s.shading == Shading::Smooth) {
+  if (s.shading == Shading::Smooth && s.integration.integrator == Integrator::March) {
     Timer t;
     if (im.volume.attachGradients()) u.volumeSeconds += t.seconds();
   }

@@ -1,5 +1,7 @@
 #include "volume_marcher.h"
 
+#include "path_trace.h"
+
 #include "exabricks/amr/basis_batch.h"
 #include "exabricks/amr/gradients.h"
 #include "exabricks/core/error.h"
@@ -344,6 +346,20 @@ void VolumeMarcher::update(const std::vector<VolumeLayer>& layers, const std::ve
   if (!traversal_ || traversal_->kind() != kind) traversal_ = std::make_unique<RegionTraversal>(model_, kind);
   traversal_->setVisible(visible_);
   if (in.reconstruction == Reconstruction::CellLocation && !locator_) locator_ = std::make_unique<CellLocator>(model_);
+}
+
+float VolumeMarcher::extinctionPerLog2() const { return float(std::log(2.0)) / referenceWidth_; }
+
+void VolumeMarcher::updateMajorants() {
+  const float perLog2 = extinctionPerLog2();
+  majorants_.assign(model_.regions.regions.size(), 0.f);
+  tbb::parallel_for(size_t(0), majorants_.size(), [&](size_t i) {
+    if (i < visible_.size() && !visible_[i]) return;
+    float sum = 0.f;
+    for (const LayerTable& layer : layers_)
+      sum += tableMaxExtinction(layer.t, model_.regions.valueRanges[size_t(layer.field)][i], perLog2);
+    majorants_[i] = sum;
+  });
 }
 
 bool VolumeMarcher::attachGradients() {

@@ -53,6 +53,13 @@ public:
   const std::vector<LayerTable>& layers() const { return layers_; }
   const RegionTraversal* traversal() const { return traversal_.get(); }
   const std::vector<uint8_t>& visible() const { return visible_; }
+  /// The path tracer's majorants: per region, the largest extinction (per lattice unit) its
+  /// value ranges reach through every layer's table, summed (0 for hidden regions). Rebuilt by
+  /// updateMajorants from the current tables.
+  void updateMajorants();
+  const std::vector<float>& majorants() const { return majorants_; }
+  /// Extinction per lattice unit of a table entry's -log2 transmittance (ln 2 / reference width).
+  float extinctionPerLog2() const;
 
   /// Marches the visible regions along the lattice ray within [tmin, tmax] with sample offset
   /// rho (in steps), compositing front to back into acc (premultiplied). OpacityOnly skips colour
@@ -71,6 +78,7 @@ private:
   /// Smooth shading's gradient fields (cellGradients) per model field, built when first needed.
   std::map<int, std::array<std::vector<float>, 3>> gradientFields_;
   std::vector<uint8_t> visible_;
+  std::vector<float> majorants_;
   std::unique_ptr<RegionTraversal> traversal_;
   std::unique_ptr<CellLocator> locator_; ///< only for Reconstruction::CellLocation
   float referenceWidth_ = 1.f;           ///< opacity reference (dataset's finest cell width), lattice units

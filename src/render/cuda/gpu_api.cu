@@ -36,7 +36,7 @@ int useDevice() {
 // 64 threads a block and at least 8 blocks an SM: at most 128 registers a thread; 10 blocks (94
 // registers, no spills) for the common one-layer smooth volume. Measured on an H100 and an H200,
 // fewer registers with spills were slower or no faster.
-template <bool Surfaces, bool SmoothOne>
+template <bool Surfaces, bool SmoothOne, bool Path = false>
 __global__ void __launch_bounds__(64, (SmoothOne && !Surfaces) ? 10 : 8)
     traceKernel(int tilesX, int tileBegin, int tileEnd, int tileStride, vec4f* colors, PassCounts* counts) {
   const TraceView& v = *reinterpret_cast<const TraceView*>(traceViewBytes);
@@ -50,7 +50,8 @@ __global__ void __launch_bounds__(64, (SmoothOne && !Surfaces) ? 10 : 8)
   __syncthreads();
   if (x < v.width && y < v.height && tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) {
     TraceCounts c;
-    colors[size_t(y) * size_t(v.width) + size_t(x)] = traceSample<Surfaces, SmoothOne>(v, x, y, c);
+    colors[size_t(y) * size_t(v.width) + size_t(x)] =
+        Path ? tracePathSample<Surfaces>(v, x, y, c) : traceSample<Surfaces, SmoothOne>(v, x, y, c);
     atomicAdd(&block[0], 1ull);
     atomicAdd(&block[1], (unsigned long long)c.samples);
     if (c.isoSamples) atomicAdd(&block[2], (unsigned long long)c.isoSamples);
@@ -145,7 +146,11 @@ void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, in
   check(cudaEventCreate(&stop), "timing the pass");
   cudaEventRecord(start);
   const bool surfaces = view.iso || view.meshes, smooth = smoothOneLayer(view);
-  if (surfaces && smooth)
+  if (view.pathTrace && surfaces)
+    traceKernel<true, false, true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+  else if (view.pathTrace)
+    traceKernel<false, false, true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
+  else if (surfaces && smooth)
     traceKernel<true, true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
   else if (surfaces)
     traceKernel<true, false><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
