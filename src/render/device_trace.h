@@ -224,75 +224,95 @@ EXA_HOST_DEVICE inline float traceOcclusion(const TraceView& v, const vec3d& pos
   return v.aoRays > 0 ? open / float(v.aoRays) : 1.f;
 }
 
+/// The camera ray of pixel (x, y) for pass v.frameIndex: clipped, inside the domain, up to the
+/// depth limit; rho is the sample offset along it.
+EXA_HOST_DEVICE inline DualRay cameraRay(const TraceView& v, int x, int y, PixelRandom& rng, float& rho) {
+  vec3d orgW, dirW;
+  primaryRay(v.camera, x, y, v.width, v.height, v.aspect, v.pixelJitter, v.jitter, rng, rho, orgW, dirW);
+  const ClipView clip{v.planes, v.planeCount, v.clipBox};
+  DualRay dr = makeDualRay(v.world, orgW, dirW, &clip);
+  if (v.hasDomain) restrictToBox(dr, v.domain);
+  if (v.depthLimit)
+    applyDepthLimit(dr, v.depthLimit[size_t(y) * size_t(v.width) + size_t(x)], v.depthLimitPlanar, v.forward);
+  return dr;
+}
+
+/// The nearest surface along a ray: a mesh (within the clip interval, or with meshes unclipped
+/// the domain's), then an iso-surface in front of it.
+struct DeviceSurfaceHit {
+  double distance = 0.0; ///< world
+  vec3f normal{0.f};     ///< world, facing the ray's origin
+  bool iso = false;
+  int which = 0; ///< mesh, or iso-value
+};
+
+EXA_HOST_DEVICE inline bool nearestSurface(const TraceView& v, const DualRay& dr, DeviceSurfaceHit& h,
+                                           uint32_t& isoSamples) {
+  bool haveHit = false;
+  if (v.meshes) {
+    const double s0 = v.clipMeshes ? dr.sMin : dr.domainMin, s1 = v.clipMeshes ? dr.sMax : dr.domainMax;
+    TriangleHit th;
+    if (s1 >= s0 &&
+        intersectTriangles(v.meshBvh, vec3f(dr.orgW), vec3f(dr.dirW), float(std::max(s0, 0.0)),
+                           std::isinf(s1) ? std::numeric_limits<float>::infinity() : float(s1), false, th)) {
+      haveHit = true;
+      h.distance = th.t;
+      h.which = th.mesh;
+      h.normal = th.normal;
+    }
+  }
+  if (v.iso && !clippedAway(dr)) {
+    Ray lr = dr.lattice;
+    if (haveHit) lr.tmax = std::min(lr.tmax, float(h.distance * dr.kappa));
+    float tHit = 0.f;
+    uint32_t region = 0;
+    int index = 0;
+    if (traceIso(v, lr, tHit, region, index, isoSamples)) {
+      haveHit = h.iso = true;
+      h.distance = double(tHit) / dr.kappa;
+      h.which = index;
+      h.normal = isoNormal(v.isoView, region, lr.org + lr.dir * tHit, dr.dirW, v.invScale);
+    }
+  }
+  return haveHit;
+}
+
+/// A surface's own colour at `position` (world): its mesh's, its iso-value's, or the iso colour
+/// field's through its map.
+EXA_HOST_DEVICE inline vec3f surfaceColor(const TraceView& v, const DeviceSurfaceHit& h, const vec3d& position) {
+  if (!h.iso) return v.meshColors[h.which];
+  vec3f base = v.isoColorCount > 0 ? v.isoColors[h.which % v.isoColorCount] : defaultIsoColor(h.which);
+  float value;
+  if (v.isoColored && sampleField(v.isoColorView, vec3f(v.world.toLattice(position)), value))
+    base = tfLookup(v.isoColorTf, value).rgb();
+  return base;
+}
+
 /// One sample of pixel (x, y) for pass v.frameIndex: premultiplied colour. `Surfaces`: the scene
 /// may have iso-surfaces (false compiles the volume alone, which needs fewer registers on a GPU).
 template <bool Surfaces, bool SmoothOne = false>
 EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, TraceCounts& c) {
   PixelRandom rng(x, y, v.frameIndex, v.seed);
   float rho;
-  vec3d orgW, dirW;
-  primaryRay(v.camera, x, y, v.width, v.height, v.aspect, v.pixelJitter, v.jitter, rng, rho, orgW, dirW);
-  const ClipView clip{v.planes, v.planeCount, v.clipBox};
-  DualRay dr = makeDualRay(v.world, orgW, dirW, v.clipping ? &clip : nullptr);
-  if (v.hasDomain) restrictToBox(dr, v.domain);
-  if (v.depthLimit)
-    applyDepthLimit(dr, v.depthLimit[size_t(y) * size_t(v.width) + size_t(x)], v.depthLimitPlanar, v.forward);
+  const DualRay dr = cameraRay(v, x, y, rng, rho);
   const vec3f viewW = vec3f(dr.dirW);
   const vec3f light = v.headlight ? viewW : v.lightWorld;
   const vec3f halfVector = normalize(light + viewW);
 
   vec4f acc;
-  // The nearest surface: a mesh (within the clip interval, or with meshes unclipped the domain's),
-  // then an iso-surface in front of it.
-  bool haveHit = false, isoHit = false;
-  double distance = 0.0;
-  int which = 0;
-  vec3f normal(0.f);
-  if constexpr (Surfaces) {
-    if (v.meshes) {
-      const double s0 = v.clipMeshes ? dr.sMin : dr.domainMin, s1 = v.clipMeshes ? dr.sMax : dr.domainMax;
-      TriangleHit th;
-      if (s1 >= s0 &&
-          intersectTriangles(v.meshBvh, vec3f(dr.orgW), vec3f(dr.dirW), float(std::max(s0, 0.0)),
-                             std::isinf(s1) ? std::numeric_limits<float>::infinity() : float(s1), false, th)) {
-        haveHit = true;
-        distance = th.t;
-        which = th.mesh;
-        normal = th.normal;
-      }
-    }
-    if (v.iso && !clippedAway(dr)) {
-      Ray lr = dr.lattice;
-      if (haveHit) lr.tmax = std::min(lr.tmax, float(distance * dr.kappa));
-      float tHit = 0.f;
-      uint32_t region = 0;
-      int index = 0;
-      if (traceIso(v, lr, tHit, region, index, c.isoSamples)) {
-        haveHit = isoHit = true;
-        distance = double(tHit) / dr.kappa;
-        which = index;
-        normal = isoNormal(v.isoView, region, lr.org + lr.dir * tHit, dr.dirW, v.invScale);
-      }
-    }
-  }
+  DeviceSurfaceHit hit;
+  bool haveHit = false;
+  if constexpr (Surfaces) haveHit = nearestSurface(v, dr, hit, c.isoSamples);
   Ray volumeRay = dr.lattice;
-  if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(distance * dr.kappa));
+  if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(hit.distance * dr.kappa));
   if (v.volume && !clippedAway(dr)) traceVolume<false, SmoothOne>(v, volumeRay, rho, light, halfVector, acc, c.samples);
   if constexpr (!Surfaces) return acc;
   if (haveHit && acc.w < 1.f) {
     ++c.surfaceHits;
-    const vec3d position = dr.orgW + dr.dirW * distance;
-    vec3f base;
-    if (!isoHit) {
-      base = v.meshColors[which];
-    } else {
-      base = v.isoColorCount > 0 ? v.isoColors[which % v.isoColorCount] : defaultIsoColor(which);
-      float value;
-      if (v.isoColored && sampleField(v.isoColorView, vec3f(v.world.toLattice(position)), value))
-        base = tfLookup(v.isoColorTf, value).rgb();
-    }
-    const float ao = v.aoRays > 0 ? traceOcclusion(v, position, normal, rng, c) : 1.f;
-    compositeOpaqueBehind(acc, shadeSurface(base, normal, light, halfVector, ao, v.terms));
+    const vec3d position = dr.orgW + dr.dirW * hit.distance;
+    const vec3f base = surfaceColor(v, hit, position);
+    const float ao = v.aoRays > 0 ? traceOcclusion(v, position, hit.normal, rng, c) : 1.f;
+    compositeOpaqueBehind(acc, shadeSurface(base, hit.normal, light, halfVector, ao, v.terms));
   }
   return acc;
 }
@@ -303,13 +323,8 @@ template <bool Surfaces>
 EXA_HOST_DEVICE inline vec4f tracePathSample(const TraceView& v, int x, int y, TraceCounts& c) {
   PixelRandom rng(x, y, v.frameIndex, v.seed);
   float rho;
-  vec3d orgW, dirW;
-  primaryRay(v.camera, x, y, v.width, v.height, v.aspect, v.pixelJitter, v.jitter, rng, rho, orgW, dirW);
+  const DualRay dr = cameraRay(v, x, y, rng, rho);
   const ClipView clip{v.planes, v.planeCount, v.clipBox};
-  DualRay dr = makeDualRay(v.world, orgW, dirW, &clip);
-  if (v.hasDomain) restrictToBox(dr, v.domain);
-  if (v.depthLimit)
-    applyDepthLimit(dr, v.depthLimit[size_t(y) * size_t(v.width) + size_t(x)], v.depthLimitPlanar, v.forward);
   const MediumView medium{v.mediumLayers, v.volume ? v.layerCount : 0, v.majorants, v.extinctionPerLog2};
   auto traverse = [&](const Ray& ray, auto&& emit) {
     if (v.volume) walkRegionTree(v.volumeTree, ray, emit);
@@ -318,37 +333,12 @@ EXA_HOST_DEVICE inline vec4f tracePathSample(const TraceView& v, int x, int y, T
     if constexpr (!Surfaces) {
       return false;
     } else {
-      bool hit = false;
-      if (v.meshes) {
-        const double s0 = v.clipMeshes ? r.sMin : r.domainMin, s1 = v.clipMeshes ? r.sMax : r.domainMax;
-        TriangleHit th;
-        if (s1 >= s0 &&
-            intersectTriangles(v.meshBvh, vec3f(r.orgW), vec3f(r.dirW), float(std::max(s0, 0.0)),
-                               std::isinf(s1) ? std::numeric_limits<float>::infinity() : float(s1), false, th)) {
-          hit = true;
-          out.distance = th.t;
-          out.normal = vec3d(th.normal);
-          out.color = v.meshColors[th.mesh];
-        }
-      }
-      if (v.iso && !clippedAway(r)) {
-        Ray lr = r.lattice;
-        if (hit) lr.tmax = std::min(lr.tmax, float(out.distance * r.kappa));
-        float t = 0.f;
-        uint32_t region = 0;
-        int which = 0;
-        if (traceIso(v, lr, t, region, which, c.isoSamples)) {
-          hit = true;
-          out.distance = double(t) / r.kappa;
-          out.normal = vec3d(isoNormal(v.isoView, region, lr.org + lr.dir * t, r.dirW, v.invScale));
-          out.color = v.isoColorCount > 0 ? v.isoColors[which % v.isoColorCount] : defaultIsoColor(which);
-          float value;
-          if (v.isoColored &&
-              sampleField(v.isoColorView, vec3f(v.world.toLattice(r.orgW + r.dirW * out.distance)), value))
-            out.color = tfLookup(v.isoColorTf, value).rgb();
-        }
-      }
-      return hit;
+      DeviceSurfaceHit h;
+      if (!nearestSurface(v, r, h, c.isoSamples)) return false;
+      out.distance = h.distance;
+      out.normal = vec3d(h.normal);
+      out.color = surfaceColor(v, h, r.orgW + r.dirW * h.distance);
+      return true;
     }
   };
   uint64_t samples = 0;

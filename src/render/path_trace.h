@@ -137,57 +137,60 @@ EXA_HOST_DEVICE inline vec3d sampleHenyeyGreenstein(const vec3d& dir, float g, P
   return aroundAxis(dir, fmin(1.0, fmax(-1.0, double(cosTheta))), phi);
 }
 
-/// Delta tracking along a lattice ray (unit direction): the first real collision's t, region
-/// and colour; false when the ray leaves the medium. `samples` counts the tentative collisions.
+/// Tentative collisions along a lattice ray (unit direction) within [tmin, tmax]: exponential
+/// steps against each region's majorant, and at each `visit(t, ratio, color)` with the ratio of
+/// the extinction there to the majorant and the medium's colour, until it returns false.
+/// `samples` counts them.
+template <typename Traverse, typename Visit>
+EXA_HOST_DEVICE inline void tentativeCollisions(const MediumView& m, Traverse&& traverse, const Ray& ray,
+                                                PixelRandom& rng, uint64_t& samples, Visit&& visit) {
+  traverse(ray, [&](const Segment& seg) {
+    const float majorant = m.majorant[seg.region];
+    if (!(majorant > 0.f)) return true;
+    float t = fmaxf(seg.t0, ray.tmin);
+    const float end = fminf(seg.t1, ray.tmax);
+    for (;;) {
+      t -= logf(1.f - rng.next()) / majorant;
+      if (t >= end) return true;
+      ++samples;
+      vec3f c;
+      const float ratio = fminf(1.f, mediumAt(m, seg.region, ray.org + ray.dir * t, c) / majorant);
+      if (!visit(t, ratio, c)) return false;
+    }
+  });
+}
+
+/// Delta tracking: the first real collision's t and colour; false when the ray leaves the medium.
 template <typename Traverse>
 EXA_HOST_DEVICE inline bool freeFlight(const MediumView& m, Traverse&& traverse, const Ray& ray, PixelRandom& rng,
                                        float& tHit, vec3f& color, uint64_t& samples) {
   bool hit = false;
-  traverse(ray, [&](const Segment& seg) {
-    const float majorant = m.majorant[seg.region];
-    if (!(majorant > 0.f)) return true;
-    float t = seg.t0;
-    for (;;) {
-      t -= logf(1.f - rng.next()) / majorant;
-      if (t >= seg.t1) return true;
-      ++samples;
-      vec3f c;
-      const float s = mediumAt(m, seg.region, ray.org + ray.dir * t, c);
-      if (rng.next() * majorant < s) {
-        tHit = t;
-        color = c;
-        hit = true;
-        return false;
-      }
-    }
+  tentativeCollisions(m, traverse, ray, rng, samples, [&](float t, float ratio, const vec3f& c) {
+    if (!(rng.next() < ratio)) return true;
+    tHit = t;
+    color = c;
+    hit = true;
+    return false;
   });
   return hit;
 }
 
-/// Ratio tracking: an unbiased estimate of the transmittance along a lattice ray, with Russian
-/// roulette once it falls below a tenth.
+/// Ratio tracking: an unbiased estimate of the transmittance, with Russian roulette once it
+/// falls below a tenth.
 template <typename Traverse>
 EXA_HOST_DEVICE inline float transmittance(const MediumView& m, Traverse&& traverse, const Ray& ray, PixelRandom& rng,
                                            uint64_t& samples) {
   float T = 1.f;
-  traverse(ray, [&](const Segment& seg) {
-    const float majorant = m.majorant[seg.region];
-    if (!(majorant > 0.f)) return true;
-    float t = seg.t0;
-    for (;;) {
-      t -= logf(1.f - rng.next()) / majorant;
-      if (t >= seg.t1) return true;
-      ++samples;
-      vec3f c;
-      T *= 1.f - fminf(1.f, mediumAt(m, seg.region, ray.org + ray.dir * t, c) / majorant);
-      if (T < 0.1f) {
-        if (rng.next() < 0.5f) {
-          T = 0.f;
-          return false;
-        }
-        T *= 2.f;
+  tentativeCollisions(m, traverse, ray, rng, samples, [&](float, float ratio, const vec3f&) {
+    T *= 1.f - ratio;
+    if (T < 0.1f) {
+      if (rng.next() < 0.5f) {
+        T = 0.f;
+        return false;
       }
+      T *= 2.f;
     }
+    return true;
   });
   return T;
 }

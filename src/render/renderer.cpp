@@ -23,6 +23,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <mutex>
 
 namespace exa {
 namespace {
@@ -82,6 +83,21 @@ struct Renderer::Impl {
     return ps;
   }
 
+  /// The camera ray of pixel (x, y): clipped (where `clip`), inside the domain, up to the depth
+  /// limit; rho is the sample offset along it.
+  DualRay cameraRay(int x, int y, const Frame& frame, const PassSetup& ps, bool clip, PixelRandom& rng,
+                    float& rho) const {
+    vec3d orgW, dirW;
+    primaryRay(frame.camera, x, y, frame.width, frame.height, ps.aspect, ps.pixelJitter, ps.jitter, rng, rho, orgW,
+               dirW);
+    DualRay dr = makeDualRay(model.world, orgW, dirW, clip ? &scene.clip : nullptr);
+    if (hasDomain) restrictToBox(dr, domain);
+    if (frame.depthLimit)
+      applyDepthLimit(dr, frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)], frame.depthLimitPlanar,
+                      ps.forward);
+    return dr;
+  }
+
   /// The path tracer's medium for the volume's current layers, with their majorants.
   void updateMedium() {
     mediumLayers.clear();
@@ -99,15 +115,8 @@ struct Renderer::Impl {
   vec4f tracePathPixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& c, uint64_t& raySamples) const {
     PixelRandom rng(x, y, frame.frameIndex, frame.seed);
     float rho;
-    vec3d orgW, dirW;
-    primaryRay(frame.camera, x, y, frame.width, frame.height, ps.aspect, ps.pixelJitter, ps.jitter, rng, rho, orgW,
-               dirW);
+    const DualRay dr = cameraRay(x, y, frame, ps, true, rng, rho);
     const ClipView clip = clipViewOf(scene.clip);
-    DualRay dr = makeDualRay(model.world, orgW, dirW, &clip);
-    if (hasDomain) restrictToBox(dr, domain);
-    if (frame.depthLimit)
-      applyDepthLimit(dr, frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)], frame.depthLimitPlanar,
-                      ps.forward);
     ++c.rays;
     raySamples = 0;
     const bool inMedium = scene.volume && !mediumLayers.empty();
@@ -133,17 +142,9 @@ struct Renderer::Impl {
   vec4f tracePixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& c, uint64_t& raySamples) const {
     PixelRandom rng(x, y, frame.frameIndex, frame.seed);
     float rho;
-    vec3d orgW, dirW;
-    primaryRay(frame.camera, x, y, frame.width, frame.height, ps.aspect, ps.pixelJitter, ps.jitter, rng, rho, orgW,
-               dirW);
     // March in lattice space with a unit-length lattice direction: t is in finest-level lattice
     // units.
-    const bool clip = ps.clipping && scene.debug == DebugView::None;
-    DualRay dr = makeDualRay(model.world, orgW, dirW, clip ? &scene.clip : nullptr);
-    if (hasDomain) restrictToBox(dr, domain);
-    if (frame.depthLimit)
-      applyDepthLimit(dr, frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)], frame.depthLimitPlanar,
-                      ps.forward);
+    const DualRay dr = cameraRay(x, y, frame, ps, ps.clipping && scene.debug == DebugView::None, rng, rho);
     const Ray& ray = dr.lattice;
     const vec3f viewW = vec3f(dr.dirW);
     RayLight light;
@@ -234,7 +235,13 @@ Device resolveDevice(const std::string& name) {
   if (name == "cuda" || name == "auto") {
     const CudaStatus s = gpu::status();
     if (s.problem.empty()) return Device::Cuda;
-    if (name == "auto") return Device::Cpu;
+    if (name == "auto") {
+      // A build with the GPU back end that cannot use it says so, once per process.
+      static std::once_flag said;
+      if (s.built)
+        std::call_once(said, [&] { logNote(strCat("device auto: rendering on the CPU, since ", s.problem)); });
+      return Device::Cpu;
+    }
     fail("the cuda device cannot be used: ", s.problem);
   }
   fail("unknown device '", name, "' (cpu, cuda, auto or portable)");
