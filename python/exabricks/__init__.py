@@ -464,7 +464,7 @@ class TransferFunction:
             cm = [tuple(p) for p in cm["points"]]
         return cls(colormap=cm, opacity=[tuple(p) for p in d["opacity"]] if "opacity" in d else None,
                    range=tuple(d["range"]) if d.get("range") is not None else None, log=bool(d.get("log", False)),
-                   opacity_scale=d.get("opacity_scale", 1.0))
+                   opacity_scale=d.get("opacity_scale", "auto"))
 
     @classmethod
     def from_yt(cls, tf, log=None, points=None, camera=None, dataset=None):

@@ -334,6 +334,8 @@ def test_rendering_releases_the_gil_and_ctrl_c_cancels():
 def test_transfer_functions_cameras_and_files(tmp_path):
     tf = eb.TransferFunction("inferno", opacity=[(0, 0), (1, 0.5)], range=(0.1, 10), log=True, opacity_scale=0.5)
     assert eb.TransferFunction.from_dict(tf.to_dict()).to_dict() == tf.to_dict()
+    # A dictionary without an opacity scale means the library's default, "auto", as a file does.
+    assert eb.TransferFunction.from_dict({"colormap": "magma"}).opacity_scale == "auto"
     (tmp_path / "preset.json").write_text(json.dumps([{"Name": "two", "RGBPoints": [0, 0, 0, 1, 5, 1, 0, 0]}]))
     p = eb.TransferFunction.from_file(tmp_path / "preset.json")
     assert p.range is None and p.opacity_scale == "auto"  # rescaled to the data, as ParaView applies it
