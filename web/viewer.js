@@ -1154,8 +1154,11 @@ function syncSettingBoxes() {
     box.checked = !!settingValue(box.dataset.setting);
   for (const input of document.querySelectorAll('input[type=number][data-setting], select[data-setting]:not(#shading)')) {
     const v = settingValue(input.dataset.setting);
-    if (v !== undefined) input.value = v;
+    if (v !== undefined) input.value = typeof v === 'number' ? Number(v.toPrecision(6)) : v;
   }
+  // The path tracer's settings show while it is the integrator.
+  const pathTraced = settingValue('integration.integrator') === 'pathtrace';
+  for (const row of document.querySelectorAll('.path-only')) row.hidden = !pathTraced;
 }
 
 function setupSettingBoxes() {
@@ -1176,12 +1179,14 @@ function setupSettingBoxes() {
       if (setting.max !== undefined) input.max = setting.max;
     }
     input.addEventListener('change', () => {
+      if (input.type === 'number' && input.value.trim() === '') return; // being typed: nothing to set yet
       const value = input.type === 'number' ? Number(input.value) : input.value;
       if (input.type === 'number' && !input.checkValidity()) {
         showMessage(`${setting.key} must be in [${input.min}, ${input.max}]`);
         return;
       }
       setSettingValue(input.dataset.setting, value);
+      syncSettingBoxes();
       requestRender(false);
     });
   }

@@ -328,3 +328,37 @@ def test_the_legend_toggles_draw_the_legends_as_the_command_line_does(start_view
         browser.find_element(By.CSS_SELECTOR, "input[data-setting='%s']" % key).click()
     wait_refined(browser, shown["request"])
     assert np.abs(canvas_pixels(browser).astype(int) - plain.astype(int)).max() <= 2
+
+
+def test_path_tracing_from_the_page_equals_the_command_line(start_viewer, cli, browser, tmp_path, artifacts):
+    """Choosing path tracing in the panel shows its settings (hidden while marching), refines the
+    path-traced picture, and the saved scene rendered by the command line gives the snapshot's
+    bytes; an albedo outside [0, 1] is refused in the banner and leaves the scene as it was."""
+    v = start_viewer()
+    browser.get(v.url + "&size=%d" % SIZE)
+    first = wait_refined(browser)
+    marched = canvas_pixels(browser)
+    albedo = browser.find_element(By.CSS_SELECTOR, "input[data-setting='pathtrace.albedo']")
+    assert not albedo.is_displayed()
+    Select(browser.find_element(By.ID, "integrator")).select_by_value("pathtrace")
+    traced = wait_refined(browser, first["request"])
+    assert albedo.is_displayed() and float(albedo.get_attribute("value")) == pytest.approx(0.8)
+    assert np.abs(canvas_pixels(browser).astype(int) - marched.astype(int)).mean() > 0.5
+    browser.save_screenshot(str(artifacts / "viewer-pathtrace.png"))
+    sun = browser.find_element(By.CSS_SELECTOR, "input[data-setting='pathtrace.sun_intensity']")
+    sun.clear()
+    sun.send_keys("3" + Keys.ENTER)
+    wait_refined(browser, traced["request"])
+    saved = json.loads(v.request("GET", "/api/scene")[1])
+    assert saved["integration"]["integrator"] == "pathtrace" and saved["pathtrace"]["sun_intensity"] == 3
+    scene = tmp_path / "traced.json"
+    scene.write_text(json.dumps(saved))
+    out = tmp_path / "traced.png"
+    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
+    status, png, _ = v.request("GET", "/api/snapshot.png")
+    assert status == 200 and png == out.read_bytes()
+    albedo.clear()
+    albedo.send_keys("2" + Keys.ENTER)
+    banner = wait_for(browser, lambda: browser.find_element(By.ID, "banner").is_displayed(), 10, "the banner")
+    assert banner and "pathtrace.albedo" in browser.find_element(By.ID, "banner").text
+    assert json.loads(v.request("GET", "/api/scene")[1])["pathtrace"]["albedo"] == pytest.approx(0.8)
