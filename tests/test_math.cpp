@@ -1,6 +1,10 @@
+#include "exabricks/core/log.h"
 #include "exabricks/core/math.h"
 
 #include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
 
 using namespace exa;
 
@@ -34,4 +38,35 @@ TEST(Math, RangeExtend) {
   r.extend(-1.f);
   EXPECT_EQ(r.lower, -1.f);
   EXPECT_EQ(r.upper, 2.f);
+}
+
+TEST(Log, LongWorkSaysItsProgressWhereStderrIsNoTerminal) {
+  // Captured stderr is a file: after 5 s a line with the fraction, the time and the time left,
+  // even though the work did not advance meanwhile; one line when it ends. Quiet says nothing.
+  testing::internal::CaptureStderr();
+  {
+    Progress p("waiting", 4);
+    p.advance(1);
+    std::this_thread::sleep_for(std::chrono::milliseconds(6500));
+    p.advance(1);
+  }
+  const std::string said = testing::internal::GetCapturedStderr();
+  EXPECT_NE(said.find("exabricks: waiting: 25.0 % after "), std::string::npos) << said;
+  EXPECT_NE(said.find("s left"), std::string::npos) << said;
+  EXPECT_NE(said.find("exabricks: waiting: done in "), std::string::npos) << said;
+  // Short work says nothing.
+  testing::internal::CaptureStderr();
+  {
+    Progress p("quick", 2);
+    p.advance(2);
+  }
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  setLogLevel(LogLevel::Quiet);
+  testing::internal::CaptureStderr();
+  {
+    Progress p("silent", 2);
+    std::this_thread::sleep_for(std::chrono::milliseconds(5500));
+  }
+  EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+  setLogLevel(LogLevel::Warning);
 }

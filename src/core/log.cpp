@@ -1,8 +1,11 @@
 #include "exabricks/core/log.h"
 
 #include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <mutex>
+#include <thread>
 #include <unistd.h>
 
 namespace exa {
@@ -36,16 +39,50 @@ struct Progress::Impl {
   uint64_t total;
   std::atomic<uint64_t> done{0};
   bool enabled;
+  bool terminal; ///< redraw one line; else append lines now and then
   std::atomic<bool> finished{false};
   std::atomic<bool> drawn{false};
   Timer timer;
   std::atomic<int64_t> lastDrawMs{0};
+  // Elsewhere than on a terminal, a thread writes the lines, so that a long stage between two
+  // advances still says that it runs.
+  std::thread heartbeat;
+  std::mutex wake;
+  std::condition_variable stop;
+
+  /// Draws the progress when it is time to (the terminal at most five times a second).
+  void draw() {
+    const int64_t ms = int64_t(timer.seconds() * 1000.0);
+    int64_t last = lastDrawMs.load();
+    if (!terminal && (ms < 5000 || (drawn && ms - last < 10000))) return;
+    if (ms - last < 200 || !lastDrawMs.compare_exchange_strong(last, ms)) return;
+    std::lock_guard<std::mutex> lock(gMutex);
+    if (finished) return;
+    drawn = true;
+    const double fraction = total ? double(done) / double(total) : 1.0;
+    const double seconds = timer.seconds();
+    if (terminal)
+      std::fprintf(stderr, "\rexabricks: %s %5.1f%% (%.1f s)", label.c_str(), 100.0 * fraction, seconds);
+    else if (fraction > 0.0)
+      std::fprintf(stderr, "exabricks: %s: %.1f %% after %.0f s, about %.0f s left\n", label.c_str(), 100.0 * fraction,
+                   seconds, seconds * (1.0 - fraction) / fraction);
+    else
+      std::fprintf(stderr, "exabricks: %s: running for %.0f s\n", label.c_str(), seconds);
+    std::fflush(stderr);
+  }
 };
 
 Progress::Progress(std::string label, uint64_t total) : impl_(new Impl) {
   impl_->label = std::move(label);
   impl_->total = total;
-  impl_->enabled = gLevel >= int(LogLevel::Warning) && isatty(STDERR_FILENO);
+  impl_->terminal = isatty(STDERR_FILENO);
+  impl_->enabled = gLevel >= int(LogLevel::Warning);
+  if (impl_->enabled && !impl_->terminal)
+    impl_->heartbeat = std::thread([im = impl_] {
+      std::unique_lock<std::mutex> lock(im->wake);
+      while (!im->stop.wait_for(lock, std::chrono::seconds(1), [im] { return im->finished.load(); }))
+        im->draw();
+    });
 }
 
 Progress::~Progress() {
@@ -54,24 +91,24 @@ Progress::~Progress() {
 }
 
 void Progress::advance(uint64_t amount) {
-  const uint64_t done = impl_->done += amount;
-  if (!impl_->enabled || impl_->finished) return;
-  const int64_t ms = int64_t(impl_->timer.seconds() * 1000.0);
-  int64_t last = impl_->lastDrawMs.load();
-  if (ms - last < 200 || !impl_->lastDrawMs.compare_exchange_strong(last, ms)) return;
-  std::lock_guard<std::mutex> lock(gMutex);
-  if (impl_->finished) return;
-  impl_->drawn = true;
-  const double pct = impl_->total ? 100.0 * double(done) / double(impl_->total) : 100.0;
-  std::fprintf(stderr, "\rexabricks: %s %5.1f%% (%.1f s)", impl_->label.c_str(), pct, impl_->timer.seconds());
-  std::fflush(stderr);
+  impl_->done += amount;
+  if (!impl_->enabled || impl_->finished || !impl_->terminal) return;
+  impl_->draw();
 }
 
 void Progress::finish() {
   if (!impl_->enabled || impl_->finished.exchange(true)) return;
+  if (impl_->heartbeat.joinable()) {
+    { std::lock_guard<std::mutex> lock(impl_->wake); }
+    impl_->stop.notify_all();
+    impl_->heartbeat.join();
+  }
   std::lock_guard<std::mutex> lock(gMutex);
   if (!impl_->drawn) return;
-  std::fprintf(stderr, "\rexabricks: %s done (%.2f s)        \n", impl_->label.c_str(), impl_->timer.seconds());
+  if (impl_->terminal)
+    std::fprintf(stderr, "\rexabricks: %s done (%.2f s)        \n", impl_->label.c_str(), impl_->timer.seconds());
+  else
+    std::fprintf(stderr, "exabricks: %s: done in %.1f s\n", impl_->label.c_str(), impl_->timer.seconds());
 }
 
 } // namespace exa

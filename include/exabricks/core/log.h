@@ -29,9 +29,10 @@ private:
   std::chrono::steady_clock::time_point start_;
 };
 
-/// A progress line on stderr for long work. It shows only when stderr is a terminal and the
-/// tool is not quiet; updates are thread-safe and rate limited, and nothing is drawn for work
-/// that finishes within a fifth of a second.
+/// Progress of long work on stderr, unless the tool is quiet: on a terminal, one line redrawn
+/// (nothing for work that finishes within a fifth of a second); elsewhere (a log, a pipe, a
+/// batch job), a line with the fraction done, the time taken and the time left once the work has
+/// taken 5 s, then every 10 s, and one when it ends. Updates are thread-safe and rate limited.
 class Progress {
 public:
   Progress(std::string label, uint64_t total);
