@@ -20,7 +20,6 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
-#include <unistd.h>
 
 namespace exa::cli {
 namespace {
@@ -48,11 +47,11 @@ struct RenderReport {
   std::vector<double> partCells, partRss; ///< per process, where several render
 };
 
-/// Renders the frame into the buffer (samplesPerPixel passes, a progress line on a terminal);
+/// Renders the frame into the buffer (samplesPerPixel passes, with its progress: Progress);
 /// with --stats, a warm-up and then --frames timed frames, their median kept.
 void renderTimed(const RenderCmdOptions& o, const Renderer& renderer, const Frame& frame, FrameBuffer& buffer,
                  bool dataParallel, const std::vector<int>& order, RenderReport& report) {
-  const bool showProgress = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
+  const bool showProgress = logLevel() >= LogLevel::Warning;
   auto renderFrame = [&]() {
     buffer.clear();
     const uint64_t share = dataParallel ? 1 : uint64_t(mpi::processes().size);
