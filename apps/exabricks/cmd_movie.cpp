@@ -17,14 +17,20 @@
 
 #include <nlohmann/json.hpp>
 
+#include <tbb/task_group.h>
+
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <mutex>
 #include <sstream>
+#include <thread>
 #include <unistd.h>
 
 namespace exa::cli {
@@ -224,17 +230,36 @@ void planFrameShare(const MovieCmdOptions& o, MoviePlan& p) {
 }
 
 /// Render: this process's frames through the series renderer (the next step loading while one
-/// renders), each with its legends written as a PNG, with a progress line. A process that fails
-/// stops all of them. Returns the frames rendered.
+/// renders), each with its legends written as a PNG, with a progress line. The PNGs are encoded
+/// and written by tasks beside the rendering (as many at once as there are cores), so that a fast
+/// renderer does not wait for the encoder. A process that fails stops all of them. Returns the
+/// frames rendered.
 int renderMovie(const MoviePlan& p, SeriesRenderer& series) {
   const bool showProgress = logLevel() >= LogLevel::Warning;
   const bool tty = isatty(STDERR_FILENO);
   int done = 0;
   Timer loop;
+  tbb::task_group writers;
+  std::atomic<int> writing{0};
+  const int maxWriting = std::max(2, int(std::thread::hardware_concurrency()));
+  std::mutex failedMutex;
+  std::exception_ptr failed;
   auto write = [&](int i, const SeriesStep& step, const Scene& scene, const Frame& frame, Image& image) {
     // The annotation names each frame's own step.
     drawLegends(scene, frame, *step.model, step.info, legendText(p.paths[size_t(step.index)]), image);
-    writePng(framePath(p.framesDir, i), image, scene.keepAlpha, scene.background);
+    while (writing.load() >= maxWriting)
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    ++writing;
+    writers.run([&, path = framePath(p.framesDir, i), picture = std::move(image), keepAlpha = scene.keepAlpha,
+                 background = scene.background] {
+      try {
+        writePng(path, picture, keepAlpha, background);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(failedMutex);
+        if (!failed) failed = std::current_exception();
+      }
+      --writing;
+    });
     ++done;
     if (!showProgress) return;
     const double per = loop.seconds() / done;
@@ -253,10 +278,13 @@ int renderMovie(const MoviePlan& p, SeriesRenderer& series) {
     try {
       series.renderFrames(p.frames, p.doc.scene, p.doc.frame, p.todo, write);
     } catch (...) {
+      writers.wait();
       endLine();
       throw;
     }
+    writers.wait();
     endLine();
+    if (failed) std::rethrow_exception(failed);
   });
   return done;
 }
