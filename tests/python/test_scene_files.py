@@ -221,3 +221,48 @@ def test_legends_render_as_the_command_line_draws_them(cli, dataset_file, tmp_pa
     plain = scene.render()
     assert np.abs(srgb(plain) - srgb(cli_image)).max() > 0.5
     assert json.loads(scene.to_json())["legends"] == {"color_bar": False, "annotation": False, "level_legend": False}
+
+
+# The front ends' controls of scene settings: ParaView's properties and the viewer's inputs, by
+# the vocabulary key they set. Each lets a user choose only values the vocabulary accepts (a
+# control may offer a narrower range, as a slider does).
+PARAVIEW_KEYS = {"SamplingRate": "frame.rate", "AmbientOcclusionRays": "ambient_occlusion.rays",
+                 "SamplesPerPixel": "frame.samples_per_pixel", "Albedo": "pathtrace.albedo",
+                 "Anisotropy": "pathtrace.anisotropy", "Bounces": "pathtrace.bounces", "Emission": "pathtrace.emission",
+                 "SunIntensity": "pathtrace.sun_intensity", "SunAngle": "pathtrace.sun_angle"}
+VIEWER_KEYS = {"ao-rays": "ambient_occlusion.rays", "spp": "frame.samples_per_pixel"}
+
+
+def within_vocabulary(setting, low, high, where):
+    lo, hi = setting["min"], setting.get("max", math.inf)
+    ok_low = low > lo if setting.get("min_exclusive") else low >= lo
+    ok_high = high < hi if setting.get("max_exclusive") else high <= hi
+    assert ok_low and ok_high and low <= high, "%s offers [%s, %s]; %s accepts [%s, %s]" % (
+        where, low, high, setting["key"], lo, hi)
+
+
+def test_front_end_controls_offer_only_what_the_vocabulary_accepts():
+    import xml.etree.ElementTree as ET
+
+    root = pathlib.Path(__file__).resolve().parents[2]
+    vocabulary = {s["key"]: s for s in eb.scene_vocabulary()}
+    xml = ET.parse(root / "paraview" / "plugin" / "ExaBricks.xml")
+    seen = set()
+    for prop in xml.iter():
+        name = prop.get("name")
+        if name not in PARAVIEW_KEYS or prop.tag not in ("IntVectorProperty", "DoubleVectorProperty"):
+            continue
+        domain = next(d for d in prop if d.tag.endswith("RangeDomain"))
+        setting = vocabulary[PARAVIEW_KEYS[name]]
+        low = float(domain.get("min", setting["min"]))
+        high = float(domain.get("max", setting.get("max", math.inf)))
+        within_vocabulary(setting, low, high, "ParaView's %s" % name)
+        default = float(prop.get("default_values"))
+        within_vocabulary(setting, default, default, "ParaView's %s default" % name)
+        seen.add(name)
+    assert seen == set(PARAVIEW_KEYS), set(PARAVIEW_KEYS) - seen
+    html = (root / "web" / "index.html").read_text()
+    for element, key in VIEWER_KEYS.items():
+        tag = html[html.index('id="%s"' % element):].split(">", 1)[0]
+        attrs = dict(part.split("=", 1) for part in tag.replace('"', "").split() if "=" in part)
+        within_vocabulary(vocabulary[key], float(attrs["min"]), float(attrs["max"]), "the viewer's %s" % element)
