@@ -2,7 +2,8 @@
 # The GPU checks in one run: the gpu-labelled tests (the CUDA back end against the CPU on every
 # feature), the device study of `exabricks bench` on an AMReX plotfile and on a generated dataset
 # of 100M cells (full-quality 1024x1024 frames, viewer drafts, orbit frames per second, upload
-# time, GPU memory, all against the same machine's CPU cores), and renders to look at. Results go
+# time, GPU memory, all against the same machine's CPU cores), path tracing on both (samples per
+# pixel per second, the CPU's and GPU's images to compare), and renders to look at. Results go
 # to OUTDIR: gpu_checks.log, the benchmarks' JSON, PNGs.
 #
 #   bench/gpu_checks.sh OUTDIR [BIN] [PLOTFILE_OR_MODEL]
@@ -42,6 +43,12 @@ for d in cpu cuda; do
   "$bin/exabricks" bench "$data" --device "$d" --progressive 8 --size 1060x807 --preview-divisor 1 >>"$log" 2>&1 ||
     status=1
 done
+say "path tracing: $data, 1024x1024, sun and environment, 4 bounces (16 samples per pixel; --stats frame time)"
+pt=(--integrator pathtrace --sun -1,1,-1,3 --environment 0.3,0.35,0.45 --bounces 4 --size 1024x1024 --spp 16 --stats)
+for d in cpu cuda; do
+  "$bin/exabricks" render "$data" --device "$d" "${pt[@]}" --float "$out/pathtrace_$d.pfm" -o "$out/pathtrace_$d.png" \
+    >>"$log" 2>&1 || status=1
+done
 say "generated dataset of $big_cells cells"
 start=$SECONDS
 "$bin/exabricks" generate -s blobs -n "$big_cells" -o /tmp/exabricks-big.cells >>"$log" 2>&1 || status=1
@@ -50,6 +57,8 @@ say "device study: generated dataset"
 "$bin/exabricks" bench /tmp/exabricks-big.cells --device cpu,cuda --size 1024x1024 --frames 3 --orbit 12 --json \
   >"$out/bench_generated.json" 2>>"$log" || status=1
 "$bin/exabricks" render /tmp/exabricks-big.cells --device cuda --size 1024x1024 --stats -o "$out/generated_cuda.png" \
+  >>"$log" 2>&1 || status=1
+"$bin/exabricks" render /tmp/exabricks-big.cells --device cuda "${pt[@]}" -o "$out/generated_pathtrace_cuda.png" \
   >>"$log" 2>&1 || status=1
 
 say "summary"
