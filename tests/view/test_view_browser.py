@@ -72,10 +72,12 @@ def wait_download(driver, folder, suffix, timeout, what, stem="exabricks"):
 
 
 def wait_refined(driver, after_request=0):
+    """The latest frame once refined. Generous: a sanitizer build refines 48 passes of a view the
+    data fills in over a minute."""
     def done():
         h = latest(driver)
         return h if h and h["final"] and h["request"] > after_request else None
-    return wait_for(driver, done, what="a refined frame")
+    return wait_for(driver, done, timeout=240, what="a refined frame")
 
 
 def wait_new_frame(driver, after_sequence):
