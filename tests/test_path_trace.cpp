@@ -34,6 +34,19 @@ Model slab(const std::function<float(float)>& valueAtZ, int split = 32) {
   return buildModel(std::move(s));
 }
 
+/// 32 x 32 x 32 finest cells of one field, each valued f(its centre).
+Model finestCube(const char* field, const std::function<float(const vec3f&)>& f) {
+  CellSet cells;
+  cells.fields.push_back({field, {}});
+  for (int z = 0; z < 32; ++z)
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        cells.cells.push_back({vec3i(x, y, z), 0});
+        cells.fields[0].values.push_back(f(vec3f(float(x), float(y), float(z)) + vec3f(0.5f)));
+      }
+  return buildModel(std::move(cells));
+}
+
 /// Opacity per finest cell rising linearly from `low` at value 0 to `high` at value 1 (scale 1),
 /// colour white.
 TransferFunction ramp(float low, float high) {
@@ -210,16 +223,7 @@ TEST(PathTrace, AConvexDiffuseSurfaceReflectsItsAlbedoTimesTheEnvironment) {
   // An iso-surface sphere, grey (albedo 0.5) and diffuse, under a uniform environment and
   // nothing else: every bounce off a convex surface sees the sky, so it shows 0.5 times the
   // environment's radiance.
-  CellSet cells;
-  cells.fields.push_back({"r", {}});
-  for (int z = 0; z < 32; ++z)
-    for (int y = 0; y < 32; ++y)
-      for (int x = 0; x < 32; ++x) {
-        cells.cells.push_back({vec3i(x, y, z), 0});
-        const vec3f d = vec3f(float(x), float(y), float(z)) + vec3f(0.5f) - vec3f(16.f);
-        cells.fields[0].values.push_back(length(d));
-      }
-  const Model m = buildModel(std::move(cells));
+  const Model m = finestCube("r", [](const vec3f& c) { return length(c - vec3f(16.f)); });
   Renderer r(m, DatasetInfo::of(m));
   Scene s = pathScene(ramp(0.f, 0.f));
   s.layers[0].field = "r";
@@ -238,16 +242,11 @@ TEST(PathTrace, AConvexDiffuseSurfaceReflectsItsAlbedoTimesTheEnvironment) {
 TEST(PathTrace, WithoutScatteringItConvergesToTheRayMarcher) {
   // Emission and absorption only (albedo 0, emission 1, black environment): the expected
   // radiance is the marcher's integral; a blob of varying colour and opacity.
-  CellSet cells;
-  cells.fields.push_back({"f", {}});
-  for (int z = 0; z < 32; ++z)
-    for (int y = 0; y < 32; ++y)
-      for (int x = 0; x < 32; ++x) {
-        const float d2 = float((x - 16) * (x - 16) + (y - 14) * (y - 14) + (z - 16) * (z - 16));
-        cells.cells.push_back({vec3i(x, y, z), 0});
-        cells.fields[0].values.push_back(std::exp(-d2 / 60.f));
-      }
-  const Model m = buildModel(std::move(cells));
+  // Centred on the cell (16, 14, 16) (cell x has its centre at x + 0.5).
+  const Model m = finestCube("f", [](const vec3f& c) {
+    const vec3f d = c - vec3f(16.5f, 14.5f, 16.5f);
+    return std::exp(-dot(d, d) / 60.f);
+  });
   TransferFunction tf = defaultTransferFunction();
   tf.valueRange = range1f{0.f, 1.f};
   tf.opacity = {{0.f, 0.f}, {1.f, 0.25f}};

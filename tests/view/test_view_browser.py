@@ -300,6 +300,16 @@ def test_errors_show_over_the_image_and_a_stopped_server_says_so(start_viewer, b
     browser.save_screenshot(str(artifacts / "viewer-6-stopped.png"))
 
 
+def expect_snapshot_equals_cli(v, cli, tmp_path, saved, name):
+    """The view's refined snapshot equals `exabricks render --scene` of the scene the page saved."""
+    scene = tmp_path / (name + ".json")
+    scene.write_text(json.dumps(saved))
+    out = tmp_path / (name + ".png")
+    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
+    status, png, _ = v.request("GET", "/api/snapshot.png")
+    assert status == 200 and png == out.read_bytes()
+
+
 def test_the_legend_toggles_draw_the_legends_as_the_command_line_does(start_viewer, cli, browser, tmp_path,
                                                                        artifacts):
     """The page's colour-bar and annotation boxes set the scene's legends: the refined canvas shows
@@ -320,12 +330,7 @@ def test_the_legend_toggles_draw_the_legends_as_the_command_line_does(start_view
     assert changed.sum() > 200, "the legends did not appear"
     saved = json.loads(v.request("GET", "/api/scene")[1])
     assert saved["legends"]["color_bar"] is True and saved["legends"]["annotation"] is True
-    scene = tmp_path / "legends.json"
-    scene.write_text(json.dumps(saved))
-    out = tmp_path / "legends.png"
-    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
-    status, png, _ = v.request("GET", "/api/snapshot.png")
-    assert status == 200 and png == out.read_bytes()
+    expect_snapshot_equals_cli(v, cli, tmp_path, saved, "legends")
     for key in ("legends.color_bar", "legends.annotation"):
         browser.find_element(By.CSS_SELECTOR, "input[data-setting='%s']" % key).click()
     wait_refined(browser, shown["request"])
@@ -353,12 +358,7 @@ def test_path_tracing_from_the_page_equals_the_command_line(start_viewer, cli, b
     wait_refined(browser, traced["request"])
     saved = json.loads(v.request("GET", "/api/scene")[1])
     assert saved["integration"]["integrator"] == "pathtrace" and saved["pathtrace"]["sun_intensity"] == 3
-    scene = tmp_path / "traced.json"
-    scene.write_text(json.dumps(saved))
-    out = tmp_path / "traced.png"
-    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
-    status, png, _ = v.request("GET", "/api/snapshot.png")
-    assert status == 200 and png == out.read_bytes()
+    expect_snapshot_equals_cli(v, cli, tmp_path, saved, "traced")
     albedo.clear()
     albedo.send_keys("2" + Keys.ENTER)
     banner = wait_for(browser, lambda: browser.find_element(By.ID, "banner").is_displayed(), 10, "the banner")
