@@ -59,7 +59,7 @@ TransferFunction ramp(float low, float high) {
   return tf;
 }
 
-/// Looking down -z through the slab, orthographic, 64 x 64 pixels over the inner 24 x 24 units.
+/// Looking down -z through the slab, orthographic, 64 x 64 pixels over the inner 12 x 12 units.
 Frame downZ(int spp) {
   Frame f;
   f.width = f.height = 64;
@@ -219,6 +219,86 @@ TEST(PathTrace, AWhiteFurnaceReturnsTheEnvironment) {
   EXPECT_NEAR(got.color.z, 1.0, 0.02);
 }
 
+TEST(PathTrace, ALayersOwnAlbedoReplacesTheScenes) {
+  // The furnace again with the scene's albedo 0 and the layer's albedo 1 at every value.
+  const Model m = slab([](float z) { return z / 32.f; });
+  Renderer r(m, DatasetInfo::of(m));
+  TransferFunction tf = ramp(0.02f, 0.3f);
+  tf.albedo = {{0.f, 1.f}, {1.f, 1.f}};
+  Scene s = pathScene(tf);
+  s.pathTracing.albedo = 0.f;
+  s.pathTracing.bounces = 1000;
+  s.pathTracing.environment = vec3f(0.5f, 0.25f, 1.f);
+  r.setScene(s);
+  const Radiance got = radianceWhereMet(r.render(downZ(16)));
+  ASSERT_GT(got.covered, 0.5);
+  EXPECT_NEAR(got.color.x, 0.5, 0.01);
+  EXPECT_NEAR(got.color.z, 1.0, 0.02);
+}
+
+TEST(PathTrace, ALayersAlbedoCurveIsReadAtTheValue) {
+  // A homogeneous slab of value 0.25 under the sun: the layer's albedo curve, 0 at value 0 rising
+  // to 1 at 0.5, gives 0.5 there, so the picture equals the scene's albedo 0.5 (the same paths,
+  // up to rounding of the extinction-weighted mean).
+  const Model m = slab([](float) { return 0.25f; });
+  Renderer r(m, DatasetInfo::of(m));
+  auto render = [&](float sceneAlbedo, const std::vector<OpacityPoint>& curve) {
+    TransferFunction tf = ramp(0.05f, 0.05f);
+    tf.albedo = curve;
+    Scene s = pathScene(tf);
+    s.pathTracing.albedo = sceneAlbedo;
+    s.pathTracing.sunDirection = vec3f(0.2f, 0.1f, -1.f);
+    s.pathTracing.sunIntensity = 4.f;
+    s.pathTracing.environment = vec3f(0.3f);
+    r.setScene(s);
+    return r.render(downZ(4));
+  };
+  const Image byScene = render(0.5f, {});
+  const Image byCurve = render(0.f, {{0.f, 0.f}, {0.5f, 1.f}});
+  const Image absorbing = render(0.f, {});
+  double diff = 0.0, dark = 0.0;
+  for (size_t i = 0; i < byScene.pixels.size(); ++i) {
+    diff += std::fabs(byScene.pixels[i].x - byCurve.pixels[i].x);
+    dark += byScene.pixels[i].x - absorbing.pixels[i].x;
+  }
+  const double n = double(byScene.pixels.size());
+  EXPECT_LT(diff / n, 1e-3 * meanRed(byScene)) << "mean |difference| " << diff / n;
+  EXPECT_GT(dark / n, 0.5 * meanRed(byScene)); // the scattered light is most of the picture
+}
+
+TEST(PathTrace, ASkyGradientLightsASphereFromAbove) {
+  // A grey diffuse sphere (albedo 0.5) under a sky that is `h` at the horizon, `z` at the zenith
+  // (the camera's up, +y) and 2h - z at the nadir: radiance linear in the sine of the elevation,
+  // L(d) = h + (z - h) d.y, so a surface of normal n reflects 0.5 (h + (z - h) 2/3 n.y). The
+  // view (12 units across) lies inside the sphere's disc (radius 9): n.y = y / 9 averages 1/3
+  // over the upper half of the picture and -1/3 over the lower half.
+  const Model m = finestCube("r", [](const vec3f& c) { return length(c - vec3f(16.f)); });
+  Renderer r(m, DatasetInfo::of(m));
+  Scene s = pathScene(ramp(0.f, 0.f));
+  s.layers[0].field = "r";
+  s.volume = false;
+  s.iso.values = {9.f};
+  s.iso.colors = {vec3f(0.5f)};
+  const float h = 0.5f, z = 0.9f;
+  s.pathTracing.environment = vec3f(h);
+  s.pathTracing.sky = vec3f(z);
+  s.pathTracing.ground = vec3f(2.f * h - z);
+  r.setScene(s);
+  const Image img = r.render(downZ(16));
+  auto half = [&](bool upper) {
+    Image part = img;
+    part.pixels.clear();
+    for (int y = 0; y < img.height; ++y)
+      if ((y < img.height / 2) == upper)
+        for (int x = 0; x < img.width; ++x)
+          part.pixels.push_back(img.pixels[size_t(y) * size_t(img.width) + size_t(x)]);
+    return radianceWhereMet(part).color.x;
+  };
+  const double slope = double(z - h) * 2.0 / 3.0 / 3.0;
+  EXPECT_NEAR(half(true), 0.5 * (h + slope), 0.005);
+  EXPECT_NEAR(half(false), 0.5 * (h - slope), 0.005);
+}
+
 TEST(PathTrace, AConvexDiffuseSurfaceReflectsItsAlbedoTimesTheEnvironment) {
   // An iso-surface sphere, grey (albedo 0.5) and diffuse, under a uniform environment and
   // nothing else: every bounce off a convex surface sees the sky, so it shows 0.5 times the
@@ -308,4 +388,7 @@ TEST(PathTrace, BadSettingsNameTheirKey) {
   refused([](Scene& s) { s.pathTracing.sunIntensity = -2.f; }, "pathtrace.sun_intensity");
   refused([](Scene& s) { s.pathTracing.environment = vec3f(1.f, -1.f, 0.f); }, "pathtrace.environment");
   refused([](Scene& s) { s.pathTracing.sunDirection = vec3f(0.f); }, "pathtrace.sun_direction");
+  refused([](Scene& s) { s.pathTracing.sky = vec3f(0.f, 0.f, -1.f); }, "pathtrace.sky");
+  refused([](Scene& s) { s.pathTracing.ground = vec3f(NAN, 0.f, 0.f); }, "pathtrace.ground");
+  refused([](Scene& s) { s.layers[0].tf.albedo = {{0.f, 0.5f}, {1.f, 1.5f}}; }, "albedo point 1");
 }

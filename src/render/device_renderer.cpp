@@ -163,8 +163,11 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
     v.volumeTree.bounds = model_.regions.bounds;
   }
   if (v.pathTrace) {
-    for (size_t i = 0; i < layers.size(); ++i)
-      v.mediumLayers[i] = {v.layers[i].view, v.layers[i].tf};
+    for (size_t i = 0; i < layers.size(); ++i) {
+      const std::vector<float>& albedo = layers[i].albedo;
+      v.mediumLayers[i] = {v.layers[i].view, v.layers[i].tf,
+                           albedo.empty() ? nullptr : put("albedo " + std::to_string(i), albedo, true, update)};
+    }
     v.majorants = put("majorants", volume.majorants(), true, update);
     v.extinctionPerLog2 = volume.extinctionPerLog2();
     v.path = pathSettingsOf(s.pathTracing, dataset_.worldDiagonal);
@@ -254,6 +257,7 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
   v.rate = frame.rate;
   v.depthLimitPlanar = frame.depthLimitPlanar;
   v.forward = normalize(frame.camera.lookAt - frame.camera.position);
+  v.path.up = skyUp(frame.camera.up);
   v.hasDomain = domain != nullptr;
   if (domain) v.domain = *domain;
   const size_t pixels = size_t(frame.width) * size_t(frame.height);

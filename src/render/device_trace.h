@@ -325,7 +325,7 @@ EXA_HOST_DEVICE inline vec4f tracePathSample(const TraceView& v, int x, int y, T
   float rho;
   const DualRay dr = cameraRay(v, x, y, rng, rho);
   const ClipView clip{v.planes, v.planeCount, v.clipBox};
-  const MediumView medium{v.mediumLayers, v.volume ? v.layerCount : 0, v.majorants, v.extinctionPerLog2};
+  const MediumView medium{v.mediumLayers, v.volume ? v.layerCount : 0, v.majorants, v.extinctionPerLog2, v.path.albedo};
   auto traverse = [&](const Ray& ray, auto&& emit) {
     if (v.volume) walkRegionTree(v.volumeTree, ray, emit);
   };

@@ -10,6 +10,7 @@ void LayerTable::build(const Model& model, const DatasetInfo& dataset, int field
     tf.valueRange = dataset.valueRanges[size_t(field)];
   if (tf.opacityScale == 0.f) tf.opacityScale = dataset.defaultOpacityScale;
   table = tabulateTransferFunction(tf);
+  albedo = tabulateAlbedo(tf);
   const range1f r = tf.valueRange;
   t.entries = table.data();
   t.range = r;

@@ -21,6 +21,7 @@ struct LayerTable {
   TransferFunction tf;
   std::vector<vec4f> table;
   TfTableView t;
+  std::vector<float> albedo;       ///< the path tracer's albedo per table entry (empty: the scene's)
   float span = 0.f, invSpan = 0.f; ///< width of the value range (the scale of shading weights)
 
   /// The field's table: an empty value range is the field's range, an opacity scale of 0 the

@@ -3,7 +3,9 @@
 // brick region (the largest extinction its value range can reach through the transfer
 // functions), through the same region traversal and basis reconstruction as the ray marcher;
 // single and multiple scattering with a Henyey-Greenstein phase function, Russian roulette, an
-// environment light and a sun with next-event estimation. A back end supplies the traversal (a
+// environment light (uniform, or a sky gradient from the horizon to the zenith and the ground)
+// and a sun with next-event estimation; the albedo is the scene's or a layer's own over its
+// values. A back end supplies the traversal (a
 // callable `traverse(ray, emit)` that emits region segments front to back, as
 // RegionTraversal::traverse and walkRegionTree do) and the random numbers.
 #pragma once
@@ -20,27 +22,35 @@
 namespace exa {
 
 /// One field of the medium and its tabulated transfer function (log2 transmittance per
-/// reference width in w, colour in xyz).
+/// reference width in w, colour in xyz), and its albedo over the same normalised values
+/// (kTfTableSize entries; null: the scene's albedo).
 struct MediumLayer {
   FieldView view;
   TfTableView table;
+  const float* albedo = nullptr;
 };
 
 /// The medium as plain data: the layers (their extinctions add), a majorant per region
 /// (extinction per lattice unit; 0 where nothing can be seen), and the factor from a table's
-/// -log2 transmittance to extinction per lattice unit (ln 2 over the reference width).
+/// -log2 transmittance to extinction per lattice unit (ln 2 over the reference width), and the
+/// albedo of layers without one of their own.
 struct MediumView {
   const MediumLayer* layers = nullptr;
   int layerCount = 0;
   const float* majorant = nullptr;
   float extinctionPerLog2 = 1.f;
+  float albedo = 0.8f;
 };
 
-/// The path tracer's settings for one pass, from the scene (directions world, unit).
+/// The path tracer's settings for one pass, from the scene (directions world, unit). The
+/// environment's radiance is `environment` at the horizon, blending linearly in the sine of the
+/// elevation above it to `zenith` straight up and to `ground` straight down (all three equal:
+/// uniform).
 struct PathSettings {
   float albedo = 0.8f, anisotropy = 0.f, emission = 0.f;
   int bounces = 4;
-  vec3f environment{1.f};
+  vec3f environment{1.f}, zenith{1.f}, ground{1.f};
+  vec3d up{0.0, 0.0, 1.0};
   vec3d towardsSun{0.0, 0.0, 1.0};
   float sunIntensity = 0.f;
   float sunCosHalfAngle = 1.f;
@@ -48,7 +58,7 @@ struct PathSettings {
 };
 
 /// The settings of a scene's path tracing; rays leave surfaces a small fraction of the data's
-/// world diagonal away.
+/// world diagonal away. The sky's zenith (`up`) is the frame's: skyUp.
 inline PathSettings pathSettingsOf(const PathTracing& p, double worldDiagonal) {
   PathSettings s;
   s.albedo = p.albedo;
@@ -56,11 +66,25 @@ inline PathSettings pathSettingsOf(const PathTracing& p, double worldDiagonal) {
   s.emission = p.emission;
   s.bounces = p.bounces;
   s.environment = p.environment;
+  s.zenith = p.sky ? *p.sky : p.environment;
+  s.ground = p.ground ? *p.ground : p.environment;
   s.towardsSun = -normalize(vec3d(p.sunDirection));
   s.sunIntensity = p.sunIntensity;
   s.sunCosHalfAngle = float(std::cos(0.5 * double(p.sunAngle) * 3.14159265358979 / 180.0));
   s.surfaceOffset = 1e-5 * worldDiagonal;
   return s;
+}
+
+/// The sky's zenith: the camera's up direction.
+inline vec3d skyUp(const vec3d& cameraUp) {
+  return length(cameraUp) > 0.0 ? normalize(cameraUp) : vec3d(0.0, 0.0, 1.0);
+}
+
+/// The environment's radiance arriving from direction `towards` (world, unit).
+EXA_HOST_DEVICE inline vec3f environmentRadiance(const PathSettings& s, const vec3d& towards) {
+  const float h = float(dot(towards, s.up));
+  const vec3f& end = h >= 0.f ? s.zenith : s.ground;
+  return s.environment + (end - s.environment) * fabsf(h);
 }
 
 /// The nearest opaque surface along a ray (an iso-surface or a mesh), as the back end finds it:
@@ -71,21 +95,44 @@ struct PathSurface {
   vec3f color{0.f};
 };
 
-/// Extinction per lattice unit at p (lattice) in `region`, summed over the layers; `color` gets
-/// the extinction-weighted colour of the layers there.
-EXA_HOST_DEVICE inline float mediumAt(const MediumView& m, uint32_t region, const vec3f& p, vec3f& color) {
-  float total = 0.f;
+/// A layer's albedo table, linearly interpolated, at normalised value n.
+EXA_HOST_DEVICE inline float albedoTableAt(const float* table, float n) {
+  const float x = n * float(kTfTableSize - 1);
+  int i = int(x);
+  i = i < 0 ? 0 : (i > kTfTableSize - 2 ? kTfTableSize - 2 : i);
+  const float f = clamp01(x - float(i));
+  return table[i] + (table[i + 1] - table[i]) * f;
+}
+
+/// The medium at one point: extinction per lattice unit summed over the layers, and their
+/// extinction-weighted colour and albedo.
+struct MediumSample {
+  float extinction = 0.f;
+  vec3f color{0.f};
+  float albedo = 0.f;
+};
+
+/// The medium at p (lattice) in `region`.
+EXA_HOST_DEVICE inline MediumSample mediumAt(const MediumView& m, uint32_t region, const vec3f& p) {
+  MediumSample out;
   vec3f c(0.f);
+  float albedo = 0.f;
   for (int i = 0; i < m.layerCount; ++i) {
+    const MediumLayer& layer = m.layers[i];
     float v;
-    if (!sampleRegion(m.layers[i].view, region, p, v)) continue;
-    const vec4f e = tfLookup(m.layers[i].table, v);
+    if (!sampleRegion(layer.view, region, p, v)) continue;
+    const float n = tfNormalized(layer.table, v);
+    const vec4f e = tfTableAt(layer.table, n);
     const float s = -e.w * m.extinctionPerLog2;
-    total += s;
+    out.extinction += s;
     c = c + vec3f(e.x, e.y, e.z) * s;
+    albedo += (layer.albedo ? albedoTableAt(layer.albedo, n) : m.albedo) * s;
   }
-  color = total > 0.f ? c * (1.f / total) : vec3f(0.f);
-  return total;
+  if (out.extinction > 0.f) {
+    out.color = c * (1.f / out.extinction);
+    out.albedo = albedo / out.extinction;
+  }
+  return out;
 }
 
 /// The largest extinction (per lattice unit) a table gives any value in r: its log2
@@ -139,7 +186,7 @@ EXA_HOST_DEVICE inline vec3d sampleHenyeyGreenstein(const vec3d& dir, float g, P
 
 /// Tentative collisions along a lattice ray (unit direction) within [tmin, tmax]: exponential
 /// steps against each region's majorant, and at each `visit(t, ratio, color)` with the ratio of
-/// the extinction there to the majorant and the medium's colour, until it returns false.
+/// the extinction there to the majorant and the medium there, until it returns false.
 /// `samples` counts them.
 template <typename Traverse, typename Visit>
 EXA_HOST_DEVICE inline void tentativeCollisions(const MediumView& m, Traverse&& traverse, const Ray& ray,
@@ -153,22 +200,22 @@ EXA_HOST_DEVICE inline void tentativeCollisions(const MediumView& m, Traverse&& 
       t -= logf(1.f - rng.next()) / majorant;
       if (t >= end) return true;
       ++samples;
-      vec3f c;
-      const float ratio = fminf(1.f, mediumAt(m, seg.region, ray.org + ray.dir * t, c) / majorant);
-      if (!visit(t, ratio, c)) return false;
+      const MediumSample here = mediumAt(m, seg.region, ray.org + ray.dir * t);
+      if (!visit(t, fminf(1.f, here.extinction / majorant), here)) return false;
     }
   });
 }
 
-/// Delta tracking: the first real collision's t and colour; false when the ray leaves the medium.
+/// Delta tracking: the first real collision's t and the medium there; false when the ray leaves
+/// the medium.
 template <typename Traverse>
 EXA_HOST_DEVICE inline bool freeFlight(const MediumView& m, Traverse&& traverse, const Ray& ray, PixelRandom& rng,
-                                       float& tHit, vec3f& color, uint64_t& samples) {
+                                       float& tHit, MediumSample& at, uint64_t& samples) {
   bool hit = false;
-  tentativeCollisions(m, traverse, ray, rng, samples, [&](float t, float ratio, const vec3f& c) {
+  tentativeCollisions(m, traverse, ray, rng, samples, [&](float t, float ratio, const MediumSample& here) {
     if (!(rng.next() < ratio)) return true;
     tHit = t;
-    color = c;
+    at = here;
     hit = true;
     return false;
   });
@@ -181,7 +228,7 @@ template <typename Traverse>
 EXA_HOST_DEVICE inline float transmittance(const MediumView& m, Traverse&& traverse, const Ray& ray, PixelRandom& rng,
                                            uint64_t& samples) {
   float T = 1.f;
-  tentativeCollisions(m, traverse, ray, rng, samples, [&](float, float ratio, const vec3f&) {
+  tentativeCollisions(m, traverse, ray, rng, samples, [&](float, float ratio, const MediumSample&) {
     T *= 1.f - ratio;
     if (T < 0.1f) {
       if (rng.next() < 0.5f) {
@@ -224,12 +271,12 @@ EXA_HOST_DEVICE inline vec4f tracePath(const MediumView& m, Traverse&& traverse,
   auto times = [](const vec3f& a, const vec3f& b) { return vec3f(a.x * b.x, a.y * b.y, a.z * b.z); };
   for (int bounce = 0;; ++bounce) {
     float t;
-    vec3f color;
+    MediumSample medium;
     PathSurface surface;
     const bool haveSurface = nearest(ray, surface);
     Ray lattice = ray.lattice;
     if (haveSurface) lattice.tmax = fminf(lattice.tmax, float(surface.distance * ray.kappa));
-    const bool inMedium = !clippedAway(ray) && freeFlight(m, traverse, lattice, rng, t, color, samples);
+    const bool inMedium = !clippedAway(ray) && freeFlight(m, traverse, lattice, rng, t, medium, samples);
     if (!inMedium && haveSurface) {
       // A diffuse surface: the sun by next-event estimation, then a cosine-weighted bounce.
       met = 1.f;
@@ -251,17 +298,14 @@ EXA_HOST_DEVICE inline vec4f tracePath(const MediumView& m, Traverse&& traverse,
       continue;
     }
     if (!inMedium) {
-      if (bounce > 0) radiance = radiance + times(throughput, s.environment);
+      if (bounce > 0) radiance = radiance + times(throughput, environmentRadiance(s, ray.dirW));
       break;
     }
     met = 1.f;
     // Absorption emits; the rest scatters (expected values of both, one path).
-    if (s.emission > 0.f) {
-      const float e = (1.f - s.albedo) * s.emission;
-      radiance = radiance + vec3f(throughput.x * color.x, throughput.y * color.y, throughput.z * color.z) * e;
-    }
-    if (!(s.albedo > 0.f) || bounce >= s.bounces) break;
-    throughput = vec3f(throughput.x * color.x, throughput.y * color.y, throughput.z * color.z) * s.albedo;
+    if (s.emission > 0.f) radiance = radiance + times(throughput, medium.color) * ((1.f - medium.albedo) * s.emission);
+    if (!(medium.albedo > 0.f) || bounce >= s.bounces) break;
+    throughput = times(throughput, medium.color) * medium.albedo;
     const vec3d at = ray.orgW + ray.dirW * (double(t) / ray.kappa);
     // The sun by next-event estimation: a direction within its disc, shadowed by ratio tracking.
     if (s.sunIntensity > 0.f) {

@@ -80,6 +80,7 @@ struct Renderer::Impl {
     ps.pixelJitter = frame.samplesPerPixel > 1 && ps.jitter;
     ps.march = MarchSettings::of(s, options, frame.rate);
     ps.path = pathSettingsOf(s.pathTracing, dataset.worldDiagonal);
+    ps.path.up = skyUp(frame.camera.up);
     return ps;
   }
 
@@ -102,12 +103,13 @@ struct Renderer::Impl {
   void updateMedium() {
     mediumLayers.clear();
     for (const LayerTable& layer : volume.layers())
-      mediumLayers.push_back({layer.view, layer.t});
+      mediumLayers.push_back({layer.view, layer.t, layer.albedo.empty() ? nullptr : layer.albedo.data()});
     volume.updateMajorants();
   }
 
   MediumView medium() const {
-    return {mediumLayers.data(), int(mediumLayers.size()), volume.majorants().data(), volume.extinctionPerLog2()};
+    return {mediumLayers.data(), int(mediumLayers.size()), volume.majorants().data(), volume.extinctionPerLog2(),
+            scene.pathTracing.albedo};
   }
 
   /// One path-traced sample of pixel (x, y): premultiplied radiance and whether the path met the

@@ -26,9 +26,21 @@ void Scene::validate() const {
     if (!std::isfinite(v)) fail("iso-values must be finite numbers");
   if (!light.headlight && !(length(light.direction) > 0.f && std::isfinite(length(light.direction))))
     fail("the light direction must be finite and non-zero");
-  const vec3f& env = pathTracing.environment;
-  if (!(env.x >= 0.f && env.y >= 0.f && env.z >= 0.f) || !std::isfinite(env.x + env.y + env.z))
-    fail("\"pathtrace.environment\" must be a finite radiance r,g,b >= 0");
+  auto checkRadiance = [](const vec3f& c, const char* key) {
+    if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !std::isfinite(c.x + c.y + c.z))
+      fail("\"", key, "\" must be a finite radiance r,g,b >= 0");
+  };
+  checkRadiance(pathTracing.environment, "pathtrace.environment");
+  for (size_t l = 0; l < layers.size(); ++l) {
+    const std::vector<OpacityPoint>& albedo = layers[l].tf.albedo;
+    for (size_t i = 0; i < albedo.size(); ++i)
+      if (!(albedo[i].x >= 0.f && albedo[i].x <= 1.f && albedo[i].alpha >= 0.f && albedo[i].alpha <= 1.f) ||
+          (i > 0 && albedo[i].x < albedo[i - 1].x))
+        fail("layer ", l, "'s albedo point ", i, " (", albedo[i].x, ", ", albedo[i].alpha,
+             ") must lie in [0, 1] x [0, 1], x not decreasing");
+  }
+  if (pathTracing.sky) checkRadiance(*pathTracing.sky, "pathtrace.sky");
+  if (pathTracing.ground) checkRadiance(*pathTracing.ground, "pathtrace.ground");
   const float sun = length(pathTracing.sunDirection);
   if (!(sun > 0.f) || !std::isfinite(sun)) fail("\"pathtrace.sun_direction\" must be finite and non-zero");
   for (size_t m = 0; m < meshes.size(); ++m) {
@@ -291,6 +303,8 @@ std::string writeSceneJson(const SceneDocument& doc) {
   j["light"] = {{"direction", vec(s.light.direction)}};
   j["pathtrace"] = {{"environment", vec(s.pathTracing.environment)},
                     {"sun_direction", vec(s.pathTracing.sunDirection)}};
+  if (s.pathTracing.sky) j["pathtrace"]["sky"] = vec(*s.pathTracing.sky);
+  if (s.pathTracing.ground) j["pathtrace"]["ground"] = vec(*s.pathTracing.ground);
   j["background"] = srgb(s.background);
   writeSettings(frameSettings(), f, j);
   writeSettings(sceneSettings(), s, j);
@@ -481,10 +495,12 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   }
   if (r.find("pathtrace")) {
     const Reader c = r.child("pathtrace");
-    c.only(keysOf("pathtrace", {"environment", "sun_direction"}));
+    c.only(keysOf("pathtrace", {"environment", "sky", "ground", "sun_direction"}));
     c.settings(sceneSettings(), "pathtrace", s);
     vec3d v;
     if (c.vec3("environment", v)) s.pathTracing.environment = vec3f(v);
+    if (c.vec3("sky", v)) s.pathTracing.sky = vec3f(v);
+    if (c.vec3("ground", v)) s.pathTracing.ground = vec3f(v);
     if (c.vec3("sun_direction", v)) s.pathTracing.sunDirection = vec3f(v);
   }
   if (r.find("ambient_occlusion")) {

@@ -336,11 +336,28 @@ ColorMap customColorMap(const json& cm, const std::string& path) {
   return m;
 }
 
+/// Points [[x, y], ...] of a piecewise-linear curve over [0, 1] with values in [0, 1] (the
+/// opacity, the albedo), x not decreasing.
+std::vector<OpacityPoint> unitCurve(const json& points, const std::string& path, const char* key, const char* y) {
+  if (!points.is_array() || points.empty()) fail(path, ": \"", key, "\" must be [[x, ", y, "], ...]");
+  std::vector<OpacityPoint> out;
+  for (size_t i = 0; i < points.size(); ++i) {
+    const json& p = points[i];
+    if (!p.is_array() || p.size() != 2)
+      fail(path, ": ", key, " point ", i, " is ", p.dump(), ", expected [x, ", y, "]");
+    const double x = unitNumber(p[0], path, strCat(key, " x of point ", i));
+    if (!out.empty() && x < out.back().x)
+      fail(path, ": ", key, " x values must not decrease (point ", i, ": ", x, " after ", out.back().x, ")");
+    out.push_back({float(x), float(unitNumber(p[1], path, strCat(key, " ", y, " of point ", i)))});
+  }
+  return out;
+}
+
 TransferFunction fromExabricks(const json& j, const std::string& path) {
-  static const char* const known[] = {"colormap", "opacity", "range", "log", "opacity_scale"};
+  static const char* const known[] = {"colormap", "opacity", "albedo", "range", "log", "opacity_scale"};
   for (auto it = j.begin(); it != j.end(); ++it)
     if (std::find(std::begin(known), std::end(known), it.key()) == std::end(known))
-      fail(path, ": unknown key \"", it.key(), "\" (known: colormap, opacity, range, log, opacity_scale)");
+      fail(path, ": unknown key \"", it.key(), "\" (known: colormap, opacity, albedo, range, log, opacity_scale)");
 
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");
@@ -358,17 +375,8 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
       fail(path, ": \"colormap\" must be a built-in name or {\"points\": [[x, r, g, b], ...]}");
     }
   }
-  if (const auto op = j.find("opacity"); op != j.end()) {
-    if (!op->is_array() || op->empty()) fail(path, ": \"opacity\" must be [[x, alpha], ...]");
-    for (size_t i = 0; i < op->size(); ++i) {
-      const json& p = (*op)[i];
-      if (!p.is_array() || p.size() != 2) fail(path, ": opacity point ", i, " is ", p.dump(), ", expected [x, alpha]");
-      const double x = unitNumber(p[0], path, strCat("opacity x of point ", i));
-      if (!tf.opacity.empty() && x < tf.opacity.back().x)
-        fail(path, ": opacity x values must not decrease (point ", i, ": ", x, " after ", tf.opacity.back().x, ")");
-      tf.opacity.push_back({float(x), float(unitNumber(p[1], path, strCat("opacity alpha of point ", i)))});
-    }
-  }
+  if (const auto op = j.find("opacity"); op != j.end()) tf.opacity = unitCurve(*op, path, "opacity", "alpha");
+  if (const auto al = j.find("albedo"); al != j.end()) tf.albedo = unitCurve(*al, path, "albedo", "albedo");
   if (const auto lg = j.find("log"); lg != j.end()) {
     if (!lg->is_boolean()) fail(path, ": \"log\" must be true or false");
     tf.logScale = lg->get<bool>();
@@ -439,6 +447,12 @@ json transferFunctionToJson(const TransferFunction& tf) {
       op.push_back({p.x, p.alpha});
     j["opacity"] = op;
   }
+  if (!tf.albedo.empty()) {
+    json al = json::array();
+    for (const OpacityPoint& p : tf.albedo)
+      al.push_back({p.x, p.alpha});
+    j["albedo"] = al;
+  }
   if (!tf.valueRange.empty()) j["range"] = {tf.valueRange.lower, tf.valueRange.upper};
   j["log"] = tf.logScale;
   if (tf.opacityScale == 0.f)
@@ -461,6 +475,14 @@ std::vector<vec4f> tabulateTransferFunction(const TransferFunction& tf) {
     const vec4f c = tf.atNormalized(float(i) / float(kTfTableSize - 1));
     table[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
   }
+  return table;
+}
+
+std::vector<float> tabulateAlbedo(const TransferFunction& tf) {
+  if (tf.albedo.empty()) return {};
+  std::vector<float> table(kTfTableSize);
+  for (int i = 0; i < kTfTableSize; ++i)
+    table[size_t(i)] = opacityAt(tf.albedo, float(i) / float(kTfTableSize - 1));
   return table;
 }
 

@@ -11,6 +11,7 @@
 #include "exabricks/render/transfer_function.h"
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -113,15 +114,20 @@ struct Integration {
 /// The volume path tracer's medium and lights (Integrator::PathTrace). The transfer function's
 /// opacity gives the extinction, its colour the scattering colour; `albedo` is the share of
 /// extinction that scatters (Henyey-Greenstein phase function of anisotropy `anisotropy`), the
-/// rest absorbs and emits `emission` times the colour. Light comes from a uniform environment
-/// (linear RGB radiance) and a sun: a directional light travelling along `sunDirection` (world)
-/// with irradiance `sunIntensity`, its disc `sunAngle` degrees across (0: a point).
+/// rest absorbs and emits `emission` times the colour (a layer's transfer function may give its
+/// own albedo per value). Light comes from the environment (linear RGB radiance: `environment` at
+/// the horizon, blending linearly in the sine of the elevation to `sky` at the zenith, along the
+/// camera's up direction, and to `ground` at the nadir; either unset is the horizon's, so that
+/// without both the environment is uniform) and a sun: a directional light travelling along
+/// `sunDirection` (world) with irradiance `sunIntensity`, its disc `sunAngle` degrees across
+/// (0: a point).
 struct PathTracing {
   float albedo = 0.8f;
   float anisotropy = 0.f;
   int bounces = 4;
   float emission = 0.f;
   vec3f environment{1.f, 1.f, 1.f};
+  std::optional<vec3f> sky, ground;
   vec3f sunDirection{-1.f, -1.f, -1.f};
   float sunIntensity = 0.f;
   float sunAngle = 0.53f;

@@ -35,9 +35,12 @@ class TransferFunction {
 public:
   ColorMap colorMap;
   std::vector<OpacityPoint> opacity; ///< increasing x; empty means a linear ramp 0 -> 1
-  range1f valueRange;                ///< values mapped to [0, 1]; empty: not set yet
-  bool logScale = false;             ///< map log10(value) (values <= 0 map to 0)
-  float opacityScale = 1.f;          ///< multiplies every opacity (0 in a Scene: the dataset default)
+  /// The path tracer's single-scattering albedo over the normalised value (x, albedo in [0, 1]),
+  /// piecewise linear as the opacity; empty: the scene's albedo.
+  std::vector<OpacityPoint> albedo;
+  range1f valueRange;       ///< values mapped to [0, 1]; empty: not set yet
+  bool logScale = false;    ///< map log10(value) (values <= 0 map to 0)
+  float opacityScale = 1.f; ///< multiplies every opacity (0 in a Scene: the dataset default)
 
   /// Value -> [0, 1] (clamped), linear or logarithmic over valueRange.
   float normalize(float value) const;
@@ -55,6 +58,10 @@ public:
 /// entries over the normalised value, colour in xyz and log2(1 - alpha) in w (so that opacity
 /// correction is one exp2), alpha capped just below one.
 std::vector<vec4f> tabulateTransferFunction(const TransferFunction& tf);
+
+/// The albedo table of a transfer function with its own albedo: kTfTableSize entries over the
+/// normalised value, as tabulateTransferFunction's; empty without one.
+std::vector<float> tabulateAlbedo(const TransferFunction& tf);
 
 /// The default of a scene: the named built-in colour map, a linear opacity ramp, the field's
 /// range and the dataset's default opacity scale (opacityScale 0).
