@@ -4,6 +4,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/transfer_function_file.h"
+#include "exabricks/render/sample_math.h"
 #include "exabricks/render/transfer_function.h"
 
 #include <gtest/gtest.h>
@@ -419,6 +420,19 @@ TEST(TransferFunction, ExabricksJson) {
   EXPECT_FALSE(d.logScale);
   EXPECT_EQ(d.opacityScale, 0.f);
   EXPECT_EQ(readTransferFunction(writeTemp("auto.json", R"({"opacity_scale": "auto"})")).opacityScale, 0.f);
+
+  // The path tracer's albedo over the normalised value, tabulated as the colour and opacity, and
+  // written back.
+  const TransferFunction a =
+      readTransferFunction(writeTemp("albedo.json", R"({"albedo": [[0, 0.2], [0.5, 1], [1, 1]]})"));
+  ASSERT_EQ(a.albedo.size(), 3u);
+  const std::vector<float> table = tabulateAlbedo(a);
+  ASSERT_EQ(table.size(), size_t(kTfTableSize));
+  EXPECT_FLOAT_EQ(table.front(), 0.2f);
+  EXPECT_FLOAT_EQ(table.back(), 1.f);
+  EXPECT_NEAR(table[size_t(kTfTableSize - 1) / 4], 0.6f, 0.01f);
+  EXPECT_TRUE(tabulateAlbedo(d).empty());
+  EXPECT_EQ(readTransferFunction(writeTemp("albedo-again.json", transferFunctionJson(a))), a);
 }
 
 TEST(TransferFunction, BadFilesAreRejectedClearly) {
@@ -444,6 +458,10 @@ TEST(TransferFunction, BadFilesAreRejectedClearly) {
       {"opacity-order.json", R"({"opacity": [[0.5, 0], [0.2, 1]]})", "must not decrease"},
       {"opacity-alpha.json", R"({"opacity": [[0, -0.5]]})", "outside [0, 1]"},
       {"opacity-type.json", R"({"opacity": [[0, "a"]]})", "must be a number"},
+      {"albedo.json", R"({"albedo": [[0, 1.5]]})", "albedo of point 0 = 1.5 is outside [0, 1]"},
+      {"albedo-point.json", R"({"albedo": [[0, 1], [1]]})", "albedo point 1 is [1], expected [x, albedo]"},
+      {"albedo-order.json", R"({"albedo": [[0.5, 0], [0.2, 1]]})", "albedo x values must not decrease"},
+      {"albedo-type.json", R"({"albedo": 0.5})", "\"albedo\" must be [[x, albedo], ...]"},
       {"badrange.json", R"({"range": [3, 1]})", "below"},
       {"range-size.json", R"({"range": [3]})", "[low, high]"},
       {"range-inf.json", R"({"range": [0, 1e999]})", "overflow"},

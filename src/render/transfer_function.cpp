@@ -337,8 +337,9 @@ ColorMap customColorMap(const json& cm, const std::string& path) {
 }
 
 /// Points [[x, y], ...] of a piecewise-linear curve over [0, 1] with values in [0, 1] (the
-/// opacity, the albedo), x not decreasing.
-std::vector<OpacityPoint> unitCurve(const json& points, const std::string& path, const char* key, const char* y) {
+/// opacity, the albedo), x not decreasing; `value` names a point's y in messages.
+std::vector<OpacityPoint> unitCurve(const json& points, const std::string& path, const char* key, const char* y,
+                                    const char* value) {
   if (!points.is_array() || points.empty()) fail(path, ": \"", key, "\" must be [[x, ", y, "], ...]");
   std::vector<OpacityPoint> out;
   for (size_t i = 0; i < points.size(); ++i) {
@@ -348,7 +349,7 @@ std::vector<OpacityPoint> unitCurve(const json& points, const std::string& path,
     const double x = unitNumber(p[0], path, strCat(key, " x of point ", i));
     if (!out.empty() && x < out.back().x)
       fail(path, ": ", key, " x values must not decrease (point ", i, ": ", x, " after ", out.back().x, ")");
-    out.push_back({float(x), float(unitNumber(p[1], path, strCat(key, " ", y, " of point ", i)))});
+    out.push_back({float(x), float(unitNumber(p[1], path, strCat(value, " of point ", i)))});
   }
   return out;
 }
@@ -375,8 +376,9 @@ TransferFunction fromExabricks(const json& j, const std::string& path) {
       fail(path, ": \"colormap\" must be a built-in name or {\"points\": [[x, r, g, b], ...]}");
     }
   }
-  if (const auto op = j.find("opacity"); op != j.end()) tf.opacity = unitCurve(*op, path, "opacity", "alpha");
-  if (const auto al = j.find("albedo"); al != j.end()) tf.albedo = unitCurve(*al, path, "albedo", "albedo");
+  if (const auto op = j.find("opacity"); op != j.end())
+    tf.opacity = unitCurve(*op, path, "opacity", "alpha", "opacity alpha");
+  if (const auto al = j.find("albedo"); al != j.end()) tf.albedo = unitCurve(*al, path, "albedo", "albedo", "albedo");
   if (const auto lg = j.find("log"); lg != j.end()) {
     if (!lg->is_boolean()) fail(path, ": \"log\" must be true or false");
     tf.logScale = lg->get<bool>();
