@@ -1,7 +1,9 @@
 // The viewer page's publication output: this view rendered on the server at a chosen size and
 // samples per pixel, as 8- or 16-bit PNG, OpenEXR or PFM, with progress, cancel and the file to
-// download under a name of the dataset, field and size. Loaded after viewer.js and series.js.
-'use strict';
+// download under a name of the dataset, field and size.
+
+import { followJob, postJson } from './series.js';
+import { $, clearMessage, isNetworkError, serverGone, showMessage, viewer } from './session.js';
 
 const picture = { job: null }; // the picture being rendered: { id, state, tiles, done, name }
 viewer.picture = picture;

@@ -1,8 +1,12 @@
 // The viewer page's time series, movie and help: a step slider with play and pause, the step's
 // simulation time and cycle, the colour range over all steps or this step's; a movie of the view
 // made on the server with its progress, cancel and download; and the overlay of mouse and keys.
-// Loaded after viewer.js, whose start() calls startSeries().
-'use strict';
+// The page's start (viewer.js) calls startSeries().
+
+import { syncControls } from './panel.js';
+import { $, apiJson, clearMessage, isNetworkError, serverGone, showMessage, viewer } from './session.js';
+import { pump, requestRender, updateFrameSize } from './stream.js';
+import { layerField, tf } from './transfer.js';
 
 const series = {
   info: null,      // GET /api/series: steps (name, time, cycle where known), current step
@@ -12,7 +16,7 @@ const series = {
 };
 viewer.series = series;
 
-function postJson(path, body) {
+export function postJson(path, body) {
   return apiJson(path, { method: 'POST', body: JSON.stringify(body), headers: { 'Content-Type': 'application/json' } });
 }
 
@@ -182,7 +186,7 @@ function showMovie(m) {
 /// Polls a background job of the server (`kind`: movie or picture) every `job.every` ms while it
 /// runs and is still the one on the page (`job.current()`), showing each state; a failure says
 /// `job.failed` with the reason, and a lost answer re-enables `job.button`.
-async function followJob(kind, id, job) {
+export async function followJob(kind, id, job) {
   while (job.current() === id) {
     await sleep(job.every);
     let j;
@@ -315,7 +319,7 @@ function setupHoles() {
   box.addEventListener('change', () => setHoles(box.checked));
 }
 
-async function startSeries() {
+export async function startSeries() {
   setupKeys();
   setupMovie();
   setupHoles();

@@ -108,9 +108,7 @@ def paraview_worker(cfg_path):
 # ---------------------------------------------------------------------------------------------
 # The driver: Debian's Python.
 
-def main():
-    if len(sys.argv) == 3 and sys.argv[1] == "--paraview-worker":
-        return paraview_worker(sys.argv[2])
+def parse_arguments():
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     add_common_arguments(p)
     p.add_argument("--frames", type=int, default=3, help="frames timed (median), after a warm-up")
@@ -118,10 +116,12 @@ def main():
                    help="ParaView's resampling grid NXxNYxNZ (default: the representation's own default)")
     p.add_argument("--pvbatch", default="pvbatch")
     p.add_argument("--out", default="peer-comparison-paraview")
-    a = p.parse_args()
-    os.makedirs(a.out, exist_ok=True)
-    print("uptime:", subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
+    return p.parse_args()
 
+
+def describe(a):
+    """The dataset as `exabricks info` describes it, and the view both renderers share: value range,
+    finest cell width, exabricks' default opacity and camera."""
     info = json.loads(subprocess.run([a.exabricks, "-q", "info", a.plotfile, "-f", a.field, "--json"], check=True,
                                      capture_output=True, text=True).stdout)
     lower, upper = info["bounds"]["world"]["lower"], info["bounds"]["world"]["upper"]
@@ -131,20 +131,17 @@ def main():
     finest_width = max(u - l for l, u in zip(lower, upper)) / finest_cells
     opacity_scale = min(1.0, 8.0 / finest_cells)  # exabricks' default, as in compare_yt.py
     pos, look, up, _ = camera(lower, upper, a.azimuth, a.elevation, a.fov)
+    return info, {"range": value_range, "finest_width": finest_width, "opacity_scale": opacity_scale,
+                  "position": pos, "look_at": look, "up": up}
 
-    # --- exabricks ---
-    ex_png = os.path.join(a.out, "exabricks.png")
-    ex_wall, ex = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
-                                opacity_scale, ex_png, [], a.frames)
-    _, ex_flat = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
-                               opacity_scale, os.path.join(a.out, "exabricks-unshaded.png"),
-                               ["--no-early-termination", "--shading", "none"], a.frames)
 
-    # --- ParaView ---
-    cfg = {"plotfile": os.path.abspath(a.plotfile), "field": a.field, "size": a.size, "position": pos,
-           "look_at": look, "up": up, "fov": a.fov, "range": list(value_range), "opacity_scale": opacity_scale,
-           "finest_width": finest_width, "frames": a.frames, "out": os.path.abspath(a.out),
-           "samples": [int(v) for v in a.samples.split("x")] if a.samples else None}
+def render_paraview(a, view):
+    """Runs pvbatch on this file under a virtual X server; returns the results it wrote and the
+    process's wall time."""
+    cfg = {"plotfile": os.path.abspath(a.plotfile), "field": a.field, "size": a.size, "position": view["position"],
+           "look_at": view["look_at"], "up": view["up"], "fov": a.fov, "range": list(view["range"]),
+           "opacity_scale": view["opacity_scale"], "finest_width": view["finest_width"], "frames": a.frames,
+           "out": os.path.abspath(a.out), "samples": [int(v) for v in a.samples.split("x")] if a.samples else None}
     cfg_path = os.path.join(a.out, "paraview-settings.json")
     json.dump(cfg, open(cfg_path, "w"), indent=1)
     env = dict(os.environ, GALLIUM_DRIVER="llvmpipe", LP_NUM_THREADS="2")
@@ -163,7 +160,11 @@ def main():
         sys.exit(f"pvbatch failed (exit status {rc}) before writing {pv_json}")
     pv = json.load(open(pv_json))
     pv["pvbatch_exit_status"] = rc
+    return pv, pv_wall
 
+
+def report(a, info, view, ex_wall, ex, ex_flat, pv, pv_wall):
+    """Prints the times and their ratios; returns both."""
     ex_frame, ex_flat_frame = ex["frame_seconds"], ex_flat["frame_seconds"]
     pr = pv["renders"]
     rows = [
@@ -178,6 +179,7 @@ def main():
         ("ParaView, render, shaded (median)", pr["shaded"]["median"]),
         ("ParaView, whole pvbatch process (X server, start, load, all renders, PNGs)", pv_wall),
     ]
+    value_range = view["range"]
     print(f"dataset {a.plotfile} ({info['cells']} leaf cells), field {a.field}, {a.size}x{a.size}, "
           f"value range [{value_range[0]:.6g}, {value_range[1]:.6g}]")
     print("ParaView:", json.dumps({k: pv[k] for k in ("reader", "representation", "opengl")}))
@@ -195,8 +197,11 @@ def main():
     print("ratios (ParaView / exabricks):")
     for name, r in ratios.items():
         print(f"  {name:76s} {r:8.2f}x")
+    return rows, ratios
 
-    # Side by side, one PNG: exabricks (full quality) | ParaView (shaded).
+
+def save_side_by_side(a, info, ex_png, ex_frame, pv, rows, ratios):
+    """One PNG: exabricks (full quality) | ParaView (shaded); and the figures in results.json."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -206,7 +211,7 @@ def main():
     samples = pv["representation"]["NumberOfSamples"]
     for ax, img, title in ((axes[0], ex_img, f"exabricks: frame {ex_frame:.2f} s (basis, shaded, adaptive)"),
                            (axes[1], pv_img, f"ParaView {pv.get('paraview_version') or ''}: render "
-                                             f"{pr['shaded']['median']:.2f} s (resampled {samples}, shaded)")):
+                                             f"{pv['renders']['shaded']['median']:.2f} s (resampled {samples}, shaded)")):
         ax.imshow(img)
         ax.set_title(title, fontsize=10)
         ax.axis("off")
@@ -219,6 +224,28 @@ def main():
               indent=1)
     print(f"wrote {out_side}")
 
+
+def main():
+    if len(sys.argv) == 3 and sys.argv[1] == "--paraview-worker":
+        return paraview_worker(sys.argv[2])
+    a = parse_arguments()
+    os.makedirs(a.out, exist_ok=True)
+    print("uptime:", subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
+    info, view = describe(a)
+    pos, look, up, value_range = view["position"], view["look_at"], view["up"], view["range"]
+
+    # --- exabricks ---
+    ex_png = os.path.join(a.out, "exabricks.png")
+    ex_wall, ex = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
+                                view["opacity_scale"], ex_png, [], a.frames)
+    _, ex_flat = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
+                               view["opacity_scale"], os.path.join(a.out, "exabricks-unshaded.png"),
+                               ["--no-early-termination", "--shading", "none"], a.frames)
+
+    # --- ParaView ---
+    pv, pv_wall = render_paraview(a, view)
+    rows, ratios = report(a, info, view, ex_wall, ex, ex_flat, pv, pv_wall)
+    save_side_by_side(a, info, ex_png, ex["frame_seconds"], pv, rows, ratios)
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -11,13 +11,13 @@ movies. See docs/python.md.
 
 import copy
 import json
-import math
 import os
-import warnings
-
-import numpy as np
 
 from . import _core
+from ._dataset import Dataset, from_cells, from_grids, load
+
+Dataset.__module__ = __name__  # users meet it as exabricks.Dataset
+from ._yt_scene import _yt_scene_units, camera_from_yt, from_yt, scene_from_yt, transfer_function_from_yt
 
 __all__ = [
     "Dataset", "TransferFunction", "Camera", "Scene", "load", "from_cells", "from_grids", "from_yt",
@@ -41,357 +41,10 @@ def list_fields(path):
     return list(_core.list_fields(str(path)))
 
 
-class Dataset:
-    """A built AMR dataset (bricks and active brick regions over leaf cells)."""
-
-    def __init__(self, core):
-        self._core = core
-
-    @property
-    def name(self):
-        return self._core.name
-
-    @property
-    def fields(self):
-        """Field names, in file order."""
-        return list(self._core.fields)
-
-    @property
-    def units(self):
-        """Units per field name, as the input states them ("" where unknown): read by the file's
-        reader, given to from_cells / from_grids, or taken from yt by from_yt."""
-        return dict(zip(self._core.fields, self._core.units))
-
-    def field_units(self, name=None):
-        """The units of a field (the default field when None); "" where unknown."""
-        fields = list(self._core.fields)
-        name = name or self.default_field
-        if name not in fields:
-            raise ValueError("unknown field '%s' (the dataset has %s)" % (name, ", ".join(fields)))
-        return self._core.units[fields.index(name)]
-
-    def field_label(self, name=None):
-        """The title the command line's colour bar gives a field: "name [units]", or the name
-        alone where its units are unknown."""
-        name = name or self.default_field
-        units = self.field_units(name)
-        return "%s [%s]" % (name, units) if units else name
-
-    @property
-    def cells(self):
-        return self._core.cells
-
-    @property
-    def bounds(self):
-        """World box ((x0, y0, z0), (x1, y1, z1)) of the cells."""
-        return self._core.bounds
-
-    @property
-    def default_field(self):
-        return self._core.default_field()
-
-    @property
-    def opacity_reference_width(self):
-        """The world length opacity is given per: the finest cell's width (averaged over the
-        axes where the spacing differs)."""
-        return self._core.opacity_reference_width
-
-    @property
-    def default_opacity_scale(self):
-        """The opacity scale "auto" stands for: a ray through the whole data gathers an optical
-        depth of about eight."""
-        return self._core.default_opacity_scale
-
-    def info(self):
-        """The dictionary `exabricks info --json` prints."""
-        return json.loads(self._core.info_json())
-
-    def sample(self, points, field=None):
-        """Values (N,) and gradients per world unit (N, 3) at world positions (N, 3); NaN where
-        no cell has weight."""
-        points = np.asarray(points, dtype=np.float64)
-        if points.ndim == 1 and points.shape[0] == 3:
-            points = points.reshape(1, 3)
-        return self._core.sample(points, field or "")
-
-    def __repr__(self):
-        return "<exabricks.Dataset %s: %d cells, fields %s>" % (self.name, self.cells, ", ".join(self.fields))
-
-
-def load(path=None, fields=None, max_brick_width=32, box=None, nan_as_holes=False):
-    """Reads any input the command line reads (model file, NAME.cells, AMReX, Chombo, FLASH, Enzo,
-    VTK AMR, raw volume; the embedded default dataset when path is None) and builds it.
-    `box` (x0, y0, z0, x1, y1, z1, finest lattice units) keeps only the cells that overlap it.
-    `nan_as_holes`: cells with a NaN or infinite value in any loaded field become holes (dropped
-    from every field, counted on stderr) instead of an error (as `--nan-as-holes`)."""
-    return Dataset(_core.load("" if path is None else str(path), list(fields or []), max_brick_width,
-                              list(box) if box is not None else [], bool(nan_as_holes)))
-
-
-def _units_list(units, names):
-    """Units per name from a dict (missing names have none) or a list in the names' order."""
-    if units is None:
-        return []
-    if isinstance(units, dict):
-        unknown = [k for k in units if k not in names]
-        if unknown:
-            raise ValueError("units given for %s, which are not among the fields %s" % (unknown, list(names)))
-        return [str(units.get(n) or "") for n in names]
-    units = [str(u or "") for u in units]
-    if len(units) != len(names):
-        raise ValueError("%d units given for %d fields" % (len(units), len(names)))
-    return units
-
-
-def from_cells(corners, levels, fields, origin=(0.0, 0.0, 0.0), spacing=(1.0, 1.0, 1.0), max_brick_width=32,
-               units=None):
-    """A dataset from leaf cells: integer lower corners (N, 3) in finest-lattice units, levels (N,)
-    (a cell is 2**level finest cells wide; corners are multiples of the width), and one (N,) array
-    per field in a dict. World = origin + spacing * lattice. A non-dict `fields` is the field
-    "scalar". `units`: a dict of units per field name (or a list in field order)."""
-    if not isinstance(fields, dict):
-        fields = {"scalar": fields}
-    pairs = [(str(name), np.asarray(values)) for name, values in fields.items()]
-    unit_list = _units_list(units, [name for name, _ in pairs])
-    for name, values in pairs:
-        if values.dtype.kind not in "fiu":
-            raise ValueError("field '%s' must hold numbers, not %s" % (name, values.dtype))
-    corners = np.asarray(corners)
-    levels = np.asarray(levels)
-    if corners.dtype.kind not in "iu" or levels.dtype.kind not in "iu":
-        raise ValueError("corners and levels must be integer arrays (finest-lattice units)")
-    return Dataset(_core.from_cells(corners, levels, pairs, list(map(float, origin)), list(map(float, spacing)),
-                                    max_brick_width, unit_list))
-
-
-def from_grids(grids, fields=None, bbox=None, max_brick_width=32, units=None):
-    """A dataset from overlapping grids in the layout yt's load_amr_grids takes: a list of dicts
-    with "left_edge", "right_edge", "level", "dimensions" and one array per field of shape
-    `dimensions` (indexed [i, j, k]). Cells covered by a finer grid are dropped. `bbox`
-    ([[x0, x1], [y0, y1], [z0, z1]], optional) gives the domain, whose lower corner is the lattice
-    origin. `units`: a dict of units per field name (or a list in field order)."""
-    if not grids:
-        raise ValueError("from_grids: no grids")
-    reserved = {"left_edge", "right_edge", "level", "dimensions"}
-    names = list(fields) if fields else [k for k in grids[0] if k not in reserved]
-    if not names:
-        raise ValueError("from_grids: the grids hold no field arrays")
-    packed = []
-    for g, grid in enumerate(grids):
-        dims = [int(d) for d in grid["dimensions"]]
-        arrays = []
-        for name in names:
-            if name not in grid:
-                raise ValueError("from_grids: grid %d has no field '%s'" % (g, name))
-            a = np.asarray(grid[name], dtype=np.float64)
-            if list(a.shape) != dims:
-                raise ValueError("from_grids: grid %d field '%s' has shape %s, dimensions are %s"
-                                 % (g, name, tuple(a.shape), tuple(dims)))
-            arrays.append(np.ascontiguousarray(a.transpose(2, 1, 0)).ravel())  # x fastest
-        packed.append((list(map(float, grid["left_edge"])), list(map(float, grid["right_edge"])), dims, arrays))
-    origin = [float(bbox[a][0]) for a in range(3)] if bbox is not None else []
-    names = [str(n) for n in names]
-    return Dataset(_core.from_grids(packed, names, origin, max_brick_width, _units_list(units, names)))
-
-
-def _yt_field_name(field):
-    return field[-1] if isinstance(field, tuple) else str(field)
-
-
-def _yt_mesh_fields(ds):
-    """The fields yt holds on the grids (not particles), in the file's order where yt keeps it
-    (AMReX plotfiles), else in yt's order."""
-    index = ds.index
-    order = list(getattr(index, "field_order", None) or ds.field_list)
-    particle_types = set(getattr(ds, "particle_types", ())) | set(getattr(ds, "particle_types_raw", ()))
-    fields = []
-    for f in order:
-        if isinstance(f, tuple) and f[0] in particle_types:
-            continue
-        info = getattr(ds, "field_info", None)
-        try:
-            if info is not None and info[f].sampling_type == "particle":
-                continue
-        except (KeyError, AttributeError, TypeError):
-            pass
-        fields.append(f)
-    return fields
-
-
-def _yt_default_field(ds):
-    """The field the command line would take from the same output: among the mesh fields, the
-    principal one where the data names it, else the first."""
-    fields = _yt_mesh_fields(ds)
-    if not fields:
-        raise ValueError("from_yt: the dataset has no mesh fields (only particles, which exabricks does not "
-                         "render); yt lists %s" % (list(ds.field_list),))
-    return fields[_core.default_field_index([_yt_field_name(f) for f in fields])]
-
-
-def _yt_units(values):
-    """The units of an array yt returned, as yt writes them; "" for none ("dimensionless": yt's
-    word for a field whose units the output does not state, or a pure number)."""
-    units = getattr(values, "units", None)
-    text = str(units) if units is not None else ""
-    return "" if text in ("dimensionless", "1") else text
-
-
-def _yt_code(value):
-    """A yt length (or array of lengths) in code units: the world units of from_yt."""
-    if hasattr(value, "in_units"):
-        try:
-            return np.array(value.in_units("code_length").d, dtype=np.float64)
-        except Exception:  # no code units in its registry: take the numbers
-            pass
-    return np.array(value.d if hasattr(value, "d") else value, dtype=np.float64)
-
-
-def from_yt(ds, fields=None, max_brick_width=32):
-    """A dataset from a loaded yt dataset (any code yt reads, through ds.index.grids): the leaf
-    cells of its grids with the given fields (yt field names or (type, name) tuples). Without
-    fields, the mesh field the command line would choose: the principal one where the data names
-    it (scalar, Density, density, dens, rho), else the first in the file's order; particle fields
-    are never taken. Values are taken in yt's units, and each field carries the units of the data
-    yt returns (Dataset.units; "" where yt has none but "dimensionless"). World coordinates are
-    yt's code units."""
-    if fields is None:
-        fields = [_yt_default_field(ds)]
-    elif isinstance(fields, (str, tuple)):
-        fields = [fields]
-    names = [_yt_field_name(f) for f in fields]
-    units = {}
-    grids = []
-    for grid in ds.index.grids:
-        entry = {
-            "left_edge": _yt_code(grid.LeftEdge),
-            "right_edge": _yt_code(grid.RightEdge),
-            "level": int(grid.Level),
-            "dimensions": [int(d) for d in grid.ActiveDimensions],
-        }
-        for f, name in zip(fields, names):
-            values = grid[f]
-            if name not in units:
-                units[name] = _yt_units(values)
-            entry[name] = np.asarray(values.d if hasattr(values, "d") else values, dtype=np.float64)
-        grids.append(entry)
-        grid.clear_data()
-    left = _yt_code(ds.domain_left_edge)
-    right = _yt_code(ds.domain_right_edge)
-    bbox = [[left[a], right[a]] for a in range(3)]
-    dataset = from_grids(grids, names, bbox=bbox, max_brick_width=max_brick_width, units=units)
-    dataset._yt_origin = _yt_origin(ds, fields, names, units)
-    return dataset
-
-
-def _yt_origin(ds, fields, names, units):
-    """What the command line reads for a dataset made from yt: the output's path, and per field
-    (by its name here) the field's name in the file and the factor from the file's values to
-    yt's (yt converts code units; the command line reads the file's numbers). A field yt derives
-    (no field of the file behind it) maps to None."""
-    path = getattr(ds, "parameter_filename", None)
-    origin = {"input": os.path.abspath(path) if path and os.path.exists(path) else None, "fields": {}}
-    on_disk = set(ds.field_list)
-    for f, name in zip(fields, names):
-        entry = None
-        try:
-            info = ds._get_field_info(f)
-            disk = info.alias_name if getattr(info, "is_alias", False) else info.name
-            if disk in on_disk:
-                disk_units = str(ds._get_field_info(disk).units or "") or "dimensionless"
-                factor = float(ds.quan(1.0, disk_units).to(units.get(name) or "dimensionless").d)
-                if factor > 0 and np.isfinite(factor):
-                    entry = (_yt_field_name(disk), factor)
-        except Exception:  # yt cannot say: the field stays yt's
-            entry = None
-        origin["fields"][name] = entry
-    return origin
-
-
-def _yt_scene_units(d, origin, to_file):
-    """A scene document of a dataset made from yt, with yt's field names and units (to_file
-    False) or the file's (to_file True, with the output's path as its input): field names
-    mapped, value ranges and iso-values scaled. Where a field the scene shows has no field of the
-    file behind it (yt derives it), or the output's path is unknown, the document is returned as
-    it is (to_file: with a warning, since the command line cannot read it)."""
-    fields = origin["fields"]
-    if to_file:
-        table = {name: entry for name, entry in fields.items() if entry is not None}
-    else:
-        table = {entry[0]: (name, entry[1]) for name, entry in fields.items() if entry is not None}
-    d = copy.deepcopy(d)
-    layers = d.get("layers", [])
-    iso = d.get("iso", {})
-    first = layers[0]["field"] if layers else ""
-    shown = [l["field"] for l in layers]
-    if iso.get("values"):
-        shown.append(iso.get("field") or first)
-    if iso.get("color_field"):
-        shown.append(iso["color_field"])
-    missing = [n for n in shown if n and n not in table]
-    if missing or (to_file and not origin["input"]):
-        if to_file:
-            why = ("yt derives %s: no field of the file lies behind it" % ", ".join("'%s'" % n for n in missing)
-                   if missing else "yt does not say which file the data came from")
-            warnings.warn("the scene file names no input the command line can read (%s)" % why, stacklevel=3)
-        return d
-
-    def scale(name):
-        factor = table[name][1]
-        return 1.0 / factor if to_file else factor
-
-    def scaled_range(tf, name):
-        if tf.get("range") is not None:
-            tf["range"] = [float(v) * scale(name) for v in tf["range"]]
-
-    for layer in layers:
-        if layer["field"]:
-            scaled_range(layer["transfer_function"], layer["field"])
-            layer["field"] = table[layer["field"]][0]
-    if iso.get("values"):
-        name = iso.get("field") or first
-        if name:
-            iso["values"] = [float(v) * scale(name) for v in iso["values"]]
-            if iso.get("field"):
-                iso["field"] = table[iso["field"]][0]
-    if iso.get("color_field"):
-        scaled_range(iso["color_map"], iso["color_field"])
-        iso["color_field"] = table[iso["color_field"]][0]
-    if to_file:
-        d["input"] = origin["input"]
-    return d
-
-
 def _file_stem(text):
     """A name fit for a file: letters, digits, '.', '-' and '_' kept, the rest '_'."""
     stem = "".join(c if c.isalnum() or c in "._-" else "_" for c in str(text)).strip("._")
     return stem or "picture"
-
-
-def _srgb_encode(linear):
-    """sRGB numbers of linear intensities in [0, 1]."""
-    c = np.clip(np.asarray(linear, dtype=np.float64), 0.0, 1.0)
-    return [float(v) for v in np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1.0 / 2.4) - 0.055)]
-
-
-def _longest_side(bounds):
-    return float(np.max(np.asarray(bounds[1], float) - np.asarray(bounds[0], float)))
-
-
-def _yt_ray_length(camera):
-    """The world length (code units) of one unit of yt's ray parameter: yt's alpha is opacity per
-    this length. A plane-parallel lens casts its rays across the depth width; perspective and
-    spherical lenses scale their rays to reach the whole domain from the camera (the central
-    ray's length; yt's off-axis rays are longer); a fisheye lens to the largest width."""
-    lens = type(camera.lens).__name__
-    if lens == "PlaneParallelLens":
-        return float(_yt_code(camera.width)[2])
-    if lens in ("PerspectiveLens", "StereoPerspectiveLens", "SphericalLens", "StereoSphericalLens"):
-        centre = _yt_code(camera._domain_center)
-        return float(np.linalg.norm(_yt_code(camera.position) - centre)
-                     + 0.5 * np.linalg.norm(_yt_code(camera._domain_width)))
-    if lens == "FisheyeLens":
-        return float(_yt_code(camera.width).max())
-    raise ValueError("TransferFunction.from_yt: yt's %s is not known" % lens)
 
 
 def _srgb(color):
@@ -482,45 +135,7 @@ class TransferFunction:
         peaks at 1 with the dataset's default scale ("auto"), as for any other transfer function.
         yt's colours are taken as the linear intensities yt integrates, and values at and outside
         its bounds are transparent, as in yt."""
-        if not hasattr(tf, "funcs") and hasattr(tf, "transfer_function"):  # a VolumeSource
-            if log is None:
-                log = bool(getattr(tf, "log_field", True))
-            tf = tf.transfer_function
-        log = True if log is None else bool(log)
-        channels = [np.asarray(f.y, dtype=np.float64) for f in tf.funcs[:4]]
-        x = np.asarray(tf.funcs[0].x, dtype=np.float64)
-        x0, x1 = float(x[0]), float(x[-1])
-        if not x1 > x0:
-            raise ValueError("the yt transfer function spans no range")
-        if points is None:
-            idx = np.arange(len(x))
-        else:
-            idx = np.unique(np.linspace(0, len(x) - 1, max(2, int(points))).round().astype(int))
-        t = (x[idx] - x0) / (x1 - x0)
-        t[0], t[-1] = 0.0, 1.0
-        rgb = np.clip(np.stack([c[idx] for c in channels[:3]], axis=1), 0.0, 1.0)
-        alpha = np.clip(channels[3][idx], 0.0, None)
-        alpha[0] = alpha[-1] = 0.0  # yt's tables give nothing at and beyond their bounds
-        if dataset is not None:
-            # Without a camera, that of yt's create_scene: a depth width of 1.5 times the longest side.
-            length = _yt_ray_length(camera) if camera is not None else 1.5 * _longest_side(dataset.bounds)
-            alpha = -np.expm1(-alpha * float(dataset.opacity_reference_width) / length)
-            scale = float(alpha.max())
-        elif camera is not None:
-            raise ValueError("TransferFunction.from_yt: converting for a yt camera needs the exabricks dataset "
-                             "(dataset=...), whose finest cell the opacity is given per")
-        else:
-            scale = "auto"
-        peak = float(alpha.max())
-        if peak > 0:
-            alpha = alpha / peak
-        elif scale != "auto":
-            scale = 1.0  # nothing is visible; the scale must stay positive
-        # Colour map points are sRGB; the renderer integrates their linear values.
-        colormap = [(float(ti),) + tuple(_srgb_encode(c)) for ti, c in zip(t, rgb)]
-        opacity = [(float(ti), float(a)) for ti, a in zip(t, alpha)]
-        value_range = (10.0 ** x0, 10.0 ** x1) if log else (x0, x1)
-        return cls(colormap=colormap, opacity=opacity, range=value_range, log=log, opacity_scale=scale)
+        return transfer_function_from_yt(cls, tf, log, points, camera, dataset)
 
     def to_dict(self):
         d = {}
@@ -573,20 +188,7 @@ class Camera:
         plane-parallel lens casts its rays from the near face of a slab one depth width thick
         around the focus: the orthographic camera sits on that face (Scene.from_yt also clips the
         far one)."""
-        pos = _yt_code(camera.position)
-        focus = _yt_code(camera.focus)
-        north = np.asarray(camera.north_vector, float)
-        width = _yt_code(camera.width)
-        ortho = type(camera.lens).__name__ == "PlaneParallelLens"
-        if ortho:
-            pos = focus - _yt_view_direction(camera) * (0.5 * float(width[2]))
-        else:
-            # yt's perspective lens makes the height the width times the resolution's aspect
-            # when it renders.
-            resolution = [float(r) for r in camera.resolution]
-            width[1] = width[0] * resolution[1] / resolution[0]
-        fov = math.degrees(2.0 * math.atan(0.5 * float(width[1]) / float(width[2]))) if width[2] > 0 else 40.0
-        return cls(position=pos, look_at=focus, up=north, fov=fov, orthographic=ortho, ortho_height=float(width[1]))
+        return camera_from_yt(cls, camera)
 
     def to_dict(self):
         return {"position": list(self.position), "look_at": list(self.look_at), "up": list(self.up),
@@ -594,37 +196,6 @@ class Camera:
 
     def __repr__(self):
         return "Camera(position=%s, look_at=%s, up=%s, fov=%g)" % (self.position, self.look_at, self.up, self.fov)
-
-
-def _yt_view_direction(camera):
-    """The unit vector from a yt camera's position to its focus."""
-    d = _yt_code(camera.focus) - _yt_code(camera.position)
-    return d / np.linalg.norm(d)
-
-
-# The settings of a scene converted from yt unless told otherwise: yt does not light volumes, and
-# its pictures show no sampling noise.
-_YT_DEFAULTS = {"shading": "none", "spp": 8}
-
-
-def _yt_view(camera, source, dataset):
-    """What a yt camera and volume source give a Scene of `dataset`: the transfer function
-    (TransferFunction.from_yt, converted for the camera) and the settings camera, width, height
-    (yt's resolution is (width, height)) and clip_planes (a plane-parallel lens's slab ends one
-    half depth width beyond the focus)."""
-    width, height = [int(r) for r in camera.resolution]
-    planes = []
-    if type(camera.lens).__name__ == "PlaneParallelLens":
-        w = _yt_code(camera.width)
-        if abs(w[0] * height - w[1] * width) > 1e-6 * abs(w[0] * height):
-            raise ValueError("the yt camera's width %g x %g does not have the aspect of its resolution %d x %d: "
-                             "exabricks renders square pixels (set the width to the resolution's aspect)"
-                             % (w[0], w[1], width, height))
-        n = _yt_view_direction(camera)
-        far = _yt_code(camera.focus) + n * (0.5 * float(w[2]))
-        planes.append((tuple(map(float, far)), tuple(map(float, n))))
-    tf = TransferFunction.from_yt(source, camera=camera, dataset=dataset)
-    return tf, {"camera": Camera.from_yt(camera), "width": width, "height": height, "clip_planes": planes}
 
 
 class Layer:
@@ -845,19 +416,7 @@ class Scene:
         show no sampling noise; 8 jittered passes hide it at yt's resolutions). The settings of an
         exabricks.yt.ExaBricksSource apply over these, and `settings` over all. Its render's image
         array agrees in exposure with the one yt's render returns."""
-        if source is None:
-            volumes = [s for s in scene.sources.values() if hasattr(s, "transfer_function") and hasattr(s, "field")]
-            if not volumes:
-                raise ValueError("Scene.from_yt: the yt scene has no volume source")
-            source = volumes[0]
-        field = source.field
-        if dataset is None:
-            dataset = from_yt(source.data_source.ds, [field])
-        tf, defaults = _yt_view(scene.camera, source, dataset)
-        defaults.update(_YT_DEFAULTS)
-        defaults.update(getattr(source, "exabricks_settings", {}))
-        defaults.update(settings)
-        return cls(dataset, field=_yt_field_name(field), transfer_function=tf, **defaults)
+        return scene_from_yt(cls, scene, dataset, source, **settings)
 
     # -- rendering ----------------------------------------------------------------------------
     def _frame_json(self, width, height, spp, rate):

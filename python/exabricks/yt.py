@@ -23,7 +23,8 @@ from yt.visualization.volume_rendering.render_source import VolumeSource
 from yt.visualization.volume_rendering.transfer_functions import ProjectionTransferFunction
 from yt.visualization.volume_rendering.zbuffer_array import ZBuffer
 
-from . import _YT_DEFAULTS, Scene, _yt_code, _yt_field_name, _yt_view, _yt_view_direction, from_yt
+from . import Scene
+from ._yt_scene import _YT_DEFAULTS, _yt_code, _yt_field_name, _yt_view, _yt_view_direction, from_yt
 
 __all__ = ["ExaBricksSource"]
 

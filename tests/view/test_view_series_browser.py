@@ -128,6 +128,6 @@ def test_the_field_chooser_shows_units(start_viewer, browser, tmp_path):  # noqa
     assert options == expected
     # A field with units is named "name [units]" (the data's own units, from /api/info).
     browser.execute_script(
-        "const v = window.exabricksViewer; v.info.fields[0].units = 'g/cm^3'; syncControls();")
+        "const v = window.exabricksViewer; v.info.fields[0].units = 'g/cm^3'; v.syncControls();")
     first = browser.execute_script("return document.getElementById('field').options[0].textContent")
     assert first == "%s [g/cm^3]" % info["fields"][0]["name"]
