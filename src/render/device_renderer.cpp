@@ -173,7 +173,6 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
     v.path = pathSettingsOf(s.pathTracing, dataset_.worldDiagonal);
   }
   v.shading = s.shading;
-  v.terms = s.light.terms;
   v.sampling = s.integration.sampling;
   v.earlyTermination = s.integration.earlyTermination;
   v.terminationOpacity = s.integration.terminationOpacity;
@@ -227,39 +226,26 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
     v.meshBvh.triangles = put("mesh triangles", meshBvh_.triangles(), false, update);
     v.meshColors = put("mesh colours", meshColors_, false, update);
   }
-  v.clipMeshes = s.clip.meshes;
   v.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
   v.planeCount = int(s.clip.planes.size());
   for (size_t i = 0; i < s.clip.planes.size(); ++i)
     v.planes[i] = s.clip.planes[i];
   v.clipBox = s.clip.box;
-  v.headlight = s.light.headlight;
-  v.lightWorld = normalize(s.light.direction);
-  v.aoRays = s.ao.rays;
-  v.aoVolume = s.volume && s.ao.volume;
-  const OcclusionLengths ol = occlusionLengths(s.ao, dataset_, model_.world);
-  v.aoLength = ol.length;
-  v.aoEps = ol.eps;
+  v.ray = raySettingsOf(s, dataset_, model_.world);
   update.deviceSeconds += timer.seconds();
 }
 
 const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd,
                                   int tileStride, gpu::PassCounts& counts) {
   TraceView v = base_;
-  v.camera = frame.camera;
-  v.width = frame.width;
-  v.height = frame.height;
-  v.aspect = double(frame.width) / double(frame.height);
+  v.frame = cameraRaysOf(frame);
+  v.frame.depthLimit = nullptr; // placed below, where the pass runs
+  v.frame.hasDomain = domain != nullptr;
+  if (domain) v.frame.domain = *domain;
   v.frameIndex = frame.frameIndex;
   v.seed = frame.seed;
-  v.jitter = frame.jitter;
-  v.pixelJitter = frame.samplesPerPixel > 1 && frame.jitter;
   v.rate = frame.rate;
-  v.depthLimitPlanar = frame.depthLimitPlanar;
-  v.forward = normalize(frame.camera.lookAt - frame.camera.position);
   v.path.up = skyUp(frame.camera.up);
-  v.hasDomain = domain != nullptr;
-  if (domain) v.domain = *domain;
   const size_t pixels = size_t(frame.width) * size_t(frame.height);
   counts = gpu::PassCounts();
   if (device_ == Device::Cuda) {
@@ -271,7 +257,7 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
       Buffer& b = buffers_["depth limit"];
       reserve(b, pixels * sizeof(float), "the depth limit");
       gpu::copyToDevice(b.device, frame.depthLimit, b.bytes);
-      v.depthLimit = static_cast<const float*>(b.device);
+      v.frame.depthLimit = static_cast<const float*>(b.device);
     }
     if (bytes > pinnedBytes_) {
       gpu::releaseHost(pinned_);
@@ -284,10 +270,10 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
   }
   std::vector<vec4f>& colors = hostColors_;
   colors.resize(pixels);
-  v.depthLimit = frame.depthLimit;
+  v.frame.depthLimit = frame.depthLimit;
   std::atomic<uint64_t> rays{0}, samples{0}, iso{0}, ao{0}, hits{0};
   tbb::parallel_for(0, frame.height, [&](int y) {
-    TraceCounts c;
+    RayCounts c;
     uint64_t r = 0;
     for (int x = 0; x < frame.width; ++x) {
       if (!tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) continue;

@@ -21,7 +21,7 @@ void release(void* p) noexcept;
 void* allocateHost(uint64_t bytes);
 void releaseHost(void* p) noexcept;
 void copyToDevice(void* device, const void* host, uint64_t bytes);
-/// Counters a pass adds up on the device (TraceCounts summed, and the rays).
+/// Counters a pass adds up on the device (RayCounts summed, and the rays).
 struct PassCounts {
   unsigned long long rays = 0, samples = 0, isoSamples = 0, aoRays = 0, surfaceHits = 0;
   double kernelSeconds = 0; ///< measured with events around the kernel

@@ -12,37 +12,19 @@ OcclusionLengths occlusionLengths(const AmbientOcclusion& ao, const DatasetInfo&
   return l;
 }
 
-float ambientOcclusion(const SurfaceHit& hit, const AmbientOcclusion& ao, const OcclusionScene& scene,
-                       const MarchSettings& march, PixelRandom& rng, FrameBuffer::TileCounters& c) {
-  const OcclusionLengths lengths = occlusionLengths(ao, scene.dataset, scene.model.world);
-  const double lengthW = lengths.length, eps = lengths.eps;
-  float open = 0.f;
-  for (int i = 0; i < ao.rays; ++i) {
-    const float r1 = rng.next(), r2 = rng.next();
-    const vec3f d = cosineHemisphere(hit.normal, r1, r2);
-    ++c.aoRays;
-    const DualRay ar = makeDualRay(scene.model.world, hit.position + vec3d(hit.normal) * eps, vec3d(d), &scene.clip);
-    const double meshMin = scene.clip.meshes ? ar.sMin : 0.0;
-    const double meshMax = scene.clip.meshes ? std::min(ar.sMax, lengthW) : lengthW;
-    if (scene.surfaces.meshOccludes(ar, meshMin, meshMax)) continue;
-    Ray lr = ar.lattice;
-    lr.tmax = std::min(lr.tmax, float(lengthW * ar.kappa));
-    float t;
-    uint32_t region;
-    int which;
-    if (!clippedAway(ar) && scene.surfaces.findIso(lr, march.sampling, march.rate, t, region, which, c.isoSamples))
-      continue;
-    float visibility = 1.f;
-    if (scene.volume && !clippedAway(ar) && lr.tmax > lr.tmin) {
-      vec4f acc;
-      uint64_t samples = 0, regions = 0;
-      scene.marcher.march<true>(lr, 0.5f, RayLight{}, march, acc, samples, regions);
-      c.samples += samples;
-      visibility = 1.f - acc.w;
-    }
-    open += visibility;
-  }
-  return ao.rays > 0 ? open / float(ao.rays) : 1.f;
+RaySettings raySettingsOf(const Scene& scene, const DatasetInfo& dataset, const WorldTransform& world) {
+  RaySettings r;
+  r.volume = scene.volume;
+  r.clipMeshes = scene.clip.meshes;
+  r.terms = scene.light.terms;
+  r.headlight = scene.light.headlight;
+  r.lightWorld = normalize(scene.light.direction);
+  r.aoRays = scene.ao.rays;
+  r.aoVolume = scene.volume && scene.ao.volume;
+  const OcclusionLengths lengths = occlusionLengths(scene.ao, dataset, world);
+  r.aoLength = lengths.length;
+  r.aoEps = lengths.eps;
+  return r;
 }
 
 } // namespace exa

@@ -41,13 +41,55 @@ const DatasetInfo& checkedDataset(const Model& m, const DatasetInfo& dataset) {
 
 /// What every ray of a pass shares.
 struct PassSetup {
-  double aspect;
-  vec3f lightWorld;
-  vec3d forward; ///< the camera's view direction (planar depth limits)
-  bool surfaces, clipping, jitter, pixelJitter;
+  CameraRays camera;
+  RaySettings ray;
+  bool surfaces, clipping;
   MarchSettings march;
   PathSettings path;
 };
+
+/// The CPU's side of the ray program (ray_program.h): Embree's mesh hierarchy, the iso region
+/// set's traversal and the batched volume march.
+struct CpuRays {
+  const Surfaces& surfaces;
+  const VolumeMarcher& volume;
+  const MarchSettings& settings;
+  SurfaceColors colors;
+  const WorldTransform& world;
+
+  bool hasMeshes() const { return surfaces.hasMeshes(); }
+  bool meshHit(const DualRay& r, double s0, double s1, SurfaceHit& hit) const {
+    return surfaces.meshHit(r, s0, s1, hit);
+  }
+  bool meshOccludes(const DualRay& r, double s0, double s1) const { return surfaces.meshOccludes(r, s0, s1); }
+  bool hasIso() const { return surfaces.isoTraversal() != nullptr; }
+  bool isoHit(const Ray& ray, float& t, uint32_t& region, int& which, RayCounts& c) const {
+    uint64_t n = 0;
+    const bool found = surfaces.findIso(ray, settings.sampling, settings.rate, t, region, which, n);
+    c.isoSamples += uint32_t(n);
+    return found;
+  }
+  const FieldView& isoView() const { return surfaces.isoView(); }
+  const vec3f& invScale() const { return surfaces.invScale(); }
+  vec3f surfaceColor(const SurfaceHit& hit) const { return surfaceColorOf(colors, world, hit); }
+  template <bool OpacityOnly>
+  void march(const Ray& ray, float rho, const RayLight& light, vec4f& acc, RayCounts& c) const {
+    uint64_t samples = 0, regions = 0;
+    volume.march<OpacityOnly>(ray, rho, light, settings, acc, samples, regions);
+    c.samples += uint32_t(samples);
+    c.regions += uint32_t(regions);
+  }
+};
+
+/// A ray's counts added to its tile's.
+void addCounts(Counters& c, const RayCounts& r) {
+  ++c.rays;
+  c.samples += r.samples;
+  c.regions += r.regions;
+  c.surfaceHits += r.surfaceHits;
+  c.isoSamples += r.isoSamples;
+  c.aoRays += r.aoRays;
+}
 
 } // namespace
 
@@ -71,32 +113,22 @@ struct Renderer::Impl {
   PassSetup passSetup(const Frame& frame) const {
     const Scene& s = scene;
     PassSetup ps;
-    ps.aspect = double(frame.width) / double(frame.height);
-    ps.lightWorld = normalize(s.light.direction);
-    ps.forward = normalize(frame.camera.lookAt - frame.camera.position);
+    ps.camera = cameraRaysOf(frame);
+    ps.camera.jitter = frame.jitter && s.debug == DebugView::None;
+    ps.camera.pixelJitter = frame.samplesPerPixel > 1 && ps.camera.jitter;
+    ps.camera.hasDomain = hasDomain;
+    ps.camera.domain = domain;
+    ps.ray = raySettingsOf(s, dataset, model.world);
     ps.surfaces = surfaces.any() && s.debug == DebugView::None;
     ps.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
-    ps.jitter = frame.jitter && s.debug == DebugView::None;
-    ps.pixelJitter = frame.samplesPerPixel > 1 && ps.jitter;
     ps.march = MarchSettings::of(s, options, frame.rate);
     ps.path = pathSettingsOf(s.pathTracing, dataset.worldDiagonal);
     ps.path.up = skyUp(frame.camera.up);
     return ps;
   }
 
-  /// The camera ray of pixel (x, y): clipped (where `clip`), inside the domain, up to the depth
-  /// limit; rho is the sample offset along it.
-  DualRay cameraRay(int x, int y, const Frame& frame, const PassSetup& ps, bool clip, PixelRandom& rng,
-                    float& rho) const {
-    vec3d orgW, dirW;
-    primaryRay(frame.camera, x, y, frame.width, frame.height, ps.aspect, ps.pixelJitter, ps.jitter, rng, rho, orgW,
-               dirW);
-    DualRay dr = makeDualRay(model.world, orgW, dirW, clip ? &scene.clip : nullptr);
-    if (hasDomain) restrictToBox(dr, domain);
-    if (frame.depthLimit)
-      applyDepthLimit(dr, frame.depthLimit[size_t(y) * size_t(frame.width) + size_t(x)], frame.depthLimitPlanar,
-                      ps.forward);
-    return dr;
+  CpuRays rays(const MarchSettings& march) const {
+    return {surfaces, volume, march, surfaces.colors(scene.iso.colors), model.world};
   }
 
   /// The path tracer's medium for the volume's current layers, with their majorants.
@@ -114,66 +146,46 @@ struct Renderer::Impl {
 
   /// One path-traced sample of pixel (x, y): premultiplied radiance and whether the path met the
   /// medium.
-  vec4f tracePathPixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& c, uint64_t& raySamples) const {
+  vec4f tracePathPixel(int x, int y, const Frame& frame, const PassSetup& ps, RayCounts& c) const {
     PixelRandom rng(x, y, frame.frameIndex, frame.seed);
     float rho;
-    const DualRay dr = cameraRay(x, y, frame, ps, true, rng, rho);
     const ClipView clip = clipViewOf(scene.clip);
-    ++c.rays;
-    raySamples = 0;
+    const DualRay dr = cameraRay(ps.camera, model.world, &clip, x, y, rng, rho);
     const bool inMedium = scene.volume && !mediumLayers.empty();
     if (!inMedium && !ps.surfaces) return vec4f();
     const RegionTraversal* traversal = volume.traversal();
     auto traverse = [&](const Ray& ray, auto&& emit) {
       if (inMedium) traversal->traverse(ray, emit);
     };
+    const CpuRays b = rays(ps.march);
     auto nearest = [&](const DualRay& r, PathSurface& out) {
       SurfaceHit hit;
-      if (!ps.surfaces || !surfaces.nearest(r, scene.clip.meshes, ps.march.sampling, frame.rate, hit, c.isoSamples))
-        return false;
+      if (!ps.surfaces || !nearestSurface(b, r, scene.clip.meshes, hit, c)) return false;
       out.distance = hit.distance;
       out.normal = vec3d(hit.normal);
-      out.color = surfaces.color(hit, scene.iso.colors);
+      out.color = b.surfaceColor(hit);
       return true;
     };
-    return tracePath(medium(), traverse, nearest, model.world, &clip, dr, ps.path, rng, raySamples);
+    uint64_t samples = 0;
+    const vec4f out = tracePath(medium(), traverse, nearest, model.world, &clip, dr, ps.path, rng, samples);
+    c.samples += uint32_t(samples);
+    c.marchSamples = c.samples;
+    return out;
   }
 
-  /// One sample of pixel (x, y) for pass frame.frameIndex: premultiplied colour and volume
-  /// samples taken.
-  vec4f tracePixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& c, uint64_t& raySamples) const {
+  /// One ray-marched sample of pixel (x, y) for pass frame.frameIndex (marchSample), or a debug
+  /// view's colour: premultiplied.
+  vec4f tracePixel(int x, int y, const Frame& frame, const PassSetup& ps, Counters& tile, RayCounts& c) const {
     PixelRandom rng(x, y, frame.frameIndex, frame.seed);
     float rho;
-    // March in lattice space with a unit-length lattice direction: t is in finest-level lattice
-    // units.
-    const DualRay dr = cameraRay(x, y, frame, ps, ps.clipping && scene.debug == DebugView::None, rng, rho);
-    const Ray& ray = dr.lattice;
-    const vec3f viewW = vec3f(dr.dirW);
-    RayLight light;
-    light.light = scene.light.headlight ? viewW : ps.lightWorld;
-    light.halfVector = normalize(light.light + viewW);
-    ++c.rays;
-    raySamples = 0;
+    const ClipView clip = clipViewOf(scene.clip);
+    const bool clipped = ps.clipping && scene.debug == DebugView::None;
+    const DualRay dr = cameraRay(ps.camera, model.world, clipped ? &clip : nullptr, x, y, rng, rho);
     if (scene.debug == DebugView::Level || scene.debug == DebugView::Region || scene.debug == DebugView::Brick)
-      return debugColor(model, *volume.traversal(), scene.debug, ray, c);
-
-    vec4f acc; // premultiplied, front to back
-    SurfaceHit hit;
-    const bool haveHit =
-        ps.surfaces && surfaces.nearest(dr, scene.clip.meshes, ps.march.sampling, frame.rate, hit, c.isoSamples);
-    Ray volumeRay = ray;
-    if (haveHit) volumeRay.tmax = std::min(volumeRay.tmax, float(hit.distance * dr.kappa));
-    if (scene.volume && !clippedAway(dr))
-      volume.march<false>(volumeRay, rho, light, ps.march, acc, raySamples, c.regions);
-    if (haveHit && acc.w < 1.f) {
-      ++c.surfaceHits;
-      const vec3f base = surfaces.color(hit, scene.iso.colors);
-      const OcclusionScene occluders{model, dataset, scene.clip, surfaces, volume, scene.volume && scene.ao.volume};
-      const float ao = scene.ao.rays > 0 ? ambientOcclusion(hit, scene.ao, occluders, ps.march, rng, c) : 1.f;
-      compositeOpaqueBehind(acc, shadeSurface(base, hit.normal, light.light, light.halfVector, ao, scene.light.terms));
-    }
-    c.samples += raySamples;
-    return acc;
+      return debugColor(model, *volume.traversal(), scene.debug, dr.lattice, tile);
+    const CpuRays b = rays(ps.march);
+    return ps.surfaces ? marchSample<true>(b, ps.ray, model.world, &clip, dr, rho, rng, c)
+                       : marchSample<false>(b, ps.ray, model.world, &clip, dr, rho, rng, c);
   }
 
   /// A pass of the tiles begin, begin + stride, ... below end on the device back end.
@@ -457,8 +469,9 @@ bool Renderer::pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit
   const Impl& im = *impl_;
   if (!(length(direction) > 0.0) || !im.haveScene) return false;
   const DualRay r = makeDualRay(im.model.world, origin, direction, &im.scene.clip);
-  uint64_t samples = 0;
-  return im.surfaces.nearest(r, im.scene.clip.meshes, im.scene.integration.sampling, 1.f, hit, samples);
+  const MarchSettings march = MarchSettings::of(im.scene, im.options, 1.f);
+  RayCounts counts;
+  return nearestSurface(im.rays(march), r, im.scene.clip.meshes, hit, counts);
 }
 
 bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassControl& control) const {
@@ -492,13 +505,12 @@ bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassCon
     const int tx = tile % buffer.tilesX_, ty = tile / buffer.tilesX_;
     for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
       for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x) {
-        uint64_t raySamples = 0;
-        const vec4f acc = pathTraced ? im.tracePathPixel(x, y, frame, ps, c, raySamples)
-                                     : im.tracePixel(x, y, frame, ps, c, raySamples);
-        if (pathTraced) c.samples += raySamples;
+        RayCounts rc;
+        const vec4f acc = pathTraced ? im.tracePathPixel(x, y, frame, ps, rc) : im.tracePixel(x, y, frame, ps, c, rc);
+        addCounts(c, rc);
         const size_t p = size_t(y) * size_t(frame.width) + size_t(x);
         buffer.sum_[p] += acc;
-        if (steps) buffer.steps_[p] += float(raySamples);
+        if (steps) buffer.steps_[p] += float(rc.marchSamples);
       }
     ++buffer.tilePasses_[size_t(tile)];
     const uint64_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;

@@ -53,13 +53,11 @@ void Surfaces::updateMeshes(const std::vector<SceneMesh>& meshes) {
     meshColors_.push_back(m.color);
 }
 
-bool Surfaces::traceMesh(const DualRay& r, double sMin, double sMax, SurfaceHit& hit) const {
+bool Surfaces::meshHit(const DualRay& r, double sMin, double sMax, SurfaceHit& hit) const {
   MeshHit m;
   if (!meshes_.intersect(r.orgW, r.dirW, sMin, sMax, m)) return false;
-  hit.kind = SurfaceHit::Mesh;
   hit.index = m.mesh;
   hit.distance = m.distance;
-  hit.position = r.orgW + r.dirW * hit.distance;
   hit.normal = m.normal;
   return true;
 }
@@ -76,38 +74,17 @@ bool Surfaces::findIso(const Ray& ray, Sampling sampling, float rate, float& tHi
                          rate, tHit, regionHit, which, samples);
 }
 
-bool Surfaces::nearest(const DualRay& r, bool clipMeshes, Sampling sampling, float rate, SurfaceHit& hit,
-                       uint64_t& isoSamples) const {
-  bool have = false;
-  if (!meshes_.empty()) {
-    const double s0 = clipMeshes ? r.sMin : r.domainMin;
-    const double s1 = clipMeshes ? r.sMax : r.domainMax;
-    have = traceMesh(r, s0, s1, hit);
-  }
-  if (!isoTraversal_ || clippedAway(r)) return have;
-  Ray lr = r.lattice;
-  if (have) lr.tmax = std::min(lr.tmax, float(hit.distance * r.kappa));
-  float t;
-  uint32_t region;
-  int which;
-  if (!findIso(lr, sampling, rate, t, region, which, isoSamples)) return have;
-  hit.kind = SurfaceHit::Iso;
-  hit.index = which;
-  hit.distance = double(t) / r.kappa;
-  hit.position = r.orgW + r.dirW * hit.distance;
-  hit.normal = isoNormal(isoView_, region, lr.org + lr.dir * t, r.dirW, invScale_);
-  return true;
-}
-
-vec3f Surfaces::color(const SurfaceHit& hit, const std::vector<vec3f>& isoColors) const {
-  if (hit.kind == SurfaceHit::Mesh) return meshColors_[size_t(hit.index)];
+SurfaceColors Surfaces::colors(const std::vector<vec3f>& isoColors) const {
+  SurfaceColors c;
+  c.meshColors = meshColors_.data();
+  c.isoColors = isoColors.data();
+  c.isoColorCount = int(isoColors.size());
+  c.isoColored = isoColored_;
   if (isoColored_) {
-    float v;
-    const vec3d pl = model_.world.toLattice(hit.position);
-    if (sampleField(isoColor_.view, vec3f(pl), v)) return isoColor_.lookup(v).rgb();
+    c.isoColorView = isoColor_.view;
+    c.isoColorTable = isoColor_.t;
   }
-  if (!isoColors.empty()) return isoColors[size_t(hit.index) % isoColors.size()];
-  return defaultIsoColor(hit.index);
+  return c;
 }
 
 } // namespace exa

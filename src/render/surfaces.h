@@ -5,6 +5,7 @@
 
 #include "dual_ray.h"
 #include "layer_table.h"
+#include "ray_program.h"
 
 #include "exabricks/accel/mesh_bvh.h"
 #include "exabricks/accel/traversal.h"
@@ -42,19 +43,17 @@ public:
   /// by one secant step. Returns the lattice t, the region and the iso-value's index.
   bool findIso(const Ray& ray, Sampling sampling, float rate, float& tHit, uint32_t& regionHit, int& which,
                uint64_t& samples) const;
-  /// Nearest surface (mesh or iso-surface) along a ray; meshes are clipped with `clipMeshes`,
-  /// else limited to the ray's domain interval only.
-  bool nearest(const DualRay& r, bool clipMeshes, Sampling sampling, float rate, SurfaceHit& hit,
-               uint64_t& isoSamples) const;
+  /// The nearest mesh within [sMin, sMax] along the ray: its distance, normal and number.
+  bool meshHit(const DualRay& r, double sMin, double sMax, SurfaceHit& hit) const;
   /// Whether a mesh lies within [sMin, sMax] along the ray.
   bool meshOccludes(const DualRay& r, double sMin, double sMax) const;
-  /// Colour of a hit before lighting: the mesh's, the iso colour field's through its map, or the
-  /// iso-value's (`isoColors`, cycled; default colours without them).
-  vec3f color(const SurfaceHit& hit, const std::vector<vec3f>& isoColors) const;
+  /// World units per lattice unit, inverted (iso-surface normals).
+  const vec3f& invScale() const { return invScale_; }
+  /// What colours a hit before lighting (surfaceColorOf): the meshes', the iso colour field's
+  /// through its map, or the iso-values' (`isoColors`, which must outlive the view).
+  SurfaceColors colors(const std::vector<vec3f>& isoColors) const;
 
 private:
-  bool traceMesh(const DualRay& r, double sMin, double sMax, SurfaceHit& hit) const;
-
   const Model& model_;
   const DatasetInfo& dataset_;
   float referenceWidth_;

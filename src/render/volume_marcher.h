@@ -5,6 +5,7 @@
 #pragma once
 
 #include "layer_table.h"
+#include "ray_program.h"
 
 #include "exabricks/accel/traversal.h"
 #include "exabricks/amr/cell_locator.h"
@@ -30,11 +31,6 @@ struct MarchSettings {
   float rate = 1.f; ///< samples per half region's finest width
 
   static MarchSettings of(const Scene& scene, const RendererOptions& options, float rate);
-};
-
-/// A ray's lighting: the direction towards the light and the half vector with the view (world, unit).
-struct RayLight {
-  vec3f light{0.f}, halfVector{0.f};
 };
 
 class VolumeMarcher {

@@ -48,9 +48,9 @@ __global__ void __launch_bounds__(64, (SmoothOne && !Surfaces) ? 10 : 8)
     for (int i = 0; i < 5; ++i)
       block[i] = 0;
   __syncthreads();
-  if (x < v.width && y < v.height && tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) {
-    TraceCounts c;
-    colors[size_t(y) * size_t(v.width) + size_t(x)] =
+  if (x < v.frame.width && y < v.frame.height && tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) {
+    RayCounts c;
+    colors[size_t(y) * size_t(v.frame.width) + size_t(x)] =
         Path ? tracePathSample<Surfaces>(v, x, y, c) : traceSample<Surfaces, SmoothOne>(v, x, y, c);
     atomicAdd(&block[0], 1ull);
     atomicAdd(&block[1], (unsigned long long)c.samples);
@@ -138,7 +138,7 @@ void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, in
   check(cudaMemcpyToSymbol(traceViewBytes, &view, sizeof(TraceView)), "setting the pass");
   check(cudaMemset(deviceCounts, 0, sizeof(PassCounts)), "clearing the counters");
   const dim3 block(8, 8);
-  const dim3 grid(unsigned(view.width + 7) / 8, unsigned(view.height + 7) / 8);
+  const dim3 grid(unsigned(view.frame.width + 7) / 8, unsigned(view.frame.height + 7) / 8);
   auto* colors = static_cast<vec4f*>(deviceColors);
   auto* passCounts = static_cast<PassCounts*>(deviceCounts);
   cudaEvent_t start, stop;
@@ -160,7 +160,7 @@ void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, in
     traceKernel<false, false><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
   cudaEventRecord(stop);
   check(cudaGetLastError(), "launching the pass");
-  const size_t pixels = size_t(view.width) * size_t(view.height);
+  const size_t pixels = size_t(view.frame.width) * size_t(view.frame.height);
   check(cudaMemcpy(hostColors, deviceColors, pixels * sizeof(vec4f), cudaMemcpyDeviceToHost), "the pass");
   check(cudaMemcpy(&counts, deviceCounts, sizeof(PassCounts), cudaMemcpyDeviceToHost), "the pass's counters");
   float ms = 0.f;
