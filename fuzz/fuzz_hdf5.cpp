@@ -1,8 +1,9 @@
 // libFuzzer entry for HDF5 files damaged at the byte level: the input is a whole file (seeds:
 // the Chombo and FLASH test fixtures in both HDF5 file formats, fuzz_seeds hdf5 DIR), probed and
 // read by the Chombo and FLASH readers. libhdf5 parses the damaged metadata: every input must
-// end in a clean error or a load, whatever libhdf5 would do with it (src/io/hdf5_file.cpp checks
-// datatypes and dataspaces before reading and walks the file in a child process first).
+// end in a clean error or a load, whatever libhdf5 would do with it (src/io/hdf5_checks.cpp checks
+// datatypes and dataspaces before reading; src/io/hdf5_child.cpp walks the file in a child process
+// first).
 #include "fuzz_files.h"
 
 #include "exabricks/core/error.h"

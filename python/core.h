@@ -1,5 +1,5 @@
 // What the parts of exabricks._core share: datasets and meshes as the module hands them to Python,
-// and the series binding (series.cpp) registered by the module.
+// and the renderer and series bindings (renderer.cpp, series.cpp) registered by the module.
 #pragma once
 
 #include "exabricks/amr/model.h"
@@ -32,6 +32,9 @@ struct Mesh {
 
 /// An image as an (H, W, 4) float32 array of linear, premultiplied RGBA.
 pybind11::array_t<float> imageArray(const Image& image);
+
+/// Registers exabricks._core.Renderer (renderer.cpp).
+void bindRenderer(pybind11::module_& m);
 
 /// Registers exabricks._core.Series.
 void bindSeries(pybind11::module_& m);

@@ -361,6 +361,31 @@ double bandPower(const Image& img, double period) {
   return power;
 }
 
+/// A smooth field with maxima, minima and saddles over the box `b`, at the cells' centres.
+void setSmoothField(CellSet& set, const box3l& b) {
+  const vec3d extent = vec3d(b.upper - b.lower);
+  for (size_t i = 0; i < set.cells.size(); ++i) {
+    const Cell& c = set.cells[i];
+    const vec3d p = (vec3d(c.lower) + vec3d(0.5 * (1 << c.level)) - vec3d(b.lower)) / extent;
+    set.fields[0].values[i] = float(0.5 + 0.35 * std::cos(2 * M_PI * p.x) * std::cos(2 * M_PI * (p.y - 0.1)) *
+                                              std::cos(2 * M_PI * (p.z + 0.2)));
+  }
+}
+
+/// An orthographic camera looking at `centre` along the axis, from outside data of `extent`,
+/// its view `size` pixels at two pixels per unit.
+Camera alongAxis(int axis, const vec3d& centre, const vec3d& extent, int size) {
+  Camera cam;
+  cam.orthographic = true;
+  vec3d dir(0.0);
+  dir[axis] = 1.0;
+  cam.position = centre - dir * (4 * std::max({extent.x, extent.y, extent.z}));
+  cam.lookAt = centre;
+  cam.up = axis == 2 ? vec3d(0, 1, 0) : vec3d(0, 0, 1);
+  cam.orthoHeight = 0.25 * size;
+  return cam;
+}
+
 } // namespace
 
 TEST(Render, DefaultShadingDoesNotDrawTheCellLattice) {
@@ -387,12 +412,7 @@ TEST(Render, DefaultShadingDoesNotDrawTheCellLattice) {
   const box3l b = cells.bounds();
   const vec3d extent = vec3d(b.upper - b.lower);
   for (CellSet* set : {&cells, &finest})
-    for (size_t i = 0; i < set->cells.size(); ++i) {
-      const Cell& c = set->cells[i];
-      const vec3d p = (vec3d(c.lower) + vec3d(0.5 * (1 << c.level)) - vec3d(b.lower)) / extent;
-      set->fields[0].values[i] = float(0.5 + 0.35 * std::cos(2 * M_PI * p.x) * std::cos(2 * M_PI * (p.y - 0.1)) *
-                                                 std::cos(2 * M_PI * (p.z + 0.2)));
-    }
+    setSmoothField(*set, b);
   const Model m = buildModel(std::move(cells), BuildOptions{});
   const Model truth = buildModel(std::move(finest), BuildOptions{});
   TransferFunction tf;
@@ -404,14 +424,7 @@ TEST(Render, DefaultShadingDoesNotDrawTheCellLattice) {
   const vec3d centre = vec3d(b.lower) + extent * 0.5;
   EXPECT_EQ(Scene().shading, Shading::Smooth);
   for (int axis = 0; axis < 3; ++axis) {
-    Camera cam;
-    cam.orthographic = true;
-    vec3d dir(0.0);
-    dir[axis] = 1.0;
-    cam.position = centre - dir * (4 * std::max({extent.x, extent.y, extent.z}));
-    cam.lookAt = centre;
-    cam.up = axis == 2 ? vec3d(0, 1, 0) : vec3d(0, 0, 1);
-    cam.orthoHeight = 0.25 * size;
+    const Camera cam = alongAxis(axis, centre, extent, size);
     auto render = [&](const Model& model, Shading s) {
       RenderSetup o = smallOptions(size);
       o.scene.shading = s;

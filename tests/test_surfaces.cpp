@@ -1,7 +1,7 @@
 // Surfaces and effects against analytic truth: iso-surfaces of linear and radial fields, meshes
 // hiding the volume, clipping removing exactly a half-space, ambient occlusion in a corner and
-// on an open plane, colouring by a second field, the multi-field combination rule, and per-pixel
-// depth limits ending rays as opaque geometry drawn elsewhere would.
+// on an open plane, colouring by a second field and the multi-field combination rule. Per-pixel
+// depth limits are tested in test_depth_limit.cpp.
 #include "datasets.h"
 #include "errors.h"
 #include "exabricks/amr/model.h"
@@ -11,6 +11,7 @@
 #include "exabricks/render/renderer.h"
 #include "reference.h"
 #include "render_setup.h"
+#include "surface_scenes.h"
 
 #include <gtest/gtest.h>
 
@@ -19,102 +20,6 @@
 
 using namespace exa;
 using namespace exa::test;
-
-namespace {
-
-/// Level-0 cells filling [0, n)^3 with value f(cell centre) in one field per function.
-template <typename... F> CellSet uniformCells(int n, const std::vector<std::string>& names, F... fs) {
-  CellSet s;
-  for (const std::string& name : names)
-    s.fields.push_back({name, {}});
-  for (int z = 0; z < n; ++z)
-    for (int y = 0; y < n; ++y)
-      for (int x = 0; x < n; ++x) {
-        s.cells.push_back({vec3i(x, y, z), 0});
-        const vec3d c(x + 0.5, y + 0.5, z + 0.5);
-        size_t i = 0;
-        ((s.fields[i++].values.push_back(float(fs(c)))), ...);
-      }
-  return s;
-}
-
-/// Two levels over [0, 64)^3: finest cells where a 2^3 block's centre lies within `fineRadius`
-/// of `centre`, cells of width 2 elsewhere; value = distance of the cell centre from `centre`.
-CellSet radialTwoLevels(const vec3d& centre, double fineRadius) {
-  CellSet s;
-  s.fields.push_back({"radius", {}});
-  s.fields.push_back({"x", {}});
-  for (int z = 0; z < 64; z += 2)
-    for (int y = 0; y < 64; y += 2)
-      for (int x = 0; x < 64; x += 2) {
-        const vec3d bc(x + 1.0, y + 1.0, z + 1.0);
-        if (length(bc - centre) < fineRadius) {
-          for (int k = 0; k < 8; ++k) {
-            const vec3i lo(x + (k & 1), y + ((k >> 1) & 1), z + (k >> 2));
-            const vec3d c = vec3d(lo) + vec3d(0.5);
-            s.cells.push_back({lo, 0});
-            s.fields[0].values.push_back(float(length(c - centre)));
-            s.fields[1].values.push_back(float(c.x));
-          }
-        } else {
-          s.cells.push_back({vec3i(x, y, z), 1});
-          s.fields[0].values.push_back(float(length(bc - centre)));
-          s.fields[1].values.push_back(float(bc.x));
-        }
-      }
-  return s;
-}
-
-TransferFunction grayRamp(float lo, float hi, float alpha) {
-  TransferFunction tf;
-  tf.colorMap = builtinColorMap("grayscale");
-  tf.opacity = {{0.f, alpha}, {1.f, alpha}};
-  tf.valueRange = range1f{lo, hi};
-  return tf;
-}
-
-/// A transfer function that shows nothing (surfaces only).
-TransferFunction invisible() { return grayRamp(0.f, 1.f, 0.f); }
-
-/// Orthographic camera looking along `dir` at `target`, `height` world units tall.
-Camera ortho(const vec3d& target, const vec3d& dir, const vec3d& up, double height) {
-  Camera c;
-  c.orthographic = true;
-  c.position = target - dir * 200.0;
-  c.lookAt = target;
-  c.up = up;
-  c.orthoHeight = height;
-  return c;
-}
-
-/// A quad (two triangles) with corners a, b, c, d in order.
-TriangleMesh quad(const vec3f& a, const vec3f& b, const vec3f& c, const vec3f& d) {
-  TriangleMesh m;
-  m.vertices = {a, b, c, d};
-  m.triangles = {vec3i(0, 1, 2), vec3i(0, 2, 3)};
-  return m;
-}
-
-double maxAbsDiff(const Image& a, const Image& b) {
-  double m = 0;
-  for (size_t i = 0; i < a.pixels.size(); ++i) {
-    m = std::max<double>(m, std::abs(a.pixels[i].x - b.pixels[i].x));
-    m = std::max<double>(m, std::abs(a.pixels[i].y - b.pixels[i].y));
-    m = std::max<double>(m, std::abs(a.pixels[i].z - b.pixels[i].z));
-    m = std::max<double>(m, std::abs(a.pixels[i].w - b.pixels[i].w));
-  }
-  return m;
-}
-
-RenderSetup surfaceOptions(int size) {
-  RenderSetup o;
-  o.frame.width = o.frame.height = size;
-  o.scene.integration.earlyTermination = false;
-  o.frame.jitter = false;
-  return o;
-}
-
-} // namespace
 
 TEST(Surfaces, LinearFieldIsoSurfaceIsThePlane) {
   // f = a . lattice centre; with a world transform the plane in world space is
@@ -552,146 +457,4 @@ TEST(Surfaces, VolumeAttenuatesAmbientOcclusionWhenAsked) {
     darkest = std::max<double>(darkest, plain.pixels[i].x - attenuated.pixels[i].x);
   }
   EXPECT_GT(darkest, 0.05);
-}
-
-TEST(Surfaces, DepthLimitEndsTheVolumeAsAClipPlaneAcrossTheView) {
-  CellSet cells = uniformCells(16, {"f"}, [](const vec3d& p) { return (p.x + p.y + p.z) / 48.0; });
-  const Model m = buildModel(std::move(cells));
-  RenderSetup o = surfaceOptions(40);
-  SceneRenderer full(m, 0, o);
-  full.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
-  const vec3d dir = normalize(vec3d(0.3, 0.5, 1.0));
-  const Camera cam = ortho(vec3d(8.0), dir, vec3d(0, 1, 0), 24.0);
-  const double depth = 201.5; // 1.5 beyond the centre of the data
-  const Image unlimited = full.render(cam);
-
-  // An orthographic camera: a constant distance along the rays is a plane across the view.
-  std::vector<float> limit(size_t(40 * 40), float(depth));
-  full.frame.depthLimit = limit.data();
-  const Image limited = full.render(cam);
-  RenderSetup oc = o;
-  oc.scene.clip.planes = {{cam.position + dir * depth, dir}};
-  SceneRenderer clipped(m, 0, oc);
-  clipped.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
-  const Image byPlane = clipped.render(cam);
-  RecordProperty("orthographic_max_abs_diff", std::to_string(maxAbsDiff(limited, byPlane)));
-  EXPECT_LT(maxAbsDiff(limited, byPlane), 1e-6);
-  EXPECT_GT(maxAbsDiff(limited, unlimited), 0.05);
-
-  // Left half without a limit, right half with it: each half is the matching image.
-  for (int y = 0; y < 40; ++y)
-    for (int x = 0; x < 20; ++x)
-      limit[size_t(y) * 40 + size_t(x)] = std::numeric_limits<float>::infinity();
-  const Image halves = full.render(cam);
-  for (int y = 0; y < 40; ++y)
-    for (int x = 0; x < 40; ++x) {
-      const vec4f &p = halves.at(x, y), &q = x < 20 ? unlimited.at(x, y) : limited.at(x, y);
-      EXPECT_EQ(p.x, q.x);
-      EXPECT_EQ(p.w, q.w);
-    }
-
-  // A perspective camera with planar depths (a z-buffer's): the same plane across the view.
-  Camera persp;
-  persp.position = vec3d(8.0) - dir * 40.0;
-  persp.lookAt = vec3d(8.0);
-  persp.up = vec3d(0, 1, 0);
-  persp.fovy = 30.0;
-  std::fill(limit.begin(), limit.end(), 41.5f);
-  full.frame.depthLimitPlanar = true;
-  const Image planar = full.render(persp);
-  oc.scene.clip.planes = {{persp.position + dir * 41.5, dir}};
-  SceneRenderer clippedPersp(m, 0, oc);
-  clippedPersp.setTransferFunction(grayRamp(0.f, 1.f, 0.2f));
-  const Image byPlanePersp = clippedPersp.render(persp);
-  RecordProperty("perspective_planar_max_abs_diff", std::to_string(maxAbsDiff(planar, byPlanePersp)));
-  EXPECT_LT(maxAbsDiff(planar, byPlanePersp), 1e-5);
-  full.frame.depthLimit = nullptr;
-  EXPECT_GT(maxAbsDiff(planar, full.render(persp)), 0.05);
-
-  // Limits beyond the data change nothing.
-  std::fill(limit.begin(), limit.end(), 1e6f);
-  full.frame.depthLimit = limit.data();
-  full.frame.depthLimitPlanar = false;
-  EXPECT_EQ(maxAbsDiff(full.render(cam), unlimited), 0.0);
-}
-
-TEST(Surfaces, DepthLimitHidesSurfacesBehindIt) {
-  const vec3d centre(31.3, 32.6, 30.9);
-  const Model m = buildModel(radialTwoLevels(centre, 26.0));
-  RenderSetup o = surfaceOptions(32);
-  SceneRenderer r(m, 0, o);
-  r.setTransferFunction(invisible());
-  IsoSurfaces is;
-  is.field = r.field(0);
-  is.values = {20.f};
-  r.setIsoSurfaces(is);
-  const Camera cam = ortho(centre, vec3d(0, 0, 1), vec3d(0, 1, 0), 50.0);
-  const Image unlimited = r.render(cam);
-  // The sphere's front lies 180 (its centre) to 200 (its rim) along the rays: a limit of 190
-  // keeps the hits nearer than that and removes the others.
-  const float limitDistance = 190.f;
-  std::vector<float> limit(size_t(32 * 32), limitDistance);
-  r.frame.depthLimit = limit.data();
-  const Image limited = r.render(cam);
-  int kept = 0, removed = 0;
-  for (int y = 0; y < 32; ++y)
-    for (int x = 0; x < 32; ++x) {
-      vec3d org, dir;
-      cam.ray((x + 0.5) / 32, (y + 0.5) / 32, 1.0, org, dir);
-      SurfaceHit hit;
-      if (!r.pick(org, dir, hit)) {
-        EXPECT_EQ(limited.at(x, y).w, 0.f);
-        continue;
-      }
-      if (std::abs(hit.distance - limitDistance) < 0.05) continue; // too close to call
-      if (hit.distance < limitDistance) {
-        // The iso search steps over the shortened interval: the hit moves by round-off.
-        EXPECT_NEAR(limited.at(x, y).x, unlimited.at(x, y).x, 1e-4);
-        EXPECT_EQ(limited.at(x, y).w, 1.f);
-        ++kept;
-      } else {
-        EXPECT_EQ(limited.at(x, y).w, 0.f) << x << ", " << y << " hit at " << hit.distance;
-        ++removed;
-      }
-    }
-  EXPECT_GT(kept, 20);
-  EXPECT_GT(removed, 20);
-
-  // A mesh just beyond the limit disappears, one just before it stays; both with the mesh
-  // clipped and not.
-  for (bool clipMeshes : {false, true}) {
-    RenderSetup om = surfaceOptions(16);
-    om.scene.volume = false;
-    om.scene.clip.meshes = clipMeshes;
-    SceneRenderer meshes(m, 0, om);
-    const double z = centre.z - 200.0 + limitDistance;
-    meshes.addMesh(quad({-100, -100, float(z + 0.5)}, {200, -100, float(z + 0.5)}, {200, 200, float(z + 0.5)},
-                        {-100, 200, float(z + 0.5)}),
-                   vec3f(0.8f));
-    std::vector<float> meshLimit(size_t(16 * 16), limitDistance);
-    meshes.frame.depthLimit = meshLimit.data();
-    for (const vec4f& p : meshes.render(cam).pixels)
-      EXPECT_EQ(p.w, 0.f);
-    std::fill(meshLimit.begin(), meshLimit.end(), limitDistance + 1.f);
-    for (const vec4f& p : meshes.render(cam).pixels)
-      EXPECT_EQ(p.w, 1.f);
-  }
-}
-
-TEST(Surfaces, BadDepthLimitsAreRejected) {
-  CellSet cells = uniformCells(4, {"f"}, [](const vec3d& p) { return p.x; });
-  const Model m = buildModel(std::move(cells));
-  SceneRenderer r(m, 0, surfaceOptions(8));
-  std::vector<float> limit(64, 1.f);
-  r.frame.depthLimit = limit.data();
-  limit[8 * 3 + 5] = std::nanf("");
-  const Camera cam = ortho(vec3d(2.0), vec3d(0, 0, 1), vec3d(0, 1, 0), 6.0);
-  expectIn(errorOf([&] { r.render(cam); }), {"depth limit of pixel (5, 3)", "distance >= 0"});
-  limit[8 * 3 + 5] = -1.f;
-  expectIn(errorOf([&] { r.render(cam); }), {"depth limit of pixel (5, 3) is -1"});
-  limit[8 * 3 + 5] = std::numeric_limits<float>::infinity();
-  EXPECT_EQ(errorOf([&] { r.render(cam); }), "no error");
-  // A preview at another resolution cannot use the limit; one at the same keeps it.
-  EXPECT_EQ(r.frame.preview(2, 0.5f).depthLimit, nullptr);
-  EXPECT_EQ(r.frame.preview(1, 0.5f).depthLimit, limit.data());
 }

@@ -98,6 +98,71 @@ FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& in
   return f;
 }
 
+/// Ctrl-C and SIGTERM are taken by one thread (sigwait) that stops the server cleanly; every
+/// thread started after this inherits the blocked mask.
+sigset_t blockStopSignals() {
+  sigset_t stopSignals;
+  sigemptyset(&stopSignals);
+  sigaddset(&stopSignals, SIGINT);
+  sigaddset(&stopSignals, SIGTERM);
+  pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
+  return stopSignals;
+}
+
+/// A series maps one colour range over all its steps (the first step's widened to it) unless
+/// --range says LOW,HIGH (`rangeGiven`) or per-step; steps found unreadable on the way are added
+/// to `unreadable`.
+void applySeriesRange(const FirstStep& first, const std::vector<std::string>& steps, const LoadOptions& lo,
+                      bool rangeGiven, bool perStep, Scene& scene,
+                      std::vector<std::pair<int, std::string>>& unreadable) {
+  if (!first.series || rangeGiven) return;
+  if (perStep) {
+    scene.layers[0].tf.valueRange = range1f();
+    return;
+  }
+  const Model& model = *first.model;
+  const int field = model.requireField(scene.layers[0].field);
+  const SeriesRange r = seriesRange(steps, lo, model.fieldNames[size_t(field)], true);
+  const range1f overSteps = r.range;
+  for (size_t k = 0; k < r.unreadable.size(); ++k)
+    if (std::none_of(first.unreadable.begin(), first.unreadable.end(),
+                     [&](const auto& u) { return u.first == r.unreadable[k]; })) {
+      logWarning(strCat("step ", r.unreadable[k], " cannot be read, marked on the page: ", r.reasons[k]));
+      unreadable.emplace_back(r.unreadable[k], r.reasons[k]);
+    }
+  TransferFunction& tf = scene.layers[0].tf;
+  tf = widenedForSeries(tf, first.dataset.valueRanges.at(size_t(field)), overSteps);
+  logNote(strCat("colour range over all ", steps.size(), " steps: [", tf.valueRange.lower, ", ", tf.valueRange.upper,
+                 "] (values over [", overSteps.lower, ", ", overSteps.upper,
+                 "]); --range per-step or LOW,HIGH to choose"));
+}
+
+/// Serves the content until Ctrl-C, SIGTERM (`stopSignals`, blocked in every thread) or the
+/// server's own end; prints the address, and how to reach it, first.
+void serve(view::ViewContent content, const view::ServerOptions& options, const std::string& name,
+           const sigset_t& stopSignals) {
+  view::Server server(std::move(content), options);
+  server.bind();
+
+  std::cout << server.url() << std::endl;
+  if (logLevel() >= LogLevel::Warning) {
+    std::fprintf(stderr,
+                 "exabricks: viewing %s at %s\n"
+                 "  from another machine: ssh -L %d:localhost:%d %s, then open the address there\n"
+                 "  Ctrl-C stops the viewer\n",
+                 name.c_str(), server.url().c_str(), server.port(), server.port(), hostName().c_str());
+  }
+  std::thread signalWaiter([&] {
+    int signal = 0;
+    sigwait(&stopSignals, &signal);
+    if (signal == SIGINT || signal == SIGTERM) server.stop();
+  });
+  server.run();
+  server.stop();
+  pthread_kill(signalWaiter.native_handle(), SIGTERM); // wakes the waiter when the server ended by itself
+  signalWaiter.join();
+}
+
 void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   ViewCmdOptions o = given;
   const std::vector<std::string> steps = viewSteps(o.inputs);
@@ -108,13 +173,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
     perStep = o.scene.range[0] == "per-step";
     o.scene.range.clear();
   }
-  // Ctrl-C and SIGTERM are taken by one thread (sigwait) that stops the server cleanly; every
-  // thread started from here on inherits the blocked mask.
-  sigset_t stopSignals;
-  sigemptyset(&stopSignals);
-  sigaddset(&stopSignals, SIGINT);
-  sigaddset(&stopSignals, SIGTERM);
-  pthread_sigmask(SIG_BLOCK, &stopSignals, nullptr);
+  const sigset_t stopSignals = blockStopSignals();
 
   if (o.port < 0 || o.port > 65535) failUsage("--port must be in 0..65535 (0: any free port)");
   if (!o.token.empty() && o.token.size() < 16) failUsage("--token must have at least 16 characters");
@@ -130,26 +189,8 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
   applyDataDefaults(o.scene, cmd, doc.scene, *model, dataset);
-  range1f overSteps;
   std::vector<std::pair<int, std::string>> unreadable = first.unreadable;
-  if (first.series && o.scene.range.empty() && perStep) {
-    doc.scene.layers[0].tf.valueRange = range1f();
-  } else if (first.series && o.scene.range.empty()) {
-    const int field = model->requireField(doc.scene.layers[0].field);
-    const SeriesRange r = seriesRange(steps, lo, model->fieldNames[size_t(field)], true);
-    overSteps = r.range;
-    for (size_t k = 0; k < r.unreadable.size(); ++k)
-      if (std::none_of(first.unreadable.begin(), first.unreadable.end(),
-                       [&](const auto& u) { return u.first == r.unreadable[k]; })) {
-        logWarning(strCat("step ", r.unreadable[k], " cannot be read, marked on the page: ", r.reasons[k]));
-        unreadable.emplace_back(r.unreadable[k], r.reasons[k]);
-      }
-    TransferFunction& tf = doc.scene.layers[0].tf;
-    tf = widenedForSeries(tf, dataset.valueRanges.at(size_t(field)), overSteps);
-    logNote(strCat("colour range over all ", steps.size(), " steps: [", tf.valueRange.lower, ", ", tf.valueRange.upper,
-                   "] (values over [", overSteps.lower, ", ", overSteps.upper,
-                   "]); --range per-step or LOW,HIGH to choose"));
-  }
+  applySeriesRange(first, steps, lo, !o.scene.range.empty(), perStep, doc.scene, unreadable);
   {
     Renderer framing(*model, dataset);
     framing.setScene(doc.scene);
@@ -179,26 +220,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   options.token = o.token;
   options.device = o.device;
   if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
-  view::Server server(std::move(content), options);
-  server.bind();
-
-  std::cout << server.url() << std::endl;
-  if (logLevel() >= LogLevel::Warning) {
-    std::fprintf(stderr,
-                 "exabricks: viewing %s at %s\n"
-                 "  from another machine: ssh -L %d:localhost:%d %s, then open the address there\n"
-                 "  Ctrl-C stops the viewer\n",
-                 o.scene.in.name().c_str(), server.url().c_str(), server.port(), server.port(), hostName().c_str());
-  }
-  std::thread signalWaiter([&] {
-    int signal = 0;
-    sigwait(&stopSignals, &signal);
-    if (signal == SIGINT || signal == SIGTERM) server.stop();
-  });
-  server.run();
-  server.stop();
-  pthread_kill(signalWaiter.native_handle(), SIGTERM); // wakes the waiter when the server ended by itself
-  signalWaiter.join();
+  serve(std::move(content), options, o.scene.in.name(), stopSignals);
   logNote("viewer stopped");
 }
 #else

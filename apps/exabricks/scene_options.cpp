@@ -107,88 +107,115 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderO
   return tf;
 }
 
-} // namespace
-
-void RenderOptions::add(CLI::App& cmd) {
-  in.add(cmd);
-  cmd.add_option("--size", size, "Image size WIDTHxHEIGHT")->capture_default_str();
-  cmd.add_option("--spp", spp, sceneSettingHelp("frame.samples_per_pixel"))->capture_default_str();
-  cmd.add_option("--rate", rate, "Quality factor: samples per half finest cell width")->capture_default_str();
-  cmd.add_option("--seed", seed, sceneSettingHelp("frame.seed"))->capture_default_str();
-  cmd.add_flag("--no-jitter", noJitter, "Sample every ray at the same offsets");
-  cmd.add_option("--colormap", colormap, "Built-in colour map")->capture_default_str();
-  cmd.add_option("--tf", tfFile, "Transfer function file (ParaView preset or exabricks JSON)");
-  cmd.add_option("--opacity", opacity, "Opacity points x,alpha,... over the normalised value")->delimiter(',');
-  cmd.add_option("--opacity-scale", opacityScale, "Multiplies the opacity (default: from the dataset size)");
-  cmd.add_option("--range", range, "Value range LOW,HIGH mapped by the transfer function")->delimiter(',');
-  cmd.add_flag("--log", logScale, "Map values logarithmically (every layer)");
-  cmd.add_flag("--linear", linear, "Map values linearly even where the data spans many decades");
-  cmd.add_flag("--colorbar", colorbar, "Draw a labelled colour bar of the first layer (scene key legends.color_bar)");
-  cmd.add_flag("--annotate", annotate,
+/// The image: its size and samples, the first layer's transfer function, the legends.
+void addImageOptions(RenderOptions& o, CLI::App& cmd) {
+  cmd.add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  cmd.add_option("--spp", o.spp, sceneSettingHelp("frame.samples_per_pixel"))->capture_default_str();
+  cmd.add_option("--rate", o.rate, "Quality factor: samples per half finest cell width")->capture_default_str();
+  cmd.add_option("--seed", o.seed, sceneSettingHelp("frame.seed"))->capture_default_str();
+  cmd.add_flag("--no-jitter", o.noJitter, "Sample every ray at the same offsets");
+  cmd.add_option("--colormap", o.colormap, "Built-in colour map")->capture_default_str();
+  cmd.add_option("--tf", o.tfFile, "Transfer function file (ParaView preset or exabricks JSON)");
+  cmd.add_option("--opacity", o.opacity, "Opacity points x,alpha,... over the normalised value")->delimiter(',');
+  cmd.add_option("--opacity-scale", o.opacityScale, "Multiplies the opacity (default: from the dataset size)");
+  cmd.add_option("--range", o.range, "Value range LOW,HIGH mapped by the transfer function")->delimiter(',');
+  cmd.add_flag("--log", o.logScale, "Map values logarithmically (every layer)");
+  cmd.add_flag("--linear", o.linear, "Map values linearly even where the data spans many decades");
+  cmd.add_flag("--colorbar", o.colorbar, "Draw a labelled colour bar of the first layer (scene key legends.color_bar)");
+  cmd.add_flag("--annotate", o.annotate,
                "Write the dataset, field and simulation time, and outline the domain (scene key legends.annotation)");
-  cmd.add_flag("--frame-all", frameAll, "Default view: frame the whole data, not only its visible part");
-  cmd.add_option("--position", position, "Camera position x,y,z (world)")->delimiter(',');
-  cmd.add_option("--look-at", lookAt, "Camera target x,y,z (world)")->delimiter(',');
-  cmd.add_option("--up", up, "Camera up vector x,y,z")->delimiter(',');
-  cmd.add_option("--fov", fov, "Vertical field of view in degrees")->capture_default_str();
-  cmd.add_flag("--ortho", ortho, "Orthographic projection");
+}
+
+/// The camera and the background.
+void addCameraOptions(RenderOptions& o, CLI::App& cmd) {
+  cmd.add_flag("--frame-all", o.frameAll, "Default view: frame the whole data, not only its visible part");
+  cmd.add_option("--position", o.position, "Camera position x,y,z (world)")->delimiter(',');
+  cmd.add_option("--look-at", o.lookAt, "Camera target x,y,z (world)")->delimiter(',');
+  cmd.add_option("--up", o.up, "Camera up vector x,y,z")->delimiter(',');
+  cmd.add_option("--fov", o.fov, "Vertical field of view in degrees")->capture_default_str();
+  cmd.add_flag("--ortho", o.ortho, "Orthographic projection");
   const CLI::Validator finite(
       [](std::string& text) {
         const double v = std::strtod(text.c_str(), nullptr);
         return std::isfinite(v) ? std::string() : "must be a finite number, not " + text;
       },
       "FINITE");
-  cmd.add_option("--azimuth", azimuth, "Default view: degrees around +z")->capture_default_str()->check(finite);
+  cmd.add_option("--azimuth", o.azimuth, "Default view: degrees around +z")->capture_default_str()->check(finite);
   const CLI::Validator latitude(
       [](std::string& text) {
         const double v = std::strtod(text.c_str(), nullptr);
         return v >= -90.0 && v <= 90.0 ? std::string() : "must be in [-90, 90] degrees, not " + text;
       },
       "DEGREES");
-  cmd.add_option("--elevation", elevation, "Default view: degrees above the x-y plane (-90 to 90)")
+  cmd.add_option("--elevation", o.elevation, "Default view: degrees above the x-y plane (-90 to 90)")
       ->capture_default_str()
       ->check(latitude);
-  cmd.add_option("--background", background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
-  cmd.add_flag("--alpha", alpha, "Keep the alpha channel instead of a background");
-  cmd.add_option("--shading", shading, sceneSettingHelp("shading"))->capture_default_str();
-  cmd.add_option("--light", light, "headlight, or the direction x,y,z light travels")->capture_default_str();
-  cmd.add_option("--traversal", traversal, sceneSettingHelp("integration.traversal"))->capture_default_str();
-  cmd.add_flag("--no-skip", noSkip, "Disable space skipping");
-  cmd.add_flag("--no-early-termination", noEarlyTermination, "Integrate every ray to its end");
-  cmd.add_option("--sampling", sampling, sceneSettingHelp("integration.sampling"))->capture_default_str();
-  cmd.add_option("--reconstruction", reconstruction, sceneSettingHelp("integration.reconstruction"))
+  cmd.add_option("--background", o.background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
+  cmd.add_flag("--alpha", o.alpha, "Keep the alpha channel instead of a background");
+}
+
+/// Shading and light, the integration, the debug views and the volume layers.
+void addIntegrationOptions(RenderOptions& o, CLI::App& cmd) {
+  cmd.add_option("--shading", o.shading, sceneSettingHelp("shading"))->capture_default_str();
+  cmd.add_option("--light", o.light, "headlight, or the direction x,y,z light travels")->capture_default_str();
+  cmd.add_option("--traversal", o.traversal, sceneSettingHelp("integration.traversal"))->capture_default_str();
+  cmd.add_flag("--no-skip", o.noSkip, "Disable space skipping");
+  cmd.add_flag("--no-early-termination", o.noEarlyTermination, "Integrate every ray to its end");
+  cmd.add_option("--sampling", o.sampling, sceneSettingHelp("integration.sampling"))->capture_default_str();
+  cmd.add_option("--reconstruction", o.reconstruction, sceneSettingHelp("integration.reconstruction"))
       ->capture_default_str();
-  cmd.add_option("--debug", debug, sceneSettingHelp("debug"))->capture_default_str();
-  cmd.add_flag("--no-volume", noVolume, "Draw surfaces only");
-  cmd.add_option("--layer", layers, "Another field in the volume: FIELD, FIELD=COLORMAP or FIELD=TF_FILE (repeatable)");
-  cmd.add_option("--iso", iso, "Iso-values v1,v2,... of implicit iso-surfaces")->delimiter(',');
-  cmd.add_option("--iso-field", isoField, "Field of the iso-surfaces (default: the rendered field)");
-  cmd.add_option("--iso-color", isoColor, "Iso-surface colours r,g,b[,r,g,b...] (sRGB), one per value")->delimiter(',');
-  cmd.add_option("--iso-color-field", isoColorField, "Colour the iso-surfaces by this field");
-  cmd.add_option("--iso-colormap", isoColormap, "Colour map for --iso-color-field")->capture_default_str();
-  cmd.add_flag("--iso-color-log", isoColorLog, "Map --iso-color-field logarithmically");
-  cmd.add_option("--iso-color-range", isoColorRange, "Value range LOW,HIGH for --iso-color-field")->delimiter(',');
-  cmd.add_option("--mesh", meshes, "Triangle mesh (OBJ, PLY or .tris) in world space (repeatable)");
-  cmd.add_option("--mesh-color", meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")->delimiter(',');
-  cmd.add_option("--clip-plane", clipPlanes,
+  cmd.add_option("--debug", o.debug, sceneSettingHelp("debug"))->capture_default_str();
+  cmd.add_flag("--no-volume", o.noVolume, "Draw surfaces only");
+  cmd.add_option("--layer", o.layers,
+                 "Another field in the volume: FIELD, FIELD=COLORMAP or FIELD=TF_FILE (repeatable)");
+}
+
+/// Iso-surfaces, meshes, clipping and ambient occlusion.
+void addSurfaceOptions(RenderOptions& o, CLI::App& cmd) {
+  cmd.add_option("--iso", o.iso, "Iso-values v1,v2,... of implicit iso-surfaces")->delimiter(',');
+  cmd.add_option("--iso-field", o.isoField, "Field of the iso-surfaces (default: the rendered field)");
+  cmd.add_option("--iso-color", o.isoColor, "Iso-surface colours r,g,b[,r,g,b...] (sRGB), one per value")
+      ->delimiter(',');
+  cmd.add_option("--iso-color-field", o.isoColorField, "Colour the iso-surfaces by this field");
+  cmd.add_option("--iso-colormap", o.isoColormap, "Colour map for --iso-color-field")->capture_default_str();
+  cmd.add_flag("--iso-color-log", o.isoColorLog, "Map --iso-color-field logarithmically");
+  cmd.add_option("--iso-color-range", o.isoColorRange, "Value range LOW,HIGH for --iso-color-field")->delimiter(',');
+  cmd.add_option("--mesh", o.meshes, "Triangle mesh (OBJ, PLY or .tris) in world space (repeatable)");
+  cmd.add_option("--mesh-color", o.meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")->delimiter(',');
+  cmd.add_option("--clip-plane", o.clipPlanes,
                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
-  cmd.add_option("--clip-box", clipBox, "Keep only the inside of a box x0,y0,z0,x1,y1,z1 (world)")->delimiter(',');
-  cmd.add_flag("--clip-meshes", clipMeshes, "Clip meshes too");
-  cmd.add_option("--ao", aoRays, sceneSettingHelp("ambient_occlusion.rays"))->capture_default_str();
-  cmd.add_option("--ao-length", aoLength, sceneSettingHelp("ambient_occlusion.length"));
-  cmd.add_flag("--ao-volume", aoVolume, sceneSettingHelp("ambient_occlusion.volume"));
-  cmd.add_option("--integrator", integrator, sceneSettingHelp("integration.integrator"))->capture_default_str();
-  cmd.add_option("--albedo", albedo, sceneSettingHelp("pathtrace.albedo"))->capture_default_str();
-  cmd.add_option("--anisotropy", anisotropy, sceneSettingHelp("pathtrace.anisotropy"))->capture_default_str();
-  cmd.add_option("--bounces", bounces, sceneSettingHelp("pathtrace.bounces"))->capture_default_str();
-  cmd.add_option("--emission", emission, sceneSettingHelp("pathtrace.emission"))->capture_default_str();
-  cmd.add_option("--environment", environment,
+  cmd.add_option("--clip-box", o.clipBox, "Keep only the inside of a box x0,y0,z0,x1,y1,z1 (world)")->delimiter(',');
+  cmd.add_flag("--clip-meshes", o.clipMeshes, "Clip meshes too");
+  cmd.add_option("--ao", o.aoRays, sceneSettingHelp("ambient_occlusion.rays"))->capture_default_str();
+  cmd.add_option("--ao-length", o.aoLength, sceneSettingHelp("ambient_occlusion.length"));
+  cmd.add_flag("--ao-volume", o.aoVolume, sceneSettingHelp("ambient_occlusion.volume"));
+}
+
+/// Path tracing.
+void addPathTracingOptions(RenderOptions& o, CLI::App& cmd) {
+  cmd.add_option("--integrator", o.integrator, sceneSettingHelp("integration.integrator"))->capture_default_str();
+  cmd.add_option("--albedo", o.albedo, sceneSettingHelp("pathtrace.albedo"))->capture_default_str();
+  cmd.add_option("--anisotropy", o.anisotropy, sceneSettingHelp("pathtrace.anisotropy"))->capture_default_str();
+  cmd.add_option("--bounces", o.bounces, sceneSettingHelp("pathtrace.bounces"))->capture_default_str();
+  cmd.add_option("--emission", o.emission, sceneSettingHelp("pathtrace.emission"))->capture_default_str();
+  cmd.add_option("--environment", o.environment,
                  "Path tracing: uniform environment radiance r,g,b (linear; default 1,1,1)")
       ->delimiter(',');
-  cmd.add_option("--sun", sun,
+  cmd.add_option("--sun", o.sun,
                  "Path tracing: a sun light travelling along dx,dy,dz (world) with irradiance INTENSITY and an "
                  "angular diameter ANGLE in degrees (default 0.53): dx,dy,dz,INTENSITY[,ANGLE]")
       ->delimiter(',');
+}
+
+} // namespace
+
+void RenderOptions::add(CLI::App& cmd) {
+  in.add(cmd);
+  addImageOptions(*this, cmd);
+  addCameraOptions(*this, cmd);
+  addIntegrationOptions(*this, cmd);
+  addSurfaceOptions(*this, cmd);
+  addPathTracingOptions(*this, cmd);
   cmd.add_option("--scene", sceneFile,
                  "Scene file (JSON, see docs/rendering.md); options given on the command line override it");
 }
@@ -219,69 +246,75 @@ RendererOptions MarchFlags::options() const {
   return r;
 }
 
-SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
-  const bool fromFile = !o.sceneFile.empty();
-  SceneDocument doc = fromFile ? readSceneFile(o.sceneFile) : SceneDocument();
-  auto given = [&](const char* name) { return cmd.count(name) > 0; };
-  auto apply = [&](const char* name) { return !fromFile || given(name); };
-  Scene& s = doc.scene;
-  Frame& f = doc.frame;
-  if (!o.in.input.empty())
-    doc.input = o.in.input;
-  else if (fromFile && doc.input.empty())
-    failUsage(o.sceneFile, " names no input: give the dataset it shows (exabricks ", cmd.get_name(), " INPUT --scene ",
-              o.sceneFile, ")");
-  if (doc.input == kEmbeddedInput) doc.input.clear(); // the default dataset
+namespace {
 
-  if (apply("--size")) parseSize(o.size, f.width, f.height);
-  if (apply("--spp")) f.samplesPerPixel = checked("--spp", "frame.samples_per_pixel", o.spp);
-  if (apply("--rate")) f.rate = checked("--rate", "frame.rate", o.rate);
-  if (apply("--seed")) f.seed = o.seed;
-  if (apply("--no-jitter")) f.jitter = !o.noJitter;
+/// Which options the command line gave, and which apply: all of them without a scene file,
+/// only the ones given over a scene file.
+struct OptionUse {
+  const CLI::App& cmd;
+  bool fromFile;
+  bool given(const char* name) const { return cmd.count(name) > 0; }
+  bool apply(const char* name) const { return !fromFile || given(name); }
+};
 
-  // The first volume layer: the field and its transfer function.
+void applyFrameOptions(const RenderOptions& o, const OptionUse& u, Frame& f) {
+  if (u.apply("--size")) parseSize(o.size, f.width, f.height);
+  if (u.apply("--spp")) f.samplesPerPixel = checked("--spp", "frame.samples_per_pixel", o.spp);
+  if (u.apply("--rate")) f.rate = checked("--rate", "frame.rate", o.rate);
+  if (u.apply("--seed")) f.seed = o.seed;
+  if (u.apply("--no-jitter")) f.jitter = !o.noJitter;
+}
+
+/// The first volume layer (the field and its transfer function) and the further layers.
+void applyLayerOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
   if (o.linear && o.logScale) failUsage("--log and --linear exclude each other");
-  if (given("--opacity-scale") && !(o.opacityScale > 0.f && std::isfinite(o.opacityScale)))
+  if (u.given("--opacity-scale") && !(o.opacityScale > 0.f && std::isfinite(o.opacityScale)))
     failUsage("--opacity-scale must be a positive number (leave it out for the dataset's default)");
   if (s.layers.empty()) s.layers.push_back(VolumeLayer{});
   VolumeLayer& first = s.layers[0];
-  if (apply("--field")) first.field = o.in.field;
-  const bool colormapGiven = given("--colormap") || (!fromFile && o.tfFile.empty());
-  first.tf = applyTransferFunctionOptions(fromFile || !o.tfFile.empty() ? first.tf : defaultTransferFunction(), o,
+  if (u.apply("--field")) first.field = o.in.field;
+  const bool colormapGiven = u.given("--colormap") || (!u.fromFile && o.tfFile.empty());
+  first.tf = applyTransferFunctionOptions(u.fromFile || !o.tfFile.empty() ? first.tf : defaultTransferFunction(), o,
                                           o.tfFile, colormapGiven ? &o.colormap : nullptr, true);
-  if (apply("--layer")) {
-    s.layers.resize(1);
-    for (const std::string& spec : o.layers) {
-      const size_t eq = spec.find('=');
-      const std::string name = spec.substr(0, eq);
-      if (name.empty()) failUsage("--layer expects FIELD or FIELD=COLORMAP or FIELD=TF_FILE, got '", spec, "'");
-      std::string file, colormap = o.colormap;
-      if (eq != std::string::npos) {
-        const std::string what = spec.substr(eq + 1);
-        if (std::ifstream(what).good())
-          file = what;
-        else
-          colormap = what;
-      }
-      s.layers.push_back({name, applyTransferFunctionOptions(defaultTransferFunction(), o, file,
-                                                             file.empty() ? &colormap : nullptr, false)});
+  if (!u.apply("--layer")) return;
+  s.layers.resize(1);
+  for (const std::string& spec : o.layers) {
+    const size_t eq = spec.find('=');
+    const std::string name = spec.substr(0, eq);
+    if (name.empty()) failUsage("--layer expects FIELD or FIELD=COLORMAP or FIELD=TF_FILE, got '", spec, "'");
+    std::string file, colormap = o.colormap;
+    if (eq != std::string::npos) {
+      const std::string what = spec.substr(eq + 1);
+      if (std::ifstream(what).good())
+        file = what;
+      else
+        colormap = what;
     }
+    s.layers.push_back({name, applyTransferFunctionOptions(defaultTransferFunction(), o, file,
+                                                           file.empty() ? &colormap : nullptr, false)});
   }
+}
 
-  if (apply("--shading")) s.shading = pick<Shading>("--shading", o.shading);
+/// Shading, the integration, the debug views and the legends.
+void applyIntegrationOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
+  if (u.apply("--shading")) s.shading = pick<Shading>("--shading", o.shading);
   Integration& in = s.integration;
-  if (apply("--traversal")) setTraversal(in, pick<TraversalSetting>("--traversal", o.traversal));
-  if (apply("--sampling")) in.sampling = pick<Sampling>("--sampling", o.sampling);
-  if (apply("--reconstruction")) in.reconstruction = pick<Reconstruction>("--reconstruction", o.reconstruction);
-  if (apply("--no-skip")) in.spaceSkipping = !o.noSkip;
-  if (apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
-  if (apply("--debug")) {
+  if (u.apply("--traversal")) setTraversal(in, pick<TraversalSetting>("--traversal", o.traversal));
+  if (u.apply("--sampling")) in.sampling = pick<Sampling>("--sampling", o.sampling);
+  if (u.apply("--reconstruction")) in.reconstruction = pick<Reconstruction>("--reconstruction", o.reconstruction);
+  if (u.apply("--no-skip")) in.spaceSkipping = !o.noSkip;
+  if (u.apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
+  if (u.apply("--debug")) {
     s.debug = pick<DebugView>("--debug", o.debug);
     if (s.debug == DebugView::Level) s.legends.levelLegend = true; // the command line's level view has its legend
   }
-  if (apply("--colorbar")) s.legends.colorBar = o.colorbar;
-  if (apply("--annotate")) s.legends.annotation = o.annotate;
-  if (apply("--light")) {
+  if (u.apply("--colorbar")) s.legends.colorBar = o.colorbar;
+  if (u.apply("--annotate")) s.legends.annotation = o.annotate;
+}
+
+/// The light, the background and the alpha channel.
+void applyLightOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
+  if (u.apply("--light")) {
     s.light.headlight = o.light == "headlight";
     if (!s.light.headlight) {
       std::vector<float> d;
@@ -298,16 +331,19 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
       s.light.direction = vec3f(d[0], d[1], d[2]);
     }
   }
-  if (apply("--background")) {
+  if (u.apply("--background")) {
     if (o.background.size() != 3) failUsage("--background expects r,g,b (sRGB, 0..1)");
     for (float c : o.background)
       if (!(c >= 0.f && c <= 1.f)) failUsage("--background components must lie in [0, 1]");
     s.background = srgbToLinear(vec3f(o.background[0], o.background[1], o.background[2]));
   }
-  if (apply("--alpha")) s.keepAlpha = o.alpha;
+  if (u.apply("--alpha")) s.keepAlpha = o.alpha;
+}
 
-  if (apply("--no-volume")) s.volume = !o.noVolume;
-  if (apply("--clip-plane")) {
+/// The volume on or off, clipping and ambient occlusion.
+void applyClipOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
+  if (u.apply("--no-volume")) s.volume = !o.noVolume;
+  if (u.apply("--clip-plane")) {
     s.clip.planes.clear();
     for (const std::string& text : o.clipPlanes) {
       const std::vector<double> v = parseNumbers(text, "--clip-plane");
@@ -316,7 +352,7 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
       s.clip.planes.push_back({vec3d(v[0], v[1], v[2]), vec3d(v[3], v[4], v[5])});
     }
   }
-  if (apply("--clip-box")) {
+  if (u.apply("--clip-box")) {
     s.clip.box = box3d();
     if (!o.clipBox.empty()) {
       const auto& b = o.clipBox;
@@ -325,25 +361,26 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
       s.clip.box = box3d(vec3d(b[0], b[1], b[2]), vec3d(b[3], b[4], b[5]));
     }
   }
-  if (apply("--clip-meshes")) s.clip.meshes = o.clipMeshes;
-  if (apply("--ao")) s.ao.rays = checked("--ao", "ambient_occlusion.rays", o.aoRays);
-  if (apply("--ao-length")) s.ao.length = checked("--ao-length", "ambient_occlusion.length", o.aoLength);
-  if (apply("--ao-volume")) s.ao.volume = o.aoVolume;
+  if (u.apply("--clip-meshes")) s.clip.meshes = o.clipMeshes;
+  if (u.apply("--ao")) s.ao.rays = checked("--ao", "ambient_occlusion.rays", o.aoRays);
+  if (u.apply("--ao-length")) s.ao.length = checked("--ao-length", "ambient_occlusion.length", o.aoLength);
+  if (u.apply("--ao-volume")) s.ao.volume = o.aoVolume;
+}
 
-  // Path tracing.
-  if (apply("--integrator")) s.integration.integrator = pick<Integrator>("--integrator", o.integrator);
+void applyPathTracingOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
+  if (u.apply("--integrator")) s.integration.integrator = pick<Integrator>("--integrator", o.integrator);
   PathTracing& pt = s.pathTracing;
-  if (apply("--albedo")) pt.albedo = checked("--albedo", "pathtrace.albedo", o.albedo);
-  if (apply("--anisotropy")) pt.anisotropy = checked("--anisotropy", "pathtrace.anisotropy", o.anisotropy);
-  if (apply("--bounces")) pt.bounces = checked("--bounces", "pathtrace.bounces", o.bounces);
-  if (apply("--emission")) pt.emission = checked("--emission", "pathtrace.emission", o.emission);
-  if (given("--environment")) {
+  if (u.apply("--albedo")) pt.albedo = checked("--albedo", "pathtrace.albedo", o.albedo);
+  if (u.apply("--anisotropy")) pt.anisotropy = checked("--anisotropy", "pathtrace.anisotropy", o.anisotropy);
+  if (u.apply("--bounces")) pt.bounces = checked("--bounces", "pathtrace.bounces", o.bounces);
+  if (u.apply("--emission")) pt.emission = checked("--emission", "pathtrace.emission", o.emission);
+  if (u.given("--environment")) {
     const auto& e = o.environment;
     if (e.size() != 3 || !(e[0] >= 0.f && e[1] >= 0.f && e[2] >= 0.f) || !std::isfinite(e[0] + e[1] + e[2]))
       failUsage("--environment expects a radiance r,g,b of finite numbers >= 0");
     pt.environment = vec3f(e[0], e[1], e[2]);
   }
-  if (given("--sun")) {
+  if (u.given("--sun")) {
     const auto& v = o.sun;
     if (v.size() != 4 && v.size() != 5) failUsage("--sun expects dx,dy,dz,INTENSITY[,ANGLE]");
     const vec3f d(v[0], v[1], v[2]);
@@ -352,36 +389,62 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
     pt.sunIntensity = checked("--sun", "pathtrace.sun_intensity", v[3]);
     if (v.size() == 5) pt.sunAngle = checked("--sun", "pathtrace.sun_angle", v[4]);
   }
+}
 
-  // Iso-surfaces.
+void applyIsoOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
   if (!o.isoColorRange.empty() && (o.isoColorRange.size() != 2 || !(o.isoColorRange[0] < o.isoColorRange[1])))
     failUsage("--iso-color-range expects LOW,HIGH with LOW < HIGH");
-  if (o.iso.empty() && !fromFile && (!o.isoField.empty() || !o.isoColorField.empty() || !o.isoColor.empty()))
+  if (o.iso.empty() && !u.fromFile && (!o.isoField.empty() || !o.isoColorField.empty() || !o.isoColor.empty()))
     failUsage("iso-surface options need --iso VALUES");
   for (float v : o.iso)
     if (!std::isfinite(v)) failUsage("--iso values must be finite numbers");
   IsoSurfaces& iso = s.iso;
-  if (apply("--iso")) iso.values = o.iso;
-  if (apply("--iso-field")) iso.field = o.isoField.empty() ? o.in.field : o.isoField;
-  if (apply("--iso-color")) iso.colors = colorList(o.isoColor, "--iso-color");
-  if (apply("--iso-color-field")) iso.colorField = o.isoColorField;
-  if (apply("--iso-colormap")) iso.colorTf.colorMap = builtinColorMap(o.isoColormap);
-  if (apply("--iso-color-log")) iso.colorTf.logScale = o.isoColorLog;
-  if (apply("--iso-color-range"))
+  if (u.apply("--iso")) iso.values = o.iso;
+  if (u.apply("--iso-field")) iso.field = o.isoField.empty() ? o.in.field : o.isoField;
+  if (u.apply("--iso-color")) iso.colors = colorList(o.isoColor, "--iso-color");
+  if (u.apply("--iso-color-field")) iso.colorField = o.isoColorField;
+  if (u.apply("--iso-colormap")) iso.colorTf.colorMap = builtinColorMap(o.isoColormap);
+  if (u.apply("--iso-color-log")) iso.colorTf.logScale = o.isoColorLog;
+  if (u.apply("--iso-color-range"))
     iso.colorTf.valueRange = o.isoColorRange.empty() ? range1f() : range1f{o.isoColorRange[0], o.isoColorRange[1]};
+}
 
-  // Meshes: read here, so that a bad mesh file fails before the (longer) model build.
-  if (apply("--mesh") || apply("--mesh-color")) {
-    const std::vector<vec3f> meshColors = colorList(o.meshColor, "--mesh-color");
-    if (apply("--mesh")) {
-      s.meshes.clear();
-      for (const std::string& path : o.meshes)
-        s.meshes.push_back({std::make_shared<TriangleMesh>(readMesh(path)), vec3f(0.6f, 0.6f, 0.62f), path});
-    }
-    if (!meshColors.empty())
-      for (size_t i = 0; i < s.meshes.size(); ++i)
-        s.meshes[i].color = meshColors[i % meshColors.size()];
+/// Meshes: read here, so that a bad mesh file fails before the (longer) model build.
+void applyMeshOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
+  if (!u.apply("--mesh") && !u.apply("--mesh-color")) return;
+  const std::vector<vec3f> meshColors = colorList(o.meshColor, "--mesh-color");
+  if (u.apply("--mesh")) {
+    s.meshes.clear();
+    for (const std::string& path : o.meshes)
+      s.meshes.push_back({std::make_shared<TriangleMesh>(readMesh(path)), vec3f(0.6f, 0.6f, 0.62f), path});
   }
+  if (!meshColors.empty())
+    for (size_t i = 0; i < s.meshes.size(); ++i)
+      s.meshes[i].color = meshColors[i % meshColors.size()];
+}
+
+} // namespace
+
+SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
+  const bool fromFile = !o.sceneFile.empty();
+  SceneDocument doc = fromFile ? readSceneFile(o.sceneFile) : SceneDocument();
+  const OptionUse u{cmd, fromFile};
+  Scene& s = doc.scene;
+  if (!o.in.input.empty())
+    doc.input = o.in.input;
+  else if (fromFile && doc.input.empty())
+    failUsage(o.sceneFile, " names no input: give the dataset it shows (exabricks ", cmd.get_name(), " INPUT --scene ",
+              o.sceneFile, ")");
+  if (doc.input == kEmbeddedInput) doc.input.clear(); // the default dataset
+
+  applyFrameOptions(o, u, doc.frame);
+  applyLayerOptions(o, u, s);
+  applyIntegrationOptions(o, u, s);
+  applyLightOptions(o, u, s);
+  applyClipOptions(o, u, s);
+  applyPathTracingOptions(o, u, s);
+  applyIsoOptions(o, u, s);
+  applyMeshOptions(o, u, s);
   if (!s.volume && s.iso.values.empty() && s.meshes.empty())
     failUsage("--no-volume leaves nothing to draw: add --iso or --mesh");
   s.validate();

@@ -114,10 +114,8 @@ struct Plotfile {
   int64_t cycle = -1; ///< steps of the coarsest level
 };
 
-Plotfile readHeader(const std::string& dir) {
-  Plotfile pf;
-  pf.dir = dir;
-  TextReader r((fs::path(dir) / "Header").string());
+/// The version line (only HyperCLaw-V1.1 is read) and the variable names.
+std::vector<std::string> readNames(TextReader& r) {
   const std::string version = r.line();
   if (version.rfind("HyperCLaw", 0) != 0) r.bad("not an AMReX plotfile header ('" + version + "')");
   {
@@ -127,24 +125,20 @@ Plotfile readHeader(const std::string& dir) {
     if (v != "HyperCLaw-V1.1") r.bad("plotfile version '" + v + "' is not supported (HyperCLaw-V1.1 is)");
   }
   const int nvars = int(r.integer(numbers(r, r.line(), 1, "the variable count")[0], 1, 100000, "the variable count"));
+  std::vector<std::string> names;
   for (int i = 0; i < nvars; ++i) {
     std::string name = r.line();
     while (!name.empty() && std::isspace((unsigned char)name.back()))
       name.pop_back();
     if (name.empty()) r.bad("empty variable name");
-    pf.names.push_back(name);
+    names.push_back(name);
   }
-  const int dim = int(r.integer(numbers(r, r.line(), 1, "the dimension")[0], 1, 3, "the dimension"));
-  if (dim != 3) r.bad(strCat("a ", dim, "-D plotfile; only 3-D AMR data can be read"));
-  {
-    const auto t = numbers(r, r.line(), 1, "the time");
-    if (std::isfinite(t[0])) pf.time = t[0];
-  }
-  pf.finestLevel = int(r.integer(numbers(r, r.line(), 1, "the finest level")[0], 0, kMaxLevel, "the finest level"));
-  const auto lo = numbers(r, r.line(), 3, "prob_lo");
-  const auto hi = numbers(r, r.line(), 3, "prob_hi");
-  pf.probLo = vec3d(lo[0], lo[1], lo[2]);
-  pf.probHi = vec3d(hi[0], hi[1], hi[2]);
+  return names;
+}
+
+/// The refinement ratio of each level to the next (powers of two, isotropic, multiplying to at
+/// most 2^kMaxLevel).
+void readRatios(TextReader& r, Plotfile& pf) {
   const auto ratios = numbers(r, r.line(), 0, "refinement ratios");
   if (int(ratios.size()) < pf.finestLevel) r.bad("fewer refinement ratios than levels");
   // Ratios may be written as one number per level or as IntVects; take one per level.
@@ -162,12 +156,46 @@ Plotfile readHeader(const std::string& dir) {
       r.bad("anisotropic refinement ratios are not supported");
     pf.ratios.push_back(int(ri));
   }
-  {
-    int64_t width = 1;
-    for (int ratio : pf.ratios)
-      if ((width *= ratio) > (int64_t(1) << kMaxLevel))
-        r.bad(strCat("the refinement ratios multiply to more than 2^", kMaxLevel));
+  int64_t width = 1;
+  for (int ratio : pf.ratios)
+    if ((width *= ratio) > (int64_t(1) << kMaxLevel))
+      r.bad(strCat("the refinement ratios multiply to more than 2^", kMaxLevel));
+}
+
+/// The levels' lines at the end of the header: each level's grids (skipped) and the prefix of
+/// its Cell_H file.
+void readLevelPrefixes(TextReader& r, Plotfile& pf) {
+  for (int l = 0; l <= pf.finestLevel; ++l) {
+    const auto head = numbers(r, r.line(), 2, "the level line");
+    if (head[0] != double(l)) r.bad(strCat("expected level ", l));
+    const int64_t ngrids = r.integer(head[1], 0, 100000000, "the grid count");
+    r.line(); // level step
+    for (int64_t g = 0; g < ngrids * 3; ++g)
+      r.line();
+    std::string prefix = r.line();
+    while (!prefix.empty() && std::isspace((unsigned char)prefix.back()))
+      prefix.pop_back();
+    pf.levelPrefixes.push_back(prefix);
   }
+}
+
+Plotfile readHeader(const std::string& dir) {
+  Plotfile pf;
+  pf.dir = dir;
+  TextReader r((fs::path(dir) / "Header").string());
+  pf.names = readNames(r);
+  const int dim = int(r.integer(numbers(r, r.line(), 1, "the dimension")[0], 1, 3, "the dimension"));
+  if (dim != 3) r.bad(strCat("a ", dim, "-D plotfile; only 3-D AMR data can be read"));
+  {
+    const auto t = numbers(r, r.line(), 1, "the time");
+    if (std::isfinite(t[0])) pf.time = t[0];
+  }
+  pf.finestLevel = int(r.integer(numbers(r, r.line(), 1, "the finest level")[0], 0, kMaxLevel, "the finest level"));
+  const auto lo = numbers(r, r.line(), 3, "prob_lo");
+  const auto hi = numbers(r, r.line(), 3, "prob_hi");
+  pf.probLo = vec3d(lo[0], lo[1], lo[2]);
+  pf.probHi = vec3d(hi[0], hi[1], hi[2]);
+  readRatios(r, pf);
   pf.domains = parseBoxes(r, r.line());
   if (int(pf.domains.size()) < pf.finestLevel + 1) r.bad("fewer level domains than levels");
   {
@@ -183,18 +211,7 @@ Plotfile readHeader(const std::string& dir) {
   const double coord = numbers(r, r.line(), 1, "the coordinate system")[0];
   if (coord != 0) r.bad(strCat("coordinate system ", coord, " is not Cartesian"));
   r.line(); // boundary width
-  for (int l = 0; l <= pf.finestLevel; ++l) {
-    const auto head = numbers(r, r.line(), 2, "the level line");
-    if (head[0] != double(l)) r.bad(strCat("expected level ", l));
-    const int64_t ngrids = r.integer(head[1], 0, 100000000, "the grid count");
-    r.line(); // level step
-    for (int64_t g = 0; g < ngrids * 3; ++g)
-      r.line();
-    std::string prefix = r.line();
-    while (!prefix.empty() && std::isspace((unsigned char)prefix.back()))
-      prefix.pop_back();
-    pf.levelPrefixes.push_back(prefix);
-  }
+  readLevelPrefixes(r, pf);
   return pf;
 }
 

@@ -41,6 +41,106 @@ std::vector<std::string> componentNames(const h5::File& f) {
   return names;
 }
 
+/// The level's cell size and, below the finest level, its refinement ratio to the next.
+void readSpacing(const h5::File& f, ChomboLevel& lv, int l, int numLevels) {
+  const std::vector<double> dx = f.attrNumbers(lv.group, "dx");
+  if (dx.size() == 1)
+    lv.dx = vec3d(dx[0]);
+  else if (dx.size() == 3)
+    lv.dx = vec3d(dx[0], dx[1], dx[2]);
+  else
+    f.bad(lv.group, "attribute 'dx' has neither 1 nor 3 values");
+  if (!(lv.dx.x > 0 && lv.dx.y > 0 && lv.dx.z > 0) || !std::isfinite(lv.dx.x + lv.dx.y + lv.dx.z))
+    f.bad(lv.group, "attribute 'dx' must be positive");
+  if (l + 1 < numLevels) {
+    const std::vector<double> r = f.attrNumbers(lv.group, "ref_ratio");
+    if (r.empty()) f.bad(lv.group, "attribute 'ref_ratio' is empty");
+    for (double v : r)
+      if (v != r[0]) f.bad(lv.group, "anisotropic refinement ratios are not supported");
+    if (r[0] != std::floor(r[0]) || r[0] < 2 || r[0] > 1024 || io::log2Exact(int64_t(r[0])) < 0)
+      f.bad(lv.group,
+            strCat("refinement ratio ", r[0], " between levels ", l, " and ", l + 1, " is not a power of two"));
+    lv.ratio = int64_t(r[0]);
+  }
+}
+
+/// The ghost cells the stored boxes are grown by (outputGhost), where the level gives them.
+void readGhost(const h5::File& f, ChomboLevel& lv) {
+  const std::string dataAttrs = lv.group + "/data_attributes";
+  if (!f.hasAttribute(dataAttrs, "outputGhost")) return;
+  const std::vector<double> g = f.attrNumbers(dataAttrs, "outputGhost");
+  if (g.size() != 3)
+    f.bad(dataAttrs, strCat("attribute 'outputGhost' has ", g.size(), " values, expected 3 (a 3-D file)"));
+  for (int a = 0; a < 3; ++a) {
+    if (g[size_t(a)] < 0 || g[size_t(a)] > 64) f.bad(dataAttrs, "attribute 'outputGhost' is out of range");
+    lv.ghost[a] = int64_t(g[size_t(a)]);
+  }
+}
+
+/// The level's valid boxes from its "boxes" table.
+void readBoxes(const h5::File& f, ChomboLevel& lv) {
+  const h5::CompoundTable boxes = f.readCompound(lv.group + "/boxes");
+  if (boxes.members.size() != 6)
+    f.bad(lv.group + "/boxes", strCat("records have ", boxes.members.size(), " members; a 3-D box has 6 (a ",
+                                      boxes.members.size() / 2, "-D file?)"));
+  // Members by name when they carry Chombo's names, else in file order.
+  static const char* kNames[6] = {"lo_i", "lo_j", "lo_k", "hi_i", "hi_j", "hi_k"};
+  size_t order[6];
+  for (size_t m = 0; m < 6; ++m) {
+    const auto it = std::find(boxes.members.begin(), boxes.members.end(), kNames[m]);
+    order[m] = it == boxes.members.end() ? m : size_t(it - boxes.members.begin());
+  }
+  for (size_t b = 0; b < boxes.records; ++b) {
+    const double* v = boxes.values.data() + b * 6;
+    vec3l lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      if (!io::integerIn(v[order[a]], -kLatticeLimit, kLatticeLimit, lo[a]) ||
+          !io::integerIn(v[order[a + 3]], -kLatticeLimit, kLatticeLimit, hi[a]))
+        f.bad(lv.group + "/boxes",
+              strCat("box ", b, " has corners that are not integers in the supported index range"));
+    }
+    if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z) f.bad(lv.group + "/boxes", strCat("box ", b, " is empty"));
+    lv.boxes.push_back({lo, hi - lo + vec3l(1), 1});
+  }
+}
+
+/// The offsets of the boxes' data, checked against the boxes and the data's length.
+void readOffsets(const h5::File& f, ChomboLevel& lv, int64_t ncomp) {
+  const std::string offsetsName = lv.group + "/data:offsets=0";
+  lv.offsets = f.readInts(offsetsName);
+  if (lv.offsets.size() != lv.boxes.size() + 1)
+    f.bad(offsetsName, strCat(lv.offsets.size(), " offsets for ", lv.boxes.size(), " boxes (expected boxes + 1)"));
+  for (size_t b = 0; b < lv.boxes.size(); ++b) {
+    const vec3l n = lv.boxes[b].cells + lv.ghost * int64_t(2);
+    const int64_t expected = ncomp * n.x * n.y * n.z;
+    if (lv.offsets[b + 1] - lv.offsets[b] != expected)
+      f.bad(offsetsName, strCat("box ", b, " has ", lv.offsets[b + 1] - lv.offsets[b], " values, expected ", expected,
+                                " (", ncomp, " components of ", n.x, "x", n.y, "x", n.z, " cells with ghost cells)"));
+  }
+  const std::string dataName = lv.group + "/data:datatype=0";
+  const std::vector<uint64_t> dims = f.dims(dataName);
+  if (dims.size() != 1) f.bad(dataName, "expected a one-dimensional dataset");
+  if (lv.offsets.front() != 0 || int64_t(dims[0]) != lv.offsets.back())
+    f.bad(dataName,
+          strCat("holds ", dims[0], " values, but the offsets describe ", lv.offsets.back() - lv.offsets.front()));
+  // The boxes' cells are bounded by the values the file stores before anything is allocated
+  // per cell (the coverage of each box included).
+  f.requireStorage(dataName);
+}
+
+/// The cell sizes must follow the ratios; a mismatch means the header contradicts itself.
+void checkSpacings(const h5::File& f, const ChomboHeader& h) {
+  for (size_t l = 0; l + 1 < h.levels.size(); ++l) {
+    const vec3d expect = h.levels[l].dx / double(h.levels[l].ratio);
+    const vec3d got = h.levels[l + 1].dx;
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(expect[a] - got[a]) > 1e-6 * expect[a])
+        f.bad(h.levels[l + 1].group,
+              strCat("dx ", got[a], " does not equal the coarser level's dx ", h.levels[l].dx[a],
+                     " divided by its ref_ratio ", h.levels[l].ratio, " (inconsistent headers)"));
+  }
+}
+
 ChomboHeader readHeader(const h5::File& f) {
   ChomboHeader h;
   if (f.hasAttribute("/Chombo_global", "SpaceDim")) {
@@ -57,91 +157,13 @@ ChomboHeader readHeader(const h5::File& f) {
     ChomboLevel lv;
     lv.group = "/level_" + std::to_string(l);
     if (!f.exists(lv.group)) f.bad(lv.group, strCat("missing group (num_levels is ", numLevels, ")"));
-    const std::vector<double> dx = f.attrNumbers(lv.group, "dx");
-    if (dx.size() == 1)
-      lv.dx = vec3d(dx[0]);
-    else if (dx.size() == 3)
-      lv.dx = vec3d(dx[0], dx[1], dx[2]);
-    else
-      f.bad(lv.group, "attribute 'dx' has neither 1 nor 3 values");
-    if (!(lv.dx.x > 0 && lv.dx.y > 0 && lv.dx.z > 0) || !std::isfinite(lv.dx.x + lv.dx.y + lv.dx.z))
-      f.bad(lv.group, "attribute 'dx' must be positive");
-    if (l + 1 < numLevels) {
-      const std::vector<double> r = f.attrNumbers(lv.group, "ref_ratio");
-      if (r.empty()) f.bad(lv.group, "attribute 'ref_ratio' is empty");
-      for (double v : r)
-        if (v != r[0]) f.bad(lv.group, "anisotropic refinement ratios are not supported");
-      if (r[0] != std::floor(r[0]) || r[0] < 2 || r[0] > 1024 || io::log2Exact(int64_t(r[0])) < 0)
-        f.bad(lv.group,
-              strCat("refinement ratio ", r[0], " between levels ", l, " and ", l + 1, " is not a power of two"));
-      lv.ratio = int64_t(r[0]);
-    }
-    const std::string dataAttrs = lv.group + "/data_attributes";
-    if (f.hasAttribute(dataAttrs, "outputGhost")) {
-      const std::vector<double> g = f.attrNumbers(dataAttrs, "outputGhost");
-      if (g.size() != 3)
-        f.bad(dataAttrs, strCat("attribute 'outputGhost' has ", g.size(), " values, expected 3 (a 3-D file)"));
-      for (int a = 0; a < 3; ++a) {
-        if (g[size_t(a)] < 0 || g[size_t(a)] > 64) f.bad(dataAttrs, "attribute 'outputGhost' is out of range");
-        lv.ghost[a] = int64_t(g[size_t(a)]);
-      }
-    }
-    const h5::CompoundTable boxes = f.readCompound(lv.group + "/boxes");
-    if (boxes.members.size() != 6)
-      f.bad(lv.group + "/boxes", strCat("records have ", boxes.members.size(), " members; a 3-D box has 6 (a ",
-                                        boxes.members.size() / 2, "-D file?)"));
-    // Members by name when they carry Chombo's names, else in file order.
-    static const char* kNames[6] = {"lo_i", "lo_j", "lo_k", "hi_i", "hi_j", "hi_k"};
-    size_t order[6];
-    for (size_t m = 0; m < 6; ++m) {
-      const auto it = std::find(boxes.members.begin(), boxes.members.end(), kNames[m]);
-      order[m] = it == boxes.members.end() ? m : size_t(it - boxes.members.begin());
-    }
-    for (size_t b = 0; b < boxes.records; ++b) {
-      const double* v = boxes.values.data() + b * 6;
-      vec3l lo, hi;
-      for (int a = 0; a < 3; ++a) {
-        if (!io::integerIn(v[order[a]], -kLatticeLimit, kLatticeLimit, lo[a]) ||
-            !io::integerIn(v[order[a + 3]], -kLatticeLimit, kLatticeLimit, hi[a]))
-          f.bad(lv.group + "/boxes",
-                strCat("box ", b, " has corners that are not integers in the supported index range"));
-      }
-      if (hi.x < lo.x || hi.y < lo.y || hi.z < lo.z) f.bad(lv.group + "/boxes", strCat("box ", b, " is empty"));
-      lv.boxes.push_back({lo, hi - lo + vec3l(1), 1});
-    }
-    const std::string offsetsName = lv.group + "/data:offsets=0";
-    lv.offsets = f.readInts(offsetsName);
-    if (lv.offsets.size() != lv.boxes.size() + 1)
-      f.bad(offsetsName, strCat(lv.offsets.size(), " offsets for ", lv.boxes.size(), " boxes (expected boxes + 1)"));
-    const int64_t ncomp = int64_t(h.names.size());
-    for (size_t b = 0; b < lv.boxes.size(); ++b) {
-      const vec3l n = lv.boxes[b].cells + lv.ghost * int64_t(2);
-      const int64_t expected = ncomp * n.x * n.y * n.z;
-      if (lv.offsets[b + 1] - lv.offsets[b] != expected)
-        f.bad(offsetsName, strCat("box ", b, " has ", lv.offsets[b + 1] - lv.offsets[b], " values, expected ", expected,
-                                  " (", ncomp, " components of ", n.x, "x", n.y, "x", n.z, " cells with ghost cells)"));
-    }
-    const std::string dataName = lv.group + "/data:datatype=0";
-    const std::vector<uint64_t> dims = f.dims(dataName);
-    if (dims.size() != 1) f.bad(dataName, "expected a one-dimensional dataset");
-    if (lv.offsets.front() != 0 || int64_t(dims[0]) != lv.offsets.back())
-      f.bad(dataName,
-            strCat("holds ", dims[0], " values, but the offsets describe ", lv.offsets.back() - lv.offsets.front()));
-    // The boxes' cells are bounded by the values the file stores before anything is allocated
-    // per cell (the coverage of each box included).
-    f.requireStorage(dataName);
+    readSpacing(f, lv, l, numLevels);
+    readGhost(f, lv);
+    readBoxes(f, lv);
+    readOffsets(f, lv, int64_t(h.names.size()));
     h.levels.push_back(std::move(lv));
   }
-  // The cell sizes must follow the ratios; a mismatch means the header contradicts itself.
-  for (size_t l = 0; l + 1 < h.levels.size(); ++l) {
-    const vec3d expect = h.levels[l].dx / double(h.levels[l].ratio);
-    const vec3d got = h.levels[l + 1].dx;
-    for (int a = 0; a < 3; ++a)
-      if (std::abs(expect[a] - got[a]) > 1e-6 * expect[a])
-        f.bad(h.levels[l + 1].group,
-              strCat("dx ", got[a], " does not equal the coarser level's dx ", h.levels[l].dx[a],
-                     " divided by its ref_ratio ", h.levels[l].ratio, " (inconsistent headers)"));
-  }
+  checkSpacings(f, h);
   return h;
 }
 

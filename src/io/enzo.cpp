@@ -136,6 +136,88 @@ Parameters readParameters(const std::string& path) {
   return p;
 }
 
+/// The hierarchy keys a grid must (or, for fields, may) give, as bits of Grid::seen.
+enum : unsigned { kRank = 1, kDim = 2, kStart = 4, kEnd = 8, kLeft = 16, kRight = 32, kFile = 64 };
+
+/// Applies one hierarchy line `k` to its grid `g`; `dir` holds the data files.
+void readGridKey(const std::string& h, const fs::path& dir, const KeyLine& k, Grid& g) {
+  auto v3 = [&](unsigned bit) {
+    const auto v = numbersOf(h, k, 3);
+    g.seen |= bit;
+    return v;
+  };
+  auto l3 = [&](unsigned bit) {
+    const auto v = v3(bit);
+    vec3l out;
+    for (int a = 0; a < 3; ++a)
+      if (!io::integerIn(v[size_t(a)], -int64_t(1e9), int64_t(1e9), out[a]))
+        fail(h, ": line ", k.line, ": ", k.key, " must be integers within +-10^9");
+    return out;
+  };
+  if (k.key == "GridRank") {
+    g.rank = int(std::clamp<int64_t>(integerOf(h, k), -1, 1000));
+    g.seen |= kRank;
+    if (g.rank != 3) fail(h, ": grid ", g.id, ": GridRank is ", g.rank, ": only 3-D AMR data can be read");
+  } else if (k.key == "GridDimension") {
+    g.dimension = l3(kDim);
+  } else if (k.key == "GridStartIndex") {
+    g.start = l3(kStart);
+  } else if (k.key == "GridEndIndex") {
+    g.end = l3(kEnd);
+  } else if (k.key == "GridLeftEdge") {
+    const auto v = v3(kLeft);
+    g.left = vec3d(v[0], v[1], v[2]);
+  } else if (k.key == "GridRightEdge") {
+    const auto v = v3(kRight);
+    g.right = vec3d(v[0], v[1], v[2]);
+  } else if (k.key == "BaryonFileName") {
+    // Written with the path of the machine that ran the simulation: keep the basename.
+    g.file = (dir / fs::path(k.value).filename()).string();
+    g.seen |= kFile;
+  } else if (k.key == "NumberOfBaryonFields") {
+    g.fields = integerOf(h, k);
+  }
+}
+
+/// The grids of the hierarchy file `h`, in file order.
+std::vector<Grid> readGrids(const std::string& h) {
+  const fs::path dir = fs::path(h).parent_path();
+  std::vector<Grid> grids;
+  for (const KeyLine& k : readKeyLines(h)) {
+    if (k.key == "Grid") {
+      const int64_t id = integerOf(h, k);
+      if (id < 0 || id > 99999999) fail(h, ": line ", k.line, ": grid number ", id, " out of range");
+      grids.push_back({});
+      grids.back().id = id;
+      grids.back().line = k.line;
+      continue;
+    }
+    if (grids.empty()) continue;
+    readGridKey(h, dir, k, grids.back());
+  }
+  if (grids.empty()) fail(h, ": no 'Grid = N' entries (not an Enzo hierarchy, or an empty one)");
+  return grids;
+}
+
+/// Every grid must give its shape and edges, and its active zones must fit its dimensions.
+void checkGrids(const std::string& h, const std::vector<Grid>& grids) {
+  static const std::pair<unsigned, const char*> kNeeded[] = {{kRank, "GridRank"},        {kDim, "GridDimension"},
+                                                             {kStart, "GridStartIndex"}, {kEnd, "GridEndIndex"},
+                                                             {kLeft, "GridLeftEdge"},    {kRight, "GridRightEdge"}};
+  for (const Grid& g : grids) {
+    for (const auto& [bit, name] : kNeeded)
+      if (!(g.seen & bit)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing ", name, " (truncated hierarchy?)");
+    if (g.fields != 0 && !(g.seen & kFile)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing BaryonFileName");
+    for (int a = 0; a < 3; ++a) {
+      if (g.start[a] < 0 || g.end[a] < g.start[a] || g.end[a] >= g.dimension[a])
+        fail(h, ": grid ", g.id, ": active zones ", g.start[a], "..", g.end[a], " on axis ", a,
+             " do not fit GridDimension ", g.dimension[a]);
+      if (!(g.right[a] > g.left[a])) fail(h, ": grid ", g.id, ": GridRightEdge is not above GridLeftEdge on axis ", a);
+    }
+    io::checkPatchCells(g.dimension, strCat(h, ": grid ", g.id, ": GridDimension"));
+  }
+}
+
 Output readOutput(const std::string& path) {
   Output o;
   if (endsWith(path, ".hierarchy")) {
@@ -149,73 +231,8 @@ Output readOutput(const std::string& path) {
   if (!fs::exists(o.parameterPath, ec)) fail(o.parameterPath, ": missing parameter file of the Enzo output");
   if (!fs::exists(o.hierarchyPath, ec)) fail(o.hierarchyPath, ": missing hierarchy file of the Enzo output");
   o.params = readParameters(o.parameterPath);
-  const fs::path dir = fs::path(o.hierarchyPath).parent_path();
-  const std::string& h = o.hierarchyPath;
-  enum : unsigned { kRank = 1, kDim = 2, kStart = 4, kEnd = 8, kLeft = 16, kRight = 32, kFile = 64 };
-  for (const KeyLine& k : readKeyLines(h)) {
-    if (k.key == "Grid") {
-      const int64_t id = integerOf(h, k);
-      if (id < 0 || id > 99999999) fail(h, ": line ", k.line, ": grid number ", id, " out of range");
-      o.grids.push_back({});
-      o.grids.back().id = id;
-      o.grids.back().line = k.line;
-      continue;
-    }
-    if (o.grids.empty()) continue;
-    Grid& g = o.grids.back();
-    auto v3 = [&](unsigned bit) {
-      const auto v = numbersOf(h, k, 3);
-      g.seen |= bit;
-      return v;
-    };
-    auto l3 = [&](unsigned bit) {
-      const auto v = v3(bit);
-      vec3l out;
-      for (int a = 0; a < 3; ++a)
-        if (!io::integerIn(v[size_t(a)], -int64_t(1e9), int64_t(1e9), out[a]))
-          fail(h, ": line ", k.line, ": ", k.key, " must be integers within +-10^9");
-      return out;
-    };
-    if (k.key == "GridRank") {
-      g.rank = int(std::clamp<int64_t>(integerOf(h, k), -1, 1000));
-      g.seen |= kRank;
-      if (g.rank != 3) fail(h, ": grid ", g.id, ": GridRank is ", g.rank, ": only 3-D AMR data can be read");
-    } else if (k.key == "GridDimension") {
-      g.dimension = l3(kDim);
-    } else if (k.key == "GridStartIndex") {
-      g.start = l3(kStart);
-    } else if (k.key == "GridEndIndex") {
-      g.end = l3(kEnd);
-    } else if (k.key == "GridLeftEdge") {
-      const auto v = v3(kLeft);
-      g.left = vec3d(v[0], v[1], v[2]);
-    } else if (k.key == "GridRightEdge") {
-      const auto v = v3(kRight);
-      g.right = vec3d(v[0], v[1], v[2]);
-    } else if (k.key == "BaryonFileName") {
-      // Written with the path of the machine that ran the simulation: keep the basename.
-      g.file = (dir / fs::path(k.value).filename()).string();
-      g.seen |= kFile;
-    } else if (k.key == "NumberOfBaryonFields") {
-      g.fields = integerOf(h, k);
-    }
-  }
-  if (o.grids.empty()) fail(h, ": no 'Grid = N' entries (not an Enzo hierarchy, or an empty one)");
-  static const std::pair<unsigned, const char*> kNeeded[] = {{kRank, "GridRank"},        {kDim, "GridDimension"},
-                                                             {kStart, "GridStartIndex"}, {kEnd, "GridEndIndex"},
-                                                             {kLeft, "GridLeftEdge"},    {kRight, "GridRightEdge"}};
-  for (const Grid& g : o.grids) {
-    for (const auto& [bit, name] : kNeeded)
-      if (!(g.seen & bit)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing ", name, " (truncated hierarchy?)");
-    if (g.fields != 0 && !(g.seen & kFile)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing BaryonFileName");
-    for (int a = 0; a < 3; ++a) {
-      if (g.start[a] < 0 || g.end[a] < g.start[a] || g.end[a] >= g.dimension[a])
-        fail(h, ": grid ", g.id, ": active zones ", g.start[a], "..", g.end[a], " on axis ", a,
-             " do not fit GridDimension ", g.dimension[a]);
-      if (!(g.right[a] > g.left[a])) fail(h, ": grid ", g.id, ": GridRightEdge is not above GridLeftEdge on axis ", a);
-    }
-    io::checkPatchCells(g.dimension, strCat(h, ": grid ", g.id, ": GridDimension"));
-  }
+  o.grids = readGrids(o.hierarchyPath);
+  checkGrids(o.hierarchyPath, o.grids);
   return o;
 }
 
@@ -276,6 +293,75 @@ std::vector<std::string> fieldNames(const Output& o, DataFiles& files) {
   fail(o.hierarchyPath, ": no grid has fields");
 }
 
+/// The finest cell size over all grids: it fixes the lattice.
+vec3d finestCellSize(const Output& o) {
+  vec3d finest(INFINITY);
+  for (const Grid& g : o.grids)
+    for (int a = 0; a < 3; ++a)
+      finest[a] = std::min(finest[a], (g.right[a] - g.left[a]) / double(g.active()[a]));
+  return finest;
+}
+
+/// Every grid's active zones on the finest lattice; every grid must sit on it exactly.
+std::vector<io::Patch> placeGrids(const Output& o, const vec3d& finest) {
+  const std::string& h = o.hierarchyPath;
+  std::vector<io::Patch> patches;
+  for (const Grid& g : o.grids) {
+    io::Patch p;
+    p.cells = g.active();
+    for (int a = 0; a < 3; ++a) {
+      const double ratio = (g.right[a] - g.left[a]) / double(p.cells[a]) / finest[a];
+      const double w = std::round(ratio);
+      if (!(w >= 1 && w <= double(int64_t(1) << kMaxLevel)) || std::abs(ratio - w) > 1e-6 * w ||
+          io::log2Exact(int64_t(w)) < 0)
+        fail(h, ": grid ", g.id, ": cell size on axis ", a, " is ", ratio, " times the finest, not a power of two");
+      if (a > 0 && int64_t(w) != p.width) fail(h, ": grid ", g.id, ": refined differently along the axes");
+      p.width = int64_t(w);
+      const double c = (g.left[a] - o.params.left[a]) / finest[a];
+      const double ci = std::round(c);
+      if (!(std::abs(c) <= double(kLatticeLimit)) || std::abs(c - ci) > 1e-5 + 1e-12 * std::abs(c))
+        fail(h, ": grid ", g.id, ": GridLeftEdge on axis ", a, " lies ", c,
+             " finest cells from DomainLeftEdge, not on the lattice");
+      p.lower[a] = int64_t(ci);
+      if (p.lower[a] % p.width != 0)
+        fail(h, ": grid ", g.id, ": corner ", p.lower[a], " on axis ", a, " is not a multiple of its cell width ",
+             p.width);
+    }
+    patches.push_back(p);
+  }
+  return patches;
+}
+
+/// The grid's group in its data file, which must hold it (`h` names the hierarchy).
+std::string gridGroup(const h5::File& f, const Grid& g, const std::string& h) {
+  const std::string group = groupOf(g.id);
+  if (!f.exists(group)) f.bad(group, strCat("missing group of grid ", g.id, " (named by ", h, ")"));
+  return group;
+}
+
+/// The picked fields' values on the grid's active zones, converted to float.
+std::vector<std::vector<float>> gridValues(const h5::File& f, const std::string& group, const Grid& g,
+                                           const std::vector<std::string>& available,
+                                           const std::vector<size_t>& picked) {
+  const vec3l n = g.active();
+  std::vector<std::vector<float>> values(picked.size());
+  for (size_t k = 0; k < picked.size(); ++k) {
+    const std::string name = group + "/" + available[picked[k]];
+    const bool whole = storedShape(f, name, g);
+    const vec3l stored = whole ? g.dimension : n, offset = whole ? g.start : vec3l(0);
+    const std::vector<double> raw = f.readDoubles(name);
+    values[k].reserve(size_t(n.x * n.y * n.z));
+    for (int64_t z = 0; z < n.z; ++z)
+      for (int64_t y = 0; y < n.y; ++y)
+        for (int64_t x = 0; x < n.x; ++x) {
+          const double v = raw[size_t(((z + offset.z) * stored.y + (y + offset.y)) * stored.x + (x + offset.x))];
+          values[k].push_back(io::toFloat32(
+              v, [&] { return strCat(f.path(), ": ", name, ": grid ", g.id, " cell (", x, ",", y, ",", z, ")"); }));
+        }
+  }
+  return values;
+}
+
 } // namespace
 
 bool isEnzoOutput(const std::string& path) {
@@ -303,35 +389,8 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   const std::vector<std::string> available = fieldNames(o, files);
   const std::vector<size_t> picked = io::pickFields(path, available, wanted);
 
-  // The finest cell size over all grids fixes the lattice; every grid must sit on it exactly.
-  vec3d finest(INFINITY);
-  for (const Grid& g : o.grids)
-    for (int a = 0; a < 3; ++a)
-      finest[a] = std::min(finest[a], (g.right[a] - g.left[a]) / double(g.active()[a]));
-  std::vector<io::Patch> patches;
-  for (const Grid& g : o.grids) {
-    io::Patch p;
-    p.cells = g.active();
-    for (int a = 0; a < 3; ++a) {
-      const double ratio = (g.right[a] - g.left[a]) / double(p.cells[a]) / finest[a];
-      const double w = std::round(ratio);
-      if (!(w >= 1 && w <= double(int64_t(1) << kMaxLevel)) || std::abs(ratio - w) > 1e-6 * w ||
-          io::log2Exact(int64_t(w)) < 0)
-        fail(h, ": grid ", g.id, ": cell size on axis ", a, " is ", ratio, " times the finest, not a power of two");
-      if (a > 0 && int64_t(w) != p.width) fail(h, ": grid ", g.id, ": refined differently along the axes");
-      p.width = int64_t(w);
-      const double c = (g.left[a] - o.params.left[a]) / finest[a];
-      const double ci = std::round(c);
-      if (!(std::abs(c) <= double(kLatticeLimit)) || std::abs(c - ci) > 1e-5 + 1e-12 * std::abs(c))
-        fail(h, ": grid ", g.id, ": GridLeftEdge on axis ", a, " lies ", c,
-             " finest cells from DomainLeftEdge, not on the lattice");
-      p.lower[a] = int64_t(ci);
-      if (p.lower[a] % p.width != 0)
-        fail(h, ": grid ", g.id, ": corner ", p.lower[a], " on axis ", a, " is not a multiple of its cell width ",
-             p.width);
-    }
-    patches.push_back(p);
-  }
+  const vec3d finest = finestCellSize(o);
+  const std::vector<io::Patch> patches = placeGrids(o, finest);
   auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[i].id); };
   // Every dataset's shape is checked (and its storage against the file, by the reads) before
   // per-cell memory is reserved for its grid; a grid without fields must be covered by finer ones.
@@ -340,8 +399,7 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
     const Grid& g = o.grids[i];
     if (g.fields == 0) continue;
     const h5::File& f = files.get(g.file);
-    const std::string group = groupOf(g.id);
-    if (!f.exists(group)) f.bad(group, strCat("missing group of grid ", g.id, " (named by ", h, ")"));
+    const std::string group = gridGroup(f, g, h);
     for (size_t k : picked) {
       storedShape(f, group + "/" + available[k], g);
       f.requireStorage(group + "/" + available[k]);
@@ -364,25 +422,8 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
     }
     if (g.fields == 0) fail(gridName(i), ": has leaf cells but no fields");
     const h5::File& f = files.get(g.file);
-    const std::string group = groupOf(g.id);
-    if (!f.exists(group)) f.bad(group, strCat("missing group of grid ", g.id, " (named by ", h, ")"));
-    const vec3l n = g.active();
-    std::vector<std::vector<float>> values(picked.size());
-    for (size_t k = 0; k < picked.size(); ++k) {
-      const std::string name = group + "/" + available[picked[k]];
-      const bool whole = storedShape(f, name, g);
-      const vec3l stored = whole ? g.dimension : n, offset = whole ? g.start : vec3l(0);
-      const std::vector<double> raw = f.readDoubles(name);
-      values[k].reserve(size_t(n.x * n.y * n.z));
-      for (int64_t z = 0; z < n.z; ++z)
-        for (int64_t y = 0; y < n.y; ++y)
-          for (int64_t x = 0; x < n.x; ++x) {
-            const double v = raw[size_t(((z + offset.z) * stored.y + (y + offset.y)) * stored.x + (x + offset.x))];
-            values[k].push_back(io::toFloat32(
-                v, [&] { return strCat(f.path(), ": ", name, ": grid ", g.id, " cell (", x, ",", y, ",", z, ")"); }));
-          }
-    }
-    io::appendLeafCells(set, patches[i], covered, values, gridName(i));
+    const std::string group = gridGroup(f, g, h);
+    io::appendLeafCells(set, patches[i], covered, gridValues(f, group, g, available, picked), gridName(i));
     progress.advance(1);
   }
   progress.finish();

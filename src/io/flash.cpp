@@ -91,56 +91,42 @@ FlashHeader readHeader(const h5::File& f) {
   return h;
 }
 
-} // namespace
+/// The leaf blocks (node type 1), with the finest cell size and the domain's lower corner.
+struct Leaves {
+  std::vector<uint64_t> blocks;
+  vec3d finest{INFINITY}, origin{INFINITY};
+};
 
-bool isFlashFile(const std::string& path) {
-  if (!h5::hasSignature(path)) return false;
-  try {
-    const h5::File f(path);
-    return f.isDataset("node type") && f.isDataset("bounding box");
-  } catch (const h5::DamagedFile&) {
-    throw; // a damaged HDF5 file, whatever its layout: the check's message says what is wrong
-  } catch (const Error&) {
-    return false;
-  }
-}
-
-std::vector<std::string> listFlashFields(const std::string& path) { return readHeader(h5::File(path)).names; }
-
-CellSet readFlash(const std::string& path, const std::vector<std::string>& wanted) {
-  const h5::File f(path);
-  const FlashHeader h = readHeader(f);
-  const std::vector<size_t> vars = io::pickFields(path, h.names, wanted);
-  const std::vector<int64_t> nodeType = f.readInts("node type");
-  if (nodeType.size() != h.blocks) f.bad("node type", strCat(nodeType.size(), " entries for ", h.blocks, " blocks"));
-  const std::vector<double> bbox = f.readDoubles("bounding box");
-  // Coordinates stored as float32 carry only about 7 digits.
-  const double eps = f.isDouble("bounding box") ? DBL_EPSILON : double(FLT_EPSILON);
-
-  std::vector<uint64_t> leaves;
-  vec3d finest(INFINITY), origin(INFINITY);
+Leaves findLeaves(const h5::File& f, const FlashHeader& h, const std::vector<int64_t>& nodeType,
+                  const std::vector<double>& bbox) {
+  Leaves l;
   for (uint64_t b = 0; b < h.blocks; ++b) {
     if (nodeType[b] != 1) continue;
-    leaves.push_back(b);
+    l.blocks.push_back(b);
     for (int a = 0; a < 3; ++a) {
       const double lo = bbox[b * 6 + size_t(a) * 2], hi = bbox[b * 6 + size_t(a) * 2 + 1];
       if (!std::isfinite(lo) || !std::isfinite(hi) || !(hi > lo))
         f.bad("bounding box", strCat("block ", b, ": empty or non-finite extent on axis ", a));
-      finest[a] = std::min(finest[a], (hi - lo) / double(h.blockCells[a]));
-      origin[a] = std::min(origin[a], lo);
+      l.finest[a] = std::min(l.finest[a], (hi - lo) / double(h.blockCells[a]));
+      l.origin[a] = std::min(l.origin[a], lo);
     }
   }
-  if (leaves.empty()) f.bad("node type", "no leaf blocks (node type 1)");
+  if (l.blocks.empty()) f.bad("node type", "no leaf blocks (node type 1)");
+  return l;
+}
 
-  // Place every leaf block on the finest lattice; report any block that does not fit exactly.
+/// Places every leaf block on the finest lattice; reports any block that does not fit exactly.
+/// `eps` is the precision of the stored coordinates.
+std::vector<io::Patch> placeLeaves(const h5::File& f, const FlashHeader& h, const std::vector<double>& bbox,
+                                   const Leaves& l, double eps) {
   std::vector<io::Patch> patches;
-  for (uint64_t b : leaves) {
+  for (uint64_t b : l.blocks) {
     io::Patch p;
     p.cells = h.blockCells;
     double ratio[3];
     for (int a = 0; a < 3; ++a) {
       const double lo = bbox[b * 6 + size_t(a) * 2], hi = bbox[b * 6 + size_t(a) * 2 + 1];
-      ratio[a] = (hi - lo) / double(h.blockCells[a]) / finest[a];
+      ratio[a] = (hi - lo) / double(h.blockCells[a]) / l.finest[a];
       const double w = std::round(ratio[a]);
       if (!(w >= 1 && w <= double(int64_t(1) << kMaxLevel)) || std::abs(ratio[a] - w) > 1e-5 * w ||
           io::log2Exact(int64_t(w)) < 0)
@@ -150,7 +136,7 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
         f.bad("bounding box", strCat("block ", b, ": refined differently along the axes (cell size ratios ", ratio[0],
                                      ", ", ratio[a], ")"));
       p.width = int64_t(w);
-      const double c = (lo - origin[a]) / finest[a];
+      const double c = (lo - l.origin[a]) / l.finest[a];
       const double ci = std::round(c);
       if (!(std::abs(c) <= double(kLatticeLimit)) || std::abs(c - ci) > 1e-6 + 16 * eps * (std::abs(c) + 1))
         f.bad("bounding box", strCat("block ", b, ": lower corner on axis ", a, " lies ", c,
@@ -162,11 +148,11 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
     }
     patches.push_back(p);
   }
+  return patches;
+}
 
-  CellSet set;
-  for (size_t v : vars)
-    set.fields.push_back({h.names[v], {}});
-  // The simulation's time and step, where the scalars hold them.
+/// The simulation's time and step, where the scalars hold them.
+void readSimulation(const h5::File& f, CellSet& set) {
   if (f.isDataset("real scalars")) {
     const double t = tableReal(f.readCompound("real scalars"), "time");
     if (std::isfinite(t)) set.simulation.time = t;
@@ -175,7 +161,10 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
     const int64_t step = tableInt(f.readCompound("integer scalars"), "nstep");
     if (step >= 0) set.simulation.cycle = step;
   }
-  const int64_t perBlock = h.blockCells.x * h.blockCells.y * h.blockCells.z;
+}
+
+/// The cells of every leaf block, in block order and x fastest within a block.
+void addCells(const std::string& path, const std::vector<io::Patch>& patches, CellSet& set) {
   for (const io::Patch& p : patches) {
     const int level = io::log2Exact(p.width);
     for (int64_t z = 0; z < p.cells.z; ++z)
@@ -187,8 +176,13 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
           set.cells.push_back(Cell{vec3i(int32_t(c.x), int32_t(c.y), int32_t(c.z)), level});
         }
   }
-  // Variables are read a run of blocks at a time: whole runs are cheap for HDF5, and the run
-  // length bounds the memory held.
+}
+
+/// The chosen variables' values on the leaf blocks, into set.fields. Variables are read a run
+/// of blocks at a time: whole runs are cheap for HDF5, and the run length bounds the memory held.
+void readVariables(const h5::File& f, const std::string& path, const FlashHeader& h, const std::vector<size_t>& vars,
+                   const std::vector<uint64_t>& leaves, CellSet& set) {
+  const int64_t perBlock = h.blockCells.x * h.blockCells.y * h.blockCells.z;
   const uint64_t run = std::max<uint64_t>(1, uint64_t(4 << 20) / uint64_t(perBlock));
   Progress progress("reading " + path, uint64_t(vars.size()) * h.blocks);
   for (size_t k = 0; k < vars.size(); ++k) {
@@ -217,9 +211,45 @@ CellSet readFlash(const std::string& path, const std::vector<std::string>& wante
     }
   }
   progress.finish();
-  set.world.origin = origin;
-  set.world.scale = finest;
-  logInfo(strCat("read ", set.cells.size(), " cells of ", leaves.size(), " leaf blocks from ", path));
+}
+
+} // namespace
+
+bool isFlashFile(const std::string& path) {
+  if (!h5::hasSignature(path)) return false;
+  try {
+    const h5::File f(path);
+    return f.isDataset("node type") && f.isDataset("bounding box");
+  } catch (const h5::DamagedFile&) {
+    throw; // a damaged HDF5 file, whatever its layout: the check's message says what is wrong
+  } catch (const Error&) {
+    return false;
+  }
+}
+
+std::vector<std::string> listFlashFields(const std::string& path) { return readHeader(h5::File(path)).names; }
+
+CellSet readFlash(const std::string& path, const std::vector<std::string>& wanted) {
+  const h5::File f(path);
+  const FlashHeader h = readHeader(f);
+  const std::vector<size_t> vars = io::pickFields(path, h.names, wanted);
+  const std::vector<int64_t> nodeType = f.readInts("node type");
+  if (nodeType.size() != h.blocks) f.bad("node type", strCat(nodeType.size(), " entries for ", h.blocks, " blocks"));
+  const std::vector<double> bbox = f.readDoubles("bounding box");
+  // Coordinates stored as float32 carry only about 7 digits.
+  const double eps = f.isDouble("bounding box") ? DBL_EPSILON : double(FLT_EPSILON);
+  const Leaves leaves = findLeaves(f, h, nodeType, bbox);
+  const std::vector<io::Patch> patches = placeLeaves(f, h, bbox, leaves, eps);
+
+  CellSet set;
+  for (size_t v : vars)
+    set.fields.push_back({h.names[v], {}});
+  readSimulation(f, set);
+  addCells(path, patches, set);
+  readVariables(f, path, h, vars, leaves.blocks, set);
+  set.world.origin = leaves.origin;
+  set.world.scale = leaves.finest;
+  logInfo(strCat("read ", set.cells.size(), " cells of ", leaves.blocks.size(), " leaf blocks from ", path));
   return set;
 }
 

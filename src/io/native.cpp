@@ -234,6 +234,91 @@ void writeNative(const CellSet& set, const std::string& cellsPath) {
   writer.finish();
 }
 
+namespace {
+
+/// One line of a .grids fixture: the box's corner, size and level, and one value or eight
+/// corner values.
+struct GridsLine {
+  int64_t ints[7] = {};
+  double v[8] = {};
+  int nv = 0;
+};
+
+GridsLine parseGridsLine(const std::string& path, size_t lineNo, const std::vector<std::string>& tokens) {
+  if (tokens.size() != 8 && tokens.size() != 15)
+    fail(path, ": line ", lineNo, ": expected 'x y z nx ny nz level value' or eight corner", " values, got ",
+         tokens.size(), " numbers");
+  GridsLine g;
+  for (int i = 0; i < 7; ++i) {
+    char* end = nullptr;
+    errno = 0;
+    const long long v = std::strtoll(tokens[i].c_str(), &end, 10);
+    if (*end != 0 || errno == ERANGE || v < INT32_MIN || v > INT32_MAX)
+      fail(path, ": line ", lineNo, ": '", tokens[i], "' is not a 32-bit integer");
+    g.ints[i] = v;
+  }
+  g.nv = int(tokens.size()) - 7;
+  for (int i = 0; i < g.nv; ++i) {
+    char* end = nullptr;
+    g.v[i] = std::strtod(tokens[7 + i].c_str(), &end);
+    if (*end != 0) fail(path, ": line ", lineNo, ": '", tokens[7 + i], "' is not a number");
+    const bool kept = io::tKeepNonFinite && !std::isfinite(g.v[i]); // its cells become holes
+    if (!kept && (!std::isfinite(g.v[i]) || std::fabs(g.v[i]) > 3.4e38))
+      fail(path, ": line ", lineNo, ": value ", tokens[7 + i], " is not a finite float");
+  }
+  return g;
+}
+
+/// Checks the line's box (its cells, the lattice range, the fixture's cell limit) and makes room
+/// for its cells, growing geometrically; running out of memory names the line.
+void reserveBox(const std::string& path, size_t lineNo, const GridsLine& g, CellSet& set, Field& field) {
+  const vec3l n(g.ints[3], g.ints[4], g.ints[5]);
+  if (n.x < 1 || n.y < 1 || n.z < 1)
+    fail(path, ": line ", lineNo, ": box size ", n.x, "x", n.y, "x", n.z, " must be positive");
+  const int64_t level = g.ints[6];
+  const Cell probe{vec3i(int32_t(g.ints[0]), int32_t(g.ints[1]), int32_t(g.ints[2])), int32_t(level)};
+  if (const std::string p = cellProblem(probe); !p.empty()) fail(path, ": line ", lineNo, ": ", p);
+  const int64_t w = int64_t(1) << level;
+  for (int a = 0; a < 3; ++a)
+    if (g.ints[a] + n[a] * w > kLatticeLimit)
+      fail(path, ": line ", lineNo, ": box reaches outside the supported lattice range");
+  // A fixture line expands to its cells: bound the total before reserving memory for them.
+  if (double(n.x) * double(n.y) * double(n.z) + double(set.cells.size()) > double(kMaxGridsCells))
+    fail(path, ": line ", lineNo, ": box of ", n.x, "x", n.y, "x", n.z, " cells: a .grids fixture describes at most ",
+         kMaxGridsCells, " cells (store larger data as NAME.cells)");
+  const uint64_t add = uint64_t(n.x * n.y * n.z), need = set.cells.size() + add;
+  auto where = [&] { return strCat(path, ": line ", lineNo, ": box of ", n.x, "x", n.y, "x", n.z, " cells"); };
+  if (need > set.cells.capacity()) {
+    const uint64_t room = std::max<uint64_t>(need, std::min<uint64_t>(2 * set.cells.capacity(), kMaxGridsCells));
+    const uint64_t grow = room - set.cells.size();
+    io::reserveMore(set.cells, grow, where);
+    io::reserveMore(field.values, grow, where);
+  }
+}
+
+/// The line's cells and their values (trilinear between the corner values when it has eight).
+void appendBox(const GridsLine& g, CellSet& set, Field& field) {
+  const vec3l n(g.ints[3], g.ints[4], g.ints[5]);
+  const int64_t level = g.ints[6];
+  const int64_t w = int64_t(1) << level;
+  for (int64_t k = 0; k < n.z; ++k)
+    for (int64_t j = 0; j < n.y; ++j)
+      for (int64_t i = 0; i < n.x; ++i) {
+        set.cells.push_back(Cell{
+            vec3i(int32_t(g.ints[0] + i * w), int32_t(g.ints[1] + j * w), int32_t(g.ints[2] + k * w)), int32_t(level)});
+        double value = g.v[0];
+        if (g.nv == 8) {
+          const double u = (i + 0.5) / n.x, s = (j + 0.5) / n.y, t = (k + 0.5) / n.z;
+          auto lerp = [](double a, double b, double f) { return a + (b - a) * f; };
+          value = lerp(lerp(lerp(g.v[0], g.v[1], u), lerp(g.v[2], g.v[3], u), s),
+                       lerp(lerp(g.v[4], g.v[5], u), lerp(g.v[6], g.v[7], u), s), t);
+        }
+        field.values.push_back(float(value));
+      }
+}
+
+} // namespace
+
 CellSet readGrids(const std::string& path) {
   std::ifstream in(path);
   if (!in) fail(path, ": cannot open: ", std::strerror(errno));
@@ -250,67 +335,9 @@ CellSet readGrids(const std::string& path) {
     for (std::string t; ls >> t;)
       tokens.push_back(t);
     if (tokens.empty()) continue;
-    if (tokens.size() != 8 && tokens.size() != 15)
-      fail(path, ": line ", lineNo, ": expected 'x y z nx ny nz level value' or eight corner", " values, got ",
-           tokens.size(), " numbers");
-    int64_t ints[7];
-    for (int i = 0; i < 7; ++i) {
-      char* end = nullptr;
-      errno = 0;
-      const long long v = std::strtoll(tokens[i].c_str(), &end, 10);
-      if (*end != 0 || errno == ERANGE || v < INT32_MIN || v > INT32_MAX)
-        fail(path, ": line ", lineNo, ": '", tokens[i], "' is not a 32-bit integer");
-      ints[i] = v;
-    }
-    double v[8];
-    const int nv = int(tokens.size()) - 7;
-    for (int i = 0; i < nv; ++i) {
-      char* end = nullptr;
-      v[i] = std::strtod(tokens[7 + i].c_str(), &end);
-      if (*end != 0) fail(path, ": line ", lineNo, ": '", tokens[7 + i], "' is not a number");
-      const bool kept = io::tKeepNonFinite && !std::isfinite(v[i]); // its cells become holes
-      if (!kept && (!std::isfinite(v[i]) || std::fabs(v[i]) > 3.4e38))
-        fail(path, ": line ", lineNo, ": value ", tokens[7 + i], " is not a finite float");
-    }
-    const vec3l n(ints[3], ints[4], ints[5]);
-    if (n.x < 1 || n.y < 1 || n.z < 1)
-      fail(path, ": line ", lineNo, ": box size ", n.x, "x", n.y, "x", n.z, " must be positive");
-    const int64_t level = ints[6];
-    const Cell probe{vec3i(int32_t(ints[0]), int32_t(ints[1]), int32_t(ints[2])), int32_t(level)};
-    if (const std::string p = cellProblem(probe); !p.empty()) fail(path, ": line ", lineNo, ": ", p);
-    const int64_t w = int64_t(1) << level;
-    for (int a = 0; a < 3; ++a)
-      if (ints[a] + n[a] * w > kLatticeLimit)
-        fail(path, ": line ", lineNo, ": box reaches outside the supported lattice range");
-    // A fixture line expands to its cells: bound the total before reserving memory for them.
-    if (double(n.x) * double(n.y) * double(n.z) + double(set.cells.size()) > double(kMaxGridsCells))
-      fail(path, ": line ", lineNo, ": box of ", n.x, "x", n.y, "x", n.z, " cells: a .grids fixture describes at most ",
-           kMaxGridsCells, " cells (store larger data as NAME.cells)");
-    {
-      // Room for the line's cells, growing geometrically; running out of memory names the line.
-      const uint64_t add = uint64_t(n.x * n.y * n.z), need = set.cells.size() + add;
-      auto where = [&] { return strCat(path, ": line ", lineNo, ": box of ", n.x, "x", n.y, "x", n.z, " cells"); };
-      if (need > set.cells.capacity()) {
-        const uint64_t room = std::max<uint64_t>(need, std::min<uint64_t>(2 * set.cells.capacity(), kMaxGridsCells));
-        const uint64_t grow = room - set.cells.size();
-        io::reserveMore(set.cells, grow, where);
-        io::reserveMore(field.values, grow, where);
-      }
-    }
-    for (int64_t k = 0; k < n.z; ++k)
-      for (int64_t j = 0; j < n.y; ++j)
-        for (int64_t i = 0; i < n.x; ++i) {
-          set.cells.push_back(Cell{vec3i(int32_t(ints[0] + i * w), int32_t(ints[1] + j * w), int32_t(ints[2] + k * w)),
-                                   int32_t(level)});
-          double value = v[0];
-          if (nv == 8) {
-            const double u = (i + 0.5) / n.x, s = (j + 0.5) / n.y, t = (k + 0.5) / n.z;
-            auto lerp = [](double a, double b, double f) { return a + (b - a) * f; };
-            value = lerp(lerp(lerp(v[0], v[1], u), lerp(v[2], v[3], u), s),
-                         lerp(lerp(v[4], v[5], u), lerp(v[6], v[7], u), s), t);
-          }
-          field.values.push_back(float(value));
-        }
+    const GridsLine g = parseGridsLine(path, lineNo, tokens);
+    reserveBox(path, lineNo, g, set, field);
+    appendBox(g, set, field);
   }
   if (set.cells.empty()) fail(path, ": no cells (empty input)");
   set.fields.push_back(std::move(field));

@@ -58,6 +58,61 @@ std::pair<int, std::string> bindProblem(const std::string& host, int port) {
   return problem;
 }
 
+/// A record of the frame stream: u32 header length, header JSON, u32 JPEG length, JPEG (lengths
+/// little-endian). The header describes the frame, or is a keep-alive where none came (it lets
+/// a closed page be noticed).
+std::string streamRecord(const PublishedFrame* frame) {
+  json header;
+  std::string image;
+  if (frame) {
+    const FrameInfo& i = frame->info;
+    header = {{"request", i.request},
+              {"sequence", i.sequence},
+              {"draft", i.draft},
+              {"final", i.final},
+              {"width", i.width},
+              {"height", i.height},
+              {"passes", i.passes},
+              {"target_passes", i.targetPasses},
+              {"render_seconds", i.renderSeconds},
+              {"since_request", i.sinceRequest},
+              {"samples", i.samples},
+              {"samples_per_second", i.samplesPerSecond},
+              {"visible_regions", i.visibleRegions},
+              {"regions", i.regions}};
+    if (!frame->error.empty()) header["error"] = frame->error;
+    image = frame->jpeg;
+  } else {
+    header = {{"keepalive", true}};
+  }
+  const std::string text = header.dump();
+  auto u32 = [](size_t n) {
+    const uint32_t v = uint32_t(n);
+    return std::string{char(v & 255u), char((v >> 8) & 255u), char((v >> 16) & 255u), char((v >> 24) & 255u)};
+  };
+  return u32(text.size()) + text + u32(image.size()) + image;
+}
+
+/// Refuses a snapshot of request `id` that is not ready, saying why.
+void requireSnapshot(Session::Wait wait, uint64_t id) {
+  switch (wait) {
+  case Session::Wait::Ready:
+    break;
+  case Session::Wait::Superseded:
+    reject(409, "the view changed before its image was refined: save again");
+  case Session::Wait::Draft:
+    reject(409, "the view is still being dragged: it has no full-resolution image yet");
+  case Session::Wait::Failed:
+    reject(409, "the view could not be rendered (see the error shown)");
+  case Session::Wait::Unknown:
+    reject(404, strCat("snapshot: no request ", id));
+  case Session::Wait::TimedOut:
+    reject(503, "the image is still refining after 10 minutes: save again later");
+  case Session::Wait::Stopped:
+    reject(503, "the viewer is stopping");
+  }
+}
+
 } // namespace
 
 void Server::Impl::routes() {
@@ -156,36 +211,8 @@ void Server::Impl::frameRoutes() {
             return true;
           }
           if (!sink.is_writable()) return false;
-          json header;
-          std::string image;
-          if (frame) {
-            const FrameInfo& i = frame->info;
-            after = i.sequence;
-            header = {{"request", i.request},
-                      {"sequence", i.sequence},
-                      {"draft", i.draft},
-                      {"final", i.final},
-                      {"width", i.width},
-                      {"height", i.height},
-                      {"passes", i.passes},
-                      {"target_passes", i.targetPasses},
-                      {"render_seconds", i.renderSeconds},
-                      {"since_request", i.sinceRequest},
-                      {"samples", i.samples},
-                      {"samples_per_second", i.samplesPerSecond},
-                      {"visible_regions", i.visibleRegions},
-                      {"regions", i.regions}};
-            if (!frame->error.empty()) header["error"] = frame->error;
-            image = frame->jpeg;
-          } else {
-            header = {{"keepalive", true}}; // lets a closed page be noticed
-          }
-          const std::string text = header.dump();
-          auto u32 = [](size_t n) {
-            const uint32_t v = uint32_t(n);
-            return std::string{char(v & 255u), char((v >> 8) & 255u), char((v >> 16) & 255u), char((v >> 24) & 255u)};
-          };
-          const std::string record = u32(text.size()) + text + u32(image.size()) + image;
+          if (frame) after = frame->info.sequence;
+          const std::string record = streamRecord(frame.get());
           return sink.write(record.data(), record.size());
         },
         [this](bool) { streams.fetch_sub(1); });
@@ -204,22 +231,7 @@ void Server::Impl::frameRoutes() {
       }
       const Session::Wait wait = session->waitSnapshot(uint64_t(id), 600 * 1000, s);
       snapshotWaits.fetch_sub(1);
-      switch (wait) {
-      case Session::Wait::Ready:
-        break;
-      case Session::Wait::Superseded:
-        reject(409, "the view changed before its image was refined: save again");
-      case Session::Wait::Draft:
-        reject(409, "the view is still being dragged: it has no full-resolution image yet");
-      case Session::Wait::Failed:
-        reject(409, "the view could not be rendered (see the error shown)");
-      case Session::Wait::Unknown:
-        reject(404, strCat("snapshot: no request ", uint64_t(id)));
-      case Session::Wait::TimedOut:
-        reject(503, "the image is still refining after 10 minutes: save again later");
-      case Session::Wait::Stopped:
-        reject(503, "the viewer is stopping");
-      }
+      requireSnapshot(wait, uint64_t(id));
     } else {
       s = session->snapshot();
       if (!s.image) reject(404, "no full-resolution image yet");

@@ -1,0 +1,299 @@
+// exabricks._core.Renderer: a renderer over one dataset, driven by the scene and frame JSON of
+// render/scene.h, with passes accumulated in its own buffer.
+#include "exabricks/render/renderer.h"
+#include "exabricks/amr/scenes.h"
+#include "exabricks/core/error.h"
+#include "exabricks/documents/image.h"
+#include "exabricks/documents/scene_file.h"
+#include "exabricks/render/legends.h"
+
+#include "core.h"
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <thread>
+
+namespace py = pybind11;
+
+namespace exa::pymod {
+namespace {
+
+/// Whether the interpreter is shutting down (daemon threads then end when they take the GIL).
+bool interpreterFinalizing() {
+#if PY_VERSION_HEX >= 0x030D0000
+  return Py_IsFinalizing() != 0;
+#else
+  return _Py_IsFinalizing() != 0;
+#endif
+}
+
+/// A renderer over one dataset: the scene comes as JSON (plus meshes), frames as JSON; passes
+/// accumulate in the renderer's own buffer until the scene or the frame changes.
+class PyRenderer {
+public:
+  PyRenderer(std::shared_ptr<Dataset> d, std::string device)
+      : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info), device_(std::move(device)) {
+    if (device_ != "auto" && device_ != "cpu") resolveDevice(device_); // an unusable device fails here
+  }
+
+  std::string device() const { return deviceName(renderer_.device()); }
+
+  py::dict setScene(const std::string& json,
+                    const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
+    SceneDocument doc = readSceneJson(json, "scene");
+    loadSceneMeshes(doc.scene, "scene");
+    std::string key = json;
+    for (const auto& [mesh, color] : meshes) {
+      if (color.size() != 3) fail("a mesh colour needs three numbers (sRGB)");
+      doc.scene.meshes.push_back({mesh->mesh, srgbToLinear(vec3f(color[0], color[1], color[2])), ""});
+      key += strCat("|", reinterpret_cast<uintptr_t>(mesh->mesh.get()), ",", color[0], ",", color[1], ",", color[2]);
+    }
+    SceneUpdate u;
+    {
+      py::gil_scoped_release release;
+      u = setSceneOnDevice(renderer_, doc.scene, device_, deviceChosen_);
+    }
+    // Any change of the scene starts the accumulation over.
+    if (key != sceneKey_) stale_ = true;
+    sceneKey_ = key;
+    scene_ = doc.scene;
+    py::dict out;
+    out["volume"] = u.volume;
+    out["iso"] = u.iso;
+    out["meshes"] = u.meshes;
+    out["seconds"] = u.seconds();
+    return out;
+  }
+
+  /// Adds passes until the buffer holds `passes` (or one more pass when 0) for the frame;
+  /// returns the passes in the buffer. Ctrl-C cancels between tiles. `depthLimit`: None, or an
+  /// (H, W) array of distances per pixel beyond which nothing is drawn (along the rays, or with
+  /// `planar` along the view direction; Frame::depthLimit).
+  int render(const std::string& frameJson, int passes, const py::object& depthLimit, bool planar) {
+    Frame f = parseFrame(frameJson);
+    std::vector<float> limit = depthLimitOf(depthLimit, f);
+    const bool limited = !depthLimit.is_none();
+    const bool sameLimit = limited == hasDepthLimit_ && (!limited || (planar == depthLimitPlanar_ && limit == depth_));
+    depth_ = std::move(limit);
+    hasDepthLimit_ = limited;
+    depthLimitPlanar_ = planar;
+    if (limited) {
+      f.depthLimit = depth_.data();
+      f.depthLimitPlanar = planar;
+    }
+    const std::string key = frameJson;
+    if (stale_ || !sameLimit || key != frameKey_ || buffer_.width() != f.width || buffer_.height() != f.height) {
+      if (buffer_.width() != f.width || buffer_.height() != f.height) buffer_.resize(f.width, f.height);
+      buffer_.clear();
+      frameKey_ = key;
+      stale_ = false;
+    }
+    frame_ = f;
+    const int target = passes > 0 ? passes : int(buffer_.passes()) + 1;
+    bool interrupted = false, cancelled = false;
+    const std::exception_ptr error = renderInWorker(f, target, interrupted, cancelled);
+    if (interrupted || cancelled) stale_ = true; // partial passes: start over next time
+    if (interrupted) throw py::error_already_set();
+    if (error) std::rethrow_exception(error);
+    return int(buffer_.passes());
+  }
+
+  /// Cancels the render in flight between tiles (from any thread, without the GIL), or the next
+  /// one when none is: that render returns at once with the passes the buffer holds, which starts
+  /// over at the next render.
+  void cancel() { cancelRequested_ = true; }
+
+  /// The accumulated image with the legends the scene asks for.
+  Image resolved() const {
+    Image img;
+    buffer_.resolve(img);
+    LegendText text;
+    text.dataset = legendDatasetLabel(dataset_->name);
+    drawLegends(scene_, frame_, *dataset_->model, dataset_->info, text, img);
+    return img;
+  }
+
+  py::array_t<float> image() const { return pymod::imageArray(resolved()); }
+
+  py::bytes png() const {
+    const Image img = resolved();
+    const std::vector<unsigned char> bytes = encodePng(img, scene_.keepAlpha, scene_.background);
+    return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+  }
+
+  /// Writes the image; `brightest` rescales its colour so that the brightest channel of any
+  /// pixel reaches 1 (as yt's own save does), alpha unchanged.
+  void save(const std::string& path, int bits, bool brightest) const {
+    Image img = resolved();
+    if (brightest) {
+      float top = 0.f;
+      for (const vec4f& p : img.pixels)
+        top = std::max({top, p.x, p.y, p.z});
+      if (top > 0.f)
+        for (vec4f& p : img.pixels)
+          p.x /= top, p.y /= top, p.z /= top;
+    }
+    const ImageFormat format = imageFormatFor(path, bits);
+    writeImage(path, img, format, scene_.keepAlpha, scene_.background);
+  }
+
+  py::dict stats() const {
+    const RenderStats& s = buffer_.stats();
+    py::dict d;
+    d["seconds"] = s.seconds;
+    d["rays"] = s.rays;
+    d["samples"] = s.samples;
+    d["regions_visited"] = s.regionsVisited;
+    d["surface_hits"] = s.surfaceHits;
+    d["iso_samples"] = s.isoSamples;
+    d["ao_rays"] = s.aoRays;
+    d["samples_per_second"] = s.samplesPerSecond();
+    d["passes"] = buffer_.passes();
+    d["visible_regions"] = renderer_.visibleRegions();
+    d["iso_regions"] = renderer_.isoRegions();
+    d["regions"] = dataset_->model->regions.regions.size();
+    return d;
+  }
+
+  py::object visibleBounds() const {
+    const box3d b = renderer_.visibleBounds();
+    if (b.empty()) return py::none();
+    return py::make_tuple(py::make_tuple(b.lower.x, b.lower.y, b.lower.z),
+                          py::make_tuple(b.upper.x, b.upper.y, b.upper.z));
+  }
+
+  py::object pick(const std::vector<double>& origin, const std::vector<double>& direction) const {
+    if (origin.size() != 3 || direction.size() != 3) fail("origin and direction need three numbers each");
+    SurfaceHit hit;
+    if (!renderer_.pick(vec3d(origin[0], origin[1], origin[2]), vec3d(direction[0], direction[1], direction[2]), hit))
+      return py::none();
+    py::dict d;
+    d["kind"] = hit.kind == SurfaceHit::Mesh ? "mesh" : "iso";
+    d["index"] = hit.index;
+    d["distance"] = hit.distance;
+    d["position"] = py::make_tuple(hit.position.x, hit.position.y, hit.position.z);
+    d["normal"] = py::make_tuple(hit.normal.x, hit.normal.y, hit.normal.z);
+    return d;
+  }
+
+private:
+  static Frame parseFrame(const std::string& json) {
+    const SceneDocument doc = readSceneJson(json, "frame");
+    if (!doc.hasCamera) fail("frame: a camera is needed");
+    return doc.frame;
+  }
+
+  /// The depth limit's distances (none for None), checked against the frame's size.
+  static std::vector<float> depthLimitOf(const py::object& depthLimit, const Frame& f) {
+    std::vector<float> limit;
+    if (depthLimit.is_none()) return limit;
+    const auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(depthLimit);
+    if (!a) fail("depth_limit must be an array of numbers");
+    if (a.ndim() != 2 || a.shape(0) != f.height || a.shape(1) != f.width) {
+      std::string shape;
+      for (py::ssize_t i = 0; i < a.ndim(); ++i)
+        shape += strCat(i ? ", " : "", a.shape(i));
+      fail("depth_limit must be an (H, W) = (", f.height, ", ", f.width, ") array like the image, not (", shape, ")");
+    }
+    limit.assign(a.data(), a.data() + a.size());
+    return limit;
+  }
+
+  /// Renders passes until the buffer holds `target`, on a worker thread without the GIL, looking
+  /// every 20 ms for cancel(), Ctrl-C (`interrupted`: a Python error is set) and the
+  /// interpreter's end. Returns what the worker threw, if anything.
+  std::exception_ptr renderInWorker(const Frame& f, int target, bool& interrupted, bool& cancelled) {
+    std::atomic<bool> cancel{false}, done{false};
+    std::exception_ptr error;
+    py::gil_scoped_release release;
+    std::thread worker([&] {
+      try {
+        PassControl control;
+        control.cancel = &cancel;
+        renderer_.renderPasses(f, buffer_, target, control);
+      } catch (...) {
+        error = std::current_exception();
+      }
+      done = true;
+    });
+    // Taking the GIL as the interpreter finalizes ends this (daemon) thread by unwinding it,
+    // even just after the check below said it was not finalizing: the worker is then stopped
+    // and joined on the way out instead of leaving a joinable thread, and the GIL is not taken
+    // again by the release's end (either would be std::terminate).
+    struct StopOnUnwind {
+      std::atomic<bool>& cancel;
+      std::thread& worker;
+      py::gil_scoped_release& release;
+      ~StopOnUnwind() {
+        if (!worker.joinable()) return;
+        cancel = true;
+        worker.join();
+        if (interpreterFinalizing()) release.disarm();
+      }
+    } stopOnUnwind{cancel, worker, release};
+    while (!done) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
+      if (cancelRequested_.exchange(false)) {
+        cancelled = true;
+        cancel = true;
+        break;
+      }
+      if (interpreterFinalizing()) {
+        // A daemon thread rendering while the interpreter exits: taking the GIL now would end
+        // this thread by unwinding it with the worker still running (std::terminate). Stop the
+        // worker and wait here for the process to end.
+        cancel = true;
+        worker.join();
+        for (;;)
+          std::this_thread::sleep_for(std::chrono::hours(1));
+      }
+      py::gil_scoped_acquire acquire;
+      if (PyErr_CheckSignals() != 0) {
+        interrupted = true;
+        cancel = true;
+        break;
+      }
+    }
+    worker.join();
+    return error;
+  }
+
+  std::shared_ptr<Dataset> dataset_; ///< declared first: outlives the renderer
+  Renderer renderer_;
+  std::string device_;        ///< cpu, cuda, auto or portable
+  bool deviceChosen_ = false; ///< the renderer has been moved to device_
+  FrameBuffer buffer_;
+  Scene scene_;
+  Frame frame_;
+  std::vector<float> depth_; ///< the depth limit of the frame in the buffer
+  bool hasDepthLimit_ = false, depthLimitPlanar_ = false;
+  std::string frameKey_, sceneKey_;
+  bool stale_ = true;
+  std::atomic<bool> cancelRequested_{false};
+};
+
+} // namespace
+
+void bindRenderer(py::module_& m) {
+  py::class_<PyRenderer>(m, "Renderer")
+      .def(py::init<std::shared_ptr<Dataset>, std::string>(), py::arg("dataset"), py::arg("device") = "auto")
+      .def_property_readonly("device", &PyRenderer::device, "Where passes run: cpu, cuda or portable")
+      .def("set_scene", &PyRenderer::setScene, py::arg("scene_json"), py::arg("meshes"))
+      .def("render", &PyRenderer::render, py::arg("frame_json"), py::arg("passes") = 0,
+           py::arg("depth_limit") = py::none(), py::arg("depth_limit_planar") = false)
+      .def("image", &PyRenderer::image)
+      .def("png", &PyRenderer::png)
+      .def("save", &PyRenderer::save, py::arg("path"), py::arg("bits") = 8, py::arg("brightest") = false)
+      .def("stats", &PyRenderer::stats)
+      .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"))
+      .def("cancel", &PyRenderer::cancel, "Cancels the render in flight (or the next one)")
+      .def("visible_bounds", &PyRenderer::visibleBounds);
+}
+
+} // namespace exa::pymod
