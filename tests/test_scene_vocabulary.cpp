@@ -26,6 +26,11 @@ json otherValue(const json& setting) {
     ADD_FAILURE() << setting.dump() << " offers no other choice";
     return d;
   }
+  if (type == "vector") {
+    // Within every kind (finite, non-zero, >= 0 where the default is) and exact in float.
+    if (d.is_null()) return json::array({0.25, 0.5, 0.75});
+    return json::array({d[1].get<double>() + 0.5, d[2].get<double>() + 0.25, d[0].get<double>() + 0.125});
+  }
   const double def = d.get<double>(), low = setting["min"].get<double>();
   if (type == "integer") {
     const double v = std::floor((low + def) / 2);
@@ -61,7 +66,10 @@ TEST(SceneVocabulary, EveryDescribedSettingRoundTrips) {
   json doc = json::object();
   for (const json& s : vocabulary) {
     const std::string key = s["key"];
-    EXPECT_EQ(atKey(defaults, key), s["default"]) << key;
+    if (s["default"].is_null())
+      EXPECT_THROW(atKey(defaults, key), json::exception) << key << ": unset, so not written";
+    else
+      EXPECT_EQ(atKey(defaults, key), s["default"]) << key;
     EXPECT_FALSE(s["help"].get<std::string>().empty()) << key;
     putKey(doc, key, otherValue(s));
   }
@@ -98,6 +106,10 @@ TEST(SceneVocabulary, NamesAndRangesAreRefusedWithOneMessage) {
             "s.json: \"integration.traversal\" is 'bvh' (choose from: auto, kd, embree)");
   EXPECT_EQ(message([] { readSceneJson(R"({"ambient_occlusion": {"rays": 2000}})", "s.json"); }),
             "s.json: \"ambient_occlusion.rays\" must be an integer in 0..1024, not 2000");
+  EXPECT_EQ(message([] { readSceneJson(R"({"pathtrace": {"sky": [1, -1, 0]}})", "s.json"); }),
+            "s.json: \"pathtrace.sky\" must be a finite radiance r,g,b >= 0, not [1, -1, 0]");
+  EXPECT_EQ(message([] { readSceneJson(R"({"light": {"direction": [0, 0]}})", "s.json"); }),
+            "s.json: \"light.direction\" must be a finite, non-zero direction x,y,z, not [0, 0]");
   Scene s;
   s.integration.terminationOpacity = 0.f;
   EXPECT_EQ(message([&] { s.validate(); }), "\"integration.termination_opacity\" must be in (0, 1], not 0");

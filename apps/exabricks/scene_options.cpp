@@ -31,6 +31,18 @@ template <typename E> E pick(const char* flag, const std::string& value) {
 }
 
 /// A flag's value checked against the range of the scene setting it sets.
+/// Three numbers of a flag for a described vector setting, checked against its kind.
+vec3f checkedVector(const char* flag, const char* key, const std::vector<float>& v) {
+  if (v.size() != 3) failUsage(flag, " expects three numbers separated by commas");
+  const vec3f value(v[0], v[1], v[2]);
+  try {
+    checkSceneVector(key, value);
+  } catch (const Error& e) {
+    failUsage(flag, ": ", e.what());
+  }
+  return value;
+}
+
 template <typename T> T checked(const char* flag, const char* key, T value) {
   try {
     checkSceneSetting(key, double(value));
@@ -198,9 +210,10 @@ void addPathTracingOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--anisotropy", o.anisotropy, sceneSettingHelp("pathtrace.anisotropy"))->capture_default_str();
   cmd.add_option("--bounces", o.bounces, sceneSettingHelp("pathtrace.bounces"))->capture_default_str();
   cmd.add_option("--emission", o.emission, sceneSettingHelp("pathtrace.emission"))->capture_default_str();
-  cmd.add_option("--environment", o.environment,
-                 "Path tracing: uniform environment radiance r,g,b (linear; default 1,1,1)")
+  cmd.add_option("--environment", o.environment, sceneSettingHelp("pathtrace.environment") + " (default 1,1,1)")
       ->delimiter(',');
+  cmd.add_option("--sky", o.sky, sceneSettingHelp("pathtrace.sky"))->delimiter(',');
+  cmd.add_option("--ground", o.ground, sceneSettingHelp("pathtrace.ground"))->delimiter(',');
   cmd.add_option("--sun", o.sun,
                  "Path tracing: a sun light travelling along dx,dy,dz (world) with irradiance INTENSITY and an "
                  "angular diameter ANGLE in degrees (default 0.53): dx,dy,dz,INTENSITY[,ANGLE]")
@@ -374,18 +387,13 @@ void applyPathTracingOptions(const RenderOptions& o, const OptionUse& u, Scene& 
   if (u.apply("--anisotropy")) pt.anisotropy = checked("--anisotropy", "pathtrace.anisotropy", o.anisotropy);
   if (u.apply("--bounces")) pt.bounces = checked("--bounces", "pathtrace.bounces", o.bounces);
   if (u.apply("--emission")) pt.emission = checked("--emission", "pathtrace.emission", o.emission);
-  if (u.given("--environment")) {
-    const auto& e = o.environment;
-    if (e.size() != 3 || !(e[0] >= 0.f && e[1] >= 0.f && e[2] >= 0.f) || !std::isfinite(e[0] + e[1] + e[2]))
-      failUsage("--environment expects a radiance r,g,b of finite numbers >= 0");
-    pt.environment = vec3f(e[0], e[1], e[2]);
-  }
+  if (u.given("--environment")) pt.environment = checkedVector("--environment", "pathtrace.environment", o.environment);
+  if (u.given("--sky")) pt.sky = checkedVector("--sky", "pathtrace.sky", o.sky);
+  if (u.given("--ground")) pt.ground = checkedVector("--ground", "pathtrace.ground", o.ground);
   if (u.given("--sun")) {
     const auto& v = o.sun;
     if (v.size() != 4 && v.size() != 5) failUsage("--sun expects dx,dy,dz,INTENSITY[,ANGLE]");
-    const vec3f d(v[0], v[1], v[2]);
-    if (!(length(d) > 0.f) || !std::isfinite(length(d))) failUsage("--sun: the direction must be finite and non-zero");
-    pt.sunDirection = d;
+    pt.sunDirection = checkedVector("--sun", "pathtrace.sun_direction", {v[0], v[1], v[2]});
     pt.sunIntensity = checked("--sun", "pathtrace.sun_intensity", v[3]);
     if (v.size() == 5) pt.sunAngle = checked("--sun", "pathtrace.sun_angle", v[4]);
   }

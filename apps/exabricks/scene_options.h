@@ -74,6 +74,7 @@ struct RenderOptions {
   int bounces = PathTracing().bounces;
   float emission = PathTracing().emission;
   std::vector<float> environment; ///< r,g,b linear radiance
+  std::vector<float> sky, ground; ///< r,g,b linear radiance at the zenith and the nadir
   std::vector<float> sun;         ///< dx,dy,dz,intensity[,angle]
   std::string sceneFile;
 

@@ -57,20 +57,32 @@ def _srgb(color):
 # Every setting of a scene file with the library's defaults.
 _DEFAULT_DOCUMENT = json.loads(_core.scene_json("{}", "defaults"))
 
-# The scalar settings of a scene file as the library describes them (key, name, type, default,
-# range, choices, help): each is the Scene attribute of its name.
+# The settings of a scene file as the library describes them (key, name, type, default, range,
+# choices, kind, help): each is the Scene attribute of its name.
 _VOCABULARY = json.loads(_core.scene_vocabulary())
-_TYPES = {"boolean": bool, "integer": int, "number": float, "choice": str}
+_TYPES = {"boolean": bool, "integer": int, "number": float, "choice": str,
+          "vector": lambda v: None if v is None else [float(c) for c in v]}
+
+
+def _attribute(setting, value):
+    """A setting's value as the Scene attribute holds it (vectors as tuples)."""
+    if setting["type"] == "vector":
+        return None if value is None else tuple(value)
+    return value
 
 
 def scene_vocabulary():
-    """The scalar settings of a scene file: a list of dicts with "key" (the path in the file),
-    "name" (the Scene attribute), "type", "default", "min"/"max" where bounded, "choices" and "help"."""
+    """The settings of a scene file: a list of dicts with "key" (the path in the file), "name"
+    (the Scene attribute), "type" (boolean, integer, number, choice or vector), "default", "min"/"max"
+    where bounded, "choices", "kind" (a vector's: direction or radiance), "optional" and "help"."""
     return copy.deepcopy(_VOCABULARY)
 
 
 def _document_value(doc, key):
+    """The value at a setting's key, None where the document leaves it out (an unset optional one)."""
     for part in key.split("."):
+        if part not in doc:
+            return None
         doc = doc[part]
     return doc
 
@@ -233,8 +245,8 @@ class Scene:
                 field, json.dumps(TransferFunction().to_dict()), True, True)
             transfer_function = TransferFunction.from_dict(json.loads(tf_json))
         self.layers = [Layer(field, transfer_function)]
-        for setting in _VOCABULARY:  # the scalar settings, with the library's defaults
-            setattr(self, setting["name"], setting["default"])
+        for setting in _VOCABULARY:  # the described settings, with the library's defaults
+            setattr(self, setting["name"], _attribute(setting, setting["default"]))
         self.iso_values = []
         self.iso_field = ""
         self.iso_colors = []
@@ -243,10 +255,6 @@ class Scene:
         self.meshes = []  # (exabricks._core.Mesh, sRGB colour)
         self.clip_planes = []  # (point, normal)
         self.clip_box = None
-        self.light_direction = tuple(_DEFAULT_DOCUMENT["light"]["direction"])
-        # Path tracing (integrator "pathtrace"): linear environment radiance, the sun's direction of travel.
-        self.environment = tuple(_DEFAULT_DOCUMENT["pathtrace"]["environment"])
-        self.sun_direction = tuple(_DEFAULT_DOCUMENT["pathtrace"]["sun_direction"])
         self.camera_path = None  # movies: {"keyframes": [...], "constant_speed": bool}, as in the scene file
         self.background = (0.0, 0.0, 0.0)
         self.camera = None
@@ -322,13 +330,12 @@ class Scene:
                     "colors": [_srgb(c) for c in self.iso_colors], "color_field": self.iso_color_field,
                     "color_map": self.iso_color_map.to_dict()},
             "clip": {"planes": [{"point": list(map(float, p)), "normal": list(map(float, n))} for p, n in self.clip_planes]},
-            "light": {"direction": list(map(float, self.light_direction))},
-            "pathtrace": {"environment": list(map(float, self.environment)),
-                          "sun_direction": list(map(float, self.sun_direction))},
             "background": _srgb(self.background),
         }
         for setting in _VOCABULARY:
-            _set_document_value(d, setting["key"], _TYPES[setting["type"]](getattr(self, setting["name"])))
+            value = _TYPES[setting["type"]](getattr(self, setting["name"]))
+            if value is not None:  # an optional setting left unset is not written
+                _set_document_value(d, setting["key"], value)
         if not d["input"]:
             del d["input"]
         if self.clip_box is not None:
@@ -383,7 +390,7 @@ class Scene:
             c = d["camera"]
             s.camera = Camera(c["position"], c["look_at"], c["up"], c["fov"], c["orthographic"], c["ortho_height"])
         for setting in _VOCABULARY:
-            setattr(s, setting["name"], _document_value(d, setting["key"]))
+            setattr(s, setting["name"], _attribute(setting, _document_value(d, setting["key"])))
         if "layers" in given:
             s.layers = [Layer(l["field"] or dataset.default_field, TransferFunction.from_dict(l["transfer_function"]))
                         for l in d["layers"]]
@@ -400,9 +407,6 @@ class Scene:
         clip = d["clip"]
         s.clip_planes = [(tuple(p["point"]), tuple(p["normal"])) for p in clip["planes"]]
         s.clip_box = tuple(clip["box"]) if clip.get("box") else None
-        s.light_direction = tuple(d["light"]["direction"])
-        s.environment = tuple(d["pathtrace"]["environment"])
-        s.sun_direction = tuple(d["pathtrace"]["sun_direction"])
         s.background = tuple(d["background"])
         s.camera_path = d.get("camera_path")
         return s

@@ -163,8 +163,8 @@ class ExaBricksSource(VolumeSource):
 
 # Scene attributes the yt camera and data source set: not settings of the source.
 _FROM_YT = ("camera", "width", "height", "clip_box")
-# Scene attributes beside the scalar settings of its vocabulary.
-_SCENE_EXTRAS = ("background", "light_direction", "environment", "sun_direction", "clip_planes", "iso_values", "iso_field", "iso_colors",
+# Scene attributes beside the settings of its vocabulary.
+_SCENE_EXTRAS = ("background", "clip_planes", "iso_values", "iso_field", "iso_colors",
                  "iso_color_field", "iso_color_map")
 
 

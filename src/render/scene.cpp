@@ -24,13 +24,6 @@ void Scene::validate() const {
       fail("a clip plane needs a finite point and a non-zero normal");
   for (float v : iso.values)
     if (!std::isfinite(v)) fail("iso-values must be finite numbers");
-  if (!light.headlight && !(length(light.direction) > 0.f && std::isfinite(length(light.direction))))
-    fail("the light direction must be finite and non-zero");
-  auto checkRadiance = [](const vec3f& c, const char* key) {
-    if (!(c.x >= 0.f && c.y >= 0.f && c.z >= 0.f) || !std::isfinite(c.x + c.y + c.z))
-      fail("\"", key, "\" must be a finite radiance r,g,b >= 0");
-  };
-  checkRadiance(pathTracing.environment, "pathtrace.environment");
   for (size_t l = 0; l < layers.size(); ++l) {
     const std::vector<OpacityPoint>& albedo = layers[l].tf.albedo;
     for (size_t i = 0; i < albedo.size(); ++i)
@@ -39,10 +32,6 @@ void Scene::validate() const {
         fail("layer ", l, "'s albedo point ", i, " (", albedo[i].x, ", ", albedo[i].alpha,
              ") must lie in [0, 1] x [0, 1], x not decreasing");
   }
-  if (pathTracing.sky) checkRadiance(*pathTracing.sky, "pathtrace.sky");
-  if (pathTracing.ground) checkRadiance(*pathTracing.ground, "pathtrace.ground");
-  const float sun = length(pathTracing.sunDirection);
-  if (!(sun > 0.f) || !std::isfinite(sun)) fail("\"pathtrace.sun_direction\" must be finite and non-zero");
   for (size_t m = 0; m < meshes.size(); ++m) {
     if (!meshes[m].mesh) {
       if (meshes[m].source.empty()) fail("mesh ", m, " has no data");
@@ -210,6 +199,13 @@ private:
         fail(source_, ": ", e.what());
       }
     }
+    if (s.type == SettingType::Vector && !(v.is_null() && s.optional)) {
+      try {
+        checkVectorValue(s.key, s.vector, v);
+      } catch (const Error& e) {
+        fail(source_, ": ", e.what());
+      }
+    }
     s.set(o, v, what);
   }
 
@@ -251,8 +247,10 @@ std::vector<std::string> keysOf(const std::string& section, std::vector<std::str
 
 template <typename Owner> void writeSettings(const std::vector<Setting<Owner>>& table, const Owner& o, json& j) {
   for (const Setting<Owner>& s : table) {
+    json value = s.get(o);
+    if (value.is_null()) continue; // an optional setting left unset
     json& section = s.section().empty() ? j : j[s.section()];
-    section[s.leaf()] = s.get(o);
+    section[s.leaf()] = std::move(value);
   }
 }
 
@@ -300,11 +298,6 @@ std::string writeSceneJson(const SceneDocument& doc) {
   if (!s.clip.box.empty())
     j["clip"]["box"] = {s.clip.box.lower.x, s.clip.box.lower.y, s.clip.box.lower.z,
                         s.clip.box.upper.x, s.clip.box.upper.y, s.clip.box.upper.z};
-  j["light"] = {{"direction", vec(s.light.direction)}};
-  j["pathtrace"] = {{"environment", vec(s.pathTracing.environment)},
-                    {"sun_direction", vec(s.pathTracing.sunDirection)}};
-  if (s.pathTracing.sky) j["pathtrace"]["sky"] = vec(*s.pathTracing.sky);
-  if (s.pathTracing.ground) j["pathtrace"]["ground"] = vec(*s.pathTracing.ground);
   j["background"] = srgb(s.background);
   writeSettings(frameSettings(), f, j);
   writeSettings(sceneSettings(), s, j);
@@ -488,20 +481,13 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   if (r.find("clip")) readClip(r.child("clip"), source, s);
   if (r.find("light")) {
     const Reader c = r.child("light");
-    c.only(keysOf("light", {"direction"}));
+    c.only(keysOf("light", {}));
     c.settings(sceneSettings(), "light", s);
-    vec3d d;
-    if (c.vec3("direction", d)) s.light.direction = vec3f(d);
   }
   if (r.find("pathtrace")) {
     const Reader c = r.child("pathtrace");
-    c.only(keysOf("pathtrace", {"environment", "sky", "ground", "sun_direction"}));
+    c.only(keysOf("pathtrace", {}));
     c.settings(sceneSettings(), "pathtrace", s);
-    vec3d v;
-    if (c.vec3("environment", v)) s.pathTracing.environment = vec3f(v);
-    if (c.vec3("sky", v)) s.pathTracing.sky = vec3f(v);
-    if (c.vec3("ground", v)) s.pathTracing.ground = vec3f(v);
-    if (c.vec3("sun_direction", v)) s.pathTracing.sunDirection = vec3f(v);
   }
   if (r.find("ambient_occlusion")) {
     const Reader c = r.child("ambient_occlusion");

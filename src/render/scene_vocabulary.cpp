@@ -2,6 +2,7 @@
 
 #include "scene_settings.h"
 
+#include <charconv>
 #include <cmath>
 #include <limits>
 
@@ -119,6 +120,40 @@ Setting<Owner> choice(const char* key, const char* name, Ref ref, const char* he
       help);
 }
 
+json vectorJson(const vec3f& v) { return json::array({v.x, v.y, v.z}); }
+vec3f vectorOf(const json& v) { return vec3f(v[0].get<float>(), v[1].get<float>(), v[2].get<float>()); }
+
+/// Three numbers: a direction or a radiance.
+template <typename Owner, typename Ref>
+Setting<Owner> vector(const char* key, const char* name, Ref ref, VectorKind kind, const char* help) {
+  Setting<Owner> s{key, name, SettingType::Vector};
+  s.vector = kind;
+  s.help = help;
+  s.get = [ref](const Owner& o) { return vectorJson(ref(const_cast<Owner&>(o))); };
+  s.set = [ref](Owner& o, const json& v, const std::string&) { ref(o) = vectorOf(v); };
+  return s;
+}
+
+/// Three numbers that may be unset (null).
+template <typename Owner, typename Ref>
+Setting<Owner> optionalVector(const char* key, const char* name, Ref ref, VectorKind kind, const char* help) {
+  Setting<Owner> s{key, name, SettingType::Vector};
+  s.vector = kind;
+  s.optional = true;
+  s.help = help;
+  s.get = [ref](const Owner& o) {
+    const std::optional<vec3f>& v = ref(const_cast<Owner&>(o));
+    return v ? vectorJson(*v) : json();
+  };
+  s.set = [ref](Owner& o, const json& v, const std::string&) {
+    if (v.is_null())
+      ref(o).reset();
+    else
+      ref(o) = vectorOf(v);
+  };
+  return s;
+}
+
 } // namespace
 
 const std::vector<Setting<Scene>>& sceneSettings() {
@@ -221,6 +256,26 @@ const std::vector<Setting<Scene>>& sceneSettings() {
       number<S>(
           "pathtrace.sun_angle", "sun_angle", [](S& s) -> float& { return s.pathTracing.sunAngle; }, 0.0, 90.0,
           "Path tracing: the sun's angular diameter in degrees (0: a point; soft shadows grow with it)"),
+      vector<S>(
+          "light.direction", "light_direction", [](S& s) -> vec3f& { return s.light.direction; }, VectorKind::Direction,
+          "The direction light travels (world), where the light is not the headlight"),
+      vector<S>(
+          "pathtrace.environment", "environment", [](S& s) -> vec3f& { return s.pathTracing.environment; },
+          VectorKind::Radiance,
+          "Path tracing: the environment's radiance (linear r,g,b): everywhere, or at the horizon with a sky "
+          "or ground"),
+      optionalVector<S>(
+          "pathtrace.sky", "sky", [](S& s) -> std::optional<vec3f>& { return s.pathTracing.sky; }, VectorKind::Radiance,
+          "Path tracing: the environment's radiance at the zenith (the camera's up), blending linearly in the "
+          "sine of the elevation to the horizon's (unset: the horizon's)"),
+      optionalVector<S>(
+          "pathtrace.ground", "ground", [](S& s) -> std::optional<vec3f>& { return s.pathTracing.ground; },
+          VectorKind::Radiance,
+          "Path tracing: the environment's radiance straight down, blending to the horizon's (unset: the "
+          "horizon's)"),
+      vector<S>(
+          "pathtrace.sun_direction", "sun_direction", [](S& s) -> vec3f& { return s.pathTracing.sunDirection; },
+          VectorKind::Direction, "Path tracing: the direction sunlight travels (world)"),
   };
   return table;
 }
@@ -274,8 +329,41 @@ void checkSettingValue(const std::string& key, SettingType type, double low, dou
 
 namespace {
 
+/// A vector as a message shows it: numbers in their shortest single-precision form.
+std::string shownVector(const json& v) {
+  if (!v.is_array()) return v.dump();
+  std::string out = "[";
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (i) out += ", ";
+    if (!v[i].is_number()) {
+      out += v[i].dump();
+      continue;
+    }
+    char buf[32];
+    const auto end = std::to_chars(buf, buf + sizeof(buf), v[i].get<float>()).ptr;
+    out.append(buf, end);
+  }
+  return out + "]";
+}
+
+} // namespace
+
+void checkVectorValue(const std::string& key, VectorKind kind, const json& v) {
+  bool numbers = v.is_array() && v.size() == 3;
+  for (size_t i = 0; numbers && i < 3; ++i)
+    numbers = v[i].is_number() && std::isfinite(v[i].get<double>()) && std::isfinite(v[i].get<float>());
+  if (kind == VectorKind::Direction) {
+    if (!numbers || !(length(vec3d(v[0].get<double>(), v[1].get<double>(), v[2].get<double>())) > 0.0))
+      fail("\"", key, "\" must be a finite, non-zero direction x,y,z, not ", shownVector(v));
+  } else if (!numbers || !(v[0].get<double>() >= 0.0 && v[1].get<double>() >= 0.0 && v[2].get<double>() >= 0.0)) {
+    fail("\"", key, "\" must be a finite radiance r,g,b >= 0, not ", shownVector(v));
+  }
+}
+
+namespace {
+
 template <typename Owner> void describe(const std::vector<Setting<Owner>>& table, json& out) {
-  static const char* types[] = {"boolean", "integer", "number", "choice"};
+  static const char* types[] = {"boolean", "integer", "number", "choice", "vector"};
   const Owner defaults{};
   for (const Setting<Owner>& s : table) {
     json e = {
@@ -287,6 +375,10 @@ template <typename Owner> void describe(const std::vector<Setting<Owner>>& table
       if (s.highOpen) e["max_exclusive"] = true;
     }
     if (s.type == SettingType::Choice) e["choices"] = s.choices;
+    if (s.type == SettingType::Vector) {
+      e["kind"] = s.vector == VectorKind::Direction ? "direction" : "radiance";
+      if (s.optional) e["optional"] = true;
+    }
     out.push_back(e);
   }
 }
@@ -314,6 +406,12 @@ void checkSceneSetting(const std::string& key, double value) {
   if (const auto* s = findSetting(sceneSettings(), key)) return checkSetting(*s, value);
   if (const auto* s = findSetting(frameSettings(), key)) return checkSetting(*s, value);
   fail("no scene setting \"", key, "\"");
+}
+
+void checkSceneVector(const std::string& key, const vec3f& value) {
+  const Setting<Scene>* s = findSetting(sceneSettings(), key);
+  if (!s || s->type != SettingType::Vector) fail("no vector scene setting \"", key, "\"");
+  checkVectorValue(key, s->vector, json::array({value.x, value.y, value.z}));
 }
 
 std::string sceneVocabularyJson() {

@@ -47,6 +47,7 @@ def every_setting(mesh):
                         "embree_below_visible_fraction": 0.3, "space_skipping": False, "early_termination": False,
                         "termination_opacity": 0.9, "integrator": "pathtrace"},
         "pathtrace": {"albedo": 0.5, "anisotropy": 0.3, "bounces": 7, "emission": 0.5, "environment": [0.2, 0.3, 0.4],
+                      "sky": [0.3, 0.5, 0.9], "ground": [0.1, 0.08, 0.05],
                       "sun_direction": [1, 2, -3], "sun_intensity": 2, "sun_angle": 2},
         "debug": "level",
         "background": [0.1, 0.2, 0.3],
@@ -149,6 +150,8 @@ def other_value(setting):
     kind, default = setting["type"], setting["default"]
     if kind == "boolean":
         return not default
+    if kind == "vector":
+        return [0.25, 0.5, 0.75] if default is None else [default[1] + 0.5, default[2] + 0.25, default[0] + 0.125]
     if kind == "choice":
         return next(c for c in setting["choices"] if c != default)
     if kind == "integer":
@@ -194,7 +197,8 @@ def test_every_described_setting_survives_write_scene_and_python(cli, dataset_fi
     # And so does the Python Scene, through its attributes of the same names.
     scene = eb.Scene.from_json(eb.load(dataset_file), text)
     for s in vocabulary:
-        assert_same(at_key(written, s["key"]), getattr(scene, s["name"]), s["name"])
+        value = getattr(scene, s["name"])
+        assert_same(at_key(written, s["key"]), list(value) if isinstance(value, tuple) else value, s["name"])
     assert_same(written, json.loads(scene.to_json()))
 
 

@@ -67,5 +67,8 @@ std::string sceneVocabularyJson();
 std::string sceneSettingHelp(const std::string& key);
 /// Throws exa::Error when `value` is outside the range of a described numeric setting.
 void checkSceneSetting(const std::string& key, double value);
+/// Throws exa::Error when `value` is not of the kind of a described vector setting (a finite,
+/// non-zero direction or a finite radiance >= 0).
+void checkSceneVector(const std::string& key, const vec3f& value);
 
 } // namespace exa
