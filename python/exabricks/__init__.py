@@ -101,14 +101,17 @@ class TransferFunction:
     opacity: (x, alpha) points over the normalised value; None is a ramp from 0 to 1.
     range: (low, high) in data units; None is the field's range.
     opacity_scale: multiplies every opacity; "auto" is the dataset's default scale.
+    albedo: (x, albedo) points over the normalised value, the path tracer's single-scattering
+        albedo there (piecewise linear as the opacity); None is the scene's `albedo`.
     """
 
-    def __init__(self, colormap="viridis", opacity=None, range=None, log=False, opacity_scale="auto"):
+    def __init__(self, colormap="viridis", opacity=None, range=None, log=False, opacity_scale="auto", albedo=None):
         self.colormap = colormap
         self.opacity = opacity
         self.range = range
         self.log = log
         self.opacity_scale = opacity_scale
+        self.albedo = albedo
 
     @classmethod
     def from_file(cls, path, preset_range=False):
@@ -129,7 +132,8 @@ class TransferFunction:
             cm = [tuple(p) for p in cm["points"]]
         return cls(colormap=cm, opacity=[tuple(p) for p in d["opacity"]] if "opacity" in d else None,
                    range=tuple(d["range"]) if d.get("range") is not None else None, log=bool(d.get("log", False)),
-                   opacity_scale=d.get("opacity_scale", "auto"))
+                   opacity_scale=d.get("opacity_scale", "auto"),
+                   albedo=[tuple(p) for p in d["albedo"]] if "albedo" in d else None)
 
     @classmethod
     def from_yt(cls, tf, log=None, points=None, camera=None, dataset=None):
@@ -157,6 +161,8 @@ class TransferFunction:
             d["colormap"] = {"points": [[float(v) for v in p] for p in self.colormap]}
         if self.opacity is not None:
             d["opacity"] = [[float(x), float(a)] for x, a in self.opacity]
+        if self.albedo is not None:
+            d["albedo"] = [[float(x), float(a)] for x, a in self.albedo]
         if self.range is not None:
             lo, hi = self.range
             d["range"] = [float(lo), float(hi)]

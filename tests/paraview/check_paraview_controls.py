@@ -125,6 +125,14 @@ traced = compare("Integrator Path Tracing", "pathtrace",
                  ["--spp", "3", "--integrator", "pathtrace", "--albedo", "0.6", "--sun", "1,-0.5,-1,3",
                   "--environment", "0.2,0.25,0.3"])
 expect(np.abs(traced - spp3).mean() > 0.005, "path tracing did not change the picture")
+display.SkyGradient = 1
+display.Sky = [0.5, 0.7, 1.2]
+display.Ground = [0.2, 0.1, 0.05]
+sky = compare("Sky Gradient", "pathtrace_sky",
+              ["--spp", "3", "--integrator", "pathtrace", "--albedo", "0.6", "--sun", "1,-0.5,-1,3",
+               "--environment", "0.2,0.25,0.3", "--sky", "0.5,0.7,1.2", "--ground", "0.2,0.1,0.05"])
+expect(np.abs(sky - traced).mean() > 0.001, "the sky gradient did not change the picture")
+display.SkyGradient = 0
 display.Albedo = 1.5  # refused: the setting stays 0.6
 compare("Albedo 1.5 refused", "pathtrace_refused",
         ["--spp", "3", "--integrator", "pathtrace", "--albedo", "0.6", "--sun", "1,-0.5,-1,3",

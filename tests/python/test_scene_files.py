@@ -27,7 +27,7 @@ def every_setting(mesh):
              "range": [0.1, 1.4], "iso_values": [0.9]}]},
         "frame": {"width": 40, "height": 30, "samples_per_pixel": 2, "rate": 0.75, "jitter": False, "seed": 7},
         "layers": [
-            {"field": "scalar", "transfer_function": {"colormap": "magma", "opacity": [[0, 0], [0.5, 0.2], [1, 0.9]],
+            {"field": "scalar", "transfer_function": {"colormap": "magma", "opacity": [[0, 0], [0.5, 0.2], [1, 0.9]], "albedo": [[0, 0.2], [1, 0.9]],
                                                       "range": [0.05, 1.3], "log": True, "opacity_scale": 0.5}},
             {"field": "radius", "transfer_function": {"colormap": {"points": [[0, 0, 0, 1], [1, 1, 0.5, 0]]},
                                                       "opacity": [[0, 0.1], [1, 0]], "range": [0.1, 0.7],

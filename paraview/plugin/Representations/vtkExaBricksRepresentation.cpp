@@ -25,6 +25,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <string>
 
 class vtkExaBricksRepresentation::vtkInternals {
@@ -42,6 +43,9 @@ public:
   double PartBounds[6] = {0, 0, 0, 0, 0, 0}; ///< this process's part, clipped to the data
   std::string PartsJson = "[]";              ///< what every process holds
   vtkNew<vtkPolyData> Placeholder;           ///< the view's handle on the part's bounds
+  // The sky gradient's properties, applied while it is on.
+  bool SkyGradient = false;
+  exa::vec3f Sky{1.f}, Ground{1.f};
 };
 
 namespace {
@@ -282,6 +286,17 @@ bool validSetting(vtkObject* self, const char* key, double value) {
   }
 }
 
+/// A vector setting checked against the scene vocabulary's kind; false (and an error) when refused.
+bool validVector(vtkObject* self, const char* key, const exa::vec3f& value) {
+  try {
+    exa::checkSceneVector(key, value);
+    return true;
+  } catch (const exa::Error& e) {
+    vtkErrorWithObjectMacro(self, "ExaBricks: " << e.what());
+    return false;
+  }
+}
+
 /// Sets a number of the path tracer after checking it against the scene vocabulary.
 void setPathNumber(vtkObject* self, vtkExaBricksVolumeMapper* mapper, const char* key, double value,
                    float exa::PathTracing::*member) {
@@ -331,23 +346,45 @@ void vtkExaBricksRepresentation::SetBounces(int bounces) {
 }
 
 void vtkExaBricksRepresentation::SetEnvironment(double r, double g, double b) {
-  if (!(r >= 0.0 && g >= 0.0 && b >= 0.0) || !std::isfinite(r + g + b)) {
-    vtkErrorMacro("ExaBricks: \"pathtrace.environment\" must be a finite radiance r,g,b >= 0");
-    return;
-  }
+  const exa::vec3f v{float(r), float(g), float(b)};
+  if (!validVector(this, "pathtrace.environment", v)) return;
   exa::paraview::Settings s = this->Mapper->GetSettings();
-  s.pathTracing.environment = exa::vec3f(float(r), float(g), float(b));
+  s.pathTracing.environment = v;
   this->Mapper->SetSettings(s);
 }
 
-void vtkExaBricksRepresentation::SetSunDirection(double x, double y, double z) {
-  const double n = std::sqrt(x * x + y * y + z * z);
-  if (!(n > 0.0) || !std::isfinite(n)) {
-    vtkErrorMacro("ExaBricks: \"pathtrace.sun_direction\" must be finite and non-zero");
-    return;
-  }
+void vtkExaBricksRepresentation::ApplySky() {
+  const vtkInternals& in = *this->Internals;
   exa::paraview::Settings s = this->Mapper->GetSettings();
-  s.pathTracing.sunDirection = exa::vec3f(float(x), float(y), float(z));
+  s.pathTracing.sky = in.SkyGradient ? std::optional<exa::vec3f>(in.Sky) : std::nullopt;
+  s.pathTracing.ground = in.SkyGradient ? std::optional<exa::vec3f>(in.Ground) : std::nullopt;
+  this->Mapper->SetSettings(s);
+}
+
+void vtkExaBricksRepresentation::SetSkyGradient(int on) {
+  this->Internals->SkyGradient = on != 0;
+  this->ApplySky();
+}
+
+void vtkExaBricksRepresentation::SetSky(double r, double g, double b) {
+  const exa::vec3f v{float(r), float(g), float(b)};
+  if (!validVector(this, "pathtrace.sky", v)) return;
+  this->Internals->Sky = v;
+  this->ApplySky();
+}
+
+void vtkExaBricksRepresentation::SetGround(double r, double g, double b) {
+  const exa::vec3f v{float(r), float(g), float(b)};
+  if (!validVector(this, "pathtrace.ground", v)) return;
+  this->Internals->Ground = v;
+  this->ApplySky();
+}
+
+void vtkExaBricksRepresentation::SetSunDirection(double x, double y, double z) {
+  const exa::vec3f v{float(x), float(y), float(z)};
+  if (!validVector(this, "pathtrace.sun_direction", v)) return;
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.pathTracing.sunDirection = v;
   this->Mapper->SetSettings(s);
 }
 

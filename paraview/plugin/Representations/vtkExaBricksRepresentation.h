@@ -72,6 +72,10 @@ public:
   void SetBounces(int bounces);
   void SetEmission(double emission);
   void SetEnvironment(double r, double g, double b);
+  /// A sky gradient (pathtrace.sky and pathtrace.ground): off, the environment is uniform.
+  void SetSkyGradient(int on);
+  void SetSky(double r, double g, double b);
+  void SetGround(double r, double g, double b);
   void SetSunDirection(double x, double y, double z);
   void SetSunIntensity(double intensity);
   void SetSunAngle(double degrees);
@@ -103,6 +107,8 @@ private:
 
   /// Builds the model of the chosen array when the input or the array changed.
   void UpdateEngine();
+  /// Passes the sky gradient's properties to the mapper.
+  void ApplySky();
 
   class vtkInternals;
   vtkInternals* Internals;
