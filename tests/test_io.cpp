@@ -219,6 +219,21 @@ TEST_F(IoTest, ModelFileRoundTrip) {
   EXPECT_EQ(sampleField(m.view(0), p, a), sampleField(r.view(0), p, b));
 }
 
+TEST_F(IoTest, NativeInputsBuildTheirValuesAfterTheBricksIntoTheSameModel) {
+  // loadModel reads a NAME.cells input's values after building its bricks: the same model as
+  // building the cells read with their values, for every selection of fields.
+  writeNative(generateScene({"blobs", 4000, 3, 4}), path("v.cells"));
+  for (const std::vector<std::string>& fields :
+       {std::vector<std::string>{}, {"radius"}, {"scalar", "radius"}, {"scalar", "radius", "scalar"}}) {
+    SCOPED_TRACE(fields.size());
+    LoadOptions o;
+    o.fields = fields;
+    o.partCells = 0;
+    CellSet cells = readNative(path("v.cells"), fields);
+    expectSameModel(loadModel(path("v.cells"), o), buildModel(std::move(cells)));
+  }
+}
+
 TEST_F(IoTest, ModelFileValuesAreUsedInPlaceAndVersion1IsStillRead) {
   const Model m = buildModel(generateScene({"blobs", 400, 1, 4}));
   writeModel(m, path("m.exa"));

@@ -127,6 +127,16 @@ void buildRegionsOf(Model& model, const RegionBuildOptions& options) {
 
 namespace {
 
+/// The regions of a model whose bricks and values are set, timed and logged.
+void finishBuild(Model& model, const BuildOptions& options, Progress& progress) {
+  logInfo(strCat("built ", model.bricks.size(), " bricks in ", model.stats.brickSeconds, " s"));
+  progress.advance(1);
+  buildRegionsOf(model, options.regions);
+  progress.finish();
+  logInfo(strCat("built ", model.regions.regions.size(), " regions in ",
+                 model.stats.regionSeconds + model.stats.rangeSeconds, " s"));
+}
+
 Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* keep) {
   Model model;
   model.world = cells.world;
@@ -163,18 +173,39 @@ Model buildWith(CellSet&& cells, const BuildOptions& options, ModelStructure* ke
     }
   }
   model.stats.brickSeconds = timer.seconds();
-  logInfo(strCat("built ", model.bricks.size(), " bricks in ", model.stats.brickSeconds, " s"));
-  progress.advance(1);
-  buildRegionsOf(model, options.regions);
-  progress.finish();
-  logInfo(strCat("built ", model.regions.regions.size(), " regions in ",
-                 model.stats.regionSeconds + model.stats.rangeSeconds, " s"));
+  finishBuild(model, options, progress);
   return model;
 }
 
 } // namespace
 
 Model buildModel(CellSet&& cells, const BuildOptions& options) { return buildWith(std::move(cells), options, nullptr); }
+
+Model buildModelValuesAfter(CellSet&& cells, const std::function<std::vector<float>(size_t field)>& valuesOf,
+                            const BuildOptions& options) {
+  Model model;
+  model.world = cells.world;
+  model.simulation = cells.simulation;
+  Timer timer;
+  Progress progress("building bricks and regions", 3);
+  BrickBuild bricks = buildBricksInPlace(cells.cells, options.bricks);
+  std::vector<Cell>().swap(cells.cells);
+  model.bricks = std::move(bricks.bricks);
+  progress.advance(1);
+  for (size_t f = 0; f < cells.fields.size(); ++f) {
+    model.fieldNames.push_back(cells.fields[f].name);
+    model.fieldUnits.push_back(cells.fields[f].units);
+    const std::vector<float> values = valuesOf(f);
+    if (values.size() != bricks.cellOfSlot.size())
+      fail("field '", cells.fields[f].name, "' has ", values.size(), " values for ", bricks.cellOfSlot.size(),
+           " cells");
+    model.fieldValues.push_back(toBrickOrder(values, bricks.cellOfSlot));
+  }
+  model.stats.brickSeconds = timer.seconds();
+  std::vector<uint32_t>().swap(bricks.cellOfSlot);
+  finishBuild(model, options, progress);
+  return model;
+}
 
 Model buildModel(CellSet&& cells, const BuildOptions& options, ModelStructure& structure) {
   return buildWith(std::move(cells), options, &structure);

@@ -311,6 +311,45 @@ Model buildInParts(const std::string& path, const FormatReader& reader, const Lo
 
 } // namespace
 
+namespace {
+
+/// A read error that already names its file: passed on without the source's name in front.
+struct NamedReadError : Error {
+  using Error::Error;
+};
+
+/// A NAME.cells input built with its values read after the bricks (buildModelValuesAfter): the
+/// cells and every field are never held together.
+Model loadNativeValuesAfter(const std::string& path, const LoadOptions& options, const Timer& timer) {
+  CellSet cells;
+  cells.cells = readNativeCells(path);
+  const uint64_t count = cells.cells.size();
+  const std::vector<std::string> names = nativeFieldsToRead(path, options.fields, count);
+  for (const std::string& name : names)
+    cells.fields.push_back(Field{name, {}});
+  logInfo(strCat("read ", count, " cells in ", timer.seconds(), " s"));
+  try {
+    return buildModelValuesAfter(
+        std::move(cells),
+        [&](size_t f) {
+          try {
+            return readNativeField(path, names[f], count);
+          } catch (const Error& e) {
+            throw NamedReadError(e.what());
+          }
+        },
+        options.build);
+  } catch (const NamedReadError&) {
+    throw;
+  } catch (const CellConflict& c) {
+    throw Error(strCat(path, ": ", locateConflict(c, readNativeCells(path))));
+  } catch (const Error& e) {
+    throw Error(strCat(path, ": ", e.what()));
+  }
+}
+
+} // namespace
+
 Model loadModel(const std::string& path, const LoadOptions& options) {
   Timer timer;
   if (detectInput(path) == InputKind::Model) {
@@ -328,6 +367,8 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
     if (const std::optional<Census> census = censusIfLarger(path, kind, *reader, options.partCells, count))
       return buildInParts(path, *reader, options, *census, count);
   }
+  if (kind == InputKind::Native && options.box.empty() && options.nonFinite != NonFinite::Holes)
+    return loadNativeValuesAfter(path, options, timer);
   CellSet cells = loadCells(path, options);
   logInfo(strCat("read ", cells.size(), " cells in ", timer.seconds(), " s"));
   try {

@@ -155,6 +155,36 @@ Census nativeCensus(const std::string& cellsPath) {
   return census.finish();
 }
 
+std::vector<Cell> readNativeCells(const std::string& cellsPath) {
+  const uint64_t bytes = fileSize(cellsPath);
+  if (bytes == 0) fail(cellsPath, ": no cells (empty file)");
+  if (bytes % sizeof(Cell) != 0)
+    fail(cellsPath, ": truncated record ", bytes / sizeof(Cell), ": file size ", bytes,
+         " is not a multiple of the 16-byte cell record");
+  std::vector<Cell> cells(bytes / sizeof(Cell));
+  readInto(cellsPath, cells.data(), bytes);
+  validateCellRecords(cells, cellsPath);
+  return cells;
+}
+
+std::vector<std::string> nativeFieldsToRead(const std::string& cellsPath, const std::vector<std::string>& wanted,
+                                            uint64_t cellCount) {
+  const std::string stem = stemOf(cellsPath);
+  std::vector<std::string> names = fieldNamesToRead(cellsPath, stem, wanted);
+  for (const std::string& name : names)
+    checkedScalarsPath(cellsPath, stem, name, cellCount);
+  return names;
+}
+
+std::vector<float> readNativeField(const std::string& cellsPath, const std::string& name, uint64_t cellCount,
+                                   bool keepNonFinite) {
+  const std::string path = checkedScalarsPath(cellsPath, stemOf(cellsPath), name, cellCount);
+  Field field{name, std::vector<float>(size_t(cellCount))};
+  readInto(path, field.values.data(), cellCount * sizeof(float));
+  if (!keepNonFinite) validateFieldValues(field, cellCount, path);
+  return std::move(field.values);
+}
+
 CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& wanted, const box3i& box,
                    bool keepNonFinite) {
   const std::string stem = stemOf(cellsPath);
@@ -178,25 +208,9 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
     return set;
   }
   CellSet set;
-  {
-    const uint64_t bytes = fileSize(cellsPath);
-    if (bytes == 0) fail(cellsPath, ": no cells (empty file)");
-    if (bytes % sizeof(Cell) != 0)
-      fail(cellsPath, ": truncated record ", bytes / sizeof(Cell), ": file size ", bytes,
-           " is not a multiple of the 16-byte cell record");
-    set.cells.resize(bytes / sizeof(Cell));
-    readInto(cellsPath, set.cells.data(), bytes);
-  }
-  validateCellRecords(set.cells, cellsPath);
-
-  for (const std::string& name : fieldNamesToRead(cellsPath, stem, wanted)) {
-    const std::string path = checkedScalarsPath(cellsPath, stem, name, set.cells.size());
-    const uint64_t bytes = set.cells.size() * sizeof(float);
-    Field field{name, std::vector<float>(set.cells.size())};
-    readInto(path, field.values.data(), bytes);
-    if (!keepNonFinite) validateFieldValues(field, set.cells.size(), path);
-    set.fields.push_back(std::move(field));
-  }
+  set.cells = readNativeCells(cellsPath);
+  for (const std::string& name : nativeFieldsToRead(cellsPath, wanted, set.cells.size()))
+    set.fields.push_back(Field{name, readNativeField(cellsPath, name, set.cells.size(), keepNonFinite)});
   return set;
 }
 

@@ -5,6 +5,7 @@
 #include "exabricks/amr/basis.h"
 #include "exabricks/amr/cells.h"
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -97,6 +98,15 @@ ModelSummary summarize(const Model& model);
 
 /// Builds bricks and regions from validated cells; moves the field values into brick order.
 Model buildModel(CellSet&& cells, const BuildOptions& options = {});
+
+/// The same model as buildModel for cells whose fields are named but hold no values yet: the
+/// bricks are built from the cells alone (permuted in place), the cells freed, and only then
+/// each field's values are taken from `valuesOf(field)` (in input cell order) and moved into
+/// brick order, one field at a time. The peak memory is the cells and a 4-byte slot index per
+/// cell, or the slot index, the fields already placed and one field twice, whichever is more,
+/// instead of the cells and every field together.
+Model buildModelValuesAfter(CellSet&& cells, const std::function<std::vector<float>(size_t field)>& valuesOf,
+                            const BuildOptions& options = {});
 
 /// What a model's structure was built from, kept to give the next data of a time series the same
 /// bricks and regions when its hierarchy (cells, levels, world transform, brick options) is

@@ -22,6 +22,15 @@ namespace exa {
 /// holes); else the first is refused, naming its file, record and field.
 CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& fields = {}, const box3i& box = {},
                    bool keepNonFinite = false);
+/// The cell records of NAME.cells alone, validated (readNative without the values).
+std::vector<Cell> readNativeCells(const std::string& cellsPath);
+/// The fields readNative reads for `fields`: those, else every field beside the cells (an error
+/// names the file when there is none); each checked to exist and to hold one value per cell.
+std::vector<std::string> nativeFieldsToRead(const std::string& cellsPath, const std::vector<std::string>& fields,
+                                            uint64_t cellCount);
+/// One field's values in cell order, as readNative reads them.
+std::vector<float> readNativeField(const std::string& cellsPath, const std::string& field, uint64_t cellCount,
+                                   bool keepNonFinite = false);
 /// Where the cells of NAME.cells lie, read in pieces (values are not read).
 Census nativeCensus(const std::string& cellsPath);
 
