@@ -14,11 +14,6 @@ namespace exa::view {
 
 namespace {
 
-/// Drafts aim at this render time, so that a draft reaches the screen within ~100 ms.
-constexpr double kDraftSeconds = 0.035;
-/// Drafts sample at this rate (samples per half finest cell width).
-constexpr float kDraftRate = 0.5f;
-
 double secondsSince(std::chrono::steady_clock::time_point t) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t).count();
 }
@@ -46,6 +41,8 @@ Session::Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset,
                  LegendText legends)
     : model_(std::move(model)), dataset_(dataset), legends_(std::move(legends)),
       renderer_(std::make_unique<Renderer>(*model_, dataset_)), options_(options) {
+  // Drafts aim at 35 ms, so that one reaches the screen within about 100 ms.
+  view_ = std::make_unique<ProgressiveView>(*renderer_, options_.device, DraftPolicy{});
   thread_ = std::thread([this] { loop(); });
 }
 
@@ -148,13 +145,13 @@ void Session::loop() {
     const LegendText legends = pendingLegends_;
     lock.unlock();
     if (model) {
-      renderer_.reset(); // it refers to the model it replaces
+      view_.reset(); // they refer to the model they replace
+      renderer_.reset();
       model_ = std::move(model);
       dataset_ = dataset;
       legends_ = legends;
       renderer_ = std::make_unique<Renderer>(*model_, dataset_);
-      deviceChosen_ = false;
-      lastDraft_.clear();
+      view_ = std::make_unique<ProgressiveView>(*renderer_, options_.device, DraftPolicy{});
     }
     try {
       serve(request);
@@ -167,8 +164,9 @@ void Session::loop() {
 
 void Session::serve(const Request& request) {
   const Frame& frame = request.doc.frame;
-  const Scene& scene = request.doc.scene;
-  setSceneOnDevice(*renderer_, scene, options_.device, deviceChosen_);
+  ProgressiveView& view = *view_;
+  view.show(request.doc);
+  view.restart(); // every request publishes its own frames
   PassControl control;
   control.cancel = &cancel_;
 
@@ -178,14 +176,11 @@ void Session::serve(const Request& request) {
   info.visibleRegions = renderer_->visibleRegions();
   info.regions = model_->regions.regions.size();
 
-  // A draft first: reduced resolution and rate, sized to answer quickly; not when the draft on
-  // screen already shows this very scene (the request that ends a drag).
-  const std::string key = writeSceneJson(request.doc);
-  if (request.interactive || key != lastDraft_) {
-    Frame draft = frame.preview(draftDivisor_, kDraftRate);
-    draft.frameIndex = 0;
-    draftBuffer_.resize(draft.width, draft.height);
-    if (!renderer_->renderPass(draft, draftBuffer_, control) || superseded(request.id)) return;
+  // A draft first; not when the draft on screen already shows this very scene (the request that
+  // ends a drag).
+  if (request.interactive || !view.draftIsCurrent()) {
+    const Frame draft = view.draftFrame();
+    if (!view.renderDraft(draft, draftBuffer_, control) || superseded(request.id)) return;
     const RenderStats& s = draftBuffer_.stats();
     info.draft = true;
     info.width = draft.width;
@@ -195,33 +190,24 @@ void Session::serve(const Request& request) {
     info.samples = s.samples;
     info.samplesPerSecond = s.samplesPerSecond();
     publish(request, draftBuffer_.resolve(), info, false, options_.jpegQuality);
-    lastDraft_ = key;
-    // The next draft's divisor: render time scales with the pixel count.
-    const double ratio = std::max(s.seconds, 1e-4) / kDraftSeconds;
-    if (ratio > 1.4 || ratio < 0.5)
-      draftDivisor_ = std::clamp(int(std::lround(draftDivisor_ * std::sqrt(ratio))), 1, 16);
   }
   if (request.interactive) return;
 
-  // Then the full-resolution image, refined pass by pass (pass k uses frame index k, so the
-  // result equals an N-sample render of the frame).
-  buffer_.resize(frame.width, frame.height);
+  // Then the full-resolution image, refined pass by pass.
   info.draft = false;
   info.width = frame.width;
   info.height = frame.height;
   Image image;
-  for (int pass = 0; pass < frame.samplesPerPixel; ++pass) {
-    Frame f = frame;
-    f.frameIndex = pass;
-    const RenderStats before = buffer_.stats();
-    if (!renderer_->renderPass(f, buffer_, control) || superseded(request.id)) return;
-    const RenderStats& after = buffer_.stats();
-    info.passes = pass + 1;
-    info.final = pass + 1 == frame.samplesPerPixel;
+  while (!view.complete()) {
+    const RenderStats before = view.buffer().stats();
+    if (!view.refine(control) || superseded(request.id)) return;
+    const RenderStats& after = view.buffer().stats();
+    info.passes = view.passes();
+    info.final = view.complete();
     info.renderSeconds = after.seconds - before.seconds;
     info.samples = after.samples - before.samples;
     info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
-    buffer_.resolve(image);
+    view.buffer().resolve(image);
     publish(request, image, info, true, info.final ? options_.finalJpegQuality : options_.jpegQuality);
   }
 }

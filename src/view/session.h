@@ -5,6 +5,7 @@
 #include "exabricks/core/image.h"
 #include "exabricks/render/legends.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/progressive.h"
 #include "server.h"
 
 #include <atomic>
@@ -75,7 +76,7 @@ private:
   DatasetInfo dataset_;
   LegendText legends_;
   std::unique_ptr<Renderer> renderer_;
-  bool deviceChosen_ = false;                 ///< the renderer has been moved to options_.device (once per model)
+  std::unique_ptr<ProgressiveView> view_;     ///< drafts and refinement of renderer_'s frames
   std::shared_ptr<const Model> pendingModel_; ///< the dataset of the next request (setModel)
   DatasetInfo pendingDataset_;
   LegendText pendingLegends_;
@@ -92,9 +93,7 @@ private:
   uint64_t sequence_ = 0;
   std::shared_ptr<const PublishedFrame> latest_;
   Snapshot snapshot_;
-  int draftDivisor_ = 4;  ///< adapted so that drafts take about kDraftSeconds
-  std::string lastDraft_; ///< the scene (JSON) of the last draft published
-  FrameBuffer buffer_, draftBuffer_;
+  FrameBuffer draftBuffer_;
   std::thread thread_;
 };
 

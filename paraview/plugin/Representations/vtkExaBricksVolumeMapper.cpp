@@ -2,6 +2,7 @@
 
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/workflows/progressive.h"
 
 #include "vtkCamera.h"
 #include "vtkColorTransferFunction.h"
@@ -103,9 +104,8 @@ namespace {
 constexpr double kInteractiveUpdateRate = 1.0;
 // A still render that may ask for the next one adds passes for about this long.
 constexpr double kStillPassSeconds = 0.15;
-// Drafts: the coarsest divisor of the resolution, and the sampling rate's factor.
-constexpr int kMaxDraftDivisor = 16;
-constexpr float kDraftRateFactor = 0.5f;
+// Drafts as the library's progressive views make them (their budget is the view's frame time).
+const exa::DraftPolicy kDraftPolicy;
 
 bool sameCamera(const exa::Camera& a, const exa::Camera& b) {
   return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovy == b.fovy &&
@@ -314,7 +314,7 @@ void vtkExaBricksVolumeMapper::UpdateRenderer(exa::paraview::Engine& e, const ex
 void vtkExaBricksVolumeMapper::RenderDraft(exa::paraview::Engine& e, vtkOpenGLRenderWindow* window,
                                            const exa::Frame& frame, const std::vector<float>& depth,
                                            double targetSeconds) {
-  exa::Frame draft = frame.preview(this->DraftDivisor, frame.rate * kDraftRateFactor);
+  exa::Frame draft = frame.preview(this->DraftDivisor, frame.rate * kDraftPolicy.rateFactor);
   draft.samplesPerPixel = 1;
   draft.frameIndex = 0;
   std::vector<float> coarse;
@@ -332,12 +332,9 @@ void vtkExaBricksVolumeMapper::RenderDraft(exa::paraview::Engine& e, vtkOpenGLRe
   this->ShownDraft = true;
   // The next draft's divisor: as many pixels as fit the time the view allows a frame, at the
   // time per pixel this one took.
-  const double pixels = double(draft.width) * double(draft.height);
-  if (stats.seconds > 0.0 && targetSeconds > 0.0) {
-    const double affordable = pixels * targetSeconds / stats.seconds;
-    const double divisor = std::sqrt(double(frame.width) * double(frame.height) / std::max(affordable, 1.0));
-    this->DraftDivisor = std::clamp(int(std::ceil(divisor)), 1, kMaxDraftDivisor);
-  }
+  this->DraftDivisor =
+      exa::nextDraftDivisor(this->DraftDivisor, frame.width, frame.height, double(draft.width) * double(draft.height),
+                            stats.seconds, targetSeconds, kDraftPolicy.maxDivisor);
 }
 
 void vtkExaBricksVolumeMapper::RenderStill(exa::paraview::Engine& e, vtkOpenGLRenderWindow* window,

@@ -1,0 +1,77 @@
+// A view refined as the interactive front ends show one (the viewer's session, ParaView's
+// representation): a draft first, at a fraction of the resolution and a lower sampling rate,
+// its size adapted so that it renders within a time budget; then full-resolution passes up to
+// the frame's samples per pixel, each added to the last (pass k uses frame index k, so the
+// result equals an N-sample render of the frame). A new scene or frame starts the refinement
+// over, and the renderer rebuilds only what the change needs; a cancel flag ends a pass early;
+// the device is chosen on the first scene, the CPU taking over under "auto" where the device
+// cannot render it.
+#pragma once
+
+#include "exabricks/render/frame_buffer.h"
+#include "exabricks/render/renderer.h"
+#include "exabricks/render/scene.h"
+
+#include <string>
+
+namespace exa {
+
+/// How drafts are made.
+struct DraftPolicy {
+  double seconds = 0.035;  ///< the render time a draft aims at (its budget)
+  float rateFactor = 0.5f; ///< a draft samples at the frame's rate times this
+  int divisor = 4;         ///< the first draft's divisor of the resolution
+  int maxDivisor = 16;     ///< the coarsest divisor
+};
+
+/// The divisor of the next draft of a `width` x `height` frame, after a draft of `draftPixels`
+/// took `seconds` against a budget of `budget` seconds: as many pixels as the budget affords at
+/// that time per pixel. The divisor stays while the time is within [0.5, 1.4] of the budget, so
+/// that drafts do not flicker between two sizes.
+int nextDraftDivisor(int divisor, int width, int height, double draftPixels, double seconds, double budget,
+                     int maxDivisor);
+
+class ProgressiveView {
+public:
+  ProgressiveView(Renderer& renderer, std::string device = "auto", DraftPolicy policy = {});
+
+  /// Shows `doc`: its scene on the renderer (what changed is rebuilt) and its frame. The
+  /// refinement starts over when the scene or the frame differs from the one shown; true then.
+  bool show(const SceneDocument& doc);
+  /// Starts the refinement over (the next refine() renders pass 0).
+  void restart();
+
+  /// The draft frame of the view shown: the frame at the draft's divisor and rate, one sample.
+  Frame draftFrame() const;
+  /// Renders `draft` (a draftFrame(), perhaps with a depth limit) into `buffer` (resized) and
+  /// adapts the next draft's divisor to `budget` seconds (the policy's when 0). False when
+  /// cancelled.
+  bool renderDraft(const Frame& draft, FrameBuffer& buffer, const PassControl& control, double budget = 0.0);
+  /// Whether the last draft rendered shows the view shown now.
+  bool draftIsCurrent() const { return draftKey_ == key_ && !key_.empty(); }
+
+  /// Adds the next full-resolution pass to buffer(); false when cancelled (the pass is then not
+  /// counted) or when the view already holds its passes.
+  bool refine(const PassControl& control);
+  const FrameBuffer& buffer() const { return buffer_; }
+  int passes() const { return passes_; }
+  int targetPasses() const { return doc_.frame.samplesPerPixel; }
+  bool complete() const { return passes_ >= targetPasses(); }
+
+  int draftDivisor() const { return divisor_; }
+  const SceneDocument& shown() const { return doc_; }
+  Renderer& renderer() { return renderer_; }
+
+private:
+  Renderer& renderer_;
+  std::string device_;
+  bool deviceChosen_ = false;
+  DraftPolicy policy_;
+  int divisor_;
+  SceneDocument doc_;
+  std::string key_, draftKey_; ///< the scene and frame shown, and those of the last draft
+  FrameBuffer buffer_;
+  int passes_ = 0;
+};
+
+} // namespace exa
