@@ -113,6 +113,17 @@ double meanAlpha(const Image& img) {
   return sum / double(img.pixels.size());
 }
 
+/// The iso-surface of radius 9 of a distance field around the centre of finestCube("r", ...),
+/// grey (albedo 0.5) and diffuse, without the volume.
+Scene greySphere() {
+  Scene s = pathScene(ramp(0.f, 0.f));
+  s.layers[0].field = "r";
+  s.volume = false;
+  s.iso.values = {9.f};
+  s.iso.colors = {vec3f(0.5f)};
+  return s;
+}
+
 } // namespace
 
 TEST(PathTrace, TransmittanceThroughAHomogeneousSlabIsAnalytic) {
@@ -274,11 +285,7 @@ TEST(PathTrace, ASkyGradientLightsASphereFromAbove) {
   // over the upper half of the picture and -1/3 over the lower half.
   const Model m = finestCube("r", [](const vec3f& c) { return length(c - vec3f(16.f)); });
   Renderer r(m, DatasetInfo::of(m));
-  Scene s = pathScene(ramp(0.f, 0.f));
-  s.layers[0].field = "r";
-  s.volume = false;
-  s.iso.values = {9.f};
-  s.iso.colors = {vec3f(0.5f)};
+  Scene s = greySphere();
   const float h = 0.5f, z = 0.9f;
   s.pathTracing.environment = vec3f(h);
   s.pathTracing.sky = vec3f(z);
@@ -305,11 +312,7 @@ TEST(PathTrace, AConvexDiffuseSurfaceReflectsItsAlbedoTimesTheEnvironment) {
   // environment's radiance.
   const Model m = finestCube("r", [](const vec3f& c) { return length(c - vec3f(16.f)); });
   Renderer r(m, DatasetInfo::of(m));
-  Scene s = pathScene(ramp(0.f, 0.f));
-  s.layers[0].field = "r";
-  s.volume = false;
-  s.iso.values = {9.f};
-  s.iso.colors = {vec3f(0.5f)};
+  Scene s = greySphere();
   s.pathTracing.environment = vec3f(1.f, 0.5f, 0.25f);
   r.setScene(s);
   const Radiance got = radianceWhereMet(r.render(downZ(8)));
