@@ -19,6 +19,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace exa::device_test {
@@ -91,7 +92,8 @@ struct Variant {
   bool pathTraced = false;
 };
 
-inline std::vector<Variant> variants() {
+/// Shading modes, sampling, maps and layers of the volume.
+inline std::vector<Variant> volumeVariants() {
   auto tf = [](const char* map) { return defaultTransferFunction(map); };
   return {
       {"smooth shading", [](Scene&, Frame&, const DatasetInfo&, const box3d&) {}},
@@ -115,6 +117,13 @@ inline std::vector<Variant> variants() {
          radius.tf.opacity = {{0.f, 0.f}, {0.6f, 0.f}, {1.f, 0.5f}};
          s.layers.push_back(radius);
        }},
+  };
+}
+
+/// Iso-surfaces, meshes, clipping, the domain and the depth limit.
+inline std::vector<Variant> surfaceVariants() {
+  auto tf = [](const char* map) { return defaultTransferFunction(map); };
+  return {
       {"iso-surfaces coloured by a field, clip plane and box",
        [tf](Scene& s, Frame&, const DatasetInfo& d, const box3d& bounds) {
          const range1f r = d.valueRanges[0];
@@ -167,8 +176,13 @@ inline std::vector<Variant> variants() {
          s.iso.values = {r.lower + 0.3f * (r.upper - r.lower)};
        },
        false, true},
-      {"one sample, no jitter",
-       [](Scene&, Frame& f, const DatasetInfo&, const box3d&) { f.samplesPerPixel = 1, f.jitter = false; }},
+  };
+}
+
+/// The path tracer with layers, iso-surfaces, meshes and clipping.
+inline std::vector<Variant> pathTracingVariants() {
+  auto tf = [](const char* map) { return defaultTransferFunction(map); };
+  return {
       {"path tracing: two layers, sun and environment, anisotropic, clipped",
        [tf](Scene& s, Frame& f, const DatasetInfo&, const box3d& bounds) {
          s.integration.integrator = Integrator::PathTrace;
@@ -198,6 +212,18 @@ inline std::vector<Variant> variants() {
        },
        false, false, true},
   };
+}
+
+/// Every variant: the volume's, the surfaces', one sample without jitter, the path tracer's.
+inline std::vector<Variant> variants() {
+  std::vector<Variant> all = volumeVariants();
+  for (Variant& v : surfaceVariants())
+    all.push_back(std::move(v));
+  all.push_back({"one sample, no jitter",
+                 [](Scene&, Frame& f, const DatasetInfo&, const box3d&) { f.samplesPerPixel = 1, f.jitter = false; }});
+  for (Variant& v : pathTracingVariants())
+    all.push_back(std::move(v));
+  return all;
 }
 
 /// Generated multi-level data with two fields, placed in a world frame that is not the lattice's.

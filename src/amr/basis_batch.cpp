@@ -88,19 +88,182 @@ HWY_INLINE void loadPairs(hn::Full128<float>, const float* values, hn::Vec128<in
 #define EXA_PAIR_LOADS 0
 #endif
 
+// One brick's hat factors per axis, as basis.h: position in cell-centre units, the lower of the two
+// nearest centres, and the hat factors and derivatives of both, zero where that cell lies outside
+// the brick. A corner's weight is the product of its three factors, so a missing cell weighs
+// nothing; its index is clamped into the brick so that every load stays inside.
+template <class D> struct BrickHats {
+  using V = hn::Vec<D>;
+  using VI = hn::Vec<hn::RebindToSigned<D>>;
+  using M = hn::Mask<D>;
+  V q[3], fl[3];
+  M any; // the lane lies in the brick's support on every axis
+  VI lo[3];
+  M both[3]; // both cells present: the upper one is one stride on
+  V h0[3], h1[3], dh0[3], dh1[3];
+};
+
+// First only whether any lane lies in the brick's support (most listed bricks of a merged region
+// reach none of a batch's samples). The tests stay in floats (the floor is an exact small integer).
+template <class D>
+HWY_INLINE bool BrickSupport(D d, const Brick& brick, const hn::Vec<D> (&p)[3], hn::Vec<D> invW, BrickHats<D>& h) {
+  const hn::Vec<D> one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f), zero = hn::Zero(d), minusOne = hn::Set(d, -1.f);
+  h.any = hn::Not(hn::Lt(one, zero)); // all true
+  for (int a = 0; a < 3; ++a) {
+    h.q[a] = hn::Sub(hn::Mul(hn::Sub(p[a], hn::Set(d, float(brick.lower[a]))), invW), half);
+    h.fl[a] = hn::Floor(h.q[a]);
+    h.any = hn::And(h.any, hn::And(hn::Ge(h.fl[a], minusOne), hn::Lt(h.fl[a], hn::Set(d, float(brick.size[a])))));
+  }
+  return !hn::AllFalse(d, h.any);
+}
+
+// Then the rest, for a brick some lane reaches. The clamping stays in floats; only the clamped
+// index is converted.
+template <class D> HWY_INLINE void BrickFactors(D d, const Brick& brick, hn::Vec<D> invW, BrickHats<D>& h) {
+  using V = hn::Vec<D>;
+  using M = hn::Mask<D>;
+  const hn::RebindToSigned<D> di;
+  const V one = hn::Set(d, 1.f), zero = hn::Zero(d), minusOne = hn::Set(d, -1.f);
+  const V magic = hn::Set(d, 8388608.f); // 2^23
+  for (int a = 0; a < 3; ++a) {
+    const V f = hn::Sub(h.q[a], h.fl[a]);
+    const V size = hn::Set(d, float(brick.size[a])), last = hn::Set(d, float(brick.size[a] - 1));
+    const M valid0 = hn::And(hn::Ge(h.fl[a], zero), hn::Lt(h.fl[a], size));
+    const M valid1 = hn::And(hn::Ge(h.fl[a], minusOne), hn::Lt(h.fl[a], last));
+    h.both[a] = hn::And(valid0, valid1);
+    h.h0[a] = hn::IfThenElseZero(valid0, hn::Sub(one, f));
+    h.h1[a] = hn::IfThenElseZero(valid1, f);
+    h.dh0[a] = hn::IfThenElseZero(valid0, hn::Neg(invW));
+    h.dh1[a] = hn::IfThenElseZero(valid1, invW);
+    // The clamped index as an integer: below kMaxBrickWidth < 2^23, i + 2^23 holds i in
+    // its mantissa bits.
+    const V clamped = hn::Min(hn::Max(h.fl[a], zero), last);
+    h.lo[a] = hn::Sub(hn::BitCast(di, hn::Add(clamped, magic)), hn::BitCast(di, magic));
+  }
+}
+
+// The values of the eight corners, two neighbours along x per (y, z) row: c0[z][y] the lower x
+// cell, c1[z][y] the upper. `above` is set where the pair's second cell is the lane's lower
+// existing one.
+template <class D>
+HWY_INLINE void FetchCorners(D d, const FieldView& view, const Brick& brick, BrickHats<D>& h, hn::Vec<D> (&c0)[2][2],
+                             hn::Vec<D> (&c1)[2][2], hn::Mask<D>& above) {
+  using V = hn::Vec<D>;
+  using VI = hn::Vec<hn::RebindToSigned<D>>;
+  const hn::RebindToSigned<D> di;
+  const VI ione = hn::Set(di, 1);
+  const float* values = view.values + brick.valueOffset;
+  const VI sx = hn::Set(di, brick.size.x), sxy = hn::Set(di, brick.size.x * brick.size.y);
+  const VI offset[3] = {hn::IfThenElseZero(hn::RebindMask(di, h.both[0]), ione),
+                        hn::IfThenElseZero(hn::RebindMask(di, h.both[1]), sx),
+                        hn::IfThenElseZero(hn::RebindMask(di, h.both[2]), sxy)};
+  // Each lane's first corner: its lower x cell plus the start of its (y, z) row.
+  const VI rowStart = hn::Add(hn::Mul(sx, h.lo[1]), hn::Mul(sxy, h.lo[2]));
+  VI at = hn::Add(h.lo[0], rowStart);
+  above = hn::Lt(hn::Set(d, 1.f), hn::Zero(d));
+#if EXA_PAIR_LOADS
+  const bool pairs = brick.size.x >= 2;
+  if (pairs) {
+    // Pairs along x start at cell b = clamp(floor, 0, size - 2), so that both lie in the
+    // brick. Where the floor is -1 (left of the first centre) b is its upper cell; where it
+    // is size - 1 (right of the last) b + 1 is its lower one. The hat factors move with the
+    // cells; the missing cell's factor is zero either way, so the sums are the same.
+    const V magic = hn::Set(d, 8388608.f); // 2^23
+    const V b = hn::Min(hn::Max(h.fl[0], hn::Zero(d)), hn::Set(d, float(brick.size.x - 2)));
+    const hn::Mask<D> same = hn::Eq(b, h.fl[0]), below = hn::Lt(h.fl[0], b);
+    above = hn::Gt(h.fl[0], b);
+    const V g0 = hn::IfThenElse(same, h.h0[0], hn::IfThenElseZero(below, h.h1[0]));
+    const V g1 = hn::IfThenElse(same, h.h1[0], hn::IfThenElseZero(above, h.h0[0]));
+    const V dg0 = hn::IfThenElse(same, h.dh0[0], hn::IfThenElseZero(below, h.dh1[0]));
+    const V dg1 = hn::IfThenElse(same, h.dh1[0], hn::IfThenElseZero(above, h.dh0[0]));
+    h.h0[0] = g0, h.h1[0] = g1, h.dh0[0] = dg0, h.dh1[0] = dg1;
+    at = hn::Add(hn::Sub(hn::BitCast(di, hn::Add(b, magic)), hn::BitCast(di, magic)), rowStart);
+  }
+#endif
+  const auto fetchRow = [&](const VI& row, V& r0, V& r1) {
+#if EXA_PAIR_LOADS
+    if (pairs) return loadPairs(d, values, row, r0, r1);
+#endif
+    r0 = hn::GatherIndex(d, values, row);
+    r1 = hn::GatherIndex(d, values, hn::Add(row, offset[0]));
+  };
+  fetchRow(at, c0[0][0], c1[0][0]);
+  fetchRow(hn::Add(at, offset[1]), c0[0][1], c1[0][1]);
+  fetchRow(hn::Add(at, offset[2]), c0[1][0], c1[1][0]);
+  fetchRow(hn::Add(hn::Add(at, offset[1]), offset[2]), c0[1][1], c1[1][1]);
+}
+
+// A batch's running sums over its bricks, and the reference value they are relative to.
+template <class D> struct BatchSums {
+  using V = hn::Vec<D>;
+  V sumW, sumWV, v0;
+  V dW[3], dWV[3];
+  hn::Mask<D> haveRef;
+};
+
+// The eight corners summed axis by axis: along x per (y, z) row, then y, then z. The same sums as
+// basis.h's cell-by-cell loop, factored.
+template <bool gradient, class D>
+HWY_INLINE void AddCorners(const BrickHats<D>& h, const hn::Vec<D> (&c0)[2][2], const hn::Vec<D> (&c1)[2][2],
+                           BatchSums<D>& s) {
+  using V = hn::Vec<D>;
+  V ex[2][2], gxx[2][2];
+  for (int cz = 0; cz < 2; ++cz)
+    for (int cy = 0; cy < 2; ++cy) {
+      const V a0 = hn::Sub(c0[cz][cy], s.v0), a1 = hn::Sub(c1[cz][cy], s.v0);
+      ex[cz][cy] = hn::MulAdd(h.h1[0], a1, hn::Mul(h.h0[0], a0));
+      if constexpr (gradient) gxx[cz][cy] = hn::MulAdd(h.dh1[0], a1, hn::Mul(h.dh0[0], a0));
+    }
+  const V wx = hn::Add(h.h0[0], h.h1[0]), wy = hn::Add(h.h0[1], h.h1[1]), wz = hn::Add(h.h0[2], h.h1[2]);
+  V eyz[2], gxyz[2], gyyz[2];
+  for (int cz = 0; cz < 2; ++cz) {
+    eyz[cz] = hn::MulAdd(h.h1[1], ex[cz][1], hn::Mul(h.h0[1], ex[cz][0]));
+    if constexpr (gradient) {
+      gxyz[cz] = hn::MulAdd(h.h1[1], gxx[cz][1], hn::Mul(h.h0[1], gxx[cz][0]));
+      gyyz[cz] = hn::MulAdd(h.dh1[1], ex[cz][1], hn::Mul(h.dh0[1], ex[cz][0]));
+    }
+  }
+  s.sumW = hn::MulAdd(wx, hn::Mul(wy, wz), s.sumW);
+  s.sumWV = hn::Add(s.sumWV, hn::MulAdd(h.h1[2], eyz[1], hn::Mul(h.h0[2], eyz[0])));
+  if constexpr (gradient) {
+    s.dW[0] = hn::MulAdd(hn::Add(h.dh0[0], h.dh1[0]), hn::Mul(wy, wz), s.dW[0]);
+    s.dW[1] = hn::MulAdd(hn::Add(h.dh0[1], h.dh1[1]), hn::Mul(wx, wz), s.dW[1]);
+    s.dW[2] = hn::MulAdd(hn::Add(h.dh0[2], h.dh1[2]), hn::Mul(wx, wy), s.dW[2]);
+    s.dWV[0] = hn::Add(s.dWV[0], hn::MulAdd(h.h1[2], gxyz[1], hn::Mul(h.h0[2], gxyz[0])));
+    s.dWV[1] = hn::Add(s.dWV[1], hn::MulAdd(h.h1[2], gyyz[1], hn::Mul(h.h0[2], gyyz[0])));
+    s.dWV[2] = hn::Add(s.dWV[2], hn::MulAdd(h.dh1[2], eyz[1], hn::Mul(h.dh0[2], eyz[0])));
+  }
+}
+
+// The value (and gradient) of the samples from `base` on: the quotients of the sums, zero where
+// no cell has weight.
+template <bool gradient, class D>
+HWY_INLINE void StoreSums(D d, const BatchSums<D>& s, SampleBatch& batch, size_t base) {
+  using V = hn::Vec<D>;
+  const hn::RebindToSigned<D> di;
+  const V one = hn::Set(d, 1.f), zero = hn::Zero(d);
+  const hn::Mask<D> ok = s.sumW > zero;
+  const V safeW = hn::IfThenElse(ok, s.sumW, one);
+  hn::StoreU(hn::IfThenElseZero(ok, hn::Add(s.v0, hn::Div(s.sumWV, safeW))), d, batch.value + base);
+  hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, ok)), di, batch.valid + base);
+  if constexpr (gradient) {
+    const V w2 = hn::Mul(safeW, safeW);
+    float* out[3] = {batch.gx + base, batch.gy + base, batch.gz + base};
+    for (int a = 0; a < 3; ++a)
+      hn::StoreU(hn::IfThenElseZero(ok, hn::Div(hn::Sub(hn::Mul(s.dWV[a], safeW), hn::Mul(s.dW[a], s.sumWV)), w2)), d,
+                 out[a]);
+  }
+}
+
 // Compiled once with and once without gradients: their six accumulators would otherwise stay live
 // (and spill) in the values-only batches too.
 template <bool gradient, size_t kLanes>
 void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch) {
-  const hn::CappedTag<float, kLanes> d;
-  const hn::RebindToSigned<decltype(d)> di;
-  using V = hn::Vec<decltype(d)>;
-  using VI = hn::Vec<decltype(di)>;
-  using M = hn::Mask<decltype(d)>;
+  using D = hn::CappedTag<float, kLanes>;
+  const D d;
+  using V = hn::Vec<D>;
   const size_t lanes = hn::Lanes(d);
-  const V one = hn::Set(d, 1.f), half = hn::Set(d, 0.5f), zero = hn::Zero(d);
-  const V minusOne = hn::Set(d, -1.f), magic = hn::Set(d, 8388608.f); // 2^23
-  const VI ione = hn::Set(di, 1), magicBits = hn::BitCast(di, magic);
+  const V one = hn::Set(d, 1.f), zero = hn::Zero(d);
   // Positions beyond count, up to the end of the last vector, repeat the last one, so that whole
   // vectors are loaded.
   const int padded = int((size_t(batch.count) + lanes - 1) / lanes * lanes);
@@ -110,130 +273,28 @@ void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t br
   }
   for (size_t base = 0; base < size_t(batch.count); base += lanes) {
     const V p[3] = {hn::LoadU(d, batch.x + base), hn::LoadU(d, batch.y + base), hn::LoadU(d, batch.z + base)};
-    V sumW = zero, sumWV = zero, v0 = zero;
-    V dW[3] = {zero, zero, zero}, dWV[3] = {zero, zero, zero};
-    M haveRef = one < zero; // all false
+    BatchSums<D> s;
+    s.sumW = zero, s.sumWV = zero, s.v0 = zero;
+    for (int a = 0; a < 3; ++a)
+      s.dW[a] = zero, s.dWV[a] = zero;
+    s.haveRef = one < zero; // all false
     for (uint32_t k = 0; k < brickCount; ++k) {
       const Brick& brick = view.bricks[brickIds[k]];
       const V invW = hn::Set(d, inverseWidth(brick.level));
-      // Per axis, as basis.h: position in cell-centre units, the lower of the two nearest
-      // centres, and the hat factors and derivatives of both, zero where that cell lies outside
-      // the brick. A corner's weight is the product of its three factors, so a missing cell
-      // weighs nothing; its index is clamped into the brick so that every load stays inside.
-      // First only whether any lane lies in the brick's support (most listed bricks of a merged
-      // region reach none of a batch's samples), then the rest. The tests and the clamping stay
-      // in floats (the floor is an exact small integer); only the clamped index is converted.
-      V q[3], fl[3];
-      M any = hn::Not(hn::Lt(one, zero)); // all true
-      for (int a = 0; a < 3; ++a) {
-        q[a] = hn::Sub(hn::Mul(hn::Sub(p[a], hn::Set(d, float(brick.lower[a]))), invW), half);
-        fl[a] = hn::Floor(q[a]);
-        any = hn::And(any, hn::And(hn::Ge(fl[a], minusOne), hn::Lt(fl[a], hn::Set(d, float(brick.size[a])))));
-      }
-      if (hn::AllFalse(d, any)) continue; // no lane lies in this brick's support
-      VI lo[3];
-      M both[3]; // both cells present: the upper one is one stride on
-      V h0[3], h1[3], dh0[3], dh1[3];
-      for (int a = 0; a < 3; ++a) {
-        const V f = hn::Sub(q[a], fl[a]);
-        const V size = hn::Set(d, float(brick.size[a])), last = hn::Set(d, float(brick.size[a] - 1));
-        const M valid0 = hn::And(hn::Ge(fl[a], zero), hn::Lt(fl[a], size));
-        const M valid1 = hn::And(hn::Ge(fl[a], minusOne), hn::Lt(fl[a], last));
-        both[a] = hn::And(valid0, valid1);
-        h0[a] = hn::IfThenElseZero(valid0, hn::Sub(one, f));
-        h1[a] = hn::IfThenElseZero(valid1, f);
-        dh0[a] = hn::IfThenElseZero(valid0, hn::Neg(invW));
-        dh1[a] = hn::IfThenElseZero(valid1, invW);
-        // The clamped index as an integer: below kMaxBrickWidth < 2^23, i + 2^23 holds i in
-        // its mantissa bits.
-        const V clamped = hn::Min(hn::Max(fl[a], zero), last);
-        lo[a] = hn::Sub(hn::BitCast(di, hn::Add(clamped, magic)), magicBits);
-      }
-      const float* values = view.values + brick.valueOffset;
-      const VI sx = hn::Set(di, brick.size.x), sxy = hn::Set(di, brick.size.x * brick.size.y);
-      const VI offset[3] = {hn::IfThenElseZero(hn::RebindMask(di, both[0]), ione),
-                            hn::IfThenElseZero(hn::RebindMask(di, both[1]), sx),
-                            hn::IfThenElseZero(hn::RebindMask(di, both[2]), sxy)};
-      // Each lane's first corner: its lower x cell plus the start of its (y, z) row.
-      const VI rowStart = hn::Add(hn::Mul(sx, lo[1]), hn::Mul(sxy, lo[2]));
-      VI at = hn::Add(lo[0], rowStart);
-      M above = hn::Lt(one, zero); // the pair's second cell is the lane's lower existing one
-#if EXA_PAIR_LOADS
-      const bool pairs = brick.size.x >= 2;
-      if (pairs) {
-        // Pairs along x start at cell b = clamp(floor, 0, size - 2), so that both lie in the
-        // brick. Where the floor is -1 (left of the first centre) b is its upper cell; where it
-        // is size - 1 (right of the last) b + 1 is its lower one. The hat factors move with the
-        // cells; the missing cell's factor is zero either way, so the sums are the same.
-        const V b = hn::Min(hn::Max(fl[0], zero), hn::Set(d, float(brick.size.x - 2)));
-        const M same = hn::Eq(b, fl[0]), below = hn::Lt(fl[0], b);
-        above = hn::Gt(fl[0], b);
-        const V g0 = hn::IfThenElse(same, h0[0], hn::IfThenElseZero(below, h1[0]));
-        const V g1 = hn::IfThenElse(same, h1[0], hn::IfThenElseZero(above, h0[0]));
-        const V dg0 = hn::IfThenElse(same, dh0[0], hn::IfThenElseZero(below, dh1[0]));
-        const V dg1 = hn::IfThenElse(same, dh1[0], hn::IfThenElseZero(above, dh0[0]));
-        h0[0] = g0, h1[0] = g1, dh0[0] = dg0, dh1[0] = dg1;
-        at = hn::Add(hn::Sub(hn::BitCast(di, hn::Add(b, magic)), magicBits), rowStart);
-      }
-#endif
-      // The corners' values, two neighbours along x per (y, z) row.
-      const auto fetchRow = [&](const VI& row, V& r0, V& r1) {
-#if EXA_PAIR_LOADS
-        if (pairs) return loadPairs(d, values, row, r0, r1);
-#endif
-        r0 = hn::GatherIndex(d, values, row);
-        r1 = hn::GatherIndex(d, values, hn::Add(row, offset[0]));
-      };
+      BrickHats<D> h;
+      if (!BrickSupport(d, brick, p, invW, h)) continue; // no lane lies in this brick's support
+      BrickFactors(d, brick, invW, h);
       V c0[2][2], c1[2][2];
-      fetchRow(at, c0[0][0], c1[0][0]);
-      fetchRow(hn::Add(at, offset[1]), c0[0][1], c1[0][1]);
-      fetchRow(hn::Add(at, offset[2]), c0[1][0], c1[1][0]);
-      fetchRow(hn::Add(hn::Add(at, offset[1]), offset[2]), c0[1][1], c1[1][1]);
+      hn::Mask<D> above;
+      FetchCorners(d, view, brick, h, c0, c1, above);
       // The reference value: the first brick that has cells on every axis gives its first cell
       // (the lower one where it exists).
-      const M newRef = hn::AndNot(haveRef, any);
-      v0 = hn::IfThenElse(newRef, hn::IfThenElse(above, c1[0][0], c0[0][0]), v0);
-      haveRef = hn::Or(haveRef, newRef);
-      // The eight corners summed axis by axis: along x per (y, z) row, then y, then z. The same
-      // sums as basis.h's cell-by-cell loop, factored.
-      V ex[2][2], gxx[2][2];
-      for (int cz = 0; cz < 2; ++cz)
-        for (int cy = 0; cy < 2; ++cy) {
-          const V a0 = hn::Sub(c0[cz][cy], v0), a1 = hn::Sub(c1[cz][cy], v0);
-          ex[cz][cy] = hn::MulAdd(h1[0], a1, hn::Mul(h0[0], a0));
-          if constexpr (gradient) gxx[cz][cy] = hn::MulAdd(dh1[0], a1, hn::Mul(dh0[0], a0));
-        }
-      const V wx = hn::Add(h0[0], h1[0]), wy = hn::Add(h0[1], h1[1]), wz = hn::Add(h0[2], h1[2]);
-      V eyz[2], gxyz[2], gyyz[2];
-      for (int cz = 0; cz < 2; ++cz) {
-        eyz[cz] = hn::MulAdd(h1[1], ex[cz][1], hn::Mul(h0[1], ex[cz][0]));
-        if constexpr (gradient) {
-          gxyz[cz] = hn::MulAdd(h1[1], gxx[cz][1], hn::Mul(h0[1], gxx[cz][0]));
-          gyyz[cz] = hn::MulAdd(dh1[1], ex[cz][1], hn::Mul(dh0[1], ex[cz][0]));
-        }
-      }
-      sumW = hn::MulAdd(wx, hn::Mul(wy, wz), sumW);
-      sumWV = hn::Add(sumWV, hn::MulAdd(h1[2], eyz[1], hn::Mul(h0[2], eyz[0])));
-      if constexpr (gradient) {
-        dW[0] = hn::MulAdd(hn::Add(dh0[0], dh1[0]), hn::Mul(wy, wz), dW[0]);
-        dW[1] = hn::MulAdd(hn::Add(dh0[1], dh1[1]), hn::Mul(wx, wz), dW[1]);
-        dW[2] = hn::MulAdd(hn::Add(dh0[2], dh1[2]), hn::Mul(wx, wy), dW[2]);
-        dWV[0] = hn::Add(dWV[0], hn::MulAdd(h1[2], gxyz[1], hn::Mul(h0[2], gxyz[0])));
-        dWV[1] = hn::Add(dWV[1], hn::MulAdd(h1[2], gyyz[1], hn::Mul(h0[2], gyyz[0])));
-        dWV[2] = hn::Add(dWV[2], hn::MulAdd(dh1[2], eyz[1], hn::Mul(dh0[2], eyz[0])));
-      }
+      const hn::Mask<D> newRef = hn::AndNot(s.haveRef, h.any);
+      s.v0 = hn::IfThenElse(newRef, hn::IfThenElse(above, c1[0][0], c0[0][0]), s.v0);
+      s.haveRef = hn::Or(s.haveRef, newRef);
+      AddCorners<gradient>(h, c0, c1, s);
     }
-    const M ok = sumW > zero;
-    const V safeW = hn::IfThenElse(ok, sumW, one);
-    hn::StoreU(hn::IfThenElseZero(ok, hn::Add(v0, hn::Div(sumWV, safeW))), d, batch.value + base);
-    hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, ok)), di, batch.valid + base);
-    if constexpr (gradient) {
-      const V w2 = hn::Mul(safeW, safeW);
-      float* out[3] = {batch.gx + base, batch.gy + base, batch.gz + base};
-      for (int a = 0; a < 3; ++a)
-        hn::StoreU(hn::IfThenElseZero(ok, hn::Div(hn::Sub(hn::Mul(dWV[a], safeW), hn::Mul(dW[a], sumWV)), w2)), d,
-                   out[a]);
-    }
+    StoreSums<gradient>(d, s, batch, base);
   }
 }
 

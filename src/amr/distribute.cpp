@@ -136,9 +136,10 @@ void appendDecodedCells(CellSet& set, const std::vector<uint8_t>& bytes) {
   if (!in.done()) fail("exabricks: a message of cells has bytes after its values");
 }
 
-CellPart distributeCells(CellSet&& mine, Collectives& comm) {
-  CellPart part;
-  // Where the cells lie: every process's census, merged and split the same way everywhere.
+namespace {
+
+/// Where the cells lie: every process's census, merged the same way everywhere.
+Census gatherCensus(const CellSet& mine, Collectives& comm) {
   std::vector<uint8_t> census;
   onEveryProcess(comm, [&] {
     CellCensus counter;
@@ -148,7 +149,38 @@ CellPart distributeCells(CellSet&& mine, Collectives& comm) {
   std::vector<Census> all;
   for (const std::vector<uint8_t>& bytes : comm.allGather(census))
     all.push_back(decodeCensus(bytes));
-  const Census merged = mergeCensuses(all);
+  return mergeCensuses(all);
+}
+
+/// What this process sends each part: the cells whose supports reach its shading reach.
+std::vector<std::vector<uint8_t>> outgoingShares(const CellSet& mine, const CellPart& part, Collectives& comm) {
+  std::vector<std::vector<uint8_t>> outgoing(size_t(comm.size()));
+  onEveryProcess(comm, [&] {
+    for (int p = 0; p < comm.size(); ++p) {
+      CellSet share;
+      share.fields.resize(mine.fields.size());
+      for (size_t f = 0; f < mine.fields.size(); ++f)
+        share.fields[f].name = mine.fields[f].name;
+      const box3l reach = shadingReach(part.partition.box(p), part.coarsestLevel);
+      for (size_t i = 0; i < mine.cells.size(); ++i) {
+        const Cell& c = mine.cells[i];
+        if (!supportReaches(c.bounds(), c.level, reach)) continue;
+        share.cells.push_back(c);
+        for (size_t f = 0; f < mine.fields.size(); ++f)
+          share.fields[f].values.push_back(mine.fields[f].values[i]);
+      }
+      outgoing[size_t(p)] = encodeCells(share);
+    }
+  });
+  return outgoing;
+}
+
+} // namespace
+
+CellPart distributeCells(CellSet&& mine, Collectives& comm) {
+  CellPart part;
+  // Where the cells lie: every process's census, merged and split the same way everywhere.
+  const Census merged = gatherCensus(mine, comm);
   part.coarsestLevel = merged.coarsestLevel;
   part.totalCells = uint64_t(merged.cells() + 0.5);
   if (part.totalCells == 0) fail("exabricks: no process holds any cells");
@@ -189,24 +221,7 @@ CellPart distributeCells(CellSet&& mine, Collectives& comm) {
   part.box = part.partition.box(comm.rank());
 
   // Each process sends every part the cells whose supports reach its shading reach.
-  std::vector<std::vector<uint8_t>> outgoing(size_t(comm.size()));
-  onEveryProcess(comm, [&] {
-    for (int p = 0; p < comm.size(); ++p) {
-      CellSet share;
-      share.fields.resize(mine.fields.size());
-      for (size_t f = 0; f < mine.fields.size(); ++f)
-        share.fields[f].name = mine.fields[f].name;
-      const box3l reach = shadingReach(part.partition.box(p), part.coarsestLevel);
-      for (size_t i = 0; i < mine.cells.size(); ++i) {
-        const Cell& c = mine.cells[i];
-        if (!supportReaches(c.bounds(), c.level, reach)) continue;
-        share.cells.push_back(c);
-        for (size_t f = 0; f < mine.fields.size(); ++f)
-          share.fields[f].values.push_back(mine.fields[f].values[i]);
-      }
-      outgoing[size_t(p)] = encodeCells(share);
-    }
-  });
+  std::vector<std::vector<uint8_t>> outgoing = outgoingShares(mine, part, comm);
   const std::vector<std::vector<uint8_t>> incoming = comm.exchange(outgoing);
   outgoing.clear();
   part.cells.world = mine.world;

@@ -103,14 +103,10 @@ struct Builder {
   std::vector<box3l>& boxes;
   int64_t grain = 1; ///< split planes are multiples of this
 
-  int build(std::vector<CensusBox> items, int parts, const box3l& region) {
-    const int index = int(nodes.size());
-    nodes.emplace_back();
-    if (parts == 1) {
-      nodes[size_t(index)].part = int(boxes.size());
-      boxes.push_back(region);
-      return index;
-    }
+  /// The plane that divides `items` between `parts` parts: the low parts' share of the cells below
+  /// it, on the data's longest axis.
+  void choosePlane(const std::vector<CensusBox>& items, int parts, const box3l& region, int& axis,
+                   int64_t& split) const {
     box3l data;
     double total = 0;
     for (const CensusBox& c : items) {
@@ -118,8 +114,6 @@ struct Builder {
       total += c.cells;
     }
     const int lowParts = parts / 2;
-    int axis = 0;
-    int64_t split = 0;
     if (data.empty()) {
       // Nothing left to divide: the parts split the region's middle (or the origin when
       // unbounded); they render nothing.
@@ -157,7 +151,11 @@ struct Builder {
         split = a * grain;
       }
     }
-    std::vector<CensusBox> low, high;
+  }
+
+  /// The items' parts below and above x[axis] = split, their cells spread evenly.
+  static void divide(const std::vector<CensusBox>& items, int axis, int64_t split, std::vector<CensusBox>& low,
+                     std::vector<CensusBox>& high) {
     for (const CensusBox& c : items) {
       if (c.box.lower[axis] < split) {
         CensusBox part = c;
@@ -172,6 +170,22 @@ struct Builder {
         high.push_back(part);
       }
     }
+  }
+
+  int build(std::vector<CensusBox> items, int parts, const box3l& region) {
+    const int index = int(nodes.size());
+    nodes.emplace_back();
+    if (parts == 1) {
+      nodes[size_t(index)].part = int(boxes.size());
+      boxes.push_back(region);
+      return index;
+    }
+    const int lowParts = parts / 2;
+    int axis = 0;
+    int64_t split = 0;
+    choosePlane(items, parts, region, axis, split);
+    std::vector<CensusBox> low, high;
+    divide(items, axis, split, low, high);
     items.clear();
     items.shrink_to_fit();
     box3l lowRegion = region, highRegion = region;

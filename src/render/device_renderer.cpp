@@ -137,7 +137,20 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
   v.invScale = vec3f(1.0 / model_.world.scale.x, 1.0 / model_.world.scale.y, 1.0 / model_.world.scale.z);
   v.meanScale = float((model_.world.scale.x + model_.world.scale.y + model_.world.scale.z) / 3.0);
   if (!model_.regions.regions.empty()) v.regions = put("regions", model_.regions.regions, false, update);
+  syncVolume(s, volume, update);
+  syncIso(s, surfaces, update);
+  syncMeshes(s, update);
+  v.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
+  v.planeCount = int(s.clip.planes.size());
+  for (size_t i = 0; i < s.clip.planes.size(); ++i)
+    v.planes[i] = s.clip.planes[i];
+  v.clipBox = s.clip.box;
+  v.ray = raySettingsOf(s, dataset_, model_.world);
+  update.deviceSeconds += timer.seconds();
+}
 
+void DeviceRenderer::syncVolume(const Scene& s, const VolumeMarcher& volume, SceneUpdate& update) {
+  TraceView& v = base_;
   const std::vector<LayerTable>& layers = volume.layers();
   v.volume = s.volume && !layers.empty();
   v.pathTrace = s.integration.integrator == Integrator::PathTrace; // lit by its paths: no gradients
@@ -176,7 +189,10 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
   v.sampling = s.integration.sampling;
   v.earlyTermination = s.integration.earlyTermination;
   v.terminationOpacity = s.integration.terminationOpacity;
+}
 
+void DeviceRenderer::syncIso(const Scene& s, const Surfaces& surfaces, SceneUpdate& update) {
+  TraceView& v = base_;
   const std::vector<float>& isoValues = surfaces.isoValues();
   v.iso = surfaces.isoTraversal() != nullptr && !isoValues.empty() && !model_.regions.nodes.empty();
   if (v.iso) {
@@ -202,7 +218,10 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
     for (size_t i = 0; i < s.iso.colors.size(); ++i)
       v.isoColors[i] = s.iso.colors[i];
   }
+}
 
+void DeviceRenderer::syncMeshes(const Scene& s, SceneUpdate& update) {
+  TraceView& v = base_;
   // Meshes: the hierarchy built again where the meshes or their colours changed.
   std::vector<std::pair<const TriangleMesh*, vec3f>> meshKey;
   for (const SceneMesh& m : s.meshes)
@@ -226,13 +245,6 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
     v.meshBvh.triangles = put("mesh triangles", meshBvh_.triangles(), false, update);
     v.meshColors = put("mesh colours", meshColors_, false, update);
   }
-  v.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
-  v.planeCount = int(s.clip.planes.size());
-  for (size_t i = 0; i < s.clip.planes.size(); ++i)
-    v.planes[i] = s.clip.planes[i];
-  v.clipBox = s.clip.box;
-  v.ray = raySettingsOf(s, dataset_, model_.world);
-  update.deviceSeconds += timer.seconds();
 }
 
 const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd,

@@ -49,6 +49,11 @@ private:
   /// A smooth-shaded layer's field and gradient fields interleaved (TraceLayer::withGradients),
   /// made once per field.
   const vec4f* withGradients(const LayerTable& layer, SceneUpdate& update);
+  /// sync's parts: the volume's layers, region trees and integration settings; the iso-surfaces;
+  /// the meshes (their hierarchy built again where they or their colours changed).
+  void syncVolume(const Scene& scene, const VolumeMarcher& volume, SceneUpdate& update);
+  void syncIso(const Scene& scene, const Surfaces& surfaces, SceneUpdate& update);
+  void syncMeshes(const Scene& scene, SceneUpdate& update);
 
   struct Buffer {
     void* device = nullptr;

@@ -5,6 +5,7 @@
 #include <charconv>
 #include <cmath>
 #include <limits>
+#include <utility>
 
 namespace exa {
 
@@ -154,11 +155,10 @@ Setting<Owner> optionalVector(const char* key, const char* name, Ref ref, Vector
   return s;
 }
 
-} // namespace
-
-const std::vector<Setting<Scene>>& sceneSettings() {
+/// The settings at the top level: what is drawn, legends, clipping of meshes.
+std::vector<Setting<Scene>> topLevelSettings() {
   using S = Scene;
-  static const std::vector<Setting<Scene>> table = {
+  return {
       boolean<S>(
           "volume", "volume", [](S& s) -> bool& { return s.volume; }, "Integrate the volume (false: surfaces only)"),
       choice<S, Shading>(
@@ -183,6 +183,13 @@ const std::vector<Setting<Scene>>& sceneSettings() {
           "With the level debug view: the level colours and their cell widths at the bottom left"),
       boolean<S>(
           "clip.meshes", "clip_meshes", [](S& s) -> bool& { return s.clip.meshes; }, "Clip meshes too"),
+  };
+}
+
+/// Local lighting and ambient occlusion.
+std::vector<Setting<Scene>> lightSettings() {
+  using S = Scene;
+  return {
       boolean<S>(
           "light.headlight", "headlight", [](S& s) -> bool& { return s.light.headlight; },
           "Light from the eye (false: along light.direction)"),
@@ -207,6 +214,13 @@ const std::vector<Setting<Scene>>& sceneSettings() {
       boolean<S>(
           "ambient_occlusion.volume", "ao_volume", [](S& s) -> bool& { return s.ao.volume; },
           "The volume attenuates ambient occlusion rays"),
+  };
+}
+
+/// How rays integrate the volume.
+std::vector<Setting<Scene>> integrationSettings() {
+  using S = Scene;
+  return {
       choice<S, Sampling>(
           "integration.sampling", "sampling", [](S& s) -> Sampling& { return s.integration.sampling; },
           "Sample placement: adaptive (per region) or fixed (the finest width everywhere)"),
@@ -238,6 +252,13 @@ const std::vector<Setting<Scene>>& sceneSettings() {
           "integration.integrator", "integrator", [](S& s) -> Integrator& { return s.integration.integrator; },
           "march (emission and absorption, local shading) or pathtrace (volume path tracing: shadows and "
           "multiple scattering from the environment and the sun; one sample per pixel and pass)"),
+  };
+}
+
+/// The path tracer's numbers.
+std::vector<Setting<Scene>> pathTracingSettings() {
+  using S = Scene;
+  return {
       number<S>(
           "pathtrace.albedo", "albedo", [](S& s) -> float& { return s.pathTracing.albedo; }, 0.0, 1.0,
           "Path tracing: the share of extinction that scatters (0: absorption and emission only)"),
@@ -256,6 +277,13 @@ const std::vector<Setting<Scene>>& sceneSettings() {
       number<S>(
           "pathtrace.sun_angle", "sun_angle", [](S& s) -> float& { return s.pathTracing.sunAngle; }, 0.0, 90.0,
           "Path tracing: the sun's angular diameter in degrees (0: a point; soft shadows grow with it)"),
+  };
+}
+
+/// Directions and radiances (three numbers each).
+std::vector<Setting<Scene>> vectorSettings() {
+  using S = Scene;
+  return {
       vector<S>(
           "light.direction", "light_direction", [](S& s) -> vec3f& { return s.light.direction; }, VectorKind::Direction,
           "The direction light travels (world), where the light is not the headlight"),
@@ -277,6 +305,20 @@ const std::vector<Setting<Scene>>& sceneSettings() {
           "pathtrace.sun_direction", "sun_direction", [](S& s) -> vec3f& { return s.pathTracing.sunDirection; },
           VectorKind::Direction, "Path tracing: the direction sunlight travels (world)"),
   };
+}
+
+} // namespace
+
+const std::vector<Setting<Scene>>& sceneSettings() {
+  // In this order: it is the order of the scene JSON and of the settings listed.
+  static const std::vector<Setting<Scene>> table = [] {
+    using Part = std::vector<Setting<Scene>> (*)();
+    std::vector<Setting<Scene>> all;
+    for (Part part : {topLevelSettings, lightSettings, integrationSettings, pathTracingSettings, vectorSettings})
+      for (Setting<Scene>& s : part())
+        all.push_back(std::move(s));
+    return all;
+  }();
   return table;
 }
 
