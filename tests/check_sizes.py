@@ -47,6 +47,41 @@ def tracked_sources(root):
     return files
 
 
+def literal_end(text, i, quote):
+    """The offset of the character that closes the literal opened by `quote` at i (a string, a
+    character, a JS template or regex literal), or where the line ends for an unclosed one."""
+    n = len(text)
+    j = i + 1
+    in_class = False
+    while j < n:
+        d = text[j]
+        if d == "\\":
+            j += 2
+            continue
+        if quote == "/":
+            if d == "\n":
+                break
+            if d == "[":
+                in_class = True
+            elif d == "]":
+                in_class = False
+            elif d == "/" and not in_class:
+                break
+        elif d == quote:
+            break
+        elif quote == "`" and text.startswith("${", j):
+            # A template literal's expression: skipped with its own braces.
+            depth, j = 1, j + 2
+            while j < n and depth:
+                depth += {"{": 1, "}": -1}.get(text[j], 0)
+                j += 1
+            continue
+        elif quote != "`" and d == "\n":
+            break
+        j += 1
+    return j
+
+
 def blank(text, js=False):
     """The text with comments, string and character literals (and in C++ preprocessor lines)
     replaced by spaces; newlines kept, so offsets and line numbers stay."""
@@ -100,34 +135,7 @@ def blank(text, js=False):
                 continue
         if c in "\"'" or (js and c == "`") or (js and c == "/" and prev in "(,=:[!&|?{};+-*%<>~^" ):
             quote = c
-            j = i + 1
-            in_class = False
-            while j < n:
-                d = text[j]
-                if d == "\\":
-                    j += 2
-                    continue
-                if quote == "/":
-                    if d == "\n":
-                        break
-                    if d == "[":
-                        in_class = True
-                    elif d == "]":
-                        in_class = False
-                    elif d == "/" and not in_class:
-                        break
-                elif d == quote:
-                    break
-                elif quote == "`" and text.startswith("${", j):
-                    # A template literal's expression: skipped with its own braces.
-                    depth, j = 1, j + 2
-                    while j < n and depth:
-                        depth += {"{": 1, "}": -1}.get(text[j], 0)
-                        j += 1
-                    continue
-                elif quote != "`" and d == "\n":
-                    break
-                j += 1
+            j = literal_end(text, i, quote)
             wipe(i + 1, min(j, n))
             i, prev = j + 1, quote
             continue

@@ -192,6 +192,176 @@ float exposureScale(const Model& model, int field, const TransferFunction& tf, c
   return float(std::clamp(kExposureDepth / depth, 1e-6, 1.0));
 }
 
+/// What adaptTransferFunction works on: the field, the value range it maps and the histogram of
+/// the field's volume over it.
+struct Adapting {
+  const Model& model;
+  const DatasetInfo& dataset;
+  int field;
+  const PartialData* part;
+  const TransferFunction& tfIn;
+  DefaultChoices& out;
+  const std::string& name;
+  range1f range;
+  TransferFunction norm;
+  std::vector<double> hist;
+  double total = 0.0;
+};
+
+/// A constant field (to a few float steps): nothing invented to draw, and said so. True when it
+/// is one.
+bool drawConstant(Adapting& a) {
+  const range1f& range = a.range;
+  const float scale = std::max(std::abs(range.lower), std::abs(range.upper));
+  if (range.upper - range.lower > 4.f * std::numeric_limits<float>::epsilon() * scale) return false;
+  a.out.tf.opacity = {{0.f, 0.f}, {1.f, 0.f}};
+  a.out.note(strCat("'", a.name, "' is constant (", range.lower, "): nothing to draw"),
+             "--range and --opacity draw it all the same");
+  return true;
+}
+
+/// Signed values (velocities, fluctuations): a diverging colour map centred on zero, opaque
+/// towards both ends, both signs shown. True when the field takes both signs so.
+bool drawSigned(Adapting& a) {
+  TransferFunction& tf = a.out.tf;
+  const float negative = -a.range.lower, positive = a.range.upper;
+  if (tf.logScale || !(negative > 0.f && positive > 0.f) ||
+      std::min(negative, positive) < 0.1f * std::max(negative, positive))
+    return false;
+  const float m = std::max(negative, positive);
+  tf.colorMap = builtinColorMap("cool-to-warm");
+  tf.valueRange = range1f{-m, m};
+  tf.opacity = {{0.f, 1.f}, {0.25f, 0.25f}, {0.5f, 0.f}, {0.75f, 0.25f}, {1.f, 1.f}};
+  if (a.tfIn.opacityScale == 0.f) tf.opacityScale = exposureScale(a.model, a.field, tf, a.dataset, a.part);
+  a.out.note(
+      strCat("'", a.name, "' takes both signs: a diverging colour map over [", -m, ", ", m, "], transparent at zero"),
+      "--colormap, --range, --opacity to choose");
+  return true;
+}
+
+/// The histogram over the range, and logarithmic mapping where a linear one would crowd most of
+/// the volume into the lowest percent of the colour map: positive values over more than three
+/// decades, half the volume below 1 % of the range. Exact zeros beside positive values over
+/// decades (a density with empty cells): the positive values decide, and zeros sit below the
+/// range. False when the field has no volume to histogram.
+bool chooseMapping(Adapting& a, bool autoLog) {
+  TransferFunction& tf = a.out.tf;
+  range1f& range = a.range;
+  const float lowest = a.dataset.valueRanges.at(size_t(a.field)).lower;
+  if (autoLog && !tf.logScale && range.lower == 0.f && range.upper > 0.f && !a.model.fieldValues.empty()) {
+    float smallest = std::numeric_limits<float>::infinity();
+    for (float v : a.model.fieldValues.at(size_t(a.field)))
+      if (v > 0.f) smallest = std::min(smallest, v);
+    if (smallest < range.upper * 1e-3f) range.lower = smallest;
+  }
+  a.norm = tf;
+  a.norm.valueRange = range;
+  a.total = histogram(a.model, a.field, a.norm, a.hist, a.part);
+  if (!(a.total > 0.0)) return false;
+  if (autoLog && !tf.logScale && range.lower > 0.f && range.upper > 1e3f * range.lower &&
+      medianBin(a.hist, a.total, false) < kBins / 100) {
+    tf.logScale = a.norm.logScale = true;
+    a.total = histogram(a.model, a.field, a.norm, a.hist, a.part);
+    const bool zeros = lowest == 0.f;
+    a.out.note(
+        strCat("'", a.name, "' is positive", zeros ? " (besides exact zeros, drawn as the lowest)" : "", ", spans ",
+               std::lround(std::log10(double(range.upper) / double(range.lower))),
+               " decades and half its volume lies in the lowest percent of the range: ", "logarithmic colour mapping"),
+        "--linear to refuse");
+    if (zeros && a.tfIn.valueRange.empty()) tf.valueRange = range;
+  } else if (range.lower != lowest && a.tfIn.valueRange.empty()) {
+    range.lower = lowest; // zeros, but no log: the whole range
+    a.norm.valueRange = range;
+    a.total = histogram(a.model, a.field, a.norm, a.hist, a.part);
+  }
+  return true;
+}
+
+/// Where the background lies in the histogram: the value filling the most volume, with its
+/// neighbours while they hold a tenth of its volume or more, when it fills a fifth of the
+/// volume or more; and at least the half of the volume on its side (the volume-weighted median).
+struct Background {
+  double share = 0.0;
+  bool dominant = false, high = false;
+  float tLo = 0.f, tHi = 1.f; ///< normalised values it spans
+};
+
+Background backgroundOf(const std::vector<double>& hist, double total) {
+  Background b;
+  const int mode = int(std::max_element(hist.begin(), hist.end()) - hist.begin());
+  b.share = hist[size_t(mode)] / total;
+  b.dominant = b.share >= 0.2;
+  int lo = mode, hi = mode;
+  while (lo > 0 && hist[size_t(lo - 1)] >= 0.1 * hist[size_t(mode)])
+    --lo;
+  while (hi < kBins - 1 && hist[size_t(hi + 1)] >= 0.1 * hist[size_t(mode)])
+    ++hi;
+  b.high = b.dominant && (float(mode) + 0.5f) / kBins > 2.f / 3.f;
+  const int median = medianBin(hist, total, b.high);
+  b.tLo = float(b.dominant ? std::min(lo, median) : median) / kBins;
+  b.tHi = float((b.dominant ? std::max(hi, median) : median) + 1) / kBins;
+  return b;
+}
+
+/// The colour map and the opacity ramp span what lies beyond the background: the value range
+/// starts (or ends) where the background ends. The far end of the colour map: the value that the
+/// most extreme structures reach along kTopShare of the axis rays that meet data, where that
+/// lies a tenth of the range or more inside it (a few small dense haloes do not stretch the
+/// colour map so far that the picture never shows its end); values beyond it show the end
+/// colour. False where the background leaves nothing beyond it.
+bool spanBeyondBackground(Adapting& a, const Background& b) {
+  TransferFunction& tf = a.out.tf;
+  auto valueAt = [&](float t) {
+    double l = a.range.lower, h = a.range.upper;
+    if (!tf.logScale) return float(l + (h - l) * double(t));
+    if (!(l > 0.0)) l = h * 1e-6;
+    return float(std::pow(10.0, std::log10(l) + (std::log10(h) - std::log10(l)) * double(t)));
+  };
+  const float tFar = extremeMetOnShare(valuesMet(a.model, a.field, a.norm, a.part), b.high, kTopShare);
+  std::string farNote;
+  if (b.high && b.tLo > 0.f) {
+    const float tEnd = tFar > 0.1f && tFar < 0.75f * b.tLo ? tFar : 0.f;
+    tf.valueRange = range1f{valueAt(tEnd), valueAt(b.tLo)};
+    tf.opacity = {{0.f, 1.f}, {0.25f, 0.5625f}, {0.5f, 0.25f}, {0.75f, 0.0625f}, {1.f, 0.f}};
+    if (tEnd > 0.f) farNote = "the lowest";
+  } else if (!b.high && b.tHi < 1.f) {
+    const float tEnd = tFar < 0.9f && tFar > b.tHi + 0.25f * (1.f - b.tHi) ? tFar : 1.f;
+    tf.valueRange = range1f{valueAt(b.tHi), valueAt(tEnd)};
+    tf.opacity = {{0.f, 0.f}, {0.25f, 0.0625f}, {0.5f, 0.25f}, {0.75f, 0.5625f}, {1.f, 1.f}};
+    if (tEnd < 1.f) farNote = "the highest";
+  } else {
+    return false;
+  }
+  if (!farNote.empty())
+    a.out.note(strCat("the colour map ends at ", b.high ? tf.valueRange.lower : tf.valueRange.upper, ", which ",
+                      farNote, " values reach along ", 100.0 * kTopShare,
+                      " % of the lines of sight (beyond it: the end colour)"),
+               "--range to choose");
+  return true;
+}
+
+/// Exposure (the lines of sight that gather the most reach optical depth kExposureDepth) and
+/// what the choice of the range says.
+void exposeAndSay(Adapting& a, const Background& b) {
+  TransferFunction& tf = a.out.tf;
+  if (a.tfIn.opacityScale == 0.f) {
+    tf.opacityScale = exposureScale(a.model, a.field, tf, a.dataset, a.part);
+    a.out.note(strCat("exposure: opacity scale ", tf.opacityScale, " (optical depth ", kExposureDepth,
+                      " along the densest ", 100.0 * kTopShare,
+                      " % of the lines of sight and into the highest values)"),
+               "--opacity-scale to choose");
+  }
+  if (b.dominant)
+    a.out.note(strCat(std::lround(100.0 * b.share), " % of the volume holds '", a.name,
+                      "' near one value (the background): transparent there; colours and opacity span [",
+                      tf.valueRange.lower, ", ", tf.valueRange.upper, "]"),
+               "--range, --opacity to choose");
+  else
+    a.out.note(strCat("transparent over the ", b.high ? "upper" : "lower", " half of the volume of '", a.name,
+                      "'; colours and opacity span [", tf.valueRange.lower, ", ", tf.valueRange.upper, "]"),
+               "--range, --opacity to choose");
+}
+
 } // namespace
 
 DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& dataset, int field,
@@ -199,136 +369,22 @@ DefaultChoices adaptTransferFunction(const Model& model, const DatasetInfo& data
                                      const PartialData* part, bool autoColorMap) {
   DefaultChoices out;
   out.tf = tfIn;
-  TransferFunction& tf = out.tf;
-  const std::string& name = model.fieldNames.at(size_t(field));
-  range1f range = tf.valueRange.empty() ? dataset.valueRanges.at(size_t(field)) : tf.valueRange;
+  const range1f range = tfIn.valueRange.empty() ? dataset.valueRanges.at(size_t(field)) : tfIn.valueRange;
   if (range.empty()) return out;
+  Adapting a{model, dataset, field, part, tfIn, out, model.fieldNames.at(size_t(field)), range, {}, {}, 0.0};
   const bool chooseRange = autoOpacity && tfIn.valueRange.empty();
-  // A constant field (to a few float steps): nothing invented to draw, and said so.
-  const float scale = std::max(std::abs(range.lower), std::abs(range.upper));
-  if (chooseRange && range.upper - range.lower <= 4.f * std::numeric_limits<float>::epsilon() * scale) {
-    tf.opacity = {{0.f, 0.f}, {1.f, 0.f}};
-    out.note(strCat("'", name, "' is constant (", range.lower, "): nothing to draw"),
-             "--range and --opacity draw it all the same");
-    return out;
-  }
-  // Signed values (velocities, fluctuations): a diverging colour map centred on zero, opaque
-  // towards both ends, both signs shown.
-  const float negative = -range.lower, positive = range.upper;
-  if (chooseRange && autoColorMap && !tf.logScale && negative > 0.f && positive > 0.f &&
-      std::min(negative, positive) >= 0.1f * std::max(negative, positive)) {
-    const float m = std::max(negative, positive);
-    tf.colorMap = builtinColorMap("cool-to-warm");
-    tf.valueRange = range1f{-m, m};
-    tf.opacity = {{0.f, 1.f}, {0.25f, 0.25f}, {0.5f, 0.f}, {0.75f, 0.25f}, {1.f, 1.f}};
-    if (tfIn.opacityScale == 0.f) tf.opacityScale = exposureScale(model, field, tf, dataset, part);
-    out.note(
-        strCat("'", name, "' takes both signs: a diverging colour map over [", -m, ", ", m, "], transparent at zero"),
-        "--colormap, --range, --opacity to choose");
-    return out;
-  }
-  // Exact zeros beside positive values over decades (a density with empty cells): the positive
-  // values decide, and zeros sit below the range.
-  if (autoLog && !tf.logScale && range.lower == 0.f && range.upper > 0.f && !model.fieldValues.empty()) {
-    float smallest = std::numeric_limits<float>::infinity();
-    for (float v : model.fieldValues.at(size_t(field)))
-      if (v > 0.f) smallest = std::min(smallest, v);
-    if (smallest < range.upper * 1e-3f) range.lower = smallest;
-  }
-  TransferFunction norm = tf;
-  norm.valueRange = range;
-  std::vector<double> hist;
-  double total = histogram(model, field, norm, hist, part);
-  if (!(total > 0.0)) return out;
-  // Logarithmic mapping where a linear one would crowd most of the volume into the lowest
-  // percent of the colour map: positive values over more than three decades, half the volume
-  // below 1 % of the range.
-  if (autoLog && !tf.logScale && range.lower > 0.f && range.upper > 1e3f * range.lower &&
-      medianBin(hist, total, false) < kBins / 100) {
-    tf.logScale = norm.logScale = true;
-    total = histogram(model, field, norm, hist, part);
-    const bool zeros = dataset.valueRanges.at(size_t(field)).lower == 0.f;
-    out.note(
-        strCat("'", name, "' is positive", zeros ? " (besides exact zeros, drawn as the lowest)" : "", ", spans ",
-               std::lround(std::log10(double(range.upper) / double(range.lower))),
-               " decades and half its volume lies in the lowest percent of the range: ", "logarithmic colour mapping"),
-        "--linear to refuse");
-    if (zeros && tfIn.valueRange.empty()) tf.valueRange = range;
-  } else if (range.lower != dataset.valueRanges.at(size_t(field)).lower && tfIn.valueRange.empty()) {
-    range.lower = dataset.valueRanges.at(size_t(field)).lower; // zeros, but no log: the whole range
-    norm.valueRange = range;
-    total = histogram(model, field, norm, hist, part);
-  }
+  if (chooseRange && drawConstant(a)) return out;
+  if (chooseRange && autoColorMap && drawSigned(a)) return out;
+  if (!chooseMapping(a, autoLog)) return out;
   if (!autoOpacity || !tfIn.valueRange.empty()) return out; // a range given is kept
-
-  // The background: the value filling the most volume, with its neighbours while they hold a
-  // tenth of its volume or more, when it fills a fifth of the volume or more; and at least the
-  // half of the volume on its side (the volume-weighted median).
-  const int mode = int(std::max_element(hist.begin(), hist.end()) - hist.begin());
-  const double share = hist[size_t(mode)] / total;
-  const bool dominant = share >= 0.2;
-  int lo = mode, hi = mode;
-  while (lo > 0 && hist[size_t(lo - 1)] >= 0.1 * hist[size_t(mode)])
-    --lo;
-  while (hi < kBins - 1 && hist[size_t(hi + 1)] >= 0.1 * hist[size_t(mode)])
-    ++hi;
-  const bool backgroundHigh = dominant && (float(mode) + 0.5f) / kBins > 2.f / 3.f;
-  const int median = medianBin(hist, total, backgroundHigh);
-  const float tLo = float(dominant ? std::min(lo, median) : median) / kBins;
-  const float tHi = float((dominant ? std::max(hi, median) : median) + 1) / kBins;
-  // The colour map and the opacity ramp span what lies beyond the background: the value range
-  // starts (or ends) where the background ends.
-  auto valueAt = [&](float t) {
-    double l = range.lower, h = range.upper;
-    if (!tf.logScale) return float(l + (h - l) * double(t));
-    if (!(l > 0.0)) l = h * 1e-6;
-    return float(std::pow(10.0, std::log10(l) + (std::log10(h) - std::log10(l)) * double(t)));
-  };
-  // The far end of the colour map: the value that the most extreme structures reach along
-  // kTopShare of the axis rays that meet data, where that lies a tenth of the range or more
-  // inside it (a few small dense haloes do not stretch the colour map so far that the picture
-  // never shows its end); values beyond it show the end colour.
-  const float tFar = extremeMetOnShare(valuesMet(model, field, norm, part), backgroundHigh, kTopShare);
-  std::string farNote;
-  if (backgroundHigh && tLo > 0.f) {
-    const float tEnd = tFar > 0.1f && tFar < 0.75f * tLo ? tFar : 0.f;
-    tf.valueRange = range1f{valueAt(tEnd), valueAt(tLo)};
-    tf.opacity = {{0.f, 1.f}, {0.25f, 0.5625f}, {0.5f, 0.25f}, {0.75f, 0.0625f}, {1.f, 0.f}};
-    if (tEnd > 0.f) farNote = "the lowest";
-  } else if (!backgroundHigh && tHi < 1.f) {
-    const float tEnd = tFar < 0.9f && tFar > tHi + 0.25f * (1.f - tHi) ? tFar : 1.f;
-    tf.valueRange = range1f{valueAt(tHi), valueAt(tEnd)};
-    tf.opacity = {{0.f, 0.f}, {0.25f, 0.0625f}, {0.5f, 0.25f}, {0.75f, 0.5625f}, {1.f, 1.f}};
-    if (tEnd < 1.f) farNote = "the highest";
-  } else {
+  const Background b = backgroundOf(a.hist, a.total);
+  if (!spanBeyondBackground(a, b)) return out;
+  if (!(out.tf.valueRange.upper > out.tf.valueRange.lower)) {
+    out.tf.valueRange = tfIn.valueRange;
+    out.tf.opacity = tfIn.opacity;
     return out;
   }
-  if (!farNote.empty())
-    out.note(strCat("the colour map ends at ", backgroundHigh ? tf.valueRange.lower : tf.valueRange.upper, ", which ",
-                    farNote, " values reach along ", 100.0 * kTopShare,
-                    " % of the lines of sight (beyond it: the end colour)"),
-             "--range to choose");
-  if (!(tf.valueRange.upper > tf.valueRange.lower)) {
-    tf.valueRange = tfIn.valueRange;
-    tf.opacity = tfIn.opacity;
-    return out;
-  }
-  // Exposure: the lines of sight that gather the most reach optical depth kExposureDepth.
-  if (tfIn.opacityScale == 0.f) {
-    tf.opacityScale = exposureScale(model, field, tf, dataset, part);
-    out.note(strCat("exposure: opacity scale ", tf.opacityScale, " (optical depth ", kExposureDepth,
-                    " along the densest ", 100.0 * kTopShare, " % of the lines of sight and into the highest values)"),
-             "--opacity-scale to choose");
-  }
-  if (dominant)
-    out.note(strCat(std::lround(100.0 * share), " % of the volume holds '", name,
-                    "' near one value (the background): transparent there; colours and opacity span [",
-                    tf.valueRange.lower, ", ", tf.valueRange.upper, "]"),
-             "--range, --opacity to choose");
-  else
-    out.note(strCat("transparent over the ", backgroundHigh ? "upper" : "lower", " half of the volume of '", name,
-                    "'; colours and opacity span [", tf.valueRange.lower, ", ", tf.valueRange.upper, "]"),
-             "--range, --opacity to choose");
+  exposeAndSay(a, b);
   return out;
 }
 

@@ -141,6 +141,33 @@ bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buff
   return complete;
 }
 
+namespace {
+
+/// A pass's colours and steps, kCompositeChannels floats a pixel.
+void packForCompositing(const FrameBuffer::Sums& s, size_t pixels, float* local) {
+  for (size_t p = 0; p < pixels; ++p) {
+    float* o = local + p * kCompositeChannels;
+    for (int c = 0; c < 4; ++c)
+      o[c] = s.colors[4 * p + size_t(c)];
+    o[4] = s.steps[p];
+  }
+}
+
+/// A composited pass added to the buffer as one more pass of every tile.
+void addComposited(const float* result, size_t pixels, FrameBuffer& buffer) {
+  const FrameBuffer::Sums out = buffer.sums();
+  for (size_t p = 0; p < pixels; ++p) {
+    const float* c = result + p * kCompositeChannels;
+    for (int ch = 0; ch < 4; ++ch)
+      out.colors[4 * p + size_t(ch)] += c[ch];
+    out.steps[p] += c[4];
+  }
+  for (size_t t = 0; t < out.tiles; ++t)
+    ++out.tilePasses[t];
+}
+
+} // namespace
+
 bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBuffer& buffer,
                            const std::vector<int>& order, PassControl control) {
   const int n = state().size;
@@ -166,12 +193,7 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
     const FrameBuffer::Sums s = pass.sums();
     stepsView = *s.stepsView;
     stats += *s.stats;
-    for (size_t p = 0; p < pixels; ++p) {
-      float* o = local.data() + p * kCompositeChannels;
-      for (int c = 0; c < 4; ++c)
-        o[c] = s.colors[4 * p + size_t(c)];
-      o[4] = s.steps[p];
-    }
+    packForCompositing(s, pixels, local.data());
     const float* result = local.data();
 #ifdef EXABRICKS_HAVE_MPI
     if (n > 1) {
@@ -204,16 +226,7 @@ bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBu
     }
 #endif
     compositeSeconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (!state().root()) continue;
-    const FrameBuffer::Sums out = buffer.sums();
-    for (size_t p = 0; p < pixels; ++p) {
-      const float* c = result + p * kCompositeChannels;
-      for (int ch = 0; ch < 4; ++ch)
-        out.colors[4 * p + size_t(ch)] += c[ch];
-      out.steps[p] += c[4];
-    }
-    for (size_t t = 0; t < out.tiles; ++t)
-      ++out.tilePasses[t];
+    if (state().root()) addComposited(result, pixels, buffer);
   }
   reduceStats(stats);
   complete = everyone(complete);
