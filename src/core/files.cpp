@@ -1,6 +1,7 @@
 #include "exabricks/core/files.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
 
 #include <algorithm>
 #include <atomic>
@@ -11,6 +12,7 @@
 #include <filesystem>
 #include <fstream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include <fcntl.h>
@@ -31,9 +33,18 @@ uint64_t fileSize(const std::string& path) {
 void readInto(const std::string& path, void* data, uint64_t size) {
   std::FILE* f = std::fopen(path.c_str(), "rb");
   if (!f) fail(path, ": cannot open: ", std::strerror(errno));
-  const size_t n = std::fread(data, 1, size, f);
-  std::fclose(f);
-  if (n != size) fail(path, ": read error (file changed while reading?)");
+  std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, std::fclose);
+  // Large files in pieces, with progress on stderr (fraction, time taken and left).
+  constexpr uint64_t kPiece = uint64_t(64) << 20;
+  std::optional<Progress> progress;
+  if (size >= 4 * kPiece)
+    progress.emplace(strCat("reading ", path, " (", (size + (1 << 20) - 1) >> 20, " MiB)"), size / kPiece + 1);
+  char* out = static_cast<char*>(data);
+  for (uint64_t at = 0; at < size; at += kPiece) {
+    const size_t n = size_t(std::min(kPiece, size - at));
+    if (std::fread(out + at, 1, n, f) != n) fail(path, ": read error (file changed while reading?)");
+    if (progress) progress->advance(1);
+  }
 }
 
 std::vector<char> readFile(const std::string& path) {
