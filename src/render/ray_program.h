@@ -14,6 +14,7 @@
 //   bool hasIso() const;
 //   bool isoHit(const Ray& lattice, float& t, uint32_t& region, int& which, RayCounts&) const;
 //   const FieldView& isoView() const;
+//   const vec3f& invScale() const;                          // world units per lattice unit, inverted
 //   vec3f surfaceColor(const SurfaceHit&) const;
 //   template <bool OpacityOnly> void march(const Ray&, float rho, const RayLight&, vec4f& acc, RayCounts&) const;
 #pragma once
