@@ -16,6 +16,7 @@
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene_vocabulary.h"
+#include "exabricks/workflows/progressive.h"
 
 #include "core.h"
 
@@ -331,7 +332,11 @@ void bindSceneFunctions(py::module_& m) {
       "A scene file's JSON checked by the command line's reader (unknown keys and invalid settings are "
       "refused with its messages, naming `source`) and written back by its writer, with every setting");
   m.def("scene_vocabulary", &sceneVocabularyJson,
-        "Every scalar setting of a scene file as JSON: key, name, type, default, range, choices and help");
+        "Every described setting of a scene file as JSON: key, name, type, default, range, choices, kind and "
+        "help");
+  m.def("next_draft_divisor", &nextDraftDivisor, py::arg("divisor"), py::arg("width"), py::arg("height"),
+        py::arg("draft_pixels"), py::arg("seconds"), py::arg("budget"), py::arg("max_divisor"),
+        "The divisor of the resolution for the next draft (the library's progressive views' rule)");
   m.def(
       "default_field_index",
       [](const std::vector<std::string>& names) {

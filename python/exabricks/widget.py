@@ -1,5 +1,6 @@
 """An interactive view of a Scene in Jupyter (ipywidgets): orbit, transfer-function range and
-opacity scale, iso-value. Every change renders a cheap preview at once; a background thread then
+opacity scale, iso-value. Every change renders a cheap preview at once, its size adapted so that
+it takes about a tenth of a second (the library's rule for drafts); a background thread then
 refines the full-resolution image pass by pass until the target is reached or the next change.
 When the interpreter exits, the refinement is cancelled and its thread joined first (a daemon
 thread still rendering at exit would otherwise be torn down mid-render)."""
@@ -8,9 +9,14 @@ import atexit
 import threading
 import weakref
 
+import time
+
 import numpy as np
 
+from . import _core
+
 _live = weakref.WeakSet()
+_PREVIEW_SECONDS = 0.1  # what a preview may take, rendering and encoding
 
 
 @atexit.register
@@ -70,9 +76,12 @@ class SceneWidget:
             self._generation += 1
             generation = self._generation
             self._apply()
-            # A preview at once, at a fraction of the resolution.
+            # A preview at once, at a fraction of the resolution; the next one sized to the time.
             w, h = max(1, self.width // self.preview), max(1, self.height // self.preview)
+            start = time.perf_counter()
             self.image.value = self.scene.png(w, h, 1)
+            self.preview = _core.next_draft_divisor(self.preview, self.width, self.height, w * h,
+                                                    time.perf_counter() - start, _PREVIEW_SECONDS, 16)
         self.status.value = "preview %dx%d" % (w, h)
         self._thread = threading.Thread(target=self._refine, args=(generation,), daemon=True)
         self._threads = [t for t in self._threads if t.is_alive()] + [self._thread]
