@@ -38,7 +38,8 @@ void readInto(const std::string& path, void* data, uint64_t size) {
   constexpr uint64_t kPiece = uint64_t(64) << 20;
   std::optional<Progress> progress;
   if (size >= 4 * kPiece)
-    progress.emplace(strCat("reading ", path, " (", (size + (1 << 20) - 1) >> 20, " MiB)"), size / kPiece + 1);
+    progress.emplace(strCat("reading ", path, " (", (size + (1 << 20) - 1) >> 20, " MiB)"),
+                     (size + kPiece - 1) / kPiece);
   char* out = static_cast<char*>(data);
   for (uint64_t at = 0; at < size; at += kPiece) {
     const size_t n = size_t(std::min(kPiece, size - at));
