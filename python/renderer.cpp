@@ -1,11 +1,12 @@
 // exabricks._core.Renderer: a renderer over one dataset, driven by the scene and frame JSON of
-// render/scene.h, with passes accumulated in its own buffer.
+// render/scene.h, with passes accumulated by a progressive view (workflows/progressive.h).
 #include "exabricks/render/renderer.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
 #include "exabricks/render/legends.h"
+#include "exabricks/workflows/progressive.h"
 
 #include "core.h"
 
@@ -34,12 +35,12 @@ bool interpreterFinalizing() {
 }
 
 /// A renderer over one dataset: the scene comes as JSON (plus meshes), frames as JSON; passes
-/// accumulate in the renderer's own buffer until the scene or the frame changes.
+/// accumulate in a progressive view until the scene, the frame or the depth limit changes.
 class PyRenderer {
 public:
-  PyRenderer(std::shared_ptr<Dataset> d, std::string device)
-      : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info), device_(std::move(device)) {
-    if (device_ != "auto" && device_ != "cpu") resolveDevice(device_); // an unusable device fails here
+  PyRenderer(std::shared_ptr<Dataset> d, const std::string& device)
+      : dataset_(std::move(d)), renderer_(*dataset_->model, dataset_->info), view_(renderer_, device) {
+    if (device != "auto" && device != "cpu") resolveDevice(device); // an unusable device fails here
   }
 
   std::string device() const { return deviceName(renderer_.device()); }
@@ -48,21 +49,16 @@ public:
                     const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
     SceneDocument doc = readSceneJson(json, "scene");
     loadSceneMeshes(doc.scene, "scene");
-    std::string key = json;
     for (const auto& [mesh, color] : meshes) {
       if (color.size() != 3) fail("a mesh colour needs three numbers (sRGB)");
       doc.scene.meshes.push_back({mesh->mesh, srgbToLinear(vec3f(color[0], color[1], color[2])), ""});
-      key += strCat("|", reinterpret_cast<uintptr_t>(mesh->mesh.get()), ",", color[0], ",", color[1], ",", color[2]);
     }
     SceneUpdate u;
     {
+      // Any change of the scene starts the accumulation over.
       py::gil_scoped_release release;
-      u = setSceneOnDevice(renderer_, doc.scene, device_, deviceChosen_);
+      u = view_.showScene(doc.scene);
     }
-    // Any change of the scene starts the accumulation over.
-    if (key != sceneKey_) stale_ = true;
-    sceneKey_ = key;
-    scene_ = doc.scene;
     py::dict out;
     out["volume"] = u.volume;
     out["iso"] = u.iso;
@@ -77,31 +73,19 @@ public:
   /// `planar` along the view direction; Frame::depthLimit).
   int render(const std::string& frameJson, int passes, const py::object& depthLimit, bool planar) {
     Frame f = parseFrame(frameJson);
-    std::vector<float> limit = depthLimitOf(depthLimit, f);
-    const bool limited = !depthLimit.is_none();
-    const bool sameLimit = limited == hasDepthLimit_ && (!limited || (planar == depthLimitPlanar_ && limit == depth_));
-    depth_ = std::move(limit);
-    hasDepthLimit_ = limited;
-    depthLimitPlanar_ = planar;
-    if (limited) {
-      f.depthLimit = depth_.data();
+    const std::vector<float> limit = depthLimitOf(depthLimit, f);
+    if (!depthLimit.is_none()) {
+      f.depthLimit = limit.data();
       f.depthLimitPlanar = planar;
     }
-    const std::string key = frameJson;
-    if (stale_ || !sameLimit || key != frameKey_ || buffer_.width() != f.width || buffer_.height() != f.height) {
-      if (buffer_.width() != f.width || buffer_.height() != f.height) buffer_.resize(f.width, f.height);
-      buffer_.clear();
-      frameKey_ = key;
-      stale_ = false;
-    }
-    frame_ = f;
-    const int target = passes > 0 ? passes : int(buffer_.passes()) + 1;
+    view_.showFrame(f); // a change starts the accumulation over
+    const int target = passes > 0 ? passes : view_.passes() + 1;
     bool interrupted = false, cancelled = false;
-    const std::exception_ptr error = renderInWorker(f, target, interrupted, cancelled);
-    if (interrupted || cancelled) stale_ = true; // partial passes: start over next time
+    const std::exception_ptr error = renderInWorker(target, interrupted, cancelled);
+    if (interrupted || cancelled) view_.restart(); // partial passes: start over next time
     if (interrupted) throw py::error_already_set();
     if (error) std::rethrow_exception(error);
-    return int(buffer_.passes());
+    return int(view_.buffer().passes());
   }
 
   /// Cancels the render in flight between tiles (from any thread, without the GIL), or the next
@@ -112,10 +96,10 @@ public:
   /// The accumulated image with the legends the scene asks for.
   Image resolved() const {
     Image img;
-    buffer_.resolve(img);
+    view_.buffer().resolve(img);
     LegendText text;
     text.dataset = legendDatasetLabel(dataset_->name);
-    drawLegends(scene_, frame_, *dataset_->model, dataset_->info, text, img);
+    drawLegends(view_.shown().scene, view_.shown().frame, *dataset_->model, dataset_->info, text, img);
     return img;
   }
 
@@ -123,7 +107,8 @@ public:
 
   py::bytes png() const {
     const Image img = resolved();
-    const std::vector<unsigned char> bytes = encodePng(img, scene_.keepAlpha, scene_.background);
+    const Scene& scene = view_.shown().scene;
+    const std::vector<unsigned char> bytes = encodePng(img, scene.keepAlpha, scene.background);
     return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
 
@@ -140,11 +125,13 @@ public:
           p.x /= top, p.y /= top, p.z /= top;
     }
     const ImageFormat format = imageFormatFor(path, bits);
-    writeImage(path, img, format, scene_.keepAlpha, scene_.background);
+    const Scene& scene = view_.shown().scene;
+    writeImage(path, img, format, scene.keepAlpha, scene.background);
   }
 
   py::dict stats() const {
-    const RenderStats& s = buffer_.stats();
+    const FrameBuffer& buffer = view_.buffer();
+    const RenderStats& s = buffer.stats();
     py::dict d;
     d["seconds"] = s.seconds;
     d["rays"] = s.rays;
@@ -154,7 +141,7 @@ public:
     d["iso_samples"] = s.isoSamples;
     d["ao_rays"] = s.aoRays;
     d["samples_per_second"] = s.samplesPerSecond();
-    d["passes"] = buffer_.passes();
+    d["passes"] = buffer.passes();
     d["visible_regions"] = renderer_.visibleRegions();
     d["iso_regions"] = renderer_.isoRegions();
     d["regions"] = dataset_->model->regions.regions.size();
@@ -205,10 +192,10 @@ private:
     return limit;
   }
 
-  /// Renders passes until the buffer holds `target`, on a worker thread without the GIL, looking
+  /// Refines the view until it holds `target` passes, on a worker thread without the GIL, looking
   /// every 20 ms for cancel(), Ctrl-C (`interrupted`: a Python error is set) and the
   /// interpreter's end. Returns what the worker threw, if anything.
-  std::exception_ptr renderInWorker(const Frame& f, int target, bool& interrupted, bool& cancelled) {
+  std::exception_ptr renderInWorker(int target, bool& interrupted, bool& cancelled) {
     std::atomic<bool> cancel{false}, done{false};
     std::exception_ptr error;
     py::gil_scoped_release release;
@@ -216,7 +203,7 @@ private:
       try {
         PassControl control;
         control.cancel = &cancel;
-        renderer_.renderPasses(f, buffer_, target, control);
+        view_.refineTo(target, control);
       } catch (...) {
         error = std::current_exception();
       }
@@ -266,15 +253,7 @@ private:
 
   std::shared_ptr<Dataset> dataset_; ///< declared first: outlives the renderer
   Renderer renderer_;
-  std::string device_;        ///< cpu, cuda, auto or portable
-  bool deviceChosen_ = false; ///< the renderer has been moved to device_
-  FrameBuffer buffer_;
-  Scene scene_;
-  Frame frame_;
-  std::vector<float> depth_; ///< the depth limit of the frame in the buffer
-  bool hasDepthLimit_ = false, depthLimitPlanar_ = false;
-  std::string frameKey_, sceneKey_;
-  bool stale_ = true;
+  ProgressiveView view_; ///< the passes of renderer_, on the device asked for (cpu, cuda, auto or portable)
   std::atomic<bool> cancelRequested_{false};
 };
 

@@ -88,3 +88,115 @@ TEST(Progressive, DraftsAreSmallerAndSizedToTheirBudget) {
   EXPECT_EQ(nextDraftDivisor(4, 1024, 1024, 256.0 * 256.0, 100.0, 0.1, 16), 16);
   EXPECT_EQ(nextDraftDivisor(4, 1024, 1024, 256.0 * 256.0, 1e-6, 0.1, 16), 1);
 }
+
+TEST(Progressive, PassesAtOnceAndPastTheTarget) {
+  const Model m = buildModel(generateScene({"blobs", 20000, 1, 3}));
+  Renderer renderer(m);
+  ProgressiveView view(renderer, "cpu");
+  const SceneDocument doc = documentOf(m, 3);
+  view.show(doc);
+  EXPECT_TRUE(view.refineTo(3, PassControl()));
+  EXPECT_EQ(view.passes(), 3);
+  EXPECT_TRUE(view.complete());
+  EXPECT_EQ(view.buffer().resolve().pixels, renderer.render(doc.frame).pixels);
+  EXPECT_TRUE(view.refineTo(2, PassControl())) << "a view holding the passes adds none";
+  EXPECT_EQ(view.passes(), 3);
+
+  // Past the target: more samples of the same frame, pass k still at frame index k.
+  EXPECT_TRUE(view.refineTo(5, PassControl()));
+  EXPECT_EQ(view.passes(), 5);
+  EXPECT_EQ(view.buffer().passes(), 5u);
+  FrameBuffer five(doc.frame.width, doc.frame.height);
+  ASSERT_TRUE(renderer.renderPasses(doc.frame, five, 5));
+  EXPECT_EQ(view.buffer().resolve().pixels, five.resolve().pixels);
+
+  // A cancel before or within a pass: not counted; the buffer keeps what it held until the
+  // next pass starts the refinement over.
+  std::atomic<bool> cancel{true};
+  PassControl cancelled;
+  cancelled.cancel = &cancel;
+  EXPECT_FALSE(view.refineTo(6, cancelled));
+  EXPECT_EQ(view.passes(), 0);
+  EXPECT_EQ(view.buffer().passes(), 5u);
+  EXPECT_EQ(view.buffer().resolve().pixels, five.resolve().pixels);
+  ASSERT_TRUE(view.refineTo(3, PassControl()));
+  EXPECT_EQ(view.buffer().passes(), 3u);
+  EXPECT_EQ(view.buffer().resolve().pixels, renderer.render(doc.frame).pixels);
+}
+
+TEST(Progressive, SceneAndFrameApartAsTogether) {
+  const Model m = buildModel(generateScene({"blobs", 20000, 1, 3}));
+  Renderer renderer(m);
+  ProgressiveView view(renderer, "cpu");
+  SceneDocument doc = documentOf(m, 2);
+  EXPECT_TRUE(view.show(doc));
+  ASSERT_TRUE(view.refineTo(2, PassControl()));
+  EXPECT_FALSE(view.showScene(doc.scene).volume) << "the same scene rebuilds nothing";
+  EXPECT_FALSE(view.showFrame(doc.frame));
+  EXPECT_EQ(view.passes(), 2);
+
+  // A new scene starts over, and until the next pass the buffer holds the last passes.
+  Scene other = doc.scene;
+  other.layers[0].tf.colorMap = builtinColorMap("inferno");
+  EXPECT_TRUE(view.showScene(other).volume);
+  EXPECT_EQ(view.passes(), 0);
+  EXPECT_EQ(view.buffer().passes(), 2u);
+  ASSERT_TRUE(view.refineTo(2, PassControl()));
+  EXPECT_EQ(view.shown().scene.layers[0].tf.colorMap, other.layers[0].tf.colorMap);
+  EXPECT_EQ(view.buffer().resolve().pixels, renderer.render(doc.frame).pixels);
+
+  // A new frame starts over; so does another size, with the buffer resized at the next pass.
+  Frame moved = doc.frame;
+  moved.camera.position.x += 1.0;
+  EXPECT_TRUE(view.showFrame(moved));
+  EXPECT_FALSE(view.show(SceneDocument{"", other, moved}));
+  moved.width = 20;
+  EXPECT_TRUE(view.showFrame(moved));
+  EXPECT_EQ(view.buffer().width(), 48);
+  ASSERT_TRUE(view.refine(PassControl()));
+  EXPECT_EQ(view.buffer().width(), 20);
+}
+
+TEST(Progressive, MeshesByTheirDataAndTheDepthLimitByItsValues) {
+  const Model m = buildModel(generateScene({"blobs", 20000, 1, 3}));
+  Renderer renderer(m);
+  ProgressiveView view(renderer, "cpu");
+  SceneDocument doc = documentOf(m, 1);
+  const box3d b = m.worldBounds();
+  auto mesh = std::make_shared<TriangleMesh>();
+  const vec3f lo(b.lower), hi(b.upper), mid((b.lower + b.upper) * 0.5);
+  mesh->vertices = {vec3f(lo.x, lo.y, mid.z), vec3f(hi.x, lo.y, mid.z), vec3f(hi.x, hi.y, mid.z)};
+  mesh->triangles = {vec3i(0, 1, 2)};
+  doc.scene.meshes.push_back({mesh, vec3f(0.5f), ""});
+  EXPECT_TRUE(view.show(doc));
+  // An equal copy of the mesh is the same scene; another triangle is not.
+  SceneDocument copied = doc;
+  copied.scene.meshes[0].mesh = std::make_shared<TriangleMesh>(*mesh);
+  EXPECT_FALSE(view.show(copied));
+  auto moved = std::make_shared<TriangleMesh>(*mesh);
+  moved->vertices[0].x += 1.f;
+  copied.scene.meshes[0].mesh = moved;
+  EXPECT_TRUE(view.show(copied));
+
+  // The depth limit: the view keeps a copy, and its values (and planarity) are part of the frame.
+  std::vector<float> limit(size_t(doc.frame.width) * size_t(doc.frame.height), 1e30f);
+  Frame limited = doc.frame;
+  limited.depthLimit = limit.data();
+  EXPECT_TRUE(view.showFrame(limited));
+  std::vector<float> same = limit;
+  limited.depthLimit = same.data();
+  EXPECT_FALSE(view.showFrame(limited)) << "the same values elsewhere";
+  EXPECT_NE(view.shown().frame.depthLimit, same.data());
+  same[7] = 0.f;
+  EXPECT_TRUE(view.showFrame(limited));
+  limited.depthLimitPlanar = true;
+  EXPECT_TRUE(view.showFrame(limited));
+  same.assign(same.size(), -1.f); // the caller's array may change: the view renders its copy
+  ASSERT_TRUE(view.refine(PassControl()));
+  same.assign(same.size(), 1e30f);
+  same[7] = 0.f;
+  Frame want = limited;
+  want.depthLimit = same.data();
+  EXPECT_EQ(view.buffer().resolve().pixels, renderer.render(want).pixels);
+  EXPECT_TRUE(view.showFrame(doc.frame)) << "no limit is another frame";
+}

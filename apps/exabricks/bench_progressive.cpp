@@ -1,10 +1,11 @@
 // exabricks bench --progressive: the interactive loop, a transfer-function change followed by
 // preview passes accumulated progressively, against the same change followed by one
-// full-quality pass.
+// full-quality pass, both through the progressive view the interactive front ends use.
 #include "bench.h"
 
 #include "exabricks/core/log.h"
 #include "exabricks/render/scene_vocabulary.h"
+#include "exabricks/workflows/progressive.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -19,35 +20,34 @@ struct ProgressiveTimes {
   uint64_t previewSamples = 0;
 };
 
-/// `rounds` rounds of: the change from `a` to `b`, then `passes` preview passes; and the same
-/// change, then one full-quality pass.
-ProgressiveTimes measureProgressive(Renderer& renderer, const Scene& a, const Scene& b, Frame& preview,
+/// `rounds` rounds of: the change from `a` to `b` in a view of the preview frame, then its
+/// `passes` passes; and the same change in a view of the full frame, then its first pass. The
+/// view shows `a` on entry.
+ProgressiveTimes measureProgressive(ProgressiveView& view, const Scene& a, const Scene& b, const Frame& preview,
                                     const Frame& full, int passes, int rounds) {
-  FrameBuffer previewBuffer(preview.width, preview.height), fullBuffer(full.width, full.height);
   // Warm-up with the first scene, then time the change and the passes after it.
-  renderer.renderPass(preview, previewBuffer);
-  renderer.renderPass(full, fullBuffer);
+  view.showFrame(preview);
+  view.refine(PassControl());
+  view.showFrame(full);
+  view.refine(PassControl());
   ProgressiveTimes p;
   for (int round = 0; round < rounds; ++round) {
-    renderer.setScene(a);
+    view.show({"", a, preview});
     Timer change;
-    const SceneUpdate u = renderer.setScene(b);
+    const SceneUpdate u = view.showScene(b);
     p.changeSeconds.push_back(u.seconds());
-    previewBuffer.clear();
     for (int i = 0; i < passes; ++i) {
-      preview.frameIndex = i;
       Timer pass;
-      renderer.renderPass(preview, previewBuffer);
+      view.refine(PassControl());
       p.passSeconds.push_back(pass.seconds());
       if (i == 0) p.firstPreview.push_back(change.seconds());
     }
-    p.previewSamples = previewBuffer.stats().samples;
-    renderer.setScene(a);
+    p.previewSamples = view.buffer().stats().samples;
+    view.show({"", a, full});
     Timer fullChangeTimer;
-    renderer.setScene(b);
-    fullBuffer.clear();
+    view.showScene(b);
     Timer fullPass;
-    renderer.renderPass(full, fullBuffer);
+    view.refine(PassControl());
     p.fullSeconds.push_back(fullPass.seconds());
     p.fullChange.push_back(fullChangeTimer.seconds());
   }
@@ -92,10 +92,10 @@ void runProgressive(const Setup& s, const BenchOptions& o) {
   Frame preview = full.preview(o.previewDivisor, o.previewRate);
   preview.samplesPerPixel = o.progressive; // the target: passes are jittered
   Renderer renderer(s.model);
-  renderer.setScene(a);
-  if (!o.devices.empty()) selectDevice(renderer, o.devices);
+  ProgressiveView view(renderer, o.devices.empty() ? "cpu" : o.devices);
+  view.showScene(a);
   const int rounds = std::max(3, o.frames);
-  const ProgressiveTimes p = measureProgressive(renderer, a, b, preview, full, o.progressive, rounds);
+  const ProgressiveTimes p = measureProgressive(view, a, b, preview, full, o.progressive, rounds);
   nlohmann::json j = describe(s, o);
   j["preview_width"] = preview.width;
   j["preview_height"] = preview.height;

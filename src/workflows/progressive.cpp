@@ -4,6 +4,30 @@
 #include <cmath>
 
 namespace exa {
+namespace {
+
+/// The key of a scene: its JSON without the meshes' data, which sameMeshData compares.
+std::string sceneKeyOf(const Scene& scene) {
+  SceneDocument d;
+  d.scene = scene;
+  for (SceneMesh& m : d.scene.meshes)
+    m.mesh.reset();
+  return writeSceneJson(d);
+}
+
+/// Whether the meshes of `a` and `b` hold the same data: the same meshes, or equal ones.
+bool sameMeshData(const std::vector<SceneMesh>& a, const std::vector<SceneMesh>& b) {
+  if (a.size() != b.size()) return false;
+  for (size_t i = 0; i < a.size(); ++i) {
+    const TriangleMesh* x = a[i].mesh.get();
+    const TriangleMesh* y = b[i].mesh.get();
+    if (x == y) continue;
+    if (!x || !y || x->vertices != y->vertices || x->triangles != y->triangles) return false;
+  }
+  return true;
+}
+
+} // namespace
 
 int nextDraftDivisor(int divisor, int width, int height, double draftPixels, double seconds, double budget,
                      int maxDivisor) {
@@ -19,19 +43,60 @@ ProgressiveView::ProgressiveView(Renderer& renderer, std::string device, DraftPo
     : renderer_(renderer), device_(std::move(device)), policy_(policy), divisor_(policy.divisor) {}
 
 bool ProgressiveView::show(const SceneDocument& doc) {
-  setSceneOnDevice(renderer_, doc.scene, device_, deviceChosen_);
-  std::string key = writeSceneJson(doc);
-  doc_ = doc;
-  if (key == key_) return false;
-  key_ = std::move(key);
+  const bool sceneChanged = takeScene(doc.scene, nullptr);
+  doc_.input = doc.input;
+  doc_.hasCamera = doc.hasCamera;
+  doc_.path = doc.path;
+  const bool frameChanged = showFrame(doc.frame);
+  return sceneChanged || frameChanged;
+}
+
+SceneUpdate ProgressiveView::showScene(const Scene& scene) {
+  SceneUpdate update;
+  takeScene(scene, &update);
+  return update;
+}
+
+bool ProgressiveView::takeScene(const Scene& scene, SceneUpdate* update) {
+  const SceneUpdate u = setSceneOnDevice(renderer_, scene, device_, deviceChosen_);
+  if (update) *update = u;
+  const bool sameMeshes = sameMeshData(doc_.scene.meshes, scene.meshes);
+  doc_.scene = scene;
+  if (!sameMeshes) sceneKey_.clear();
+  return changed(sceneKey_, sceneKeyOf(scene));
+}
+
+bool ProgressiveView::showFrame(const Frame& frame) {
+  SceneDocument d;
+  d.input = doc_.input;
+  d.hasCamera = doc_.hasCamera;
+  d.path = doc_.path;
+  d.frame = frame;
+  d.frame.depthLimit = nullptr;
+  std::string key = writeSceneJson(d);
+  if (frame.depthLimit) {
+    if (frame.depthLimit != depthLimit_.data()) // not the copy shown() refers to
+      depthLimit_.assign(frame.depthLimit, frame.depthLimit + size_t(frame.width) * size_t(frame.height));
+    key += frame.depthLimitPlanar ? "planar depth limit " : "depth limit ";
+    key.append(reinterpret_cast<const char*>(depthLimit_.data()), depthLimit_.size() * sizeof(float));
+  } else {
+    depthLimit_.clear();
+  }
+  doc_.frame = frame;
+  doc_.frame.depthLimit = frame.depthLimit ? depthLimit_.data() : nullptr;
+  return changed(frameKey_, std::move(key));
+}
+
+bool ProgressiveView::changed(std::string& held, std::string key) {
+  if (key == held) return false;
+  held = std::move(key);
   restart();
   return true;
 }
 
 void ProgressiveView::restart() {
   passes_ = 0;
-  buffer_.resize(doc_.frame.width, doc_.frame.height);
-  buffer_.clear();
+  cleared_ = false;
 }
 
 Frame ProgressiveView::draftFrame() const {
@@ -44,7 +109,7 @@ Frame ProgressiveView::draftFrame() const {
 bool ProgressiveView::renderDraft(const Frame& draft, FrameBuffer& buffer, const PassControl& control, double budget) {
   buffer.resize(draft.width, draft.height);
   if (!renderer_.renderPass(draft, buffer, control)) return false;
-  draftKey_ = key_;
+  draftKey_ = key();
   divisor_ = nextDraftDivisor(divisor_, doc_.frame.width, doc_.frame.height, double(draft.width) * draft.height,
                               buffer.stats().seconds, budget > 0.0 ? budget : policy_.seconds, policy_.maxDivisor);
   return true;
@@ -52,14 +117,26 @@ bool ProgressiveView::renderDraft(const Frame& draft, FrameBuffer& buffer, const
 
 bool ProgressiveView::refine(const PassControl& control) {
   if (complete()) return false;
-  Frame pass = doc_.frame;
-  pass.frameIndex = passes_;
-  if (!renderer_.renderPass(pass, buffer_, control)) {
-    // A cancelled pass leaves part of its tiles added: the refinement starts over.
-    restart();
-    return false;
+  return refineTo(passes_ + 1, control);
+}
+
+bool ProgressiveView::refineTo(int passes, const PassControl& control) {
+  if (passes_ >= passes) return true;
+  if (!cleared_) {
+    buffer_.resize(doc_.frame.width, doc_.frame.height); // cleared
+    cleared_ = true;
   }
-  ++passes_;
+  Frame pass = doc_.frame;
+  while (passes_ < passes) {
+    pass.frameIndex = passes_;
+    const bool cancelled = control.cancel && control.cancel->load(std::memory_order_relaxed);
+    if (cancelled || !renderer_.renderPass(pass, buffer_, control)) {
+      // A cancelled pass leaves part of its tiles added: the refinement starts over.
+      restart();
+      return false;
+    }
+    ++passes_;
+  }
   return true;
 }
 

@@ -2,10 +2,10 @@
 // representation): a draft first, at a fraction of the resolution and a lower sampling rate,
 // its size adapted so that it renders within a time budget; then full-resolution passes up to
 // the frame's samples per pixel, each added to the last (pass k uses frame index k, so the
-// result equals an N-sample render of the frame). A new scene or frame starts the refinement
-// over, and the renderer rebuilds only what the change needs; a cancel flag ends a pass early;
-// the device is chosen on the first scene, the CPU taking over under "auto" where the device
-// cannot render it.
+// result equals an N-sample render of the frame). A new scene, frame or depth limit starts the
+// refinement over, and the renderer rebuilds only what the change needs; a cancel flag ends a
+// pass early; the device is chosen on the first scene, the CPU taking over under "auto" where
+// the device cannot render it.
 #pragma once
 
 #include "exabricks/render/frame_buffer.h"
@@ -13,6 +13,7 @@
 #include "exabricks/render/scene.h"
 
 #include <string>
+#include <vector>
 
 namespace exa {
 
@@ -34,11 +35,20 @@ int nextDraftDivisor(int divisor, int width, int height, double draftPixels, dou
 class ProgressiveView {
 public:
   ProgressiveView(Renderer& renderer, std::string device = "auto", DraftPolicy policy = {});
+  ProgressiveView(const ProgressiveView&) = delete; ///< shown() refers to the view's own depth limit
+  ProgressiveView& operator=(const ProgressiveView&) = delete;
 
   /// Shows `doc`: its scene on the renderer (what changed is rebuilt) and its frame. The
   /// refinement starts over when the scene or the frame differs from the one shown; true then.
+  /// Meshes are compared by their data; the frame's depth limit (if any) is copied, and its
+  /// values count as part of the frame.
   bool show(const SceneDocument& doc);
-  /// Starts the refinement over (the next refine() renders pass 0).
+  /// Shows `scene` with the frame shown, as show() does; returns what the renderer rebuilt.
+  SceneUpdate showScene(const Scene& scene);
+  /// Shows `frame` with the scene shown, as show() does; true when the refinement starts over.
+  bool showFrame(const Frame& frame);
+  /// Starts the refinement over: the next pass is pass 0, and it clears buffer(), which holds
+  /// the last passes until then (what a front end may keep showing).
   void restart();
 
   /// The draft frame of the view shown: the frame at the draft's divisor and rate, one sample.
@@ -48,11 +58,15 @@ public:
   /// cancelled.
   bool renderDraft(const Frame& draft, FrameBuffer& buffer, const PassControl& control, double budget = 0.0);
   /// Whether the last draft rendered shows the view shown now.
-  bool draftIsCurrent() const { return draftKey_ == key_ && !key_.empty(); }
+  bool draftIsCurrent() const { return !sceneKey_.empty() && !frameKey_.empty() && draftKey_ == key(); }
 
   /// Adds the next full-resolution pass to buffer(); false when cancelled (the pass is then not
-  /// counted) or when the view already holds its passes.
+  /// counted, and the refinement starts over) or when the view already holds its passes.
   bool refine(const PassControl& control);
+  /// Adds full-resolution passes until the view holds `passes`, which may go past
+  /// targetPasses() (more samples of the same frame); false when cancelled, as refine().
+  bool refineTo(int passes, const PassControl& control);
+  /// The passes added up; after a restart, until the next pass, the passes from before it.
   const FrameBuffer& buffer() const { return buffer_; }
   int passes() const { return passes_; }
   int targetPasses() const { return doc_.frame.samplesPerPixel; }
@@ -63,15 +77,23 @@ public:
   Renderer& renderer() { return renderer_; }
 
 private:
+  /// Shows `scene` (its update in `update`, unless null); true when the refinement starts over.
+  bool takeScene(const Scene& scene, SceneUpdate* update);
+  /// Holds `key` in `held`; true (and the refinement starts over) when it differs from the key held.
+  bool changed(std::string& held, std::string key);
+  std::string key() const { return sceneKey_ + frameKey_; }
+
   Renderer& renderer_;
   std::string device_;
   bool deviceChosen_ = false;
   DraftPolicy policy_;
   int divisor_;
   SceneDocument doc_;
-  std::string key_, draftKey_; ///< the scene and frame shown, and those of the last draft
+  std::vector<float> depthLimit_;              ///< doc_.frame's depth limit, when it has one
+  std::string sceneKey_, frameKey_, draftKey_; ///< the scene and frame shown, and those of the last draft
   FrameBuffer buffer_;
   int passes_ = 0;
+  bool cleared_ = false; ///< buffer_ holds the passes counted (else it is cleared before the next)
 };
 
 } // namespace exa
