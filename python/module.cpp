@@ -24,8 +24,6 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
-#include <cstring>
-
 namespace py = pybind11;
 using namespace exa;
 using exa::pymod::Dataset;
@@ -289,6 +287,28 @@ void bindMesh(py::module_& m) {
           py::arg("path"), "Reads an OBJ, PLY or .tris file")
       .def_property_readonly(
           "source", [](const Mesh& x) { return x.source; }, "The file the mesh was read from (empty: made from arrays)")
+      .def_property_readonly(
+          "vertices",
+          [](const Mesh& x) {
+            py::array_t<float> out({py::ssize_t(x.mesh->vertices.size()), py::ssize_t(3)});
+            float* v = out.mutable_data();
+            for (const vec3f& p : x.mesh->vertices)
+              for (int k = 0; k < 3; ++k)
+                *v++ = p[k];
+            return out;
+          },
+          "The vertices, a (V, 3) float32 array (a copy)")
+      .def_property_readonly(
+          "triangles",
+          [](const Mesh& x) {
+            py::array_t<int64_t> out({py::ssize_t(x.mesh->triangles.size()), py::ssize_t(3)});
+            int64_t* t = out.mutable_data();
+            for (const vec3i& tri : x.mesh->triangles)
+              for (int k = 0; k < 3; ++k)
+                *t++ = tri[k];
+            return out;
+          },
+          "The triangles' vertex indices, a (T, 3) int64 array (a copy)")
       .def_property_readonly("vertex_count", [](const Mesh& x) { return x.mesh->vertices.size(); })
       .def_property_readonly("triangle_count", [](const Mesh& x) { return x.mesh->triangles.size(); });
 }
@@ -331,6 +351,10 @@ void bindSceneFunctions(py::module_& m) {
       py::arg("text"), py::arg("source"),
       "A scene file's JSON checked by the command line's reader (unknown keys and invalid settings are "
       "refused with its messages, naming `source`) and written back by its writer, with every setting");
+  m.def("scene_structure", &sceneStructureJson,
+        "Every structured key of a scene file (camera, layers, transfer functions, iso, meshes, clipping, camera "
+        "path) and the device choice as JSON: key, type, kind, range, choices, default, example and help");
+  m.def("scene_example", &sceneExampleJson, "A scene file that uses every structured key at its example value");
   m.def("scene_vocabulary", &sceneVocabularyJson,
         "Every described setting of a scene file as JSON: key, name, type, default, range, choices, kind and "
         "help");

@@ -14,5 +14,6 @@ void addRender(CLI::App& app);
 void addBench(CLI::App& app);
 void addView(CLI::App& app);
 void addMovie(CLI::App& app);
+void addKeys(CLI::App& app);
 
 } // namespace exa::cli

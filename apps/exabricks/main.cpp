@@ -128,6 +128,7 @@ int main(int argc, char** argv) {
   exa::cli::addBench(app);
   exa::cli::addView(app);
   exa::cli::addMovie(app);
+  exa::cli::addKeys(app);
   // The global flags may follow the command too (exabricks render -q ...).
   for (CLI::App* command : app.get_subcommands({}))
     command->fallthrough();

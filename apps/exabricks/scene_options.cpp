@@ -237,7 +237,7 @@ void addDeviceOption(CLI::App& cmd, std::string& device) {
   cmd.add_option("--device", device,
                  "Where passes run: cpu, cuda (an NVIDIA GPU), auto (the GPU where one is present and the scene "
                  "has nothing it lacks, else the CPU) or portable (the GPU's code on CPU threads, for comparisons)")
-      ->check(CLI::IsMember({"cpu", "cuda", "auto", "portable"}))
+      ->check(CLI::IsMember(deviceChoices()))
       ->capture_default_str();
 }
 

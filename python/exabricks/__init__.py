@@ -21,7 +21,7 @@ from ._yt_scene import _yt_scene_units, camera_from_yt, from_yt, scene_from_yt, 
 
 __all__ = [
     "Dataset", "TransferFunction", "Camera", "Scene", "load", "from_cells", "from_grids", "from_yt",
-    "colormap_names", "list_fields", "scene_vocabulary", "read_png", "Series",
+    "colormap_names", "list_fields", "scene_vocabulary", "scene_structure", "read_png", "Series",
 ]
 
 
@@ -69,6 +69,14 @@ def _attribute(setting, value):
     if setting["type"] == "vector":
         return None if value is None else tuple(value)
     return value
+
+
+def scene_structure():
+    """The structured keys of a scene file and the device choice, as the library describes them:
+    a list of dicts with "key" (a path; "[]" stands for a list's items; the keys of the camera
+    and transfer-function objects carry "object"), "type", "kind", "min"/"max", "choices",
+    "default", "example", "required" and "help" (see `exabricks keys`)."""
+    return json.loads(_core.scene_structure())
 
 
 def scene_vocabulary():
@@ -326,8 +334,9 @@ class Scene:
 
     # -- the scene file -----------------------------------------------------------------------
     def to_dict(self, with_meshes=False):
-        """The scene in the JSON form of `exabricks render --scene` (meshes made from arrays are
-        written inline only with with_meshes)."""
+        """The scene in the JSON form of `exabricks render --scene`. Meshes read from files are
+        recorded by their file; those made from arrays are written inline (vertices and triangles)
+        only with `with_meshes`, as to_json does."""
         d = {
             "input": self._input,
             "camera": self.camera.to_dict() if self.camera is not None else Camera().to_dict(),
@@ -346,12 +355,14 @@ class Scene:
             del d["input"]
         if self.clip_box is not None:
             d["clip"]["box"] = [float(v) for v in self.clip_box]
-        # Meshes read from files are recorded by their file; those made from arrays are not.
-        files = [{"file": m.source, "color": _srgb(c)} for m, c in self.meshes if m.source]
-        if files:
-            d["meshes"] = files
-        if with_meshes and len(files) < len(self.meshes):
-            raise ValueError("meshes made from arrays are kept by the Scene; write them with the mesh files instead")
+        meshes = []
+        for m, c in self.meshes:
+            if m.source:
+                meshes.append({"file": m.source, "color": _srgb(c)})
+            elif with_meshes:
+                meshes.append({"vertices": m.vertices.tolist(), "triangles": m.triangles.tolist(), "color": _srgb(c)})
+        if meshes:
+            d["meshes"] = meshes
         if self.camera_path is not None:
             d["camera_path"] = copy.deepcopy(self.camera_path)
         return d
@@ -360,7 +371,7 @@ class Scene:
         """The scene file's text, as the command line writes it (every setting; checked by its
         reader). For a dataset made from yt (from_yt), the file names what the command line reads:
         the output's path, the file's field names and values in the file's units."""
-        d = self.to_dict()
+        d = self.to_dict(with_meshes=True)
         origin = getattr(self.dataset, "_yt_origin", None)
         if origin is not None and not self._input:
             d = _yt_scene_units(d, origin, to_file=True)
@@ -407,9 +418,10 @@ class Scene:
         s.iso_color_field = iso["color_field"]
         s.iso_color_map = TransferFunction.from_dict(iso["color_map"])
         for m in d["meshes"]:
-            if "file" not in m:
-                raise ValueError("%s: meshes given inline are not read into a Scene; add them with add_mesh" % source)
-            s.add_mesh(path=m["file"], color=m["color"])
+            if "file" in m:
+                s.add_mesh(path=m["file"], color=m["color"])
+            else:
+                s.add_mesh(m["vertices"], m["triangles"], color=m["color"])
         clip = d["clip"]
         s.clip_planes = [(tuple(p["point"]), tuple(p["normal"])) for p in clip["planes"]]
         s.clip_box = tuple(clip["box"]) if clip.get("box") else None

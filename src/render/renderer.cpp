@@ -3,6 +3,7 @@
 // volume_marcher: the volume; lighting: ambient occlusion; debug_views), summed into the
 // caller's FrameBuffer.
 #include "exabricks/render/renderer.h"
+#include "exabricks/render/scene_vocabulary.h"
 
 #include "debug_views.h"
 #include "device_renderer.h"
@@ -258,7 +259,10 @@ Device resolveDevice(const std::string& name) {
     }
     fail("the cuda device cannot be used: ", s.problem);
   }
-  fail("unknown device '", name, "' (cpu, cuda, auto or portable)");
+  std::string choices;
+  for (const std::string& c : deviceChoices())
+    choices += (choices.empty() ? "" : ", ") + c;
+  fail("device is '", name, "' (choose from: ", choices, ")");
 }
 
 Device selectDevice(Renderer& renderer, const std::string& choice) {

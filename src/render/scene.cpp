@@ -63,15 +63,14 @@ Frame Frame::preview(int divisor, float previewRate) const {
 
 void Frame::validate() const {
   checkSettings(frameSettings(), *this);
-  if (frameIndex < 0) fail("the frame index must not be negative");
+  checkStructuredNumber("frame.frame_index", frameIndex);
   const Camera& c = camera;
   const vec3d forward = c.lookAt - c.position;
   if (!std::isfinite(length(forward)) || !std::isfinite(length(c.up)) || !std::isfinite(length(c.position)))
     fail("camera position, look-at and up must be finite");
   if (length(forward) == 0 || length(cross(forward, c.up)) == 0)
     fail("degenerate camera: position equals look-at, or up is parallel to the view direction");
-  if (c.orthographic ? !(c.orthoHeight > 0 && std::isfinite(c.orthoHeight)) : !(c.fovy > 0 && c.fovy < 180))
-    fail(c.orthographic ? "orthographic height must be positive" : "field of view must be in (0, 180) degrees");
+  checkStructuredNumber(c.orthographic ? "camera.ortho_height" : "camera.fov", c.orthographic ? c.orthoHeight : c.fovy);
   if (depthLimit)
     for (int y = 0; y < height; ++y)
       for (int x = 0; x < width; ++x) {
@@ -99,6 +98,8 @@ public:
       : j_(j), source_(std::move(source)), path_(std::move(path)) {
     if (!j_.is_object()) fail(where(), " must be a JSON object");
   }
+  /// Fails on keys not described under `path` (knownSceneKeys).
+  void only(const std::string& path) const { only(knownSceneKeys(path)); }
   /// Fails on keys not in `known`.
   void only(const std::vector<std::string>& known) const {
     for (auto it = j_.begin(); it != j_.end(); ++it) {
@@ -137,6 +138,16 @@ public:
         fail(source_, ": \"", key(k), "\" must be an integer in range, not ", v->dump());
     }
     out = T(d);
+    return true;
+  }
+  /// A number checked against the range the description gives `described` (such as "camera.fov").
+  template <typename T> bool number(const char* k, T& out, const std::string& described) const {
+    if (!number(k, out)) return false;
+    try {
+      checkStructuredNumber(described, double(out));
+    } catch (const Error& e) {
+      fail(source_, ": ", e.what());
+    }
     return true;
   }
   bool string(const char* k, std::string& out) const {
@@ -220,13 +231,13 @@ json cameraJson(const Camera& c) {
 
 /// A camera object; false when it has no position. Errors name the key.
 bool readCamera(const Reader& c, Camera& cam) {
-  c.only({"position", "look_at", "up", "fov", "orthographic", "ortho_height"});
+  c.only("camera");
   const bool hasPosition = c.vec3("position", cam.position);
   c.vec3("look_at", cam.lookAt);
   c.vec3("up", cam.up);
-  c.number("fov", cam.fovy);
+  c.number("fov", cam.fovy, "camera.fov");
   c.boolean("orthographic", cam.orthographic);
-  c.number("ortho_height", cam.orthoHeight);
+  c.number("ortho_height", cam.orthoHeight, "camera.ortho_height");
   return hasPosition;
 }
 
@@ -236,13 +247,12 @@ TransferFunction readTf(const Reader& r, const char* k, const TransferFunction& 
   return transferFunctionFromJson(*v, r.source() + ": \"" + r.key(k) + "\"");
 }
 
-/// The keys directly under `section` of a scene file: `keys` (read by hand), then the described ones.
+/// The keys directly under `section` of a scene file: the described ones, then `keys` (read but
+/// no longer part of scene files).
 std::vector<std::string> keysOf(const std::string& section, std::vector<std::string> keys) {
-  for (const Setting<Scene>& s : sceneSettings())
-    if (s.section() == section) keys.push_back(s.leaf());
-  for (const Setting<Frame>& s : frameSettings())
-    if (s.section() == section) keys.push_back(s.leaf());
-  return keys;
+  std::vector<std::string> all = knownSceneKeys(section);
+  all.insert(all.end(), keys.begin(), keys.end());
+  return all;
 }
 
 template <typename Owner> void writeSettings(const std::vector<Setting<Owner>>& table, const Owner& o, json& j) {
@@ -318,14 +328,14 @@ std::string writeSceneJson(const SceneDocument& doc) {
 namespace {
 
 void readCameraPath(const Reader& p, const std::string& source, CameraPath& path) {
-  p.only({"keyframes", "constant_speed"});
+  p.only("camera_path");
   p.boolean("constant_speed", path.constantSpeed);
   const json* keys = p.find("keyframes");
   if (!keys || !keys->is_array() || keys->empty())
     fail(source, ": \"camera_path.keyframes\" must be a non-empty array of {\"time\", \"camera\", ...}");
   for (size_t i = 0; i < keys->size(); ++i) {
     const Reader k((*keys)[i], source, "camera_path.keyframes[" + std::to_string(i) + "]");
-    k.only({"time", "camera", "range", "opacity_scale", "iso_values"});
+    k.only("camera_path.keyframes[]");
     CameraKeyframe key;
     if (!k.number("time", key.time)) fail(source, ": \"", k.key("time"), "\" is required");
     if (!k.find("camera") || !readCamera(k.child("camera"), key.camera))
@@ -335,7 +345,7 @@ void readCameraPath(const Reader& p, const std::string& source, CameraPath& path
       key.range = range1f{float(n[0]), float(n[1])};
     }
     float scale = 0.f;
-    if (k.number("opacity_scale", scale)) key.opacityScale = scale;
+    if (k.number("opacity_scale", scale, "camera_path.keyframes[].opacity_scale")) key.opacityScale = scale;
     if (const json* v = k.find("iso_values")) {
       std::vector<float> values;
       for (double d : k.numbers(*v, k.key("iso_values"), 0))
@@ -356,7 +366,7 @@ void readLayers(const json& layers, const std::string& source, std::vector<Volum
   out.clear();
   for (size_t i = 0; i < layers.size(); ++i) {
     const Reader l(layers[i], source, "layers[" + std::to_string(i) + "]");
-    l.only({"field", "transfer_function"});
+    l.only("layers[]");
     VolumeLayer layer;
     l.string("field", layer.field);
     layer.tf = readTf(l, "transfer_function", layer.tf);
@@ -365,7 +375,7 @@ void readLayers(const json& layers, const std::string& source, std::vector<Volum
 }
 
 void readIso(const Reader& c, const std::string& source, IsoSurfaces& iso) {
-  c.only({"field", "values", "colors", "color_field", "color_map"});
+  c.only("iso");
   c.string("field", iso.field);
   if (const json* v = c.find("values"))
     for (double d : c.numbers(*v, c.key("values"), 0))
@@ -387,7 +397,7 @@ void readMeshes(const json& meshes, const std::string& source, std::vector<Scene
   if (!meshes.is_array()) fail(source, ": \"meshes\" must be an array");
   for (size_t i = 0; i < meshes.size(); ++i) {
     const Reader m(meshes[i], source, "meshes[" + std::to_string(i) + "]");
-    m.only({"file", "color", "vertices", "triangles"});
+    m.only("meshes[]");
     SceneMesh sm;
     m.color("color", sm.color);
     if (m.string("file", sm.source)) {
@@ -411,12 +421,12 @@ void readMeshes(const json& meshes, const std::string& source, std::vector<Scene
 }
 
 void readClip(const Reader& c, const std::string& source, Scene& s) {
-  c.only(keysOf("clip", {"planes", "box"}));
+  c.only("clip");
   if (const json* planes = c.find("planes")) {
     if (!planes->is_array()) fail(source, ": \"clip.planes\" must be an array of {\"point\", \"normal\"}");
     for (size_t i = 0; i < planes->size(); ++i) {
       const Reader p((*planes)[i], source, "clip.planes[" + std::to_string(i) + "]");
-      p.only({"point", "normal"});
+      p.only("clip.planes[]");
       ClipPlane cp;
       if (!p.vec3("point", cp.point) || !p.vec3("normal", cp.normal))
         fail(source, ": \"clip.planes[", i, "]\" needs \"point\" and \"normal\"");
@@ -461,8 +471,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   Scene& s = doc.scene;
   Frame& f = doc.frame;
   const Reader r(j, source, "");
-  r.only(keysOf("", {"input", "camera", "camera_path", "frame", "layers", "iso", "meshes", "clip", "light", "pathtrace",
-                     "ambient_occlusion", "integration", "background", "legends"}));
+  r.only("");
   r.string("input", doc.input);
   if (r.find("camera")) {
     doc.hasCamera = readCamera(r.child("camera"), f.camera);
@@ -471,9 +480,9 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   if (r.find("camera_path")) readCameraPath(r.child("camera_path"), source, doc.path);
   if (r.find("frame")) {
     const Reader c = r.child("frame");
-    c.only(keysOf("frame", {"frame_index"}));
+    c.only("frame");
     c.settings(frameSettings(), "frame", f);
-    c.number("frame_index", f.frameIndex);
+    c.number("frame_index", f.frameIndex, "frame.frame_index");
   }
   if (const json* layers = r.find("layers")) readLayers(*layers, source, s.layers);
   if (r.find("iso")) readIso(r.child("iso"), source, s.iso);
@@ -481,23 +490,23 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   if (r.find("clip")) readClip(r.child("clip"), source, s);
   if (r.find("light")) {
     const Reader c = r.child("light");
-    c.only(keysOf("light", {}));
+    c.only("light");
     c.settings(sceneSettings(), "light", s);
   }
   if (r.find("pathtrace")) {
     const Reader c = r.child("pathtrace");
-    c.only(keysOf("pathtrace", {}));
+    c.only("pathtrace");
     c.settings(sceneSettings(), "pathtrace", s);
   }
   if (r.find("ambient_occlusion")) {
     const Reader c = r.child("ambient_occlusion");
-    c.only(keysOf("ambient_occlusion", {}));
+    c.only("ambient_occlusion");
     c.settings(sceneSettings(), "ambient_occlusion", s);
   }
   if (r.find("integration")) readIntegration(r.child("integration"), source, s);
   if (r.find("legends")) {
     const Reader c = r.child("legends");
-    c.only(keysOf("legends", {}));
+    c.only("legends");
     c.settings(sceneSettings(), "legends", s);
   }
   r.settings(sceneSettings(), "", s);

@@ -3,6 +3,7 @@
 #include "exabricks/core/color.h"
 #include "exabricks/core/error.h"
 #include "exabricks/render/sample_math.h"
+#include "exabricks/render/scene_vocabulary.h"
 
 #include "tf_json.h"
 
@@ -355,10 +356,14 @@ std::vector<OpacityPoint> unitCurve(const json& points, const std::string& path,
 }
 
 TransferFunction fromExabricks(const json& j, const std::string& path) {
-  static const char* const known[] = {"colormap", "opacity", "albedo", "range", "log", "opacity_scale"};
+  const std::vector<std::string> known = knownSceneKeys("transfer_function");
   for (auto it = j.begin(); it != j.end(); ++it)
-    if (std::find(std::begin(known), std::end(known), it.key()) == std::end(known))
-      fail(path, ": unknown key \"", it.key(), "\" (known: colormap, opacity, albedo, range, log, opacity_scale)");
+    if (std::find(known.begin(), known.end(), it.key()) == known.end()) {
+      std::string list;
+      for (const std::string& k : known)
+        list += (list.empty() ? "" : ", ") + k;
+      fail(path, ": unknown key \"", it.key(), "\" (known: ", list, ")");
+    }
 
   TransferFunction tf;
   tf.colorMap = builtinColorMap("viridis");

@@ -267,6 +267,8 @@ void Server::Impl::frameRoutes() {
 void Server::Impl::sceneRoutes() {
   http.Get("/api/vocabulary",
            [](const httplib::Request&, httplib::Response& res) { sendJson(res, json::parse(sceneVocabularyJson())); });
+  http.Get("/api/structure",
+           [](const httplib::Request&, httplib::Response& res) { sendJson(res, json::parse(sceneStructureJson())); });
   // The scene in effect, in the form `exabricks render --scene` reads.
   http.Get("/api/scene", [this](const httplib::Request&, httplib::Response& res) {
     const std::optional<SceneDocument> doc = session->current();

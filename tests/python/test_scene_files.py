@@ -4,6 +4,7 @@ unknown keys are refused with the messages of `render --scene`, and a path is ta
 text is."""
 import json
 import math
+import os
 import pathlib
 import subprocess
 
@@ -270,3 +271,82 @@ def test_front_end_controls_offer_only_what_the_vocabulary_accepts():
         tag = html[html.index('id="%s"' % element):].split(">", 1)[0]
         attrs = dict(part.split("=", 1) for part in tag.replace('"', "").split() if "=" in part)
         within_vocabulary(vocabulary[key], float(attrs["min"]), float(attrs["max"]), "the viewer's %s" % element)
+
+
+def holds(got, want, where="scene"):
+    """Every key of `want` is in `got` with an equal value (numbers within float32 round-off)."""
+    if isinstance(want, dict):
+        assert isinstance(got, dict), (where, got)
+        for k in want:
+            assert k in got, (where + "." + k, "missing")
+            holds(got[k], want[k], where + "." + k)
+    elif isinstance(want, list):
+        assert isinstance(got, list) and len(got) == len(want), (where, got, want)
+        for i, (x, y) in enumerate(zip(got, want)):
+            holds(x, y, "%s[%d]" % (where, i))
+    elif isinstance(want, float) or isinstance(got, float):
+        assert got == pytest.approx(want, rel=1e-6, abs=1e-9), (where, got, want)
+    else:
+        assert got == want, (where, got, want)
+
+
+TRIANGLE_PLY = """ply
+format ascii 1.0
+element vertex 3
+property float x
+property float y
+property float z
+element face 1
+property list uchar int vertex_indices
+end_header
+0 0 0
+60 0 0
+0 60 30
+3 0 1 2
+"""
+
+
+def test_every_described_structured_key_survives_the_command_line_and_python(cli, dataset_file, tmp_path,
+                                                                               monkeypatch):
+    """The library's example scene file uses every structured key it describes (camera, layers and
+    transfer functions, iso, meshes from a file and inline, clipping, camera path, background):
+    `render --scene` then `--write-scene`, and Scene.from_json then to_json, keep each of them."""
+    structure = eb.scene_structure()
+    example = json.loads(_core.scene_example())
+    top = {s["key"].split(".")[0].split("[")[0] for s in structure
+           if "object" not in s and s.get("document", True) and s.get("written", True)}
+    assert top <= set(example), top - set(example)
+    monkeypatch.chdir(tmp_path)  # the example names its mesh file as the working directory sees it
+    (tmp_path / "triangle.ply").write_text(TRIANGLE_PLY)
+    (tmp_path / "example.json").write_text(json.dumps(example))
+    def files_resolved(doc):  # mesh files as one path, whether written relative or absolute
+        for m in doc.get("meshes", []):
+            if "file" in m:
+                m["file"] = os.path.realpath(m["file"])
+        return doc
+
+    want = files_resolved(json.loads(json.dumps(example)))
+    del want["input"]  # a front end given a dataset records the one it renders
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--scene", "example.json", "--size", "32x24", "-o",
+                    "example.png", "--write-scene", "cli.json"], check=True, cwd=tmp_path)
+    holds(files_resolved(json.loads((tmp_path / "cli.json").read_text())), want, "render --write-scene")
+    scene = eb.Scene.from_json(eb.load(dataset_file), tmp_path / "example.json")
+    holds(files_resolved(json.loads(scene.to_json())), want, "Scene.to_json")
+    assert len(scene.meshes) == 2 and scene.meshes[1][0].triangles.tolist() == [[0, 1, 2]]
+    # Scene.to_json's file is the command line's: it reads back to the same text.
+    (tmp_path / "py.json").write_text(scene.to_json())
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--scene", "py.json", "--size", "32x24", "-o",
+                    "py.png", "--write-scene", "again.json"], check=True, cwd=tmp_path)
+    holds(files_resolved(json.loads((tmp_path / "again.json").read_text())), want, "Scene.to_json -> render")
+
+
+def test_the_device_choices_are_the_described_ones(cli, dataset_file):
+    device = next(s for s in eb.scene_structure() if s["key"] == "device")
+    assert device["choices"] == ["auto", "cpu", "cuda", "portable"] and device["document"] is False
+    for choice in ("cpu", "portable"):
+        assert eb.Scene(eb.load(dataset_file), device=choice).render(24, 16).shape == (16, 24, 4)
+    with pytest.raises(Exception, match=r"device is 'gpu' \(choose from: auto, cpu, cuda, portable\)"):
+        eb.Scene(eb.load(dataset_file), device="gpu")
+    bad = subprocess.run([cli, "render", str(dataset_file), "--device", "gpu", "-o", "/dev/null"],
+                         capture_output=True, text=True)
+    assert bad.returncode != 0 and "auto" in bad.stderr and "portable" in bad.stderr

@@ -9,6 +9,8 @@
 
 #include <span>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace exa {
 
@@ -70,5 +72,27 @@ void checkSceneSetting(const std::string& key, double value);
 /// Throws exa::Error when `value` is not of the kind of a described vector setting (a finite,
 /// non-zero direction or a finite radiance >= 0).
 void checkSceneVector(const std::string& key, const vec3f& value);
+
+/// The description of the structured keys of a scene file and of the device choice, as a JSON
+/// array of objects: "key" (a path, "[]" standing for every item of a list; the keys of an object
+/// used at several places carry "object": "camera" or "transfer_function" and their own name),
+/// "type" (string, boolean, number, integer, numbers, points, vector, list, object, camera,
+/// transfer_function, colormap or choice), "kind" (vectors: point, direction, color or index),
+/// "min" and "max" where bounded (with "min_exclusive" / "max_exclusive"), "choices", "default"
+/// (null: none, or taken from the data), "example" (a valid value other than the default),
+/// "required", "written": false (read, not written) and "document": false (not a scene-file
+/// key: an option of the front ends), and "help".
+std::string sceneStructureJson();
+/// A scene file holding every written structured key at its example value (lists and objects
+/// whole, their items' keys within them).
+std::string sceneExampleJson();
+/// The keys known directly under `path` of a scene file ("" at the top, "layers[]" for a layer,
+/// "camera" or "transfer_function" for those objects): the structured keys and the settings.
+std::vector<std::string> knownSceneKeys(const std::string& path);
+/// Throws exa::Error when `value` is outside the range of a described structured number (such as
+/// "camera.fov"); false when the key has no range.
+bool checkStructuredNumber(std::string_view key, double value);
+/// The devices a renderer can be asked for: auto, cpu, cuda, portable (see selectDevice).
+const std::vector<std::string>& deviceChoices();
 
 } // namespace exa
