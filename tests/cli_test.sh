@@ -169,7 +169,7 @@ check "JPEG output" bash -c "'$exe' render s.cells -o out.jpg --size 16x16 && he
 fails_with "unknown image format" "unknown image format '.gif'" "$exe" render s.cells -o x.gif
 usage_rc() { "$@" > /dev/null 2>&1; [ $? -eq 2 ]; }
 check "a bad option value is a usage error (exit 2)" usage_rc "$exe" render s.cells -o x.png --opacity-scale 0
-fails_with "opacity scale 0 is refused" "--opacity-scale must be a positive number" "$exe" render s.cells -o x.png --opacity-scale 0
+fails_with "opacity scale 0 is refused" "--opacity-scale: \"transfer_function.opacity_scale\" must be a finite number > 0, not 0" "$exe" render s.cells -o x.png --opacity-scale 0
 fails_with "negative opacity scale is refused" "--opacity-scale" "$exe" render s.cells -o x.png --opacity-scale -1
 check "an unreadable input exits 1" bash -c "'$exe' info nothing.cells 2>/dev/null; [ \$? -eq 1 ]"
 check "--version" bash -c "'$exe' --version | grep -q '^exabricks [0-9]'"

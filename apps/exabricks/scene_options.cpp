@@ -129,8 +129,8 @@ void addImageOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--colormap", o.colormap, "Built-in colour map")->capture_default_str();
   cmd.add_option("--tf", o.tfFile, "Transfer function file (ParaView preset or exabricks JSON)");
   cmd.add_option("--opacity", o.opacity, "Opacity points x,alpha,... over the normalised value")->delimiter(',');
-  cmd.add_option("--opacity-scale", o.opacityScale, "Multiplies the opacity (default: from the dataset size)");
-  cmd.add_option("--range", o.range, "Value range LOW,HIGH mapped by the transfer function")->delimiter(',');
+  cmd.add_option("--opacity-scale", o.opacityScale, sceneSettingHelp("transfer_function.opacity_scale"));
+  cmd.add_option("--range", o.range, sceneSettingHelp("transfer_function.range"))->delimiter(',');
   cmd.add_flag("--log", o.logScale, "Map values logarithmically (every layer)");
   cmd.add_flag("--linear", o.linear, "Map values linearly even where the data spans many decades");
   cmd.add_flag("--colorbar", o.colorbar, "Draw a labelled colour bar of the first layer (scene key legends.color_bar)");
@@ -141,10 +141,10 @@ void addImageOptions(RenderOptions& o, CLI::App& cmd) {
 /// The camera and the background.
 void addCameraOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_flag("--frame-all", o.frameAll, "Default view: frame the whole data, not only its visible part");
-  cmd.add_option("--position", o.position, "Camera position x,y,z (world)")->delimiter(',');
-  cmd.add_option("--look-at", o.lookAt, "Camera target x,y,z (world)")->delimiter(',');
-  cmd.add_option("--up", o.up, "Camera up vector x,y,z")->delimiter(',');
-  cmd.add_option("--fov", o.fov, "Vertical field of view in degrees")->capture_default_str();
+  cmd.add_option("--position", o.position, sceneSettingHelp("camera.position"))->delimiter(',');
+  cmd.add_option("--look-at", o.lookAt, sceneSettingHelp("camera.look_at"))->delimiter(',');
+  cmd.add_option("--up", o.up, sceneSettingHelp("camera.up"))->delimiter(',');
+  cmd.add_option("--fov", o.fov, sceneSettingHelp("camera.fov"))->capture_default_str();
   cmd.add_flag("--ortho", o.ortho, "Orthographic projection");
   const CLI::Validator finite(
       [](std::string& text) {
@@ -162,7 +162,7 @@ void addCameraOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--elevation", o.elevation, "Default view: degrees above the x-y plane (-90 to 90)")
       ->capture_default_str()
       ->check(latitude);
-  cmd.add_option("--background", o.background, "Background colour r,g,b (sRGB, 0..1)")->delimiter(',');
+  cmd.add_option("--background", o.background, sceneSettingHelp("background"))->delimiter(',');
   cmd.add_flag("--alpha", o.alpha, "Keep the alpha channel instead of a background");
 }
 
@@ -185,18 +185,18 @@ void addIntegrationOptions(RenderOptions& o, CLI::App& cmd) {
 /// Iso-surfaces, meshes, clipping and ambient occlusion.
 void addSurfaceOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--iso", o.iso, "Iso-values v1,v2,... of implicit iso-surfaces")->delimiter(',');
-  cmd.add_option("--iso-field", o.isoField, "Field of the iso-surfaces (default: the rendered field)");
+  cmd.add_option("--iso-field", o.isoField, sceneSettingHelp("iso.field"));
   cmd.add_option("--iso-color", o.isoColor, "Iso-surface colours r,g,b[,r,g,b...] (sRGB), one per value")
       ->delimiter(',');
   cmd.add_option("--iso-color-field", o.isoColorField, "Colour the iso-surfaces by this field");
   cmd.add_option("--iso-colormap", o.isoColormap, "Colour map for --iso-color-field")->capture_default_str();
   cmd.add_flag("--iso-color-log", o.isoColorLog, "Map --iso-color-field logarithmically");
   cmd.add_option("--iso-color-range", o.isoColorRange, "Value range LOW,HIGH for --iso-color-field")->delimiter(',');
-  cmd.add_option("--mesh", o.meshes, "Triangle mesh (OBJ, PLY or .tris) in world space (repeatable)");
+  cmd.add_option("--mesh", o.meshes, sceneSettingHelp("meshes[].file") + " (repeatable)");
   cmd.add_option("--mesh-color", o.meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")->delimiter(',');
   cmd.add_option("--clip-plane", o.clipPlanes,
                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
-  cmd.add_option("--clip-box", o.clipBox, "Keep only the inside of a box x0,y0,z0,x1,y1,z1 (world)")->delimiter(',');
+  cmd.add_option("--clip-box", o.clipBox, sceneSettingHelp("clip.box"))->delimiter(',');
   cmd.add_flag("--clip-meshes", o.clipMeshes, "Clip meshes too");
   cmd.add_option("--ao", o.aoRays, sceneSettingHelp("ambient_occlusion.rays"))->capture_default_str();
   cmd.add_option("--ao-length", o.aoLength, sceneSettingHelp("ambient_occlusion.length"));
@@ -234,9 +234,7 @@ void RenderOptions::add(CLI::App& cmd) {
 }
 
 void addDeviceOption(CLI::App& cmd, std::string& device) {
-  cmd.add_option("--device", device,
-                 "Where passes run: cpu, cuda (an NVIDIA GPU), auto (the GPU where one is present and the scene "
-                 "has nothing it lacks, else the CPU) or portable (the GPU's code on CPU threads, for comparisons)")
+  cmd.add_option("--device", device, sceneSettingHelp("device"))
       ->check(CLI::IsMember(deviceChoices()))
       ->capture_default_str();
 }
@@ -281,8 +279,7 @@ void applyFrameOptions(const RenderOptions& o, const OptionUse& u, Frame& f) {
 /// The first volume layer (the field and its transfer function) and the further layers.
 void applyLayerOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
   if (o.linear && o.logScale) failUsage("--log and --linear exclude each other");
-  if (u.given("--opacity-scale") && !(o.opacityScale > 0.f && std::isfinite(o.opacityScale)))
-    failUsage("--opacity-scale must be a positive number (leave it out for the dataset's default)");
+  if (u.given("--opacity-scale")) checked("--opacity-scale", "transfer_function.opacity_scale", o.opacityScale);
   if (s.layers.empty()) s.layers.push_back(VolumeLayer{});
   VolumeLayer& first = s.layers[0];
   if (u.apply("--field")) first.field = o.in.field;
@@ -480,7 +477,7 @@ std::vector<std::string> neededFields(const Scene& s) {
 Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
                          const box3d& visible, const WholeData* whole) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
-  if (!(o.fov > 0 && o.fov < 180)) failUsage("--fov must be in (0, 180) degrees");
+  checked("--fov", "camera.fov", o.fov);
   const box3i cb = whole ? whole->cellBounds : model.cellBounds();
   const box3d all = model.world.toWorld(cb);
   const box3d target = o.frameAll || visible.empty() ? all : visible;

@@ -275,6 +275,12 @@ std::vector<std::string> knownSceneKeys(const std::string& path) {
   return keys;
 }
 
+std::string structuredKeyHelp(const std::string& key) {
+  const json* e = findStructured(key);
+  if (!e) fail("no scene key \"", key, "\"");
+  return (*e)["help"];
+}
+
 bool checkStructuredNumber(std::string_view key, double value) {
   const json* e = findStructured(key);
   if (!e) return false;

@@ -441,13 +441,13 @@ const Setting<Owner>* findSetting(const std::vector<Setting<Owner>>& table, cons
 std::string sceneSettingHelp(const std::string& key) {
   if (const auto* s = findSetting(sceneSettings(), key)) return s->help;
   if (const auto* s = findSetting(frameSettings(), key)) return s->help;
-  fail("no scene setting \"", key, "\"");
+  return structuredKeyHelp(key);
 }
 
 void checkSceneSetting(const std::string& key, double value) {
   if (const auto* s = findSetting(sceneSettings(), key)) return checkSetting(*s, value);
   if (const auto* s = findSetting(frameSettings(), key)) return checkSetting(*s, value);
-  fail("no scene setting \"", key, "\"");
+  if (!checkStructuredNumber(key, value)) fail("no numeric scene setting \"", key, "\"");
 }
 
 void checkSceneVector(const std::string& key, const vec3f& value) {

@@ -350,3 +350,17 @@ def test_the_device_choices_are_the_described_ones(cli, dataset_file):
     bad = subprocess.run([cli, "render", str(dataset_file), "--device", "gpu", "-o", "/dev/null"],
                          capture_output=True, text=True)
     assert bad.returncode != 0 and "auto" in bad.stderr and "portable" in bad.stderr
+
+
+def test_exabricks_keys_prints_the_description(cli):
+    """`exabricks keys` lists every key with its help; --json is the library's description and
+    --example its example scene file."""
+    described = json.loads(subprocess.run([cli, "keys", "--json"], check=True, capture_output=True,
+                                          text=True).stdout)
+    assert described == {"settings": eb.scene_vocabulary(), "structure": eb.scene_structure()}
+    example = subprocess.run([cli, "keys", "--example"], check=True, capture_output=True, text=True).stdout
+    assert json.loads(example) == json.loads(_core.scene_example())
+    text = subprocess.run([cli, "keys"], check=True, capture_output=True, text=True).stdout
+    for s in eb.scene_vocabulary() + eb.scene_structure():
+        assert s["help"] in text, s["key"]
+    assert "camera_path.keyframes[].time" in text and "<camera>.fov  (number: (0, 180); default 40.0)" in text

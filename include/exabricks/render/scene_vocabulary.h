@@ -65,9 +65,11 @@ template <typename E> E parseName(const std::string& name, const std::string& wh
 /// Python Scene's attribute), "type" (boolean, integer, number or choice), "default", "min" and
 /// "max" where bounded (with "min_exclusive" / "max_exclusive" when open), "choices" and "help".
 std::string sceneVocabularyJson();
-/// The one-line help of a described setting (key as in sceneVocabularyJson).
+/// The one-line help of a described setting or structured key (key as in sceneVocabularyJson,
+/// or a structured key's path, "camera.fov" and "transfer_function.range" for the objects' keys).
 std::string sceneSettingHelp(const std::string& key);
-/// Throws exa::Error when `value` is outside the range of a described numeric setting.
+/// Throws exa::Error when `value` is outside the range of a described numeric setting or
+/// structured number.
 void checkSceneSetting(const std::string& key, double value);
 /// Throws exa::Error when `value` is not of the kind of a described vector setting (a finite,
 /// non-zero direction or a finite radiance >= 0).
@@ -89,6 +91,8 @@ std::string sceneExampleJson();
 /// The keys known directly under `path` of a scene file ("" at the top, "layers[]" for a layer,
 /// "camera" or "transfer_function" for those objects): the structured keys and the settings.
 std::vector<std::string> knownSceneKeys(const std::string& path);
+/// The help of a structured key ("camera.fov", "clip.box", "device", ...).
+std::string structuredKeyHelp(const std::string& key);
 /// Throws exa::Error when `value` is outside the range of a described structured number (such as
 /// "camera.fov"); false when the key has no range.
 bool checkStructuredNumber(std::string_view key, double value);
