@@ -189,7 +189,74 @@ struct Renderer::Impl {
                        : marchSample<false>(b, ps.ray, model.world, &clip, dr, rho, rng, c);
   }
 
-  /// A pass of the tiles begin, begin + stride, ... below end on the device back end.
+  /// The one pass loop of every back end, over the tiles begin, begin + stride, ... below end:
+  /// each tile in parallel (none once cancelled) has its counters reset, `traceTile(tile,
+  /// counters)` add its pixels to the buffer, and its pass counted, with progress per tile. The
+  /// pass's statistics are its tiles' counters summed, plus `whole` (what a back end counts for
+  /// the pass as a whole). False when cancelled.
+  template <typename TraceTile>
+  static bool runPass(FrameBuffer& buffer, int begin, int end, int stride, const PassControl& control,
+                      const RenderStats& whole, TraceTile&& traceTile) {
+    const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
+    std::atomic<bool> cancelled{false};
+    std::atomic<uint64_t> done{0};
+    Timer timer;
+    tbb::parallel_for(0, passTiles, [&](int i) {
+      const int tile = begin + i * stride;
+      Counters& c = buffer.counters_[size_t(tile)];
+      c = Counters();
+      if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
+        cancelled.store(true, std::memory_order_relaxed);
+        return;
+      }
+      traceTile(tile, c);
+      ++buffer.tilePasses_[size_t(tile)];
+      const uint64_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;
+      if (control.progress) control.progress(n, uint64_t(passTiles));
+    });
+    RenderStats st = whole;
+    st.seconds += timer.seconds();
+    for (int i = 0; i < passTiles; ++i) {
+      const Counters& c = buffer.counters_[size_t(begin + i * stride)];
+      st.rays += c.rays;
+      st.samples += c.samples;
+      st.regionsVisited += c.regions;
+      st.surfaceHits += c.surfaceHits;
+      st.isoSamples += c.isoSamples;
+      st.aoRays += c.aoRays;
+    }
+    st.tiles = done.load();
+    buffer.stats_ += st;
+    return !cancelled.load();
+  }
+
+  /// Calls f(x, y, pixel index) for the pixels of `tile`.
+  template <typename F> static void forTilePixels(const FrameBuffer& buffer, const Frame& frame, int tile, F&& f) {
+    const int tx = tile % buffer.tilesX_, ty = tile / buffer.tilesX_;
+    for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
+      for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x)
+        f(x, y, size_t(y) * size_t(frame.width) + size_t(x));
+  }
+
+  /// A pass on CPU threads: the ray program per pixel (ray-marched or path-traced, or a debug view).
+  bool cpuPass(const Frame& frame, FrameBuffer& buffer, int begin, int end, int stride,
+               const PassControl& control) const {
+    const PassSetup ps = passSetup(frame);
+    const bool steps = scene.debug == DebugView::Steps;
+    const bool pathTraced = scene.integration.integrator == Integrator::PathTrace && scene.debug == DebugView::None;
+    buffer.stepsView_ = steps;
+    return runPass(buffer, begin, end, stride, control, RenderStats(), [&](int tile, Counters& c) {
+      forTilePixels(buffer, frame, tile, [&](int x, int y, size_t p) {
+        RayCounts rc;
+        const vec4f acc = pathTraced ? tracePathPixel(x, y, frame, ps, rc) : tracePixel(x, y, frame, ps, c, rc);
+        addCounts(c, rc);
+        buffer.sum_[p] += acc;
+        if (steps) buffer.steps_[p] += float(rc.marchSamples);
+      });
+    });
+  }
+
+  /// A pass on the device back end: launched for the whole pass, its colours then added per tile.
   bool devicePass(const Frame& frame, FrameBuffer& buffer, int begin, int end, int stride,
                   const PassControl& control) const {
     if (control.cancel && control.cancel->load(std::memory_order_relaxed)) return false;
@@ -198,30 +265,17 @@ struct Renderer::Impl {
     gpu::PassCounts counts;
     const vec4f* colors =
         device->pass(frame, hasDomain ? &domain : nullptr, buffer.tilesX_, begin, end, stride, counts);
-    const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
-    tbb::parallel_for(0, passTiles, [&](int i) {
-      const int tile = begin + i * stride;
-      buffer.counters_[size_t(tile)] = Counters();
-      const int tx = tile % buffer.tilesX_, ty = tile / buffer.tilesX_;
-      for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
-        for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x) {
-          const size_t p = size_t(y) * size_t(frame.width) + size_t(x);
-          buffer.sum_[p] += colors[p];
-        }
-      ++buffer.tilePasses_[size_t(tile)];
+    RenderStats whole;
+    whole.seconds = timer.seconds();
+    whole.rays = counts.rays;
+    whole.samples = counts.samples;
+    whole.surfaceHits = counts.surfaceHits;
+    whole.isoSamples = counts.isoSamples;
+    whole.aoRays = counts.aoRays;
+    whole.deviceSeconds = counts.kernelSeconds;
+    return runPass(buffer, begin, end, stride, control, whole, [&](int tile, Counters&) {
+      forTilePixels(buffer, frame, tile, [&](int, int, size_t p) { buffer.sum_[p] += colors[p]; });
     });
-    if (control.progress) control.progress(uint64_t(passTiles), uint64_t(passTiles));
-    RenderStats st;
-    st.seconds = timer.seconds();
-    st.rays = counts.rays;
-    st.samples = counts.samples;
-    st.surfaceHits = counts.surfaceHits;
-    st.isoSamples = counts.isoSamples;
-    st.aoRays = counts.aoRays;
-    st.tiles = uint64_t(passTiles);
-    st.deviceSeconds = counts.kernelSeconds;
-    buffer.stats_ += st;
-    return true;
   }
 };
 
@@ -484,57 +538,12 @@ bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassCon
   frame.validate();
   if (buffer.width() != frame.width || buffer.height() != frame.height)
     fail("frame buffer is ", buffer.width(), "x", buffer.height(), ", the frame ", frame.width, "x", frame.height);
-  const PassSetup ps = im.passSetup(frame);
   const int tileCount = buffer.tileCount();
   const int end = control.tileEnd < 0 ? tileCount : std::min(control.tileEnd, tileCount);
   const int stride = std::max(1, control.tileStride);
   const int begin = std::max(0, control.tileBegin);
-  const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
-  if (im.device) return im.devicePass(frame, buffer, begin, end, stride, control);
-  const bool steps = im.scene.debug == DebugView::Steps;
-  const bool pathTraced = im.scene.integration.integrator == Integrator::PathTrace && im.scene.debug == DebugView::None;
-  buffer.stepsView_ = steps;
-  std::atomic<bool> cancelled{false};
-  std::atomic<uint64_t> done{0};
-  Timer timer;
-
-  tbb::parallel_for(0, passTiles, [&](int i) {
-    const int tile = begin + i * stride;
-    Counters& c = buffer.counters_[size_t(tile)];
-    c = Counters();
-    if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
-      cancelled.store(true, std::memory_order_relaxed);
-      return;
-    }
-    const int tx = tile % buffer.tilesX_, ty = tile / buffer.tilesX_;
-    for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
-      for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x) {
-        RayCounts rc;
-        const vec4f acc = pathTraced ? im.tracePathPixel(x, y, frame, ps, rc) : im.tracePixel(x, y, frame, ps, c, rc);
-        addCounts(c, rc);
-        const size_t p = size_t(y) * size_t(frame.width) + size_t(x);
-        buffer.sum_[p] += acc;
-        if (steps) buffer.steps_[p] += float(rc.marchSamples);
-      }
-    ++buffer.tilePasses_[size_t(tile)];
-    const uint64_t n = done.fetch_add(1, std::memory_order_relaxed) + 1;
-    if (control.progress) control.progress(n, uint64_t(passTiles));
-  });
-
-  RenderStats st;
-  st.seconds = timer.seconds();
-  for (int i = 0; i < passTiles; ++i) {
-    const Counters& c = buffer.counters_[size_t(begin + i * stride)];
-    st.rays += c.rays;
-    st.samples += c.samples;
-    st.regionsVisited += c.regions;
-    st.surfaceHits += c.surfaceHits;
-    st.isoSamples += c.isoSamples;
-    st.aoRays += c.aoRays;
-  }
-  st.tiles = done.load();
-  buffer.stats_ += st;
-  return !cancelled.load();
+  return im.device ? im.devicePass(frame, buffer, begin, end, stride, control)
+                   : im.cpuPass(frame, buffer, begin, end, stride, control);
 }
 
 bool Renderer::renderPasses(const Frame& frame, FrameBuffer& buffer, int passes, const PassControl& control) const {
