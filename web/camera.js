@@ -1,6 +1,7 @@
 // The viewer page's camera: orbit, pan and zoom with the mouse on the image, and the reset view.
 
 import { $, viewer } from './session.js';
+import { syncStructureInputs } from './settings.js';
 import { requestRender } from './stream.js';
 
 const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
@@ -99,5 +100,6 @@ export function setupCameraControls() {
 
 export function resetView() {
   viewer.doc.camera = JSON.parse(JSON.stringify(viewer.initialCamera));
+  syncStructureInputs();
   requestRender(false);
 }

@@ -104,6 +104,7 @@ function setupIsoControls() {
     requestRender(false);
   });
   on('iso-colormap', 'change', () => {
+    if ($('iso-colormap').value === 'custom') return;
     const s = iso();
     s.color_map = Object.assign({}, s.color_map || {}, { colormap: $('iso-colormap').value });
     requestRender(false);

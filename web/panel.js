@@ -4,6 +4,7 @@
 import { bounds } from './clip.js';
 import { iso, renderIsoList } from './iso.js';
 import { $, apiJson, isNetworkError, serverGone, showMessage, viewer } from './session.js';
+import { colormapChoices } from './settings.js';
 import { requestRender } from './stream.js';
 import { effectiveRange, layer, layerField, refreshHistogram, tf } from './transfer.js';
 
@@ -29,6 +30,15 @@ document.addEventListener('change', (e) => {
   if (t instanceof HTMLSelectElement && t.selectedOptions.length) t.title = t.selectedOptions[0].title;
 });
 
+/// A colour-map chooser: the built-in maps the scene's description offers for `key`, and "from
+/// file" where the map is given by its points (a preset or a loaded scene's).
+function fillColormaps(select, colormap, key) {
+  const { choices, fallback } = colormapChoices(key);
+  const maps = choices.map((n) => [n, n]);
+  const custom = colormap && typeof colormap === 'object';
+  fillSelect(select, custom ? maps.concat([['custom', 'from file']]) : maps, custom ? 'custom' : colormap || fallback);
+}
+
 /// A field as the choosers name it: "name [units]" where the data records units.
 function fieldLabel(f) {
   return f.units ? `${f.name} [${f.units}]` : f.name;
@@ -38,10 +48,7 @@ export function syncControls() {
   const doc = viewer.doc;
   const fields = viewer.info.fields.map((f) => [f.name, fieldLabel(f)]);
   fillSelect($('field'), fields, layerField());
-  const maps = Object.keys(viewer.info.colormaps).map((n) => [n, n]);
-  const cm = tf().colormap;
-  const custom = cm && typeof cm === 'object';
-  fillSelect($('colormap'), custom ? maps.concat([['custom', 'from file']]) : maps, custom ? 'custom' : cm || 'viridis');
+  fillColormaps($('colormap'), tf().colormap, 'layers[].transfer_function.colormap');
   $('volume-on').checked = doc.volume !== false;
   const [lo, hi] = effectiveRange();
   showRangeValue($('range-lo'), lo);
@@ -54,8 +61,7 @@ export function syncControls() {
   const s = iso();
   fillSelect($('iso-field'), [['', '(volume field)']].concat(fields), s.field || '');
   fillSelect($('iso-color-field'), [['', '(colour per value)']].concat(fields), s.color_field || '');
-  const isoMap = s.color_map && typeof s.color_map.colormap === 'string' ? s.color_map.colormap : 'cool-to-warm';
-  fillSelect($('iso-colormap'), maps, isoMap);
+  fillColormaps($('iso-colormap'), (s.color_map || {}).colormap || 'cool-to-warm', 'iso.color_map.colormap');
   renderIsoList();
   const clip = doc.clip || {};
   const plane = (clip.planes || [])[0];

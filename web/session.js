@@ -8,6 +8,7 @@ export const $ = (id) => document.getElementById(id);
 export const viewer = {
   info: null,        // GET /api/info
   vocabulary: [],    // GET /api/vocabulary: the scalar settings of scene files
+  structure: [],     // GET /api/structure: the structured keys of scene files
   doc: null,         // the scene document being edited
   initialCamera: null,
   histogram: null,

@@ -1,5 +1,7 @@
 // The viewer page's controls bound to settings of the scene file by name (data-setting="KEY"):
-// choices, checkboxes and number fields, with the limits and help the server describes.
+// choices, checkboxes and number fields, with the limits and help the server describes; and those
+// bound to structured keys (data-structure="camera.fov"), with the limits, choices and help of the
+// server's description of the scene's structure.
 
 import { fillSelect } from './panel.js';
 import { showMessage, viewer } from './session.js';
@@ -43,6 +45,7 @@ export function syncSettingBoxes() {
   // The path tracer's settings show while it is the integrator.
   const pathTraced = settingValue('integration.integrator') === 'pathtrace';
   for (const row of document.querySelectorAll('.path-only')) row.hidden = !pathTraced;
+  syncStructureInputs();
 }
 
 export function setupSettingBoxes() {
@@ -71,6 +74,76 @@ export function setupSettingBoxes() {
       }
       setSettingValue(input.dataset.setting, value);
       syncSettingBoxes();
+      requestRender(false);
+    });
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Structured keys (GET /api/structure)
+
+/// The description of a structured key: "iso.values" as the server names it, or a key of a camera
+/// or transfer function under the key that holds one ("camera.fov", "iso.color_map.colormap").
+export function structureEntry(path) {
+  const exact = viewer.structure.find((e) => !e.object && e.key === path);
+  if (exact) return exact;
+  const dot = path.lastIndexOf('.');
+  if (dot < 0) return undefined;
+  const owner = structureEntry(path.slice(0, dot));
+  return owner && viewer.structure.find((e) => e.object === owner.type && e.key === path.slice(dot + 1));
+}
+
+/// The built-in colour maps a transfer function's colormap key offers, and its default.
+export function colormapChoices(path) {
+  const entry = structureEntry(path);
+  if (entry && entry.choices) return { choices: entry.choices, fallback: entry.default };
+  return { choices: Object.keys(viewer.info.colormaps), fallback: 'viridis' };
+}
+
+/// The interval a described number lies in, as "(0, 180)" or "[0, ∞)"; and whether v lies in it.
+function interval(entry) {
+  const lo = entry.min === undefined ? '(-∞' : `${entry.min_exclusive ? '(' : '['}${entry.min}`;
+  const hi = entry.max === undefined ? '∞)' : `${entry.max}${entry.max_exclusive ? ')' : ']'}`;
+  return `${lo}, ${hi}`;
+}
+
+function within(entry, v) {
+  if (!Number.isFinite(v)) return false;
+  if (entry.min !== undefined && (entry.min_exclusive ? !(v > entry.min) : !(v >= entry.min))) return false;
+  return entry.max === undefined || (entry.max_exclusive ? v < entry.max : v <= entry.max);
+}
+
+const structureInputs = () => document.querySelectorAll('input[type=number][data-structure]');
+
+/// Number fields bound to a structured key, shown from the document (the key's default where it
+/// has none); disabled while the setting data-unless names is on (the field of view of an
+/// orthographic camera).
+export function syncStructureInputs() {
+  for (const input of structureInputs()) {
+    const entry = structureEntry(input.dataset.structure);
+    let v = settingValue(input.dataset.structure);
+    if (v === undefined && entry) v = entry.default;
+    if (typeof v === 'number') input.value = Number(v.toPrecision(6));
+    if (input.dataset.unless) input.disabled = !!settingValue(input.dataset.unless);
+  }
+}
+
+export function setupStructureInputs() {
+  for (const input of structureInputs()) {
+    const key = input.dataset.structure;
+    const entry = structureEntry(key);
+    if (!entry) continue;
+    input.title = entry.help;
+    if (entry.min !== undefined) input.min = entry.min;
+    if (entry.max !== undefined) input.max = entry.max;
+    input.addEventListener('change', () => {
+      if (input.value.trim() === '') return; // being typed: nothing to set yet
+      const value = Number(input.value);
+      if (!within(entry, value)) {
+        showMessage(`${key} must be in ${interval(entry)}`);
+        return;
+      }
+      setSettingValue(key, value);
       requestRender(false);
     });
   }

@@ -9,7 +9,7 @@ import { fillSelect, setupRangeBoxes, syncControls } from './panel.js';
 import './picture.js';
 import { startSeries } from './series.js';
 import { $, apiJson, isNetworkError, serverGone, showMessage, viewer } from './session.js';
-import { fillChoices, setupSettingBoxes } from './settings.js';
+import { fillChoices, setupSettingBoxes, setupStructureInputs } from './settings.js';
 import { readStream, requestRender } from './stream.js';
 import { setupEditor } from './transfer.js';
 
@@ -22,6 +22,7 @@ async function start() {
   try {
     viewer.info = await apiJson('/api/info');
     viewer.vocabulary = await apiJson('/api/vocabulary');
+    viewer.structure = await apiJson('/api/structure');
   } catch (e) {
     if (isNetworkError(e)) serverGone();
     else showMessage(`Cannot reach the viewer: ${e.message}`);
@@ -42,6 +43,7 @@ async function start() {
   setupEditor();
   setupControls();
   setupSettingBoxes();
+  setupStructureInputs();
   setupRangeBoxes();
   $('banner-close').addEventListener('click', () => showMessage(''));
   readStream();

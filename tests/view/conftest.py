@@ -158,3 +158,36 @@ def series_dataset(cli, tmp_path):
     subprocess.run([cli, "-q", "generate", "--steps", "3", "-n", "20000", "-o", str(folder / "s.cells")], check=True,
                    capture_output=True)
     return str(folder / "s_*.cells")
+
+
+def holds(got, want, where="scene"):
+    """Every key of `want` is in `got` with an equal value (numbers within 1e-6 relative: the scene
+    keeps float32 values)."""
+    if isinstance(want, dict):
+        assert isinstance(got, dict), (where, got)
+        for k in want:
+            assert k in got, (where + "." + k, "missing")
+            holds(got[k], want[k], where + "." + k)
+    elif isinstance(want, list):
+        assert isinstance(got, list) and len(got) == len(want), (where, got, want)
+        for i, (x, y) in enumerate(zip(got, want)):
+            holds(x, y, "%s[%d]" % (where, i))
+    elif isinstance(want, float) or isinstance(got, float):
+        assert got == pytest.approx(want, rel=1e-6, abs=1e-9), (where, got, want)
+    else:
+        assert got == want, (where, got, want)
+
+
+@pytest.fixture
+def scene_example(cli):
+    """The library's example scene (`exabricks keys --example`: every structured key of scene
+    files at its example value) as the viewer takes it: without its mesh file (the viewer reads
+    no file a request names) and its input (the viewer renders the dataset it serves). Returns
+    (that document, the whole example)."""
+    example = json.loads(subprocess.run([cli, "keys", "--example"], check=True, capture_output=True,
+                                        text=True).stdout)
+    uploadable = json.loads(json.dumps(example))
+    uploadable["meshes"] = [m for m in uploadable["meshes"] if "file" not in m]
+    assert uploadable["meshes"], "the example has no inline mesh"
+    del uploadable["input"]
+    return uploadable, example

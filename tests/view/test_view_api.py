@@ -7,6 +7,7 @@ import subprocess
 import time
 
 import pytest
+from conftest import holds
 
 
 def small_scene(viewer, **frame):
@@ -347,3 +348,47 @@ def test_the_snapshot_carries_the_legends_the_scene_asks_for(start_viewer, cli, 
     # The scene the server reports (what the page saves) keeps the key.
     status, saved, _ = v.request("GET", "/api/scene")
     assert status == 200 and json.loads(saved)["legends"]["color_bar"] is True
+
+
+def key_paths(doc, prefix=""):
+    """Every key path of a document, "[]" standing for each item of a list."""
+    paths = set()
+    if isinstance(doc, dict):
+        for k, value in doc.items():
+            path = prefix + "." + k if prefix else k
+            paths |= {path} | key_paths(value, path)
+    elif isinstance(doc, list):
+        for value in doc:
+            paths |= {prefix + "[]"} | key_paths(value, prefix + "[]")
+    return paths
+
+
+def test_every_described_key_of_a_scene_comes_back_from_the_viewer(start_viewer, cli, scene_example):
+    v = start_viewer()
+    structure = v.json("GET", "/api/structure")
+    assert structure == json.loads(subprocess.run([cli, "keys", "--json"], check=True, capture_output=True,
+                                                  text=True).stdout)["structure"]
+    status, _, _ = v.request("GET", "/api/structure", token=False)
+    assert status == 403
+    uploadable, example = scene_example
+    # The example uses every key a scene file holds (those read only, or kept out of documents, aside).
+    paths = key_paths(example)
+    for entry in structure:
+        if entry.get("written") is False or entry.get("document") is False:
+            continue
+        if "object" in entry:
+            owners = [e["key"] for e in structure if e["type"] == entry["object"] and "object" not in e]
+            assert any(o + "." + entry["key"] in paths for o in owners), entry
+        else:
+            assert entry["key"] in paths, entry
+    # A mesh file named by a request is refused, saying why; the rest comes back whole.
+    status, data, _ = v.request("POST", "/api/scene", json.dumps(example))
+    assert status == 400 and b"reads no file" in data and b"triangle.ply" in data, data
+    r = v.json("POST", "/api/scene", json.dumps(uploadable))
+    assert r["has_camera"] is True
+    holds(r["document"], uploadable, "POST /api/scene")
+    assert r["document"].get("input", "") in ("", "<embedded>", v.info()["input"])
+    # Rendered, it is the scene in effect, whole.
+    doc = dict(r["document"], frame=dict(r["document"]["frame"], width=64, height=48, samples_per_pixel=1))
+    v.wait_final(v.render(doc))
+    holds(v.json("GET", "/api/scene"), uploadable, "GET /api/scene")

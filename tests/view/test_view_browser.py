@@ -14,6 +14,7 @@ import time
 
 import numpy as np
 import pytest
+from conftest import holds
 
 selenium = pytest.importorskip("selenium", reason="python3-selenium is not installed (see the README's test command)")
 from selenium import webdriver  # noqa: E402
@@ -364,3 +365,77 @@ def test_path_tracing_from_the_page_equals_the_command_line(start_viewer, cli, b
     banner = wait_for(browser, lambda: browser.find_element(By.ID, "banner").is_displayed(), 10, "the banner")
     assert banner and "pathtrace.albedo" in browser.find_element(By.ID, "banner").text
     assert json.loads(v.request("GET", "/api/scene")[1])["pathtrace"]["albedo"] == pytest.approx(0.8)
+
+
+def test_a_loaded_scene_keeps_every_described_key(start_viewer, browser, scene_example, tmp_path, artifacts):
+    """A scene loaded through the page (the example of every structured key) renders, and the scene
+    in effect (what the page sent) still holds every key at its value, those the page does not edit
+    included; a scene naming a mesh file is refused in the banner and leaves the view as it was."""
+    v = start_viewer()
+    browser.get(v.url + "&size=%d" % SIZE)
+    first = wait_refined(browser)
+    uploadable, example = scene_example
+    load = browser.find_element(By.ID, "load-scene")
+    (tmp_path / "example.json").write_text(json.dumps(example))
+    load.send_keys(str(tmp_path / "example.json"))
+    wait_for(browser, lambda: browser.find_element(By.ID, "banner").is_displayed(), 10, "the banner")
+    assert "reads no file" in browser.find_element(By.ID, "banner").text
+    assert "camera_path" not in json.loads(v.request("GET", "/api/scene")[1])
+    browser.execute_script("window.exabricksViewer.metrics.errors.length = 0")
+    (tmp_path / "uploadable.json").write_text(json.dumps(uploadable))
+    load.send_keys(str(tmp_path / "uploadable.json"))
+    loaded = wait_refined(browser, first["request"])
+    browser.save_screenshot(str(artifacts / "viewer-example-scene.png"))
+    assert browser.execute_script("return window.exabricksViewer.lastRequest") == loaded["request"]
+    holds(json.loads(v.request("GET", "/api/scene")[1]), uploadable, "the scene in effect")
+    # The panel shows what it edits of it; the corners show its background (sRGB 32, 64, 128).
+    assert Select(browser.find_element(By.ID, "colormap")).first_selected_option.get_attribute("value") == "inferno"
+    assert Select(browser.find_element(By.ID, "iso-colormap")).first_selected_option.get_attribute("value") == "custom"
+    fov = browser.find_element(By.ID, "fov")
+    assert not fov.is_enabled() and float(fov.get_attribute("value")) == 35  # an orthographic camera
+    corner = canvas_pixels(browser)[1, 1].astype(int)
+    assert np.abs(corner - [32, 64, 128]).max() <= 6, corner
+    # An edit of one key leaves the others as they were.
+    browser.find_element(By.CSS_SELECTOR, "input[data-setting='legends.color_bar']").click()
+    wait_refined(browser, loaded["request"])
+    edited = json.loads(v.request("GET", "/api/scene")[1])
+    assert edited["legends"]["color_bar"] is True
+    holds(edited, uploadable, "the scene after an edit")
+    assert browser.execute_script("return window.exabricksViewer.metrics.errors") == []
+
+
+def test_structured_controls_take_their_limits_and_choices_from_the_description(start_viewer, browser):
+    """The colour-map choosers offer the choices the scene's description gives the colormap key of
+    a transfer function, and the field of view takes its limits and help from camera.fov's: a value
+    outside (0, 180) is refused in the banner, one inside sets the camera's."""
+    v = start_viewer()
+    browser.get(v.url + "&size=%d" % SIZE)
+    first = wait_refined(browser)
+    structure = v.json("GET", "/api/structure")
+    assert browser.execute_script("return window.exabricksViewer.structure") == structure
+    colormap = next(e for e in structure if e.get("object") == "transfer_function" and e["key"] == "colormap")
+    for chooser in ("colormap", "iso-colormap"):
+        options = Select(browser.find_element(By.ID, chooser)).options
+        assert [o.get_attribute("value") for o in options] == colormap["choices"], chooser
+    described = next(e for e in structure if e.get("object") == "camera" and e["key"] == "fov")
+    assert described["min_exclusive"] and described["max_exclusive"]
+    fov = browser.find_element(By.ID, "fov")
+    assert float(fov.get_attribute("min")) == described["min"] and float(fov.get_attribute("max")) == described["max"]
+    assert fov.get_attribute("title") == described["help"] and fov.is_enabled()
+    camera = browser.execute_script("return window.exabricksViewer.doc.camera")
+    assert float(fov.get_attribute("value")) == pytest.approx(camera["fov"])
+    for wrong in ("180", "0"):
+        fov.clear()
+        fov.send_keys(wrong + Keys.ENTER)
+        wait_for(browser, lambda: browser.find_element(By.ID, "banner").is_displayed(), 10, "the banner")
+        assert "camera.fov must be in (0, 180)" in browser.find_element(By.ID, "banner").text
+        assert browser.execute_script("return window.exabricksViewer.doc.camera.fov") == camera["fov"]
+        browser.find_element(By.ID, "banner-close").click()
+    browser.execute_script("window.exabricksViewer.metrics.errors.length = 0")
+    fov.clear()
+    fov.send_keys("25" + Keys.ENTER)
+    wait_refined(browser, first["request"])
+    assert json.loads(v.request("GET", "/api/scene")[1])["camera"]["fov"] == 25
+    browser.find_element(By.ID, "reset-view").click()
+    wait_for(browser, lambda: float(fov.get_attribute("value")) == pytest.approx(camera["fov"]), 10, "the reset")
+    assert browser.execute_script("return window.exabricksViewer.metrics.errors") == []
