@@ -71,12 +71,17 @@ def _attribute(setting, value):
     return value
 
 
+# The structured keys of a scene file (camera, layers, transfer functions, iso, meshes, clipping,
+# camera path) and the device choice, as the library describes them.
+_STRUCTURE = json.loads(_core.scene_structure())
+
+
 def scene_structure():
     """The structured keys of a scene file and the device choice, as the library describes them:
     a list of dicts with "key" (a path; "[]" stands for a list's items; the keys of the camera
     and transfer-function objects carry "object"), "type", "kind", "min"/"max", "choices",
     "default", "example", "required" and "help" (see `exabricks keys`)."""
-    return json.loads(_core.scene_structure())
+    return copy.deepcopy(_STRUCTURE)
 
 
 def scene_vocabulary():
@@ -135,6 +140,12 @@ class TransferFunction:
 
     @classmethod
     def from_dict(cls, d):
+        """A transfer function from its scene-file form (the keys `exabricks keys` lists under
+        <transfer_function>); an unknown key raises ValueError, as the scene reader refuses it."""
+        known = [e["key"] for e in _STRUCTURE if e.get("object") == "transfer_function"]
+        for key in d:
+            if key not in known:
+                raise ValueError('transfer function: unknown key "%s" (known: %s)' % (key, ", ".join(known)))
         cm = d.get("colormap", "viridis")
         if isinstance(cm, dict):
             cm = [tuple(p) for p in cm["points"]]

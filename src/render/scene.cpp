@@ -232,6 +232,15 @@ json cameraJson(const Camera& c) {
 /// A camera object; false when it has no position. Errors name the key.
 bool readCamera(const Reader& c, Camera& cam) {
   c.only("camera");
+  // The keys left out take the described defaults.
+  cam = Camera();
+  for (const char* k : {"camera.look_at", "camera.up"}) {
+    const json& d = structuredDefault(k);
+    (k[7] == 'u' ? cam.up : cam.lookAt) = vec3d(d[0].get<double>(), d[1].get<double>(), d[2].get<double>());
+  }
+  cam.fovy = structuredDefault("camera.fov").get<double>();
+  cam.orthographic = structuredDefault("camera.orthographic").get<bool>();
+  cam.orthoHeight = structuredDefault("camera.ortho_height").get<double>();
   const bool hasPosition = c.vec3("position", cam.position);
   c.vec3("look_at", cam.lookAt);
   c.vec3("up", cam.up);

@@ -9,6 +9,7 @@
 
 #include <functional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace exa {
@@ -40,6 +41,8 @@ template <typename Owner> struct Setting {
 };
 
 const std::vector<Setting<Scene>>& sceneSettings();
+/// The default the description gives a structured key ("camera.up"); null where it has none.
+const nlohmann::json& structuredDefault(std::string_view key);
 const std::vector<Setting<Frame>>& frameSettings();
 
 /// Throws exa::Error when a number is outside a setting's range (or not an integer where one is

@@ -5,6 +5,7 @@
 #include "exabricks/render/transfer_function.h"
 
 #include "scene_settings.h"
+#include "tf_json.h"
 
 #include <algorithm>
 #include <cmath>
@@ -58,15 +59,14 @@ std::vector<json> cameraKeys() {
   const char* c = "camera";
   return {
       member(c, required(vector("position", "point", nullptr, {205.5, 130.5, 120.25}, "Where the eye is (world)"))),
-      member(c, vector("look_at", "point", nullptr, {48.0, 43.75, 43.5},
-                       "The point the view is centred on (world; default: the data's centre)")),
+      member(c, vector("look_at", "point", {0.0, 0.0, 0.0}, {48.0, 43.75, 43.5},
+                       "The point the view is centred on (world)")),
       member(c, vector("up", "direction", {0.0, 0.0, 1.0}, {0.0, 1.0, 0.0}, "The image's up direction (world)")),
       member(c, ranged(entry("fov", "number", 40.0, 35.0, "Vertical field of view in degrees (perspective)"), 0.0,
                        180.0, true, true)),
       member(c, entry("orthographic", "boolean", false, true, "An orthographic (parallel) projection")),
-      member(c, ranged(entry("ortho_height", "number", nullptr, 90.5,
-                             "World height of an orthographic view (default: the data's extent)"),
-                       0.0, kInf, true, false)),
+      member(c, ranged(entry("ortho_height", "number", 1.0, 90.5, "World height of an orthographic view"), 0.0, kInf,
+                       true, false)),
   };
 }
 
@@ -140,7 +140,7 @@ std::vector<json> documentKeys() {
             "A colour per iso-value (sRGB); none: coloured by color_field, else by the layer's map"),
       vector("iso.colors[]", "color", nullptr, {1.0, 0.5, 0.25}, "An iso-surface's colour (sRGB, each in [0, 1])"),
       entry("iso.color_field", "string", "", "scalar", "Colour the iso-surfaces by this field through color_map"),
-      entry("iso.color_map", "transfer_function", nullptr,
+      entry("iso.color_map", "transfer_function", transferFunctionToJson(IsoSurfaces().colorTf),
             {{"colormap", {{"points", {{0.0, 0.0, 0.0, 1.0}, {1.0, 1.0, 0.0, 0.0}}}}}, {"log", false}},
             "The map that colours iso-surfaces by color_field"),
       entry("meshes", "list", json::array(), meshesExample(), "Triangle meshes drawn with the volume"),
@@ -273,6 +273,12 @@ std::vector<std::string> knownSceneKeys(const std::string& path) {
   for (const Setting<Frame>& s : frameSettings())
     add(s.section(), s.leaf());
   return keys;
+}
+
+const json& structuredDefault(std::string_view key) {
+  const json* e = findStructured(key);
+  if (!e) fail("no scene key \"", key, "\"");
+  return (*e)["default"];
 }
 
 std::string structuredKeyHelp(const std::string& key) {

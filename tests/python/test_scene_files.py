@@ -364,3 +364,37 @@ def test_exabricks_keys_prints_the_description(cli):
     for s in eb.scene_vocabulary() + eb.scene_structure():
         assert s["help"] in text, s["key"]
     assert "camera_path.keyframes[].time" in text and "<camera>.fov  (number: (0, 180); default 40.0)" in text
+
+
+def test_python_defaults_are_the_described_ones():
+    """Camera(), TransferFunction() and a Scene's structured attributes start where the library's
+    description says the scene file's keys do."""
+    described = {("<%s>.%s" % (s["object"], s["key"]) if "object" in s else s["key"]): s["default"]
+                 for s in eb.scene_structure()}
+    camera = eb.Camera()
+    for key in ("look_at", "up", "fov", "orthographic", "ortho_height"):
+        value = getattr(camera, key)
+        assert_same(described["<camera>." + key], list(value) if isinstance(value, tuple) else value, key)
+    tf = eb.TransferFunction().to_dict()
+    for key in ("colormap", "log", "opacity_scale"):
+        assert tf[key] == described["<transfer_function>." + key], key
+    tf = eb.TransferFunction()
+    assert tf.opacity is None and tf.range is None and tf.albedo is None
+    assert described["<transfer_function>.opacity"] is None and described["<transfer_function>.range"] is None
+    scene = eb.Scene(eb.load())
+    assert scene.iso_values == described["iso.values"] and scene.iso_colors == described["iso.colors"]
+    assert scene.iso_field == described["iso.field"] and scene.iso_color_field == described["iso.color_field"]
+    assert_same(described["iso.color_map"], scene.iso_color_map.to_dict())
+    assert list(scene.background) == described["background"] and scene.clip_box == described["clip.box"]
+    assert scene.clip_planes == described["clip.planes"] and scene.meshes == described["meshes"]
+    with pytest.raises(ValueError, match=r'unknown key "colour" \(known: colormap, opacity, albedo, range, log, '
+                                         r'opacity_scale\)'):
+        eb.TransferFunction.from_dict({"colour": "red"})
+
+
+def test_a_camera_without_up_takes_the_described_one(tmp_path):
+    text = _core.scene_json(json.dumps({"camera": {"position": [100, 20, 30]}}), "s.json")
+    camera = json.loads(text)["camera"]
+    described = {s["key"]: s["default"] for s in eb.scene_structure() if s.get("object") == "camera"}
+    for key in ("look_at", "up", "fov", "orthographic", "ortho_height"):
+        assert camera[key] == described[key], key
