@@ -109,14 +109,14 @@ display.IsoValues = []
 
 # 4. Lighting.
 display.Shade = 1
-display.Shading = "Analytic"
+display.Shading = "analytic"
 compare("Shade, Shading Analytic", "analytic", ["--spp", "3", "--shading", "analytic"])
-display.Shading = "Smooth"
+display.Shading = "smooth"
 compare("Shade, Shading Smooth", "smooth", ["--spp", "3", "--shading", "smooth"])
 display.Shade = 0
 
 # 4b. Path tracing: the same paths as the command line's (same pixels, passes and seed).
-display.Integrator = "Path Tracing"
+display.Integrator = "pathtrace"
 display.Albedo = 0.6
 display.SunIntensity = 3.0
 display.SunDirection = [1.0, -0.5, -1.0]
@@ -139,7 +139,7 @@ compare("Albedo 1.5 refused", "pathtrace_refused",
          "--environment", "0.2,0.25,0.3"])
 display.Albedo = 0.8
 display.SunIntensity = 0.0
-display.Integrator = "Ray Marching"
+display.Integrator = "march"
 
 # 5. The model was built once, whatever changed since; a new colour map and opacity function
 # change the picture, not the model.

@@ -24,9 +24,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 class vtkExaBricksRepresentation::vtkInternals {
 public:
@@ -46,6 +48,7 @@ public:
   // The sky gradient's properties, applied while it is on.
   bool SkyGradient = false;
   exa::vec3f Sky{1.f}, Ground{1.f};
+  std::string SceneJson; ///< the scene document last asked for
 };
 
 namespace {
@@ -56,10 +59,6 @@ vtkMultiProcessController* renderingProcesses() {
 }
 
 constexpr int kMaxClipPlanes = 64;
-const char* const kShadingNames[] = {"Smooth", "Analytic", "Central", "None"};
-const exa::Shading kShadings[] = {exa::Shading::Smooth, exa::Shading::Analytic, exa::Shading::Central,
-                                  exa::Shading::None};
-const char* const kDevices[] = {"auto", "cpu", "cuda"};
 
 // Whether the view is capturing a screenshot: vtkPVView keeps the flag for its subclasses, and a
 // member pointer formed through a subclass reads it.
@@ -88,7 +87,8 @@ void vtkExaBricksRepresentation::PrintSelf(ostream& os, vtkIndent indent) {
   os << indent << "Field: " << this->Internals->BuiltField << "\n";
   os << indent << "Model builds: " << this->Internals->Builds << "\n";
   os << indent << "Sampling rate: " << s.rate << "\n";
-  os << indent << "Shading: " << kShadingNames[this->GetShading()] << "\n";
+  os << indent << "Shading: " << exa::nameOf(s.shading) << "\n";
+  os << indent << "Integrator: " << exa::nameOf(s.integrator) << "\n";
   os << indent << "Ambient occlusion rays: " << s.aoRays << "\n";
   os << indent << "Iso values: " << s.isoValues.size() << "\n";
   os << indent << "Samples per pixel: " << s.samplesPerPixel << "\n";
@@ -244,22 +244,6 @@ void vtkExaBricksRepresentation::SetSamplingRate(double rate) {
 
 double vtkExaBricksRepresentation::GetSamplingRate() { return this->Mapper->GetSettings().rate; }
 
-void vtkExaBricksRepresentation::SetShading(int shading) {
-  if (shading < 0 || shading > 3) {
-    vtkErrorMacro("ExaBricks: Shading is 0 (Smooth), 1 (Analytic), 2 (Central) or 3 (None), not " << shading);
-    return;
-  }
-  exa::paraview::Settings s = this->Mapper->GetSettings();
-  s.shading = kShadings[shading];
-  this->Mapper->SetSettings(s);
-}
-
-int vtkExaBricksRepresentation::GetShading() {
-  for (int i = 0; i < 4; ++i)
-    if (kShadings[i] == this->Mapper->GetSettings().shading) return i;
-  return 0;
-}
-
 void vtkExaBricksRepresentation::SetAmbientOcclusionRays(int rays) {
   if (rays < 0 || rays > 1024) {
     vtkErrorMacro("ExaBricks: Ambient Occlusion Rays must be 0 (off) to 1024, not " << rays);
@@ -286,6 +270,26 @@ bool validSetting(vtkObject* self, const char* key, double value) {
   }
 }
 
+/// The value a choice's name stands for, as the library names it; false (and the library's
+/// message) for another name.
+template <typename E> bool parseChoice(vtkObject* self, const char* what, const char* name, E& value) {
+  try {
+    value = exa::parseName<E>(name ? name : "", what);
+    return true;
+  } catch (const exa::Error& e) {
+    vtkErrorWithObjectMacro(self, "ExaBricks: " << e.what());
+    return false;
+  }
+}
+
+/// A choice as state files saved it: by name, or (files saved while the choices were numbered
+/// enumerations) by its index in the enumeration of then, `earlier`.
+const char* savedChoice(const char* value, std::initializer_list<const char*> earlier) {
+  if (value && value[0] >= '0' && value[0] <= '9' && value[1] == '\0' && size_t(value[0] - '0') < earlier.size())
+    return earlier.begin()[value[0] - '0'];
+  return value;
+}
+
 /// A vector setting checked against the scene vocabulary's kind; false (and an error) when refused.
 bool validVector(vtkObject* self, const char* key, const exa::vec3f& value) {
   try {
@@ -308,19 +312,25 @@ void setPathNumber(vtkObject* self, vtkExaBricksVolumeMapper* mapper, const char
 
 } // namespace
 
-void vtkExaBricksRepresentation::SetIntegrator(int integrator) {
-  if (integrator != 0 && integrator != 1) {
-    vtkErrorMacro("ExaBricks: Integrator is 0 (ray marching) or 1 (path tracing), not " << integrator);
-    return;
-  }
+void vtkExaBricksRepresentation::SetShading(const char* shading) {
+  exa::Shading value;
+  if (!parseChoice(this, "Shading", savedChoice(shading, {"smooth", "analytic", "central", "none"}), value)) return;
   exa::paraview::Settings s = this->Mapper->GetSettings();
-  s.integrator = integrator == 1 ? exa::Integrator::PathTrace : exa::Integrator::March;
+  s.shading = value;
   this->Mapper->SetSettings(s);
 }
 
-int vtkExaBricksRepresentation::GetIntegrator() {
-  return this->Mapper->GetSettings().integrator == exa::Integrator::PathTrace ? 1 : 0;
+const char* vtkExaBricksRepresentation::GetShading() { return exa::nameOf(this->Mapper->GetSettings().shading); }
+
+void vtkExaBricksRepresentation::SetIntegrator(const char* integrator) {
+  exa::Integrator value;
+  if (!parseChoice(this, "Integrator", savedChoice(integrator, {"march", "pathtrace"}), value)) return;
+  exa::paraview::Settings s = this->Mapper->GetSettings();
+  s.integrator = value;
+  this->Mapper->SetSettings(s);
 }
+
+const char* vtkExaBricksRepresentation::GetIntegrator() { return exa::nameOf(this->Mapper->GetSettings().integrator); }
 
 void vtkExaBricksRepresentation::SetAlbedo(double v) {
   setPathNumber(this, this->Mapper, "pathtrace.albedo", v, &exa::PathTracing::albedo);
@@ -455,20 +465,26 @@ void vtkExaBricksRepresentation::SetSamplesPerPixel(int samples) {
 
 int vtkExaBricksRepresentation::GetSamplesPerPixel() { return this->Mapper->GetSettings().samplesPerPixel; }
 
-void vtkExaBricksRepresentation::SetDevice(int device) {
-  if (device < 0 || device > 2) {
-    vtkErrorMacro("ExaBricks: Device is 0 (auto), 1 (cpu) or 2 (cuda), not " << device);
+void vtkExaBricksRepresentation::SetDevice(const char* device) {
+  device = savedChoice(device, {"auto", "cpu", "cuda"});
+  const std::vector<std::string>& choices = exa::deviceChoices();
+  if (!device || std::find(choices.begin(), choices.end(), device) == choices.end()) {
+    std::string names;
+    for (const std::string& c : choices)
+      names += (names.empty() ? "" : ", ") + c;
+    vtkErrorMacro("ExaBricks: Device is '" << (device ? device : "") << "' (choose from: " << names << ")");
     return;
   }
   exa::paraview::Settings s = this->Mapper->GetSettings();
-  s.device = kDevices[device];
+  s.device = device;
   this->Mapper->SetSettings(s);
 }
 
-int vtkExaBricksRepresentation::GetDevice() {
-  for (int i = 0; i < 3; ++i)
-    if (this->Mapper->GetSettings().device == kDevices[i]) return i;
-  return 0;
+const char* vtkExaBricksRepresentation::GetDevice() { return this->Mapper->GetSettings().device.c_str(); }
+
+const char* vtkExaBricksRepresentation::GetSceneDocument() {
+  this->Internals->SceneJson = this->Mapper->GetSceneDocument();
+  return this->Internals->SceneJson.c_str();
 }
 
 int vtkExaBricksRepresentation::GetModelBuilds() { return this->Internals->Builds; }

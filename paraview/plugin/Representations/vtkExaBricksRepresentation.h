@@ -44,9 +44,9 @@ public:
   /// it was.
   void SetSamplingRate(double rate);
   double GetSamplingRate();
-  /// 0 Smooth, 1 Analytic, 2 Central, 3 None: how the volume is lit while Shade is on.
-  void SetShading(int shading);
-  int GetShading();
+  /// How the volume is lit while Shade is on, named as scene files name it (scene key shading).
+  void SetShading(const char* shading);
+  const char* GetShading();
   void SetAmbientOcclusionRays(int rays);
   int GetAmbientOcclusionRays();
   void SetNumberOfIsoValues(int count);
@@ -60,13 +60,13 @@ public:
   int GetNumberOfClipPlanes();
   void SetSamplesPerPixel(int samples);
   int GetSamplesPerPixel();
-  /// 0 auto (the GPU where one can be used), 1 cpu, 2 cuda.
-  void SetDevice(int device);
-  int GetDevice();
-  /// 0 the ray marcher, 1 the volume path tracer (scene key integration.integrator), with its
-  /// medium and lights (the scene's pathtrace keys).
-  void SetIntegrator(int integrator);
-  int GetIntegrator();
+  /// One of exa::deviceChoices(): auto (the GPU where one can be used), cpu, cuda, portable.
+  void SetDevice(const char* device);
+  const char* GetDevice();
+  /// The ray marcher or the volume path tracer, named as scene files name them (scene key
+  /// integration.integrator), with its medium and lights (the scene's pathtrace keys).
+  void SetIntegrator(const char* integrator);
+  const char* GetIntegrator();
   void SetAlbedo(double albedo);
   void SetAnisotropy(double g);
   void SetBounces(int bounces);
@@ -90,6 +90,10 @@ public:
   const char* GetPartsInformation();
   int GetRefinementPasses();
   const char* GetDeviceInUse();
+  /// The scene document of the last render (exa::writeSceneJson: the view's camera and size, the
+  /// layer and transfer function of the colour map and opacity function, iso-values, clip planes,
+  /// shading, path tracing, ...); "{}" before the first.
+  const char* GetSceneDocument();
   ///@}
 
 protected:

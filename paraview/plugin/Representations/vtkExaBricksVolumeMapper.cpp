@@ -197,6 +197,10 @@ void vtkExaBricksVolumeMapper::SetSettings(const exa::paraview::Settings& settin
   this->Modified();
 }
 
+std::string vtkExaBricksVolumeMapper::GetSceneDocument() const {
+  return this->Document ? exa::writeSceneJson(*this->Document) : std::string("{}");
+}
+
 double* vtkExaBricksVolumeMapper::GetBounds() {
   if (this->Engine)
     std::copy(this->Engine->bounds, this->Engine->bounds + 6, this->Bounds);
@@ -454,6 +458,10 @@ void vtkExaBricksVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol) {
     frame.rate = this->Options.rate;
     frame.samplesPerPixel = this->Options.samplesPerPixel;
     frame.validate();
+    this->Document = std::make_unique<exa::SceneDocument>();
+    this->Document->scene = scene;
+    this->Document->frame = frame;
+    this->Document->hasCamera = true;
     if (interactive)
       this->RenderDraft(e, window, frame, depth, 1.0 / updateRate);
     else

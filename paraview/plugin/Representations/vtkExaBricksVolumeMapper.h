@@ -44,7 +44,7 @@ struct Settings {
   std::vector<float> isoValues;              ///< iso-surfaces of the rendered array
   std::vector<ClipPlane> clipPlanes;         ///< each removes the half-space its normal points into
   int samplesPerPixel = 8;                   ///< the passes a still image accumulates
-  std::string device = "auto";               ///< "auto", "cpu" or "cuda" (exa::selectDevice)
+  std::string device = "auto";               ///< one of exa::deviceChoices() (exa::selectDevice)
   Integrator integrator = Integrator::March; ///< the ray marcher or the volume path tracer
   PathTracing pathTracing;                   ///< the path tracer's medium and lights
   friend bool operator==(const Settings&, const Settings&) = default;
@@ -93,6 +93,9 @@ public:
   bool GetLastRenderWasDraft() const { return this->ShownDraft; }
   int GetDraftDivisor() const { return this->DraftDivisor; }
   const char* GetDeviceInUse() const { return this->DeviceInUse.c_str(); }
+  /// The scene document the last render drew (its scene, camera and full-resolution frame) as
+  /// exa::writeSceneJson writes it; "{}" before the first.
+  std::string GetSceneDocument() const;
   ///@}
 
   void Render(vtkRenderer* ren, vtkVolume* vol) override;
@@ -136,6 +139,9 @@ private:
   std::string DeviceChoice;
   std::string DeviceInUse = "cpu";
   bool DeviceAwaitsScene = false; ///< on the CPU because a scene needed it, with a GPU at hand
+
+  // What the last render drew.
+  std::unique_ptr<exa::SceneDocument> Document;
 
   // The accumulated still image and what it was rendered for.
   struct Accumulation;
