@@ -185,10 +185,7 @@ void DeviceRenderer::syncVolume(const Scene& s, const VolumeMarcher& volume, Sce
     v.extinctionPerLog2 = volume.extinctionPerLog2();
     v.path = pathSettingsOf(s.pathTracing, dataset_.worldDiagonal);
   }
-  v.shading = s.shading;
-  v.sampling = s.integration.sampling;
-  v.earlyTermination = s.integration.earlyTermination;
-  v.terminationOpacity = s.integration.terminationOpacity;
+  v.sample = volumeSettingsOf(s, v.sample.rate); // the rate is the frame's (sync)
 }
 
 void DeviceRenderer::syncIso(const Scene& s, const Surfaces& surfaces, SceneUpdate& update) {
@@ -256,7 +253,7 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
   if (domain) v.frame.domain = *domain;
   v.frameIndex = frame.frameIndex;
   v.seed = frame.seed;
-  v.rate = frame.rate;
+  v.sample.rate = frame.rate;
   v.path.up = skyUp(frame.camera.up);
   const size_t pixels = size_t(frame.width) * size_t(frame.height);
   counts = gpu::PassCounts();

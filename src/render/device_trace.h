@@ -55,11 +55,7 @@ struct TraceView {
   RegionTreeView volumeTree;
   int layerCount = 0;
   TraceLayer layers[kTraceMaxLayers];
-  Shading shading = Shading::Smooth;
-  Sampling sampling = Sampling::Adaptive;
-  bool earlyTermination = true;
-  float terminationOpacity = 0.98f;
-  float rate = 1.f;
+  VolumeSettings sample; ///< as the CPU's march samples (its rate the frame's)
   // Path tracing (Integrator::PathTrace): the layers as the medium, with a majorant per region.
   bool pathTrace = false;
   MediumLayer mediumLayers[kTraceMaxLayers];
@@ -104,12 +100,12 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
   const ShadingTerms& terms = v.ray.terms;
   if (v.layerCount == 0 || !(ray.tmax > ray.tmin)) return;
   const int layerCount = SmoothOne ? 1 : v.layerCount;
-  const bool wantGrad = !SmoothOne && !OpacityOnly && v.shading == Shading::Analytic;
-  const bool shade = !OpacityOnly && (SmoothOne || v.shading != Shading::None);
+  const bool wantGrad = !SmoothOne && !OpacityOnly && v.sample.shading == Shading::Analytic;
+  const bool shade = !OpacityOnly && (SmoothOne || v.sample.shading != Shading::None);
   walkRegionTree(v.volumeTree, ray, [&](const Segment& seg) {
     const Region& region = v.regions[seg.region];
     SegmentMarch sm(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho,
-                    sampleStep(region, v.sampling, v.referenceWidth, v.rate));
+                    sampleStep(region, v.sample.sampling, v.referenceWidth, v.sample.rate));
     const float cellWidth = region.finestWidth() * v.meanScale;
     while (sm.a < sm.end) {
       const float b = sm.intervalEnd();
@@ -139,10 +135,11 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
         const float alpha = correctedOpacity(rgba.w, len, v.invReferenceWidth);
         vec3f c = rgba.rgb();
         if (shade) {
-          if (!SmoothOne && v.shading == Shading::Smooth && !l.withGradients)
+          if (!SmoothOne && v.sample.shading == Shading::Smooth && !l.withGradients)
             for (int a = 0; a < 3; ++a)
               if (!sampleRegion(l.grad[a], seg.region, p, grad[a])) grad[a] = 0.f;
-          if (!SmoothOne && v.shading == Shading::Central) grad = centralGradient(l.view, seg.region, region, p, value);
+          if (!SmoothOne && v.sample.shading == Shading::Central)
+            grad = centralGradient(l.view, seg.region, region, p, value);
           const float fade = fadeScaleAt(fadeWidthOf(cellWidth, l.byValue, l.invSpan), l.byValue, value);
           c = shadeVolumeSample(c, grad * v.invScale, light, halfVector, terms, fade);
         }
@@ -154,7 +151,7 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
       const float alpha = correctedOpacity(logSum, len, v.invReferenceWidth);
       if (!SmoothOne && layerCount > 1) color = alphaSum > 0.f ? colorSum * (1.f / alphaSum) : vec3f(0.f);
       compositeBehind(acc, color, alpha);
-      if (v.earlyTermination && acc.w >= v.terminationOpacity) return false;
+      if (v.sample.earlyTermination && acc.w >= v.sample.terminationOpacity) return false;
     }
     return true;
   });
@@ -166,8 +163,8 @@ EXA_HOST_DEVICE inline bool traceIso(const TraceView& v, const Ray& ray, float& 
   if (!v.iso) return false;
   auto walk = [&](const Ray& r, auto&& emit) { walkRegionTree(v.isoTree, r, emit); };
   uint64_t n = 0;
-  const bool found = findIsoCrossing(walk, v.isoView, v.isoValues, v.isoCount, ray, v.sampling, v.referenceWidth,
-                                     v.rate, t, region, which, n);
+  const bool found = findIsoCrossing(walk, v.isoView, v.isoValues, v.isoCount, ray, v.sample.sampling, v.referenceWidth,
+                                     v.sample.rate, t, region, which, n);
   samples += uint32_t(n);
   return found;
 }
@@ -199,8 +196,8 @@ template <bool SmoothOne> struct DeviceRays {
   EXA_HOST_DEVICE bool isoHit(const Ray& ray, float& t, uint32_t& region, int& which, RayCounts& c) const {
     auto walk = [&](const Ray& r, auto&& emit) { walkRegionTree(v.isoTree, r, emit); };
     uint64_t n = 0;
-    const bool found = findIsoCrossing(walk, v.isoView, v.isoValues, v.isoCount, ray, v.sampling, v.referenceWidth,
-                                       v.rate, t, region, which, n);
+    const bool found = findIsoCrossing(walk, v.isoView, v.isoValues, v.isoCount, ray, v.sample.sampling,
+                                       v.referenceWidth, v.sample.rate, t, region, which, n);
     c.isoSamples += uint32_t(n);
     return found;
   }
@@ -261,7 +258,7 @@ template <bool Surfaces> EXA_HOST_DEVICE inline vec4f tracePathSample(const Trac
 /// Whether the scene is one layer with smooth shading read with its values (the common case,
 /// which traceVolume<..., true> serves with less code).
 EXA_HOST_DEVICE inline bool smoothOneLayer(const TraceView& v) {
-  return v.layerCount == 1 && v.shading == Shading::Smooth && v.layers[0].withGradients != nullptr;
+  return v.layerCount == 1 && v.sample.shading == Shading::Smooth && v.layers[0].withGradients != nullptr;
 }
 
 /// Whether pixel (x, y) lies in a tile the pass renders (PassControl's selection, kRenderTile

@@ -12,6 +12,16 @@ OcclusionLengths occlusionLengths(const AmbientOcclusion& ao, const DatasetInfo&
   return l;
 }
 
+VolumeSettings volumeSettingsOf(const Scene& scene, float rate) {
+  VolumeSettings v;
+  v.shading = scene.shading;
+  v.sampling = scene.integration.sampling;
+  v.earlyTermination = scene.integration.earlyTermination;
+  v.terminationOpacity = scene.integration.terminationOpacity;
+  v.rate = rate;
+  return v;
+}
+
 RaySettings raySettingsOf(const Scene& scene, const DatasetInfo& dataset, const WorldTransform& world) {
   RaySettings r;
   r.volume = scene.volume;

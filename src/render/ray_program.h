@@ -46,6 +46,19 @@ struct RayLight {
   vec3f light{0.f}, halfVector{0.f};
 };
 
+/// How rays sample the volume, from the scene and the frame's rate (volumeSettingsOf): the same
+/// for the CPU's batched march and the per-ray code of the device back ends.
+struct VolumeSettings {
+  Shading shading = Shading::Smooth;
+  Sampling sampling = Sampling::Adaptive;
+  bool earlyTermination = true;
+  float terminationOpacity = 0.98f;
+  float rate = 1.f; ///< samples per half region's finest width
+};
+
+/// The volume settings of a scene at a frame's rate (lighting.cpp).
+VolumeSettings volumeSettingsOf(const Scene& scene, float rate);
+
 /// The settings every ray of a pass shares, from the scene (raySettingsOf).
 struct RaySettings {
   bool volume = true; ///< the volume is integrated

@@ -66,7 +66,7 @@ struct CpuRays {
   bool hasIso() const { return surfaces.isoTraversal() != nullptr; }
   bool isoHit(const Ray& ray, float& t, uint32_t& region, int& which, RayCounts& c) const {
     uint64_t n = 0;
-    const bool found = surfaces.findIso(ray, settings.sampling, settings.rate, t, region, which, n);
+    const bool found = surfaces.findIso(ray, settings.sample.sampling, settings.sample.rate, t, region, which, n);
     c.isoSamples += uint32_t(n);
     return found;
   }

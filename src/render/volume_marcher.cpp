@@ -75,9 +75,9 @@ public:
 
   BatchMarch(const Inputs& in, const MarchSettings& s, const RayLight& light, vec4f& acc, uint64_t& raySamples)
       : in_(in), layer_(in.layers[0]), s_(s), light_(light), acc_(acc), raySamples_(raySamples) {
-    wantGrad_ = !OpacityOnly && s.shading == Shading::Analytic;
-    smooth_ = !OpacityOnly && s.shading == Shading::Smooth;
-    central_ = s.shading == Shading::Central;
+    wantGrad_ = !OpacityOnly && s.sample.shading == Shading::Analytic;
+    smooth_ = !OpacityOnly && s.sample.shading == Shading::Smooth;
+    central_ = s.sample.shading == Shading::Central;
     fn_ = s.options.vectorized ? batchFunctions() : scalarBatchFunctions();
     params_.invReferenceWidth = 1.f / in.referenceWidth;
     params_.shade = wantGrad_ || smooth_;
@@ -91,7 +91,7 @@ public:
   /// the ray terminated.
   bool add(const Ray& ray, float rho, const Segment& seg) {
     const Region& region = in_.model.regions.regions[seg.region];
-    const float dt = sampleStep(region, s_.sampling, in_.referenceWidth, s_.rate);
+    const float dt = sampleStep(region, s_.sample.sampling, in_.referenceWidth, s_.sample.rate);
     // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
     SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
     const uint32_t* ids = layer_.view.brickIds + region.brickBegin;
@@ -236,7 +236,7 @@ private:
         b += w * shaded.b[j];
         t *= 1.f - alpha;
       }
-      if (!(s_.earlyTermination && 1.f - t >= s_.terminationOpacity)) {
+      if (!(s_.sample.earlyTermination && 1.f - t >= s_.sample.terminationOpacity)) {
         transmittance = t;
         i = n;
       } else {
@@ -255,7 +255,7 @@ private:
       }
       transmittance *= 1.f - alpha;
       ++i;
-      if (s_.earlyTermination && 1.f - transmittance >= s_.terminationOpacity) {
+      if (s_.sample.earlyTermination && 1.f - transmittance >= s_.sample.terminationOpacity) {
         done = true;
         break;
       }
@@ -301,14 +301,10 @@ private:
 
 MarchSettings MarchSettings::of(const Scene& scene, const RendererOptions& options, float rate) {
   MarchSettings m;
-  m.shading = scene.shading;
+  m.sample = volumeSettingsOf(scene, rate);
   m.terms = scene.light.terms;
-  m.sampling = scene.integration.sampling;
   m.reconstruction = scene.integration.reconstruction;
-  m.earlyTermination = scene.integration.earlyTermination;
-  m.terminationOpacity = scene.integration.terminationOpacity;
   m.options = options;
-  m.rate = rate;
   return m;
 }
 

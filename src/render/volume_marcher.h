@@ -21,14 +21,10 @@ namespace exa {
 /// What a march takes from the scene, the renderer's options and the frame: the same for every
 /// ray of a pass.
 struct MarchSettings {
-  Shading shading = Shading::Smooth;
+  VolumeSettings sample; ///< as the per-ray code samples (ray_program.h)
   ShadingTerms terms;
-  Sampling sampling = Sampling::Adaptive;
   Reconstruction reconstruction = Reconstruction::Regions;
-  bool earlyTermination = true;
-  float terminationOpacity = 0.98f;
   RendererOptions options;
-  float rate = 1.f; ///< samples per half region's finest width
 
   static MarchSettings of(const Scene& scene, const RendererOptions& options, float rate);
 };
