@@ -10,6 +10,8 @@
 #include "exabricks/render/overlay.h"
 #include "exabricks/render/scene_vocabulary.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -18,17 +20,6 @@
 
 namespace exa::cli {
 namespace {
-
-/// The value a flag names, from the library's names of the enumeration.
-template <typename E> E pick(const char* flag, const std::string& value) {
-  try {
-    return parseName<E>(value, flag);
-  } catch (const UsageError&) {
-    throw;
-  } catch (const Error& e) {
-    failUsage(e.what());
-  }
-}
 
 /// A flag's value checked against the range of the scene setting it sets.
 /// Three numbers of a flag for a described vector setting, checked against its kind.
@@ -119,13 +110,95 @@ TransferFunction applyTransferFunctionOptions(TransferFunction tf, const RenderO
   return tf;
 }
 
+/// Where a flag's help is listed.
+enum class FlagGroup { Image, Camera, Integration, Surfaces, PathTracing };
+/// A flag's form: it takes the setting's value, or sets a switch on or off.
+enum class FlagForm { Value, On, Off };
+
+/// The flags that set one described scene setting each: their help, type, default and checks
+/// are the setting's (scene_vocabulary.h); they are registered and applied from this table.
+struct SettingFlag {
+  const char* flag;
+  const char* key;
+  FlagGroup group;
+  FlagForm form = FlagForm::Value;
+};
+
+constexpr SettingFlag kSettingFlags[] = {
+    {"--spp", "frame.samples_per_pixel", FlagGroup::Image},
+    {"--rate", "frame.rate", FlagGroup::Image},
+    {"--seed", "frame.seed", FlagGroup::Image},
+    {"--no-jitter", "frame.jitter", FlagGroup::Image, FlagForm::Off},
+    {"--colorbar", "legends.color_bar", FlagGroup::Image, FlagForm::On},
+    {"--annotate", "legends.annotation", FlagGroup::Image, FlagForm::On},
+    {"--alpha", "alpha", FlagGroup::Camera, FlagForm::On},
+    {"--shading", "shading", FlagGroup::Integration},
+    {"--traversal", "integration.traversal", FlagGroup::Integration},
+    {"--no-skip", "integration.space_skipping", FlagGroup::Integration, FlagForm::Off},
+    {"--no-early-termination", "integration.early_termination", FlagGroup::Integration, FlagForm::Off},
+    {"--sampling", "integration.sampling", FlagGroup::Integration},
+    {"--reconstruction", "integration.reconstruction", FlagGroup::Integration},
+    {"--debug", "debug", FlagGroup::Integration},
+    {"--no-volume", "volume", FlagGroup::Integration, FlagForm::Off},
+    {"--clip-meshes", "clip.meshes", FlagGroup::Surfaces, FlagForm::On},
+    {"--ao", "ambient_occlusion.rays", FlagGroup::Surfaces},
+    {"--ao-length", "ambient_occlusion.length", FlagGroup::Surfaces},
+    {"--ao-volume", "ambient_occlusion.volume", FlagGroup::Surfaces, FlagForm::On},
+    {"--integrator", "integration.integrator", FlagGroup::PathTracing},
+    {"--albedo", "pathtrace.albedo", FlagGroup::PathTracing},
+    {"--anisotropy", "pathtrace.anisotropy", FlagGroup::PathTracing},
+    {"--bounces", "pathtrace.bounces", FlagGroup::PathTracing},
+    {"--emission", "pathtrace.emission", FlagGroup::PathTracing},
+};
+
+/// Registers the group's setting flags with the help, type and default of their settings.
+void addSettingFlags(RenderOptions& o, CLI::App& cmd, FlagGroup group) {
+  const nlohmann::json vocabulary = nlohmann::json::parse(sceneVocabularyJson());
+  for (const SettingFlag& f : kSettingFlags) {
+    if (f.group != group) continue;
+    const auto s =
+        std::find_if(vocabulary.begin(), vocabulary.end(), [&](const nlohmann::json& e) { return e["key"] == f.key; });
+    const std::string key = f.key, help = (*s)["help"], type = (*s)["type"];
+    if (f.form != FlagForm::Value) {
+      cmd.add_flag(std::string(f.flag))
+          ->description((f.form == FlagForm::Off ? "Off: " : "") + help + " (scene key " + key + ")");
+      continue;
+    }
+    std::string typeName = type == "integer" ? "INT" : type == "number" ? "FLOAT" : "TEXT";
+    if (type == "choice") {
+      typeName.clear();
+      for (const nlohmann::json& c : (*s)["choices"])
+        typeName += (typeName.empty() ? "{" : ",") + c.get<std::string>();
+      typeName += "}";
+    }
+    cmd.add_option(f.flag, o.settings[f.flag], help + " (scene key " + key + ")")
+        ->type_name(typeName)
+        ->default_str(sceneSettingDefaultText(key));
+  }
+}
+
+/// Applies the setting flags given; errors name the flag and the key.
+void applySettingFlags(const RenderOptions& o, const CLI::App& cmd, SceneDocument& doc) {
+  for (const SettingFlag& f : kSettingFlags) {
+    if (cmd.count(f.flag) == 0) continue;
+    const std::string text = f.form == FlagForm::Value ? o.settings.at(f.flag)
+                             : f.form == FlagForm::On  ? "true"
+                                                       : "false";
+    try {
+      setSceneSettingText(doc.scene, doc.frame, f.key, text, f.flag);
+    } catch (const Error& e) {
+      const std::string m = e.what();
+      failUsage(m.rfind(f.flag, 0) == 0 ? m : std::string(f.flag) + ": " + m);
+    }
+  }
+  if (cmd.count("--debug") && doc.scene.debug == DebugView::Level)
+    doc.scene.legends.levelLegend = true; // the command line's level view has its legend
+}
+
 /// The image: its size and samples, the first layer's transfer function, the legends.
 void addImageOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();
-  cmd.add_option("--spp", o.spp, sceneSettingHelp("frame.samples_per_pixel"))->capture_default_str();
-  cmd.add_option("--rate", o.rate, "Quality factor: samples per half finest cell width")->capture_default_str();
-  cmd.add_option("--seed", o.seed, sceneSettingHelp("frame.seed"))->capture_default_str();
-  cmd.add_flag("--no-jitter", o.noJitter, "Sample every ray at the same offsets");
+  addSettingFlags(o, cmd, FlagGroup::Image);
   cmd.add_option("--colormap", o.colormap, "Built-in colour map")->capture_default_str();
   cmd.add_option("--tf", o.tfFile, "Transfer function file (ParaView preset or exabricks JSON)");
   cmd.add_option("--opacity", o.opacity, "Opacity points x,alpha,... over the normalised value")->delimiter(',');
@@ -133,9 +206,6 @@ void addImageOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--range", o.range, sceneSettingHelp("transfer_function.range"))->delimiter(',');
   cmd.add_flag("--log", o.logScale, "Map values logarithmically (every layer)");
   cmd.add_flag("--linear", o.linear, "Map values linearly even where the data spans many decades");
-  cmd.add_flag("--colorbar", o.colorbar, "Draw a labelled colour bar of the first layer (scene key legends.color_bar)");
-  cmd.add_flag("--annotate", o.annotate,
-               "Write the dataset, field and simulation time, and outline the domain (scene key legends.annotation)");
 }
 
 /// The camera and the background.
@@ -163,21 +233,13 @@ void addCameraOptions(RenderOptions& o, CLI::App& cmd) {
       ->capture_default_str()
       ->check(latitude);
   cmd.add_option("--background", o.background, sceneSettingHelp("background"))->delimiter(',');
-  cmd.add_flag("--alpha", o.alpha, "Keep the alpha channel instead of a background");
+  addSettingFlags(o, cmd, FlagGroup::Camera);
 }
 
 /// Shading and light, the integration, the debug views and the volume layers.
 void addIntegrationOptions(RenderOptions& o, CLI::App& cmd) {
-  cmd.add_option("--shading", o.shading, sceneSettingHelp("shading"))->capture_default_str();
+  addSettingFlags(o, cmd, FlagGroup::Integration);
   cmd.add_option("--light", o.light, "headlight, or the direction x,y,z light travels")->capture_default_str();
-  cmd.add_option("--traversal", o.traversal, sceneSettingHelp("integration.traversal"))->capture_default_str();
-  cmd.add_flag("--no-skip", o.noSkip, "Disable space skipping");
-  cmd.add_flag("--no-early-termination", o.noEarlyTermination, "Integrate every ray to its end");
-  cmd.add_option("--sampling", o.sampling, sceneSettingHelp("integration.sampling"))->capture_default_str();
-  cmd.add_option("--reconstruction", o.reconstruction, sceneSettingHelp("integration.reconstruction"))
-      ->capture_default_str();
-  cmd.add_option("--debug", o.debug, sceneSettingHelp("debug"))->capture_default_str();
-  cmd.add_flag("--no-volume", o.noVolume, "Draw surfaces only");
   cmd.add_option("--layer", o.layers,
                  "Another field in the volume: FIELD, FIELD=COLORMAP or FIELD=TF_FILE (repeatable)");
 }
@@ -197,19 +259,12 @@ void addSurfaceOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--clip-plane", o.clipPlanes,
                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
   cmd.add_option("--clip-box", o.clipBox, sceneSettingHelp("clip.box"))->delimiter(',');
-  cmd.add_flag("--clip-meshes", o.clipMeshes, "Clip meshes too");
-  cmd.add_option("--ao", o.aoRays, sceneSettingHelp("ambient_occlusion.rays"))->capture_default_str();
-  cmd.add_option("--ao-length", o.aoLength, sceneSettingHelp("ambient_occlusion.length"));
-  cmd.add_flag("--ao-volume", o.aoVolume, sceneSettingHelp("ambient_occlusion.volume"));
+  addSettingFlags(o, cmd, FlagGroup::Surfaces);
 }
 
 /// Path tracing.
 void addPathTracingOptions(RenderOptions& o, CLI::App& cmd) {
-  cmd.add_option("--integrator", o.integrator, sceneSettingHelp("integration.integrator"))->capture_default_str();
-  cmd.add_option("--albedo", o.albedo, sceneSettingHelp("pathtrace.albedo"))->capture_default_str();
-  cmd.add_option("--anisotropy", o.anisotropy, sceneSettingHelp("pathtrace.anisotropy"))->capture_default_str();
-  cmd.add_option("--bounces", o.bounces, sceneSettingHelp("pathtrace.bounces"))->capture_default_str();
-  cmd.add_option("--emission", o.emission, sceneSettingHelp("pathtrace.emission"))->capture_default_str();
+  addSettingFlags(o, cmd, FlagGroup::PathTracing);
   cmd.add_option("--environment", o.environment, sceneSettingHelp("pathtrace.environment") + " (default 1,1,1)")
       ->delimiter(',');
   cmd.add_option("--sky", o.sky, sceneSettingHelp("pathtrace.sky"))->delimiter(',');
@@ -270,10 +325,6 @@ struct OptionUse {
 
 void applyFrameOptions(const RenderOptions& o, const OptionUse& u, Frame& f) {
   if (u.apply("--size")) parseSize(o.size, f.width, f.height);
-  if (u.apply("--spp")) f.samplesPerPixel = checked("--spp", "frame.samples_per_pixel", o.spp);
-  if (u.apply("--rate")) f.rate = checked("--rate", "frame.rate", o.rate);
-  if (u.apply("--seed")) f.seed = o.seed;
-  if (u.apply("--no-jitter")) f.jitter = !o.noJitter;
 }
 
 /// The first volume layer (the field and its transfer function) and the further layers.
@@ -305,23 +356,6 @@ void applyLayerOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
   }
 }
 
-/// Shading, the integration, the debug views and the legends.
-void applyIntegrationOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
-  if (u.apply("--shading")) s.shading = pick<Shading>("--shading", o.shading);
-  Integration& in = s.integration;
-  if (u.apply("--traversal")) setTraversal(in, pick<TraversalSetting>("--traversal", o.traversal));
-  if (u.apply("--sampling")) in.sampling = pick<Sampling>("--sampling", o.sampling);
-  if (u.apply("--reconstruction")) in.reconstruction = pick<Reconstruction>("--reconstruction", o.reconstruction);
-  if (u.apply("--no-skip")) in.spaceSkipping = !o.noSkip;
-  if (u.apply("--no-early-termination")) in.earlyTermination = !o.noEarlyTermination;
-  if (u.apply("--debug")) {
-    s.debug = pick<DebugView>("--debug", o.debug);
-    if (s.debug == DebugView::Level) s.legends.levelLegend = true; // the command line's level view has its legend
-  }
-  if (u.apply("--colorbar")) s.legends.colorBar = o.colorbar;
-  if (u.apply("--annotate")) s.legends.annotation = o.annotate;
-}
-
 /// The light, the background and the alpha channel.
 void applyLightOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
   if (u.apply("--light")) {
@@ -347,12 +381,10 @@ void applyLightOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
       if (!(c >= 0.f && c <= 1.f)) failUsage("--background components must lie in [0, 1]");
     s.background = srgbToLinear(vec3f(o.background[0], o.background[1], o.background[2]));
   }
-  if (u.apply("--alpha")) s.keepAlpha = o.alpha;
 }
 
 /// The volume on or off, clipping and ambient occlusion.
 void applyClipOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
-  if (u.apply("--no-volume")) s.volume = !o.noVolume;
   if (u.apply("--clip-plane")) {
     s.clip.planes.clear();
     for (const std::string& text : o.clipPlanes) {
@@ -371,19 +403,10 @@ void applyClipOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
       s.clip.box = box3d(vec3d(b[0], b[1], b[2]), vec3d(b[3], b[4], b[5]));
     }
   }
-  if (u.apply("--clip-meshes")) s.clip.meshes = o.clipMeshes;
-  if (u.apply("--ao")) s.ao.rays = checked("--ao", "ambient_occlusion.rays", o.aoRays);
-  if (u.apply("--ao-length")) s.ao.length = checked("--ao-length", "ambient_occlusion.length", o.aoLength);
-  if (u.apply("--ao-volume")) s.ao.volume = o.aoVolume;
 }
 
 void applyPathTracingOptions(const RenderOptions& o, const OptionUse& u, Scene& s) {
-  if (u.apply("--integrator")) s.integration.integrator = pick<Integrator>("--integrator", o.integrator);
   PathTracing& pt = s.pathTracing;
-  if (u.apply("--albedo")) pt.albedo = checked("--albedo", "pathtrace.albedo", o.albedo);
-  if (u.apply("--anisotropy")) pt.anisotropy = checked("--anisotropy", "pathtrace.anisotropy", o.anisotropy);
-  if (u.apply("--bounces")) pt.bounces = checked("--bounces", "pathtrace.bounces", o.bounces);
-  if (u.apply("--emission")) pt.emission = checked("--emission", "pathtrace.emission", o.emission);
   if (u.given("--environment")) pt.environment = checkedVector("--environment", "pathtrace.environment", o.environment);
   if (u.given("--sky")) pt.sky = checkedVector("--sky", "pathtrace.sky", o.sky);
   if (u.given("--ground")) pt.ground = checkedVector("--ground", "pathtrace.ground", o.ground);
@@ -444,7 +467,7 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
 
   applyFrameOptions(o, u, doc.frame);
   applyLayerOptions(o, u, s);
-  applyIntegrationOptions(o, u, s);
+  applySettingFlags(o, cmd, doc);
   applyLightOptions(o, u, s);
   applyClipOptions(o, u, s);
   applyPathTracingOptions(o, u, s);

@@ -10,6 +10,7 @@
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -22,10 +23,6 @@ namespace exa::cli {
 struct RenderOptions {
   InputOptions in;
   std::string size = "800x800";
-  int spp = 1;
-  float rate = 1.f;
-  uint64_t seed = 0;
-  bool noJitter = false;
   std::string colormap = "viridis";
   std::string tfFile;
   std::vector<float> opacity;     ///< x0 a0 x1 a1 ... in normalised value
@@ -34,24 +31,13 @@ struct RenderOptions {
   bool logScale = false;
   bool linear = false;
   bool frameAll = false;
-  bool colorbar = false;
-  bool annotate = false;
   std::vector<double> position, lookAt, up;
   double fov = 40.0;
   bool ortho = false;
   double azimuth = 30.0, elevation = 25.0;
   std::vector<float> background{0.f, 0.f, 0.f};
-  bool alpha = false;
-  std::string shading = "smooth";
   std::string light = "headlight";
-  std::string traversal = "auto";
-  bool noSkip = false;
-  bool noEarlyTermination = false;
-  std::string sampling = "adaptive";
-  std::string reconstruction = "regions";
-  std::string debug = "none";
   // Surfaces and effects.
-  bool noVolume = false;
   std::vector<std::string> layers; ///< FIELD=COLORMAP or FIELD=TF_FILE
   std::vector<float> iso;
   std::string isoField;
@@ -64,19 +50,12 @@ struct RenderOptions {
   std::vector<float> meshColor;        ///< sRGB triples, one per mesh (cycled)
   std::vector<std::string> clipPlanes; ///< px,py,pz,nx,ny,nz each
   std::vector<double> clipBox;
-  bool clipMeshes = false;
-  int aoRays = 0;
-  float aoLength = 0.f;
-  bool aoVolume = false;
-  std::string integrator = "march";
-  float albedo = PathTracing().albedo;
-  float anisotropy = PathTracing().anisotropy;
-  int bounces = PathTracing().bounces;
-  float emission = PathTracing().emission;
   std::vector<float> environment; ///< r,g,b linear radiance
   std::vector<float> sky, ground; ///< r,g,b linear radiance at the zenith and the nadir
   std::vector<float> sun;         ///< dx,dy,dz,intensity[,angle]
   std::string sceneFile;
+  /// The flags that set one described scene setting each, by flag: their text as given.
+  std::map<std::string, std::string> settings;
 
   /// Registers every option above on a command.
   void add(CLI::App& cmd);

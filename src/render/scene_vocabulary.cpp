@@ -450,6 +450,82 @@ void checkSceneSetting(const std::string& key, double value) {
   if (!checkStructuredNumber(key, value)) fail("no numeric scene setting \"", key, "\"");
 }
 
+namespace {
+
+/// A described setting's value from text as a command line gives it: true or false, a number,
+/// a name, or x,y,z. Range and kind are checked (the messages name the key).
+template <typename Owner> json valueOfText(const Setting<Owner>& s, const std::string& text) {
+  auto number = [&](const std::string& part) {
+    double v = 0.0;
+    const char* end = part.data() + part.size();
+    const auto r = std::from_chars(part.data(), end, v);
+    if (part.empty() || r.ec == std::errc::invalid_argument || r.ptr != end)
+      fail("\"", s.key, "\" must be a number, not '", text, "'");
+    return v; // out of range: +-inf or 0, refused or kept by the range check
+  };
+  switch (s.type) {
+  case SettingType::Boolean:
+    if (text != "true" && text != "false") fail("\"", s.key, "\" must be true or false, not '", text, "'");
+    return text == "true";
+  case SettingType::Choice:
+    return text;
+  case SettingType::Vector: {
+    json v = json::array();
+    for (size_t start = 0;;) {
+      const size_t comma = text.find(',', start);
+      v.push_back(number(text.substr(start, comma - start)));
+      if (comma == std::string::npos) break;
+      start = comma + 1;
+    }
+    checkVectorValue(s.key, s.vector, v);
+    return v;
+  }
+  default:
+    break;
+  }
+  const double v = number(text);
+  checkSetting(s, v);
+  if (s.type == SettingType::Integer) {
+    uint64_t u = 0; // exact beyond 2^53 (seeds)
+    if (v >= 0.0 && std::from_chars(text.data(), text.data() + text.size(), u).ptr == text.data() + text.size())
+      return json(u);
+    return json(int64_t(v));
+  }
+  return json(v);
+}
+
+} // namespace
+
+void setSceneSettingText(Scene& scene, Frame& frame, const std::string& key, const std::string& text,
+                         const std::string& what) {
+  if (const auto* s = findSetting(sceneSettings(), key)) return s->set(scene, valueOfText(*s, text), what);
+  if (const auto* s = findSetting(frameSettings(), key)) return s->set(frame, valueOfText(*s, text), what);
+  fail("no scene setting \"", key, "\"");
+}
+
+std::string sceneSettingDefaultText(const std::string& key) {
+  auto number = [](const json& x) { // in the shortest form of its single-precision value
+    if (x.is_number_integer()) return x.dump();
+    char buf[32];
+    return std::string(buf, std::to_chars(buf, buf + sizeof(buf), x.get<float>()).ptr);
+  };
+  auto text = [&](const json& d) {
+    if (d.is_null()) return std::string();
+    if (d.is_string()) return d.get<std::string>();
+    if (!d.is_array()) return number(d);
+    std::string out;
+    for (const json& x : d)
+      out += (out.empty() ? "" : ",") + number(x);
+    return out;
+  };
+  if (const auto* s = findSetting(sceneSettings(), key)) {
+    const json d = s->get(Scene());
+    return d.is_boolean() ? (d.get<bool>() ? "true" : "false") : text(d);
+  }
+  if (const auto* s = findSetting(frameSettings(), key)) return text(s->get(Frame()));
+  fail("no scene setting \"", key, "\"");
+}
+
 void checkSceneVector(const std::string& key, const vec3f& value) {
   const Setting<Scene>* s = findSetting(sceneSettings(), key);
   if (!s || s->type != SettingType::Vector) fail("no vector scene setting \"", key, "\"");

@@ -71,6 +71,13 @@ std::string sceneSettingHelp(const std::string& key);
 /// Throws exa::Error when `value` is outside the range of a described numeric setting or
 /// structured number.
 void checkSceneSetting(const std::string& key, double value);
+/// Sets a described setting of `scene` or `frame` from text as a command line gives it ("true",
+/// "0.5", "smooth", "1,0,0"), checked against its type and range; an unknown name names `what`.
+/// Throws exa::Error naming the key.
+void setSceneSettingText(Scene& scene, Frame& frame, const std::string& key, const std::string& text,
+                         const std::string& what);
+/// A described setting's default as setSceneSettingText reads it ("" where unset).
+std::string sceneSettingDefaultText(const std::string& key);
 /// Throws exa::Error when `value` is not of the kind of a described vector setting (a finite,
 /// non-zero direction or a finite radiance >= 0).
 void checkSceneVector(const std::string& key, const vec3f& value);
