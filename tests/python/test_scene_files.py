@@ -398,3 +398,29 @@ def test_a_camera_without_up_takes_the_described_one(tmp_path):
     described = {s["key"]: s["default"] for s in eb.scene_structure() if s.get("object") == "camera"}
     for key in ("look_at", "up", "fov", "orthographic", "ortho_height"):
         assert camera[key] == described[key], key
+
+
+def test_every_setting_flag_sets_its_key(cli, dataset_file, tmp_path):
+    """The flags `render --help` lists with "(scene key K)" set K: each given at once at a value
+    other than the default (switches flip it), `--write-scene` holds every one."""
+    import re
+
+    vocabulary = {s["key"]: s for s in eb.scene_vocabulary()}
+    help_text = subprocess.run([cli, "render", "--help"], check=True, capture_output=True, text=True).stdout
+    flags = re.findall(r"^\s+(--[a-z-]+)\b[^\n]*(?:\n\s{20,}[^\n]*)*?\(scene key ([a-z_.]+)\)", help_text, re.M)
+    assert len(flags) >= 20, flags
+    args, want = [], {}
+    for flag, key in flags:
+        s = vocabulary[key]
+        value = other_value(s)
+        if s["type"] == "boolean":
+            args.append(flag)  # a switch: on where the default is off, off where it is on
+            assert value == (not flag.startswith("--no-")), flag
+        else:
+            args += [flag, str(value)]
+        want[key] = value
+    subprocess.run([cli, "-q", "render", str(dataset_file), "--size", "24x16", "--iso", "0.5", "-o",
+                    str(tmp_path / "flags.png"), "--write-scene", str(tmp_path / "flags.json")] + args, check=True)
+    written = json.loads((tmp_path / "flags.json").read_text())
+    for key, value in want.items():
+        assert_same(value, at_key(written, key), key)
