@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import exabricks as eb
+from documents import assert_same, holds
 from exabricks import _core
 
 CAMERA = {"position": [150.0, 20.0, 60.0], "look_at": [30.0, 31.0, 33.0], "up": [0.0, 0.2, 1.0], "fov": 33.0,
@@ -55,22 +56,6 @@ def every_setting(mesh):
         "alpha": True,
         "legends": {"color_bar": True, "annotation": True, "level_legend": True},
     }
-
-
-def assert_same(a, b, where="scene"):
-    """Equal documents: the same keys and values (numbers within float32 round-off)."""
-    if isinstance(a, dict):
-        assert isinstance(b, dict) and sorted(a) == sorted(b), (where, sorted(a), sorted(b) if isinstance(b, dict) else b)
-        for k in a:
-            assert_same(a[k], b[k], where + "." + k)
-    elif isinstance(a, list):
-        assert isinstance(b, list) and len(a) == len(b), (where, a, b)
-        for i, (x, y) in enumerate(zip(a, b)):
-            assert_same(x, y, "%s[%d]" % (where, i))
-    elif isinstance(a, float) or isinstance(b, float):
-        assert b == pytest.approx(a, rel=1e-6, abs=1e-9), (where, a, b)
-    else:
-        assert a == b, (where, a, b)
 
 
 @pytest.fixture
@@ -271,23 +256,6 @@ def test_front_end_controls_offer_only_what_the_vocabulary_accepts():
         tag = html[html.index('id="%s"' % element):].split(">", 1)[0]
         attrs = dict(part.split("=", 1) for part in tag.replace('"', "").split() if "=" in part)
         within_vocabulary(vocabulary[key], float(attrs["min"]), float(attrs["max"]), "the viewer's %s" % element)
-
-
-def holds(got, want, where="scene"):
-    """Every key of `want` is in `got` with an equal value (numbers within float32 round-off)."""
-    if isinstance(want, dict):
-        assert isinstance(got, dict), (where, got)
-        for k in want:
-            assert k in got, (where + "." + k, "missing")
-            holds(got[k], want[k], where + "." + k)
-    elif isinstance(want, list):
-        assert isinstance(got, list) and len(got) == len(want), (where, got, want)
-        for i, (x, y) in enumerate(zip(got, want)):
-            holds(x, y, "%s[%d]" % (where, i))
-    elif isinstance(want, float) or isinstance(got, float):
-        assert got == pytest.approx(want, rel=1e-6, abs=1e-9), (where, got, want)
-    else:
-        assert got == want, (where, got, want)
 
 
 TRIANGLE_PLY = """ply

@@ -6,10 +6,14 @@ import pathlib
 import signal
 import struct
 import subprocess
+import sys
 import time
 import urllib.parse
 
 import pytest
+
+# The tests compare scene documents as the Python tests do (tests/python/documents.py).
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "python"))
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 CLI = os.environ.get("EXABRICKS", str(ROOT / "build" / "exabricks"))
@@ -158,24 +162,6 @@ def series_dataset(cli, tmp_path):
     subprocess.run([cli, "-q", "generate", "--steps", "3", "-n", "20000", "-o", str(folder / "s.cells")], check=True,
                    capture_output=True)
     return str(folder / "s_*.cells")
-
-
-def holds(got, want, where="scene"):
-    """Every key of `want` is in `got` with an equal value (numbers within 1e-6 relative: the scene
-    keeps float32 values)."""
-    if isinstance(want, dict):
-        assert isinstance(got, dict), (where, got)
-        for k in want:
-            assert k in got, (where + "." + k, "missing")
-            holds(got[k], want[k], where + "." + k)
-    elif isinstance(want, list):
-        assert isinstance(got, list) and len(got) == len(want), (where, got, want)
-        for i, (x, y) in enumerate(zip(got, want)):
-            holds(x, y, "%s[%d]" % (where, i))
-    elif isinstance(want, float) or isinstance(got, float):
-        assert got == pytest.approx(want, rel=1e-6, abs=1e-9), (where, got, want)
-    else:
-        assert got == want, (where, got, want)
 
 
 @pytest.fixture

@@ -7,7 +7,7 @@ import subprocess
 import time
 
 import pytest
-from conftest import holds
+from documents import holds
 
 
 def small_scene(viewer, **frame):

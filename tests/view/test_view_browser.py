@@ -14,7 +14,7 @@ import time
 
 import numpy as np
 import pytest
-from conftest import holds
+from documents import holds
 
 selenium = pytest.importorskip("selenium", reason="python3-selenium is not installed (see the README's test command)")
 from selenium import webdriver  # noqa: E402
