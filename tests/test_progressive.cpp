@@ -1,6 +1,7 @@
 // The progressive view the interactive front ends share: its passes add up to the N-sample
 // render of the frame, a change starts them over, a cancelled pass is not counted, and drafts
-// are sized to their time budget.
+// are sized to their time budget; the device falls back to the CPU for a scene it cannot draw
+// and is tried again with the next.
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/workflows/progressive.h"
@@ -199,4 +200,73 @@ TEST(Progressive, MeshesByTheirDataAndTheDepthLimitByItsValues) {
   want.depthLimit = same.data();
   EXPECT_EQ(view.buffer().resolve().pixels, renderer.render(want).pixels);
   EXPECT_TRUE(view.showFrame(doc.frame)) << "no limit is another frame";
+}
+
+TEST(Progressive, ANamedDeviceFallsBackForAScene) {
+  // The portable device runs the GPU's per-ray code on the CPU, with the GPU back end's limits.
+  const Model m = buildModel(generateScene({"blobs", 20000, 1, 3}));
+  Renderer renderer(m);
+  ProgressiveView view(renderer, "portable");
+  const SceneDocument doc = documentOf(m, 1);
+  EXPECT_TRUE(view.show(doc));
+  EXPECT_EQ(renderer.device(), Device::Portable);
+  ASSERT_TRUE(view.refine(PassControl()));
+
+  // A scene the device cannot draw: shown on the CPU, and an error says why.
+  SceneDocument debug = doc;
+  debug.scene.debug = DebugView::Level;
+  EXPECT_THROW(view.show(debug), DeviceFallbackError);
+  EXPECT_EQ(renderer.device(), Device::Cpu);
+  EXPECT_EQ(view.shown().scene.debug, DebugView::Level);
+  EXPECT_EQ(view.passes(), 0);
+  EXPECT_FALSE(view.show(debug)) << "the same scene stays on the CPU, without another error";
+  ASSERT_TRUE(view.refine(PassControl()));
+  EXPECT_EQ(view.buffer().resolve().pixels, renderer.render(debug.frame).pixels);
+
+  // The next scene that differs goes back to the device, and its passes start over there.
+  EXPECT_TRUE(view.show(doc));
+  EXPECT_EQ(renderer.device(), Device::Portable);
+  ASSERT_TRUE(view.refine(PassControl()));
+  EXPECT_FALSE(view.show(doc));
+  EXPECT_EQ(view.passes(), 1);
+
+  // Another choice moves the renderer with the next scene shown, the same scene included.
+  view.setDevice("cpu");
+  EXPECT_TRUE(view.show(doc)) << "passes on another device start over";
+  EXPECT_EQ(renderer.device(), Device::Cpu);
+  view.setDevice("portable");
+  EXPECT_TRUE(view.show(doc));
+  EXPECT_EQ(renderer.device(), Device::Portable);
+  view.setDevice("cpu");
+  EXPECT_NO_THROW(view.show(debug)) << "the choice applies before the scene";
+  EXPECT_EQ(renderer.device(), Device::Cpu);
+  EXPECT_THROW(view.setDevice("gpu"), Error);
+  EXPECT_EQ(view.device(), "cpu");
+}
+
+TEST(Progressive, AutoTriesTheGpuAgainWithALaterScene) {
+  if (!cudaStatus().problem.empty()) GTEST_SKIP() << "no GPU: " << cudaStatus().problem;
+  const Model m = buildModel(generateScene({"blobs", 20000, 1, 3}));
+  Renderer renderer(m);
+  ProgressiveView view(renderer, "auto");
+  const SceneDocument doc = documentOf(m, 1);
+  EXPECT_TRUE(view.show(doc));
+  EXPECT_EQ(renderer.device(), Device::Cuda);
+  SceneDocument debug = doc;
+  debug.scene.debug = DebugView::Level;
+  EXPECT_NO_THROW(view.show(debug)) << "auto falls back without an error";
+  EXPECT_EQ(renderer.device(), Device::Cpu);
+  EXPECT_FALSE(view.show(debug));
+  EXPECT_EQ(renderer.device(), Device::Cpu);
+  EXPECT_TRUE(view.show(doc));
+  EXPECT_EQ(renderer.device(), Device::Cuda) << "a later scene the GPU can draw goes back to it";
+  ASSERT_TRUE(view.refine(PassControl()));
+
+  // A first scene the GPU cannot draw starts on the CPU; the next one moves to the GPU.
+  Renderer other(m);
+  ProgressiveView fresh(other, "auto");
+  EXPECT_NO_THROW(fresh.show(debug));
+  EXPECT_EQ(other.device(), Device::Cpu);
+  EXPECT_TRUE(fresh.show(doc));
+  EXPECT_EQ(other.device(), Device::Cuda);
 }

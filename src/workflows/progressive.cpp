@@ -1,5 +1,8 @@
 #include "exabricks/workflows/progressive.h"
 
+#include "exabricks/core/log.h"
+#include "exabricks/render/scene_vocabulary.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -27,6 +30,12 @@ bool sameMeshData(const std::vector<SceneMesh>& a, const std::vector<SceneMesh>&
   return true;
 }
 
+/// Throws exa::Error, as resolveDevice does, where `device` is none of deviceChoices().
+void checkDeviceChoice(const std::string& device) {
+  const std::vector<std::string>& choices = deviceChoices();
+  if (std::find(choices.begin(), choices.end(), device) == choices.end()) resolveDevice(device);
+}
+
 } // namespace
 
 int nextDraftDivisor(int divisor, int width, int height, double draftPixels, double seconds, double budget,
@@ -40,30 +49,89 @@ int nextDraftDivisor(int divisor, int width, int height, double draftPixels, dou
 }
 
 ProgressiveView::ProgressiveView(Renderer& renderer, std::string device, DraftPolicy policy)
-    : renderer_(renderer), device_(std::move(device)), policy_(policy), divisor_(policy.divisor) {}
+    : renderer_(renderer), device_(std::move(device)), policy_(policy), divisor_(policy.divisor) {
+  checkDeviceChoice(device_);
+}
 
 bool ProgressiveView::show(const SceneDocument& doc) {
-  const bool sceneChanged = takeScene(doc.scene, nullptr);
+  std::string fallback;
+  const bool sceneChanged = takeScene(doc.scene, nullptr, fallback);
   doc_.input = doc.input;
   doc_.hasCamera = doc.hasCamera;
   doc_.path = doc.path;
   const bool frameChanged = showFrame(doc.frame);
+  reportFallback(fallback);
   return sceneChanged || frameChanged;
 }
 
 SceneUpdate ProgressiveView::showScene(const Scene& scene) {
   SceneUpdate update;
-  takeScene(scene, &update);
+  std::string fallback;
+  takeScene(scene, &update, fallback);
+  reportFallback(fallback);
   return update;
 }
 
-bool ProgressiveView::takeScene(const Scene& scene, SceneUpdate* update) {
-  const SceneUpdate u = setSceneOnDevice(renderer_, scene, device_, deviceChosen_);
+void ProgressiveView::setDevice(std::string device) {
+  if (device == device_) return;
+  checkDeviceChoice(device);
+  device_ = std::move(device);
+  deviceChosen_ = false;
+  deviceAwaitsScene_ = false;
+}
+
+bool ProgressiveView::takeScene(const Scene& scene, SceneUpdate* update, std::string& fallback) {
+  std::string sceneKey = sceneKeyOf(scene);
+  const bool same = sceneKey == sceneKey_ && sameMeshData(doc_.scene.meshes, scene.meshes);
+  const SceneUpdate u = placeScene(scene, !same, fallback);
   if (update) *update = u;
-  const bool sameMeshes = sameMeshData(doc_.scene.meshes, scene.meshes);
   doc_.scene = scene;
-  if (!sameMeshes) sceneKey_.clear();
-  return changed(sceneKey_, sceneKeyOf(scene));
+  const Device device = renderer_.device();
+  if (same && device == sceneDevice_) return false;
+  sceneKey_ = std::move(sceneKey);
+  sceneDevice_ = device;
+  restart();
+  return true;
+}
+
+SceneUpdate ProgressiveView::placeScene(const Scene& scene, bool changed, std::string& fallback) {
+  SceneUpdate u;
+  try {
+    u = renderer_.setScene(scene);
+  } catch (const Error& e) {
+    if (renderer_.device() == Device::Cpu) throw;
+    // The device lacks what this scene needs: the CPU draws it, and where the device is the one
+    // chosen, the next scene tries it again (else the choice follows).
+    renderer_.setDevice(Device::Cpu);
+    if (deviceChosen_) {
+      deviceAwaitsScene_ = true;
+      fallback = e.what();
+      return renderer_.setScene(scene);
+    }
+    u = renderer_.setScene(scene);
+  }
+  if (deviceChosen_ && !(deviceAwaitsScene_ && changed)) return u;
+  deviceChosen_ = true;
+  deviceAwaitsScene_ = false;
+  Device wanted = Device::Cpu;
+  try {
+    wanted = resolveDevice(device_);
+    renderer_.setDevice(wanted);
+    noted_.clear();
+  } catch (const Error& e) {
+    renderer_.setDevice(Device::Cpu);
+    deviceAwaitsScene_ = wanted != Device::Cpu; // the device is there: the scene is why
+    fallback = e.what();
+  }
+  return u;
+}
+
+void ProgressiveView::reportFallback(const std::string& fallback) {
+  if (fallback.empty()) return;
+  const std::string message = strCat("device ", device_, ": rendering on the CPU, since ", fallback);
+  if (device_ != "auto") throw DeviceFallbackError(message);
+  if (message != noted_) logNote(message);
+  noted_ = message;
 }
 
 bool ProgressiveView::showFrame(const Frame& frame) {
@@ -129,8 +197,15 @@ bool ProgressiveView::refineTo(int passes, const PassControl& control) {
   Frame pass = doc_.frame;
   while (passes_ < passes) {
     pass.frameIndex = passes_;
-    const bool cancelled = control.cancel && control.cancel->load(std::memory_order_relaxed);
-    if (cancelled || !renderer_.renderPass(pass, buffer_, control)) {
+    bool rendered = false;
+    try {
+      const bool cancelled = control.cancel && control.cancel->load(std::memory_order_relaxed);
+      rendered = !cancelled && renderer_.renderPass(pass, buffer_, control);
+    } catch (...) {
+      restart();
+      throw;
+    }
+    if (!rendered) {
       // A cancelled pass leaves part of its tiles added: the refinement starts over.
       restart();
       return false;

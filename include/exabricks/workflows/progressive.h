@@ -2,12 +2,14 @@
 // representation): a draft first, at a fraction of the resolution and a lower sampling rate,
 // its size adapted so that it renders within a time budget; then full-resolution passes up to
 // the frame's samples per pixel, each added to the last (pass k uses frame index k, so the
-// result equals an N-sample render of the frame). A new scene, frame or depth limit starts the
-// refinement over, and the renderer rebuilds only what the change needs; a cancel flag ends a
-// pass early; the device is chosen on the first scene, the CPU taking over under "auto" where
-// the device cannot render it.
+// result equals an N-sample render of the frame). A new scene, frame, depth limit or device
+// starts the refinement over, and the renderer rebuilds only what the change needs; a cancel flag
+// ends a pass early. The device is chosen on the first scene (and on the first after the choice
+// changes); where it cannot be used, or cannot draw a scene, the CPU draws that scene, and the
+// next scene that differs tries the device again.
 #pragma once
 
+#include "exabricks/core/error.h"
 #include "exabricks/render/frame_buffer.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
@@ -32,16 +34,28 @@ struct DraftPolicy {
 int nextDraftDivisor(int divisor, int width, int height, double draftPixels, double seconds, double budget,
                      int maxDivisor);
 
+/// What a view throws where its device, named other than "auto", cannot be used or cannot draw
+/// the scene: the view then shows the scene on the CPU all the same (shown() holds it, passes go
+/// on there), so that a caller may report the error and render on.
+class DeviceFallbackError : public Error {
+public:
+  using Error::Error;
+};
+
 class ProgressiveView {
 public:
+  /// A view of `renderer` on `device` (one of deviceChoices(), as selectDevice takes it).
   ProgressiveView(Renderer& renderer, std::string device = "auto", DraftPolicy policy = {});
   ProgressiveView(const ProgressiveView&) = delete; ///< shown() refers to the view's own depth limit
   ProgressiveView& operator=(const ProgressiveView&) = delete;
 
   /// Shows `doc`: its scene on the renderer (what changed is rebuilt) and its frame. The
-  /// refinement starts over when the scene or the frame differs from the one shown; true then.
-  /// Meshes are compared by their data; the frame's depth limit (if any) is copied, and its
-  /// values count as part of the frame.
+  /// refinement starts over when the scene, the frame or the renderer's device differs from the
+  /// one shown; true then. Meshes are compared by their data; the frame's depth limit (if any) is
+  /// copied, and its values count as part of the frame. Where the device cannot be used or cannot
+  /// draw the scene, the renderer draws it on the CPU: under "auto" the log says why (once per
+  /// reason); another choice throws DeviceFallbackError once the document is shown. A later scene
+  /// that differs tries the device again.
   bool show(const SceneDocument& doc);
   /// Shows `scene` with the frame shown, as show() does; returns what the renderer rebuilt.
   SceneUpdate showScene(const Scene& scene);
@@ -64,7 +78,8 @@ public:
   /// counted, and the refinement starts over) or when the view already holds its passes.
   bool refine(const PassControl& control);
   /// Adds full-resolution passes until the view holds `passes`, which may go past
-  /// targetPasses() (more samples of the same frame); false when cancelled, as refine().
+  /// targetPasses() (more samples of the same frame); false when cancelled, as refine(). A pass
+  /// that throws starts the refinement over too.
   bool refineTo(int passes, const PassControl& control);
   /// The passes added up; after a restart, until the next pass, the passes from before it.
   const FrameBuffer& buffer() const { return buffer_; }
@@ -72,20 +87,34 @@ public:
   int targetPasses() const { return doc_.frame.samplesPerPixel; }
   bool complete() const { return passes_ >= targetPasses(); }
 
+  /// Moves the view to `device` with the next scene shown (show(), showScene()); the refinement
+  /// starts over there where the renderer's device changes.
+  void setDevice(std::string device);
+  const std::string& device() const { return device_; }
+
   int draftDivisor() const { return divisor_; }
   const SceneDocument& shown() const { return doc_; }
   Renderer& renderer() { return renderer_; }
 
 private:
   /// Shows `scene` (its update in `update`, unless null); true when the refinement starts over.
-  bool takeScene(const Scene& scene, SceneUpdate* update);
+  /// Why the CPU draws it rather than the device chosen goes to `fallback` (empty otherwise).
+  bool takeScene(const Scene& scene, SceneUpdate* update, std::string& fallback);
+  /// Makes `scene` the renderer's on the device chosen, where it can draw it; `changed`: the
+  /// scene differs from the one shown.
+  SceneUpdate placeScene(const Scene& scene, bool changed, std::string& fallback);
+  /// Says why the CPU draws the scene (`fallback`, unless empty), as show() describes.
+  void reportFallback(const std::string& fallback);
   /// Holds `key` in `held`; true (and the refinement starts over) when it differs from the key held.
   bool changed(std::string& held, std::string key);
-  std::string key() const { return sceneKey_ + frameKey_; }
+  std::string key() const { return deviceName(sceneDevice_) + sceneKey_ + frameKey_; }
 
   Renderer& renderer_;
   std::string device_;
-  bool deviceChosen_ = false;
+  bool deviceChosen_ = false;        ///< the renderer was moved to device_ (else it is, with the next scene)
+  bool deviceAwaitsScene_ = false;   ///< on the CPU for a scene device_ could not draw
+  Device sceneDevice_ = Device::Cpu; ///< where the passes held were rendered
+  std::string noted_;                ///< the last fallback the log told of
   DraftPolicy policy_;
   int divisor_;
   SceneDocument doc_;

@@ -107,14 +107,9 @@ constexpr double kStillPassSeconds = 0.15;
 // Drafts as the library's progressive views make them (their budget is the view's frame time).
 const exa::DraftPolicy kDraftPolicy;
 
-bool sameCamera(const exa::Camera& a, const exa::Camera& b) {
-  return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovy == b.fovy &&
-         a.orthographic == b.orthographic && a.orthoHeight == b.orthoHeight;
-}
-
 // The smallest depth over each block of the full-resolution depth that a draft pixel covers: the
 // draft's rays end no farther than the nearest opaque geometry of their block.
-std::vector<float> blockDepth(const std::vector<float>& depth, int width, int height, int dw, int dh) {
+std::vector<float> blockDepth(const float* depth, int width, int height, int dw, int dh) {
   std::vector<float> out(size_t(dw) * size_t(dh), std::numeric_limits<float>::infinity());
   for (int y = 0; y < height; ++y) {
     const int by = std::min(dh - 1, int(int64_t(y) * dh / height));
@@ -137,36 +132,9 @@ void main() { gl_FragData[0] = texture(image, texCoord); }
 
 } // namespace
 
-struct vtkExaBricksVolumeMapper::Accumulation {
-  // What the passes were rendered for: any change starts over.
-  const exa::paraview::Engine* engine = nullptr;
-  exa::Scene scene;
-  exa::Camera camera;
-  int width = 0, height = 0, samplesPerPixel = 0;
-  float rate = 0.f;
-  exa::Device device = exa::Device::Cpu;
-  std::vector<float> depth;
-  bool valid = false;
-
-  exa::FrameBuffer buffer;
-  exa::Image image; ///< the buffer resolved
-  uint32_t resolvedPasses = 0;
-
-  bool matches(const exa::paraview::Engine* e, const exa::Scene& s, const exa::Frame& f, exa::Device d,
-               const std::vector<float>& z) const {
-    return valid && engine == e && sameCamera(camera, f.camera) && width == f.width && height == f.height &&
-           samplesPerPixel == f.samplesPerPixel && rate == f.rate && device == d && depth == z && sameScene(scene, s);
-  }
-  static bool sameScene(const exa::Scene& a, const exa::Scene& b) {
-    return a.layers == b.layers && a.iso == b.iso && a.shading == b.shading && a.ao.rays == b.ao.rays &&
-           a.ao.length == b.ao.length && a.ao.volume == b.ao.volume && a.volume == b.volume && a.clip == b.clip &&
-           a.integration == b.integration && a.pathTracing == b.pathTracing;
-  }
-};
-
 vtkStandardNewMacro(vtkExaBricksVolumeMapper);
 
-vtkExaBricksVolumeMapper::vtkExaBricksVolumeMapper() : Still(std::make_unique<Accumulation>()) {
+vtkExaBricksVolumeMapper::vtkExaBricksVolumeMapper() {
   // The data comes with the engine, not through the pipeline; vtkVolume draws only mappers with
   // an input, so the mapper has an empty one.
   vtkNew<vtkImageData> placeholder;
@@ -186,8 +154,8 @@ void vtkExaBricksVolumeMapper::PrintSelf(ostream& os, vtkIndent indent) {
 }
 
 void vtkExaBricksVolumeMapper::SetEngine(std::shared_ptr<exa::paraview::Engine> engine) {
+  this->View.reset(); // it refers to the engine's renderer
   this->Engine = std::move(engine);
-  this->Still->valid = false;
   this->Modified();
 }
 
@@ -281,90 +249,48 @@ void vtkExaBricksVolumeMapper::Draw(vtkOpenGLRenderWindow* window, const exa::Im
   this->Texture->Deactivate();
 }
 
-void vtkExaBricksVolumeMapper::UpdateRenderer(exa::paraview::Engine& e, const exa::Scene& scene) {
-  exa::Renderer& renderer = *e.renderer;
-  const std::string& choice = this->Options.device;
-  exa::SceneUpdate update;
-  try {
-    update = renderer.setScene(scene);
-  } catch (const exa::Error& error) {
-    if (renderer.device() == exa::Device::Cpu) throw;
-    // The GPU lacks what this scene needs: the CPU renders it (said once for an explicit choice).
-    if (choice != "auto")
-      vtkErrorMacro("ExaBricks: the GPU cannot render this scene (" << error.what() << "); rendering on the CPU");
-    renderer.setDevice(exa::Device::Cpu);
-    renderer.setScene(scene);
-    this->DeviceAwaitsScene = true;
-    this->DeviceInUse = exa::deviceName(renderer.device());
-    return;
+void vtkExaBricksVolumeMapper::Show(exa::paraview::Engine& e, const exa::SceneDocument& doc) {
+  if (!this->View || &this->View->renderer() != e.renderer.get()) {
+    this->View.reset();
+    this->View = std::make_unique<exa::ProgressiveView>(*e.renderer, this->Options.device, kDraftPolicy);
+    this->StillImagePasses = -1;
   }
-  // Back on the CPU for an earlier scene: a new scene may suit the GPU again.
-  const bool retry = this->DeviceAwaitsScene && (update.volume || update.iso || update.meshes);
-  if (this->DeviceEngine == &e && this->DeviceChoice == choice && !retry) return;
-  this->DeviceEngine = &e;
-  this->DeviceChoice = choice;
+  this->View->setDevice(this->Options.device);
+  bool restarted = true;
   try {
-    exa::selectDevice(renderer, choice);
-  } catch (const exa::Error& error) {
-    renderer.setDevice(exa::Device::Cpu);
-    vtkErrorMacro("ExaBricks: Device '" << choice << "' cannot be used (" << error.what() << "); rendering on the CPU");
+    restarted = this->View->show(doc);
+  } catch (const exa::DeviceFallbackError& error) {
+    // The device asked for cannot draw this scene: the view shows it on the CPU.
+    vtkErrorMacro("ExaBricks: " << error.what());
   }
-  // On the CPU while a GPU could be used: the scene is why, and the next one is tried again.
-  this->DeviceAwaitsScene =
-      renderer.device() == exa::Device::Cpu && choice != "cpu" && exa::cudaStatus().problem.empty();
-  this->DeviceInUse = exa::deviceName(renderer.device());
+  if (restarted) this->StillImagePasses = -1;
+  this->DeviceInUse = exa::deviceName(e.renderer->device());
 }
 
-void vtkExaBricksVolumeMapper::RenderDraft(exa::paraview::Engine& e, vtkOpenGLRenderWindow* window,
-                                           const exa::Frame& frame, const std::vector<float>& depth,
-                                           double targetSeconds) {
-  exa::Frame draft = frame.preview(this->DraftDivisor, frame.rate * kDraftPolicy.rateFactor);
-  draft.samplesPerPixel = 1;
-  draft.frameIndex = 0;
+void vtkExaBricksVolumeMapper::RenderDraft(vtkOpenGLRenderWindow* window, double targetSeconds) {
+  exa::ProgressiveView& view = *this->View;
+  const exa::Frame& frame = view.shown().frame;
+  exa::Frame draft = view.draftFrame();
+  // The draft's rays end no farther than the nearest opaque depth of the pixels each covers.
   std::vector<float> coarse;
-  if (!depth.empty()) {
-    coarse = draft.width == frame.width && draft.height == frame.height
-                 ? depth
-                 : blockDepth(depth, frame.width, frame.height, draft.width, draft.height);
+  draft.depthLimit = nullptr;
+  if (frame.depthLimit) {
+    coarse = blockDepth(frame.depthLimit, frame.width, frame.height, draft.width, draft.height);
     draft.depthLimit = coarse.data();
     draft.depthLimitPlanar = true;
   }
-  exa::RenderStats stats;
-  const exa::Image image = e.renderer->render(draft, &stats);
-  this->Draw(window, image, true);
+  const int divisor = view.draftDivisor();
+  // The next draft's divisor follows the time the view allows a frame.
+  if (!view.renderDraft(draft, this->DraftBuffer, exa::PassControl(), targetSeconds)) return;
+  this->Draw(window, this->DraftBuffer.resolve(), true);
   this->ShownPasses = 0;
   this->ShownDraft = true;
-  // The next draft's divisor: as many pixels as fit the time the view allows a frame, at the
-  // time per pixel this one took.
-  this->DraftDivisor =
-      exa::nextDraftDivisor(this->DraftDivisor, frame.width, frame.height, double(draft.width) * double(draft.height),
-                            stats.seconds, targetSeconds, kDraftPolicy.maxDivisor);
+  this->DraftDivisor = divisor;
 }
 
-void vtkExaBricksVolumeMapper::RenderStill(exa::paraview::Engine& e, vtkOpenGLRenderWindow* window,
-                                           const exa::Frame& frame, std::vector<float> depth) {
-  Accumulation& a = *this->Still;
-  const exa::Device device = e.renderer->device();
-  if (!a.matches(&e, e.renderer->scene(), frame, device, depth)) {
-    a.engine = &e;
-    a.scene = e.renderer->scene();
-    a.camera = frame.camera;
-    a.width = frame.width;
-    a.height = frame.height;
-    a.samplesPerPixel = frame.samplesPerPixel;
-    a.rate = frame.rate;
-    a.device = device;
-    a.depth = std::move(depth);
-    a.buffer.resize(frame.width, frame.height);
-    a.resolvedPasses = 0;
-    a.valid = true;
-  }
-  exa::Frame f = frame;
-  if (!a.depth.empty()) {
-    f.depthLimit = a.depth.data();
-    f.depthLimitPlanar = true;
-  }
-  const int target = frame.samplesPerPixel;
+void vtkExaBricksVolumeMapper::RenderStill(vtkOpenGLRenderWindow* window) {
+  exa::ProgressiveView& view = *this->View;
+  const exa::PassControl control;
   // Renders asked of the interactor come only where an event loop runs whenever the application
   // is idle: Qt's interactor (ParaView's GUI), or a generic one whose application serves its
   // timers (its CreateOneShotTimer fails otherwise, as in pvbatch). pvpython's X interactor has a
@@ -373,27 +299,23 @@ void vtkExaBricksVolumeMapper::RenderStill(exa::paraview::Engine& e, vtkOpenGLRe
   const bool later = !this->CompleteStillRenders && interactor && interactor->GetInitialized() &&
                      interactor->GetEnabled() &&
                      (interactor->IsA("QVTKInteractor") || interactor->IsA("vtkGenericRenderWindowInteractor"));
-  a.valid = false; // until the passes are in
-  if (int(a.buffer.passes()) < target) {
+  if (!view.complete()) {
     if (later) {
       // Passes for a moment, then the next render adds more: the view stays responsive.
       exa::Timer timer;
-      do {
-        f.frameIndex = int(a.buffer.passes());
-        e.renderer->renderPass(f, a.buffer);
-      } while (int(a.buffer.passes()) < target && timer.seconds() < kStillPassSeconds);
+      do
+        view.refine(control);
+      while (!view.complete() && timer.seconds() < kStillPassSeconds);
     }
     // Without an event loop to ask for the next render (pvbatch, a server), finish here.
-    if (int(a.buffer.passes()) < target && !(later && this->ScheduleRender(interactor)))
-      e.renderer->renderPasses(f, a.buffer, target);
+    if (!view.complete() && !(later && this->ScheduleRender(interactor))) view.refineTo(view.targetPasses(), control);
   }
-  a.valid = true;
-  if (a.resolvedPasses != a.buffer.passes() || a.image.width != frame.width || a.image.height != frame.height) {
-    a.buffer.resolve(a.image);
-    a.resolvedPasses = a.buffer.passes();
+  if (this->StillImagePasses != view.passes()) {
+    view.buffer().resolve(this->StillImage);
+    this->StillImagePasses = view.passes();
   }
-  this->Draw(window, a.image, false);
-  this->ShownPasses = int(a.buffer.passes());
+  this->Draw(window, this->StillImage, false);
+  this->ShownPasses = view.passes();
   this->ShownDraft = false;
 }
 
@@ -449,23 +371,29 @@ void vtkExaBricksVolumeMapper::Render(vtkRenderer* ren, vtkVolume* vol) {
                                exa::paraview::transferFunctionOf(color, property->GetScalarOpacity(0),
                                                                  property->GetScalarOpacityUnitDistance(0), cellWidth),
                                color, property->GetShade(0) != 0, this->Options);
-    this->UpdateRenderer(e, scene);
-    std::vector<float> depth = this->ViewDepth(camera, aspect, x0, y0, width, height);
-    exa::Frame frame;
+    const std::vector<float> depth = this->ViewDepth(camera, aspect, x0, y0, width, height);
+    auto doc = std::make_unique<exa::SceneDocument>();
+    doc->scene = scene;
+    doc->hasCamera = true;
+    exa::Frame& frame = doc->frame;
     frame.camera = exa::paraview::cameraOf(camera, aspect);
     frame.width = width;
     frame.height = height;
     frame.rate = this->Options.rate;
     frame.samplesPerPixel = this->Options.samplesPerPixel;
     frame.validate();
-    this->Document = std::make_unique<exa::SceneDocument>();
-    this->Document->scene = scene;
-    this->Document->frame = frame;
-    this->Document->hasCamera = true;
+    // Rays end at the opaque geometry's depth (the view keeps a copy).
+    if (!depth.empty()) {
+      frame.depthLimit = depth.data();
+      frame.depthLimitPlanar = true;
+    }
+    this->Show(e, *doc);
+    frame.depthLimit = nullptr;
+    this->Document = std::move(doc);
     if (interactive)
-      this->RenderDraft(e, window, frame, depth, 1.0 / updateRate);
+      this->RenderDraft(window, 1.0 / updateRate);
     else
-      this->RenderStill(e, window, frame, std::move(depth));
+      this->RenderStill(window);
   } catch (const std::exception& error) {
     vtkErrorMacro(<< error.what());
   }

@@ -1,16 +1,18 @@
 // A volume mapper that renders the leaf cells of AMR data with exabricks into the render view:
 // the camera, view size and transfer function are the view's and the volume property's, every
 // ray ends at the depth of the opaque geometry drawn before it, and the image is blended over
-// the view's (premultiplied alpha). Interactive renders (the render window asks for more than
-// one frame per second) draw a draft at a fraction of the resolution, upscaled; still renders
-// add passes to an accumulation that lasts while the camera, size, scene and depth stay the same,
-// up to the samples per pixel asked for.
+// the view's (premultiplied alpha). The mapper shows what it renders to an exa::ProgressiveView:
+// interactive renders (the render window asks for more than one frame per second) draw the view's
+// draft at a fraction of the resolution, upscaled; still renders add the view's passes, which
+// last while the camera, size, scene, device and depth stay the same, up to the samples per pixel
+// asked for.
 #pragma once
 
 #include "vtkAbstractVolumeMapper.h"
 
 #include "exabricks/amr/model.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/progressive.h"
 
 #include "vtkWeakPointer.h"
 
@@ -114,12 +116,13 @@ private:
   /// The opaque depth of the viewport as exabricks' planar depth (row 0 at the top; +inf where
   /// nothing opaque was drawn); empty when the depth buffer cannot be read.
   std::vector<float> ViewDepth(vtkCamera* camera, double aspect, int x0, int y0, int width, int height);
-  /// Makes the scene current and the renderer run where the Device setting asks.
-  void UpdateRenderer(exa::paraview::Engine& engine, const exa::Scene& scene);
-  void RenderDraft(exa::paraview::Engine& engine, vtkOpenGLRenderWindow* window, const exa::Frame& frame,
-                   const std::vector<float>& depth, double targetSeconds);
-  void RenderStill(exa::paraview::Engine& engine, vtkOpenGLRenderWindow* window, const exa::Frame& frame,
-                   std::vector<float> depth);
+  /// Shows `doc` to the engine's view (made for the engine on its first render), on the device
+  /// the Device setting asks for.
+  void Show(exa::paraview::Engine& engine, const exa::SceneDocument& doc);
+  /// Draws the view's draft, its divisor adapted to `targetSeconds`.
+  void RenderDraft(vtkOpenGLRenderWindow* window, double targetSeconds);
+  /// Adds the view's passes (all, or some and then asks for another render) and draws them.
+  void RenderStill(vtkOpenGLRenderWindow* window);
   void Draw(vtkOpenGLRenderWindow* window, const exa::Image& image, bool smooth);
   /// Asks the render window's interactor for another render soon (refinement), where it has an
   /// event loop; false where it cannot.
@@ -134,20 +137,15 @@ private:
   vtkOpenGLQuadHelper* Quad = nullptr;
   bool WarnedDepth = false;
 
-  // Where the renderer runs: the choice applied to the engine in use and what it gave.
-  exa::paraview::Engine* DeviceEngine = nullptr;
-  std::string DeviceChoice;
+  // The drafts and passes of the engine's renderer, on the device it runs on.
+  std::unique_ptr<exa::ProgressiveView> View;
+  exa::FrameBuffer DraftBuffer;
+  exa::Image StillImage;     ///< the view's passes resolved
+  int StillImagePasses = -1; ///< the passes StillImage holds (-1: none of the view's)
   std::string DeviceInUse = "cpu";
-  bool DeviceAwaitsScene = false; ///< on the CPU because a scene needed it, with a GPU at hand
 
   // What the last render drew.
   std::unique_ptr<exa::SceneDocument> Document;
-
-  // The accumulated still image and what it was rendered for.
-  struct Accumulation;
-  std::unique_ptr<Accumulation> Still;
-
-  // Drafts: the divisor of the resolution, adapted to the time the view allows a frame.
   int DraftDivisor = 4;
   int ShownPasses = 0;
   bool ShownDraft = false;
