@@ -17,7 +17,9 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <exception>
+#include <functional>
 #include <thread>
 
 namespace py = pybind11;
@@ -81,11 +83,44 @@ public:
     view_.showFrame(f); // a change starts the accumulation over
     const int target = passes > 0 ? passes : view_.passes() + 1;
     bool interrupted = false, cancelled = false;
-    const std::exception_ptr error = renderInWorker(target, interrupted, cancelled);
+    const std::exception_ptr error =
+        renderInWorker([&](const PassControl& control) { view_.refineTo(target, control); }, interrupted, cancelled);
     if (interrupted || cancelled) view_.restart(); // partial passes: start over next time
     if (interrupted) throw py::error_already_set();
     if (error) std::rethrow_exception(error);
     return int(view_.buffer().passes());
+  }
+
+  /// Shows the frame as render() does (without a depth limit) and renders the view's draft of it:
+  /// the frame divided by the view's draft divisor, at the draft's share of its rate, one sample.
+  /// The divisor of the next draft then adapts to `budget` seconds (the view's policy's when 0).
+  /// Returns (image, divisor, seconds) with the scene's legends in the image, or None when
+  /// cancelled; Ctrl-C cancels as in render().
+  py::object renderDraft(const std::string& frameJson, double budget) {
+    if (!(budget >= 0.0) || !std::isfinite(budget)) fail("budget must be a number of seconds >= 0, not ", budget);
+    view_.showFrame(parseFrame(frameJson)); // a change starts the accumulation over
+    const Frame draft = view_.draftFrame();
+    const int divisor = view_.draftDivisor();
+    bool interrupted = false, cancelled = false, rendered = false;
+    const std::exception_ptr error = renderInWorker(
+        [&](const PassControl& control) { rendered = view_.renderDraft(draft, draftBuffer_, control, budget); },
+        interrupted, cancelled);
+    if (interrupted) throw py::error_already_set();
+    if (error) std::rethrow_exception(error);
+    if (cancelled || !rendered) return py::none();
+    draftBuffer_.resolve(draftImage_);
+    drawLegends(view_.shown().scene, draft, *dataset_->model, dataset_->info, legendText(), draftImage_);
+    return py::make_tuple(pymod::imageArray(draftImage_), divisor, draftBuffer_.stats().seconds);
+  }
+
+  /// The divisor of the resolution for the next draft.
+  int draftDivisor() const { return view_.draftDivisor(); }
+
+  /// The last draft as PNG bytes, as png() encodes the accumulated image.
+  py::bytes draftPng() const {
+    const Scene& scene = view_.shown().scene;
+    const std::vector<unsigned char> bytes = encodePng(draftImage_, scene.keepAlpha, scene.background);
+    return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
 
   /// Cancels the render in flight between tiles (from any thread, without the GIL), or the next
@@ -97,9 +132,7 @@ public:
   Image resolved() const {
     Image img;
     view_.buffer().resolve(img);
-    LegendText text;
-    text.dataset = legendDatasetLabel(dataset_->name);
-    drawLegends(view_.shown().scene, view_.shown().frame, *dataset_->model, dataset_->info, text, img);
+    drawLegends(view_.shown().scene, view_.shown().frame, *dataset_->model, dataset_->info, legendText(), img);
     return img;
   }
 
@@ -170,6 +203,12 @@ public:
   }
 
 private:
+  LegendText legendText() const {
+    LegendText text;
+    text.dataset = legendDatasetLabel(dataset_->name);
+    return text;
+  }
+
   static Frame parseFrame(const std::string& json) {
     const SceneDocument doc = readSceneJson(json, "frame");
     if (!doc.hasCamera) fail("frame: a camera is needed");
@@ -192,10 +231,11 @@ private:
     return limit;
   }
 
-  /// Refines the view until it holds `target` passes, on a worker thread without the GIL, looking
-  /// every 20 ms for cancel(), Ctrl-C (`interrupted`: a Python error is set) and the
-  /// interpreter's end. Returns what the worker threw, if anything.
-  std::exception_ptr renderInWorker(int target, bool& interrupted, bool& cancelled) {
+  /// Runs `work` (passes of the view under the control it is given) on a worker thread without
+  /// the GIL, looking every 20 ms for cancel(), Ctrl-C (`interrupted`: a Python error is set) and
+  /// the interpreter's end, any of which cancels it. Returns what the worker threw, if anything.
+  std::exception_ptr renderInWorker(const std::function<void(const PassControl&)>& work, bool& interrupted,
+                                    bool& cancelled) {
     std::atomic<bool> cancel{false}, done{false};
     std::exception_ptr error;
     py::gil_scoped_release release;
@@ -203,7 +243,7 @@ private:
       try {
         PassControl control;
         control.cancel = &cancel;
-        view_.refineTo(target, control);
+        work(control);
       } catch (...) {
         error = std::current_exception();
       }
@@ -253,7 +293,9 @@ private:
 
   std::shared_ptr<Dataset> dataset_; ///< declared first: outlives the renderer
   Renderer renderer_;
-  ProgressiveView view_; ///< the passes of renderer_, on the device asked for (cpu, cuda, auto or portable)
+  ProgressiveView view_;    ///< the passes of renderer_, on the device asked for (cpu, cuda, auto or portable)
+  FrameBuffer draftBuffer_; ///< the last draft
+  Image draftImage_;        ///< the last draft resolved, with its legends
   std::atomic<bool> cancelRequested_{false};
 };
 
@@ -271,6 +313,10 @@ void bindRenderer(py::module_& m) {
       .def("save", &PyRenderer::save, py::arg("path"), py::arg("bits") = 8, py::arg("brightest") = false)
       .def("stats", &PyRenderer::stats)
       .def("pick", &PyRenderer::pick, py::arg("origin"), py::arg("direction"))
+      .def("render_draft", &PyRenderer::renderDraft, py::arg("frame_json"), py::arg("budget") = 0.0,
+           "Renders the view's draft of the frame: (image, divisor, seconds), or None when cancelled")
+      .def_property_readonly("draft_divisor", &PyRenderer::draftDivisor, "The divisor of the next draft")
+      .def("draft_png", &PyRenderer::draftPng, "The last draft as PNG bytes")
       .def("cancel", &PyRenderer::cancel, "Cancels the render in flight (or the next one)")
       .def("visible_bounds", &PyRenderer::visibleBounds);
 }

@@ -495,6 +495,21 @@ class Scene:
         return self._renderer.render(self._frame_json(w, h, max(target, passes or 1), rate or self.rate), int(passes),
                                      depth_limit, bool(depth_limit_planar))
 
+    def render_draft(self, width=None, height=None, budget=0.035, spp=None, rate=None):
+        """Renders the draft an interactive view shows of the frame before refining it, as the
+        viewer's and ParaView's drafts are made: an (h, w, 4) float32 array like render's, the
+        frame's size divided by the scene's draft divisor (a quarter at first), one sample per
+        pixel at half the frame's rate. The divisor then adapts so that the next draft renders in
+        about `budget` seconds, and stays while the time is within half to 1.4 times the budget
+        (drafts do not flicker between two sizes). The frame (`spp` and `rate` as render takes
+        them) becomes the one shown, as render_progressive shows it: its passes carry on when it
+        is the same. None when cancelled."""
+        w, h = int(width or self.width), int(height or self.height)
+        self._update()
+        draft = self._renderer.render_draft(self._frame_json(w, h, int(spp or self.spp), rate or self.rate),
+                                            float(budget))
+        return None if draft is None else draft[0]
+
     def image(self):
         """The accumulated image as an (H, W, 4) float32 array (linear, premultiplied)."""
         return self._renderer.image()
@@ -534,11 +549,12 @@ class Scene:
         h = max(1, int(round(self.height * w / self.width)))
         return self.png(w, h)
 
-    def widget(self, width=512, height=512, preview=4, passes=16):
+    def widget(self, width=512, height=512, budget=0.035, passes=16):
         """An interactive view in Jupyter (ipywidgets): orbit, transfer-function range and
-        opacity, iso-value; each change renders a preview, then refines progressively."""
+        opacity, iso-value; each change shows a draft (render_draft with `budget` seconds), then
+        refines progressively up to `passes` samples per pixel."""
         from .widget import SceneWidget
-        return SceneWidget(self, width, height, preview, passes).widget
+        return SceneWidget(self, width, height, budget, passes).widget
 
 
 from .series import Series  # noqa: E402  (it uses Dataset and Scene above)

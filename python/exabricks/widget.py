@@ -1,7 +1,8 @@
 """An interactive view of a Scene in Jupyter (ipywidgets): orbit, transfer-function range and
-opacity scale, iso-value. Every change renders a cheap preview at once, its size adapted so that
-it takes about a tenth of a second (the library's rule for drafts); a background thread then
-refines the full-resolution image pass by pass until the target is reached or the next change.
+opacity scale, iso-value. Every change shows the scene's draft at once (Scene.render_draft: the
+library's progressive view sizes it to a time budget and samples it at a lower rate); a
+background thread then refines the full-resolution image pass by pass until the target is
+reached or the next change.
 When the interpreter exits, the refinement is cancelled and its thread joined first (a daemon
 thread still rendering at exit would otherwise be torn down mid-render)."""
 
@@ -9,14 +10,9 @@ import atexit
 import threading
 import weakref
 
-import time
-
 import numpy as np
 
-from . import _core
-
 _live = weakref.WeakSet()
-_PREVIEW_SECONDS = 0.1  # what a preview may take, rendering and encoding
 
 
 @atexit.register
@@ -26,12 +22,12 @@ def _close_all():
 
 
 class SceneWidget:
-    def __init__(self, scene, width=512, height=512, preview=4, passes=16):
+    def __init__(self, scene, width=512, height=512, budget=0.035, passes=16):
         import ipywidgets as w
 
         self.scene = scene
         self.width, self.height = int(width), int(height)
-        self.preview = max(1, int(preview))
+        self.budget = float(budget)  # the seconds a draft aims at
         self.passes = max(1, int(passes))
         self._generation = 0
         self._lock = threading.Lock()
@@ -76,13 +72,12 @@ class SceneWidget:
             self._generation += 1
             generation = self._generation
             self._apply()
-            # A preview at once, at a fraction of the resolution; the next one sized to the time.
-            w, h = max(1, self.width // self.preview), max(1, self.height // self.preview)
-            start = time.perf_counter()
-            self.image.value = self.scene.png(w, h, 1)
-            self.preview = _core.next_draft_divisor(self.preview, self.width, self.height, w * h,
-                                                    time.perf_counter() - start, _PREVIEW_SECONDS, 16)
-        self.status.value = "preview %dx%d" % (w, h)
+            # The view's draft at once (it shows the frame the passes refine); None when cancelled.
+            draft = self.scene.render_draft(self.width, self.height, self.budget, spp=self.passes)
+            if draft is not None:
+                self.image.value = self.scene._renderer.draft_png()
+        if draft is not None:
+            self.status.value = "preview %dx%d" % (draft.shape[1], draft.shape[0])
         self._thread = threading.Thread(target=self._refine, args=(generation,), daemon=True)
         self._threads = [t for t in self._threads if t.is_alive()] + [self._thread]
         self._thread.start()
@@ -97,6 +92,11 @@ class SceneWidget:
             self.status.value = "%d of %d samples per pixel" % (done, self.passes)
             if done >= self.passes:
                 return
+
+    @property
+    def preview(self):
+        """The divisor of the resolution for the next draft (the view's, adapted to the budget)."""
+        return self.scene._renderer.draft_divisor
 
     def close(self):
         """Stops refining: cancels the pass in flight and waits for the background threads."""

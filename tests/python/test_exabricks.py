@@ -368,19 +368,84 @@ def test_yt_camera_converts():
     s.render()
 
 
-def test_widget_renders_a_preview_then_refines():
+def png_size(data):
+    """(width, height) of PNG bytes, from their header."""
+    assert data[:4] == b"\x89PNG"
+    return int.from_bytes(data[16:20], "big"), int.from_bytes(data[20:24], "big")
+
+
+def test_drafts_are_the_views_sized_to_the_budget_at_a_lower_rate():
+    s = eb.Scene(eb.load(), width=128, height=96)
+    r = s._renderer
+    assert r.draft_divisor == 4  # the view's first draft: a quarter of the resolution
+    draft = s.render_draft(budget=1e-9)
+    assert draft.shape == (24, 32, 4)
+    assert r.draft_divisor == 16  # far over a tiny budget: as coarse as drafts go
+    # One sample per pixel at half the frame's rate, as a render of that size and rate draws it.
+    assert draft[..., 3].max() > 0
+    np.testing.assert_array_equal(draft, s.render(32, 24, spp=1, rate=s.rate * 0.5))
+    assert not np.array_equal(draft, s.render(32, 24, spp=1))
+    draft = s.render_draft(budget=1e-9)
+    assert draft.shape == (6, 8, 4)
+    np.testing.assert_array_equal(draft, s.render(8, 6, spp=1, rate=s.rate * 0.5))
+    s.render_draft(budget=60.0)
+    assert r.draft_divisor == 1  # far under a large budget: the next one is full size
+    draft = s.render_draft(budget=60.0)
+    assert draft.shape == (96, 128, 4)
+    np.testing.assert_array_equal(draft, s.render(spp=1, rate=s.rate * 0.5))
+    assert png_size(r.draft_png()) == (128, 96)
+    # Each next divisor follows the view's rule, hysteresis included: at a budget near the time
+    # a draft took, the divisor stays.
+    frame = s._frame_json(128, 96, s.spp, s.rate)
+    seconds = None
+    for budget in (1e-4, 1e-3, 0.0, None, None, 1.0, None):
+        budget = seconds if budget is None else budget
+        image, divisor, seconds = r.render_draft(frame, budget)
+        assert 1 <= divisor <= 16
+        assert image.shape == (96 // divisor, 128 // divisor, 4)
+        expected = eb._core.next_draft_divisor(divisor, 128, 96, image.shape[0] * image.shape[1], seconds,
+                                               budget or 0.035, 16)
+        assert r.draft_divisor == expected
+    with pytest.raises(Exception, match="budget"):
+        s.render_draft(budget=-1.0)
+
+
+def test_widget_previews_are_the_views_drafts_then_it_refines():
     pytest.importorskip("ipywidgets", reason="ipywidgets is not installed (Debian: python3-ipywidgets)")
     from exabricks.widget import SceneWidget
     s = eb.Scene(eb.load())
-    w = SceneWidget(s, 64, 48, preview=4, passes=3)
-    # A 16x12 preview takes far less than its tenth of a second: the next one is finer.
-    assert w.preview < 4
+    drafts = []
+    render_draft = s.render_draft
+
+    def recording(*args, **kwargs):
+        draft = render_draft(*args, **kwargs)
+        drafts.append(draft.copy())
+        return draft
+
+    s.render_draft = recording
+    w = SceneWidget(s, 128, 96, budget=1e-9, passes=3)
+    # The view's first draft (a quarter), far over its budget: the next is as coarse as drafts go.
+    assert [d.shape for d in drafts] == [(24, 32, 4)]
+    assert w.preview == 16
     img = w.wait()
-    assert img.shape == (48, 64, 4)
+    assert img.shape == (96, 128, 4)
     assert w.image.value[:4] == b"\x89PNG"
-    w.azimuth.value = 120.0
-    assert w.wait().shape == (48, 64, 4)
     assert s.stats()["passes"] == 3
+    w.azimuth.value = 120.0
+    assert drafts[-1].shape == (6, 8, 4)
+    assert png_size(s._renderer.draft_png()) == (8, 6)
+    assert w.wait().shape == (96, 128, 4)
+    assert s.stats()["passes"] == 3
+    np.testing.assert_array_equal(drafts[-1], s.render(8, 6, spp=1, rate=s.rate * 0.5))
+    # A large budget: the drafts grow back to the full resolution.
+    w.budget = 60.0
+    w.azimuth.value = 130.0
+    assert drafts[-1].shape == (6, 8, 4) and w.preview == 1
+    w.azimuth.value = 140.0
+    assert drafts[-1].shape == (96, 128, 4)
+    w.wait()
+    np.testing.assert_array_equal(drafts[-1], s.render(128, 96, spp=1, rate=s.rate * 0.5))
+    w.close()
 
 
 @pytest.mark.parametrize("script", [
