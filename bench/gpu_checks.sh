@@ -30,10 +30,36 @@ say "gpu tests"
 "$bin/exabricks_gpu_tests" >>"$log" 2>&1 || status=1
 grep -E '^\[  (PASSED|FAILED|SKIPPED) ' "$log"
 
+say "path tracing: $data, 1024x1024, sun and environment, 4 bounces (16 samples per pixel; --stats frame time)"
+pt=(--integrator pathtrace --sun -1,1,-1,3 --environment 0.3,0.35,0.45 --bounces 4 --size 1024x1024 --spp 16 --stats)
+for d in cpu cuda; do
+  "$bin/exabricks" render "$data" --device "$d" "${pt[@]}" -o "$out/pathtrace_$d.png" \
+    >>"$log" 2>&1 || status=1
+done
+say "path tracing converges to the same image on both devices: $data, 256x256, 256 samples per pixel"
+for d in cpu cuda; do
+  "$bin/exabricks" render "$data" --device "$d" --integrator pathtrace --sun -1,1,-1,3 --environment 0.3,0.35,0.45 \
+    --bounces 4 --size 256x256 --spp 256 --stats -o "$out/converged_$d.png" --float "$out/converged_$d.pfm" \
+    >>"$log" 2>&1 || status=1
+done
 say "renders of $data"
 for d in cpu cuda; do
   "$bin/exabricks" render "$data" --device "$d" --size 1024x1024 --stats -o "$out/plt_$d.png" >>"$log" 2>&1 || status=1
 done
+
+say "generated dataset of $big_cells cells"
+start=$SECONDS
+"$bin/exabricks" generate -s blobs -n "$big_cells" -o /tmp/exabricks-big.cells >>"$log" 2>&1 || status=1
+say "generated in $((SECONDS - start)) s"
+"$bin/exabricks" -q build /tmp/exabricks-big.cells -o /tmp/exabricks-big.model >>"$log" 2>&1 || status=1
+say "built in $((SECONDS - start)) s"
+say "path tracing: generated dataset, 1024x1024 (as above)"
+for d in cuda cpu; do
+  "$bin/exabricks" render /tmp/exabricks-big.model --device "$d" "${pt[@]}" -o "$out/generated_pathtrace_$d.png" \
+    >>"$log" 2>&1 || status=1
+done
+"$bin/exabricks" render /tmp/exabricks-big.model --device cuda --size 1024x1024 --stats -o "$out/generated_cuda.png" \
+  >>"$log" 2>&1 || status=1
 
 say "device study: $data"
 "$bin/exabricks" bench "$data" --device cpu,cuda --size 1024x1024 --frames 5 --json >"$out/bench_plotfile.json" \
@@ -43,23 +69,9 @@ for d in cpu cuda; do
   "$bin/exabricks" bench "$data" --device "$d" --progressive 8 --size 1060x807 --preview-divisor 1 >>"$log" 2>&1 ||
     status=1
 done
-say "path tracing: $data, 1024x1024, sun and environment, 4 bounces (16 samples per pixel; --stats frame time)"
-pt=(--integrator pathtrace --sun -1,1,-1,3 --environment 0.3,0.35,0.45 --bounces 4 --size 1024x1024 --spp 16 --stats)
-for d in cpu cuda; do
-  "$bin/exabricks" render "$data" --device "$d" "${pt[@]}" --float "$out/pathtrace_$d.pfm" -o "$out/pathtrace_$d.png" \
-    >>"$log" 2>&1 || status=1
-done
-say "generated dataset of $big_cells cells"
-start=$SECONDS
-"$bin/exabricks" generate -s blobs -n "$big_cells" -o /tmp/exabricks-big.cells >>"$log" 2>&1 || status=1
-say "generated in $((SECONDS - start)) s"
 say "device study: generated dataset"
-"$bin/exabricks" bench /tmp/exabricks-big.cells --device cpu,cuda --size 1024x1024 --frames 3 --orbit 12 --json \
+"$bin/exabricks" bench /tmp/exabricks-big.model --device cpu,cuda --size 1024x1024 --frames 3 --orbit 12 --json \
   >"$out/bench_generated.json" 2>>"$log" || status=1
-"$bin/exabricks" render /tmp/exabricks-big.cells --device cuda --size 1024x1024 --stats -o "$out/generated_cuda.png" \
-  >>"$log" 2>&1 || status=1
-"$bin/exabricks" render /tmp/exabricks-big.cells --device cuda "${pt[@]}" -o "$out/generated_pathtrace_cuda.png" \
-  >>"$log" 2>&1 || status=1
 
 say "summary"
 for f in "$out"/bench_*.json; do
