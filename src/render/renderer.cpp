@@ -334,26 +334,6 @@ Device selectDevice(Renderer& renderer, const std::string& choice) {
   return renderer.device();
 }
 
-SceneUpdate setSceneOnDevice(Renderer& renderer, const Scene& scene, const std::string& choice, bool& chosen) {
-  SceneUpdate u;
-  bool set = false;
-  if (renderer.device() != Device::Cpu && choice == "auto") {
-    try {
-      u = renderer.setScene(scene);
-      set = true;
-    } catch (const Error& e) {
-      logNote(strCat("device auto: rendering on the CPU, since ", e.what()));
-      renderer.setDevice(Device::Cpu);
-    }
-  }
-  if (!set) u = renderer.setScene(scene);
-  if (!chosen) {
-    chosen = true;
-    selectDevice(renderer, choice);
-  }
-  return u;
-}
-
 void Renderer::setDevice(Device device) {
   Impl& im = *impl_;
   if (device == this->device()) return;

@@ -90,12 +90,6 @@ class Renderer;
 /// they cannot be used.
 Device selectDevice(Renderer& renderer, const std::string& choice);
 
-/// Makes `scene` current for a renderer that follows the device `choice` over many scenes (a
-/// viewer, a Python scene): the first call moves it there (selectDevice; `chosen` records that it
-/// did); under "auto" a scene the device cannot draw moves it to the CPU for good, saying why on
-/// the log. Other choices throw as setScene does.
-SceneUpdate setSceneOnDevice(Renderer& renderer, const Scene& scene, const std::string& choice, bool& chosen);
-
 /// What the machine offers for Device::Cuda.
 struct CudaStatus {
   bool built = false; ///< this build has the CUDA back end
