@@ -233,11 +233,13 @@ json cameraJson(const Camera& c) {
 bool readCamera(const Reader& c, Camera& cam) {
   c.only("camera");
   // The keys left out take the described defaults.
-  cam = Camera();
-  for (const char* k : {"camera.look_at", "camera.up"}) {
+  auto described = [](const char* k) {
     const json& d = structuredDefault(k);
-    (k[7] == 'u' ? cam.up : cam.lookAt) = vec3d(d[0].get<double>(), d[1].get<double>(), d[2].get<double>());
-  }
+    return vec3d(d[0].get<double>(), d[1].get<double>(), d[2].get<double>());
+  };
+  cam = Camera();
+  cam.lookAt = described("camera.look_at");
+  cam.up = described("camera.up");
   cam.fovy = structuredDefault("camera.fov").get<double>();
   cam.orthographic = structuredDefault("camera.orthographic").get<bool>();
   cam.orthoHeight = structuredDefault("camera.ortho_height").get<double>();

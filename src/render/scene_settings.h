@@ -47,7 +47,7 @@ const std::vector<Setting<Frame>>& frameSettings();
 
 /// Throws exa::Error when a number is outside a setting's range (or not an integer where one is
 /// needed): "KEY" must be in RANGE, not VALUE.
-void checkSettingValue(const std::string& key, SettingType type, double low, double high, bool lowOpen, bool highOpen,
+void checkSettingValue(std::string_view key, SettingType type, double low, double high, bool lowOpen, bool highOpen,
                        double value);
 template <typename Owner> void checkSetting(const Setting<Owner>& s, double value) {
   checkSettingValue(s.key, s.type, s.low, s.high, s.lowOpen, s.highOpen, value);

@@ -296,11 +296,7 @@ bool checkStructuredNumber(std::string_view key, double value) {
   const double lo = low->get<double>(), hi = high == e->end() ? kInf : high->get<double>();
   const bool openLow = lowOpen != e->end(), openHigh = highOpen != e->end();
   const bool integer = e->find("type")->get_ref<const std::string&>() == "integer";
-  if (std::isfinite(value) && (openLow ? value > lo : value >= lo) && (openHigh ? value < hi : value <= hi) &&
-      (!integer || value == std::floor(value)))
-    return true; // checked without building a message
-  checkSettingValue(std::string(key), integer ? SettingType::Integer : SettingType::Number, lo, hi, openLow, openHigh,
-                    value);
+  checkSettingValue(key, integer ? SettingType::Integer : SettingType::Number, lo, hi, openLow, openHigh, value);
   return true;
 }
 

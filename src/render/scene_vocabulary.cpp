@@ -356,7 +356,7 @@ std::string shown(double v) {
 
 } // namespace
 
-void checkSettingValue(const std::string& key, SettingType type, double low, double high, bool lowOpen, bool highOpen,
+void checkSettingValue(std::string_view key, SettingType type, double low, double high, bool lowOpen, bool highOpen,
                        double value) {
   const bool integer = type == SettingType::Integer;
   const bool ok = std::isfinite(value) && (lowOpen ? value > low : value >= low) &&
