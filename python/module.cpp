@@ -381,6 +381,7 @@ PYBIND11_MODULE(_core, m) {
   m.doc() = "exabricks: ExaBricks rendering of structured AMR data (C++ core)";
   m.attr("DEFAULT_DATASET_NAME") = kDefaultDatasetName;
   m.attr("EMBEDDED_INPUT") = kEmbeddedInput;
+  m.attr("VERSION") = EXABRICKS_VERSION; // the command line's `exabricks --version`
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

@@ -107,6 +107,17 @@ check "an unknown option: exit 2, one line" one_usage_line "$exe" render s.cells
 check "a missing -o: exit 2, one line" one_usage_line "$exe" render s.cells
 check "--threads 0: exit 2, one line" one_usage_line "$exe" --threads 0 info s.cells
 check "a misspelt command: exit 2, one line" one_usage_line "$exe" rendr s.cells
+check "an unknown colour map: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --colormap nope
+check "an unknown iso colour map: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --iso-colormap nope
+fails_with "a word among a flag's numbers is named" "--sun: 'a' is not a finite number" "$exe" render s.cells -o x.png --sun a,b,c,d
+check "a word among a flag's numbers: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --sun a,b,c,d
+fails_with "a word for an integer option is named" "--fps: 'abc' is not a valid number" "$exe" movie s.cells -o m --fps abc
+fails_with "--iso beyond single precision" "--iso: 1e+40 is beyond single precision" "$exe" render s.cells -o x.png --iso 1e40
+fails_with "--opacity-scale beyond single precision" "beyond single precision" "$exe" render s.cells -o x.png --opacity-scale 1e40
+fails_with "--range beyond single precision" "--range: 1e+40 is beyond single precision" "$exe" render s.cells -o x.png --range 0,1e40
+fails_with "--albedo far out of range names its range" 'pathtrace.albedo" must be in [0, 1], not 1e+40' "$exe" render s.cells -o x.png --albedo 1e40
+fails_with "a scene's vector beyond single precision" '"pathtrace.sun_direction": 1e+40 is beyond single precision' bash -c "echo '{\"pathtrace\": {\"sun_direction\": [1e40, 0, 0]}}' > big.json && '$exe' render s.cells --scene big.json -o x.png"
+fails_with "a scene's iso-value beyond single precision" '"iso.values": 1e+40 is beyond single precision' bash -c "echo '{\"iso\": {\"values\": [1e40]}}' > big2.json && '$exe' render s.cells --scene big2.json -o x.png"
 fails_with "a misspelt command gets a suggestion" "did you mean 'render'" "$exe" rendr s.cells -o x.png
 check "global flags after the command" bash -c "'$exe' info s.cells -q --threads 1 > /dev/null"
 fails_with "--rate nan names the value" "not nan" "$exe" render s.cells -o x.png --rate nan

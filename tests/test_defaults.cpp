@@ -5,6 +5,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/render/defaults.h"
+#include "exabricks/render/legends.h"
 #include "exabricks/render/overlay.h"
 
 #include <gtest/gtest.h>
@@ -311,34 +312,76 @@ TEST(Defaults, DefaultRendersOfRealDataShowTheData) {
 }
 
 TEST(Overlay, LegendsKeepClearOfEachOtherAtSmallSizes) {
-  // 200 x 150 with three annotation lines, one far too long, the outline drawn first across the
-  // whole image: the lines fit the width, the colour bar (title included) starts below them, and
-  // no outline pixel is left on the bar's panel.
+  // 200 x 150 with three annotation lines, one far too long: the lines fit the width, the colour
+  // bar (title included) starts below them, and an outline keeps off the bar's boxes.
   Image img(200, 150);
   const std::string longLine = "<default: blobs scene, 200000 cells, seed 1> and more words than fit";
   const std::string fitted = fitText(longLine, img.width - 12, 1);
   EXPECT_LE(textWidth(fitted, 1), img.width - 12);
   EXPECT_EQ(fitted.substr(fitted.size() - 3), "...");
   EXPECT_EQ(fitText("short", 100, 1), "short");
-  for (int x = 0; x < img.width; ++x) // an outline crossing where the bar goes
-    for (int y = 0; y < img.height; y += 10)
-      img.at(x, y) = vec4f(0.5f, 0.5f, 0.5f, 1.f);
   const int top = linesHeight(3, img);
   TransferFunction tf = defaultTransferFunction();
   tf.valueRange = range1f{0.f, 1.f};
-  drawColorBar(img, tf, "a long field title", vec3f(1.f), top);
-  int barLeft = img.width, firstRow = img.height;
+  const ColorBarLayout bar = colorBarLayout(img, tf, "a long field title", top);
+  for (const PixelRect& r : bar.boxes)
+    EXPECT_GE(r.y0, top);
+  const Camera camera = Camera::frame(box3d(vec3d(0.0), vec3d(1.0)), 30, 25, 40, false);
+  drawBoxOutline(img, camera, box3d(vec3d(-0.5), vec3d(1.5)), vec3f(0.5f), bar.boxes);
+  int outline = 0;
   for (int y = 0; y < img.height; ++y)
-    for (int x = img.width / 2; x < img.width; ++x) {
-      const vec4f& p = img.at(x, y);
-      if (p.w > 0.f && !(p.x == 0.5f && p.y == 0.5f && p.z == 0.5f)) {
-        barLeft = std::min(barLeft, x);
-        firstRow = std::min(firstRow, y);
-      }
+    for (int x = 0; x < img.width; ++x) {
+      bool inBar = false;
+      for (const PixelRect& r : bar.boxes)
+        inBar = inBar || r.contains(x, y);
+      if (img.at(x, y).w == 0.f) continue;
+      EXPECT_FALSE(inBar) << "outline on the bar at " << x << ", " << y;
+      ++outline;
     }
-  EXPECT_GE(firstRow, top);
-  for (int y = firstRow; y < img.height - 10; y += 10)
-    EXPECT_NE(img.at(img.width - 2, y).x, 0.5f) << "the outline crosses the bar's panel at row " << y;
+  EXPECT_GT(outline, 100);
+}
+
+TEST(Overlay, TheColourBarDrawsOverThePictureWithoutErasingIt) {
+  // A lit picture (random colours everywhere) with the legends of a log-mapped field with a long
+  // title, at several sizes, with and without the annotation: adding the colour bar changes no
+  // pixel outside the boxes it reports, and those boxes are a small part of the picture.
+  Model model = uniformModel({"Density"}, [](int x, int y, int z) { return 1.f + float(x + y + z); });
+  model.fieldUnits = {"code units"};
+  const DatasetInfo info = DatasetInfo::of(model);
+  Scene scene;
+  scene.layers = {VolumeLayer{"Density", defaultTransferFunction()}};
+  scene.layers[0].tf.logScale = true;
+  Frame frame;
+  frame.camera = Camera::frame(model.world.toWorld(model.cellBounds()), 30, 25, 40, false);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.f, 1.f);
+  for (const auto& [w, h] : std::vector<std::pair<int, int>>{{800, 800}, {512, 512}, {200, 150}})
+    for (bool annotate : {false, true}) {
+      SCOPED_TRACE(strCat(w, "x", h, annotate ? " annotated" : ""));
+      Image picture(w, h);
+      for (vec4f& p : picture.pixels)
+        p = vec4f(u(rng), u(rng), u(rng), 1.f);
+      Image without = picture, with = picture;
+      scene.legends = {false, annotate, false};
+      EXPECT_TRUE(drawLegends(scene, frame, model, info, {"plt00100"}, without).empty());
+      scene.legends = {true, annotate, false};
+      const std::vector<PixelRect> boxes = drawLegends(scene, frame, model, info, {"plt00100"}, with);
+      ASSERT_FALSE(boxes.empty());
+      size_t inside = 0, changed = 0;
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          bool inBar = false;
+          for (const PixelRect& r : boxes)
+            inBar = inBar || r.contains(x, y);
+          inside += inBar;
+          const vec4f &a = without.at(x, y), &b = with.at(x, y);
+          const bool same = a.x == b.x && a.y == b.y && a.z == b.z && a.w == b.w;
+          if (!inBar && !same && ++changed <= 3) ADD_FAILURE() << "pixel " << x << ", " << y << " changed";
+          if (inBar && !same) ++changed;
+        }
+      EXPECT_GT(changed, 0u) << "no colour bar drawn";
+      EXPECT_LT(double(inside) / (double(w) * h), 0.12) << "the colour bar's boxes cover too much";
+    }
 }
 
 TEST(Overlay, TicksTextColourBarOutlineAndProjection) {

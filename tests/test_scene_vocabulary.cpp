@@ -190,6 +190,10 @@ TEST(SceneVocabulary, EveryStructuredKeyIsDescribedAndRoundTrips) {
     const std::string key = e["key"], type = e["type"];
     EXPECT_FALSE(e["help"].get<std::string>().empty()) << key;
     if (e.contains("object") || !e.value("document", true) || !e.value("written", true)) continue;
+    if (!e.value("in_example", true)) { // (a file the example cannot name: it renders as written)
+      EXPECT_EQ(key, "meshes[].file");
+      continue;
+    }
     // Every key is used by the example document, at a value other than its default.
     std::vector<json> values;
     collect(example, key, values);

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <string>
@@ -23,7 +24,9 @@ struct KeysOptions {
 
 /// A bound as people write it: 0, not 0.0.
 std::string bound(const json& v) {
+  if (v.is_number_integer()) return v.dump();
   const double d = v.get<double>();
+  if (!(std::abs(d) < 0x1p62)) return v.dump();
   return d == double(int64_t(d)) ? std::to_string(int64_t(d)) : v.dump();
 }
 

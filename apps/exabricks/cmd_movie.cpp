@@ -160,6 +160,14 @@ MoviePlan planMovie(const MovieCmdOptions& o, const CLI::App& cmd) {
   p.lo.fields = neededFields(p.doc.scene);
   p.frames = planFrames(o, cmd, steps, !p.doc.path.empty());
   frameRange(o.frames, p.frames.frames, p.first, p.last);
+  const double seconds = p.frames.frames / o.fps;
+  if (steps > 1 && !p.toFolder && !cmd.count("--frames-per-step") && p.frames.frames == steps && seconds < 2.0 &&
+      mpi::processes().root()) {
+    const int hold = std::max(2, int(std::ceil(std::min(1.0, 4.0 / steps) * o.fps)));
+    logNote(strCat("the movie shows each of its ", steps, " steps for one frame: ", std::round(seconds * 100) / 100,
+                   " s at ", o.fps, " frames per second; --frames-per-step ", hold, " holds each step for ",
+                   std::round(hold / o.fps * 100) / 100, " s (or lower --fps)"));
+  }
   return p;
 }
 

@@ -1,6 +1,8 @@
 #include "common.h"
 
 #include "exabricks/amr/scenes.h"
+#include "exabricks/core/text.h"
+#include "exabricks/render/transfer_function.h"
 
 #include <algorithm>
 #include <cstdio>
@@ -95,6 +97,33 @@ nlohmann::json deviceJson(const Renderer& renderer) {
     j["memory_by_structure"] = structures;
   }
   return j;
+}
+
+/// Each number of an option the renderer holds in single precision: a finite number that fits.
+const CLI::Validator& singleNumber() {
+  static const CLI::Validator v(
+      [](std::string& text) {
+        double d = 0.0;
+        if (!parseFiniteNumber(text, d)) return "'" + text + "' is not a finite number";
+        return beyondSinglePrecision(d);
+      },
+      "NUMBER");
+  return v;
+}
+
+/// A built-in colour map's name.
+const CLI::Validator& colormapName() {
+  static const CLI::Validator v(
+      [](std::string& text) {
+        const std::vector<std::string>& names = builtinColorMapNames();
+        if (std::find(names.begin(), names.end(), text) != names.end()) return std::string();
+        std::string known;
+        for (const std::string& n : names)
+          known += (known.empty() ? "" : ", ") + n;
+        return "unknown colour map '" + text + "' (choose from: " + known + ")";
+      },
+      "COLORMAP");
+  return v;
 }
 
 } // namespace exa::cli

@@ -44,4 +44,9 @@ nlohmann::json toJson(const range1f& r);
 /// and the memory the renderer holds there per structure.
 nlohmann::json deviceJson(const Renderer& renderer);
 
+/// Each number of an option the renderer holds in single precision: a finite number that fits.
+const CLI::Validator& singleNumber();
+/// A built-in colour map's name.
+const CLI::Validator& colormapName();
+
 } // namespace exa::cli

@@ -68,6 +68,15 @@ size_t editDistance(const std::string& a, const std::string& b) {
 /// The message of a usage error: where no command was recognised, "unknown command 'WORD'" for
 /// the first word that is not an option, with the command within two edits of it.
 std::string usageMessage(CLI::App& app, int argc, char** argv, const CLI::ParseError& e) {
+  // CLI11's "Could not convert: --fps = abc" as the other messages read: "--fps: 'abc' is not a valid
+  // number for it".
+  const std::string what = e.what(), convert = "Could not convert: ";
+  if (dynamic_cast<const CLI::ConversionError*>(&e) && what.rfind(convert, 0) == 0) {
+    const size_t eq = what.find(" = ");
+    if (eq != std::string::npos)
+      return what.substr(convert.size(), eq - convert.size()) + ": '" + what.substr(eq + 3) +
+             "' is not a valid number for it";
+  }
   for (CLI::App* command : app.get_subcommands({}))
     if (command->parsed()) return e.what();
   for (int i = 1; i < argc; ++i) {

@@ -54,6 +54,7 @@ std::vector<double> parseNumbers(const std::string& text, const char* what) {
   for (std::string part; std::getline(in, part, ',');) {
     double v = 0;
     if (!parseFiniteNumber(part, v)) failUsage(what, ": '", part, "' is not a number");
+    if (const std::string why = beyondSinglePrecision(v); !why.empty()) failUsage(what, ": ", why);
     out.push_back(v);
   }
   return out;
@@ -199,10 +200,13 @@ void applySettingFlags(const RenderOptions& o, const CLI::App& cmd, SceneDocumen
 void addImageOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--size", o.size, "Image size WIDTHxHEIGHT")->capture_default_str();
   addSettingFlags(o, cmd, FlagGroup::Image);
-  cmd.add_option("--colormap", o.colormap, "Built-in colour map")->capture_default_str();
+  cmd.add_option("--colormap", o.colormap, "Built-in colour map")->capture_default_str()->check(colormapName());
   cmd.add_option("--tf", o.tfFile, "Transfer function file (ParaView preset or exabricks JSON)");
-  cmd.add_option("--opacity", o.opacity, "Opacity points x,alpha,... over the normalised value")->delimiter(',');
-  cmd.add_option("--opacity-scale", o.opacityScale, sceneSettingHelp("transfer_function.opacity_scale"));
+  cmd.add_option("--opacity", o.opacity, "Opacity points x,alpha,... over the normalised value")
+      ->delimiter(',')
+      ->check(singleNumber());
+  cmd.add_option("--opacity-scale", o.opacityScale, sceneSettingHelp("transfer_function.opacity_scale"))
+      ->check(singleNumber());
   cmd.add_option("--range", o.range, sceneSettingHelp("transfer_function.range"))->delimiter(',');
   cmd.add_flag("--log", o.logScale, "Map values logarithmically (every layer)");
   cmd.add_flag("--linear", o.linear, "Map values linearly even where the data spans many decades");
@@ -211,10 +215,10 @@ void addImageOptions(RenderOptions& o, CLI::App& cmd) {
 /// The camera and the background.
 void addCameraOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_flag("--frame-all", o.frameAll, "Default view: frame the whole data, not only its visible part");
-  cmd.add_option("--position", o.position, sceneSettingHelp("camera.position"))->delimiter(',');
-  cmd.add_option("--look-at", o.lookAt, sceneSettingHelp("camera.look_at"))->delimiter(',');
-  cmd.add_option("--up", o.up, sceneSettingHelp("camera.up"))->delimiter(',');
-  cmd.add_option("--fov", o.fov, sceneSettingHelp("camera.fov"))->capture_default_str();
+  cmd.add_option("--position", o.position, sceneSettingHelp("camera.position"))->delimiter(',')->check(singleNumber());
+  cmd.add_option("--look-at", o.lookAt, sceneSettingHelp("camera.look_at"))->delimiter(',')->check(singleNumber());
+  cmd.add_option("--up", o.up, sceneSettingHelp("camera.up"))->delimiter(',')->check(singleNumber());
+  cmd.add_option("--fov", o.fov, sceneSettingHelp("camera.fov"))->capture_default_str()->check(singleNumber());
   cmd.add_flag("--ortho", o.ortho, "Orthographic projection");
   const CLI::Validator finite(
       [](std::string& text) {
@@ -232,7 +236,7 @@ void addCameraOptions(RenderOptions& o, CLI::App& cmd) {
   cmd.add_option("--elevation", o.elevation, "Default view: degrees above the x-y plane (-90 to 90)")
       ->capture_default_str()
       ->check(latitude);
-  cmd.add_option("--background", o.background, sceneSettingHelp("background"))->delimiter(',');
+  cmd.add_option("--background", o.background, sceneSettingHelp("background"))->delimiter(',')->check(singleNumber());
   addSettingFlags(o, cmd, FlagGroup::Camera);
 }
 
@@ -246,19 +250,28 @@ void addIntegrationOptions(RenderOptions& o, CLI::App& cmd) {
 
 /// Iso-surfaces, meshes, clipping and ambient occlusion.
 void addSurfaceOptions(RenderOptions& o, CLI::App& cmd) {
-  cmd.add_option("--iso", o.iso, "Iso-values v1,v2,... of implicit iso-surfaces")->delimiter(',');
+  cmd.add_option("--iso", o.iso, "Iso-values v1,v2,... of implicit iso-surfaces")
+      ->delimiter(',')
+      ->check(singleNumber());
   cmd.add_option("--iso-field", o.isoField, sceneSettingHelp("iso.field"));
   cmd.add_option("--iso-color", o.isoColor, "Iso-surface colours r,g,b[,r,g,b...] (sRGB), one per value")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(singleNumber());
   cmd.add_option("--iso-color-field", o.isoColorField, "Colour the iso-surfaces by this field");
-  cmd.add_option("--iso-colormap", o.isoColormap, "Colour map for --iso-color-field")->capture_default_str();
+  cmd.add_option("--iso-colormap", o.isoColormap, "Colour map for --iso-color-field")
+      ->capture_default_str()
+      ->check(colormapName());
   cmd.add_flag("--iso-color-log", o.isoColorLog, "Map --iso-color-field logarithmically");
-  cmd.add_option("--iso-color-range", o.isoColorRange, "Value range LOW,HIGH for --iso-color-field")->delimiter(',');
+  cmd.add_option("--iso-color-range", o.isoColorRange, "Value range LOW,HIGH for --iso-color-field")
+      ->delimiter(',')
+      ->check(singleNumber());
   cmd.add_option("--mesh", o.meshes, sceneSettingHelp("meshes[].file") + " (repeatable)");
-  cmd.add_option("--mesh-color", o.meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")->delimiter(',');
+  cmd.add_option("--mesh-color", o.meshColor, "Mesh colours r,g,b[,r,g,b...] (sRGB), one per mesh")
+      ->delimiter(',')
+      ->check(singleNumber());
   cmd.add_option("--clip-plane", o.clipPlanes,
                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
-  cmd.add_option("--clip-box", o.clipBox, sceneSettingHelp("clip.box"))->delimiter(',');
+  cmd.add_option("--clip-box", o.clipBox, sceneSettingHelp("clip.box"))->delimiter(',')->check(singleNumber());
   addSettingFlags(o, cmd, FlagGroup::Surfaces);
 }
 
@@ -266,13 +279,15 @@ void addSurfaceOptions(RenderOptions& o, CLI::App& cmd) {
 void addPathTracingOptions(RenderOptions& o, CLI::App& cmd) {
   addSettingFlags(o, cmd, FlagGroup::PathTracing);
   cmd.add_option("--environment", o.environment, sceneSettingHelp("pathtrace.environment") + " (default 1,1,1)")
-      ->delimiter(',');
-  cmd.add_option("--sky", o.sky, sceneSettingHelp("pathtrace.sky"))->delimiter(',');
-  cmd.add_option("--ground", o.ground, sceneSettingHelp("pathtrace.ground"))->delimiter(',');
+      ->delimiter(',')
+      ->check(singleNumber());
+  cmd.add_option("--sky", o.sky, sceneSettingHelp("pathtrace.sky"))->delimiter(',')->check(singleNumber());
+  cmd.add_option("--ground", o.ground, sceneSettingHelp("pathtrace.ground"))->delimiter(',')->check(singleNumber());
   cmd.add_option("--sun", o.sun,
                  "Path tracing: a sun light travelling along dx,dy,dz (world) with irradiance INTENSITY and an "
                  "angular diameter ANGLE in degrees (default 0.53): dx,dy,dz,INTENSITY[,ANGLE]")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(singleNumber());
 }
 
 } // namespace

@@ -16,6 +16,8 @@ import os
 from . import _core
 from ._dataset import Dataset, from_cells, from_grids, load
 
+__version__ = _core.VERSION
+
 Dataset.__module__ = __name__  # users meet it as exabricks.Dataset
 from ._yt_scene import _yt_scene_units, camera_from_yt, from_yt, scene_from_yt, transfer_function_from_yt
 

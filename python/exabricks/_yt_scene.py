@@ -313,7 +313,33 @@ def scene_from_yt(cls, scene, dataset=None, source=None, **settings):
     if dataset is None:
         dataset = from_yt(source.data_source.ds, [field])
     tf, defaults = _yt_view(scene.camera, source, dataset)
+    name, factor = _field_of_dataset(source.data_source.ds, field, dataset)
+    if factor != 1.0 and tf.range is not None:
+        tf.range = tuple(float(v) * factor for v in tf.range)
     defaults.update(_YT_DEFAULTS)
     defaults.update(getattr(source, "exabricks_settings", {}))
     defaults.update(settings)
-    return cls(dataset, field=_yt_field_name(field), transfer_function=tf, **defaults)
+    return cls(dataset, field=name, transfer_function=tf, **defaults)
+
+
+def _field_of_dataset(ds, field, dataset):
+    """The field of `dataset` that holds yt's `field`, and the factor from the yt field's values to
+    that field's: the same name (factor 1), else a field of the dataset made from yt that reads the
+    same field of the file (yt's alias of it in other units: ("gas", "density") for Enzo's
+    "Density", in g/cm**3 where the dataset holds code units)."""
+    name = _yt_field_name(field)
+    if name in dataset.fields:
+        return name, 1.0
+    held = (getattr(dataset, "_yt_origin", None) or {}).get("fields", {})
+    try:
+        units = str(ds._get_field_info(field).units or "")
+    except Exception:  # yt cannot say
+        units = ""
+    mine = _yt_origin(ds, [field], [name], {name: units})["fields"][name]
+    for other, entry in held.items():
+        if mine is not None and entry is not None and entry[0] == mine[0]:
+            return other, entry[1] / mine[1]
+    raise ValueError("the yt scene shows %r, which the dataset does not hold (fields: %s)%s: make the dataset with "
+                     "exabricks.from_yt(ds, [%r])" % (field, ", ".join(dataset.fields),
+                                                      "" if mine is None else ", nor the file's field '%s' behind it"
+                                                      % mine[0], field))

@@ -20,13 +20,18 @@ void fillRect(Image& image, int x0, int y0, int x1, int y1, const vec3f& c) {
       image.at(x, y) = {c.x, c.y, c.z, 1.f};
 }
 
-void drawLine(Image& image, double x0, double y0, double x1, double y1, const vec3f& c) {
+void drawLine(Image& image, double x0, double y0, double x1, double y1, const vec3f& c,
+              const std::vector<PixelRect>& keepClear = {}) {
   const int steps = int(std::ceil(std::max(std::abs(x1 - x0), std::abs(y1 - y0)))) + 1;
   if (steps > 1 << 20) return;
   for (int i = 0; i <= steps; ++i) {
     const double t = double(i) / steps;
     const int x = int(std::floor(x0 + (x1 - x0) * t)), y = int(std::floor(y0 + (y1 - y0) * t));
-    if (x >= 0 && y >= 0 && x < image.width && y < image.height) image.at(x, y) = {c.x, c.y, c.z, 1.f};
+    if (x < 0 || y < 0 || x >= image.width || y >= image.height) continue;
+    bool clear = true;
+    for (const PixelRect& r : keepClear)
+      clear = clear && !r.contains(x, y);
+    if (clear) image.at(x, y) = {c.x, c.y, c.z, 1.f};
   }
 }
 
@@ -39,7 +44,10 @@ int textWidth(const std::string& text, int scale) {
   return stb_easy_font_width(copy.data()) * scale;
 }
 
-int drawText(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale) {
+namespace {
+
+/// The strokes of `text` at (x, y), in pixels.
+std::vector<PixelRect> glyphStrokes(int x, int y, const std::string& text, int scale) {
   // stb's easy font: quads of four vertices (x, y, z, colour; 16 bytes each) per glyph stroke. It
   // stops quietly when its buffer is full, so the buffer grows until a pass leaves room for
   // another quad: then no stroke was dropped.
@@ -52,12 +60,45 @@ int drawText(Image& image, int x, int y, const std::string& text, const vec3f& c
     if (size_t(quads + 1) * kQuadBytes <= buffer.size()) break;
     buffer.resize(buffer.size() * 2);
   }
+  std::vector<PixelRect> strokes(size_t(std::max(quads, 0)));
   for (int q = 0; q < quads; ++q) {
     const float* v = reinterpret_cast<const float*>(buffer.data() + size_t(q) * kQuadBytes);
     const float qx0 = v[0], qy0 = v[1], qx1 = v[8], qy1 = v[9]; // vertices 0 and 2
-    fillRect(image, x + int(qx0 * scale), y + int(qy0 * scale), x + int(qx1 * scale), y + int(qy1 * scale), color);
+    strokes[size_t(q)] = {x + int(qx0 * scale), y + int(qy0 * scale), x + int(qx1 * scale), y + int(qy1 * scale)};
   }
+  return strokes;
+}
+
+int drawGlyphs(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale,
+               const vec3f* backing) {
+  const std::vector<PixelRect> strokes = glyphStrokes(x, y, text, scale);
+  // The backing first (every stroke grown by one font unit), then the strokes over it.
+  if (backing)
+    for (const PixelRect& r : strokes)
+      fillRect(image, r.x0 - scale, r.y0 - scale, r.x1 + scale, r.y1 + scale, *backing);
+  for (const PixelRect& r : strokes)
+    fillRect(image, r.x0, r.y0, r.x1, r.y1, color);
   return textWidth(text, scale);
+}
+
+} // namespace
+
+int drawText(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale) {
+  return drawGlyphs(image, x, y, text, color, scale, nullptr);
+}
+
+PixelRect textOverRect(int x, int y, const std::string& text, int scale) {
+  PixelRect box{x, y, x, y};
+  for (const PixelRect& r : glyphStrokes(x, y, text, scale))
+    box = {std::min(box.x0, r.x0 - scale), std::min(box.y0, r.y0 - scale), std::max(box.x1, r.x1 + scale),
+           std::max(box.y1, r.y1 + scale)};
+  return box;
+}
+
+int drawTextOver(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale) {
+  const float luminance = 0.2126f * color.x + 0.7152f * color.y + 0.0722f * color.z;
+  const vec3f backing(luminance > 0.5f ? 0.f : 1.f);
+  return drawGlyphs(image, x, y, text, color, scale, &backing);
 }
 
 namespace {
@@ -153,45 +194,62 @@ std::vector<std::string> colorBarLabels(const std::vector<double>& ticks, bool l
   return labels;
 }
 
-void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor, int top) {
+ColorBarLayout colorBarLayout(const Image& image, const TransferFunction& tf, const std::string& title, int top) {
   if (tf.valueRange.empty()) fail("a colour bar needs the transfer function's value range");
-  const int s = overlayScale(image);
-  const std::vector<double> ticks = colorBarTicks(tf.valueRange, tf.logScale);
-  const std::vector<std::string> labels = colorBarLabels(ticks, tf.logScale);
+  ColorBarLayout l;
+  const int s = l.scale = overlayScale(image);
+  l.ticks = colorBarTicks(tf.valueRange, tf.logScale);
+  l.labels = colorBarLabels(l.ticks, tf.logScale);
   int labelW = 0;
-  for (const std::string& label : labels)
+  for (const std::string& label : l.labels)
     labelW = std::max(labelW, textWidth(label, s));
   const int barW = std::max(6, image.width / 40);
-  const int x1 = image.width - labelW - 6 * s - 4, x0 = x1 - barW;
+  l.x1 = image.width - labelW - 6 * s - 4, l.x0 = l.x1 - barW;
   // Centred, below `top` (what is drawn above it, its title included), inside the bottom margin.
   const int titleH = 14 * s;
   int barH = std::max(20, image.height * 3 / 5);
-  const int y0 = std::max((image.height - barH) / 2, top + titleH + 2 * s);
-  barH = std::max(8 * s, std::min(barH, image.height - 6 * s - y0));
-  const int y1 = y0 + barH;
-  const std::string head = tf.logScale ? title + " (log)" : title;
-  const int headX = std::max(0, x1 - textWidth(head, s));
-  // The bar's panel is cleared first: lines drawn before it (the domain's outline) stay off it.
-  const int panelX = std::min(x0 - 3 * s, headX - s);
-  for (int y = std::max(0, y0 - titleH - s); y < std::min(image.height, y1 + 6 * s); ++y)
-    for (int x = std::max(0, panelX); x < image.width; ++x)
-      image.at(x, y) = vec4f(0.f, 0.f, 0.f, 0.f);
-  for (int y = y0; y < y1; ++y) {
-    const float t = 1.f - (float(y - y0) + 0.5f) / float(barH);
-    fillRect(image, x0, y, x1, y + 1, tf.colorMap.at(t));
+  l.y0 = std::max((image.height - barH) / 2, top + titleH + 2 * s);
+  barH = std::max(8 * s, std::min(barH, image.height - 6 * s - l.y0));
+  l.y1 = l.y0 + barH;
+  l.head = tf.logScale ? title + " (log)" : title;
+  l.headX = std::max(0, l.x1 - textWidth(l.head, s)), l.headY = l.y0 - titleH;
+  // What is drawn: the bar in its frame, each tick with its label, the title (each glyph's backing
+  // reaches one font unit beyond it).
+  l.boxes.push_back({l.x0 - 1, l.y0 - 1, l.x1 + 1, l.y1 + 1});
+  for (size_t i = 0; i < l.ticks.size(); ++i) {
+    const int y = l.tickRow(tf, i);
+    const PixelRect label = textOverRect(l.x1 + 5 * s, y - 4 * s, l.labels[i], s);
+    l.boxes.push_back({l.x1, std::min(y, label.y0), label.x1, std::max(y + 1, label.y1)});
+  }
+  l.boxes.push_back(textOverRect(l.headX, l.headY, l.head, s));
+  return l;
+}
+
+int ColorBarLayout::tickRow(const TransferFunction& tf, size_t i) const {
+  return y1 - int(std::lround(double(tf.normalize(float(ticks.at(i)))) * (y1 - y0)));
+}
+
+void drawColorBar(Image& image, const TransferFunction& tf, const ColorBarLayout& l, const vec3f& textColor) {
+  const int s = l.scale;
+  for (int y = l.y0; y < l.y1; ++y) {
+    const float t = 1.f - (float(y - l.y0) + 0.5f) / float(l.y1 - l.y0);
+    fillRect(image, l.x0, y, l.x1, y + 1, tf.colorMap.at(t));
   }
   // Frame and ticks.
-  drawLine(image, x0 - 1, y0 - 1, x1, y0 - 1, textColor);
-  drawLine(image, x0 - 1, y1, x1, y1, textColor);
-  drawLine(image, x0 - 1, y0 - 1, x0 - 1, y1, textColor);
-  drawLine(image, x1, y0 - 1, x1, y1, textColor);
-  for (size_t i = 0; i < ticks.size(); ++i) {
-    const float n = tf.normalize(float(ticks[i]));
-    const int y = y1 - int(std::lround(double(n) * barH));
-    drawLine(image, x1, y, x1 + 3 * s, y, textColor);
-    drawText(image, x1 + 5 * s, y - 4 * s, labels[i], textColor, s);
+  drawLine(image, l.x0 - 1, l.y0 - 1, l.x1, l.y0 - 1, textColor);
+  drawLine(image, l.x0 - 1, l.y1, l.x1, l.y1, textColor);
+  drawLine(image, l.x0 - 1, l.y0 - 1, l.x0 - 1, l.y1, textColor);
+  drawLine(image, l.x1, l.y0 - 1, l.x1, l.y1, textColor);
+  for (size_t i = 0; i < l.ticks.size(); ++i) {
+    const int y = l.tickRow(tf, i);
+    drawLine(image, l.x1, y, l.x1 + 3 * s, y, textColor);
+    drawTextOver(image, l.x1 + 5 * s, y - 4 * s, l.labels[i], textColor, s);
   }
-  drawText(image, headX, y0 - titleH, head, textColor, s);
+  drawTextOver(image, l.headX, l.headY, l.head, textColor, s);
+}
+
+void drawColorBar(Image& image, const TransferFunction& tf, const std::string& title, const vec3f& textColor, int top) {
+  drawColorBar(image, tf, colorBarLayout(image, tf, title, top), textColor);
 }
 
 std::string fitText(const std::string& text, int width, int scale) {
@@ -210,10 +268,11 @@ int linesHeight(size_t lines, const Image& image) {
 void drawLines(Image& image, const std::vector<std::string>& lines, const vec3f& color) {
   const int s = overlayScale(image);
   for (size_t i = 0; i < lines.size(); ++i)
-    drawText(image, 6 * s, 6 * s + int(i) * 12 * s, fitText(lines[i], image.width - 12 * s, s), color, s);
+    drawTextOver(image, 6 * s, 6 * s + int(i) * 12 * s, fitText(lines[i], image.width - 12 * s, s), color, s);
 }
 
-void drawBoxOutline(Image& image, const Camera& camera, const box3d& box, const vec3f& color) {
+void drawBoxOutline(Image& image, const Camera& camera, const box3d& box, const vec3f& color,
+                    const std::vector<PixelRect>& keepClear) {
   if (box.empty()) return;
   const double aspect = double(image.width) / double(image.height);
   auto corner = [&](int i) {
@@ -225,7 +284,7 @@ void drawBoxOutline(Image& image, const Camera& camera, const box3d& box, const 
       if (a & bit) continue;
       double u0, v0, u1, v1;
       if (!camera.project(corner(a), aspect, u0, v0) || !camera.project(corner(a | bit), aspect, u1, v1)) continue;
-      drawLine(image, u0 * image.width, v0 * image.height, u1 * image.width, v1 * image.height, color);
+      drawLine(image, u0 * image.width, v0 * image.height, u1 * image.width, v1 * image.height, color, keepClear);
     }
 }
 

@@ -305,10 +305,11 @@ Device resolveDevice(const std::string& name) {
     const CudaStatus s = gpu::status();
     if (s.problem.empty()) return Device::Cuda;
     if (name == "auto") {
-      // A build with the GPU back end that cannot use it says so, once per process.
+      // A build with the GPU back end that cannot use it says so once per process, where the
+      // user asked to hear what was chosen (-v): nothing asked for a GPU.
       static std::once_flag said;
       if (s.built)
-        std::call_once(said, [&] { logNote(strCat("device auto: rendering on the CPU, since ", s.problem)); });
+        std::call_once(said, [&] { logInfo(strCat("device auto: rendering on the CPU, since ", s.problem)); });
       return Device::Cpu;
     }
     fail("the cuda device cannot be used: ", s.problem);
@@ -425,8 +426,13 @@ box3d Renderer::visibleBounds() const {
     for (size_t i = 0; i < visible.size(); ++i)
       if (visible[i]) volume.extend(im.model.regions.regions[i].bounds());
   if (!volume.empty() && im.scene.debug == DebugView::None) {
+    // The cells drawn at a tenth of the largest opacity or more, and a margin of a twentieth of
+    // their size for the fainter cells around them (within the visible regions).
     const box3f opaque = opaqueCellBounds(im.model, im.volume.layers(), volume);
-    if (!opaque.empty()) volume = opaque;
+    if (!opaque.empty()) {
+      const vec3f margin = (opaque.upper - opaque.lower) * 0.05f;
+      volume = box3f(max(opaque.lower - margin, volume.lower), min(opaque.upper + margin, volume.upper));
+    }
   }
   const std::vector<uint8_t>& isoVisible = im.surfaces.isoVisible();
   for (size_t i = 0; i < isoVisible.size(); ++i)

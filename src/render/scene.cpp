@@ -2,6 +2,7 @@
 
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 #include "exabricks/render/scene_vocabulary.h"
 
 #include "scene_settings.h"
@@ -164,6 +165,8 @@ public:
     for (const json& x : v) {
       if (!x.is_number() || !std::isfinite(x.get<double>()))
         fail(source_, ": \"", what, "\" must hold finite numbers, not ", x.dump());
+      if (const std::string why = beyondSinglePrecision(x.get<double>()); !why.empty())
+        fail(source_, ": \"", what, "\": ", why);
       out.push_back(x.get<double>());
     }
     return out;
@@ -333,6 +336,7 @@ std::string writeSceneJson(const SceneDocument& doc) {
     }
     j["camera_path"] = {{"keyframes", keys}, {"constant_speed", doc.path.constantSpeed}};
   }
+  removeFloatNoise(j);
   return j.dump(2) + "\n";
 }
 

@@ -1,6 +1,7 @@
 // The structured keys of scene files (camera, camera path, layers and transfer functions, iso,
 // meshes, clipping, background) and the device choice: each once, with its type, range, default,
 // an example and help. The scene reader takes its known keys and number ranges from here.
+#include "exabricks/amr/scenes.h"
 #include "exabricks/render/scene_vocabulary.h"
 #include "exabricks/render/transfer_function.h"
 
@@ -92,8 +93,7 @@ std::vector<json> transferFunctionKeys() {
 }
 
 json meshesExample() {
-  return {{{"file", "triangle.ply"}, {"color", {0.25, 0.5, 0.75}}},
-          {{"vertices", {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.0, 1.0, 0.5}}},
+  return {{{"vertices", {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.0, 1.0, 0.5}}},
            {"triangles", {{0, 1, 2}}},
            {"color", {0.5, 0.25, 0.125}}}};
 }
@@ -111,6 +111,13 @@ json keyframesExample() {
            {"iso_values", {0.25, 0.5}}}};
 }
 
+/// A mesh file: left out of the example document, which renders as it is written.
+json meshFileKey() {
+  json e = entry("meshes[].file", "string", nullptr, "triangle.ply", "A mesh file (OBJ, PLY or .tris)");
+  e["in_example"] = false;
+  return e;
+}
+
 std::vector<json> documentKeys() {
   const json tfExample = {{"colormap", "inferno"},
                           {"opacity", {{0.0, 0.0}, {0.5, 0.125}, {1.0, 0.75}}},
@@ -123,7 +130,8 @@ std::vector<json> documentKeys() {
       0.0, kInf, false, false);
   frameIndex["written"] = false;
   return {
-      entry("input", "string", "", "data.cells", "The dataset the scene was made for (its path)"),
+      entry("input", "string", "", kEmbeddedInput,
+            "The dataset the scene was made for (its path; \"<embedded>\": the embedded default dataset)"),
       entry("camera", "camera", nullptr, cameraExample(205.5),
             "The view; without it, the data is framed from the default direction"),
       vector("background", "color", {0.0, 0.0, 0.0}, {0.125, 0.25, 0.5}, "Background colour (sRGB, each in [0, 1])"),
@@ -144,7 +152,7 @@ std::vector<json> documentKeys() {
             {{"colormap", {{"points", {{0.0, 0.0, 0.0, 1.0}, {1.0, 1.0, 0.0, 0.0}}}}}, {"log", false}},
             "The map that colours iso-surfaces by color_field"),
       entry("meshes", "list", json::array(), meshesExample(), "Triangle meshes drawn with the volume"),
-      entry("meshes[].file", "string", nullptr, "triangle.ply", "A mesh file (OBJ, PLY or .tris)"),
+      meshFileKey(),
       vector("meshes[].color", "color", {0.8, 0.8, 0.8}, {0.25, 0.5, 0.75}, "The mesh's colour (sRGB)"),
       entry("meshes[].vertices", "list", nullptr, {{0.0, 0.0, 0.0}, {1.0, 0.0, 0.0}, {0.0, 1.0, 0.5}},
             "Vertices in place of a file"),
@@ -234,7 +242,11 @@ const std::vector<std::string>& deviceChoices() {
   return names;
 }
 
-std::string sceneStructureJson() { return structure().dump(); }
+std::string sceneStructureJson() {
+  json j = structure();
+  removeFloatNoise(j);
+  return j.dump();
+}
 
 std::string sceneExampleJson() {
   json doc = json::object();
@@ -249,6 +261,7 @@ std::string sceneExampleJson() {
       at = &(*at)[key.substr(start, dot - start)];
     (*at)[key.substr(start)] = e["example"];
   }
+  removeFloatNoise(doc);
   return doc.dump(2) + "\n";
 }
 

@@ -1,6 +1,9 @@
 #include "exabricks/render/scene_vocabulary.h"
 
+#include "exabricks/core/text.h"
+
 #include "scene_settings.h"
+#include "tf_json.h"
 
 #include <charconv>
 #include <cmath>
@@ -361,7 +364,8 @@ void checkSettingValue(std::string_view key, SettingType type, double low, doubl
   const bool integer = type == SettingType::Integer;
   const bool ok = std::isfinite(value) && (lowOpen ? value > low : value >= low) &&
                   (highOpen ? value < high : value <= high) && (!integer || value == std::floor(value));
-  if (ok) return;
+  if (ok && (integer || beyondSinglePrecision(value).empty())) return;
+  if (ok) fail("\"", key, "\": ", beyondSinglePrecision(value)); // within its range, but no float holds it
   const std::string lo = shown(low), hi = shown(high), v = shown(value);
   if (integer && high > 1e15) fail("\"", key, "\" must be an integer >= ", lo, ", not ", v);
   if (integer) fail("\"", key, "\" must be an integer in ", lo, "..", hi, ", not ", v);
@@ -391,6 +395,9 @@ std::string shownVector(const json& v) {
 } // namespace
 
 void checkVectorValue(const std::string& key, VectorKind kind, const json& v) {
+  for (size_t i = 0; v.is_array() && i < v.size(); ++i)
+    if (v[i].is_number())
+      if (const std::string why = beyondSinglePrecision(v[i].get<double>()); !why.empty()) fail("\"", key, "\": ", why);
   bool numbers = v.is_array() && v.size() == 3;
   for (size_t i = 0; numbers && i < 3; ++i)
     numbers = v[i].is_number() && std::isfinite(v[i].get<double>()) && std::isfinite(v[i].get<float>());
@@ -414,6 +421,10 @@ template <typename Owner> void describe(const std::vector<Setting<Owner>>& table
       e["min"] = s.low;
       if (s.lowOpen) e["min_exclusive"] = true;
       if (std::isfinite(s.high)) e["max"] = s.high;
+      if (s.type == SettingType::Integer) { // bounds as integers (a seed's reaches 2^64 - 1)
+        e["min"] = int64_t(s.low);
+        if (std::isfinite(s.high)) e["max"] = s.high >= 0x1p63 ? json(uint64_t(s.high)) : json(int64_t(s.high));
+      }
       if (s.highOpen) e["max_exclusive"] = true;
     }
     if (s.type == SettingType::Choice) e["choices"] = s.choices;
@@ -536,6 +547,7 @@ std::string sceneVocabularyJson() {
   json out = json::array();
   describe(frameSettings(), out);
   describe(sceneSettings(), out);
+  removeFloatNoise(out);
   return out.dump();
 }
 

@@ -12,4 +12,8 @@ namespace exa {
 TransferFunction transferFunctionFromJson(const nlohmann::json& j, const std::string& source);
 nlohmann::json transferFunctionToJson(const TransferFunction& tf);
 
+/// Every number of `j` that holds a single-precision value written in its shortest form
+/// (withoutFloatNoise), for documents people read: scene files, transfer functions, the keys.
+void removeFloatNoise(nlohmann::json& j);
+
 } // namespace exa

@@ -2,6 +2,7 @@
 
 #include "exabricks/core/color.h"
 #include "exabricks/core/error.h"
+#include "exabricks/core/text.h"
 #include "exabricks/render/sample_math.h"
 #include "exabricks/render/scene_vocabulary.h"
 
@@ -233,8 +234,8 @@ std::string jsonMessage(const std::exception& e) {
 double number(const json& v, const std::string& path, const std::string& what) {
   if (!v.is_number()) fail(path, ": ", what, " must be a number, not ", v.dump());
   const double d = v.get<double>();
-  if (!std::isfinite(d) || !std::isfinite(float(d)))
-    fail(path, ": ", what, " = ", v.dump(), " is not a finite single-precision number");
+  if (const std::string why = beyondSinglePrecision(d); !why.empty()) fail(path, ": ", what, ": ", why);
+  if (!std::isfinite(d)) fail(path, ": ", what, " = ", v.dump(), " is not a finite number");
   return d;
 }
 
@@ -504,6 +505,19 @@ TransferFunction parseTransferFunction(const std::string& jsonText, const std::s
   return transferFunctionFromJson(j, source);
 }
 
-std::string transferFunctionJson(const TransferFunction& tf) { return transferFunctionToJson(tf).dump(2); }
+void removeFloatNoise(json& j) {
+  if (j.is_number_float()) {
+    j = withoutFloatNoise(j.get<double>());
+  } else if (j.is_structured()) {
+    for (json& child : j)
+      removeFloatNoise(child);
+  }
+}
+
+std::string transferFunctionJson(const TransferFunction& tf) {
+  json j = transferFunctionToJson(tf);
+  removeFloatNoise(j);
+  return j.dump(2);
+}
 
 } // namespace exa

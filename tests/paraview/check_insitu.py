@@ -7,7 +7,9 @@ writing an image per step and the data of steps 0 and 3. The image of step 3 equ
 render` of the data written at step 3 (same camera and transfer function) within the bounds of
 check_paraview_parallel.py; the hierarchy changes between steps 0 and 3 and so do the images. A
 script that fails (the plugin missing) is reported on every step and the simulation still ends
-normally."""
+normally. Without a display (no DISPLAY, as on a compute node) the simulation runs to its end, the
+script says once why ParaView's view cannot draw, and draws each step with exabricks render
+instead: the same picture as the representation's within the same bounds."""
 import json
 import os
 import re
@@ -29,14 +31,18 @@ with open(view_path, "w") as f:
     json.dump(view, f)
 
 
-def simulate(n, out, env_plugin):
+def simulate(n, out, env_plugin, display=True):
     env = dict(os.environ, EXABRICKS_INSITU_VIEW=view_path)
+    if not display:
+        env.pop("DISPLAY", None)
+        env["EXABRICKS_CLI"] = cli
     if env_plugin:
         env["EXABRICKS_PV_PLUGIN"] = plugin
     else:
         env.pop("EXABRICKS_PV_PLUGIN", None)
     command = [mpiexec, "--oversubscribe", "-np", str(n)] + (["--allow-run-as-root"] if os.geteuid() == 0 else [])
     command += ["-x", "EXABRICKS_INSITU_VIEW"] + (["-x", "EXABRICKS_PV_PLUGIN"] if env_plugin else [])
+    command += [] if display else ["-x", "EXABRICKS_CLI"]
     command += [simulation, script, "--steps", "5", "--regrid", "2", "--out", out]
     return subprocess.run(command, capture_output=True, text=True, timeout=600, env=env)
 
@@ -69,6 +75,30 @@ for n in (2, 3):
         failures.append("%d processes: the in situ image of step 3 differs from exabricks render of its data" % n)
     if blocks[0] == blocks[3] or moved < 1e-3:
         failures.append("%d processes: the hierarchy (%s blocks) or the picture did not change" % (n, blocks))
+
+# Without a display: every step, said once, drawn by exabricks render from the data.
+out = os.path.join(work, "nodisplay")
+run = simulate(2, out, True, display=False)
+steps = [line for line in run.stdout.splitlines() if line.startswith("step ")]
+said = run.stdout.count("cannot draw")
+print("without a display: exit %d, %d steps, %d reporting a failure, said %d times why the view cannot draw" %
+      (run.returncode, len(steps), sum("failed" in s for s in steps), said))
+if run.returncode != 0 or len(steps) != 5 or any("failed" in s for s in steps) or said != 1:
+    print(run.stdout[-2000:], run.stderr[-3000:])
+    failures.append("without a display the simulation or its script failed (exit %d, %d steps, said %d times)" %
+                    (run.returncode, len(steps), said))
+elif not os.path.exists(os.path.join(out, "step_0003.vthb")) or os.path.exists(os.path.join(out, "step_0001.vthb")):
+    failures.append("without a display the data of step 3 (and only every third step) should be written")
+else:
+    drawn = read_png(os.path.join(out, "step_0003.png"))
+    reference = exabricks_render(cli, os.path.join(out, "step_0003.vthb"), work, "step3-nodisplay.pfm", "--spp", "8",
+                                 field="density", value_range=RANGE, camera=(POSITION, FOCUS))
+    d = np.abs(drawn - reference).max(axis=-1)
+    print("without a display: step 3 drawn by exabricks render against its data: max %.1f/255, mean %.3f/255, "
+          "all %d steps drawn" % (255 * d.max(), 255 * d.mean(),
+                                  sum(os.path.exists(os.path.join(out, "step_%04d.png" % k)) for k in range(5))))
+    if d.max() > 1.0 / 255 or not all(os.path.exists(os.path.join(out, "step_%04d.png" % k)) for k in range(5)):
+        failures.append("without a display the steps were not drawn as exabricks render draws them")
 
 # A Catalyst script that fails (no plugin to load): reported, and the simulation goes on to its end.
 run = simulate(2, os.path.join(work, "failing"), False)

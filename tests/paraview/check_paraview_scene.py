@@ -38,7 +38,7 @@ KEYS = {
     "Shading": "shading",
     "Integrator": "integration.integrator",
     "Albedo": "pathtrace.albedo",
-    "Anisotropy": "pathtrace.anisotropy",
+    "ScatteringAnisotropy": "pathtrace.anisotropy",
     "Bounces": "pathtrace.bounces",
     "Emission": "pathtrace.emission",
     "SunIntensity": "pathtrace.sun_intensity",

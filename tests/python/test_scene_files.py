@@ -218,7 +218,8 @@ def test_legends_render_as_the_command_line_draws_them(cli, dataset_file, tmp_pa
 # control may offer a narrower range, as a slider does).
 PARAVIEW_KEYS = {"SamplingRate": "frame.rate", "AmbientOcclusionRays": "ambient_occlusion.rays",
                  "SamplesPerPixel": "frame.samples_per_pixel", "Albedo": "pathtrace.albedo",
-                 "Anisotropy": "pathtrace.anisotropy", "Bounces": "pathtrace.bounces", "Emission": "pathtrace.emission",
+                 "ScatteringAnisotropy": "pathtrace.anisotropy", "Bounces": "pathtrace.bounces",
+                 "Emission": "pathtrace.emission",
                  "SunIntensity": "pathtrace.sun_intensity", "SunAngle": "pathtrace.sun_angle"}
 VIEWER_KEYS = {"ao-rays": "ambient_occlusion.rays", "spp": "frame.samples_per_pixel"}
 
@@ -284,7 +285,10 @@ def test_every_described_structured_key_survives_the_command_line_and_python(cli
     top = {s["key"].split(".")[0].split("[")[0] for s in structure
            if "object" not in s and s.get("document", True) and s.get("written", True)}
     assert top <= set(example), top - set(example)
-    monkeypatch.chdir(tmp_path)  # the example names its mesh file as the working directory sees it
+    # The example renders as written, so it names no mesh file: one is added here.
+    assert all("file" not in m for m in example["meshes"])
+    example["meshes"].insert(0, {"file": "triangle.ply", "color": [0.25, 0.5, 0.75]})
+    monkeypatch.chdir(tmp_path)  # the mesh file as the working directory sees it
     (tmp_path / "triangle.ply").write_text(TRIANGLE_PLY)
     (tmp_path / "example.json").write_text(json.dumps(example))
     def files_resolved(doc):  # mesh files as one path, whether written relative or absolute

@@ -157,6 +157,20 @@ def test_a_scene_made_from_yt_renders_in_the_command_line(tmp_path, cli):
     assert again.field == "density"
     assert again.transfer_function.range == pytest.approx(yt_range, rel=1e-5)
 
+    # A dataset made beforehand from the same output (its default field, the file's Density in code
+    # units) serves yt's scene of ("gas", "density"): the same picture, the range in its units.
+    made = eb.from_yt(ds)
+    reused = eb.Scene.from_yt(yt.create_scene(ds, ("gas", "density")), dataset=made)
+    assert reused.dataset is made and reused.field == "Density"
+    assert list(reused.transfer_function.range) == pytest.approx(
+        [v / enzo_output.DENSITY_UNITS for v in yt_range], rel=1e-5)
+    reused.width, reused.height, reused.spp = 64, 48, 2
+    reused.save(str(tmp_path / "reused.png"))
+    c = np.asarray(Image.open(tmp_path / "reused.png"), dtype=np.float64)
+    assert np.abs(c - b).mean() < 0.5 and np.abs(c - b).max() <= 2
+    with pytest.raises(ValueError, match="does not hold"):
+        eb.Scene.from_yt(yt.create_scene(ds, ("gas", "number_density")), dataset=made)
+
     # A field yt derives has no field of the file behind it: the file names no input, and says why.
     derived = eb.Scene.from_yt(yt.create_scene(ds, ("gas", "number_density")))
     with pytest.warns(UserWarning, match="yt derives 'number_density'"):

@@ -172,6 +172,8 @@ def scene_example(cli):
     (that document, the whole example)."""
     example = json.loads(subprocess.run([cli, "keys", "--example"], check=True, capture_output=True,
                                         text=True).stdout)
+    # (The example renders as written, so it names no mesh file: one is added, as a user would.)
+    example["meshes"].insert(0, {"file": "triangle.ply", "color": [0.25, 0.5, 0.75]})
     uploadable = json.loads(json.dumps(example))
     uploadable["meshes"] = [m for m in uploadable["meshes"] if "file" not in m]
     assert uploadable["meshes"], "the example has no inline mesh"

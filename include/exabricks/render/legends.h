@@ -5,6 +5,7 @@
 #pragma once
 
 #include "exabricks/core/image.h"
+#include "exabricks/render/overlay.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
 
@@ -32,8 +33,9 @@ vec3f legendInk(const vec3f& background);
 
 /// Draws the legends `scene.legends` asks for into `image` (in `frame`'s camera): the colour bar
 /// with the volume on and no debug view, the level legend with the level debug view, the
-/// annotation always. Draws nothing when none is asked for.
-void drawLegends(const Scene& scene, const Frame& frame, const Model& model, const DatasetInfo& dataset,
-                 const LegendText& text, Image& image);
+/// annotation always. Draws nothing when none is asked for. They draw over the picture: the
+/// colour bar changes no pixel outside the boxes it returns (empty without a colour bar).
+std::vector<PixelRect> drawLegends(const Scene& scene, const Frame& frame, const Model& model,
+                                   const DatasetInfo& dataset, const LegendText& text, Image& image);
 
 } // namespace exa

@@ -93,7 +93,8 @@ void checkSceneVector(const std::string& key, const vec3f& value);
 /// key: an option of the front ends), and "help".
 std::string sceneStructureJson();
 /// A scene file holding every written structured key at its example value (lists and objects
-/// whole, their items' keys within them).
+/// whole, their items' keys within them) but a mesh file, over the embedded dataset: it renders
+/// as it is written.
 std::string sceneExampleJson();
 /// The keys known directly under `path` of a scene file ("" at the top, "layers[]" for a layer,
 /// "camera" or "transfer_function" for those objects): the structured keys and the settings.
