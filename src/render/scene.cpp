@@ -278,9 +278,7 @@ template <typename Owner> void writeSettings(const std::vector<Setting<Owner>>& 
   }
 }
 
-} // namespace
-
-std::string writeSceneJson(const SceneDocument& doc) {
+json sceneJson(const SceneDocument& doc) {
   const Scene& s = doc.scene;
   const Frame& f = doc.frame;
   json j = json::object();
@@ -336,9 +334,18 @@ std::string writeSceneJson(const SceneDocument& doc) {
     }
     j["camera_path"] = {{"keyframes", keys}, {"constant_speed", doc.path.constantSpeed}};
   }
+  return j;
+}
+
+} // namespace
+
+std::string writeSceneJson(const SceneDocument& doc) {
+  json j = sceneJson(doc);
   removeFloatNoise(j);
   return j.dump(2) + "\n";
 }
+
+std::string exactSceneJson(const SceneDocument& doc) { return sceneJson(doc).dump(); }
 
 namespace {
 

@@ -15,7 +15,7 @@ std::string sceneKeyOf(const Scene& scene) {
   d.scene = scene;
   for (SceneMesh& m : d.scene.meshes)
     m.mesh.reset();
-  return writeSceneJson(d);
+  return exactSceneJson(d);
 }
 
 /// Whether the meshes of `a` and `b` hold the same data: the same meshes, or equal ones.
@@ -141,7 +141,7 @@ bool ProgressiveView::showFrame(const Frame& frame) {
   d.path = doc_.path;
   d.frame = frame;
   d.frame.depthLimit = nullptr;
-  std::string key = writeSceneJson(d);
+  std::string key = exactSceneJson(d);
   if (frame.depthLimit) {
     if (frame.depthLimit != depthLimit_.data()) // not the copy shown() refers to
       depthLimit_.assign(frame.depthLimit, frame.depthLimit + size_t(frame.width) * size_t(frame.height));

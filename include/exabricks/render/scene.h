@@ -206,8 +206,11 @@ struct SceneDocument {
   CameraPath path;        ///< movies: camera keyframes (empty: the camera stays)
 };
 
-/// Writes a scene document as JSON (every setting, colours in sRGB).
+/// Writes a scene document as JSON (every setting, colours in sRGB), numbers that hold single
+/// precision values in their shortest form (0.3, not 0.30000001192092896).
 std::string writeSceneJson(const SceneDocument& doc);
+/// The same document with every number exact, on one line: a key that tells any two scenes apart.
+std::string exactSceneJson(const SceneDocument& doc);
 /// Reads JSON written by writeSceneJson, or any subset of its keys (the rest keep their
 /// defaults). Meshes named by file keep their `source` and no data: documents/scene_file.h reads them.
 /// Errors name `source` and the offending key.
