@@ -13,7 +13,9 @@ The bounds: mean difference below 0.5/255, at most 8 % of the pixels beyond 1.5/
 composites 8-bit colour: each part's image is rounded before it is blended, one step at most)
 and at most 0.1 % beyond 4.5/255 (pixels where a part's face is seen edge-on; 0.5 % with
 iso-surfaces, whose root search steps differently where a ray crosses a part's face, as in the
-command line's data-parallel check). Each
+command line's data-parallel check; 1 % with opaque geometry: ParaView cuts the outline's lines
+at the parts' faces when it moves them between processes, and single pixels along those lines
+are drawn or not). Each
 process builds only its part with its halo: the most cells a process holds falls with the
 number of processes, and the cells they own add up to the whole. Prints "skipped: ..." where the
 shared sample is absent."""
@@ -138,7 +140,8 @@ if 1 in records:
                   % (case, n, 255 * d.max(), 255 * d.mean(), 100 * beyond, 100 * far, 100 * shown))
             if shown < 0.05:
                 failures.append("%s: the picture shows almost nothing (%.0f%%)" % (case, 100 * shown))
-            if d.mean() > 0.5 / 255 or beyond > 0.08 or far > (0.005 if case in ("iso", "clip") else 0.001):
+            far_bound = 0.01 if case == "geometry" else 0.005 if case in ("iso", "clip") else 0.001
+            if d.mean() > 0.5 / 255 or beyond > 0.08 or far > far_bound:
                 failures.append("%s on %d processes differs from one process (mean %.3f/255, %.2f%% beyond "
                                 "1.5/255, %.3f%% beyond 4.5/255)" % (case, n, 255 * d.mean(), 100 * beyond, 100 * far))
         parts = records[n]["volume"]["parts"]
