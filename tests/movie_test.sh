@@ -62,6 +62,7 @@ for k in 0 1 2; do
   # Frames 2k and 2k+1 show step k, from the orbit's views 2k and 2k+1.
   check "orbit with a series: frames $((2 * k)) and $((2 * k + 1)) are step $k's orbit views" bash -c "'$exe' -q movie moving/blobs_000$k.cells -o orbit_step$k ${look[*]} --range $range --orbit 6 && cmp orbit_step$k/frame_0000$((2 * k)).png orbit_series/frame_0000$((2 * k)).png && cmp orbit_step$k/frame_0000$((2 * k + 1)).png orbit_series/frame_0000$((2 * k + 1)).png"
 done
+check "a short series encoded as a video says how to hold its steps" bash -c "'$exe' movie moving -o hint.mp4 --size 16x16 2>&1 >/dev/null | grep -q 'each of its 3 steps for one frame: 0.13 s at 24 frames per second; --frames-per-step 24 holds'"
 fails_with "orbit with fewer frames than steps" "every step needs a frame" "$exe" movie moving -o bad --orbit 2
 fails_with "orbit with --frames-per-step" "leave out --frames-per-step" "$exe" movie moving -o bad --orbit 6 --frames-per-step 2
 

@@ -88,6 +88,11 @@ def grids_of(corners, levels, values):
     ]
 
 
+def test_version_is_the_command_lines(cli):
+    out = subprocess.run([cli, "--version"], check=True, capture_output=True, text=True).stdout.split()
+    assert out == ["exabricks", eb.__version__]
+
+
 def test_from_grids_equals_from_cells():
     corners, levels, values = two_level_cells()
     a = eb.from_cells(corners, levels, {"density": values})
