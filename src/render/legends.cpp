@@ -18,11 +18,6 @@ std::string legendDatasetLabel(const std::string& input) {
   return name.empty() || name == "." || name == ".." ? input : name;
 }
 
-vec3f legendInk(const vec3f& bg) {
-  const float luminance = 0.2126f * bg.x + 0.7152f * bg.y + 0.0722f * bg.z;
-  return luminance > 0.3f ? vec3f(0.f) : vec3f(1.f);
-}
-
 namespace {
 
 /// The annotation's lines for an image `width` pixels wide: the dataset, the field, then the

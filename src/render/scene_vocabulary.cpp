@@ -364,8 +364,12 @@ void checkSettingValue(std::string_view key, SettingType type, double low, doubl
   const bool integer = type == SettingType::Integer;
   const bool ok = std::isfinite(value) && (lowOpen ? value > low : value >= low) &&
                   (highOpen ? value < high : value <= high) && (!integer || value == std::floor(value));
-  if (ok && (integer || beyondSinglePrecision(value).empty())) return;
-  if (ok) fail("\"", key, "\": ", beyondSinglePrecision(value)); // within its range, but no float holds it
+  if (ok) {
+    if (integer) return;
+    const std::string why = beyondSinglePrecision(value); // within its range, but no float holds it
+    if (why.empty()) return;
+    fail("\"", key, "\": ", why);
+  }
   const std::string lo = shown(low), hi = shown(high), v = shown(value);
   if (integer && high > 1e15) fail("\"", key, "\" must be an integer >= ", lo, ", not ", v);
   if (integer) fail("\"", key, "\" must be an integer in ", lo, "..", hi, ", not ", v);
@@ -418,13 +422,12 @@ template <typename Owner> void describe(const std::vector<Setting<Owner>>& table
     json e = {
         {"key", s.key}, {"name", s.name}, {"type", types[int(s.type)]}, {"default", s.get(defaults)}, {"help", s.help}};
     if (s.type == SettingType::Integer || s.type == SettingType::Number) {
-      e["min"] = s.low;
+      // (an integer's bounds as integers: a seed's reaches 2^64 - 2048)
+      const bool integer = s.type == SettingType::Integer;
+      e["min"] = integer ? json(int64_t(s.low)) : json(s.low);
       if (s.lowOpen) e["min_exclusive"] = true;
-      if (std::isfinite(s.high)) e["max"] = s.high;
-      if (s.type == SettingType::Integer) { // bounds as integers (a seed's reaches 2^64 - 1)
-        e["min"] = int64_t(s.low);
-        if (std::isfinite(s.high)) e["max"] = s.high >= 0x1p63 ? json(uint64_t(s.high)) : json(int64_t(s.high));
-      }
+      if (std::isfinite(s.high))
+        e["max"] = !integer ? json(s.high) : s.high >= 0x1p63 ? json(uint64_t(s.high)) : json(int64_t(s.high));
       if (s.highOpen) e["max_exclusive"] = true;
     }
     if (s.type == SettingType::Choice) e["choices"] = s.choices;

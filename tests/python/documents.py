@@ -3,6 +3,14 @@ round-off (the library keeps single-precision values)."""
 import pytest
 
 
+def with_mesh_file(example):
+    """The library's example scene (`exabricks keys --example`, which names no file so that it
+    renders as written) with a mesh file first among its meshes, as a user's scene may have."""
+    assert all("file" not in m for m in example["meshes"])
+    example["meshes"].insert(0, {"file": "triangle.ply", "color": [0.25, 0.5, 0.75]})
+    return example
+
+
 def holds(got, want, where="scene", same_keys=False):
     """Every key of `want` is in `got` with an equal value; with `same_keys`, `got` has no others."""
     if isinstance(want, dict):

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import exabricks as eb
-from documents import assert_same, holds
+from documents import assert_same, holds, with_mesh_file
 from exabricks import _core
 
 CAMERA = {"position": [150.0, 20.0, 60.0], "look_at": [30.0, 31.0, 33.0], "up": [0.0, 0.2, 1.0], "fov": 33.0,
@@ -285,9 +285,7 @@ def test_every_described_structured_key_survives_the_command_line_and_python(cli
     top = {s["key"].split(".")[0].split("[")[0] for s in structure
            if "object" not in s and s.get("document", True) and s.get("written", True)}
     assert top <= set(example), top - set(example)
-    # The example renders as written, so it names no mesh file: one is added here.
-    assert all("file" not in m for m in example["meshes"])
-    example["meshes"].insert(0, {"file": "triangle.ply", "color": [0.25, 0.5, 0.75]})
+    example = with_mesh_file(example)
     monkeypatch.chdir(tmp_path)  # the mesh file as the working directory sees it
     (tmp_path / "triangle.ply").write_text(TRIANGLE_PLY)
     (tmp_path / "example.json").write_text(json.dumps(example))

@@ -14,6 +14,7 @@ import pytest
 
 # The tests compare scene documents as the Python tests do (tests/python/documents.py).
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "python"))
+from documents import with_mesh_file  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 CLI = os.environ.get("EXABRICKS", str(ROOT / "build" / "exabricks"))
@@ -172,8 +173,7 @@ def scene_example(cli):
     (that document, the whole example)."""
     example = json.loads(subprocess.run([cli, "keys", "--example"], check=True, capture_output=True,
                                         text=True).stdout)
-    # (The example renders as written, so it names no mesh file: one is added, as a user would.)
-    example["meshes"].insert(0, {"file": "triangle.ply", "color": [0.25, 0.5, 0.75]})
+    example = with_mesh_file(example)
     uploadable = json.loads(json.dumps(example))
     uploadable["meshes"] = [m for m in uploadable["meshes"] if "file" not in m]
     assert uploadable["meshes"], "the example has no inline mesh"

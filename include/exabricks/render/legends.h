@@ -28,9 +28,6 @@ struct LegendText {
 /// "plt00100"), or the default dataset's description for an empty path.
 std::string legendDatasetLabel(const std::string& input);
 
-/// The colour legends draw in: black over a light background, white over a dark one.
-vec3f legendInk(const vec3f& background);
-
 /// Draws the legends `scene.legends` asks for into `image` (in `frame`'s camera): the colour bar
 /// with the volume on and no debug view, the level legend with the level debug view, the
 /// annotation always. Draws nothing when none is asked for. They draw over the picture: the

@@ -16,6 +16,10 @@ namespace exa {
 /// Pixels per font unit for an image of this size (1 up to 400 rows, then one more per 400).
 int overlayScale(const Image& image);
 
+/// The colour legends draw in over `background`: black over a light one, white over a dark one
+/// (and the backing of text in `ink`: legendInk(ink)).
+vec3f legendInk(const vec3f& background);
+
 /// A rectangle of pixels, [x0, x1) x [y0, y1).
 struct PixelRect {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
