@@ -8,11 +8,13 @@
 #include "exabricks/amr/basis_batch.h"
 #include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene_vocabulary.h"
+#include "exabricks/workflows/streamed.h"
 
 #include <algorithm>
 #include <cctype>
@@ -154,6 +156,83 @@ void printStats(const RenderCmdOptions& o, const Scene& scene, const Renderer& r
   std::printf("load + build     %.3f s\n", r.loadSeconds);
 }
 
+/// Writes the image of a render: legends, the empty-image warning, the outputs.
+void writeOutputs(const RenderCmdOptions& o, const SceneDocument& doc, const FrameBuffer& buffer, const Model& model,
+                  const DatasetInfo& dataset, const WholeData* whole, size_t visibleRegions, size_t regions) {
+  const ImageFormat format = imageFormatFor(o.output, o.bits);
+  Image image = buffer.resolve();
+  drawLegends(doc.scene, doc.frame, model, dataset, legendText(doc.input, whole), image);
+  if (imageIsEmpty(image))
+    logWarning(strCat("the image is empty: nothing in view is visible (", visibleRegions, " of ", regions,
+                      " regions may be; check --range, --opacity and the camera)"));
+  writeImage(o.output, image, format, doc.scene.keepAlpha, doc.scene.background);
+  if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, doc.scene.background);
+  logInfo(strCat("wrote ", o.output));
+}
+
+/// A step larger than the budget: read and drawn part by part, front to back, one part (or as
+/// many as fit) resident at a time.
+void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& doc, const LoadOptions& lo,
+                 MemoryPlan plan) {
+  Timer loadTimer;
+  if (o.march.device != "auto" && o.march.device != "cpu")
+    failUsage("--memory-budget draws on the CPU; --device ", o.march.device, " holds the whole step");
+  logInfo(strCat("memory budget ", formatBytes(plan.budget), ": ", plan.partition.parts(), " parts of at most ",
+                 formatBytes(plan.largestPartBytes()), " each, besides ", formatBytes(plan.fixedBytes)));
+  StreamedStep step(doc.input, lo, std::move(plan));
+  const StepSurvey& survey = step.survey();
+  WholeData whole{survey.cellBounds, survey.levels, step.partialData()};
+  const Model& model = step.skeleton();
+  Scene& scene = doc.scene;
+  Frame& frame = doc.frame;
+  applyDataDefaults(o.scene, cmd, scene, model, survey.dataset, &whole);
+  const RendererOptions options = o.march.options();
+  frame.camera = cameraFromOptions(o.scene, cmd, doc, model, step.visibleBounds(scene, options), &whole);
+  frame.validate();
+  doc.hasCamera = true;
+  const double loadSeconds = loadTimer.seconds();
+  if (!o.writeScene.empty()) writeSceneFile(o.writeScene, withAbsolutePaths(doc));
+
+  FrameBuffer buffer(frame.width, frame.height);
+  Timer renderTimer;
+  Progress progress("rendering", uint64_t(step.parts()) * uint64_t(buffer.tileCount()) *
+                                     uint64_t(frame.samplesPerPixel));
+  if (logLevel() < LogLevel::Warning) progress.finish();
+  PassControl control;
+  control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
+  renderStreamed(step, scene, options, frame, buffer, control);
+  progress.finish();
+  const double renderSeconds = renderTimer.seconds();
+  writeOutputs(o, doc, buffer, model, survey.dataset, &whole, 0, 0);
+  const RenderStats& stats = buffer.stats();
+  if (o.json) {
+    nlohmann::json j;
+    j["output"] = o.output;
+    j["width"] = frame.width;
+    j["height"] = frame.height;
+    j["samples_per_pixel"] = frame.samplesPerPixel;
+    j["frame_seconds"] = renderSeconds;
+    j["rays"] = stats.rays;
+    j["samples"] = stats.samples;
+    j["load_seconds"] = loadSeconds;
+    j["memory"] = {{"budget_bytes", step.plan().budget},
+                   {"parts", step.parts()},
+                   {"parts_read", step.partsRead()},
+                   {"resident_parts", step.residentParts()},
+                   {"resident_bytes_estimate", step.residentBytes()},
+                   {"cells", survey.cells},
+                   {"peak_rss_bytes", peakResidentBytes()}};
+    std::cout << j.dump(2) << "\n";
+  } else if (o.stats) {
+    std::printf("frame time       %.4f s (%d parts, %llu read)\n", renderSeconds, step.parts(),
+                (unsigned long long)step.partsRead());
+    std::printf("samples          %llu\n", (unsigned long long)stats.samples);
+    std::printf("load + survey    %.3f s\n", loadSeconds);
+    std::printf("peak memory      %s of a %s budget\n", formatBytes(peakResidentBytes()).c_str(),
+                formatBytes(step.plan().budget).c_str());
+  }
+}
+
 void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
   const ImageFormat format = imageFormatFor(o.output, o.bits);
@@ -170,6 +249,10 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields = neededFields(scene);
+  if (std::optional<MemoryPlan> plan = memoryPlanFor(o.scene.in, doc.input, lo,
+                                                    streamedFrameBytes(frame.width, frame.height, frame.samplesPerPixel),
+                                                    dataParallel || mpi::processes().size > 1))
+    return runStreamed(o, cmd, doc, lo, std::move(*plan));
   // Image-parallel (and one process): every process holds the whole model. Data-parallel: each
   // holds its part and the halo. If one process cannot read its data, all of them stop with an
   // error instead of waiting for it.
@@ -219,14 +302,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     report.partRss = mpi::allGather(double(peakRssBytes()));
   }
   if (!root) return; // the first process writes the image and the statistics
-  Image image = buffer.resolve();
-  drawLegends(scene, frame, model, dataset, legendText(doc.input, whole), image);
-  if (imageIsEmpty(image))
-    logWarning(strCat("the image is empty: nothing in view is visible (", renderer.visibleRegions(), " of ",
-                      model.regions.regions.size(), " regions may be; check --range, --opacity and the camera)"));
-  writeImage(o.output, image, format, scene.keepAlpha, scene.background);
-  if (!o.floatOutput.empty()) writePfm(o.floatOutput, image, scene.background);
-  logInfo(strCat("wrote ", o.output));
+  writeOutputs(o, doc, buffer, model, dataset, whole, renderer.visibleRegions(), model.regions.regions.size());
 
   if (o.json)
     printJson(o, frame, renderer, model, report);
@@ -240,6 +316,7 @@ void addRender(CLI::App& app) {
   auto o = std::make_shared<RenderCmdOptions>();
   CLI::App* cmd = app.add_subcommand("render", "Volume-render a field to a PNG or JPEG image");
   o->scene.add(*cmd);
+  o->scene.in.addMemoryBudget(*cmd);
   o->march.add(*cmd);
   cmd->add_option("-o,--output", o->output,
                   "Image to write: .png, .jpg / .jpeg, .exr (linear, premultiplied alpha, 32-bit float) or .pfm")

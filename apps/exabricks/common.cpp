@@ -65,6 +65,37 @@ LoadOptions InputOptions::loadOptions(bool onlySelectedField) const {
   return o;
 }
 
+void InputOptions::addMemoryBudget(CLI::App& cmd) {
+  cmd.add_option("--memory-budget", memoryBudget,
+                 "Most resident memory for the whole process, e.g. 512M or 2G: a step that does not fit is read "
+                 "and drawn in parts, one at a time (default: the whole step, or three quarters of the memory "
+                 "available when it does not fit)");
+}
+
+std::optional<MemoryPlan> memoryPlanFor(const InputOptions& in, const std::string& input, const LoadOptions& lo,
+                                        uint64_t frameBytes, bool severalProcesses) {
+  std::optional<uint64_t> budget;
+  if (!in.memoryBudget.empty()) {
+    uint64_t bytes = 0;
+    if (!parseByteSize(in.memoryBudget, bytes))
+      failUsage("--memory-budget: '", in.memoryBudget, "' is not a size (e.g. 512M, 2G, 1.5GiB)");
+    if (severalProcesses)
+      failUsage("--memory-budget holds a step in parts on one process; under MPI, --distribute data splits it "
+                "among the processes");
+    budget = bytes;
+  } else if (!severalProcesses) {
+    budget = budgetForLargeStep(input, lo, frameBytes);
+  }
+  if (!budget) return std::nullopt;
+  try {
+    MemoryPlan plan = planMemory(input, lo, *budget, frameBytes);
+    if (!plan.streamed()) return std::nullopt;
+    return plan;
+  } catch (const BudgetTooSmall& e) {
+    failUsage(e.what());
+  }
+}
+
 std::string InputOptions::name() const { return input.empty() ? kDefaultDatasetName : input; }
 
 void parseSize(const std::string& text, int& width, int& height) {

@@ -4,11 +4,13 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/load.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/streamed.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace exa::cli {
@@ -25,11 +27,22 @@ struct InputOptions {
   double rawThreshold = 0.0;              ///< raw volumes: largest value spread of a merged cell
   int rawMaxLevel = 4;                    ///< raw volumes: coarsest merged level
   bool nanAsHoles = false;                ///< NaN and infinite values make their cells holes
+  std::string memoryBudget;               ///< --memory-budget as given (empty: none)
 
   void add(CLI::App& cmd, bool fieldOption = true);
+  /// Registers --memory-budget (the commands that hold a step in parts under it).
+  void addMemoryBudget(CLI::App& cmd);
   LoadOptions loadOptions(bool onlySelectedField) const;
   std::string name() const;
 };
+
+/// How a command holds `input` (loaded with `lo`, beside `frameBytes` of images): none when
+/// whole, as without a budget; a plan of parts under --memory-budget, or when the step is too
+/// large for the memory available (said on stderr). A budget smaller than the process with its
+/// smallest part is a usage error naming the smallest budget that works; several processes
+/// (`severalProcesses`) refuse --memory-budget.
+std::optional<MemoryPlan> memoryPlanFor(const InputOptions& in, const std::string& input, const LoadOptions& lo,
+                                        uint64_t frameBytes, bool severalProcesses);
 
 /// Parses WIDTHxHEIGHT (each 1..32768) as given to --size; throws with the text otherwise.
 void parseSize(const std::string& text, int& width, int& height);

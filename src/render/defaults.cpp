@@ -13,33 +13,42 @@ namespace {
 
 constexpr int kBins = 256;
 
+/// Runs `count(model, owned)` over the data: over the model (owned: null, every cell counts), or
+/// over each part of a dataset held in parts (only the cells each part owns count; parts read one
+/// at a time, or one per process), and then sums `sums` over the processes.
+template <typename Count>
+void countOverParts(const Model& model, const PartialData* part, std::vector<double>& sums, Count&& count) {
+  if (part && part->eachPart)
+    part->eachPart([&](const Model& m, const box3l& owned) { count(m, &owned); });
+  else
+    count(model, part ? &part->owned : nullptr);
+  if (part && part->sumOverParts) part->sumOverParts(sums);
+}
+
 /// Volume-weighted histogram of the normalised value; returns the total volume. For a model
 /// that holds part of the data, only the cells the part owns count, and the parts' histograms
 /// are summed.
 double histogram(const Model& model, int field, const TransferFunction& tf, std::vector<double>& hist,
                  const PartialData* part) {
-  hist.assign(kBins, 0.0);
-  const ValueArray& values = model.fieldValues.at(size_t(field));
-  double total = 0.0;
-  for (const Brick& b : model.bricks) {
-    const double volume = std::ldexp(1.0, 3 * b.level);
-    auto add = [&](uint32_t slot) { // one cell, weighted by its volume
-      const float t = tf.normalize(values[b.valueOffset + slot]);
-      hist[size_t(std::clamp(int(t * kBins), 0, kBins - 1))] += volume;
-      total += volume;
-    };
-    if (part)
-      forCellsCentredIn(b, part->owned, add); // a part counts only the cells it owns
-    else
-      for (uint32_t slot = 0; slot < b.cellCount(); ++slot)
-        add(slot);
-  }
-  if (part && part->sumOverParts) {
-    hist.push_back(total);
-    part->sumOverParts(hist);
-    total = hist.back();
-    hist.pop_back();
-  }
+  hist.assign(kBins + 1, 0.0); // the total volume last
+  countOverParts(model, part, hist, [&](const Model& m, const box3l* owned) {
+    const ValueArray& values = m.fieldValues.at(size_t(field));
+    for (const Brick& b : m.bricks) {
+      const double volume = std::ldexp(1.0, 3 * b.level);
+      auto add = [&](uint32_t slot) { // one cell, weighted by its volume
+        const float t = tf.normalize(values[b.valueOffset + slot]);
+        hist[size_t(std::clamp(int(t * kBins), 0, kBins - 1))] += volume;
+        hist[kBins] += volume;
+      };
+      if (owned)
+        forCellsCentredIn(b, *owned, add); // a part counts only the cells it owns
+      else
+        for (uint32_t slot = 0; slot < b.cellCount(); ++slot)
+          add(slot);
+    }
+  });
+  const double total = hist.back();
+  hist.pop_back();
   return total;
 }
 
@@ -60,9 +69,8 @@ constexpr int kRays = 128;
 constexpr size_t kRayCount = size_t(3) * kRays * kRays;
 
 /// Calls visit(ray, value index, cell width) for every cell and every ray that crosses it (along
-/// its whole width); for a model that holds part of the data, only the cells the part owns.
-template <typename Visit>
-void castAxisRays(const Model& model, const box3i& bounds, const PartialData* part, Visit&& visit) {
+/// its whole width); with `owned`, only the cells whose centres lie in it.
+template <typename Visit> void castAxisRays(const Model& model, const box3i& bounds, const box3l* owned, Visit&& visit) {
   double pitch[3];
   for (int a = 0; a < 3; ++a)
     pitch[a] = double(std::max(bounds.upper[a] - bounds.lower[a], 1)) / kRays;
@@ -78,7 +86,7 @@ void castAxisRays(const Model& model, const box3i& bounds, const PartialData* pa
       for (int y = 0; y < b.size.y; ++y)
         for (int x = 0; x < b.size.x; ++x, ++slot) {
           const vec3i lo = b.lower + vec3i(x, y, z) * w;
-          if (part && !centreInside(lo, b.level, part->owned)) continue;
+          if (owned && !centreInside(lo, b.level, *owned)) continue;
           for (int a = 0; a < 3; ++a) {
             const int i = (a + 1) % 3, j = (a + 2) % 3;
             int i0, i1, j0, j1;
@@ -101,12 +109,14 @@ box3i wholeBounds(const Model& model, const PartialData* part) {
 constexpr int kTopBins = 32;
 std::vector<double> valuesMet(const Model& model, int field, const TransferFunction& norm, const PartialData* part) {
   std::vector<double> counts(kRayCount * kTopBins, 0.0);
-  const ValueArray& values = model.fieldValues.at(size_t(field));
-  castAxisRays(model, wholeBounds(model, part), part, [&](size_t ray, uint32_t slot, int) {
-    const float t = norm.normalize(values[slot]);
-    if (t == t) counts[ray * kTopBins + size_t(std::clamp(int(t * kTopBins), 0, kTopBins - 1))] += 1.0;
+  const box3i bounds = wholeBounds(model, part);
+  countOverParts(model, part, counts, [&](const Model& m, const box3l* owned) {
+    const ValueArray& values = m.fieldValues.at(size_t(field));
+    castAxisRays(m, bounds, owned, [&](size_t ray, uint32_t slot, int) {
+      const float t = norm.normalize(values[slot]);
+      if (t == t) counts[ray * kTopBins + size_t(std::clamp(int(t * kTopBins), 0, kTopBins - 1))] += 1.0;
+    });
   });
-  if (part && part->sumOverParts) part->sumOverParts(counts);
   return counts;
 }
 
@@ -163,12 +173,14 @@ double depthOfDensestSightLines(const Model& model, int field, const TransferFun
                                 const PartialData* part) {
   constexpr double kFixed = 1 << 20;
   std::vector<double> depth(kRayCount, 0.0); // in kFixed units
-  const ValueArray& values = model.fieldValues.at(size_t(field));
-  castAxisRays(model, wholeBounds(model, part), part, [&](size_t ray, uint32_t slot, int width) {
-    const double alpha = std::round(double(ramp.lookup(values[slot]).w) * kFixed);
-    depth[ray] += alpha * std::ldexp(1.0, int(std::lround(std::log2(double(width) / dataset.referenceWidth))));
+  const box3i bounds = wholeBounds(model, part);
+  countOverParts(model, part, depth, [&](const Model& m, const box3l* owned) {
+    const ValueArray& values = m.fieldValues.at(size_t(field));
+    castAxisRays(m, bounds, owned, [&](size_t ray, uint32_t slot, int width) {
+      const double alpha = std::round(double(ramp.lookup(values[slot]).w) * kFixed);
+      depth[ray] += alpha * std::ldexp(1.0, int(std::lround(std::log2(double(width) / dataset.referenceWidth))));
+    });
   });
-  if (part && part->sumOverParts) part->sumOverParts(depth);
   std::vector<double> seeing;
   for (double d : depth)
     if (d > 0.0) seeing.push_back(d / kFixed);
@@ -250,8 +262,14 @@ bool chooseMapping(Adapting& a, bool autoLog) {
   const float lowest = a.dataset.valueRanges.at(size_t(a.field)).lower;
   if (autoLog && !tf.logScale && range.lower == 0.f && range.upper > 0.f && !a.model.fieldValues.empty()) {
     float smallest = std::numeric_limits<float>::infinity();
-    for (float v : a.model.fieldValues.at(size_t(a.field)))
-      if (v > 0.f) smallest = std::min(smallest, v);
+    auto scan = [&](const Model& m) {
+      for (float v : m.fieldValues.at(size_t(a.field)))
+        if (v > 0.f) smallest = std::min(smallest, v);
+    };
+    if (a.part && a.part->eachPart)
+      a.part->eachPart([&](const Model& m, const box3l&) { scan(m); });
+    else
+      scan(a.model);
     if (smallest < range.upper * 1e-3f) range.lower = smallest;
   }
   a.norm = tf;

@@ -141,33 +141,6 @@ bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buff
   return complete;
 }
 
-namespace {
-
-/// A pass's colours and steps, kCompositeChannels floats a pixel.
-void packForCompositing(const FrameBuffer::Sums& s, size_t pixels, float* local) {
-  for (size_t p = 0; p < pixels; ++p) {
-    float* o = local + p * kCompositeChannels;
-    for (int c = 0; c < 4; ++c)
-      o[c] = s.colors[4 * p + size_t(c)];
-    o[4] = s.steps[p];
-  }
-}
-
-/// A composited pass added to the buffer as one more pass of every tile.
-void addComposited(const float* result, size_t pixels, FrameBuffer& buffer) {
-  const FrameBuffer::Sums out = buffer.sums();
-  for (size_t p = 0; p < pixels; ++p) {
-    const float* c = result + p * kCompositeChannels;
-    for (int ch = 0; ch < 4; ++ch)
-      out.colors[4 * p + size_t(ch)] += c[ch];
-    out.steps[p] += c[4];
-  }
-  for (size_t t = 0; t < out.tiles; ++t)
-    ++out.tilePasses[t];
-}
-
-} // namespace
-
 bool renderFrameComposited(const Renderer* renderer, const Frame& frame, FrameBuffer& buffer,
                            const std::vector<int>& order, PassControl control) {
   const int n = state().size;

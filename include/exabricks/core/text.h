@@ -2,7 +2,10 @@
 #pragma once
 
 #include <charconv>
+#include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <limits>
 #include <string>
@@ -44,6 +47,48 @@ inline double withoutFloatNoise(double value) {
   if (digits <= 9) return value;
   end = std::to_chars(buf, buf + sizeof(buf), float(value)).ptr;
   return std::strtod(std::string(static_cast<const char*>(buf), end).c_str(), nullptr);
+}
+
+
+/// A size in bytes as people write it: "2G", "512M", "1.5GiB", "64MB", "300k", "1000000" (K, M,
+/// G, T are powers of 1024, with or without "B" or "iB"; a bare number is bytes). False for
+/// anything else, or a size that is not a positive whole number of bytes below 2^63.
+inline bool parseByteSize(const std::string& text, uint64_t& bytes) {
+  size_t used = 0;
+  double number = 0;
+  try {
+    number = std::stod(text, &used);
+  } catch (...) {
+    return false;
+  }
+  if (used == 0 || !std::isfinite(number) || number <= 0) return false;
+  std::string unit = text.substr(used);
+  for (char& c : unit)
+    c = char(std::toupper(static_cast<unsigned char>(c)));
+  double scale = 1;
+  if (!unit.empty() && unit != "B") {
+    const std::string prefixes = "KMGT";
+    const size_t k = prefixes.find(unit[0]);
+    if (k == std::string::npos || !(unit.size() == 1 || unit.substr(1) == "B" || unit.substr(1) == "IB")) return false;
+    scale = std::ldexp(1.0, 10 * int(k + 1));
+  }
+  const double value = std::round(number * scale);
+  if (!(value >= 1 && value < std::ldexp(1.0, 63))) return false;
+  bytes = uint64_t(value);
+  return true;
+}
+
+/// A size in bytes for people: "512 B", "3.2 MiB", "1.50 GiB" (three significant digits).
+inline std::string formatBytes(uint64_t bytes) {
+  const char* units[] = {"B", "KiB", "MiB", "GiB", "TiB"};
+  double v = double(bytes);
+  int u = 0;
+  while (v >= 1024 && u < 4)
+    v /= 1024, ++u;
+  char buf[32];
+  std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : v < 10 ? "%.2f %s" : v < 100 ? "%.1f %s" : "%.0f %s", v,
+                units[u]);
+  return buf;
 }
 
 } // namespace exa

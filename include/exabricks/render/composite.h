@@ -3,6 +3,8 @@
 // operator on premultiplied colour, one pass at a time.
 #pragma once
 
+#include "exabricks/render/frame_buffer.h"
+
 #include <cstddef>
 
 namespace exa {
@@ -28,6 +30,44 @@ inline void compositeFrontToBack(const float* const* parts, size_t partCount, si
     float* o = out + p * kCompositeChannels;
     o[0] = r, o[1] = g, o[2] = b, o[3] = a, o[4] = steps;
   }
+}
+
+/// One pass of a buffer (cleared before the pass) as kCompositeChannels floats per pixel.
+inline void packForCompositing(const FrameBuffer::Sums& s, size_t pixels, float* out) {
+  for (size_t p = 0; p < pixels; ++p) {
+    float* o = out + p * kCompositeChannels;
+    for (size_t c = 0; c < 4; ++c)
+      o[c] = s.colors[4 * p + c];
+    o[4] = s.steps[p];
+  }
+}
+
+/// acc = acc over part: a part behind every part composited into `acc` so far, pixel by pixel,
+/// as compositeFrontToBack adds it.
+inline void compositePartBehind(float* acc, const float* part, size_t pixels) {
+  for (size_t p = 0; p < pixels; ++p) {
+    float* a = acc + p * kCompositeChannels;
+    const float* c = part + p * kCompositeChannels;
+    const float t = 1.f - a[3];
+    a[0] += t * c[0];
+    a[1] += t * c[1];
+    a[2] += t * c[2];
+    a[3] += t * c[3];
+    a[4] += c[4];
+  }
+}
+
+/// A composited pass added to the buffer as one more pass of every tile.
+inline void addComposited(const float* result, size_t pixels, FrameBuffer& buffer) {
+  const FrameBuffer::Sums out = buffer.sums();
+  for (size_t p = 0; p < pixels; ++p) {
+    const float* c = result + p * kCompositeChannels;
+    for (size_t ch = 0; ch < 4; ++ch)
+      out.colors[4 * p + ch] += c[ch];
+    out.steps[p] += c[4];
+  }
+  for (size_t t = 0; t < out.tiles; ++t)
+    ++out.tilePasses[t];
 }
 
 } // namespace exa

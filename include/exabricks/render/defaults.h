@@ -19,6 +19,10 @@ struct PartialData {
   box3i bounds; ///< lattice bounds of the whole data's cells
 
   std::function<void(std::vector<double>&)> sumOverParts;
+  /// A dataset held in parts one at a time (larger than memory): calls visit(part's model, the
+  /// lattice box it owns) for every part, and the defaults count each part's owned cells instead
+  /// of the model's.
+  std::function<void(const std::function<void(const Model&, const box3l&)>&)> eachPart;
 };
 
 struct DefaultChoices {

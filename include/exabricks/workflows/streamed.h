@@ -1,0 +1,138 @@
+// Steps larger than memory: a memory budget for the whole process, the k-d partition of the step
+// whose largest part (with its halo) fits in it, parts read one at a time and kept while they fit
+// (least recently used first out), and frames rendered part by part front to back, composited as
+// data-parallel rendering composites the processes' parts, so that a frame equals the in-core one.
+#pragma once
+
+#include "exabricks/amr/model.h"
+#include "exabricks/amr/partition.h"
+#include "exabricks/core/error.h"
+#include "exabricks/io/load.h"
+#include "exabricks/render/defaults.h"
+#include "exabricks/render/renderer.h"
+
+#include <cstdint>
+#include <list>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace exa {
+
+/// A budget that cannot hold the process and the smallest part it can be split into.
+class BudgetTooSmall : public Error {
+public:
+  BudgetTooSmall(const std::string& message, uint64_t smallestBudget) : Error(message), smallest(smallestBudget) {}
+  uint64_t smallest; ///< the smallest budget that works, bytes
+};
+
+/// This process's resident memory now (VmRSS), its peak so far (VmHWM) and the memory the system
+/// can still give (MemAvailable), in bytes; 0 where unknown.
+uint64_t residentBytesNow();
+uint64_t peakResidentBytes();
+uint64_t availableMemoryBytes();
+
+/// What a resident part costs per cell it holds (halo included) when `fields` fields are loaded:
+/// the values, smooth shading's gradients, bricks, regions, the renderer's structures and the
+/// build's working memory, as measured on AMReX and generated inputs (docs/performance.md).
+uint64_t bytesPerResidentCell(size_t fields);
+
+/// How a step is held under a memory budget.
+struct MemoryPlan {
+  uint64_t budget = 0;       ///< the whole process's resident memory, bytes
+  uint64_t fixedBytes = 0;   ///< the process without data: code, libraries, frame buffers
+  uint64_t bytesPerCell = 0; ///< bytesPerResidentCell of the loaded fields
+  double cells = 0;          ///< the step's cells (census)
+  KdPartition partition = KdPartition::whole();
+  int coarsestLevel = 0;
+  std::vector<double> partCells; ///< per part, the cells it holds with its halo (estimated)
+
+  bool streamed() const { return partition.parts() > 1; }
+  /// The estimated resident bytes of part p, and of the largest part.
+  uint64_t partBytes(int part) const;
+  uint64_t largestPartBytes() const;
+};
+
+/// Plans `input` (its census: AMReX and NAME.cells from their headers and records, other inputs
+/// by reading their cells) for a process that holds `frameBytes` of images besides its data: in
+/// one piece when the step fits in the budget, else the fewest k-d parts (balanced by cells, cut
+/// only at multiples of the coarsest cell width) whose largest part with its halo fits beside the
+/// process. Throws BudgetTooSmall with the smallest budget that works when none does.
+MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes);
+
+/// Without a budget given: none (hold the step whole, as before) when the step's estimated
+/// resident bytes fit in three quarters of the memory the system has available, or when its
+/// cells cannot be counted without reading them; else that budget, with a note on stderr.
+std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options,
+                                           uint64_t frameBytes);
+
+/// What the whole step is, gathered from its parts.
+struct StepSurvey {
+  DatasetInfo dataset;
+  box3i cellBounds;
+  std::vector<int> levels; ///< levels that hold cells
+  uint64_t cells = 0;      ///< every part's owned cells
+  std::vector<uint64_t> levelCells; ///< per level (index = level), owned cells
+};
+
+/// A step held in parts, one resident at a time, or as many as the budget holds.
+class StreamedStep {
+public:
+  StreamedStep(std::string input, LoadOptions options, MemoryPlan plan);
+  ~StreamedStep();
+  StreamedStep(const StreamedStep&) = delete;
+  StreamedStep& operator=(const StreamedStep&) = delete;
+
+  const MemoryPlan& plan() const { return plan_; }
+  int parts() const { return plan_.partition.parts(); }
+  /// A model holding no cells but the step's world, fields, units and simulation state: what the
+  /// front ends ask of a model that is not a part's cells.
+  const Model& skeleton() const { return skeleton_; }
+  /// The whole step's values; the first call reads every part.
+  const StepSurvey& survey();
+  /// Part p's lattice box and its world box (the renderer's domain).
+  const box3l& partBox(int part) const { return plan_.partition.box(part); }
+  box3d partWorldBox(int part) const { return skeleton_.world.toWorld(partBox(part)); }
+  /// Part p's model, read and built unless resident (null when the part holds no cells). Makes
+  /// room first by dropping the least recently used parts. Valid until the next call.
+  const Model* part(int part);
+  /// Part p's renderer over the step's dataset values, set to `scene` and `options`.
+  Renderer* renderer(int part, const Scene& scene, const RendererOptions& options);
+  /// Calls visit(model, owned box) for every part that holds cells, resident parts first.
+  void forEachPart(const std::function<void(const Model&, const box3l&)>& visit);
+  /// The defaults' view of the step: every part's owned cells counted.
+  PartialData partialData();
+  /// Parts front to back as `camera` sees them.
+  std::vector<int> order(const Camera& camera) const;
+  /// Union of what each part's renderer may show within its part (a first view frames it).
+  box3d visibleBounds(const Scene& scene, const RendererOptions& options);
+
+  int residentParts() const { return int(resident_.size()); }
+  /// Estimated bytes of the resident parts.
+  uint64_t residentBytes() const;
+  /// Parts read so far (a part read again after it was dropped counts again).
+  uint64_t partsRead() const { return reads_; }
+
+private:
+  struct Resident;
+  Resident& bring(int part);
+  std::string input_;
+  LoadOptions options_;
+  MemoryPlan plan_;
+  Model skeleton_;
+  std::optional<StepSurvey> survey_;
+  std::list<Resident> resident_; ///< most recently used first
+  uint64_t reads_ = 0;
+};
+
+/// Renders `frame` (every pass) into `buffer` from the step's parts, front to back, each pass
+/// composited over the parts as data-parallel rendering composites them. False when cancelled.
+bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOptions& options, const Frame& frame,
+                    FrameBuffer& buffer, const PassControl& control = {});
+
+/// Bytes of the images a frame of this size and samples per pixel holds while it is composited
+/// from parts (the output buffer, one part's pass and the per-pass composites).
+uint64_t streamedFrameBytes(int width, int height, int samplesPerPixel);
+
+} // namespace exa

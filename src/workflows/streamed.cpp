@@ -1,0 +1,339 @@
+#include "exabricks/workflows/streamed.h"
+
+#include "exabricks/amr/scenes.h"
+#include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
+#include "exabricks/render/composite.h"
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <malloc.h>
+
+namespace exa {
+
+namespace {
+
+uint64_t statusKiB(const char* file, const std::string& key) {
+  std::ifstream in(file);
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind(key, 0) == 0) return uint64_t(std::strtoull(line.c_str() + key.size(), nullptr, 10)) * 1024u;
+  return 0;
+}
+
+/// Room the process keeps beyond its measured size: thread stacks and pools of the workers,
+/// Embree's and the allocator's slack.
+constexpr uint64_t kProcessSlack = uint64_t(24) << 20;
+/// The per-pass composites a streamed frame keeps at once (passes beyond are drawn in rounds).
+constexpr uint64_t kCompositeBytes = uint64_t(32) << 20;
+
+int passesPerRound(size_t pixels, int samplesPerPixel) {
+  const uint64_t perPass = uint64_t(pixels) * kCompositeChannels * sizeof(float);
+  return int(std::clamp<uint64_t>(kCompositeBytes / std::max<uint64_t>(perPass, 1), 1, uint64_t(samplesPerPixel)));
+}
+
+/// The census cells in `box` (each census box's cells taken as spread evenly over it).
+double cellsIn(const Census& census, const box3l& box) {
+  double n = 0;
+  for (const CensusBox& c : census.boxes) {
+    double share = 1;
+    for (int a = 0; a < 3 && share > 0; ++a) {
+      const int64_t lo = std::max(c.box.lower[a], box.lower[a]), hi = std::min(c.box.upper[a], box.upper[a]);
+      share *= hi > lo ? double(hi - lo) / double(c.box.upper[a] - c.box.lower[a]) : 0.0;
+    }
+    n += share * c.cells;
+  }
+  return n;
+}
+
+/// The cells part p reads: those of its shading reach grown by the coarsest width (its halo).
+std::vector<double> haloCells(const Census& census, const KdPartition& partition) {
+  std::vector<double> cells;
+  for (int p = 0; p < partition.parts(); ++p) {
+    const box3i read = haloReadBox(shadingReach(partition.box(p), census.coarsestLevel), census.coarsestLevel);
+    cells.push_back(cellsIn(census, box3l(vec3l(read.lower), vec3l(read.upper))));
+  }
+  return cells;
+}
+
+size_t loadedFields(const std::string& input, const LoadOptions& options) {
+  return options.fields.empty() ? std::max<size_t>(listFields(input).size(), 1) : options.fields.size();
+}
+
+} // namespace
+
+uint64_t residentBytesNow() { return statusKiB("/proc/self/status", "VmRSS:"); }
+uint64_t peakResidentBytes() { return statusKiB("/proc/self/status", "VmHWM:"); }
+uint64_t availableMemoryBytes() { return statusKiB("/proc/meminfo", "MemAvailable:"); }
+
+uint64_t bytesPerResidentCell(size_t fields) {
+  // Per loaded field: 4 bytes of values and 12 of smooth shading's gradient field, which the
+  // renderer builds for the shaded field; the build's records and slot index, bricks, regions
+  // and the renderer's tables come to about 24 bytes per cell more.
+  return 24 + 4 * uint64_t(fields) + 12;
+}
+
+uint64_t MemoryPlan::partBytes(int part) const {
+  return uint64_t(std::ceil(partCells.at(size_t(part)))) * bytesPerCell;
+}
+
+uint64_t MemoryPlan::largestPartBytes() const {
+  uint64_t most = 0;
+  for (int p = 0; p < int(partCells.size()); ++p)
+    most = std::max(most, partBytes(p));
+  return most;
+}
+
+MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes) {
+  MemoryPlan plan;
+  plan.budget = budget;
+  plan.fixedBytes = residentBytesNow() + kProcessSlack + frameBytes;
+  plan.bytesPerCell = bytesPerResidentCell(loadedFields(input, options));
+  const Census census = loadCensus(input, options);
+  plan.fixedBytes = std::max(plan.fixedBytes, residentBytesNow() + kProcessSlack + frameBytes);
+  plan.cells = census.cells();
+  plan.coarsestLevel = census.coarsestLevel;
+  plan.partCells = {plan.cells};
+  auto mib = [](uint64_t b) { return ((b + (uint64_t(1) << 20) - 1) >> 20) << 20; };
+  const uint64_t whole = plan.fixedBytes + uint64_t(std::ceil(plan.cells)) * plan.bytesPerCell;
+  if (whole <= budget || plan.cells < 1) return plan;
+
+  // The fewest parts whose largest part fits; halos stop shrinking parts beyond some count.
+  const int64_t grain = int64_t(1) << census.coarsestLevel;
+  double bestLargest = std::numeric_limits<double>::infinity();
+  int parts = int(std::clamp<double>(
+      std::ceil(plan.cells * double(plan.bytesPerCell) / double(std::max<uint64_t>(budget, plan.fixedBytes + 1) -
+                                                                 std::min(budget, plan.fixedBytes))),
+      2.0, 65536.0));
+  for (int tries = 0; tries < 24 && parts <= 65536; ++tries) {
+    KdPartition partition = KdPartition::balance(census, parts, grain);
+    std::vector<double> cells = haloCells(census, partition);
+    const double largest = *std::max_element(cells.begin(), cells.end());
+    if (plan.fixedBytes + uint64_t(std::ceil(largest)) * plan.bytesPerCell <= budget) {
+      plan.partition = std::move(partition);
+      plan.partCells = std::move(cells);
+      return plan;
+    }
+    if (largest > 0.97 * bestLargest) break; // halos dominate: more parts do not help
+    bestLargest = std::min(bestLargest, largest);
+    parts = int(std::min<double>(65536.0, std::ceil(double(parts) * 1.5)));
+  }
+  const uint64_t smallest = mib(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell);
+  throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
+                              input.empty() ? std::string(kDefaultDatasetName) : input, " (", std::llround(plan.cells),
+                              " cells): this process needs ", formatBytes(plan.fixedBytes),
+                              " without data and its smallest part about ", formatBytes(smallest - plan.fixedBytes),
+                              "; the smallest budget that works is ", formatBytes(smallest), " (--memory-budget ",
+                              smallest >> 20, "M)"),
+                       smallest);
+}
+
+std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options,
+                                           uint64_t frameBytes) {
+  if (input.empty()) return std::nullopt;
+  const InputKind kind = detectInput(input);
+  if (kind != InputKind::Amrex && kind != InputKind::Native) return std::nullopt; // counted only by reading
+  const uint64_t available = availableMemoryBytes();
+  if (available == 0) return std::nullopt;
+  const Census census = loadCensus(input, options);
+  const double need = double(residentBytesNow() + kProcessSlack + frameBytes) +
+                      census.cells() * double(bytesPerResidentCell(loadedFields(input, options)));
+  const uint64_t budget = available / 4 * 3;
+  if (need <= double(budget)) return std::nullopt;
+  logWarning(strCat(input, " holds ", std::llround(census.cells()), " cells, about ", formatBytes(uint64_t(need)),
+                    " held whole, more than three quarters of the memory available (", formatBytes(available),
+                    "): reading it in parts within a budget of ", formatBytes(budget), " (--memory-budget to choose)"));
+  return budget;
+}
+
+uint64_t streamedFrameBytes(int width, int height, int samplesPerPixel) {
+  const size_t pixels = size_t(width) * size_t(height);
+  const uint64_t buffer = uint64_t(pixels) * (sizeof(vec4f) + sizeof(float)); // a FrameBuffer's sums
+  const uint64_t perPass = uint64_t(pixels) * kCompositeChannels * sizeof(float);
+  const uint64_t image = uint64_t(pixels) * 4 * sizeof(float) * 2; // resolved and written
+  return 2 * buffer + perPass * uint64_t(1 + passesPerRound(pixels, samplesPerPixel)) + image;
+}
+
+struct StreamedStep::Resident {
+  int part = 0;
+  std::unique_ptr<Model> model; ///< null: the part holds no cells
+  std::unique_ptr<Renderer> renderer;
+  uint64_t bytes = 0;
+};
+
+StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan plan)
+    : input_(std::move(input)), options_(std::move(options)), plan_(std::move(plan)) {
+  options_.partCells = 0; // the parts are this step's own
+  options_.box = box3i();
+  // The skeleton: the step's world, fields and simulation from a part that holds cells.
+  for (int p = 0; p < parts(); ++p) {
+    Resident& r = bring(p);
+    if (!r.model) continue;
+    const Model& m = *r.model;
+    skeleton_.world = m.world;
+    skeleton_.simulation = m.simulation;
+    skeleton_.fieldNames = m.fieldNames;
+    skeleton_.fieldUnits = m.fieldUnits;
+    skeleton_.fieldValues.assign(m.fieldNames.size(), ValueArray());
+    return;
+  }
+  fail(input_.empty() ? std::string(kDefaultDatasetName) : input_, ": no part holds any cells");
+}
+
+StreamedStep::~StreamedStep() = default;
+
+uint64_t StreamedStep::residentBytes() const {
+  uint64_t n = 0;
+  for (const Resident& r : resident_)
+    n += r.bytes;
+  return n;
+}
+
+StreamedStep::Resident& StreamedStep::bring(int part) {
+  for (auto it = resident_.begin(); it != resident_.end(); ++it)
+    if (it->part == part) {
+      resident_.splice(resident_.begin(), resident_, it);
+      return resident_.front();
+    }
+  const uint64_t need = plan_.partBytes(part);
+  bool dropped = false;
+  while (!resident_.empty() && plan_.fixedBytes + residentBytes() + need > plan_.budget) {
+    resident_.pop_back();
+    dropped = true;
+  }
+  if (dropped) malloc_trim(0); // give the freed part back before the next is read
+  Resident r;
+  r.part = part;
+  r.bytes = need;
+  std::optional<Model> m = loadModelPart(input_, options_, partBox(part), plan_.coarsestLevel);
+  if (m) r.model = std::make_unique<Model>(std::move(*m));
+  ++reads_;
+  resident_.push_front(std::move(r));
+  return resident_.front();
+}
+
+const Model* StreamedStep::part(int part) { return bring(part).model.get(); }
+
+Renderer* StreamedStep::renderer(int part, const Scene& scene, const RendererOptions& options) {
+  const DatasetInfo& dataset = survey().dataset; // may read every part: before this one is brought
+  Resident& r = bring(part);
+  if (!r.model) return nullptr;
+  if (!r.renderer) {
+    r.renderer = std::make_unique<Renderer>(*r.model, dataset);
+    r.renderer->setDomain(partWorldBox(part));
+  }
+  r.renderer->setOptions(options);
+  r.renderer->setScene(scene);
+  return r.renderer.get();
+}
+
+void StreamedStep::forEachPart(const std::function<void(const Model&, const box3l&)>& visit) {
+  std::vector<int> order;
+  for (const Resident& r : resident_)
+    order.push_back(r.part);
+  for (int p = 0; p < parts(); ++p)
+    if (std::find(order.begin(), order.end(), p) == order.end()) order.push_back(p);
+  for (int p : order)
+    if (const Model* m = part(p)) visit(*m, partBox(p));
+}
+
+const StepSurvey& StreamedStep::survey() {
+  if (survey_) return *survey_;
+  StepSurvey s;
+  int finest = kMaxLevel;
+  std::vector<range1f> ranges(skeleton_.fieldNames.size());
+  std::vector<bool> levelHere(kMaxLevel + 1, false);
+  s.levelCells.assign(kMaxLevel + 1, 0);
+  forEachPart([&](const Model& m, const box3l& owned) {
+    for (const Brick& b : m.bricks) {
+      finest = std::min(finest, b.level);
+      levelHere[size_t(b.level)] = true;
+      forCellsCentredIn(b, owned, [&](uint32_t) { ++s.levelCells[size_t(b.level)]; });
+    }
+    s.cellBounds.extend(m.cellBounds());
+    for (size_t f = 0; f < ranges.size() && f < m.regions.valueRanges.size(); ++f)
+      for (const range1f& r : m.regions.valueRanges[f])
+        ranges[f].extend(r);
+  });
+  for (int l = 0; l <= kMaxLevel; ++l)
+    if (levelHere[size_t(l)]) s.levels.push_back(l);
+  for (uint64_t n : s.levelCells)
+    s.cells += n;
+  s.dataset = DatasetInfo::from(finest, s.cellBounds, skeleton_.world.scale, std::move(ranges));
+  survey_ = std::move(s);
+  return *survey_;
+}
+
+PartialData StreamedStep::partialData() {
+  PartialData d;
+  d.bounds = survey().cellBounds;
+  d.eachPart = [this](const std::function<void(const Model&, const box3l&)>& visit) { forEachPart(visit); };
+  return d;
+}
+
+std::vector<int> StreamedStep::order(const Camera& camera) const {
+  if (camera.orthographic) return plan_.partition.orderAlong((camera.lookAt - camera.position) / skeleton_.world.scale);
+  return plan_.partition.orderFrom(skeleton_.world.toLattice(camera.position));
+}
+
+box3d StreamedStep::visibleBounds(const Scene& scene, const RendererOptions& options) {
+  box3d all;
+  std::vector<int> order;
+  for (const Resident& r : resident_)
+    order.push_back(r.part);
+  for (int p = 0; p < parts(); ++p)
+    if (std::find(order.begin(), order.end(), p) == order.end()) order.push_back(p);
+  for (int p : order) {
+    const Renderer* r = renderer(p, scene, options);
+    if (!r) continue;
+    const box3d local = r->visibleBounds(), mine = partWorldBox(p);
+    if (local.empty()) continue;
+    box3d clipped;
+    for (int a = 0; a < 3; ++a) {
+      clipped.lower[a] = std::max(local.lower[a], mine.lower[a]);
+      clipped.upper[a] = std::min(local.upper[a], mine.upper[a]);
+    }
+    if (clipped.lower.x <= clipped.upper.x && clipped.lower.y <= clipped.upper.y && clipped.lower.z <= clipped.upper.z)
+      all.extend(clipped);
+  }
+  return all;
+}
+
+bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOptions& options, const Frame& frame,
+                    FrameBuffer& buffer, const PassControl& control) {
+  const size_t pixels = size_t(frame.width) * size_t(frame.height);
+  const int round = passesPerRound(pixels, frame.samplesPerPixel);
+  buffer.resize(frame.width, frame.height);
+  FrameBuffer pass(frame.width, frame.height);
+  std::vector<float> local(pixels * kCompositeChannels), composites(size_t(round) * pixels * kCompositeChannels);
+  std::vector<int> order = step.order(frame.camera);
+  RenderStats stats;
+  bool complete = true;
+  Frame f = frame;
+  for (int first = 0; first < frame.samplesPerPixel && complete; first += round) {
+    const int count = std::min(round, frame.samplesPerPixel - first);
+    std::fill(composites.begin(), composites.end(), 0.f);
+    // Resident parts are taken where they come in the order; the others are read in it.
+    for (int p : order) {
+      const Renderer* r = step.renderer(p, scene, options);
+      if (!r) continue;
+      for (int k = 0; k < count && complete; ++k) {
+        f.frameIndex = first + k; // as Renderer::renderPasses numbers the passes
+        pass.clear();
+        complete = r->renderPass(f, pass, control);
+        const FrameBuffer::Sums s = pass.sums();
+        stats += *s.stats;
+        packForCompositing(s, pixels, local.data());
+        compositePartBehind(composites.data() + size_t(k) * pixels * kCompositeChannels, local.data(), pixels);
+      }
+    }
+    for (int k = 0; k < count && complete; ++k)
+      addComposited(composites.data() + size_t(k) * pixels * kCompositeChannels, pixels, buffer);
+  }
+  *buffer.sums().stats = stats;
+  *buffer.sums().stepsView = *pass.sums().stepsView;
+  return complete;
+}
+
+} // namespace exa
