@@ -7,6 +7,7 @@
 #include "exabricks/io/model_info.h"
 
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 
 #include <cstdio>
 #include <iostream>
@@ -103,14 +104,82 @@ void runParts(const InfoOptions& o) {
   }
 }
 
+/// A step larger than the budget: what its parts hold, read one at a time.
+void runStreamed(const InfoOptions& o, const LoadOptions& lo, MemoryPlan plan) {
+  Timer total;
+  StreamedStep step(o.in.input, lo, std::move(plan));
+  const StepSurvey& s = step.survey();
+  const Model& model = step.skeleton();
+  const double seconds = total.seconds();
+  const box3i lattice = s.cellBounds;
+  const box3d world = model.world.toWorld(lattice);
+  const MemoryPlan& p = step.plan();
+  if (o.json) {
+    nlohmann::json j;
+    j["input"] = o.in.name();
+    j["cells"] = s.cells;
+    j["bounds"] = {{"lattice",
+                    {{"lower", {lattice.lower.x, lattice.lower.y, lattice.lower.z}},
+                     {"upper", {lattice.upper.x, lattice.upper.y, lattice.upper.z}}}},
+                   {"world",
+                    {{"lower", {world.lower.x, world.lower.y, world.lower.z}},
+                     {"upper", {world.upper.x, world.upper.y, world.upper.z}}}}};
+    nlohmann::json levels = nlohmann::json::array();
+    for (int l : s.levels)
+      levels.push_back({{"level", l}, {"cell_width", 1 << l}, {"cells", s.levelCells[size_t(l)]}});
+    j["levels"] = levels;
+    nlohmann::json fields = nlohmann::json::array();
+    for (size_t f = 0; f < model.fieldNames.size(); ++f)
+      fields.push_back({{"name", model.fieldNames[f]},
+                        {"units", model.unitsOf(int(f))},
+                        {"range", toJson(s.dataset.valueRanges.at(f))}});
+    j["fields"] = fields;
+    j["memory"] = {{"budget_bytes", p.budget},
+                   {"parts", step.parts()},
+                   {"largest_part_bytes", p.largestPartBytes()},
+                   {"fixed_bytes", p.fixedBytes},
+                   {"parts_read", step.partsRead()},
+                   {"bricks_over_parts", s.bricks},
+                   {"regions_over_parts", s.regions},
+                   {"peak_rss_bytes", peakResidentBytes()}};
+    j["build_seconds"] = {{"load_total", seconds}};
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("input            %s\n", o.in.name().c_str());
+  std::printf("lattice bounds   [%d %d %d] - [%d %d %d] (finest-level units, upper exclusive)\n", lattice.lower.x,
+              lattice.lower.y, lattice.lower.z, lattice.upper.x, lattice.upper.y, lattice.upper.z);
+  std::printf("world bounds     [%g %g %g] - [%g %g %g]\n", world.lower.x, world.lower.y, world.lower.z, world.upper.x,
+              world.upper.y, world.upper.z);
+  std::printf("cells            %llu\n", (unsigned long long)s.cells);
+  std::printf("  %-8s %-10s %14s\n", "level", "width", "cells");
+  for (auto l = s.levels.rbegin(); l != s.levels.rend(); ++l)
+    std::printf("  %-8d %-10d %14llu\n", *l, 1 << *l, (unsigned long long)s.levelCells[size_t(*l)]);
+  for (size_t f = 0; f < model.fieldNames.size(); ++f)
+    std::printf("field %-10s [%g, %g]%s\n", model.fieldNames[f].c_str(), s.dataset.valueRanges[f].lower,
+                s.dataset.valueRanges[f].upper,
+                model.unitsOf(int(f)).empty() ? "" : (" " + model.unitsOf(int(f))).c_str());
+  std::printf("memory budget    %s: %d parts read one at a time, the largest about %s beside %s\n",
+              formatBytes(p.budget).c_str(), step.parts(), formatBytes(p.largestPartBytes()).c_str(),
+              formatBytes(p.fixedBytes).c_str());
+  std::printf("over the parts   %llu bricks, %llu regions (halos included)\n", (unsigned long long)s.bricks,
+              (unsigned long long)s.regions);
+  std::printf("peak memory      %s (read in %.3f s)\n", formatBytes(peakResidentBytes()).c_str(), seconds);
+}
+
 void run(const InfoOptions& o) {
   if (o.fieldsOnly) {
     mpi::requireOneProcess("info --fields");
     return printFields(o);
   }
-  if (mpi::processes().size > 1) return runParts(o);
+  if (mpi::processes().size > 1) {
+    memoryPlanFor(o.in, o.in.input, LoadOptions(), 0, true); // refuses --memory-budget
+    return runParts(o);
+  }
   Timer total;
   LoadOptions lo = o.in.loadOptions(true);
+  if (std::optional<MemoryPlan> plan = memoryPlanFor(o.in, o.in.input, lo, 0, false))
+    return runStreamed(o, lo, std::move(*plan));
   lo.report = std::make_shared<LoadReport>();
   const Model model = loadModel(o.in.input, lo);
   const double loadSeconds = total.seconds();
@@ -183,6 +252,7 @@ void addInfo(CLI::App& app) {
   auto opts = std::make_shared<InfoOptions>();
   CLI::App* cmd = app.add_subcommand("info", "Print levels, bricks, regions, ranges, memory and build times");
   opts->in.add(*cmd);
+  opts->in.addMemoryBudget(*cmd);
   cmd->add_flag("--json", opts->json, "Print one JSON object on stdout");
   cmd->add_flag("--fields", opts->fieldsOnly, "Only list the fields");
   cmd->callback([opts] { run(*opts); });

@@ -26,10 +26,8 @@ void writeOut(const std::string& text) {
     fail("writing standard output: ", std::strerror(errno));
 }
 
-void run(const SampleOptions& o) {
-  const Model model = loadModel(o.in.input, o.in.loadOptions(true));
-  const int field = model.requireField(o.in.field);
-
+/// Reads the points: one per line that holds one ('x y z'; blank and comment lines hold none).
+std::vector<vec3d> readPoints(const SampleOptions& o) {
   std::ifstream file;
   std::istream* in = &std::cin;
   const std::string source = o.points.empty() || o.points == "-" ? "<stdin>" : o.points;
@@ -38,9 +36,9 @@ void run(const SampleOptions& o) {
     if (!file) fail(o.points, ": cannot open: ", std::strerror(errno));
     in = &file;
   }
-  std::string line, out;
+  std::vector<vec3d> points;
+  std::string line;
   size_t lineNo = 0;
-  char buffer[160];
   while (std::getline(*in, line)) {
     ++lineNo;
     const size_t hash = line.find('#');
@@ -61,14 +59,77 @@ void run(const SampleOptions& o) {
       ok = end && *end == '\0';
     }
     if (!ok) fail(source, ": line ", lineNo, ": expected three numbers 'x y z', got '", line, "'");
-    double value;
-    vec3d g;
-    if (model.sampleWorld(field, vec3d(w[0], w[1], w[2]), value, g)) {
-      std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %.9g\n", value, g.x, g.y, g.z);
-      out += buffer;
-    } else {
-      out += "nan nan nan nan\n";
+    points.push_back(vec3d(w[0], w[1], w[2]));
+  }
+  return points;
+}
+
+/// One output line: the value and gradient, or nan where no cell has weight.
+void appendSample(const Model& model, int field, const vec3d& p, std::string& out) {
+  double value;
+  vec3d g;
+  if (model.sampleWorld(field, p, value, g)) {
+    char buffer[160];
+    std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %.9g\n", value, g.x, g.y, g.z);
+    out += buffer;
+  } else {
+    out += "nan nan nan nan\n";
+  }
+}
+
+/// A step larger than the budget: the points sorted into the parts that hold them, each part read
+/// once (samples inside a part equal the whole step's: it holds every cell whose support reaches it).
+void runStreamed(const SampleOptions& o, const LoadOptions& lo, MemoryPlan plan, const std::vector<vec3d>& points) {
+  StreamedStep step(o.in.input, lo, std::move(plan));
+  const Model& skeleton = step.skeleton();
+  const int field = skeleton.requireField(o.in.field);
+  std::vector<std::vector<size_t>> ofPart(size_t(step.parts()));
+  std::vector<std::string> lines(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const vec3d l = skeleton.world.toLattice(points[i]);
+    int found = -1;
+    for (int p = 0; p < step.parts() && found < 0; ++p) {
+      const box3l& b = step.partBox(p);
+      if (l.x >= double(b.lower.x) && l.x < double(b.upper.x) && l.y >= double(b.lower.y) &&
+          l.y < double(b.upper.y) && l.z >= double(b.lower.z) && l.z < double(b.upper.z))
+        found = p;
     }
+    if (found < 0)
+      lines[i] = "nan nan nan nan\n"; // not finite, or beyond every part
+    else
+      ofPart[size_t(found)].push_back(i);
+  }
+  for (int p = 0; p < step.parts(); ++p) {
+    if (ofPart[size_t(p)].empty()) continue;
+    const Model* m = step.part(p);
+    for (size_t i : ofPart[size_t(p)]) {
+      if (m)
+        appendSample(*m, field, points[i], lines[i]);
+      else
+        lines[i] = "nan nan nan nan\n";
+    }
+  }
+  std::string out;
+  for (const std::string& line : lines) {
+    out += line;
+    if (out.size() > (1 << 16)) {
+      writeOut(out);
+      out.clear();
+    }
+  }
+  writeOut(out);
+}
+
+void run(const SampleOptions& o) {
+  const LoadOptions lo = o.in.loadOptions(true);
+  const std::vector<vec3d> points = readPoints(o);
+  if (std::optional<MemoryPlan> plan = memoryPlanFor(o.in, o.in.input, lo, 0, false))
+    return runStreamed(o, lo, std::move(*plan), points);
+  const Model model = loadModel(o.in.input, lo);
+  const int field = model.requireField(o.in.field);
+  std::string out;
+  for (const vec3d& p : points) {
+    appendSample(model, field, p, out);
     if (out.size() > (1 << 16)) {
       writeOut(out);
       out.clear();
@@ -84,6 +145,7 @@ void addSample(CLI::App& app) {
   CLI::App* cmd =
       app.add_subcommand("sample", "Reconstruct 'value gx gy gz' at 'x y z' world positions (nan outside the data)");
   opts->in.add(*cmd);
+  opts->in.addMemoryBudget(*cmd);
   cmd->add_option("-p,--points", opts->points, "File of 'x y z' lines (default: standard input)");
   cmd->callback([opts] { run(*opts); });
 }

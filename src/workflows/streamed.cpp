@@ -33,16 +33,15 @@ int passesPerRound(size_t pixels, int samplesPerPixel) {
   return int(std::clamp<uint64_t>(kCompositeBytes / std::max<uint64_t>(perPass, 1), 1, uint64_t(samplesPerPixel)));
 }
 
-/// The census cells in `box` (each census box's cells taken as spread evenly over it).
+/// The census cells of the boxes that overlap `box`, whole: a reader reads the patches (AMReX
+/// boxes, blocks of NAME.cells records) that reach a part's read box entirely before it crops them.
 double cellsIn(const Census& census, const box3l& box) {
   double n = 0;
   for (const CensusBox& c : census.boxes) {
-    double share = 1;
-    for (int a = 0; a < 3 && share > 0; ++a) {
-      const int64_t lo = std::max(c.box.lower[a], box.lower[a]), hi = std::min(c.box.upper[a], box.upper[a]);
-      share *= hi > lo ? double(hi - lo) / double(c.box.upper[a] - c.box.lower[a]) : 0.0;
-    }
-    n += share * c.cells;
+    bool overlaps = true;
+    for (int a = 0; a < 3 && overlaps; ++a)
+      overlaps = std::max(c.box.lower[a], box.lower[a]) < std::min(c.box.upper[a], box.upper[a]);
+    if (overlaps) n += c.cells;
   }
   return n;
 }
@@ -99,14 +98,13 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   const uint64_t whole = plan.fixedBytes + uint64_t(std::ceil(plan.cells)) * plan.bytesPerCell;
   if (whole <= budget || plan.cells < 1) return plan;
 
-  // The fewest parts whose largest part fits; halos stop shrinking parts beyond some count.
+  // The fewest parts whose largest part fits, trying 2, 3, 4, 6, 8, 12, ... parts (the same
+  // counts for any budget, so the smallest budget named below is one that works). Halos stop
+  // shrinking the largest part beyond some count.
   const int64_t grain = int64_t(1) << census.coarsestLevel;
   double bestLargest = std::numeric_limits<double>::infinity();
-  int parts = int(std::clamp<double>(
-      std::ceil(plan.cells * double(plan.bytesPerCell) / double(std::max<uint64_t>(budget, plan.fixedBytes + 1) -
-                                                                 std::min(budget, plan.fixedBytes))),
-      2.0, 65536.0));
-  for (int tries = 0; tries < 24 && parts <= 65536; ++tries) {
+  int worse = 0;
+  for (int parts = 2; parts <= 65536 && worse < 3; parts = parts % 3 == 0 ? parts / 3 * 4 : parts / 2 * 3) {
     KdPartition partition = KdPartition::balance(census, parts, grain);
     std::vector<double> cells = haloCells(census, partition);
     const double largest = *std::max_element(cells.begin(), cells.end());
@@ -115,9 +113,8 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
       plan.partCells = std::move(cells);
       return plan;
     }
-    if (largest > 0.97 * bestLargest) break; // halos dominate: more parts do not help
+    worse = largest < 0.97 * bestLargest ? 0 : worse + 1;
     bestLargest = std::min(bestLargest, largest);
-    parts = int(std::min<double>(65536.0, std::ceil(double(parts) * 1.5)));
   }
   const uint64_t smallest = mib(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell);
   throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
@@ -252,6 +249,8 @@ const StepSurvey& StreamedStep::survey() {
       forCellsCentredIn(b, owned, [&](uint32_t) { ++s.levelCells[size_t(b.level)]; });
     }
     s.cellBounds.extend(m.cellBounds());
+    s.bricks += m.bricks.size();
+    s.regions += m.regions.regions.size();
     for (size_t f = 0; f < ranges.size() && f < m.regions.valueRanges.size(); ++f)
       for (const range1f& r : m.regions.valueRanges[f])
         ranges[f].extend(r);

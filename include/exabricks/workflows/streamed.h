@@ -74,6 +74,7 @@ struct StepSurvey {
   std::vector<int> levels; ///< levels that hold cells
   uint64_t cells = 0;      ///< every part's owned cells
   std::vector<uint64_t> levelCells; ///< per level (index = level), owned cells
+  uint64_t bricks = 0, regions = 0; ///< summed over the parts' models (halos included)
 };
 
 /// A step held in parts, one resident at a time, or as many as the budget holds.
