@@ -195,8 +195,8 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
 
   FrameBuffer buffer(frame.width, frame.height);
   Timer renderTimer;
-  Progress progress("rendering", uint64_t(step.parts()) * uint64_t(buffer.tileCount()) *
-                                     uint64_t(frame.samplesPerPixel));
+  Progress progress("rendering",
+                    uint64_t(step.parts()) * uint64_t(buffer.tileCount()) * uint64_t(frame.samplesPerPixel));
   if (logLevel() < LogLevel::Warning) progress.finish();
   PassControl control;
   control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
@@ -249,9 +249,9 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields = neededFields(scene);
-  if (std::optional<MemoryPlan> plan = memoryPlanFor(o.scene.in, doc.input, lo,
-                                                    streamedFrameBytes(frame.width, frame.height, frame.samplesPerPixel),
-                                                    dataParallel || mpi::processes().size > 1))
+  if (std::optional<MemoryPlan> plan =
+          memoryPlanFor(o.scene.in, doc.input, lo, streamedFrameBytes(frame.width, frame.height, frame.samplesPerPixel),
+                        dataParallel || mpi::processes().size > 1))
     return runStreamed(o, cmd, doc, lo, std::move(*plan));
   // Image-parallel (and one process): every process holds the whole model. Data-parallel: each
   // holds its part and the halo. If one process cannot read its data, all of them stop with an

@@ -90,8 +90,8 @@ void runStreamed(const SampleOptions& o, const LoadOptions& lo, MemoryPlan plan,
     int found = -1;
     for (int p = 0; p < step.parts() && found < 0; ++p) {
       const box3l& b = step.partBox(p);
-      if (l.x >= double(b.lower.x) && l.x < double(b.upper.x) && l.y >= double(b.lower.y) &&
-          l.y < double(b.upper.y) && l.z >= double(b.lower.z) && l.z < double(b.upper.z))
+      if (l.x >= double(b.lower.x) && l.x < double(b.upper.x) && l.y >= double(b.lower.y) && l.y < double(b.upper.y) &&
+          l.z >= double(b.lower.z) && l.z < double(b.upper.z))
         found = p;
     }
     if (found < 0)

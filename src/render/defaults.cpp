@@ -70,7 +70,8 @@ constexpr size_t kRayCount = size_t(3) * kRays * kRays;
 
 /// Calls visit(ray, value index, cell width) for every cell and every ray that crosses it (along
 /// its whole width); with `owned`, only the cells whose centres lie in it.
-template <typename Visit> void castAxisRays(const Model& model, const box3i& bounds, const box3l* owned, Visit&& visit) {
+template <typename Visit>
+void castAxisRays(const Model& model, const box3i& bounds, const box3l* owned, Visit&& visit) {
   double pitch[3];
   for (int a = 0; a < 3; ++a)
     pitch[a] = double(std::max(bounds.upper[a] - bounds.lower[a], 1)) / kRays;

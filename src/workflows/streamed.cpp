@@ -126,8 +126,7 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
                        smallest);
 }
 
-std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options,
-                                           uint64_t frameBytes) {
+std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options, uint64_t frameBytes) {
   if (input.empty()) return std::nullopt;
   const InputKind kind = detectInput(input);
   if (kind != InputKind::Amrex && kind != InputKind::Native) return std::nullopt; // counted only by reading

@@ -1,8 +1,8 @@
 // Numbers and text given by people (options, request parameters) and written for them.
 #pragma once
 
-#include <charconv>
 #include <cctype>
+#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -49,7 +49,6 @@ inline double withoutFloatNoise(double value) {
   return std::strtod(std::string(static_cast<const char*>(buf), end).c_str(), nullptr);
 }
 
-
 /// A size in bytes as people write it: "2G", "512M", "1.5GiB", "64MB", "300k", "1000000" (K, M,
 /// G, T are powers of 1024, with or without "B" or "iB"; a bare number is bytes). False for
 /// anything else, or a size that is not a positive whole number of bytes below 2^63.
@@ -86,8 +85,12 @@ inline std::string formatBytes(uint64_t bytes) {
   while (v >= 1024 && u < 4)
     v /= 1024, ++u;
   char buf[32];
-  std::snprintf(buf, sizeof buf, u == 0 ? "%.0f %s" : v < 10 ? "%.2f %s" : v < 100 ? "%.1f %s" : "%.0f %s", v,
-                units[u]);
+  std::snprintf(buf, sizeof buf,
+                u == 0    ? "%.0f %s"
+                : v < 10  ? "%.2f %s"
+                : v < 100 ? "%.1f %s"
+                          : "%.0f %s",
+                v, units[u]);
   return buf;
 }
 

@@ -64,15 +64,14 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
 /// Without a budget given: none (hold the step whole, as before) when the step's estimated
 /// resident bytes fit in three quarters of the memory the system has available, or when its
 /// cells cannot be counted without reading them; else that budget, with a note on stderr.
-std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options,
-                                           uint64_t frameBytes);
+std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options, uint64_t frameBytes);
 
 /// What the whole step is, gathered from its parts.
 struct StepSurvey {
   DatasetInfo dataset;
   box3i cellBounds;
-  std::vector<int> levels; ///< levels that hold cells
-  uint64_t cells = 0;      ///< every part's owned cells
+  std::vector<int> levels;          ///< levels that hold cells
+  uint64_t cells = 0;               ///< every part's owned cells
   std::vector<uint64_t> levelCells; ///< per level (index = level), owned cells
   uint64_t bricks = 0, regions = 0; ///< summed over the parts' models (halos included)
 };

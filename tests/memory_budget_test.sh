@@ -1,0 +1,91 @@
+#!/usr/bin/env bash
+# End-to-end checks of --memory-budget: a step larger than the budget is read and drawn in parts
+# whose picture equals the in-core render of the same scene, whose first-picture defaults are the
+# whole step's, and whose peak resident memory (/usr/bin/time) stays within the budget + 15 %;
+# samples and info equal the in-core ones; a budget too small names the smallest that works.
+set -u
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+exe=${EXABRICKS:?set EXABRICKS to the exabricks binary}
+dir=${1:?usage: memory_budget_test.sh TMPDIR}
+rm -rf "$dir" && mkdir -p "$dir" && cd "$dir" || exit 1
+source "$here/cli_checks.sh"
+
+# Two float images (PFM) agree as the in-core criterion asks: mean <= 0.5/255, 99.9 % of the
+# channels within 2/255.
+same_image() {
+  $py - "$1" "$2" <<'EOF'
+import sys, numpy as np
+def pfm(path):
+    with open(path, "rb") as f:
+        kind = f.readline().strip(); w, h = map(int, f.readline().split()); scale = float(f.readline())
+        a = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    return a.reshape(h, w, 3 if kind == b"PF" else 1)
+a, b = pfm(sys.argv[1]), pfm(sys.argv[2])
+d = np.abs(np.clip(a, 0, 1) - np.clip(b, 0, 1)) * 255
+print("    mean %.4f, max %.2f, within 2/255: %.4f %%" % (d.mean(), d.max(), 100 * (d <= 2).mean()))
+sys.exit(0 if d.mean() <= 0.5 and (d <= 2).mean() >= 0.999 else 1)
+EOF
+}
+# Peak resident kilobytes of a command (GNU time), which must succeed.
+peak_kb() { /usr/bin/time -f %M -o peak.txt "$@" >/dev/null 2>err.txt && cat peak.txt; }
+within_budget() { # kilobytes, budget in MiB
+  $py -c "import sys; kb, mib = int('$1'), float('$2'); print('    peak %.1f MiB of %.0f MiB' % (kb / 1024, mib)); sys.exit(0 if 0 < kb / 1024 <= 1.15 * mib else 1)"
+}
+
+check "generate a cosmic step" "$exe" -q generate -s cosmic -n 700000 -o c.cells
+look=(--size 256x256)
+check "in-core render with its scene" "$exe" -q render c.cells -o in.png --float in.pfm --write-scene in.json "${look[@]}"
+
+for budget in 55 70; do
+  kb=$(peak_kb "$exe" render c.cells --scene in.json -o b$budget.png --float b$budget.pfm --memory-budget ${budget}M --json)
+  check "render under ${budget}M succeeds" test -n "$kb"
+  check "render under ${budget}M keeps its budget" within_budget "${kb:-0}" $budget
+  check "render under ${budget}M equals the in-core render" same_image in.pfm b$budget.pfm
+done
+check "the budget was read in parts" bash -c "'$exe' render c.cells --scene in.json -o x.png --memory-budget 55M --json 2>/dev/null | $py -c 'import json,sys; m = json.load(sys.stdin)[\"memory\"]; assert m[\"parts\"] > 1 and m[\"resident_parts\"] >= 1, m'"
+
+# The first picture's defaults (range, logarithmic mapping, opacity, exposure) count every part.
+check "defaults under a budget are the whole step's" bash -c "'$exe' -q render c.cells -o d.png ${look[*]} --memory-budget 55M --write-scene d.json && $py -c \"
+import json
+a, b = json.load(open('in.json')), json.load(open('d.json'))
+assert a['layers'] == b['layers'], (a['layers'], b['layers'])\""
+
+# Samples: every point in the part that holds it, equal to the whole step's.
+$py -c "
+import random
+random.seed(7)
+for i in range(5000): print(*(random.uniform(-0.05, 1.05) for _ in range(3)))
+print('nan 0 0')" >points.txt
+check "sample under a budget equals in core" bash -c "'$exe' sample c.cells -p points.txt > s_in.txt && '$exe' sample c.cells -p points.txt --memory-budget 48M > s_b.txt && cmp s_in.txt s_b.txt"
+
+# info: the whole step's cells, levels and ranges from its parts.
+check "info under a budget counts the in-core cells, levels and ranges" bash -c "'$exe' info c.cells --json > i_in.json && '$exe' info c.cells --json --memory-budget 48M > i_b.json && $py -c \"
+import json
+a, b = json.load(open('i_in.json')), json.load(open('i_b.json'))
+assert a['cells'] == b['cells'] and b['memory']['parts'] > 1, (a['cells'], b)
+assert [(l['level'], l['cells']) for l in a['levels']] == [(l['level'], l['cells']) for l in b['levels']]
+assert a['fields'] == b['fields'] and a['bounds'] == b['bounds']\""
+
+# A budget too small: exit 2 with the smallest that works, and that one works.
+fails_with "a budget too small names the smallest that works" "the smallest budget that works is" "$exe" render c.cells -o t.png "${look[@]}" --memory-budget 30M
+smallest=$("$exe" render c.cells -o t.png "${look[@]}" --memory-budget 30M 2>&1 | sed -n 's/.*(--memory-budget \([0-9]*M\)).*/\1/p')
+check "it exits 2" bash -c "'$exe' render c.cells -o t.png ${look[*]} --memory-budget 30M 2>/dev/null; [ \$? -eq 2 ]"
+check "the smallest budget named works" "$exe" -q render c.cells -o t.png "${look[@]}" --memory-budget "${smallest:-none}"
+check "no half-written image after a refused budget" bash -c "rm -f u.png; '$exe' render c.cells -o u.png --memory-budget 30M 2>/dev/null; [ ! -e u.png ]"
+fails_with "a budget that is no size" "--memory-budget: 'lots' is not a size" "$exe" render c.cells -o t.png --memory-budget lots
+fails_with "a budget of nothing" "is not a size" "$exe" info c.cells --memory-budget 0
+check "a budget the step fits in draws it whole" bash -c "'$exe' render c.cells --scene in.json -o w.png --float w.pfm --memory-budget 4G --json | $py -c 'import json,sys; j = json.load(sys.stdin); assert \"memory\" not in j, j' && cmp in.pfm w.pfm"
+
+# A real AMReX plotfile, read box by box.
+data=${EXABRICKS_DATA:-$here/../../shared/data}
+drop=$data/amrex/advection_3d/plt_drop
+if [ -d "$drop" ]; then
+  check "plt_drop in-core render" "$exe" -q render "$drop" -o p_in.png --float p_in.pfm --write-scene p.json "${look[@]}"
+  kb=$(peak_kb "$exe" render "$drop" --scene p.json -o p_b.png --float p_b.pfm --memory-budget 110M)
+  check "plt_drop under 110M keeps its budget" within_budget "${kb:-0}" 110
+  check "plt_drop under 110M equals the in-core render" same_image p_in.pfm p_b.pfm
+else
+  echo "skip plt_drop checks: $drop is absent (shared sample data)"
+fi
+if [ $failures -ne 0 ]; then echo "$failures failure(s)"; exit 1; fi
+echo "all memory budget checks passed"
