@@ -268,6 +268,12 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
       gpu::copyToDevice(b.device, frame.depthLimit, b.bytes);
       v.frame.depthLimit = static_cast<const float*>(b.device);
     }
+    if (frame.frontOpacity) {
+      Buffer& b = buffers_["front opacity"];
+      reserve(b, pixels * sizeof(float), "the front opacity");
+      gpu::copyToDevice(b.device, frame.frontOpacity, b.bytes);
+      v.frame.frontOpacity = static_cast<const float*>(b.device);
+    }
     if (bytes > pinnedBytes_) {
       gpu::releaseHost(pinned_);
       pinned_ = nullptr;
@@ -280,6 +286,7 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
   std::vector<vec4f>& colors = hostColors_;
   colors.resize(pixels);
   v.frame.depthLimit = frame.depthLimit;
+  v.frame.frontOpacity = frame.frontOpacity;
   std::atomic<uint64_t> rays{0}, samples{0}, iso{0}, ao{0}, hits{0};
   tbb::parallel_for(0, frame.height, [&](int y) {
     RayCounts c;

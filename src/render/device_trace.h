@@ -222,7 +222,8 @@ EXA_HOST_DEVICE inline vec4f traceSample(const TraceView& v, int x, int y, RayCo
   float rho;
   const ClipView clip{v.planes, v.planeCount, v.clipBox};
   const DualRay dr = cameraRay(v.frame, v.world, &clip, x, y, rng, rho);
-  return marchSample<Surfaces>(DeviceRays<SmoothOne>{v}, v.ray, v.world, &clip, dr, rho, rng, c);
+  return marchSample<Surfaces>(DeviceRays<SmoothOne>{v}, v.ray, v.world, &clip, dr, rho, rng, c,
+                               frontOpacityOf(v.frame, x, y));
 }
 
 /// One path-traced sample of pixel (x, y) for pass v.frameIndex (tracePath, path_trace.h): the

@@ -34,6 +34,7 @@ RaySettings raySettingsOf(const Scene& scene, const DatasetInfo& dataset, const 
   const OcclusionLengths lengths = occlusionLengths(scene.ao, dataset, world);
   r.aoLength = lengths.length;
   r.aoEps = lengths.eps;
+  if (scene.integration.earlyTermination) r.stopOpacity = scene.integration.terminationOpacity;
   return r;
 }
 

@@ -69,6 +69,7 @@ struct RaySettings {
   int aoRays = 0;
   bool aoVolume = false;               ///< the volume attenuates occlusion rays
   double aoLength = 1.0, aoEps = 1e-5; ///< world
+  float stopOpacity = 2.f;             ///< the volume is not marched once this is gathered (early termination)
 };
 
 /// The ray settings of a scene over a dataset (lighting.cpp).
@@ -85,7 +86,8 @@ struct CameraRays {
   /// Frame::depthLimit (per pixel, where the pass runs) and how to read it.
   const float* depthLimit = nullptr;
   bool depthLimitPlanar = false;
-  vec3d forward{0.0, 0.0, -1.0}; ///< the camera's view direction (planar depth limits)
+  vec3d forward{0.0, 0.0, -1.0};       ///< the camera's view direction (planar depth limits)
+  const float* frontOpacity = nullptr; ///< Frame::frontOpacity, where the pass runs
 };
 
 /// The camera rays of a frame (without its depth limit's storage, which the back end places).
@@ -99,6 +101,7 @@ inline CameraRays cameraRaysOf(const Frame& frame) {
   c.pixelJitter = frame.samplesPerPixel > 1 && frame.jitter;
   c.depthLimit = frame.depthLimit;
   c.depthLimitPlanar = frame.depthLimitPlanar;
+  c.frontOpacity = frame.frontOpacity;
   c.forward = normalize(frame.camera.lookAt - frame.camera.position);
   return c;
 }
@@ -114,6 +117,11 @@ EXA_HOST_DEVICE inline DualRay cameraRay(const CameraRays& c, const WorldTransfo
   if (c.depthLimit)
     applyDepthLimit(dr, c.depthLimit[size_t(y) * size_t(c.width) + size_t(x)], c.depthLimitPlanar, c.forward);
   return dr;
+}
+
+/// The opacity the data in front of the domain gathered along pixel (x, y)'s ray (0 without).
+EXA_HOST_DEVICE inline float frontOpacityOf(const CameraRays& c, int x, int y) {
+  return c.frontOpacity ? c.frontOpacity[size_t(y) * size_t(c.width) + size_t(x)] : 0.f;
 }
 
 /// The light of a ray travelling along viewW: the headlight's or the scene's direction.
@@ -210,19 +218,20 @@ EXA_HOST_DEVICE inline float occlusion(const B& b, const RaySettings& s, const W
 
 /// One ray-marched sample along camera ray `r` (sample offset rho): the volume in front of the
 /// nearest surface, then the surface lit and occluded, premultiplied. `Surfaces` false compiles
-/// the volume alone (fewer registers on a GPU).
+/// the volume alone (fewer registers on a GPU). `front`: the opacity gathered in front of the
+/// domain (Frame::frontOpacity); the ray continues from it.
 template <bool Surfaces, typename B>
 EXA_HOST_DEVICE inline vec4f marchSample(const B& b, const RaySettings& s, const WorldTransform& world,
                                          const ClipView* clip, const DualRay& r, float rho, PixelRandom& rng,
-                                         RayCounts& c) {
+                                         RayCounts& c, float front = 0.f) {
   const RayLight light = rayLightOf(s, vec3f(r.dirW));
-  vec4f acc;
+  vec4f acc(0.f, 0.f, 0.f, front);
   SurfaceHit hit;
   bool haveHit = false;
   if constexpr (Surfaces) haveHit = nearestSurface(b, r, s.clipMeshes, hit, c);
   Ray volumeRay = r.lattice;
   if (haveHit) volumeRay.tmax = fminf(volumeRay.tmax, float(hit.distance * r.kappa));
-  if (s.volume && !clippedAway(r)) {
+  if (s.volume && !clippedAway(r) && !(front > 0.f && front >= s.stopOpacity)) {
     b.template march<false>(volumeRay, rho, light, acc, c);
     c.marchSamples = c.samples;
   }

@@ -185,8 +185,9 @@ struct Renderer::Impl {
     if (scene.debug == DebugView::Level || scene.debug == DebugView::Region || scene.debug == DebugView::Brick)
       return debugColor(model, *volume.traversal(), scene.debug, dr.lattice, tile);
     const CpuRays b = rays(ps.march);
-    return ps.surfaces ? marchSample<true>(b, ps.ray, model.world, &clip, dr, rho, rng, c)
-                       : marchSample<false>(b, ps.ray, model.world, &clip, dr, rho, rng, c);
+    const float front = frontOpacityOf(ps.camera, x, y);
+    return ps.surfaces ? marchSample<true>(b, ps.ray, model.world, &clip, dr, rho, rng, c, front)
+                       : marchSample<false>(b, ps.ray, model.world, &clip, dr, rho, rng, c, front);
   }
 
   /// The one pass loop of every back end, over the tiles begin, begin + stride, ... below end:

@@ -58,7 +58,7 @@ Frame Frame::preview(int divisor, float previewRate) const {
   f.width = std::max(1, width / divisor);
   f.height = std::max(1, height / divisor);
   f.rate = previewRate;
-  if (f.width != width || f.height != height) f.depthLimit = nullptr;
+  if (f.width != width || f.height != height) f.depthLimit = f.frontOpacity = nullptr;
   return f;
 }
 
@@ -72,6 +72,10 @@ void Frame::validate() const {
   if (length(forward) == 0 || length(cross(forward, c.up)) == 0)
     fail("degenerate camera: position equals look-at, or up is parallel to the view direction");
   checkStructuredNumber(c.orthographic ? "camera.ortho_height" : "camera.fov", c.orthographic ? c.orthoHeight : c.fovy);
+  if (frontOpacity)
+    for (size_t p = 0; p < size_t(width) * size_t(height); ++p)
+      if (!(frontOpacity[p] >= 0.f && frontOpacity[p] <= 1.f))
+        fail("the front opacity of pixel ", p, " is ", frontOpacity[p], "; it must lie in [0, 1]");
   if (depthLimit)
     for (int y = 0; y < height; ++y)
       for (int x = 0; x < width; ++x) {

@@ -7,9 +7,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <malloc.h>
+#include <tuple>
 
 namespace exa {
 
@@ -151,6 +153,41 @@ uint64_t streamedFrameBytes(int width, int height, int samplesPerPixel) {
   return 2 * buffer + perPass * uint64_t(1 + passesPerRound(pixels, samplesPerPixel)) + image;
 }
 
+namespace {
+
+/// Every file of an input with its size and time of last change: the input itself, the files of
+/// a directory (an AMReX plotfile), or NAME.cells with its NAME[.FIELD].scalars.
+std::vector<std::tuple<std::string, uintmax_t, std::filesystem::file_time_type>> snapshotOf(const std::string& input) {
+  namespace fs = std::filesystem;
+  std::vector<std::tuple<std::string, uintmax_t, fs::file_time_type>> files;
+  if (input.empty()) return files;
+  std::error_code ec;
+  auto add = [&](const fs::path& p) {
+    if (fs::is_regular_file(p, ec)) files.emplace_back(p.string(), fs::file_size(p, ec), fs::last_write_time(p, ec));
+  };
+  const fs::path path(input);
+  if (fs::is_directory(path, ec)) {
+    for (fs::recursive_directory_iterator it(path, ec), end; !ec && it != end; it.increment(ec))
+      add(it->path());
+  } else {
+    add(path);
+    const std::string stem = path.stem().string();
+    const fs::path folder = path.has_parent_path() ? path.parent_path() : fs::path(".");
+    for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec))
+      if (const std::string name = it->path().filename().string();
+          it->path() != path && name.rfind(stem + ".", 0) == 0 && it->path().extension() == ".scalars")
+        add(it->path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+} // namespace
+
+struct StreamedStep::Snapshot {
+  std::vector<std::tuple<std::string, uintmax_t, std::filesystem::file_time_type>> files;
+};
+
 struct StreamedStep::Resident {
   int part = 0;
   std::unique_ptr<Model> model; ///< null: the part holds no cells
@@ -159,7 +196,8 @@ struct StreamedStep::Resident {
 };
 
 StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan plan)
-    : input_(std::move(input)), options_(std::move(options)), plan_(std::move(plan)) {
+    : input_(std::move(input)), options_(std::move(options)), plan_(std::move(plan)),
+      snapshot_(std::make_unique<Snapshot>(Snapshot{snapshotOf(input_)})) {
   options_.partCells = 0; // the parts are this step's own
   options_.box = box3i();
   // The skeleton: the step's world, fields and simulation from a part that holds cells.
@@ -199,6 +237,7 @@ StreamedStep::Resident& StreamedStep::bring(int part) {
     dropped = true;
   }
   if (dropped) malloc_trim(0); // give the freed part back before the next is read
+  checkUnchanged();
   Resident r;
   r.part = part;
   r.bytes = need;
@@ -207,6 +246,22 @@ StreamedStep::Resident& StreamedStep::bring(int part) {
   ++reads_;
   resident_.push_front(std::move(r));
   return resident_.front();
+}
+
+void StreamedStep::checkUnchanged() const {
+  const auto now = snapshotOf(input_);
+  if (now == snapshot_->files) return;
+  std::string what = "files were added or removed";
+  for (size_t i = 0; i < std::min(now.size(), snapshot_->files.size()); ++i)
+    if (now[i] != snapshot_->files[i]) {
+      what = std::get<0>(now[i]) == std::get<0>(snapshot_->files[i])
+                 ? strCat(std::get<0>(now[i]), " changed (", std::get<1>(snapshot_->files[i]), " bytes, now ",
+                          std::get<1>(now[i]), ")")
+                 : "files were added or removed";
+      break;
+    }
+  fail(input_, ": changed while its parts were being read (", what,
+       "): a step that a running simulation is still writing? Read it once it is complete");
 }
 
 const Model* StreamedStep::part(int part) { return bring(part).model.get(); }
@@ -300,11 +355,17 @@ box3d StreamedStep::visibleBounds(const Scene& scene, const RendererOptions& opt
 
 bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOptions& options, const Frame& frame,
                     FrameBuffer& buffer, const PassControl& control) {
+  if (scene.integration.integrator == Integrator::PathTrace)
+    fail("a step drawn in parts is ray-marched: path tracing scatters light between the parts and needs the whole "
+         "step (a larger --memory-budget)");
+  // Rays continue from the opacity in front (the march); debug views composite part over part.
+  const bool continued = scene.debug == DebugView::None;
   const size_t pixels = size_t(frame.width) * size_t(frame.height);
   const int round = passesPerRound(pixels, frame.samplesPerPixel);
   buffer.resize(frame.width, frame.height);
   FrameBuffer pass(frame.width, frame.height);
-  std::vector<float> local(pixels * kCompositeChannels), composites(size_t(round) * pixels * kCompositeChannels);
+  std::vector<float> local(pixels * kCompositeChannels), composites(size_t(round) * pixels * kCompositeChannels),
+      front(size_t(round) * pixels);
   std::vector<int> order = step.order(frame.camera);
   RenderStats stats;
   bool complete = true;
@@ -312,18 +373,30 @@ bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOption
   for (int first = 0; first < frame.samplesPerPixel && complete; first += round) {
     const int count = std::min(round, frame.samplesPerPixel - first);
     std::fill(composites.begin(), composites.end(), 0.f);
+    std::fill(front.begin(), front.end(), 0.f);
     // Resident parts are taken where they come in the order; the others are read in it.
     for (int p : order) {
       const Renderer* r = step.renderer(p, scene, options);
       if (!r) continue;
       for (int k = 0; k < count && complete; ++k) {
         f.frameIndex = first + k; // as Renderer::renderPasses numbers the passes
+        // The rays continue from the opacity the parts in front gathered: the part adds its
+        // light dimmed by them and returns the total opacity.
+        float* alpha = front.data() + size_t(k) * pixels;
+        f.frontOpacity = continued ? alpha : nullptr;
         pass.clear();
         complete = r->renderPass(f, pass, control);
         const FrameBuffer::Sums s = pass.sums();
         stats += *s.stats;
         packForCompositing(s, pixels, local.data());
-        compositePartBehind(composites.data() + size_t(k) * pixels * kCompositeChannels, local.data(), pixels);
+        float* acc = composites.data() + size_t(k) * pixels * kCompositeChannels;
+        for (size_t p = 0; p < pixels; ++p) {
+          const float* c = local.data() + p * kCompositeChannels;
+          float* a = acc + p * kCompositeChannels;
+          const float t = continued ? 1.f : 1.f - a[3]; // debug views: the part over what is behind
+          a[0] += t * c[0], a[1] += t * c[1], a[2] += t * c[2], a[4] += c[4];
+          a[3] = alpha[p] = continued ? std::clamp(c[3], 0.f, 1.f) : a[3] + t * c[3];
+        }
       }
     }
     for (int k = 0; k < count && complete; ++k)

@@ -42,21 +42,6 @@ inline void packForCompositing(const FrameBuffer::Sums& s, size_t pixels, float*
   }
 }
 
-/// acc = acc over part: a part behind every part composited into `acc` so far, pixel by pixel,
-/// as compositeFrontToBack adds it.
-inline void compositePartBehind(float* acc, const float* part, size_t pixels) {
-  for (size_t p = 0; p < pixels; ++p) {
-    float* a = acc + p * kCompositeChannels;
-    const float* c = part + p * kCompositeChannels;
-    const float t = 1.f - a[3];
-    a[0] += t * c[0];
-    a[1] += t * c[1];
-    a[2] += t * c[2];
-    a[3] += t * c[3];
-    a[4] += c[4];
-  }
-}
-
 /// A composited pass added to the buffer as one more pass of every tile.
 inline void addComposited(const float* result, size_t pixels, FrameBuffer& buffer) {
   const FrameBuffer::Sums out = buffer.sums();

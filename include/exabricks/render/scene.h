@@ -189,6 +189,12 @@ struct Frame {
   /// limit. Never part of scene files.
   const float* depthLimit = nullptr;
   bool depthLimitPlanar = false;
+  /// Optional, per pixel (row-major, width × height), kept alive by the caller: the opacity that
+  /// the data in front of the renderer's domain gathered along each pixel's ray in this pass (a
+  /// step drawn part by part, front to back). A ray then starts with it, so that early termination
+  /// and surfaces behind see what one ray through all the data sees; the pass's colour is this
+  /// part's light already dimmed by the front, and its opacity the total. Never part of scene files.
+  const float* frontOpacity = nullptr;
 
   /// A cheap draft of this frame: 1/divisor of the resolution per axis (at least one pixel)
   /// and the given sampling rate (without the depth limit when the resolution changes).

@@ -116,7 +116,10 @@ public:
 
 private:
   struct Resident;
+  struct Snapshot;
   Resident& bring(int part);
+  /// Throws when the input's files changed since the step was opened (a step being written).
+  void checkUnchanged() const;
   std::string input_;
   LoadOptions options_;
   MemoryPlan plan_;
@@ -124,6 +127,7 @@ private:
   std::optional<StepSurvey> survey_;
   std::list<Resident> resident_; ///< most recently used first
   uint64_t reads_ = 0;
+  std::unique_ptr<Snapshot> snapshot_;
 };
 
 /// Renders `frame` (every pass) into `buffer` from the step's parts, front to back, each pass

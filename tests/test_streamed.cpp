@@ -1,0 +1,140 @@
+// Steps held in parts under a memory budget: sizes as people write them, plans that fit the
+// budget (or name the smallest that works), frames drawn part by part equal to the in-core render
+// (several passes, so the per-pass compositing counts), and a step that changes while its parts
+// are read is reported instead of drawn mixed.
+#include "exabricks/amr/model.h"
+#include "exabricks/amr/scenes.h"
+#include "exabricks/core/text.h"
+#include "exabricks/io/native.h"
+#include "exabricks/workflows/streamed.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+using namespace exa;
+
+namespace {
+
+std::string writeStep(const std::string& name, uint64_t cells) {
+  const std::string dir = std::string(EXABRICKS_TEST_TMP) + "/streamed";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/" + name + ".cells";
+  writeNative(generateScene({"blobs", cells, 3, 4}), path);
+  return path;
+}
+
+/// The step in `parts` k-d parts (whatever the process's size now), with room for `resident`
+/// of them beside the process.
+MemoryPlan planOfParts(const std::string& path, int parts, int resident, uint64_t frameBytes) {
+  MemoryPlan plan = planMemory(path, {}, uint64_t(64) << 30, frameBytes);
+  const Census census = loadCensus(path);
+  plan.partition = KdPartition::balance(census, parts, int64_t(1) << census.coarsestLevel);
+  plan.partCells.assign(size_t(parts), plan.cells / parts);
+  plan.budget = plan.fixedBytes + uint64_t(resident) * plan.largestPartBytes();
+  return plan;
+}
+
+} // namespace
+
+TEST(Streamed, ByteSizesAsPeopleWriteThem) {
+  uint64_t b = 0;
+  EXPECT_TRUE(parseByteSize("512M", b) && b == uint64_t(512) << 20);
+  EXPECT_TRUE(parseByteSize("2G", b) && b == uint64_t(2) << 30);
+  EXPECT_TRUE(parseByteSize("1.5GiB", b) && b == uint64_t(3) << 29);
+  EXPECT_TRUE(parseByteSize("64mb", b) && b == uint64_t(64) << 20);
+  EXPECT_TRUE(parseByteSize("300k", b) && b == 300 * 1024);
+  EXPECT_TRUE(parseByteSize("1000000", b) && b == 1000000);
+  for (const char* bad : {"", "0", "-1G", "G", "2X", "2 G", "1e30", "nan", "2GB extra", "0.1"})
+    EXPECT_FALSE(parseByteSize(bad, b)) << bad;
+  EXPECT_EQ(formatBytes(512), "512 B");
+  EXPECT_EQ(formatBytes(uint64_t(3) << 29), "1.50 GiB");
+}
+
+TEST(Streamed, PlansFitTheBudgetOrNameTheSmallestThatWorks) {
+  const std::string path = writeStep("plan", 600000);
+  const uint64_t frame = streamedFrameBytes(64, 64, 1);
+  const MemoryPlan whole = planMemory(path, {}, uint64_t(64) << 30, frame);
+  EXPECT_FALSE(whole.streamed());
+  const MemoryPlan parts =
+      planMemory(path, {}, whole.fixedBytes + uint64_t(whole.cells * double(whole.bytesPerCell)) * 3 / 4, frame);
+  ASSERT_TRUE(parts.streamed());
+  EXPECT_LE(parts.fixedBytes + parts.largestPartBytes(), parts.budget);
+  try {
+    planMemory(path, {}, whole.fixedBytes + 1024, frame);
+    FAIL() << "a budget without room for a part was taken";
+  } catch (const BudgetTooSmall& e) {
+    EXPECT_GT(e.smallest, whole.fixedBytes);
+    EXPECT_NE(std::string(e.what()).find("smallest budget that works"), std::string::npos) << e.what();
+    // The budget named works (the process's own size may have grown a little since).
+    EXPECT_TRUE(planMemory(path, {}, e.smallest + (uint64_t(4) << 20), frame).streamed());
+  }
+}
+
+TEST(Streamed, FramesFromPartsEqualTheInCoreRender) {
+  const std::string path = writeStep("frame", 120000);
+  const Model model = loadModel(path);
+  Scene scene = Scene::volumeOf(defaultTransferFunction("viridis"), model.fieldNames[0]);
+  scene.layers[0].tf.opacityScale = 0.3f;
+  Frame frame;
+  frame.width = 64;
+  frame.height = 48;
+  frame.samplesPerPixel = 3; // jittered passes, each composited over the parts
+  frame.jitter = true;
+  const box3d b = model.worldBounds();
+  frame.camera.lookAt = (b.lower + b.upper) * 0.5;
+  frame.camera.position = frame.camera.lookAt + vec3d(0.4, 0.5, 1.4) * length(b.size());
+
+  Renderer whole(model);
+  whole.setScene(scene);
+  const Image reference = whole.render(frame);
+
+  const MemoryPlan plan = planOfParts(path, 4, 1, streamedFrameBytes(64, 48, 3));
+  StreamedStep step(path, {}, plan);
+  EXPECT_EQ(step.survey().cells, model.cellCount());
+  const DatasetInfo in = DatasetInfo::of(model), parts = step.survey().dataset;
+  EXPECT_EQ(in.referenceWidth, parts.referenceWidth);
+  EXPECT_EQ(in.extentCells, parts.extentCells);
+  ASSERT_EQ(in.valueRanges.size(), parts.valueRanges.size());
+  for (size_t f = 0; f < in.valueRanges.size(); ++f)
+    EXPECT_TRUE(in.valueRanges[f].lower == parts.valueRanges[f].lower &&
+                in.valueRanges[f].upper == parts.valueRanges[f].upper)
+        << f;
+  FrameBuffer buffer;
+  ASSERT_TRUE(renderStreamed(step, scene, RendererOptions(), frame, buffer));
+  const Image image = buffer.resolve();
+  ASSERT_EQ(image.pixels.size(), reference.pixels.size());
+  // The in-core criterion: mean <= 0.5/255, 99.9 % of the channels within 2/255 (parts end their
+  // regions, and so their sampling steps, at the part planes).
+  double sum = 0;
+  size_t beyond = 0;
+  for (size_t i = 0; i < image.pixels.size(); ++i)
+    for (int c = 0; c < 4; ++c) {
+      const float* a = &image.pixels[i].x;
+      const float* r = &reference.pixels[i].x;
+      const double d = std::abs(double(a[c]) - double(r[c]));
+      sum += d;
+      beyond += d > 2.0 / 255.0 ? 1 : 0;
+    }
+  EXPECT_LE(sum / double(4 * image.pixels.size()), 0.5 / 255.0);
+  EXPECT_LE(double(beyond), 0.001 * double(4 * image.pixels.size()));
+  EXPECT_LE(step.residentBytes() + plan.fixedBytes, plan.budget);
+}
+
+TEST(Streamed, AStepChangedWhileItsPartsAreReadIsReported) {
+  const std::string path = writeStep("changing", 120000);
+  const MemoryPlan plan = planOfParts(path, 4, 1, 0);
+  StreamedStep step(path, {}, plan);
+  std::filesystem::resize_file(path.substr(0, path.size() - 6) + ".scalars",
+                               std::filesystem::file_size(path.substr(0, path.size() - 6) + ".scalars") + 4);
+  try {
+    for (int p = 0; p < step.parts(); ++p)
+      step.part(p);
+    FAIL() << "the change was not noticed";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("changed while its parts were being read"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find(".scalars"), std::string::npos) << e.what();
+  }
+}
