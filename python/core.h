@@ -6,6 +6,7 @@
 #include "exabricks/core/image.h"
 #include "exabricks/core/mesh.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/streamed.h"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -17,10 +18,15 @@ namespace exa::pymod {
 
 /// A built model, shared by every renderer made from it (they keep it alive).
 struct Dataset {
-  std::shared_ptr<const Model> model;
-  DatasetInfo info; ///< computed once, shared by its renderers, defaults and warnings
+  std::shared_ptr<const Model> model; ///< a step held in parts: its skeleton (no cells)
+  DatasetInfo info;                   ///< computed once, shared by its renderers, defaults and warnings
   std::string name;
   double loadSeconds = 0;
+  /// A step larger than its memory budget, held in parts (null: `model` holds it whole). Its
+  /// parts are read as renders and samples need them; one thread at a time uses it.
+  std::shared_ptr<StreamedStep> streamed;
+  /// The whole step's cell bounds (lattice).
+  box3i cellBounds() const { return streamed ? streamed->survey().cellBounds : model->cellBounds(); }
 };
 
 /// A triangle mesh made once from numpy arrays or read from a file (`source`, which scene files

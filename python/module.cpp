@@ -6,6 +6,7 @@
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/mesh.h"
 #include "exabricks/documents/scene_file.h"
@@ -53,7 +54,7 @@ std::shared_ptr<Dataset> makeDataset(Model&& m, std::string name, double seconds
 }
 
 std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::string>& fields, int maxBrickWidth,
-                              const std::vector<int>& box, bool nanAsHoles) {
+                              const std::vector<int>& box, bool nanAsHoles, const std::string& memoryBudget) {
   LoadOptions o;
   o.fields = fields;
   if (nanAsHoles) o.nonFinite = NonFinite::Holes;
@@ -63,6 +64,31 @@ std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::st
     o.box = box3i(vec3i(box[0], box[1], box[2]), vec3i(box[3], box[4], box[5]));
   }
   Timer t;
+  if (!memoryBudget.empty()) {
+    uint64_t budget = 0;
+    if (!parseByteSize(memoryBudget, budget))
+      fail("memory_budget: '", memoryBudget, "' is not a size (e.g. 512M, 2G, or a number of bytes)");
+    if (!box.empty()) fail("memory_budget and box: choose one (a box already reads only its cells)");
+    std::shared_ptr<StreamedStep> step;
+    {
+      py::gil_scoped_release release;
+      // Room for a 1024² frame of a few passes beside the parts.
+      MemoryPlan plan = planMemory(path, o, budget, streamedFrameBytes(1024, 1024, 4));
+      if (plan.streamed()) {
+        step = std::make_shared<StreamedStep>(path, o, std::move(plan));
+        step->survey();
+      }
+    }
+    if (step) {
+      auto d = std::make_shared<Dataset>();
+      d->model = std::make_shared<const Model>(step->skeleton());
+      d->info = step->survey().dataset;
+      d->name = path.empty() ? kDefaultDatasetName : path;
+      d->loadSeconds = t.seconds();
+      d->streamed = std::move(step);
+      return d;
+    }
+  }
   Model m;
   {
     py::gil_scoped_release release;
@@ -175,6 +201,25 @@ py::tuple sample(const Dataset& d, py::array_t<double, py::array::c_style | py::
   const double* p = points.data();
   double* v = values.mutable_data();
   double* g = gradients.mutable_data();
+  if (d.streamed) {
+    std::vector<vec3d> at(n);
+    for (size_t i = 0; i < n; ++i)
+      at[i] = vec3d(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+    std::vector<double> vs;
+    std::vector<vec3d> gs;
+    std::vector<bool> found;
+    {
+      py::gil_scoped_release release;
+      d.streamed->sample(f, at, vs, gs, found);
+    }
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    for (size_t i = 0; i < n; ++i) {
+      v[i] = found[i] ? vs[i] : nan;
+      g[3 * i] = found[i] ? gs[i].x : nan, g[3 * i + 1] = found[i] ? gs[i].y : nan,
+            g[3 * i + 2] = found[i] ? gs[i].z : nan;
+    }
+    return py::make_tuple(values, gradients);
+  }
   {
     py::gil_scoped_release release;
     for (size_t i = 0; i < n; ++i) {
@@ -228,10 +273,24 @@ void bindDataset(py::module_& m) {
             return u;
           },
           "Units per field, in field order (empty where unknown)")
-      .def_property_readonly("cells", [](const Dataset& d) { return d.model->cellCount(); })
+      .def_property_readonly(
+          "cells", [](const Dataset& d) { return d.streamed ? d.streamed->survey().cells : d.model->cellCount(); })
+      .def_property_readonly("memory",
+                             [](const Dataset& d) -> py::object {
+                               if (!d.streamed) return py::none();
+                               const MemoryPlan& p = d.streamed->plan();
+                               py::dict m;
+                               m["budget_bytes"] = p.budget;
+                               m["parts"] = d.streamed->parts();
+                               m["resident_parts"] = d.streamed->residentParts();
+                               m["parts_read"] = d.streamed->partsRead();
+                               m["largest_part_bytes"] = p.largestPartBytes();
+                               m["peak_rss_bytes"] = peakResidentBytes();
+                               return std::move(m);
+                             })
       .def_property_readonly("bounds",
                              [](const Dataset& d) {
-                               const box3i b = d.model->cellBounds();
+                               const box3i b = d.cellBounds();
                                const vec3d lo = d.model->world.toWorld(vec3d(b.lower));
                                const vec3d hi = d.model->world.toWorld(vec3d(b.upper));
                                return py::make_tuple(py::make_tuple(lo.x, lo.y, lo.z),
@@ -249,6 +308,7 @@ void bindDataset(py::module_& m) {
       .def("info_json",
            [](const Dataset& d) {
              // The command line's `info --json`: the model's description and the device object.
+             if (d.streamed) return d.streamed->infoJson(d.name, d.loadSeconds);
              std::string j = modelInfoJson(*d.model, d.name, d.loadSeconds);
              const size_t end = j.find_last_of('}');
              if (end == std::string::npos) fail("internal: model information is not a JSON object");
@@ -259,8 +319,10 @@ void bindDataset(py::module_& m) {
           "adapt_transfer_function",
           [](const Dataset& d, const std::string& field, const std::string& tfJson, bool autoLog, bool autoOpacity) {
             const int f = d.model->requireField(field);
-            const DefaultChoices c = adaptTransferFunction(
-                *d.model, d.info, f, parseTransferFunction(tfJson, "transfer function"), autoLog, autoOpacity);
+            const PartialData parts = d.streamed ? d.streamed->partialData() : PartialData();
+            const DefaultChoices c =
+                adaptTransferFunction(*d.model, d.info, f, parseTransferFunction(tfJson, "transfer function"), autoLog,
+                                      autoOpacity, d.streamed ? &parts : nullptr);
             return py::make_tuple(transferFunctionJson(c.tf), c.notes);
           },
           py::arg("field"), py::arg("tf_json"), py::arg("auto_log") = true, py::arg("auto_opacity") = true)
@@ -316,7 +378,7 @@ void bindMesh(py::module_& m) {
 /// The functions that make datasets: load, from_cells, from_grids, and list_fields.
 void bindDatasetFunctions(py::module_& m) {
   m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(), py::arg("max_brick_width") = 32,
-        py::arg("box") = std::vector<int>(), py::arg("nan_as_holes") = false);
+        py::arg("box") = std::vector<int>(), py::arg("nan_as_holes") = false, py::arg("memory_budget") = "");
   m.def("from_cells", &fromCells, py::arg("corners"), py::arg("levels"), py::arg("fields"), py::arg("origin"),
         py::arg("spacing"), py::arg("max_brick_width") = 32, py::arg("units") = std::vector<std::string>());
   m.def("from_grids", &fromGrids, py::arg("grids"), py::arg("names"), py::arg("origin"),

@@ -45,7 +45,7 @@ public:
     if (device != "auto" && device != "cpu") resolveDevice(device); // an unusable device fails here
   }
 
-  std::string device() const { return deviceName(renderer_.device()); }
+  std::string device() const { return dataset_->streamed ? "cpu" : deviceName(renderer_.device()); }
 
   py::dict setScene(const std::string& json,
                     const std::vector<std::pair<std::shared_ptr<Mesh>, std::vector<float>>>& meshes) {
@@ -56,7 +56,13 @@ public:
       doc.scene.meshes.push_back({mesh->mesh, srgbToLinear(vec3f(color[0], color[1], color[2])), ""});
     }
     SceneUpdate u;
-    {
+    if (dataset_->streamed) {
+      // A step in parts: each part's renderer takes the scene when the frame is drawn.
+      streamedDrawn_ = streamedDrawn_ &&
+                       exactSceneJson(documentOf(doc.scene)) == exactSceneJson(documentOf(streamedScene_)) &&
+                       doc.scene.meshes.empty();
+      streamedScene_ = doc.scene;
+    } else {
       // Any change of the scene starts the accumulation over.
       py::gil_scoped_release release;
       u = view_.showScene(doc.scene);
@@ -80,6 +86,7 @@ public:
       f.depthLimit = limit.data();
       f.depthLimitPlanar = planar;
     }
+    if (dataset_->streamed) return renderStreamedFrame(f, passes);
     view_.showFrame(f); // a change starts the accumulation over
     const int target = passes > 0 ? passes : view_.passes() + 1;
     bool interrupted = false, cancelled = false;
@@ -98,6 +105,7 @@ public:
   /// cancelled; Ctrl-C cancels as in render().
   py::object renderDraft(const std::string& frameJson, double budget) {
     if (!(budget >= 0.0) || !std::isfinite(budget)) fail("budget must be a number of seconds >= 0, not ", budget);
+    if (dataset_->streamed) return renderStreamedDraft(parseFrame(frameJson));
     view_.showFrame(parseFrame(frameJson)); // a change starts the accumulation over
     const Frame draft = view_.draftFrame();
     const int divisor = view_.draftDivisor();
@@ -118,7 +126,7 @@ public:
 
   /// The last draft as PNG bytes, as png() encodes the accumulated image.
   py::bytes draftPng() const {
-    const Scene& scene = view_.shown().scene;
+    const Scene& scene = shownScene();
     const std::vector<unsigned char> bytes = encodePng(draftImage_, scene.keepAlpha, scene.background);
     return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
@@ -131,6 +139,11 @@ public:
   /// The accumulated image with the legends the scene asks for.
   Image resolved() const {
     Image img;
+    if (dataset_->streamed) {
+      streamedBuffer_.resolve(img);
+      drawLegends(streamedScene_, streamedFrame_, *dataset_->model, dataset_->info, legendText(), img);
+      return img;
+    }
     view_.buffer().resolve(img);
     drawLegends(view_.shown().scene, view_.shown().frame, *dataset_->model, dataset_->info, legendText(), img);
     return img;
@@ -140,7 +153,7 @@ public:
 
   py::bytes png() const {
     const Image img = resolved();
-    const Scene& scene = view_.shown().scene;
+    const Scene& scene = shownScene();
     const std::vector<unsigned char> bytes = encodePng(img, scene.keepAlpha, scene.background);
     return py::bytes(reinterpret_cast<const char*>(bytes.data()), bytes.size());
   }
@@ -158,12 +171,12 @@ public:
           p.x /= top, p.y /= top, p.z /= top;
     }
     const ImageFormat format = imageFormatFor(path, bits);
-    const Scene& scene = view_.shown().scene;
+    const Scene& scene = shownScene();
     writeImage(path, img, format, scene.keepAlpha, scene.background);
   }
 
   py::dict stats() const {
-    const FrameBuffer& buffer = view_.buffer();
+    const FrameBuffer& buffer = dataset_->streamed ? streamedBuffer_ : view_.buffer();
     const RenderStats& s = buffer.stats();
     py::dict d;
     d["seconds"] = s.seconds;
@@ -175,14 +188,26 @@ public:
     d["ao_rays"] = s.aoRays;
     d["samples_per_second"] = s.samplesPerSecond();
     d["passes"] = buffer.passes();
+    if (dataset_->streamed) {
+      d["parts"] = dataset_->streamed->parts();
+      d["parts_read"] = dataset_->streamed->partsRead();
+      d["regions"] = dataset_->streamed->survey().regions;
+      return d;
+    }
     d["visible_regions"] = renderer_.visibleRegions();
     d["iso_regions"] = renderer_.isoRegions();
     d["regions"] = dataset_->model->regions.regions.size();
     return d;
   }
 
-  py::object visibleBounds() const {
-    const box3d b = renderer_.visibleBounds();
+  py::object visibleBounds() {
+    box3d b;
+    if (dataset_->streamed) {
+      py::gil_scoped_release release;
+      b = dataset_->streamed->visibleBounds(streamedScene_, RendererOptions());
+    } else {
+      b = renderer_.visibleBounds();
+    }
     if (b.empty()) return py::none();
     return py::make_tuple(py::make_tuple(b.lower.x, b.lower.y, b.lower.z),
                           py::make_tuple(b.upper.x, b.upper.y, b.upper.z));
@@ -190,6 +215,7 @@ public:
 
   py::object pick(const std::vector<double>& origin, const std::vector<double>& direction) const {
     if (origin.size() != 3 || direction.size() != 3) fail("origin and direction need three numbers each");
+    if (dataset_->streamed) fail("pick needs the whole step: this dataset is held in parts (memory_budget)");
     SurfaceHit hit;
     if (!renderer_.pick(vec3d(origin[0], origin[1], origin[2]), vec3d(direction[0], direction[1], direction[2]), hit))
       return py::none();
@@ -203,6 +229,65 @@ public:
   }
 
 private:
+  const Scene& shownScene() const { return dataset_->streamed ? streamedScene_ : view_.shown().scene; }
+
+  /// A step held in parts: the frame's passes (`passes`, or the frame's samples per pixel when 0)
+  /// drawn part by part, front to back (renderStreamed); the same frame and scene again draw
+  /// nothing new.
+  int renderStreamedFrame(Frame f, int passes) {
+    if (passes > 0) f.samplesPerPixel = passes;
+    if (streamedDrawn_ && sameFrame(f, streamedFrame_)) return int(streamedBuffer_.passes());
+    bool interrupted = false, cancelled = false, complete = false;
+    const std::exception_ptr error = renderInWorker(
+        [&](const PassControl& control) {
+          streamedBuffer_.clear();
+          complete =
+              renderStreamed(*dataset_->streamed, streamedScene_, RendererOptions(), f, streamedBuffer_, control);
+        },
+        interrupted, cancelled);
+    streamedFrame_ = f;
+    streamedFrame_.depthLimit = nullptr; // not kept: only compared by its presence
+    streamedDrawn_ = complete && !f.depthLimit;
+    if (interrupted) throw py::error_already_set();
+    if (error) std::rethrow_exception(error);
+    return int(streamedBuffer_.passes());
+  }
+
+  /// A draft of a step held in parts: a quarter of the frame's resolution per axis, one sample at
+  /// half its rate, drawn part by part. Returns (image, divisor, seconds) as renderDraft does.
+  py::object renderStreamedDraft(const Frame& frame) {
+    constexpr int kDivisor = 4;
+    Frame draft = frame.preview(kDivisor, frame.rate * 0.5f);
+    draft.samplesPerPixel = 1;
+    bool interrupted = false, cancelled = false, complete = false;
+    const std::exception_ptr error = renderInWorker(
+        [&](const PassControl& control) {
+          complete =
+              renderStreamed(*dataset_->streamed, streamedScene_, RendererOptions(), draft, draftBuffer_, control);
+        },
+        interrupted, cancelled);
+    if (interrupted) throw py::error_already_set();
+    if (error) std::rethrow_exception(error);
+    if (cancelled || !complete) return py::none();
+    draftBuffer_.resolve(draftImage_);
+    drawLegends(streamedScene_, draft, *dataset_->model, dataset_->info, legendText(), draftImage_);
+    return py::make_tuple(pymod::imageArray(draftImage_), kDivisor, draftBuffer_.stats().seconds);
+  }
+
+  static SceneDocument documentOf(const Scene& scene) {
+    SceneDocument d;
+    d.scene = scene;
+    d.hasCamera = true;
+    return d;
+  }
+
+  static bool sameFrame(const Frame& a, const Frame& b) {
+    SceneDocument x, y;
+    x.frame = a, y.frame = b;
+    x.hasCamera = y.hasCamera = true;
+    return exactSceneJson(x) == exactSceneJson(y);
+  }
+
   LegendText legendText() const {
     LegendText text;
     text.dataset = legendDatasetLabel(dataset_->name);
@@ -295,7 +380,12 @@ private:
   Renderer renderer_;
   ProgressiveView view_;    ///< the passes of renderer_, on the device asked for (cpu, cuda, auto or portable)
   FrameBuffer draftBuffer_; ///< the last draft
-  Image draftImage_;        ///< the last draft resolved, with its legends
+  // A step held in parts (Dataset::streamed): the scene and the last frame drawn, and its image.
+  Scene streamedScene_;
+  Frame streamedFrame_;
+  FrameBuffer streamedBuffer_;
+  bool streamedDrawn_ = false;
+  Image draftImage_; ///< the last draft resolved, with its legends
   std::atomic<bool> cancelRequested_{false};
 };
 

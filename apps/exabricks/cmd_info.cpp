@@ -115,35 +115,7 @@ void runStreamed(const InfoOptions& o, const LoadOptions& lo, MemoryPlan plan) {
   const box3d world = model.world.toWorld(lattice);
   const MemoryPlan& p = step.plan();
   if (o.json) {
-    nlohmann::json j;
-    j["input"] = o.in.name();
-    j["cells"] = s.cells;
-    j["bounds"] = {{"lattice",
-                    {{"lower", {lattice.lower.x, lattice.lower.y, lattice.lower.z}},
-                     {"upper", {lattice.upper.x, lattice.upper.y, lattice.upper.z}}}},
-                   {"world",
-                    {{"lower", {world.lower.x, world.lower.y, world.lower.z}},
-                     {"upper", {world.upper.x, world.upper.y, world.upper.z}}}}};
-    nlohmann::json levels = nlohmann::json::array();
-    for (int l : s.levels)
-      levels.push_back({{"level", l}, {"cell_width", 1 << l}, {"cells", s.levelCells[size_t(l)]}});
-    j["levels"] = levels;
-    nlohmann::json fields = nlohmann::json::array();
-    for (size_t f = 0; f < model.fieldNames.size(); ++f)
-      fields.push_back({{"name", model.fieldNames[f]},
-                        {"units", model.unitsOf(int(f))},
-                        {"range", toJson(s.dataset.valueRanges.at(f))}});
-    j["fields"] = fields;
-    j["memory"] = {{"budget_bytes", p.budget},
-                   {"parts", step.parts()},
-                   {"largest_part_bytes", p.largestPartBytes()},
-                   {"fixed_bytes", p.fixedBytes},
-                   {"parts_read", step.partsRead()},
-                   {"bricks_over_parts", s.bricks},
-                   {"regions_over_parts", s.regions},
-                   {"peak_rss_bytes", peakResidentBytes()}};
-    j["build_seconds"] = {{"load_total", seconds}};
-    std::cout << j.dump(2) << "\n";
+    std::cout << step.infoJson(o.in.name(), seconds) << "\n";
     return;
   }
   std::printf("input            %s\n", o.in.name().c_str());

@@ -81,37 +81,21 @@ void appendSample(const Model& model, int field, const vec3d& p, std::string& ou
 /// once (samples inside a part equal the whole step's: it holds every cell whose support reaches it).
 void runStreamed(const SampleOptions& o, const LoadOptions& lo, MemoryPlan plan, const std::vector<vec3d>& points) {
   StreamedStep step(o.in.input, lo, std::move(plan));
-  const Model& skeleton = step.skeleton();
-  const int field = skeleton.requireField(o.in.field);
-  std::vector<std::vector<size_t>> ofPart(size_t(step.parts()));
-  std::vector<std::string> lines(points.size());
-  for (size_t i = 0; i < points.size(); ++i) {
-    const vec3d l = skeleton.world.toLattice(points[i]);
-    int found = -1;
-    for (int p = 0; p < step.parts() && found < 0; ++p) {
-      const box3l& b = step.partBox(p);
-      if (l.x >= double(b.lower.x) && l.x < double(b.upper.x) && l.y >= double(b.lower.y) && l.y < double(b.upper.y) &&
-          l.z >= double(b.lower.z) && l.z < double(b.upper.z))
-        found = p;
-    }
-    if (found < 0)
-      lines[i] = "nan nan nan nan\n"; // not finite, or beyond every part
-    else
-      ofPart[size_t(found)].push_back(i);
-  }
-  for (int p = 0; p < step.parts(); ++p) {
-    if (ofPart[size_t(p)].empty()) continue;
-    const Model* m = step.part(p);
-    for (size_t i : ofPart[size_t(p)]) {
-      if (m)
-        appendSample(*m, field, points[i], lines[i]);
-      else
-        lines[i] = "nan nan nan nan\n";
-    }
-  }
+  const int field = step.skeleton().requireField(o.in.field);
+  std::vector<double> values;
+  std::vector<vec3d> gradients;
+  std::vector<bool> found;
+  step.sample(field, points, values, gradients, found);
   std::string out;
-  for (const std::string& line : lines) {
-    out += line;
+  char buffer[160];
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (found[i]) {
+      std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %.9g\n", values[i], gradients[i].x, gradients[i].y,
+                    gradients[i].z);
+      out += buffer;
+    } else {
+      out += "nan nan nan nan\n";
+    }
     if (out.size() > (1 << 16)) {
       writeOut(out);
       out.clear();

@@ -48,6 +48,13 @@ class Dataset:
         return self._core.cells
 
     @property
+    def memory(self):
+        """For a step held in parts (load's memory_budget): its budget, parts, the parts resident
+        and read so far, the largest part's estimated bytes and the process's peak resident
+        memory; None for a dataset held whole."""
+        return self._core.memory
+
+    @property
     def bounds(self):
         """World box ((x0, y0, z0), (x1, y1, z1)) of the cells."""
         return self._core.bounds
@@ -84,14 +91,21 @@ class Dataset:
         return "<exabricks.Dataset %s: %d cells, fields %s>" % (self.name, self.cells, ", ".join(self.fields))
 
 
-def load(path=None, fields=None, max_brick_width=32, box=None, nan_as_holes=False):
+def load(path=None, fields=None, max_brick_width=32, box=None, nan_as_holes=False, memory_budget=None):
     """Reads any input the command line reads (model file, NAME.cells, AMReX, Chombo, FLASH, Enzo,
     VTK AMR, raw volume; the embedded default dataset when path is None) and builds it.
     `box` (x0, y0, z0, x1, y1, z1, finest lattice units) keeps only the cells that overlap it.
     `nan_as_holes`: cells with a NaN or infinite value in any loaded field become holes (dropped
-    from every field, counted on stderr) instead of an error (as `--nan-as-holes`)."""
+    from every field, counted on stderr) instead of an error (as `--nan-as-holes`).
+    `memory_budget` ("512M", "2G", or bytes): the most resident memory for the whole process, as
+    the command line's `--memory-budget`; a step that does not fit is held in parts, read as
+    renders and samples need them, and drawn part by part (equal to the whole step's picture);
+    `Dataset.memory` then describes the parts. A budget too small raises an error naming the
+    smallest that works."""
+    budget = "" if memory_budget is None else str(int(memory_budget)) if isinstance(memory_budget, int) \
+        else str(memory_budget)
     return Dataset(_core.load("" if path is None else str(path), list(fields or []), max_brick_width,
-                              list(box) if box is not None else [], bool(nan_as_holes)))
+                              list(box) if box is not None else [], bool(nan_as_holes), budget))
 
 
 def _units_list(units, names):

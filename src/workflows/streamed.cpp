@@ -5,6 +5,8 @@
 #include "exabricks/core/text.h"
 #include "exabricks/render/composite.h"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -351,6 +353,78 @@ box3d StreamedStep::visibleBounds(const Scene& scene, const RendererOptions& opt
       all.extend(clipped);
   }
   return all;
+}
+
+void StreamedStep::sample(int field, const std::vector<vec3d>& points, std::vector<double>& values,
+                          std::vector<vec3d>& gradients, std::vector<bool>& found) {
+  values.assign(points.size(), 0.0);
+  gradients.assign(points.size(), vec3d(0.0));
+  found.assign(points.size(), false);
+  std::vector<std::vector<size_t>> ofPart(static_cast<size_t>(this->parts()));
+  for (size_t i = 0; i < points.size(); ++i) {
+    const vec3d l = skeleton_.world.toLattice(points[i]);
+    for (int p = 0; p < parts(); ++p) {
+      const box3l& b = partBox(p);
+      if (l.x >= double(b.lower.x) && l.x < double(b.upper.x) && l.y >= double(b.lower.y) && l.y < double(b.upper.y) &&
+          l.z >= double(b.lower.z) && l.z < double(b.upper.z)) {
+        ofPart[size_t(p)].push_back(i);
+        break;
+      }
+    }
+  }
+  for (int p = 0; p < parts(); ++p) {
+    if (ofPart[size_t(p)].empty()) continue;
+    const Model* m = part(p);
+    if (!m) continue;
+    for (size_t i : ofPart[size_t(p)])
+      found[i] = m->sampleWorld(field, points[i], values[i], gradients[i]);
+  }
+}
+
+std::string StreamedStep::infoJson(const std::string& name, double seconds) {
+  const StepSurvey& s = survey();
+  const box3i lattice = s.cellBounds;
+  const box3d world = skeleton_.world.toWorld(lattice);
+  auto range = [](const range1f& r) -> nlohmann::json {
+    if (r.empty()) return {{"min", nullptr}, {"max", nullptr}};
+    return {{"min", r.lower}, {"max", r.upper}};
+  };
+  nlohmann::json j;
+  j["input"] = name;
+  j["cells"] = s.cells;
+  j["bounds"] = {{"lattice",
+                  {{"lower", {lattice.lower.x, lattice.lower.y, lattice.lower.z}},
+                   {"upper", {lattice.upper.x, lattice.upper.y, lattice.upper.z}}}},
+                 {"world",
+                  {{"lower", {world.lower.x, world.lower.y, world.lower.z}},
+                   {"upper", {world.upper.x, world.upper.y, world.upper.z}}}}};
+  const SimulationState& sim = skeleton_.simulation;
+  j["simulation"] = {{"time", sim.hasTime() ? nlohmann::json(sim.time) : nlohmann::json()},
+                     {"cycle", sim.hasCycle() ? nlohmann::json(sim.cycle) : nlohmann::json()},
+                     {"redshift", sim.hasRedshift() ? nlohmann::json(sim.redshift) : nlohmann::json()}};
+  j["world"] = {{"origin", {skeleton_.world.origin.x, skeleton_.world.origin.y, skeleton_.world.origin.z}},
+                {"scale", {skeleton_.world.scale.x, skeleton_.world.scale.y, skeleton_.world.scale.z}}};
+  nlohmann::json levels = nlohmann::json::array();
+  for (auto l = s.levels.begin(); l != s.levels.end(); ++l)
+    levels.push_back({{"level", *l}, {"cell_width", 1 << *l}, {"cells", s.levelCells[size_t(*l)]}});
+  j["levels"] = levels;
+  nlohmann::json fields = nlohmann::json::array();
+  for (size_t f = 0; f < skeleton_.fieldNames.size(); ++f)
+    fields.push_back({{"name", skeleton_.fieldNames[f]},
+                      {"units", skeleton_.unitsOf(int(f))},
+                      {"range", range(s.dataset.valueRanges.at(f))}});
+  j["fields"] = fields;
+  j["memory"] = {{"budget_bytes", plan_.budget},
+                 {"parts", parts()},
+                 {"largest_part_bytes", plan_.largestPartBytes()},
+                 {"fixed_bytes", plan_.fixedBytes},
+                 {"parts_read", reads_},
+                 {"resident_parts", residentParts()},
+                 {"bricks_over_parts", s.bricks},
+                 {"regions_over_parts", s.regions},
+                 {"peak_rss_bytes", peakResidentBytes()}};
+  j["build_seconds"] = {{"load_total", seconds}};
+  return j.dump(2);
 }
 
 bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOptions& options, const Frame& frame,

@@ -107,6 +107,13 @@ public:
   std::vector<int> order(const Camera& camera) const;
   /// Union of what each part's renderer may show within its part (a first view frames it).
   box3d visibleBounds(const Scene& scene, const RendererOptions& options);
+  /// Reconstructs `field` at world points, each in the part that holds it (every part read at
+  /// most once): `found[i]` false where no cell has weight, or the point is not finite.
+  void sample(int field, const std::vector<vec3d>& points, std::vector<double>& values, std::vector<vec3d>& gradients,
+              std::vector<bool>& found);
+  /// What `info --json` prints of the step: its cells per level, bounds, fields and ranges, and
+  /// the plan ("memory": budget, parts, the largest part, parts read, peak resident memory).
+  std::string infoJson(const std::string& name, double seconds);
 
   int residentParts() const { return int(resident_.size()); }
   /// Estimated bytes of the resident parts.

@@ -1,0 +1,74 @@
+"""exabricks.load(..., memory_budget=...): a step larger than the budget is held in parts; its
+first picture's choices, its picture, its samples and its info equal the whole step's."""
+
+import subprocess
+
+import numpy as np
+import pytest
+
+import exabricks
+
+
+@pytest.fixture(scope="module")
+def step(tmp_path_factory):
+    from conftest import CLI
+    import os
+    if not os.path.exists(CLI):
+        pytest.skip("the exabricks command is not built at %s (set EXABRICKS)" % CLI)
+    path = tmp_path_factory.mktemp("budget") / "c.cells"
+    subprocess.run([CLI, "-q", "generate", "-s", "cosmic", "-n", "700000", "-o", str(path)], check=True)
+    return str(path)
+
+
+def in_parts(path):
+    """The step held whole, and in a few parts: the budget comes down from 64 MiB above the
+    smallest that works (which the error of a budget too small names) until the step no longer
+    fits whole."""
+    whole = exabricks.load(path)
+    with pytest.raises(Exception, match="the smallest budget that works is") as refused:
+        exabricks.load(path, memory_budget="1M")
+    smallest = int(str(refused.value).split("(--memory-budget ")[-1].rstrip("M)"))
+    for extra in range(64, -1, -8):
+        parted = exabricks.load(path, memory_budget="%dM" % (smallest + extra))
+        if parted.memory is not None:
+            return whole, parted
+    pytest.fail("no budget above %dM held the step in parts" % smallest)
+
+
+def test_a_step_in_parts_draws_the_whole_steps_picture(step):
+    whole, parted = in_parts(step)
+    assert parted.memory is not None and parted.memory["parts"] > 1, parted.memory
+    assert whole.memory is None
+    assert parted.cells == whole.cells and parted.bounds == whole.bounds and parted.fields == whole.fields
+    a, b = exabricks.Scene(whole), exabricks.Scene(parted)
+    # The defaults count every part: the same transfer function and notes.
+    assert a.transfer_function.to_dict() == b.transfer_function.to_dict()
+    assert a.notes == b.notes
+    b.camera = a.camera
+    one, parts = a.render(96, 80), b.render(96, 80)
+    d = np.abs(one - parts) * 255
+    assert d.mean() <= 0.5 and (d <= 2).mean() >= 0.999, (d.mean(), d.max())
+    assert b.stats()["parts"] == parted.memory["parts"]
+    draft = b.render_draft(96, 80)
+    assert draft.shape == (20, 24, 4)
+
+
+def test_a_step_in_parts_samples_and_describes_the_whole_step(step):
+    whole, parted = in_parts(step)
+    points = np.random.RandomState(4).uniform(-0.05, 1.05, (2000, 3)) * np.array(whole.bounds[1])
+    va, ga = whole.sample(points)
+    vb, gb = parted.sample(points)
+    # The same cells in each part's own bricks: equal up to the order of the float sums.
+    assert np.array_equal(np.isnan(va), np.isnan(vb))
+    ok = ~np.isnan(va)
+    assert np.allclose(va[ok], vb[ok], rtol=1e-5, atol=0) and np.allclose(ga[ok], gb[ok], rtol=1e-4, atol=1e-9)
+    a, b = whole.info(), parted.info()
+    assert a["cells"] == b["cells"] and a["fields"] == b["fields"] and a["bounds"] == b["bounds"]
+    assert [(l["level"], l["cells"]) for l in a["levels"]] == [(l["level"], l["cells"]) for l in b["levels"]]
+    assert b["memory"]["parts"] > 1
+
+
+def test_bad_budgets_are_refused(step):
+    for bad in ("lots", "0", "-2G"):
+        with pytest.raises(Exception, match="not a size"):
+            exabricks.load(step, memory_budget=bad)
