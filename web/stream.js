@@ -174,6 +174,7 @@ function showStats(h, now) {
     ['drafts/s', `${recent}`],
     ['latency', m.latencies.length ? `${m.latencies[m.latencies.length - 1].toFixed(0)} ms` : '–'],
   ];
+  if (h.data) rows.unshift(['data', h.data]); // coarse levels first: what the frame shows
   $('stats').innerHTML = rows.map(([k, v]) => `<tr><td>${k}</td><td>${v}</td></tr>`).join('');
 }
 

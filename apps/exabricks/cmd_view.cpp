@@ -40,6 +40,7 @@ struct ViewCmdOptions {
   int port = 8765;
   std::string token;
   std::string device = "auto";
+  double coarseFirst = 2e6; ///< inputs of more cells show their coarse levels first (0: never)
 };
 
 /// Passes the viewer refines to when neither the options nor a scene file say.
@@ -67,12 +68,32 @@ struct FirstStep {
   DatasetInfo dataset;
   int index = 0;                                       ///< the step shown first
   std::vector<std::pair<int, std::string>> unreadable; ///< steps before it that could not be read
+  CoarseFirst coarse;                                  ///< level > 0: `model` holds the coarse levels
 };
 
 /// The dataset, or the first readable step of a series (a step that cannot be read is said on
 /// stderr and skipped; when none can be read, the first one's error).
-FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo) {
+FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo,
+                    double coarseFirst) {
   FirstStep f;
+  if (steps.size() <= 1 && coarseFirst > 0) f.coarse = coarseFirstLevel(input, coarseFirst);
+  if (f.coarse.level > 0) {
+    // The coarse levels first: a plotfile stores every level's values, so cells 2^level wide and
+    // wider are leaves where the finer levels are not read. The dataset's values are the whole
+    // step's where its metadata holds them (finest level; AMReX value ranges per box).
+    LoadOptions coarse = lo;
+    coarse.finestLevel = f.coarse.level;
+    f.model = std::make_shared<const Model>(loadModel(input, coarse));
+    const DatasetInfo own = DatasetInfo::of(*f.model);
+    std::vector<range1f> ranges = own.valueRanges;
+    for (size_t k = 0; k < ranges.size(); ++k)
+      if (const std::optional<range1f> r = fieldRangeFromMetadata(input, f.model->fieldNames[k])) ranges[k] = *r;
+    f.dataset = DatasetInfo::from(f.coarse.finestLevel, f.model->cellBounds(), f.model->world.scale, ranges);
+    logNote(strCat("showing the coarse levels first (cells ", 1 << f.coarse.level, " finest cells wide and wider, ",
+                   std::llround(f.coarse.coarseCells), " of ", std::llround(f.coarse.cells),
+                   " cells in boxes); every level follows"));
+    return f;
+  }
   if (steps.size() > 1) {
     SeriesOptions so;
     so.load = lo;
@@ -184,7 +205,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields.clear(); // every field: the page can switch between them
-  const FirstStep first = loadFirst(steps, doc.input, lo);
+  const FirstStep first = loadFirst(steps, doc.input, lo, o.coarseFirst);
   if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
@@ -208,6 +229,13 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   content.name = datasetLabel(o.inputs.empty() ? o.scene.in.input : o.inputs[0]);
   content.initial = doc;
   content.load = lo;
+  if (first.coarse.level > 0) {
+    const std::string input = doc.input;
+    content.refine = [input, lo] { return std::make_shared<const Model>(loadModel(input, lo)); };
+    content.coarseNote = strCat("coarse levels: cells ", 1 << first.coarse.level, " wide and wider (",
+                                std::llround(first.coarse.coarseCells), " of ", std::llround(first.coarse.cells),
+                                " cells in boxes); reading the finer levels");
+  }
   if (first.series) {
     content.series = first.series;
     content.steps = steps;
@@ -244,6 +272,11 @@ void addView(CLI::App& app) {
   cmd->add_option("--host", o->host, "Address to listen on (127.0.0.1: this machine only)")->capture_default_str();
   addDeviceOption(*cmd, o->device);
   cmd->add_option("--token", o->token, "Access token (default: a random one, printed with the address)");
+  cmd->add_option("--coarse-first", o->coarseFirst,
+                  "An AMReX plotfile with more cells in its boxes shows its coarse levels (at most this many "
+                  "cells) at once, then every level (0: every level from the start)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->callback([o, cmd] { run(*o, *cmd); });
 }
 

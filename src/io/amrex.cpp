@@ -410,7 +410,23 @@ std::optional<range1f> amrexFieldRange(const std::string& path, const std::strin
   return all;
 }
 
-CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted, const box3i& box) {
+std::vector<double> amrexLevelCells(const std::string& path) {
+  const Plotfile pf = readHeader(path);
+  std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
+  for (int l = pf.finestLevel - 1; l >= 0; --l)
+    width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
+  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
+  for (int l = 0; l <= pf.finestLevel; ++l) {
+    const int level = std::clamp(io::log2Exact(width[size_t(l)]), 0, kMaxLevel);
+    for (const IndexBox& b : readCellHeader(pf, l).boxes) {
+      const vec3l n = b.hi - b.lo + vec3l(1);
+      cells[size_t(level)] += double(n.x) * double(n.y) * double(n.z);
+    }
+  }
+  return cells;
+}
+
+CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted, const box3i& box, int finestLevel) {
   const Plotfile pf = readHeader(path);
   std::vector<int> components;
   std::vector<std::string> names = wanted.empty() ? pf.names : wanted;
@@ -448,12 +464,19 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
   std::vector<std::pair<int, size_t>> origin; // level and box of each patch
   for (int l = 0; l <= pf.finestLevel; ++l)
     for (size_t bi = 0; bi < levels[size_t(l)].boxes.size(); ++bi) {
+      if (width[size_t(l)] < (int64_t(1) << finestLevel)) break; // finer than asked: its cover stays a leaf
       const IndexBox& b = levels[size_t(l)].boxes[bi];
       const int64_t w = width[size_t(l)];
       patches.push_back({b.lo * w, b.hi - b.lo + vec3l(1), w});
       origin.push_back({l, bi});
     }
-  checkFabBytes(pf, levels);
+  {
+    // The data of the levels read must be there (coarse levels alone: not the finer ones').
+    std::vector<LevelData> read = levels;
+    for (int l = 0; l <= pf.finestLevel; ++l)
+      if (width[size_t(l)] < (int64_t(1) << finestLevel)) read[size_t(l)] = LevelData();
+    checkFabBytes(pf, read);
+  }
   const io::Coverage coverage(
       patches, [&](size_t i) { return strCat(path, ": level ", origin[i].first, " box ", origin[i].second); });
   for (size_t i = 0; i < patches.size(); ++i) {

@@ -66,9 +66,9 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Amrex, "AMReX plotfile", isAmrexPlotfile, listAmrexFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
-         return readAmrex(p, r.fields, r.box);
+         return readAmrex(p, r.fields, r.box, r.finestLevel);
        },
-       amrexFieldRange, amrexCensus},
+       amrexFieldRange, amrexCensus, amrexLevelCells},
       {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -194,6 +194,9 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     request.raw = options.raw;
     request.keepNonFinite = options.nonFinite == NonFinite::Holes;
     const FormatReader* reader = findReader(path);
+    if (options.finestLevel > 0 && !reader->levelCells)
+      fail(path, ": a ", reader->name, " is read with all its levels (coarse levels alone: AMReX plotfiles)");
+    request.finestLevel = options.finestLevel;
     set = reader->read(path, request);
     assignConventionalUnits(reader->kind, set);
   }
@@ -361,13 +364,14 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
   }
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   const InputKind kind = detectInput(path);
-  if (options.partCells > 0 && options.box.empty() && kind != InputKind::Default) {
+  if (options.partCells > 0 && options.box.empty() && kind != InputKind::Default && options.finestLevel == 0) {
     const FormatReader* reader = findReader(path);
     uint64_t count = 0;
     if (const std::optional<Census> census = censusIfLarger(path, kind, *reader, options.partCells, count))
       return buildInParts(path, *reader, options, *census, count);
   }
-  if (kind == InputKind::Native && options.box.empty() && options.nonFinite != NonFinite::Holes)
+  if (kind == InputKind::Native && options.box.empty() && options.nonFinite != NonFinite::Holes &&
+      options.finestLevel == 0)
     return loadNativeValuesAfter(path, options, timer);
   CellSet cells = loadCells(path, options);
   logInfo(strCat("read ", cells.size(), " cells in ", timer.seconds(), " s"));
@@ -385,6 +389,36 @@ std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std
   const FormatReader* reader = findReader(path);
   if (!reader || !reader->fieldRange) return std::nullopt;
   return reader->fieldRange(path, field);
+}
+
+CoarseFirst coarseFirstLevel(const std::string& path, double maxCells) {
+  CoarseFirst c;
+  if (path.empty() || detectInput(path) == InputKind::Model) return c;
+  const FormatReader* reader = findReader(path);
+  if (!reader || !reader->levelCells) return c;
+  const std::vector<double> cells = reader->levelCells(path);
+  c.finestLevel = -1;
+  for (int l = 0; l < int(cells.size()); ++l) {
+    c.cells += cells[size_t(l)];
+    if (c.finestLevel < 0 && cells[size_t(l)] > 0) c.finestLevel = l;
+  }
+  c.finestLevel = std::max(c.finestLevel, 0);
+  if (c.cells <= maxCells) return c;
+  // The finest level whose cells, with those of every coarser level, stay within maxCells (the
+  // coarsest level alone when it holds more).
+  int level = 0;
+  double coarse = 0;
+  for (int l = int(cells.size()) - 1; l >= 0; --l) {
+    if (cells[size_t(l)] == 0) continue;
+    if (coarse > 0 && coarse + cells[size_t(l)] > maxCells) break;
+    coarse += cells[size_t(l)];
+    level = l;
+  }
+  if (level > c.finestLevel) { // only a coarser picture than the whole is worth drawing first
+    c.level = level;
+    c.coarseCells = coarse;
+  }
+  return c;
 }
 
 std::vector<std::string> listFields(const std::string& path) {

@@ -3,11 +3,14 @@
 #include "web_assets.h"
 
 #include "exabricks/amr/scenes.h"
+#include "exabricks/core/log.h"
 
 #include <cerrno>
 #include <cstring>
 #include <netdb.h>
+#include <optional>
 #include <sys/socket.h>
+#include <thread>
 #include <unistd.h>
 
 namespace exa::view {
@@ -80,6 +83,7 @@ std::string streamRecord(const PublishedFrame* frame) {
               {"samples_per_second", i.samplesPerSecond},
               {"visible_regions", i.visibleRegions},
               {"regions", i.regions}};
+    if (!i.data.empty()) header["data"] = i.data;
     if (!frame->error.empty()) header["error"] = frame->error;
     image = frame->jpeg;
   } else {
@@ -347,8 +351,40 @@ void Server::bind() {
   s.pictures = std::make_unique<PictureMaker>();
   LegendText legends;
   legends.dataset = s.content.name;
-  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, std::move(legends));
+  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, legends);
+  if (s.content.refine) s.session->setDataNote(s.content.coarseNote);
   s.session->submit(s.content.initial, false); // the first picture renders while the page loads
+  if (s.content.refine) s.startRefining(legends);
+}
+
+/// Reads the whole dataset on a thread of its own while the coarse levels are shown, then draws
+/// the view on screen again from it. The thread is detached: a viewer stopped meanwhile leaves it
+/// to the process's end, and it touches the server only while `alive` says the server is there.
+void Server::Impl::startRefining(const LegendText& legends) {
+  std::thread([refine = content.refine, refining = refining, session = session.get(), steps = steps.get(), legends] {
+    std::shared_ptr<const Model> model;
+    std::string error;
+    Timer t;
+    try {
+      model = refine();
+    } catch (const std::exception& e) {
+      error = e.what();
+    }
+    std::lock_guard<std::mutex> lock(refining->mutex);
+    if (!refining->alive) return;
+    if (!model) {
+      logWarning(strCat("the finer levels could not be read; the view keeps the coarse levels: ", error));
+      session->setDataNote("coarse levels only: the finer levels could not be read (" + error + ")");
+      if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
+      return;
+    }
+    logNote(strCat("every level read and built in ", t.seconds(), " s: the view refines"));
+    const DatasetInfo dataset = DatasetInfo::of(*model);
+    steps->refine(model, dataset);
+    session->setModel(model, dataset, legends);
+    session->setDataNote("");
+    if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
+  }).detach();
 }
 
 void checkListenAddress(const std::string& host, int port) {
@@ -379,6 +415,10 @@ void Server::run() {
 
 void Server::stop() {
   if (impl_->stopping.exchange(true)) return;
+  {
+    std::lock_guard<std::mutex> lock(impl_->refining->mutex);
+    impl_->refining->alive = false; // a dataset still being read is no longer shown
+  }
   if (impl_->session) impl_->session->stop();
   impl_->http.stop();
   impl_->movies.reset(); // a movie in progress stops; the movies' folder is removed

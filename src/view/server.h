@@ -62,6 +62,11 @@ struct ViewContent {
   std::vector<std::pair<int, std::string>> unreadable; ///< steps that could not be read, and why
   RendererOptions rendererOptions;                     ///< how movies march
   LoadOptions load;                                    ///< how the datasets were read (NaN as holes or not)
+  /// Coarse levels first: `model` holds a dataset's coarse levels, `refine` reads all of it (on
+  /// a thread of its own once the server is bound; its dataset then replaces `model`, and the view
+  /// on screen is drawn again from it), and `coarseNote` says what the first frames show.
+  std::function<std::shared_ptr<const Model>()> refine;
+  std::string coarseNote;
 };
 
 /// Statistics of a published frame (also sent to the page with each frame).
@@ -77,6 +82,7 @@ struct FrameInfo {
   double samplesPerSecond = 0;
   uint64_t samples = 0;
   size_t visibleRegions = 0, regions = 0;
+  std::string data; ///< what of the data the frame shows, where not all of it (coarse levels first)
 };
 
 /// Throws exa::Error saying why the viewer could not listen on host:port (in use by another

@@ -99,6 +99,15 @@ struct Server::Impl {
   std::atomic<int> snapshotWaits{0};
   std::atomic<bool> stopping{false};
   int port = 0;
+  /// Whether the server is still there for a thread that reads the whole dataset (coarse levels
+  /// first), which holds the mutex while it hands the dataset over.
+  struct Refining {
+    std::mutex mutex;
+    bool alive = true;
+  };
+  std::shared_ptr<Refining> refining = std::make_shared<Refining>();
+  /// Reads the whole dataset on a detached thread, then shows it (ViewContent::refine).
+  void startRefining(const LegendText& legends);
 
   /// The name a download of the view takes, as Save picture names its files: the dataset shown,
   /// the first layer's field and the size (`extension` replaces the picture's), in a

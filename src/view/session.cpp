@@ -67,6 +67,11 @@ void Session::setModel(std::shared_ptr<const Model> model, const DatasetInfo& da
   cancel_ = true;
 }
 
+void Session::setDataNote(std::string note) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  dataNote_ = std::move(note);
+}
+
 uint64_t Session::submit(const SceneDocument& doc, bool interactive) {
   std::lock_guard<std::mutex> lock(mutex_);
   Request r;
@@ -175,6 +180,10 @@ void Session::serve(const Request& request) {
   info.targetPasses = frame.samplesPerPixel;
   info.visibleRegions = renderer_->visibleRegions();
   info.regions = model_->regions.regions.size();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    info.data = dataNote_;
+  }
 
   // A draft first; not when the draft on screen already shows this very scene (the request that
   // ends a drag).

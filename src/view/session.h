@@ -36,6 +36,8 @@ public:
   /// Renders another dataset (a series' step) from the next request on; the request in flight is
   /// cancelled.
   void setModel(std::shared_ptr<const Model> model, const DatasetInfo& dataset, LegendText legends = {});
+  /// What the frames say of the data they show ("coarse levels ..."; empty: all of it).
+  void setDataNote(std::string note);
   /// Accepts a validated scene document; returns its request number. Cancels the request in
   /// flight: from now on no frame of an older request is published.
   uint64_t submit(const SceneDocument& doc, bool interactive);
@@ -80,6 +82,7 @@ private:
   std::shared_ptr<const Model> pendingModel_; ///< the dataset of the next request (setModel)
   DatasetInfo pendingDataset_;
   LegendText pendingLegends_;
+  std::string dataNote_; ///< FrameInfo::data of the frames (guarded by mutex_)
   ServerOptions options_;
   mutable std::mutex mutex_;
   mutable std::condition_variable requestReady_, frameReady_;

@@ -47,6 +47,12 @@ void ViewSteps::record(const StepView& step) {
   f.simulation = step.model->simulation;
 }
 
+void ViewSteps::refine(std::shared_ptr<const Model> model, const DatasetInfo& dataset) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  current_.model = std::move(model);
+  current_.dataset = dataset;
+}
+
 StepView ViewSteps::current() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return current_;

@@ -62,6 +62,9 @@ public:
   /// current step as it was) when the step cannot be read so.
   StepView setNonFinite(NonFinite policy, LoadReport* report = nullptr);
 
+  /// The current step's data, read again in full (its coarse levels were shown first).
+  void refine(std::shared_ptr<const Model> model, const DatasetInfo& dataset);
+
 private:
   void record(const StepView& step);
 

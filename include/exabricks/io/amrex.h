@@ -25,8 +25,14 @@ std::optional<range1f> amrexFieldRange(const std::string& path, const std::strin
 
 /// Reads the leaf cells of a plotfile with the requested fields (all when empty). The world
 /// transform maps the finest level's index space onto the physical domain. With a box (finest
-/// lattice units), the data of boxes that do not overlap it is not read.
-CellSet readAmrex(const std::string& path, const std::vector<std::string>& fields = {}, const box3i& box = {});
+/// lattice units), the data of boxes that do not overlap it is not read. With `finestLevel` > 0
+/// (an exabricks level: cells 2^finestLevel finest cells wide), the boxes of finer levels are not
+/// read and the coarser cells under them are leaves (a plotfile stores every level's values).
+CellSet readAmrex(const std::string& path, const std::vector<std::string>& fields = {}, const box3i& box = {},
+                  int finestLevel = 0);
+
+/// Cells in each level's boxes (index: exabricks level), from the headers alone.
+std::vector<double> amrexLevelCells(const std::string& path);
 
 /// Where the plotfile's leaf cells lie, from its headers alone (no cell data is read).
 Census amrexCensus(const std::string& path);

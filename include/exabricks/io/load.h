@@ -35,6 +35,9 @@ struct LoadOptions {
   /// one part only. 0: always in one piece.
   uint64_t partCells = uint64_t(1) << 27;
   NonFinite nonFinite = NonFinite::Refuse;
+  /// Coarse levels only (ReadRequest::finestLevel; AMReX plotfiles): cells narrower than
+  /// 2^finestLevel finest cells are not read, the coarser cells under them are leaves. 0: all.
+  int finestLevel = 0;
   /// Not null: receives what the load made holes of (counts add up over the parts of a build).
   /// The readers of native NAME.cells inputs keep such values; those of other formats refuse them.
   std::shared_ptr<LoadReport> report;
@@ -52,6 +55,19 @@ Model loadModel(const std::string& path, const LoadOptions& options = {});
 /// A field's value range from the input's metadata alone, where its format records one (AMReX
 /// plotfiles: the per-box minima and maxima); none otherwise.
 std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std::string& field);
+
+/// A first picture from the coarse levels.
+struct CoarseFirst {
+  int level = 0;          ///< read levels of cells 2^level finest cells wide and wider (0: all; none needed)
+  int finestLevel = 0;    ///< the input's finest level
+  double cells = 0;       ///< cells in every level's boxes
+  double coarseCells = 0; ///< cells in the boxes of `level` and coarser
+};
+/// The finest level whose boxes, with those of every coarser level, hold at most `maxCells`
+/// cells (read alone with LoadOptions::finestLevel); level 0 when the input holds no more than
+/// that, or its format cannot read coarse levels alone (AMReX plotfiles can: their headers list
+/// every level's boxes and every level's values are stored).
+CoarseFirst coarseFirstLevel(const std::string& path, double maxCells);
 
 /// Names of the fields an input holds, without building anything.
 std::vector<std::string> listFields(const std::string& path);

@@ -25,6 +25,10 @@ struct ReadRequest {
   /// NaN and infinite values are returned as read (the loader makes their cells holes); readers
   /// that do not take it refuse them.
   bool keepNonFinite = false;
+  /// Readers of patch-based files that store every level's values (FormatReader::levelCells):
+  /// levels finer than this (cells narrower than 2^finestLevel) are not read and the coarser
+  /// cells under them are leaves. 0: every level.
+  int finestLevel = 0;
 };
 
 struct FormatReader {
@@ -39,6 +43,10 @@ struct FormatReader {
   /// Where the cells lie without reading their values, where the format allows (else null: the
   /// cells are read to count them).
   Census (*census)(const std::string& path) = nullptr;
+  /// Cells in each level's patches (index: exabricks level) from metadata alone, where the format
+  /// stores every level's values so that coarse levels can be read alone (ReadRequest::finestLevel);
+  /// else null.
+  std::vector<double> (*levelCells)(const std::string& path) = nullptr;
 };
 
 /// The registered readers, in the order in which inputs are probed.

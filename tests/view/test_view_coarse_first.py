@@ -1,0 +1,77 @@
+"""Coarse levels first: a plotfile with more cells than --coarse-first shows its coarse levels at
+once (the frames say so), then every level, and the refined view equals the command line's render
+of the same scene; a plotfile whose finer levels cannot be read keeps the coarse view running."""
+import json
+import os
+import pathlib
+import shutil
+import subprocess
+import time
+
+import pytest
+
+DATA = pathlib.Path(os.environ.get("EXABRICKS_DATA", pathlib.Path(__file__).resolve().parents[3] / "shared" / "data"))
+DROP = DATA / "amrex" / "advection_3d" / "plt_drop"
+
+
+def drop():
+    if not DROP.exists():
+        pytest.skip("shared sample %s is absent (set EXABRICKS_DATA to the folder of shared samples)" % DROP)
+    return DROP
+
+
+def frames_until(v, done, timeout=120):
+    """Frame headers of the stream until done(header, image) says so."""
+    seen = []
+    deadline = time.time() + timeout
+    for header, image in v.stream(timeout):
+        assert time.time() < deadline, "the view did not get there within %s s: %s" % (timeout, seen[-3:])
+        if header.get("keepalive"):
+            continue
+        assert "error" not in header, header
+        seen.append(header)
+        if done(header, image):
+            return seen
+
+
+def test_coarse_levels_first_then_every_level_equal_to_the_command_line(start_viewer, cli, tmp_path):
+    path = drop()
+    started = time.time()
+    v = start_viewer(str(path), "--size", "96x80", "--spp", "2")
+    address = time.time() - started
+    print("address after %.2f s" % address)
+    assert address < 10  # the coarse levels only (the goal: 2 s; the whole step takes longer)
+    frames = frames_until(v, lambda h, i: h["final"] and "data" not in h)
+    first = frames[0]
+    assert "coarse levels" in first.get("data", ""), first
+    doc = v.info()["document"]
+    request = v.render(doc)
+    frames_until(v, lambda h, i: h["request"] == request and h["final"])
+    status, png, _ = v.request("GET", "/api/snapshot.png?request=%d" % request, timeout=120)
+    assert status == 200
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(doc))
+    out = tmp_path / "cli.png"
+    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
+    assert png == out.read_bytes()
+
+
+def test_every_level_from_the_start_with_coarse_first_off(start_viewer):
+    v = start_viewer(str(drop()), "--size", "64x48", "--spp", "1", "--coarse-first", "0")
+    frames = frames_until(v, lambda h, i: h["final"])
+    assert all("data" not in h for h in frames)
+
+
+def test_finer_levels_that_cannot_be_read_leave_the_coarse_view_running(start_viewer, tmp_path):
+    # A copy whose finest level's data are cut short: the coarse levels show, the failure is said
+    # on the page and on stderr, and the viewer keeps serving.
+    copy = tmp_path / "plt_cut"
+    shutil.copytree(drop(), copy)
+    for data in (copy / "Level_3").glob("Cell_D_*"):  # AMReX level 3: the finest
+        with open(data, "r+b") as f:
+            f.truncate(100)
+    v = start_viewer(str(copy), "--size", "64x48", "--spp", "1")
+    frames = frames_until(v, lambda h, i: "could not be read" in h.get("data", ""), timeout=120)
+    assert "coarse levels" in frames[0].get("data", "")
+    assert v.alive()
+    assert "could not be read" in v.stderr_path.read_text()
