@@ -120,11 +120,15 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
     worse = largest < 0.97 * bestLargest ? 0 : worse + 1;
     bestLargest = std::min(bestLargest, largest);
   }
-  const uint64_t smallest = mib(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell);
+  // Named with a few MiB to spare: the process's own size varies a little from run to run.
+  const uint64_t smallest =
+      mib(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell + (uint64_t(4) << 20));
   throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
                               input.empty() ? std::string(kDefaultDatasetName) : input, " (", std::llround(plan.cells),
                               " cells): this process needs ", formatBytes(plan.fixedBytes),
-                              " without data and its smallest part about ", formatBytes(smallest - plan.fixedBytes),
+                              " without data, the whole step about ", formatBytes(whole - plan.fixedBytes),
+                              " more (held whole: --memory-budget ", mib(whole) >> 20,
+                              "M) and its smallest part about ", formatBytes(smallest - plan.fixedBytes),
                               "; the smallest budget that works is ", formatBytes(smallest), " (--memory-budget ",
                               smallest >> 20, "M)"),
                        smallest);
