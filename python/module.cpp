@@ -279,14 +279,14 @@ void bindDataset(py::module_& m) {
                              [](const Dataset& d) -> py::object {
                                if (!d.streamed) return py::none();
                                const MemoryPlan& p = d.streamed->plan();
-                               py::dict m;
-                               m["budget_bytes"] = p.budget;
-                               m["parts"] = d.streamed->parts();
-                               m["resident_parts"] = d.streamed->residentParts();
-                               m["parts_read"] = d.streamed->partsRead();
-                               m["largest_part_bytes"] = p.largestPartBytes();
-                               m["peak_rss_bytes"] = peakResidentBytes();
-                               return std::move(m);
+                               py::dict memory;
+                               memory["budget_bytes"] = p.budget;
+                               memory["parts"] = d.streamed->parts();
+                               memory["resident_parts"] = d.streamed->residentParts();
+                               memory["parts_read"] = d.streamed->partsRead();
+                               memory["largest_part_bytes"] = p.largestPartBytes();
+                               memory["peak_rss_bytes"] = peakResidentBytes();
+                               return py::object(std::move(memory));
                              })
       .def_property_readonly("bounds",
                              [](const Dataset& d) {

@@ -123,15 +123,14 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   // Named with a few MiB to spare: the process's own size varies a little from run to run.
   const uint64_t smallest =
       mib(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell + (uint64_t(4) << 20));
-  throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
-                              input.empty() ? std::string(kDefaultDatasetName) : input, " (", std::llround(plan.cells),
-                              " cells): this process needs ", formatBytes(plan.fixedBytes),
-                              " without data, the whole step about ", formatBytes(whole - plan.fixedBytes),
-                              " more (held whole: --memory-budget ", mib(whole) >> 20,
-                              "M) and its smallest part about ", formatBytes(smallest - plan.fixedBytes),
-                              "; the smallest budget that works is ", formatBytes(smallest), " (--memory-budget ",
-                              smallest >> 20, "M)"),
-                       smallest);
+  throw BudgetTooSmall(
+      strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
+             input.empty() ? std::string(kDefaultDatasetName) : input, " (", std::llround(plan.cells),
+             " cells): this process needs ", formatBytes(plan.fixedBytes), " without data, the whole step about ",
+             formatBytes(whole - plan.fixedBytes), " more (held whole: --memory-budget ", mib(whole) >> 20,
+             "M) and its smallest part about ", formatBytes(smallest - plan.fixedBytes),
+             "; the smallest budget that works is ", formatBytes(smallest), " (--memory-budget ", smallest >> 20, "M)"),
+      smallest);
 }
 
 std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options, uint64_t frameBytes) {
@@ -468,12 +467,12 @@ bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOption
         stats += *s.stats;
         packForCompositing(s, pixels, local.data());
         float* acc = composites.data() + size_t(k) * pixels * kCompositeChannels;
-        for (size_t p = 0; p < pixels; ++p) {
-          const float* c = local.data() + p * kCompositeChannels;
-          float* a = acc + p * kCompositeChannels;
+        for (size_t px = 0; px < pixels; ++px) {
+          const float* c = local.data() + px * kCompositeChannels;
+          float* a = acc + px * kCompositeChannels;
           const float t = continued ? 1.f : 1.f - a[3]; // debug views: the part over what is behind
           a[0] += t * c[0], a[1] += t * c[1], a[2] += t * c[2], a[4] += c[4];
-          a[3] = alpha[p] = continued ? std::clamp(c[3], 0.f, 1.f) : a[3] + t * c[3];
+          a[3] = alpha[px] = continued ? std::clamp(c[3], 0.f, 1.f) : a[3] + t * c[3];
         }
       }
     }
