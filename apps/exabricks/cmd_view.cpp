@@ -14,6 +14,7 @@
 #include "view/server.h"
 
 #include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <iostream>
 #include <pthread.h>
@@ -250,6 +251,12 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
   serve(std::move(content), options, o.scene.in.name(), stopSignals);
   logNote("viewer stopped");
+  if (first.coarse.level > 0) {
+    // The whole dataset may still be being read on its own thread: end the process here, before
+    // static objects that thread may use are destroyed.
+    std::fflush(nullptr);
+    std::_Exit(0);
+  }
 }
 #else
 void run(const ViewCmdOptions&, const CLI::App&) {
