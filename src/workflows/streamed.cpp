@@ -1,6 +1,7 @@
 #include "exabricks/workflows/streamed.h"
 
 #include "exabricks/amr/scenes.h"
+#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
 #include "exabricks/render/composite.h"
@@ -139,10 +140,16 @@ std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadO
   if (kind != InputKind::Amrex && kind != InputKind::Native) return std::nullopt; // counted only by reading
   const uint64_t available = availableMemoryBytes();
   if (available == 0) return std::nullopt;
-  const Census census = loadCensus(input, options);
-  const double need = double(residentBytesNow() + kProcessSlack + frameBytes) +
-                      census.cells() * double(bytesPerResidentCell(loadedFields(input, options)));
   const uint64_t budget = available / 4 * 3;
+  const double perCell = double(bytesPerResidentCell(loadedFields(input, options)));
+  const double fixed = double(residentBytesNow() + kProcessSlack + frameBytes);
+  // An upper bound from sizes alone first (the records of NAME.cells, the cells in an AMReX
+  // plotfile's boxes): a step that fits by it is read as before, without a census.
+  const double most = kind == InputKind::Native ? double(fileSize(input) / sizeof(Cell))
+                                                : coarseFirstLevel(input, std::numeric_limits<double>::max()).cells;
+  if (fixed + most * perCell <= double(budget)) return std::nullopt;
+  const Census census = loadCensus(input, options);
+  const double need = fixed + census.cells() * perCell;
   if (need <= double(budget)) return std::nullopt;
   logWarning(strCat(input, " holds ", std::llround(census.cells()), " cells, about ", formatBytes(uint64_t(need)),
                     " held whole, more than three quarters of the memory available (", formatBytes(available),
