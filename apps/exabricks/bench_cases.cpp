@@ -188,7 +188,7 @@ nlohmann::json casesJson(const Setup& s, const BenchOptions& o, const std::vecto
                             {"transfer_function_update_seconds", r.updateSeconds}});
   j["variants"] = variantsJson;
   j["ratios"] = ratios;
-  j["memory"]["peak_rss_bytes"] = peakRssBytes();
+  j["memory"]["peak_rss_bytes"] = peakResidentBytes();
   j["memory"]["cell_locator_bytes"] = locator.nodes * 16 + s.model.bricks.size() * 4;
   return j;
 }
@@ -205,7 +205,7 @@ void printCases(const Setup& s, const BenchOptions& o, const nlohmann::json& j,
               s.loadSeconds, s.model.stats.brickSeconds, s.model.stats.regionSeconds, s.model.stats.rangeSeconds,
               locatorSeconds);
   std::printf("memory: model %.1f MiB, peak RSS %.1f MiB (%.1f MiB after load)\n",
-              double(j["memory"]["model_bytes"].get<uint64_t>()) / 1048576.0, double(peakRssBytes()) / 1048576.0,
+              double(j["memory"]["model_bytes"].get<uint64_t>()) / 1048576.0, double(peakResidentBytes()) / 1048576.0,
               double(s.peakAfterLoad) / 1048576.0);
   std::printf("load average (1 min): %.2f at the start, %.2f at the end\n\n", j["load_average_at_start"].get<double>(),
               j["load_average_at_end"].get<double>());

@@ -173,7 +173,7 @@ void runDevices(const Setup& s, const BenchOptions& o) {
   for (const DeviceRun& r : runs)
     list.push_back(deviceEntry(r, runs.front(), views));
   j["devices"] = list;
-  j["memory"]["peak_rss_bytes"] = peakRssBytes();
+  j["memory"]["peak_rss_bytes"] = peakResidentBytes();
   if (o.json) {
     std::cout << j.dump(2) << "\n";
     return;

@@ -176,7 +176,7 @@ void runOrbit(const Setup& s, const BenchOptions& o) {
   if (fitted)
     j["fit"] = {
         {"seconds_per_million_samples", a * 1e6}, {"seconds_per_million_regions", b * 1e6}, {"seconds_constant", c}};
-  j["memory"]["peak_rss_bytes"] = peakRssBytes();
+  j["memory"]["peak_rss_bytes"] = peakResidentBytes();
   if (o.json) {
     std::cout << j.dump(2) << "\n";
     return;

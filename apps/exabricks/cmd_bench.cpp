@@ -94,7 +94,7 @@ void run(const BenchOptions& o) {
   Timer loadTimer;
   s.model = loadModel(o.in.input, o.in.loadOptions(true));
   s.loadSeconds = loadTimer.seconds();
-  s.peakAfterLoad = peakRssBytes();
+  s.peakAfterLoad = peakResidentBytes();
   s.field = s.model.requireField(o.in.field);
   s.base.layers = {VolumeLayer{s.model.fieldNames[size_t(s.field)], defaultTransferFunction()}};
   s.worldBox = s.model.worldBounds();

@@ -42,7 +42,7 @@ void runParts(const InfoOptions& o) {
   auto gather = [](double v) { return mpi::allGather(v); };
   const std::vector<double> resident = gather(double(s.cells)), own = gather(double(owned)),
                             bricks = gather(double(s.bricks)), regions = gather(double(s.regions)),
-                            rss = gather(double(peakRssBytes())), seconds = gather(loadSeconds);
+                            rss = gather(double(peakResidentBytes())), seconds = gather(loadSeconds);
   std::vector<std::vector<double>> box(6);
   for (int a = 0; a < 3; ++a) {
     box[size_t(a)] = gather(double(part.box.lower[a]));

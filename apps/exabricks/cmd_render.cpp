@@ -299,7 +299,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   // What each process holds, for the statistics (collectives: every process takes part).
   if (part || mpi::processes().size > 1) {
     report.partCells = mpi::allGather(double(model.cellCount()));
-    report.partRss = mpi::allGather(double(peakRssBytes()));
+    report.partRss = mpi::allGather(double(peakResidentBytes()));
   }
   if (!root) return; // the first process writes the image and the statistics
   writeOutputs(o, doc, buffer, model, dataset, whole, renderer.visibleRegions(), model.regions.regions.size());

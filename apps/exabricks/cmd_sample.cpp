@@ -64,34 +64,16 @@ std::vector<vec3d> readPoints(const SampleOptions& o) {
   return points;
 }
 
-/// One output line: the value and gradient, or nan where no cell has weight.
-void appendSample(const Model& model, int field, const vec3d& p, std::string& out) {
-  double value;
-  vec3d g;
-  if (model.sampleWorld(field, p, value, g)) {
-    char buffer[160];
-    std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %.9g\n", value, g.x, g.y, g.z);
-    out += buffer;
-  } else {
-    out += "nan nan nan nan\n";
-  }
-}
-
-/// A step larger than the budget: the points sorted into the parts that hold them, each part read
-/// once (samples inside a part equal the whole step's: it holds every cell whose support reaches it).
-void runStreamed(const SampleOptions& o, const LoadOptions& lo, MemoryPlan plan, const std::vector<vec3d>& points) {
-  StreamedStep step(o.in.input, lo, std::move(plan));
-  const int field = step.skeleton().requireField(o.in.field);
-  std::vector<double> values;
-  std::vector<vec3d> gradients;
-  std::vector<bool> found;
-  step.sample(field, points, values, gradients, found);
+/// Writes one line per point to standard output, `sampleAt(i, value, gradient)` saying whether
+/// point i has a value ("value gx gy gz", else "nan nan nan nan"), in pieces of 64 KiB.
+template <typename SampleAt> void writeSamples(size_t count, SampleAt&& sampleAt) {
   std::string out;
   char buffer[160];
-  for (size_t i = 0; i < points.size(); ++i) {
-    if (found[i]) {
-      std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %.9g\n", values[i], gradients[i].x, gradients[i].y,
-                    gradients[i].z);
+  for (size_t i = 0; i < count; ++i) {
+    double value;
+    vec3d g;
+    if (sampleAt(i, value, g)) {
+      std::snprintf(buffer, sizeof buffer, "%.9g %.9g %.9g %.9g\n", value, g.x, g.y, g.z);
       out += buffer;
     } else {
       out += "nan nan nan nan\n";
@@ -104,6 +86,21 @@ void runStreamed(const SampleOptions& o, const LoadOptions& lo, MemoryPlan plan,
   writeOut(out);
 }
 
+/// A step larger than the budget: the points sorted into the parts that hold them, each part read
+/// once (samples inside a part equal the whole step's: it holds every cell whose support reaches it).
+void runStreamed(const SampleOptions& o, const LoadOptions& lo, MemoryPlan plan, const std::vector<vec3d>& points) {
+  StreamedStep step(o.in.input, lo, std::move(plan));
+  const int field = step.skeleton().requireField(o.in.field);
+  std::vector<double> values;
+  std::vector<vec3d> gradients;
+  std::vector<bool> found;
+  step.sample(field, points, values, gradients, found);
+  writeSamples(points.size(), [&](size_t i, double& value, vec3d& g) {
+    value = values[i], g = gradients[i];
+    return bool(found[i]);
+  });
+}
+
 void run(const SampleOptions& o) {
   const LoadOptions lo = o.in.loadOptions(true);
   const std::vector<vec3d> points = readPoints(o);
@@ -111,15 +108,8 @@ void run(const SampleOptions& o) {
     return runStreamed(o, lo, std::move(*plan), points);
   const Model model = loadModel(o.in.input, lo);
   const int field = model.requireField(o.in.field);
-  std::string out;
-  for (const vec3d& p : points) {
-    appendSample(model, field, p, out);
-    if (out.size() > (1 << 16)) {
-      writeOut(out);
-      out.clear();
-    }
-  }
-  writeOut(out);
+  writeSamples(points.size(),
+               [&](size_t i, double& value, vec3d& g) { return model.sampleWorld(field, points[i], value, g); });
 }
 
 } // namespace

@@ -11,13 +11,6 @@
 
 namespace exa::cli {
 
-uint64_t peakRssBytes() {
-  std::ifstream in("/proc/self/status");
-  for (std::string line; std::getline(in, line);)
-    if (line.rfind("VmHWM:", 0) == 0) return uint64_t(std::stoull(line.substr(6))) * 1024u;
-  return 0;
-}
-
 void InputOptions::add(CLI::App& cmd, bool fieldOption) {
   cmd.add_option("input", input,
                  "Model file, NAME.cells dataset, .grids fixture, AMReX plotfile, Chombo or FLASH HDF5 file, "

@@ -47,9 +47,6 @@ std::optional<MemoryPlan> memoryPlanFor(const InputOptions& in, const std::strin
 /// Parses WIDTHxHEIGHT (each 1..32768) as given to --size; throws with the text otherwise.
 void parseSize(const std::string& text, int& width, int& height);
 
-/// Peak resident set size of this process so far (VmHWM), bytes; 0 where unknown.
-uint64_t peakRssBytes();
-
 /// JSON for a range; null bounds for an empty range.
 nlohmann::json toJson(const range1f& r);
 

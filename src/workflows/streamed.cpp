@@ -291,13 +291,17 @@ Renderer* StreamedStep::renderer(int part, const Scene& scene, const RendererOpt
   return r.renderer.get();
 }
 
-void StreamedStep::forEachPart(const std::function<void(const Model&, const box3l&)>& visit) {
+std::vector<int> StreamedStep::residentFirst() const {
   std::vector<int> order;
   for (const Resident& r : resident_)
     order.push_back(r.part);
   for (int p = 0; p < parts(); ++p)
     if (std::find(order.begin(), order.end(), p) == order.end()) order.push_back(p);
-  for (int p : order)
+  return order;
+}
+
+void StreamedStep::forEachPart(const std::function<void(const Model&, const box3l&)>& visit) {
+  for (int p : residentFirst())
     if (const Model* m = part(p)) visit(*m, partBox(p));
 }
 
@@ -344,12 +348,7 @@ std::vector<int> StreamedStep::order(const Camera& camera) const {
 
 box3d StreamedStep::visibleBounds(const Scene& scene, const RendererOptions& options) {
   box3d all;
-  std::vector<int> order;
-  for (const Resident& r : resident_)
-    order.push_back(r.part);
-  for (int p = 0; p < parts(); ++p)
-    if (std::find(order.begin(), order.end(), p) == order.end()) order.push_back(p);
-  for (int p : order) {
+  for (int p : residentFirst()) {
     const Renderer* r = renderer(p, scene, options);
     if (!r) continue;
     const box3d local = r->visibleBounds(), mine = partWorldBox(p);

@@ -125,6 +125,8 @@ private:
   struct Resident;
   struct Snapshot;
   Resident& bring(int part);
+  /// Every part, the resident ones first (most recently used first): an order that reads least.
+  std::vector<int> residentFirst() const;
   /// Throws when the input's files changed since the step was opened (a step being written).
   void checkUnchanged() const;
   std::string input_;
