@@ -443,6 +443,15 @@ box3d Renderer::visibleBounds() const {
   return im.model.world.toWorld(volume);
 }
 
+std::optional<box3d> Renderer::visibleBoundsWithin(const box3d& part) const {
+  const box3d local = visibleBounds();
+  if (local.empty()) return std::nullopt;
+  const box3d clipped(max(local.lower, part.lower), min(local.upper, part.upper));
+  if (!(clipped.lower.x <= clipped.upper.x && clipped.lower.y <= clipped.upper.y && clipped.lower.z <= clipped.upper.z))
+    return std::nullopt;
+  return clipped;
+}
+
 size_t Renderer::isoRegions() const {
   const RegionTraversal* t = impl_->surfaces.isoTraversal();
   return t ? t->visibleCount() : 0;

@@ -351,15 +351,7 @@ box3d StreamedStep::visibleBounds(const Scene& scene, const RendererOptions& opt
   for (int p : residentFirst()) {
     const Renderer* r = renderer(p, scene, options);
     if (!r) continue;
-    const box3d local = r->visibleBounds(), mine = partWorldBox(p);
-    if (local.empty()) continue;
-    box3d clipped;
-    for (int a = 0; a < 3; ++a) {
-      clipped.lower[a] = std::max(local.lower[a], mine.lower[a]);
-      clipped.upper[a] = std::min(local.upper[a], mine.upper[a]);
-    }
-    if (clipped.lower.x <= clipped.upper.x && clipped.lower.y <= clipped.upper.y && clipped.lower.z <= clipped.upper.z)
-      all.extend(clipped);
+    if (const std::optional<box3d> mine = r->visibleBoundsWithin(partWorldBox(p))) all.extend(*mine);
   }
   return all;
 }

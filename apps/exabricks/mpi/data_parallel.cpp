@@ -99,19 +99,11 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
 }
 
 box3d agreedVisibleBounds(const Renderer& renderer, const DataPart& part) {
-  const box3d local = renderer.visibleBounds();
-  const box3d mine = part.worldBox();
   std::vector<double> low(3, std::numeric_limits<double>::infinity()),
       high(3, -std::numeric_limits<double>::infinity());
-  box3d clipped;
-  for (int a = 0; a < 3; ++a) {
-    clipped.lower[a] = std::max(local.lower[a], mine.lower[a]);
-    clipped.upper[a] = std::min(local.upper[a], mine.upper[a]);
-  }
-  if (!local.empty() && clipped.lower.x <= clipped.upper.x && clipped.lower.y <= clipped.upper.y &&
-      clipped.lower.z <= clipped.upper.z)
+  if (const std::optional<box3d> clipped = renderer.visibleBoundsWithin(part.worldBox()))
     for (int a = 0; a < 3; ++a)
-      low[size_t(a)] = clipped.lower[a], high[size_t(a)] = clipped.upper[a];
+      low[size_t(a)] = clipped->lower[a], high[size_t(a)] = clipped->upper[a];
   allReduce(low, Reduce::Min);
   allReduce(high, Reduce::Max);
   for (int a = 0; a < 3; ++a)

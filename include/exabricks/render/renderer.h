@@ -24,6 +24,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -203,6 +204,9 @@ public:
   /// World box of the regions that may show the volume (when it is on) or hold an iso-surface
   /// (empty when there are none): what a first view frames.
   box3d visibleBounds() const;
+  /// visibleBounds() within the world box `part` (closed: a face shared with it counts), or none:
+  /// what a renderer that holds one part of a dataset adds to the whole's framing.
+  std::optional<box3d> visibleBoundsWithin(const box3d& part) const;
   /// Regions that may hold an iso-surface.
   size_t isoRegions() const;
   size_t meshCount() const;
