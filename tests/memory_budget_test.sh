@@ -2,7 +2,8 @@
 # End-to-end checks of --memory-budget: a step larger than the budget is read and drawn in parts
 # whose picture equals the in-core render of the same scene, whose first-picture defaults are the
 # whole step's, and whose peak resident memory (/usr/bin/time) stays within the budget + 15 %;
-# samples and info equal the in-core ones; a budget too small names the smallest that works.
+# samples, info, movie frames and bench's comparison equal the in-core ones; a budget too small
+# names the smallest that works.
 set -u
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 exe=${EXABRICKS:?set EXABRICKS to the exabricks binary}
@@ -24,6 +25,17 @@ a, b = pfm(sys.argv[1]), pfm(sys.argv[2])
 d = np.abs(np.clip(a, 0, 1) - np.clip(b, 0, 1)) * 255
 print("    mean %.4f, max %.2f, within 2/255: %.4f %%" % (d.mean(), d.max(), 100 * (d <= 2).mean()))
 sys.exit(0 if d.mean() <= 0.5 and (d <= 2).mean() >= 0.999 else 1)
+EOF
+}
+# Two 8-bit pictures (PNG) agree as the in-core criterion asks.
+same_png() {
+  $py - "$1" "$2" <<'EOF'
+import sys, numpy as np
+from PIL import Image
+a, b = (np.asarray(Image.open(p).convert("RGBA")).astype(float) for p in sys.argv[1:3])
+d = np.abs(a - b)
+print("    mean %.4f, max %.0f, within 2/255: %.4f %%" % (d.mean(), d.max(), 100 * (d <= 2).mean()))
+sys.exit(0 if a.shape == b.shape and d.mean() <= 0.5 and (d <= 2).mean() >= 0.999 else 1)
 EOF
 }
 # Peak resident kilobytes of a command (GNU time), which must succeed.
@@ -62,6 +74,35 @@ check "defaults under a budget are the whole step's" bash -c "'$exe' -q render c
 import json
 a, b = json.load(open('in.json')), json.load(open('d.json'))
 assert a['layers'] == b['layers'], (a['layers'], b['layers'])\""
+
+# The first view frames what the whole step shows: the parts' visible cells united, with one
+# margin around them all.
+check "the default camera under a budget is the in-core one" bash -c "$py -c \"
+import json
+a, b = json.load(open('in.json'))['camera'], json.load(open('d.json'))['camera']
+for k in a:
+    x, y = (a[k], b[k]) if isinstance(a[k], list) else ([a[k]], [b[k]])
+    assert all(abs(float(u) - float(v)) <= 1e-5 * (1 + abs(float(u))) for u, v in zip(x, y)), (k, a[k], b[k])\""
+
+# A movie under a budget: every frame drawn from parts equals the in-core movie's frame.
+mv=(--orbit 2 --size 128x128)
+check "movie in core" "$exe" -q movie c.cells -o mv_in "${mv[@]}"
+mvhalf=$(between "$exe" movie c.cells -o mv_t "${mv[@]}")
+check "movie under a budget" bash -c "'$exe' -q movie c.cells -o mv_b ${mv[*]} --memory-budget ${mvhalf}M --json > mv.json"
+check "the movie under a budget was drawn in parts" $py -c "import json; m = json.load(open('mv.json'))['memory']; assert m['largest_parts'] > 1 and m['parts_read'] > 0, m"
+for f in 00000 00001; do
+  check "movie frame $f under a budget equals in core" same_png mv_in/frame_$f.png mv_b/frame_$f.png
+done
+
+# bench: the budget study, its first view compared with the whole step's.
+bhalf=$(between "$exe" bench c.cells --orbit 2 --size 96x96)
+check "bench under a budget compares with in core" bash -c "'$exe' bench c.cells --memory-budget ${bhalf}M --orbit 2 --size 96x96 --in-core --json 2>/dev/null | $py -c '
+import json, sys
+j = json.load(sys.stdin)
+assert j[\"parts\"] > 1 and len(j[\"orbit\"]) == 2 and j[\"first_picture_seconds\"] > 0, j
+d = j[\"in_core\"][\"difference\"]
+assert d[\"mean_255\"] <= 0.5 and d[\"share_within_2_255\"] >= 0.999, d'"
+fails_with "bench --in-core needs a budget" "--in-core compares with a step held under --memory-budget" "$exe" bench c.cells --in-core
 
 # Samples: every point in the part that holds it, equal to the whole step's.
 $py -c "

@@ -1,6 +1,7 @@
 // The studies of `exabricks bench` (cmd_bench.cpp parses the options and picks one): the renderer
 // variants (bench_cases.cpp), the orbit (bench_orbit.cpp), progressive passes
-// (bench_progressive.cpp) and devices (bench_devices.cpp), and what they share.
+// (bench_progressive.cpp), devices (bench_devices.cpp) and a step held in parts under a memory
+// budget (bench_memory.cpp), and what they share.
 #pragma once
 
 #include "common.h"
@@ -30,6 +31,7 @@ struct BenchOptions {
   std::string plot = "exabricks-orbit.png";
   bool json = false;
   std::string devices; ///< device study: a comma list of cpu, cuda, portable, auto
+  bool inCore = false; ///< budget study: the whole step read afterwards and compared
 };
 
 /// The loaded dataset and what every study starts from.
@@ -68,5 +70,7 @@ void runCases(const Setup& s, const BenchOptions& o);
 void runOrbit(const Setup& s, const BenchOptions& o);
 void runProgressive(const Setup& s, const BenchOptions& o);
 void runDevices(const Setup& s, const BenchOptions& o);
+/// The step held in parts under `budget` (bench_memory.cpp): plan, survey, first frame, an orbit.
+void runBudgeted(const BenchOptions& o, uint64_t budget);
 
 } // namespace exa::cli::bench

@@ -2,12 +2,14 @@
 // regions, the ratios between variants and the image differences), build times and memory;
 // with --orbit, the orbit study: frame time against samples and regions over many viewpoints;
 // with --progressive, the progressive passes after a transfer-function change; with --device,
-// the same frames on several devices. Here: the options, the dataset and what the studies share.
+// the same frames on several devices; with --memory-budget, a step held in parts
+// (bench_memory.cpp). Here: the options, the dataset and what the studies share.
 #include "bench.h"
 #include "commands.h"
 #include "common.h"
 
 #include "exabricks/core/log.h"
+#include "exabricks/workflows/streamed.h"
 
 #include <tbb/task_arena.h>
 
@@ -90,9 +92,22 @@ void run(const BenchOptions& o) {
   s.base.integration.earlyTermination = false;
   s.base.integration.autoTraversal = false;
   s.base.integration.traversal = TraversalKind::KdTree;
+  // A step too large for the memory available, or any step under --memory-budget: the budget
+  // study, since the others hold the whole step.
+  const LoadOptions lo = o.in.loadOptions(true);
+  const uint64_t frameBytes = streamedFrameBytes(s.frame.width, s.frame.height, 1);
+  const bool budgetGiven = !o.in.memoryBudget.empty();
+  if (o.inCore && !budgetGiven) failUsage("--in-core compares with a step held under --memory-budget");
+  if (const std::optional<uint64_t> budget = memoryBudgetFor(o.in, o.in.input, lo, frameBytes, false);
+      budget && (budgetGiven || planWithin(o.in.input, lo, *budget, frameBytes).streamed())) {
+    if (o.progressive > 0 || !o.devices.empty())
+      failUsage("--progressive and --device hold the whole step; under --memory-budget, bench measures the step "
+                "held in parts (plan, survey, first frame, --orbit views)");
+    return bench::runBudgeted(o, *budget);
+  }
   s.loadAtStart = bench::loadAverage();
   Timer loadTimer;
-  s.model = loadModel(o.in.input, o.in.loadOptions(true));
+  s.model = loadModel(o.in.input, lo);
   s.loadSeconds = loadTimer.seconds();
   s.peakAfterLoad = peakResidentBytes();
   s.field = s.model.requireField(o.in.field);
@@ -114,6 +129,7 @@ void addBench(CLI::App& app) {
   auto o = std::make_shared<BenchOptions>();
   CLI::App* cmd = app.add_subcommand("bench", "Measure renderer variants, or frame time over an orbit of views");
   o->in.add(*cmd);
+  o->in.addMemoryBudget(*cmd);
   cmd->add_option("--size", o->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--frames", o->frames, "Rounds of one frame per variant, interleaved (median, after a warm-up)")
       ->capture_default_str();
@@ -131,6 +147,8 @@ void addBench(CLI::App& app) {
   cmd->add_option("--preview-rate", o->previewRate, "Progressive study: preview sampling rate")->capture_default_str();
   cmd->add_option("--csv", o->csv, "Orbit study: CSV file to write")->capture_default_str();
   cmd->add_option("--plot", o->plot, "Orbit study: PNG plot to write")->capture_default_str();
+  cmd->add_flag("--in-core", o->inCore,
+                "With --memory-budget: then read the whole step and draw the first view from it, compared");
   cmd->add_flag("--json", o->json, "Print the results as one JSON object on stdout");
   cmd->add_option("--device", o->devices,
                   "Device study instead of the cases: a comma list of cpu, cuda, auto, portable (for example "

@@ -14,6 +14,7 @@
 #include "exabricks/render/renderer.h"
 #include "exabricks/workflows/encode.h"
 #include "exabricks/workflows/series.h"
+#include "exabricks/workflows/streamed.h"
 
 #include <nlohmann/json.hpp>
 
@@ -171,6 +172,20 @@ MoviePlan planMovie(const MovieCmdOptions& o, const CLI::App& cmd) {
   return p;
 }
 
+/// The camera of the first picture, and the orbit or fly-in around what it shows (`visible`, or
+/// the whole `domain` with --frame-all or when nothing is visible).
+void frameMovie(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& p, const Model& model, const box3d& domain,
+                const box3d& visible, const WholeData* whole = nullptr) {
+  const RenderOptions& ro = p.ro;
+  const box3d target = ro.frameAll || visible.empty() ? domain : visible;
+  p.doc.frame.camera = cameraFromOptions(ro, cmd, p.doc, model, visible, whole);
+  if (o.flyIn) p.doc.path = flyInPath(target, ro.azimuth, ro.elevation, ro.fov, ro.ortho);
+  p.doc.frame.validate();
+  p.doc.hasCamera = true;
+  if (o.orbit) p.frames.orbit = OrbitView{target, ro.azimuth, ro.elevation, ro.fov, ro.ortho};
+  p.frames.path = p.doc.path;
+}
+
 /// Plan, second part: step 0 fixes the first picture (field, transfer-function defaults, value
 /// range, camera) for every slice of the movie, whichever frames this process renders.
 void planFirstPicture(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& p, SeriesRenderer& series) {
@@ -193,16 +208,9 @@ void planFirstPicture(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& 
   } else if (p.rangeMode == RangeMode::PerStep && !cmd.count("--range")) {
     scene.layers[0].tf.valueRange = range1f();
   }
-  const box3d domain = model0.worldBounds();
   Renderer framing(model0, first.info);
   framing.setScene(scene);
-  const box3d target = ro.frameAll || framing.visibleBounds().empty() ? domain : framing.visibleBounds();
-  p.doc.frame.camera = cameraFromOptions(ro, cmd, p.doc, model0, framing.visibleBounds());
-  if (o.flyIn) p.doc.path = flyInPath(target, ro.azimuth, ro.elevation, ro.fov, ro.ortho);
-  p.doc.frame.validate();
-  p.doc.hasCamera = true;
-  if (o.orbit) p.frames.orbit = OrbitView{target, ro.azimuth, ro.elevation, ro.fov, ro.ortho};
-  p.frames.path = p.doc.path;
+  frameMovie(o, cmd, p, model0, model0.worldBounds(), framing.visibleBounds());
 }
 
 /// Plan, last part: the manifest. Frames already rendered for this very movie are kept (a movie
@@ -346,8 +354,149 @@ void printSummary(const MovieCmdOptions& o, const MoviePlan& p, const SeriesRend
   std::cout << j.dump(2) << "\n";
 }
 
+/// Under a memory budget: one step open at a time (no prefetch), each held in the parts its plan
+/// makes (one part when it fits), kept resident across its frames while the budget holds them,
+/// every frame drawn part by part front to back as `render --memory-budget` draws it.
+class BudgetedMovie {
+public:
+  BudgetedMovie(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& p, uint64_t budget)
+      : o_(o), cmd_(cmd), p_(p), budget_(budget), options_(o.march.options()),
+        frameBytes_(streamedFrameBytes(p.doc.frame.width, p.doc.frame.height, p.doc.frame.samplesPerPixel)) {
+    if (o.march.device != "auto" && o.march.device != "cpu")
+      failUsage("--memory-budget draws on the CPU; --device ", o.march.device, " holds the whole step");
+  }
+
+  void run() {
+    Timer total;
+    firstPicture();
+    planFrameShare(o_, p_);
+    const int done = renderFrames();
+    int missing = 0;
+    for (int i = 0; i < p_.frames.frames; ++i)
+      missing += fs::exists(framePath(p_.framesDir, i)) ? 0 : 1;
+    const std::string encoded = encodeMovie(o_, p_, missing);
+    if (!o_.json) return;
+    const nlohmann::json j{{"frames", p_.frames.frames},
+                           {"rendered", done},
+                           {"first", p_.first},
+                           {"last", p_.last},
+                           {"steps", int(p_.paths.size())},
+                           {"steps_loaded", stepsOpened_},
+                           {"frames_dir", p_.framesDir},
+                           {"output", encoded},
+                           {"missing_frames", missing},
+                           {"seconds", total.seconds()},
+                           {"render_seconds", renderSeconds_},
+                           {"memory",
+                            {{"budget_bytes", budget_},
+                             {"parts_read", partsRead_},
+                             {"largest_parts", largestParts_},
+                             {"peak_rss_bytes", peakResidentBytes()}}}};
+    std::cout << j.dump(2) << "\n";
+  }
+
+private:
+  StreamedStep& open(int k) {
+    if (current_ == k) return *step_;
+    if (step_) partsRead_ += step_->partsRead();
+    step_.reset(); // the step before is dropped before the next is read
+    step_ = std::make_unique<StreamedStep>(p_.paths[size_t(k)], p_.lo,
+                                           planWithin(p_.paths[size_t(k)], p_.lo, budget_, frameBytes_));
+    current_ = k;
+    ++stepsOpened_;
+    largestParts_ = std::max(largestParts_, step_->parts());
+    return *step_;
+  }
+
+  WholeData whole(StreamedStep& step) {
+    const StepSurvey& survey = step.survey();
+    return WholeData{survey.cellBounds, survey.levels, step.partialData()};
+  }
+
+  /// Step 0's defaults and camera, as planFirstPicture takes them from a whole step; a range over
+  /// the series from the files' metadata where they record it, else from each step's parts.
+  void firstPicture() {
+    StreamedStep& first = open(0);
+    Scene& scene = p_.doc.scene;
+    WholeData w = whole(first);
+    applyDataDefaults(p_.ro, cmd_, scene, first.skeleton(), first.survey().dataset, &w);
+    const int steps = int(p_.paths.size());
+    if (p_.rangeMode == RangeMode::Global && steps > 1) {
+      const std::string field =
+          first.skeleton().fieldNames[size_t(first.skeleton().requireField(scene.layers[0].field))];
+      range1f values;
+      for (int k = 0; k < steps; ++k)
+        if (const std::optional<range1f> r = fieldRangeFromMetadata(p_.paths[size_t(k)], field))
+          values.extend(*r);
+        else
+          values.extend(open(k).survey().dataset.valueRanges.at(size_t(open(k).skeleton().requireField(field))));
+      StreamedStep& step0 = open(0);
+      TransferFunction& tf = scene.layers[0].tf;
+      tf = widenedForSeries(tf, step0.survey().dataset.valueRanges.at(size_t(step0.skeleton().requireField(field))),
+                            values);
+      logNote(strCat("colour range over all ", steps, " steps: [", tf.valueRange.lower, ", ", tf.valueRange.upper,
+                     "]; --range per-step or LOW,HIGH to choose"));
+    } else if (p_.rangeMode == RangeMode::PerStep && !cmd_.count("--range")) {
+      scene.layers[0].tf.valueRange = range1f();
+    }
+    StreamedStep& step0 = open(0);
+    w = whole(step0);
+    frameMovie(o_, cmd_, p_, step0.skeleton(), step0.skeleton().world.toWorld(w.cellBounds),
+               step0.visibleBounds(scene, options_), &w);
+  }
+
+  int renderFrames() {
+    int done = 0;
+    Timer loop;
+    for (const int i : p_.todo) {
+      const int k = p_.frames.stepOf(i);
+      StreamedStep& step = open(k);
+      Scene scene = p_.doc.scene;
+      Frame frame = p_.doc.frame;
+      p_.frames.view(i, scene, frame);
+      FrameBuffer buffer(frame.width, frame.height);
+      Timer timer;
+      renderStreamed(step, scene, options_, frame, buffer);
+      renderSeconds_ += timer.seconds();
+      Image image = buffer.resolve();
+      const WholeData w = whole(step);
+      drawLegends(scene, frame, step.skeleton(), step.survey().dataset, legendText(p_.paths[size_t(k)], &w), image);
+      writePng(framePath(p_.framesDir, i), image, scene.keepAlpha, scene.background);
+      ++done;
+      if (logLevel() >= LogLevel::Warning)
+        std::fprintf(stderr, "frame %d (%d of %zu, step %d of %zu, %d parts): %.2f s per frame\n", i, done,
+                     p_.todo.size(), k + 1, p_.paths.size(), step.parts(), loop.seconds() / done);
+    }
+    if (step_) partsRead_ += step_->partsRead();
+    step_.reset();
+    current_ = -1;
+    return done;
+  }
+
+  const MovieCmdOptions& o_;
+  const CLI::App& cmd_;
+  MoviePlan& p_;
+  uint64_t budget_;
+  RendererOptions options_;
+  uint64_t frameBytes_;
+  std::unique_ptr<StreamedStep> step_;
+  int current_ = -1;
+  int stepsOpened_ = 0, largestParts_ = 0;
+  uint64_t partsRead_ = 0;
+  double renderSeconds_ = 0;
+};
+
 void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   MoviePlan plan = planMovie(o, cmd);
+  // A movie under --memory-budget holds every step within it; without the flag, a first step too
+  // large for the memory available sets the budget the whole movie keeps.
+  const Frame& f = plan.doc.frame;
+  const uint64_t frameBytes = streamedFrameBytes(f.width, f.height, f.samplesPerPixel);
+  if (const std::optional<uint64_t> budget =
+          memoryBudgetFor(plan.ro.in, plan.paths[0], plan.lo, frameBytes, mpi::processes().size > 1);
+      budget &&
+      (!plan.ro.in.memoryBudget.empty() || planWithin(plan.paths[0], plan.lo, *budget, frameBytes).streamed()))
+    return BudgetedMovie(o, cmd, plan, *budget).run();
   Timer total;
   SeriesOptions so;
   so.load = plan.lo;
@@ -373,6 +522,7 @@ void addMovie(CLI::App& app) {
   auto o = std::make_shared<MovieCmdOptions>();
   CLI::App* cmd = app.add_subcommand("movie", "Render a time series and/or a camera path to a movie");
   o->scene.add(*cmd);
+  o->scene.in.addMemoryBudget(*cmd);
   o->march.add(*cmd);
   // The movie's inputs replace the single INPUT of the render options.
   cmd->remove_option(cmd->get_option("input"));

@@ -5,8 +5,10 @@
 
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/workflows/series.h"
+#include "exabricks/workflows/streamed.h"
 
 #include <filesystem>
 
@@ -120,6 +122,33 @@ FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& in
   return f;
 }
 
+/// Images a viewer holds besides its data under a memory budget: a frame of the size the view
+/// starts with (--size) composited from parts, and the coarse view's refining buffer and draft.
+uint64_t viewerFrameBytes(const Frame& frame) {
+  const uint64_t pixels = uint64_t(frame.width) * uint64_t(frame.height);
+  return streamedFrameBytes(frame.width, frame.height, frame.samplesPerPixel) + pixels * 2 * (sizeof(vec4f) + 4);
+}
+
+/// Under --memory-budget, or for a step too large for the memory available: 0 when the step fits
+/// (it is viewed as without a budget); else the budget, with `coarseFirst` lowered to the cells
+/// half of it holds: the view shows the coarse levels resident and draws every level in parts.
+/// Only inputs whose coarse levels can be read alone (AMReX plotfiles) are viewed in parts.
+uint64_t viewBudget(const InputOptions& in, const std::string& input, const LoadOptions& lo, uint64_t frameBytes,
+                    double& coarseFirst) {
+  const std::optional<uint64_t> budget = memoryBudgetFor(in, input, lo, frameBytes, false);
+  if (!budget) return 0;
+  const MemoryPlan whole = planWithin(input, lo, *budget, frameBytes);
+  if (!whole.streamed()) return 0;
+  const double room = (double(*budget) - double(whole.fixedBytes)) / 2 / double(whole.bytesPerCell);
+  coarseFirst = coarseFirst > 0 ? std::min(coarseFirst, room) : room;
+  if (coarseFirstLevel(input, coarseFirst).level == 0)
+    failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
+              ": the viewer shows such a step from its coarse levels while it draws every level in parts, and only "
+              "an AMReX plotfile's coarse levels can be read alone; `render` and `movie` draw it with "
+              "--memory-budget");
+  return *budget;
+}
+
 /// Ctrl-C and SIGTERM are taken by one thread (sigwait) that stops the server cleanly; every
 /// thread started after this inherits the blocked mask.
 sigset_t blockStopSignals() {
@@ -206,7 +235,12 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
   lo.fields.clear(); // every field: the page can switch between them
-  const FirstStep first = loadFirst(steps, doc.input, lo, o.coarseFirst);
+  double coarseFirst = o.coarseFirst;
+  if (steps.size() > 1 && !o.scene.in.memoryBudget.empty())
+    failUsage("--memory-budget views one step; a series' steps are each held whole");
+  const uint64_t frameBytes = viewerFrameBytes(doc.frame);
+  const uint64_t budget = steps.size() > 1 ? 0 : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
+  const FirstStep first = loadFirst(steps, doc.input, lo, coarseFirst);
   if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
@@ -230,7 +264,17 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   content.name = datasetLabel(o.inputs.empty() ? o.scene.in.input : o.inputs[0]);
   content.initial = doc;
   content.load = lo;
-  if (first.coarse.level > 0) {
+  if (budget) {
+    // Every level in parts, planned beside the coarse levels now resident.
+    content.parts = std::make_shared<StreamedStep>(doc.input, lo, planWithin(doc.input, lo, budget, frameBytes));
+    content.budget = budget;
+    content.coarseNote = strCat("coarse levels: cells ", 1 << first.coarse.level, " wide and wider (",
+                                std::llround(first.coarse.coarseCells), " of ", std::llround(first.coarse.cells),
+                                " cells in boxes); every level follows in ", content.parts->parts(),
+                                " parts within a budget of ", formatBytes(budget));
+    logNote(strCat("memory budget ", formatBytes(budget), ": a still view is drawn from every level in ",
+                   content.parts->parts(), " parts, its drafts from the coarse levels"));
+  } else if (first.coarse.level > 0) {
     const std::string input = doc.input;
     content.refine = [input, lo] { return std::make_shared<const Model>(loadModel(input, lo)); };
     content.coarseNote = strCat("coarse levels: cells ", 1 << first.coarse.level, " wide and wider (",
@@ -271,6 +315,7 @@ void addView(CLI::App& app) {
   auto o = std::make_shared<ViewCmdOptions>();
   CLI::App* cmd = app.add_subcommand("view", "Explore a dataset interactively in a web browser");
   o->scene.add(*cmd);
+  o->scene.in.addMemoryBudget(*cmd);
   // A series' steps replace the single INPUT of the render options.
   cmd->remove_option(cmd->get_option("input"));
   cmd->add_option("inputs", o->inputs,

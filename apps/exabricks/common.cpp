@@ -65,9 +65,8 @@ void InputOptions::addMemoryBudget(CLI::App& cmd) {
                  "available when it does not fit)");
 }
 
-std::optional<MemoryPlan> memoryPlanFor(const InputOptions& in, const std::string& input, const LoadOptions& lo,
+std::optional<uint64_t> memoryBudgetFor(const InputOptions& in, const std::string& input, const LoadOptions& lo,
                                         uint64_t frameBytes, bool severalProcesses) {
-  std::optional<uint64_t> budget;
   if (!in.memoryBudget.empty()) {
     uint64_t bytes = 0;
     if (!parseByteSize(in.memoryBudget, bytes))
@@ -75,18 +74,27 @@ std::optional<MemoryPlan> memoryPlanFor(const InputOptions& in, const std::strin
     if (severalProcesses)
       failUsage("--memory-budget holds a step in parts on one process; under MPI, --distribute data splits it "
                 "among the processes");
-    budget = bytes;
-  } else if (!severalProcesses) {
-    budget = budgetForLargeStep(input, lo, frameBytes);
+    return bytes;
   }
-  if (!budget) return std::nullopt;
+  if (severalProcesses) return std::nullopt;
+  return budgetForLargeStep(input, lo, frameBytes);
+}
+
+MemoryPlan planWithin(const std::string& input, const LoadOptions& lo, uint64_t budget, uint64_t frameBytes) {
   try {
-    MemoryPlan plan = planMemory(input, lo, *budget, frameBytes);
-    if (!plan.streamed()) return std::nullopt;
-    return plan;
+    return planMemory(input, lo, budget, frameBytes);
   } catch (const BudgetTooSmall& e) {
     failUsage(e.what());
   }
+}
+
+std::optional<MemoryPlan> memoryPlanFor(const InputOptions& in, const std::string& input, const LoadOptions& lo,
+                                        uint64_t frameBytes, bool severalProcesses) {
+  const std::optional<uint64_t> budget = memoryBudgetFor(in, input, lo, frameBytes, severalProcesses);
+  if (!budget) return std::nullopt;
+  MemoryPlan plan = planWithin(input, lo, *budget, frameBytes);
+  if (!plan.streamed()) return std::nullopt;
+  return plan;
 }
 
 std::string InputOptions::name() const { return input.empty() ? kDefaultDatasetName : input; }

@@ -43,6 +43,12 @@ struct InputOptions {
 /// (`severalProcesses`) refuse --memory-budget.
 std::optional<MemoryPlan> memoryPlanFor(const InputOptions& in, const std::string& input, const LoadOptions& lo,
                                         uint64_t frameBytes, bool severalProcesses);
+/// The budget memoryPlanFor plans with: --memory-budget, or (without it, on one process) the one
+/// budgetForLargeStep chooses for a step too large for the memory available; none otherwise.
+std::optional<uint64_t> memoryBudgetFor(const InputOptions& in, const std::string& input, const LoadOptions& lo,
+                                        uint64_t frameBytes, bool severalProcesses);
+/// planMemory, a budget too small being a usage error that names `input`'s smallest budget.
+MemoryPlan planWithin(const std::string& input, const LoadOptions& lo, uint64_t budget, uint64_t frameBytes);
 
 /// Parses WIDTHxHEIGHT (each 1..32768) as given to --size; throws with the text otherwise.
 void parseSize(const std::string& text, int& width, int& height);

@@ -419,37 +419,50 @@ box3f opaqueCellBounds(const Model& model, const std::vector<LayerTable>& layers
 
 } // namespace
 
-box3d Renderer::visibleBounds() const {
+VisibleExtent Renderer::visibleExtent() const {
   const Impl& im = *impl_;
-  box3f volume, iso;
+  VisibleExtent e;
   const std::vector<uint8_t>& visible = im.volume.visible();
   if (im.scene.volume)
     for (size_t i = 0; i < visible.size(); ++i)
-      if (visible[i]) volume.extend(im.model.regions.regions[i].bounds());
-  if (!volume.empty() && im.scene.debug == DebugView::None) {
-    // The cells drawn at a tenth of the largest opacity or more, and a margin of a twentieth of
-    // their size for the fainter cells around them (within the visible regions).
-    const box3f opaque = opaqueCellBounds(im.model, im.volume.layers(), volume);
-    if (!opaque.empty()) {
-      const vec3f margin = (opaque.upper - opaque.lower) * 0.05f;
-      volume = box3f(max(opaque.lower - margin, volume.lower), min(opaque.upper + margin, volume.upper));
-    }
-  }
+      if (visible[i]) e.volume.extend(im.model.regions.regions[i].bounds());
+  if (!e.volume.empty() && im.scene.debug == DebugView::None)
+    e.opaque = opaqueCellBounds(im.model, im.volume.layers(), e.volume);
   const std::vector<uint8_t>& isoVisible = im.surfaces.isoVisible();
   for (size_t i = 0; i < isoVisible.size(); ++i)
-    if (isoVisible[i]) iso.extend(im.model.regions.regions[i].bounds());
-  volume.extend(iso);
-  if (volume.empty()) return box3d();
-  return im.model.world.toWorld(volume);
+    if (isoVisible[i]) e.iso.extend(im.model.regions.regions[i].bounds());
+  return e;
 }
 
-std::optional<box3d> Renderer::visibleBoundsWithin(const box3d& part) const {
-  const box3d local = visibleBounds();
-  if (local.empty()) return std::nullopt;
-  const box3d clipped(max(local.lower, part.lower), min(local.upper, part.upper));
-  if (!(clipped.lower.x <= clipped.upper.x && clipped.lower.y <= clipped.upper.y && clipped.lower.z <= clipped.upper.z))
-    return std::nullopt;
-  return clipped;
+box3d Renderer::visibleBounds() const {
+  const box3f framed = visibleExtent().framed();
+  if (framed.empty()) return box3d();
+  return impl_->model.world.toWorld(framed);
+}
+
+void VisibleExtent::extend(const VisibleExtent& other) {
+  volume.extend(other.volume);
+  opaque.extend(other.opaque);
+  iso.extend(other.iso);
+}
+
+VisibleExtent VisibleExtent::within(const box3l& part) const {
+  const box3f p(vec3f(part.lower), vec3f(part.upper));
+  auto clip = [&](const box3f& b) {
+    const box3f c(max(b.lower, p.lower), min(b.upper, p.upper));
+    return c.lower.x <= c.upper.x && c.lower.y <= c.upper.y && c.lower.z <= c.upper.z ? c : box3f();
+  };
+  return VisibleExtent{clip(volume), clip(opaque), clip(iso)};
+}
+
+box3f VisibleExtent::framed() const {
+  box3f box = volume;
+  if (!box.empty() && !opaque.empty()) {
+    const vec3f margin = (opaque.upper - opaque.lower) * 0.05f;
+    box = box3f(max(opaque.lower - margin, volume.lower), min(opaque.upper + margin, volume.upper));
+  }
+  box.extend(iso);
+  return box;
 }
 
 size_t Renderer::isoRegions() const {

@@ -351,8 +351,9 @@ void Server::bind() {
   s.pictures = std::make_unique<PictureMaker>();
   LegendText legends;
   legends.dataset = s.content.name;
-  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, legends);
-  if (s.content.refine) s.session->setDataNote(s.content.coarseNote);
+  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, legends, s.content.parts,
+                                        s.content.budget);
+  if (s.content.refine || s.content.parts) s.session->setDataNote(s.content.coarseNote);
   s.session->submit(s.content.initial, false); // the first picture renders while the page loads
   if (s.content.refine) s.startRefining(legends);
 }

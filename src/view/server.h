@@ -19,6 +19,7 @@
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
 #include "exabricks/workflows/series.h"
+#include "exabricks/workflows/streamed.h"
 
 #include <cstdint>
 #include <functional>
@@ -67,6 +68,11 @@ struct ViewContent {
   /// on screen is drawn again from it), and `coarseNote` says what the first frames show.
   std::function<std::shared_ptr<const Model>()> refine;
   std::string coarseNote;
+  /// A step larger than the memory budget: `model` holds its coarse levels (drafts and the first
+  /// passes), and every still view is then drawn from all levels in these parts, one part
+  /// resident at a time, within `budget` bytes (instead of `refine`).
+  std::shared_ptr<StreamedStep> parts;
+  uint64_t budget = 0;
 };
 
 /// Statistics of a published frame (also sent to the page with each frame).

@@ -3,6 +3,7 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
 #include "exabricks/documents/image.h"
 
 #include <turbojpeg.h>
@@ -38,9 +39,10 @@ std::string encodeJpeg(const Image& image, const vec3f& background, int quality,
 } // namespace
 
 Session::Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options,
-                 LegendText legends)
+                 LegendText legends, std::shared_ptr<StreamedStep> parts, uint64_t budget)
     : model_(std::move(model)), dataset_(dataset), legends_(std::move(legends)),
-      renderer_(std::make_unique<Renderer>(*model_, dataset_)), options_(options) {
+      renderer_(std::make_unique<Renderer>(*model_, dataset_)), options_(options), parts_(std::move(parts)),
+      budget_(budget) {
   // Drafts aim at 35 ms, so that one reaches the screen within about 100 ms.
   view_ = std::make_unique<ProgressiveView>(*renderer_, options_.device, DraftPolicy{});
   thread_ = std::thread([this] { loop(); });
@@ -212,13 +214,30 @@ void Session::serve(const Request& request) {
     if (!view.refine(control) || superseded(request.id)) return;
     const RenderStats& after = view.buffer().stats();
     info.passes = view.passes();
-    info.final = view.complete();
+    info.final = view.complete() && !parts_; // with parts, every level's frame ends the request
     info.renderSeconds = after.seconds - before.seconds;
     info.samples = after.samples - before.samples;
     info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
     view.buffer().resolve(image);
-    publish(request, image, info, true, info.final ? options_.finalJpegQuality : options_.jpegQuality);
+    publish(request, image, info, !parts_, info.final ? options_.finalJpegQuality : options_.jpegQuality);
   }
+  if (parts_) serveParts(request, info, control);
+}
+
+void Session::serveParts(const Request& request, FrameInfo info, PassControl& control) {
+  const Frame& frame = request.doc.frame;
+  FrameBuffer buffer(frame.width, frame.height);
+  Timer timer;
+  if (!renderStreamed(*parts_, request.doc.scene, RendererOptions{}, frame, buffer, control) || superseded(request.id))
+    return;
+  info.passes = frame.samplesPerPixel;
+  info.final = true;
+  info.renderSeconds = timer.seconds();
+  info.samples = buffer.stats().samples;
+  info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
+  info.data = strCat("every level, drawn in ", parts_->parts(), " parts (", parts_->residentParts(), " resident); ",
+                     formatBytes(residentBytesNow()), " resident of a ", formatBytes(budget_), " budget");
+  publish(request, buffer.resolve(), info, true, options_.finalJpegQuality);
 }
 
 void Session::publish(const Request& request, const Image& rendered, FrameInfo info, bool keepImage, int quality) {

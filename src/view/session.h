@@ -6,6 +6,7 @@
 #include "exabricks/render/legends.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/workflows/progressive.h"
+#include "exabricks/workflows/streamed.h"
 #include "server.h"
 
 #include <atomic>
@@ -29,8 +30,10 @@ struct PublishedFrame {
 class Session {
 public:
   /// `legends`: what the scene's legends write of the dataset (they are drawn into every frame).
+  /// `parts`: the whole step held in parts (ViewContent::parts), from which every still view's
+  /// last frame is drawn; `budget` is said with it.
   Session(std::shared_ptr<const Model> model, const DatasetInfo& dataset, const ServerOptions& options,
-          LegendText legends = {});
+          LegendText legends = {}, std::shared_ptr<StreamedStep> parts = nullptr, uint64_t budget = 0);
   ~Session();
 
   /// Renders another dataset (a series' step) from the next request on; the request in flight is
@@ -73,6 +76,8 @@ private:
   bool superseded(uint64_t id) const;
   void publish(const Request& request, const Image& image, FrameInfo info, bool keepImage, int quality);
   void publishError(const Request& request, const std::string& message);
+  /// The view's last frame from every level, drawn part by part (parts_).
+  void serveParts(const Request& request, FrameInfo info, PassControl& control);
 
   std::shared_ptr<const Model> model_;
   DatasetInfo dataset_;
@@ -97,6 +102,8 @@ private:
   std::shared_ptr<const PublishedFrame> latest_;
   Snapshot snapshot_;
   FrameBuffer draftBuffer_;
+  std::shared_ptr<StreamedStep> parts_; ///< used by the render thread only
+  uint64_t budget_ = 0;
   std::thread thread_;
 };
 

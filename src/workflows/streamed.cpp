@@ -347,13 +347,11 @@ std::vector<int> StreamedStep::order(const Camera& camera) const {
 }
 
 box3d StreamedStep::visibleBounds(const Scene& scene, const RendererOptions& options) {
-  box3d all;
-  for (int p : residentFirst()) {
-    const Renderer* r = renderer(p, scene, options);
-    if (!r) continue;
-    if (const std::optional<box3d> mine = r->visibleBoundsWithin(partWorldBox(p))) all.extend(*mine);
-  }
-  return all;
+  VisibleExtent all;
+  for (int p : residentFirst())
+    if (const Renderer* r = renderer(p, scene, options)) all.extend(r->visibleExtent().within(partBox(p)));
+  const box3f framed = all.framed();
+  return framed.empty() ? box3d() : skeleton_.world.toWorld(framed);
 }
 
 void StreamedStep::sample(int field, const std::vector<vec3d>& points, std::vector<double>& values,

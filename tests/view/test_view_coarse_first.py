@@ -75,3 +75,33 @@ def test_finer_levels_that_cannot_be_read_leave_the_coarse_view_running(start_vi
     assert "coarse levels" in frames[0].get("data", "")
     assert v.alive()
     assert "could not be read" in v.stderr_path.read_text()
+
+
+def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_in_parts(start_viewer, cli, tmp_path):
+    # Under a budget that cannot hold plt_drop whole: drafts and first passes from the coarse
+    # levels, then every still view's last frame from every level, drawn part by part, equal to
+    # the command line's in-core render of the same scene; the process keeps its budget.
+    np = pytest.importorskip("numpy")
+    image = pytest.importorskip("PIL.Image")
+    budget = 150
+    v = start_viewer(str(drop()), "--size", "96x80", "--spp", "2", "--memory-budget", "%dM" % budget)
+    frames = frames_until(v, lambda h, i: h["final"])
+    assert "coarse levels" in frames[0].get("data", ""), frames[0]
+    assert "every level, drawn in" in frames[-1].get("data", ""), frames[-1]
+    doc = v.info()["document"]
+    request = v.render(doc)
+    frames_until(v, lambda h, i: h["request"] == request and h["final"])
+    status, png, _ = v.request("GET", "/api/snapshot.png?request=%d" % request, timeout=120)
+    assert status == 200
+    peak_kb = int(next(l.split()[1] for l in open("/proc/%d/status" % v.proc.pid) if l.startswith("VmHWM")))
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(doc))
+    out = tmp_path / "cli.png"
+    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
+    (tmp_path / "view.png").write_bytes(png)
+    a, b = (np.asarray(image.open(p).convert("RGBA")).astype(float) for p in (tmp_path / "view.png", out))
+    d = np.abs(a - b)
+    print("mean %.4f, max %.0f, peak %.1f MiB of %d MiB" % (d.mean(), d.max(), peak_kb / 1024, budget))
+    assert a.shape == b.shape and d.mean() <= 0.5 and (d <= 2).mean() >= 0.999
+    if not os.environ.get("EXABRICKS_SANITIZED"):
+        assert peak_kb / 1024 <= 1.15 * budget

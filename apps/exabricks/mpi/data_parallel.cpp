@@ -99,16 +99,24 @@ DataPart loadDataPart(const std::string& input, const LoadOptions& options) {
 }
 
 box3d agreedVisibleBounds(const Renderer& renderer, const DataPart& part) {
-  std::vector<double> low(3, std::numeric_limits<double>::infinity()),
-      high(3, -std::numeric_limits<double>::infinity());
-  if (const std::optional<box3d> clipped = renderer.visibleBoundsWithin(part.worldBox()))
-    for (int a = 0; a < 3; ++a)
-      low[size_t(a)] = clipped->lower[a], high[size_t(a)] = clipped->upper[a];
+  // The three boxes of each process's extent within its part, united over the processes.
+  const VisibleExtent mine = renderer.visibleExtent().within(part.box);
+  std::vector<double> low, high;
+  for (const box3f* b : {&mine.volume, &mine.opaque, &mine.iso})
+    for (int a = 0; a < 3; ++a) {
+      low.push_back(b->empty() ? std::numeric_limits<double>::infinity() : double(b->lower[a]));
+      high.push_back(b->empty() ? -std::numeric_limits<double>::infinity() : double(b->upper[a]));
+    }
   allReduce(low, Reduce::Min);
   allReduce(high, Reduce::Max);
-  for (int a = 0; a < 3; ++a)
-    if (!(low[size_t(a)] <= high[size_t(a)])) return box3d();
-  return box3d(vec3d(low[0], low[1], low[2]), vec3d(high[0], high[1], high[2]));
+  VisibleExtent all;
+  box3f* boxes[] = {&all.volume, &all.opaque, &all.iso};
+  for (size_t k = 0; k < 3; ++k)
+    if (low[3 * k] <= high[3 * k] && low[3 * k + 1] <= high[3 * k + 1] && low[3 * k + 2] <= high[3 * k + 2])
+      *boxes[k] = box3f(vec3f(float(low[3 * k]), float(low[3 * k + 1]), float(low[3 * k + 2])),
+                        vec3f(float(high[3 * k]), float(high[3 * k + 1]), float(high[3 * k + 2])));
+  const box3f framed = all.framed();
+  return framed.empty() ? box3d() : part.model.world.toWorld(framed);
 }
 
 } // namespace exa::mpi

@@ -153,6 +153,20 @@ struct PassControl {
   std::function<void(uint64_t, uint64_t)> progress;
 };
 
+/// What a first view frames, in lattice units: the regions that may show the volume, the cells in
+/// them drawn at a tenth of the largest opacity or more, and the regions that may hold an
+/// iso-surface. Renderers that each hold one part of a dataset (processes, a step held in parts)
+/// give theirs within their part, and the union frames the whole as one renderer over it would.
+struct VisibleExtent {
+  box3f volume, opaque, iso;
+  void extend(const VisibleExtent& other);
+  /// Each box clipped to the lattice box `part` (closed: a face shared with it counts).
+  VisibleExtent within(const box3l& part) const;
+  /// The framed lattice box: the opaque cells with a margin of a twentieth of their size, within
+  /// the volume's regions (the regions alone where no cell is that opaque), and the iso regions.
+  box3f framed() const;
+};
+
 class Renderer {
 public:
   explicit Renderer(const Model& model);
@@ -201,12 +215,11 @@ public:
   bool pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const;
   /// Regions that may be visible under the current transfer functions.
   size_t visibleRegions() const;
+  /// What a first view frames (VisibleExtent), in lattice units.
+  VisibleExtent visibleExtent() const;
   /// World box of the regions that may show the volume (when it is on) or hold an iso-surface
-  /// (empty when there are none): what a first view frames.
+  /// (empty when there are none), narrowed to the clearly visible cells: what a first view frames.
   box3d visibleBounds() const;
-  /// visibleBounds() within the world box `part` (closed: a face shared with it counts), or none:
-  /// what a renderer that holds one part of a dataset adds to the whole's framing.
-  std::optional<box3d> visibleBoundsWithin(const box3d& part) const;
   /// Regions that may hold an iso-surface.
   size_t isoRegions() const;
   size_t meshCount() const;

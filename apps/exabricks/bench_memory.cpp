@@ -1,0 +1,163 @@
+// exabricks bench --memory-budget: a step held in parts under a budget. The plan, the pass that
+// surveys every part (what a first picture needs), the first converged frame, then the frames of
+// an orbit (each drawn part by part, the parts that fit kept between frames), with the parts read
+// and the peak resident memory after each phase; with --in-core, the whole step read afterwards
+// and the first view drawn from it, compared (time ratio and image difference).
+#include "bench.h"
+
+#include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
+#include "exabricks/render/camera_path.h"
+#include "exabricks/render/transfer_function.h"
+#include "exabricks/workflows/streamed.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <unistd.h>
+
+namespace exa::cli::bench {
+
+namespace {
+
+struct BudgetedFrame {
+  double seconds = 0;
+  uint64_t partsRead = 0;
+  uint64_t peakBytes = 0;
+};
+
+/// The difference of two images (linear, premultiplied) in steps of 1/255 over every channel:
+/// mean, largest, and the share of channels within 2/255.
+nlohmann::json imageAgreement(const Image& a, const Image& b) {
+  double sum = 0, largest = 0;
+  size_t within = 0, n = 0;
+  for (size_t i = 0; i < a.pixels.size(); ++i) {
+    const vec4f& p = a.pixels[i];
+    const vec4f& q = b.pixels[i];
+    for (const double e : {double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z, double(p.w) - q.w}) {
+      const double d = std::abs(e) * 255.0;
+      sum += d;
+      largest = std::max(largest, d);
+      within += d <= 2.0 ? 1 : 0;
+      ++n;
+    }
+  }
+  return {{"mean_255", n ? sum / double(n) : 0.0},
+          {"max_255", largest},
+          {"share_within_2_255", n ? double(within) / double(n) : 1.0}};
+}
+
+} // namespace
+
+void runBudgeted(const BenchOptions& o, uint64_t budget) {
+  Frame frame;
+  parseSize(o.size, frame.width, frame.height);
+  const int views = o.orbitStudy ? o.orbit : 8;
+  if (views < 1 || views > 10000) failUsage("--orbit must be in 1..10000");
+  const double loadAtStart = loadAverage();
+  const LoadOptions lo = o.in.loadOptions(true);
+  Timer total;
+  const MemoryPlan plan = planWithin(o.in.input, lo, budget, streamedFrameBytes(frame.width, frame.height, 1));
+  const double planSeconds = total.seconds();
+  StreamedStep step(o.in.input, lo, plan);
+  Timer surveyTimer;
+  const StepSurvey& survey = step.survey();
+  const double surveySeconds = surveyTimer.seconds();
+  const uint64_t peakAfterSurvey = peakResidentBytes();
+
+  const Model& skeleton = step.skeleton();
+  Scene scene;
+  const std::string field = skeleton.fieldNames[size_t(skeleton.requireField(o.in.field))];
+  scene.layers = {VolumeLayer{field, defaultTransferFunction()}};
+  const RendererOptions options;
+  box3d target = step.visibleBounds(scene, options);
+  if (target.empty()) target = skeleton.world.toWorld(survey.cellBounds);
+
+  const bool onTerminal = logLevel() >= LogLevel::Warning && isatty(STDERR_FILENO) && !o.json;
+  std::vector<BudgetedFrame> frames;
+  Image first;
+  for (int i = 0; i < views; ++i) {
+    frame.camera = orbitCamera(target, 30.0, 25.0, 40.0, false, i, views);
+    FrameBuffer buffer(frame.width, frame.height);
+    const uint64_t readBefore = step.partsRead();
+    Timer t;
+    renderStreamed(step, scene, options, frame, buffer);
+    frames.push_back({t.seconds(), step.partsRead() - readBefore, peakResidentBytes()});
+    if (i == 0) first = buffer.resolve();
+    if (onTerminal) std::fprintf(stderr, "\rbudget: view %d of %d", i + 1, views);
+  }
+  if (onTerminal) std::fprintf(stderr, "\n");
+  const double firstPicture = planSeconds + surveySeconds + frames[0].seconds;
+
+  nlohmann::json j;
+  j["dataset"] = o.in.name();
+  j["field"] = field;
+  j["cells"] = survey.cells;
+  j["width"] = frame.width;
+  j["height"] = frame.height;
+  j["threads"] = tbbThreads();
+  j["load_average_at_start"] = loadAtStart;
+  j["budget_bytes"] = budget;
+  j["parts"] = step.parts();
+  j["largest_part_bytes_estimate"] = plan.largestPartBytes();
+  j["plan_seconds"] = planSeconds;
+  j["survey_seconds"] = surveySeconds;
+  j["peak_rss_after_survey_bytes"] = peakAfterSurvey;
+  j["first_frame_seconds"] = frames[0].seconds;
+  j["first_picture_seconds"] = firstPicture;
+  std::vector<double> later;
+  nlohmann::json rows = nlohmann::json::array();
+  for (size_t i = 0; i < frames.size(); ++i) {
+    rows.push_back(
+        {{"seconds", frames[i].seconds}, {"parts_read", frames[i].partsRead}, {"peak_rss_bytes", frames[i].peakBytes}});
+    if (i > 0) later.push_back(frames[i].seconds);
+  }
+  j["orbit"] = rows;
+  j["orbit_median_seconds"] = later.empty() ? frames[0].seconds : median(later);
+  const uint64_t peak = peakResidentBytes(); // before --in-core reads the whole step
+  j["peak_rss_bytes"] = peak;
+  j["load_average_at_end"] = loadAverage();
+
+  if (o.inCore) {
+    // The whole step, read after the budgeted frames so that their peak was measured first.
+    Timer load;
+    const Model model = loadModel(o.in.input, lo);
+    const double loadSeconds = load.seconds();
+    Renderer renderer(model);
+    renderer.setScene(scene);
+    frame.camera = orbitCamera(target, 30.0, 25.0, 40.0, false, 0, views);
+    RenderStats st;
+    const Image whole = renderer.render(frame, &st);
+    j["in_core"] = {{"load_seconds", loadSeconds},
+                    {"frame_seconds", st.seconds},
+                    {"first_picture_seconds", loadSeconds + st.seconds},
+                    {"peak_rss_bytes", peakResidentBytes()},
+                    {"frame_ratio_budget_over_in_core", st.seconds > 0 ? frames[0].seconds / st.seconds : 0.0},
+                    {"difference", imageAgreement(first, whole)}};
+  }
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::printf("%s, %llu cells, %dx%d, %d threads, budget %s: %d parts (largest about %s)\n", o.in.name().c_str(),
+              (unsigned long long)survey.cells, frame.width, frame.height, tbbThreads(), formatBytes(budget).c_str(),
+              step.parts(), formatBytes(plan.largestPartBytes()).c_str());
+  std::printf("plan %.3f s, survey of every part %.3f s, first frame %.3f s: first picture %.3f s\n", planSeconds,
+              surveySeconds, frames[0].seconds, firstPicture);
+  std::printf("orbit: %d views, median %.3f s per later view, parts read per view:", views,
+              double(j["orbit_median_seconds"]));
+  for (const BudgetedFrame& f : frames)
+    std::printf(" %llu", (unsigned long long)f.partsRead);
+  std::printf("\npeak resident %s of a %s budget\n", formatBytes(peak).c_str(), formatBytes(budget).c_str());
+  if (o.inCore) {
+    const nlohmann::json& c = j["in_core"];
+    std::printf("in core: load %.3f s, frame %.3f s (budgeted / in core %.2fx), peak %s; difference mean %.4f/255, "
+                "max %.3f/255, %.4f%% of channels within 2/255\n",
+                double(c["load_seconds"]), double(c["frame_seconds"]), double(c["frame_ratio_budget_over_in_core"]),
+                formatBytes(uint64_t(c["peak_rss_bytes"])).c_str(), double(c["difference"]["mean_255"]),
+                double(c["difference"]["max_255"]), 100.0 * double(c["difference"]["share_within_2_255"]));
+  }
+}
+
+} // namespace exa::cli::bench
