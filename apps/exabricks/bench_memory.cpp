@@ -48,6 +48,48 @@ nlohmann::json imageAgreement(const Image& a, const Image& b) {
           {"share_within_2_255", n ? double(within) / double(n) : 1.0}};
 }
 
+/// The whole step read after the budgeted frames (so that their peak was measured first), the
+/// first view drawn from it and compared with the budgeted one.
+nlohmann::json inCoreComparison(const BenchOptions& o, const LoadOptions& lo, const Scene& scene, const Frame& frame,
+                                double budgetedSeconds, const Image& budgeted) {
+  Timer load;
+  const Model model = loadModel(o.in.input, lo);
+  const double loadSeconds = load.seconds();
+  Renderer renderer(model);
+  renderer.setScene(scene);
+  RenderStats st;
+  const Image whole = renderer.render(frame, &st);
+  return {{"load_seconds", loadSeconds},
+          {"frame_seconds", st.seconds},
+          {"first_picture_seconds", loadSeconds + st.seconds},
+          {"peak_rss_bytes", peakResidentBytes()},
+          {"frame_ratio_budget_over_in_core", st.seconds > 0 ? budgetedSeconds / st.seconds : 0.0},
+          {"difference", imageAgreement(budgeted, whole)}};
+}
+
+void printBudgeted(const nlohmann::json& j, const BenchOptions& o) {
+  std::printf("%s, %llu cells, %dx%d, %d threads, budget %s: %d parts (largest about %s)\n", o.in.name().c_str(),
+              (unsigned long long)j["cells"], int(j["width"]), int(j["height"]), int(j["threads"]),
+              formatBytes(uint64_t(j["budget_bytes"])).c_str(), int(j["parts"]),
+              formatBytes(uint64_t(j["largest_part_bytes_estimate"])).c_str());
+  std::printf("plan %.3f s, survey of every part %.3f s, first frame %.3f s: first picture %.3f s\n",
+              double(j["plan_seconds"]), double(j["survey_seconds"]), double(j["first_frame_seconds"]),
+              double(j["first_picture_seconds"]));
+  std::printf("orbit: %zu views, median %.3f s per later view, parts read per view:", j["orbit"].size(),
+              double(j["orbit_median_seconds"]));
+  for (const nlohmann::json& f : j["orbit"])
+    std::printf(" %llu", (unsigned long long)f["parts_read"]);
+  std::printf("\npeak resident %s of a %s budget\n", formatBytes(uint64_t(j["peak_rss_bytes"])).c_str(),
+              formatBytes(uint64_t(j["budget_bytes"])).c_str());
+  if (!j.contains("in_core")) return;
+  const nlohmann::json& c = j["in_core"];
+  std::printf("in core: load %.3f s, frame %.3f s (budgeted / in core %.2fx), peak %s; difference mean %.4f/255, "
+              "max %.3f/255, %.4f%% of channels within 2/255\n",
+              double(c["load_seconds"]), double(c["frame_seconds"]), double(c["frame_ratio_budget_over_in_core"]),
+              formatBytes(uint64_t(c["peak_rss_bytes"])).c_str(), double(c["difference"]["mean_255"]),
+              double(c["difference"]["max_255"]), 100.0 * double(c["difference"]["share_within_2_255"]));
+}
+
 } // namespace
 
 void runBudgeted(const BenchOptions& o, uint64_t budget) {
@@ -120,44 +162,13 @@ void runBudgeted(const BenchOptions& o, uint64_t budget) {
   j["load_average_at_end"] = loadAverage();
 
   if (o.inCore) {
-    // The whole step, read after the budgeted frames so that their peak was measured first.
-    Timer load;
-    const Model model = loadModel(o.in.input, lo);
-    const double loadSeconds = load.seconds();
-    Renderer renderer(model);
-    renderer.setScene(scene);
     frame.camera = orbitCamera(target, 30.0, 25.0, 40.0, false, 0, views);
-    RenderStats st;
-    const Image whole = renderer.render(frame, &st);
-    j["in_core"] = {{"load_seconds", loadSeconds},
-                    {"frame_seconds", st.seconds},
-                    {"first_picture_seconds", loadSeconds + st.seconds},
-                    {"peak_rss_bytes", peakResidentBytes()},
-                    {"frame_ratio_budget_over_in_core", st.seconds > 0 ? frames[0].seconds / st.seconds : 0.0},
-                    {"difference", imageAgreement(first, whole)}};
+    j["in_core"] = inCoreComparison(o, lo, scene, frame, frames[0].seconds, first);
   }
-  if (o.json) {
+  if (o.json)
     std::cout << j.dump(2) << "\n";
-    return;
-  }
-  std::printf("%s, %llu cells, %dx%d, %d threads, budget %s: %d parts (largest about %s)\n", o.in.name().c_str(),
-              (unsigned long long)survey.cells, frame.width, frame.height, tbbThreads(), formatBytes(budget).c_str(),
-              step.parts(), formatBytes(plan.largestPartBytes()).c_str());
-  std::printf("plan %.3f s, survey of every part %.3f s, first frame %.3f s: first picture %.3f s\n", planSeconds,
-              surveySeconds, frames[0].seconds, firstPicture);
-  std::printf("orbit: %d views, median %.3f s per later view, parts read per view:", views,
-              double(j["orbit_median_seconds"]));
-  for (const BudgetedFrame& f : frames)
-    std::printf(" %llu", (unsigned long long)f.partsRead);
-  std::printf("\npeak resident %s of a %s budget\n", formatBytes(peak).c_str(), formatBytes(budget).c_str());
-  if (o.inCore) {
-    const nlohmann::json& c = j["in_core"];
-    std::printf("in core: load %.3f s, frame %.3f s (budgeted / in core %.2fx), peak %s; difference mean %.4f/255, "
-                "max %.3f/255, %.4f%% of channels within 2/255\n",
-                double(c["load_seconds"]), double(c["frame_seconds"]), double(c["frame_ratio_budget_over_in_core"]),
-                formatBytes(uint64_t(c["peak_rss_bytes"])).c_str(), double(c["difference"]["mean_255"]),
-                double(c["difference"]["max_255"]), 100.0 * double(c["difference"]["share_within_2_255"]));
-  }
+  else
+    printBudgeted(j, o);
 }
 
 } // namespace exa::cli::bench

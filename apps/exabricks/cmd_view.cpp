@@ -188,6 +188,27 @@ void applySeriesRange(const FirstStep& first, const std::vector<std::string>& st
                  "]); --range per-step or LOW,HIGH to choose"));
 }
 
+/// How the view gets from the coarse levels to every level: in parts under a memory budget, or
+/// by reading the whole step on a thread of its own.
+void addRefinement(view::ViewContent& content, const FirstStep& first, const std::string& input, const LoadOptions& lo,
+                   uint64_t budget, uint64_t frameBytes) {
+  const std::string shown =
+      strCat("coarse levels: cells ", 1 << first.coarse.level, " wide and wider (",
+             std::llround(first.coarse.coarseCells), " of ", std::llround(first.coarse.cells), " cells in boxes); ");
+  if (budget) {
+    // Every level in parts, planned beside the coarse levels now resident.
+    content.parts = std::make_shared<StreamedStep>(input, lo, planWithin(input, lo, budget, frameBytes));
+    content.budget = budget;
+    content.coarseNote = strCat(shown, "every level follows in ", content.parts->parts(), " parts within a budget of ",
+                                formatBytes(budget));
+    logNote(strCat("memory budget ", formatBytes(budget), ": a still view is drawn from every level in ",
+                   content.parts->parts(), " parts, its drafts from the coarse levels"));
+  } else if (first.coarse.level > 0) {
+    content.refine = [input, lo] { return std::make_shared<const Model>(loadModel(input, lo)); };
+    content.coarseNote = shown + "reading the finer levels";
+  }
+}
+
 /// Serves the content until Ctrl-C, SIGTERM (`stopSignals`, blocked in every thread) or the
 /// server's own end; prints the address, and how to reach it, first.
 void serve(view::ViewContent content, const view::ServerOptions& options, const std::string& name,
@@ -264,23 +285,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   content.name = datasetLabel(o.inputs.empty() ? o.scene.in.input : o.inputs[0]);
   content.initial = doc;
   content.load = lo;
-  if (budget) {
-    // Every level in parts, planned beside the coarse levels now resident.
-    content.parts = std::make_shared<StreamedStep>(doc.input, lo, planWithin(doc.input, lo, budget, frameBytes));
-    content.budget = budget;
-    content.coarseNote = strCat("coarse levels: cells ", 1 << first.coarse.level, " wide and wider (",
-                                std::llround(first.coarse.coarseCells), " of ", std::llround(first.coarse.cells),
-                                " cells in boxes); every level follows in ", content.parts->parts(),
-                                " parts within a budget of ", formatBytes(budget));
-    logNote(strCat("memory budget ", formatBytes(budget), ": a still view is drawn from every level in ",
-                   content.parts->parts(), " parts, its drafts from the coarse levels"));
-  } else if (first.coarse.level > 0) {
-    const std::string input = doc.input;
-    content.refine = [input, lo] { return std::make_shared<const Model>(loadModel(input, lo)); };
-    content.coarseNote = strCat("coarse levels: cells ", 1 << first.coarse.level, " wide and wider (",
-                                std::llround(first.coarse.coarseCells), " of ", std::llround(first.coarse.cells),
-                                " cells in boxes); reading the finer levels");
-  }
+  addRefinement(content, first, doc.input, lo, budget, frameBytes);
   if (first.series) {
     content.series = first.series;
     content.steps = steps;
