@@ -1,7 +1,7 @@
 // Steps held in parts under a memory budget: sizes as people write them, plans that fit the
 // budget (or name the smallest that works), frames drawn part by part equal to the in-core render
-// (several passes, so the per-pass compositing counts), and a step that changes while its parts
-// are read is reported instead of drawn mixed.
+// (several passes, so the per-pass compositing counts) and the same when the parts come back from
+// the disk, and a step that changes while its parts are read is reported instead of drawn mixed.
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/text.h"
@@ -131,6 +131,18 @@ TEST(Streamed, FramesFromPartsEqualTheInCoreRender) {
   EXPECT_LE(sum / double(4 * image.pixels.size()), 0.5 / 255.0);
   EXPECT_LE(double(beyond), 0.001 * double(4 * image.pixels.size()));
   EXPECT_LE(step.residentBytes() + plan.fixedBytes, plan.budget);
+
+  // Again: the parts that the budget did not keep come back from the disk (their models and
+  // smooth shading's gradients, as built), and the frame is the same to the bit.
+  const uint64_t fromDisk = step.partsFromDisk();
+  FrameBuffer again;
+  ASSERT_TRUE(renderStreamed(step, scene, RendererOptions(), frame, again));
+  EXPECT_GT(step.partsFromDisk(), fromDisk);
+  const Image second = again.resolve();
+  for (size_t i = 0; i < image.pixels.size(); ++i)
+    ASSERT_TRUE(image.pixels[i].x == second.pixels[i].x && image.pixels[i].y == second.pixels[i].y &&
+                image.pixels[i].z == second.pixels[i].z && image.pixels[i].w == second.pixels[i].w)
+        << i;
 }
 
 TEST(Streamed, AStepChangedWhileItsPartsAreReadIsReported) {

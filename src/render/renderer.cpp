@@ -419,6 +419,12 @@ box3f opaqueCellBounds(const Model& model, const std::vector<LayerTable>& layers
 
 } // namespace
 
+const std::array<std::vector<float>, 3>* Renderer::gradients(int field) const { return impl_->volume.gradients(field); }
+
+void Renderer::adoptGradients(int field, std::array<std::vector<float>, 3> gradients) {
+  impl_->volume.adoptGradients(field, std::move(gradients));
+}
+
 VisibleExtent Renderer::visibleExtent() const {
   const Impl& im = *impl_;
   VisibleExtent e;

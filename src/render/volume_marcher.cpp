@@ -358,6 +358,18 @@ void VolumeMarcher::updateMajorants() {
   });
 }
 
+const std::array<std::vector<float>, 3>* VolumeMarcher::gradients(int field) const {
+  const auto it = gradientFields_.find(field);
+  return it == gradientFields_.end() ? nullptr : &it->second;
+}
+
+void VolumeMarcher::adoptGradients(int field, std::array<std::vector<float>, 3> gradients) {
+  for (const std::vector<float>& g : gradients)
+    if (g.size() != model_.fieldValues.at(size_t(field)).size())
+      fail("gradient fields of ", g.size(), " cells adopted for a field of ", model_.fieldValues[size_t(field)].size());
+  gradientFields_.emplace(field, std::move(gradients)); // one already built (and pointed at) stays
+}
+
 bool VolumeMarcher::attachGradients() {
   bool built = false;
   for (LayerTable& layer : layers_) {

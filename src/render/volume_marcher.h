@@ -40,6 +40,10 @@ public:
   /// Builds the gradient fields of every layer's field that has none yet (smooth shading) and
   /// points the layers at them; true when one was built.
   bool attachGradients();
+  /// The gradient fields of model field `field` built so far (null: none yet), and gradient
+  /// fields built before by a marcher over the same model, used instead of building them.
+  const std::array<std::vector<float>, 3>* gradients(int field) const;
+  void adoptGradients(int field, std::array<std::vector<float>, 3> gradients);
 
   bool empty() const { return layers_.empty(); }
   const std::vector<LayerTable>& layers() const { return layers_; }

@@ -1,5 +1,7 @@
 #include "exabricks/workflows/streamed.h"
 
+#include "part_cache.h"
+
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
@@ -212,6 +214,10 @@ StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan pl
       snapshot_(std::make_unique<Snapshot>(Snapshot{snapshotOf(input_)})) {
   options_.partCells = 0; // the parts are this step's own
   options_.box = box3i();
+  uint64_t partsBytes = 0;
+  for (int p = 0; p < parts(); ++p)
+    partsBytes += plan_.partBytes(p);
+  cache_ = std::make_unique<PartCache>(parts(), parts() > 1 ? partsBytes : 0);
   // The skeleton: the step's world, fields and simulation from a part that holds cells.
   for (int p = 0; p < parts(); ++p) {
     Resident& r = bring(p);
@@ -228,6 +234,8 @@ StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan pl
 }
 
 StreamedStep::~StreamedStep() = default;
+
+uint64_t StreamedStep::partsFromDisk() const { return cache_->hits(); }
 
 uint64_t StreamedStep::residentBytes() const {
   uint64_t n = 0;
@@ -253,7 +261,11 @@ StreamedStep::Resident& StreamedStep::bring(int part) {
   Resident r;
   r.part = part;
   r.bytes = need;
-  std::optional<Model> m = loadModelPart(input_, options_, partBox(part), plan_.coarsestLevel);
+  std::optional<Model> m = cache_->read(part);
+  if (!m) {
+    m = loadModelPart(input_, options_, partBox(part), plan_.coarsestLevel);
+    if (m && parts() > 1) cache_->write(part, *m);
+  }
   if (m) r.model = std::make_unique<Model>(std::move(*m));
   ++reads_;
   resident_.push_front(std::move(r));
@@ -285,9 +297,15 @@ Renderer* StreamedStep::renderer(int part, const Scene& scene, const RendererOpt
   if (!r.renderer) {
     r.renderer = std::make_unique<Renderer>(*r.model, dataset);
     r.renderer->setDomain(partWorldBox(part));
+    for (int f = 0; f < int(r.model->fieldNames.size()); ++f)
+      if (auto g = cache_->readGradients(part, f)) r.renderer->adoptGradients(f, std::move(*g));
   }
   r.renderer->setOptions(options);
   r.renderer->setScene(scene);
+  // Smooth shading's gradients, built once per part and field: kept with the part on disk.
+  for (int f = 0; f < int(r.model->fieldNames.size()); ++f)
+    if (const auto* g = r.renderer->gradients(f); g && cache_->on() && !cache_->hasGradients(part, f))
+      cache_->writeGradients(part, f, *g);
   return r.renderer.get();
 }
 

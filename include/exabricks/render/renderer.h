@@ -21,6 +21,7 @@
 #include "exabricks/render/frame_buffer.h"
 #include "exabricks/render/scene.h"
 
+#include <array>
 #include <atomic>
 #include <functional>
 #include <memory>
@@ -210,6 +211,12 @@ public:
   /// box (box3d()) restricts nothing; an empty box that is not the default one shows nothing.
   void setDomain(const box3d& world);
   const box3d& domain() const;
+
+  /// Smooth shading's gradient fields of model field `field` (x, y, z per cell, in brick order),
+  /// once a scene needed them (null before). A renderer made again over the same model can
+  /// adopt them (before its scene is set) instead of building them again.
+  const std::array<std::vector<float>, 3>* gradients(int field) const;
+  void adoptGradients(int field, std::array<std::vector<float>, 3> gradients);
 
   /// The nearest (clipped) mesh or iso-surface hit along a world ray; false when there is none.
   bool pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const;

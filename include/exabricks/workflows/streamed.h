@@ -76,7 +76,12 @@ struct StepSurvey {
   uint64_t bricks = 0, regions = 0; ///< summed over the parts' models (halos included)
 };
 
-/// A step held in parts, one resident at a time, or as many as the budget holds.
+class PartCache;
+
+/// A step held in parts, one resident at a time, or as many as the budget holds. A part built
+/// once is kept on disk (an unlinked model file in the temporary folder, where it has room) and
+/// read from there when it is needed again: an orbit rereads no source file and builds nothing
+/// twice.
 class StreamedStep {
 public:
   StreamedStep(std::string input, LoadOptions options, MemoryPlan plan);
@@ -120,6 +125,8 @@ public:
   uint64_t residentBytes() const;
   /// Parts read so far (a part read again after it was dropped counts again).
   uint64_t partsRead() const { return reads_; }
+  /// Of those, the parts read back from the disk cache instead of built from the step.
+  uint64_t partsFromDisk() const;
 
 private:
   struct Resident;
@@ -137,6 +144,7 @@ private:
   std::list<Resident> resident_; ///< most recently used first
   uint64_t reads_ = 0;
   std::unique_ptr<Snapshot> snapshot_;
+  std::unique_ptr<PartCache> cache_;
 };
 
 /// Renders `frame` (every pass) into `buffer` from the step's parts, front to back, each pass
