@@ -20,7 +20,8 @@ import sys
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peer_common import add_common_arguments, camera, run_exabricks  # noqa: E402
+from peer_common import (add_common_arguments, agreement, alike, camera, dataset_info,  # noqa: E402
+                         describe_agreement, require_comparable, run_exabricks)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -122,8 +123,8 @@ def parse_arguments():
 def describe(a):
     """The dataset as `exabricks info` describes it, and the view both renderers share: value range,
     finest cell width, exabricks' default opacity and camera."""
-    info = json.loads(subprocess.run([a.exabricks, "-q", "info", a.plotfile, "-f", a.field, "--json"], check=True,
-                                     capture_output=True, text=True).stdout)
+    info = dataset_info(a.exabricks, a.plotfile)
+    require_comparable(info, a.field, a.plotfile)
     lower, upper = info["bounds"]["world"]["lower"], info["bounds"]["world"]["upper"]
     fr = [f for f in info["fields"] if f["name"] == a.field][0]["range"]
     value_range = (fr["min"], fr["max"])
@@ -163,8 +164,8 @@ def render_paraview(a, view):
     return pv, pv_wall
 
 
-def report(a, info, view, ex_wall, ex, ex_flat, pv, pv_wall):
-    """Prints the times and their ratios; returns both."""
+def report(a, info, view, ex_wall, ex, ex_flat, pv, pv_wall, agree):
+    """Prints the times and their ratios, beside the agreement of the pictures; returns both."""
     ex_frame, ex_flat_frame = ex["frame_seconds"], ex_flat["frame_seconds"]
     pr = pv["renders"]
     rows = [
@@ -194,13 +195,16 @@ def report(a, info, view, ex_wall, ex, ex_flat, pv, pv_wall):
         "ParaView load + first render / exabricks end to end":
             (pv["load_seconds"] + pr["unshaded"]["first"]) / ex_wall,
     }
-    print("ratios (ParaView / exabricks):")
+    print("pictures: exabricks unshaded against ParaView unshaded: " + describe_agreement(agree["unshaded"]))
+    print("          exabricks full quality against ParaView shaded: " + describe_agreement(agree["shaded"]))
+    valid = alike(agree["unshaded"]) and alike(agree["shaded"])
+    print("ratios (ParaView / exabricks)" + ("" if valid else ", NOT VALID: the pictures differ") + ":")
     for name, r in ratios.items():
-        print(f"  {name:76s} {r:8.2f}x")
+        print(f"  {name:76s} {r:8.2f}x" + ("" if valid else "  (not valid)"))
     return rows, ratios
 
 
-def save_side_by_side(a, info, ex_png, ex_frame, pv, rows, ratios):
+def save_side_by_side(a, info, ex_png, ex_frame, pv, rows, ratios, agree):
     """One PNG: exabricks (full quality) | ParaView (shaded); and the figures in results.json."""
     import matplotlib
     matplotlib.use("Agg")
@@ -220,7 +224,8 @@ def save_side_by_side(a, info, ex_png, ex_frame, pv, rows, ratios):
     fig.tight_layout()
     out_side = os.path.join(a.out, "side-by-side.png")
     fig.savefig(out_side)
-    json.dump({"rows": dict(rows), "ratios": ratios, "paraview": pv}, open(os.path.join(a.out, "results.json"), "w"),
+    json.dump({"rows": dict(rows), "ratios": ratios, "paraview": pv, "agreement": agree,
+               "valid": alike(agree["unshaded"]) and alike(agree["shaded"])}, open(os.path.join(a.out, "results.json"), "w"),
               indent=1)
     print(f"wrote {out_side}")
 
@@ -240,12 +245,21 @@ def main():
                                 view["opacity_scale"], ex_png, [], a.frames)
     _, ex_flat = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
                                view["opacity_scale"], os.path.join(a.out, "exabricks-unshaded.png"),
-                               ["--no-early-termination", "--shading", "none"], a.frames)
+                               ["--no-early-termination"], a.frames, shading="none")
 
     # --- ParaView ---
     pv, pv_wall = render_paraview(a, view)
-    rows, ratios = report(a, info, view, ex_wall, ex, ex_flat, pv, pv_wall)
-    save_side_by_side(a, info, ex_png, ex["frame_seconds"], pv, rows, ratios)
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    agree = {"unshaded": agreement(plt.imread(os.path.join(a.out, "exabricks-unshaded.png"))[..., :3],
+                                   plt.imread(os.path.join(a.out, "paraview.png"))[..., :3]),
+             "shaded": agreement(plt.imread(ex_png)[..., :3],
+                                 plt.imread(os.path.join(a.out, "paraview-shaded.png"))[..., :3])}
+    rows, ratios = report(a, info, view, ex_wall, ex, ex_flat, pv, pv_wall, agree)
+    save_side_by_side(a, info, ex_png, ex["frame_seconds"], pv, rows, ratios, agree)
+    if not (alike(agree["unshaded"]) and alike(agree["shaded"])):
+        return "the two pictures differ: the ratios compare unlike work"
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -18,7 +18,8 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from peer_common import add_common_arguments, camera, run_exabricks  # noqa: E402
+from peer_common import (add_common_arguments, agreement, alike, camera, dataset_info,  # noqa: E402
+                         describe_agreement, pinned_arguments, require_comparable, run_exabricks)
 
 
 def bright_level(rgb):
@@ -40,8 +41,8 @@ def parse_arguments():
 def describe(a):
     """The dataset as `exabricks info` describes it, and the view both renderers share: value range,
     exabricks' default opacity and camera."""
-    info = json.loads(subprocess.run([a.exabricks, "-q", "info", a.plotfile, "-f", a.field, "--json"], check=True,
-                                     capture_output=True, text=True).stdout)
+    info = dataset_info(a.exabricks, a.plotfile)
+    require_comparable(info, a.field, a.plotfile)
     lower, upper = info["bounds"]["world"]["lower"], info["bounds"]["world"]["upper"]
     fr = [f for f in info["fields"] if f["name"] == a.field][0]["range"]
     value_range = (fr["min"], fr["max"])
@@ -67,17 +68,14 @@ def render_exabricks(a, view):
                                ["--no-early-termination"], a.frames)
     _, ex_flat = run_exabricks(a.exabricks, a.plotfile, a.field, a.size, pos, look, up, a.fov, value_range,
                                opacity_scale, os.path.join(a.out, "exabricks-unshaded.png"),
-                               ["--no-early-termination", "--shading", "none"], a.frames)
+                               ["--no-early-termination"], a.frames, shading="none")
     # Mean brightness over black at the calibration size, unshaded, for matching yt's opacity.
     cal_png = os.path.join(a.out, "exabricks-calibration.png")
-    subprocess.run([a.exabricks, "-q", "render", "-o", cal_png, "--background", "0,0,0", "--shading", "none",
-                    a.plotfile, "-f", a.field,
-                    "--size", f"{a.calibration_size}x{a.calibration_size}", "--colormap", "viridis",
-                    "--position", ",".join(map(repr, pos)), "--look-at", ",".join(map(repr, look)),
-                    "--up", ",".join(map(repr, up)), "--fov", repr(a.fov),
-                    "--range", f"{value_range[0]!r},{value_range[1]!r}", "--opacity-scale", repr(opacity_scale),
-                    "--no-early-termination"], check=True)
-    return {"png": ex_png, "wall": ex_wall, "full": ex, "no_et": ex_noet, "flat": ex_flat, "calibration": cal_png}
+    subprocess.run([a.exabricks, "-q", "render", "-o", cal_png, "--no-early-termination"]
+                   + pinned_arguments(a.plotfile, a.field, a.calibration_size, pos, look, up, a.fov, value_range,
+                                      opacity_scale, "none"), check=True)
+    return {"png": ex_png, "wall": ex_wall, "full": ex, "no_et": ex_noet, "flat": ex_flat, "calibration": cal_png,
+            "flat_png": os.path.join(a.out, "exabricks-unshaded.png")}
 
 
 def make_scene(ds, yfield, view, fov, resolution, alpha_scale):
@@ -142,6 +140,8 @@ def render_yt(a, view, ex_cal):
     import yt
 
     yfield = ("boxlib", a.field)
+    if yfield not in yt.load(a.plotfile).field_list:
+        sys.exit("yt cannot read the field %s of %s: nothing to compare" % (a.field, a.plotfile))
     # Timed: the first render of a scene builds yt's brick k-d tree (vertex-centred data per
     # grid), the second reuses it. Render time does not depend on the opacity (yt integrates
     # every ray to its end).
@@ -211,8 +211,9 @@ def render_from_yt(a, view, ds, yfield):
     return t_from_yt, t_eb_first, t_eb_frame
 
 
-def report(a, info, view, ex, yt_run, ex_cal, from_yt_times):
-    """Prints the times and their ratios; returns both."""
+def report(a, info, view, ex, yt_run, ex_cal, from_yt_times, agree):
+    """Prints the times and their ratios, each beside the agreement of the pictures it compares;
+    returns both."""
     eb_rows = []
     if from_yt_times is not None:
         t_from_yt, t_eb_first, t_eb_frame = from_yt_times
@@ -240,7 +241,10 @@ def report(a, info, view, ex, yt_run, ex_cal, from_yt_times):
     print(f"  yt opacity scale {yt_run['scale']:.4g}: brightest pixels {yt_run['bright']:.4f} (exabricks unshaded "
           f"{ex_cal:.4f}), found in {yt_run['calibration']:.1f} s")
     print(f"  yt printed 'Failed to split grids.' {yt_run['split_messages']} times while building its k-d tree")
-    print("ratios (yt / exabricks):")
+    print("pictures: exabricks unshaded against yt (the same settings): " + describe_agreement(agree["unshaded"]))
+    print("          exabricks full quality (lit) against yt: " + describe_agreement(agree["full"]))
+    valid = alike(agree["unshaded"])
+    print("ratios (yt / exabricks)" + ("" if valid else ", NOT VALID: the pictures differ") + ":")
     ratios = {
         "yt first render / exabricks full-quality frame": t_first / ex_frame,
         "yt second render / exabricks full-quality frame": t_second / ex_frame,
@@ -252,11 +256,11 @@ def report(a, info, view, ex, yt_run, ex_cal, from_yt_times):
         ratios["yt first render / (exabricks.from_yt + first render)"] = t_first / (t_from_yt + t_eb_first)
         ratios["yt second render / exabricks frame through from_yt"] = t_second / t_eb_frame
     for name, r in ratios.items():
-        print(f"  {name:66s} {r:8.2f}x")
+        print(f"  {name:66s} {r:8.2f}x" + ("" if valid else "  (not valid)"))
     return rows, ratios
 
 
-def save_side_by_side(a, info, ex, yt_run, ex_cal, rows, ratios):
+def save_side_by_side(a, info, ex, yt_run, ex_cal, rows, ratios, agree):
     """Both images side by side in one PNG, and the figures in results.json."""
     import matplotlib.pyplot as plt
     import yt
@@ -275,7 +279,8 @@ def save_side_by_side(a, info, ex, yt_run, ex_cal, rows, ratios):
     fig.tight_layout()
     side = os.path.join(a.out, "side-by-side.png")
     fig.savefig(side)
-    json.dump({"rows": dict(rows), "ratios": ratios, "yt_opacity_scale": yt_run["scale"],
+    json.dump({"rows": dict(rows), "ratios": ratios, "yt_opacity_scale": yt_run["scale"], "agreement": agree,
+               "valid": alike(agree["unshaded"]),
                "brightness": [ex_cal, yt_run["bright"]], "yt_split_failures": yt_run["split_messages"]},
               open(os.path.join(a.out, "results.json"), "w"), indent=1)
     print(f"wrote {side}")
@@ -296,8 +301,12 @@ def main():
     ex_cal = bright_level(plt.imread(ex["calibration"])[..., :3])
     yt_run = render_yt(a, view, ex_cal)
     from_yt_times = render_from_yt(a, view, yt_run["ds"], yt_run["field"])
-    rows, ratios = report(a, info, view, ex, yt_run, ex_cal, from_yt_times)
-    save_side_by_side(a, info, ex, yt_run, ex_cal, rows, ratios)
+    agree = {"unshaded": agreement(plt.imread(ex["flat_png"])[..., :3], yt_run["rgb"]),
+             "full": agreement(plt.imread(ex["png"])[..., :3], yt_run["rgb"])}
+    rows, ratios = report(a, info, view, ex, yt_run, ex_cal, from_yt_times, agree)
+    save_side_by_side(a, info, ex, yt_run, ex_cal, rows, ratios, agree)
+    if not alike(agree["unshaded"]):
+        return "the two pictures differ (%s): the ratios compare unlike work" % describe_agreement(agree["unshaded"])
 
 
 if __name__ == "__main__":
