@@ -103,6 +103,55 @@ TEST(BasisBatch, EqualsTheScalarReconstruction) {
   EXPECT_GT(wide, 0);
 }
 
+TEST(BasisBatch, SeveralFieldsInOnePassEqualEachFieldAlone) {
+  // Smooth shading's three gradient fields in one pass over a region's bricks: each equals the
+  // field reconstructed alone, to the bit (the same sums in the same order), and the scalar
+  // reference to round-off.
+  forEveryTarget([&] {
+    for (const test::NamedCells& d : test::smallDatasets()) {
+      const Model m = buildModel(CellSet(d.cells));
+      const FieldView view = m.view(0);
+      std::vector<std::vector<float>> arrays(3, std::vector<float>(m.fieldValues[0].size()));
+      std::mt19937 rng(5);
+      std::uniform_real_distribution<float> u(0.f, 1.f);
+      for (size_t k = 0; k < arrays[0].size(); ++k)
+        arrays[0][k] = view.values[k] * 2.f - 1.f, arrays[1][k] = u(rng), arrays[2][k] = float(k % 7);
+      const float* const values[3] = {arrays[0].data(), arrays[1].data(), arrays[2].data()};
+      std::uniform_int_distribution<int> pickRegion(0, int(m.regions.regions.size()) - 1);
+      for (int trial = 0; trial < 200; ++trial) {
+        const uint32_t r = uint32_t(pickRegion(rng));
+        const Region& region = m.regions.regions[r];
+        const box3f b = region.bounds();
+        SampleBatch batch;
+        batch.count = 1 + trial % kSampleBatch;
+        for (int i = 0; i < batch.count; ++i) {
+          batch.x[i] = b.lower.x + u(rng) * (b.upper.x - b.lower.x);
+          batch.y[i] = b.lower.y + u(rng) * (b.upper.y - b.lower.y);
+          batch.z[i] = b.lower.z + u(rng) * (b.upper.z - b.lower.z);
+        }
+        const int fields = 1 + trial % 3;
+        alignas(64) float together[3][kSampleBatch], scalar[3][kSampleBatch];
+        float* const out[3] = {together[0], together[1], together[2]};
+        float* const ref[3] = {scalar[0], scalar[1], scalar[2]};
+        const uint32_t* ids = m.regions.brickIds.data() + region.brickBegin;
+        sampleFieldsBatch(view, values, fields, ids, region.brickCount, batch, out);
+        sampleFieldsBatchScalar(view, values, fields, ids, region.brickCount, batch, ref);
+        for (int f = 0; f < fields; ++f) {
+          FieldView alone = view;
+          alone.values = values[f];
+          SampleBatch one = batch;
+          sampleBricksBatch(alone, ids, region.brickCount, one, false);
+          for (int i = 0; i < batch.count; ++i) {
+            const float expected = one.valid[i] ? one.value[i] : 0.f;
+            ASSERT_EQ(together[f][i], expected) << d.name << " field " << f << " sample " << i;
+            EXPECT_NEAR(together[f][i], scalar[f][i], 2e-6f * (1.f + std::abs(scalar[f][i]))) << d.name;
+          }
+        }
+      }
+    }
+  });
+}
+
 TEST(BasisBatch, UnionOfRegionListsEqualsEachSamplesOwnRegion) {
   // A batch that joins the samples of several regions is reconstructed over the ascending union
   // of their brick lists; every sample must get what its own region's list gives it in a batch

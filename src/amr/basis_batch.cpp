@@ -3,6 +3,8 @@
 // includes itself through foreach_target.h) and dispatches at run time.
 #include "exabricks/amr/basis_batch.h"
 
+#include <algorithm>
+
 #ifndef EXABRICKS_HAVE_HWY
 
 namespace exa {
@@ -16,6 +18,11 @@ void sampleBricksBatch(const FieldView& view, const uint32_t* brickIds, uint32_t
 }
 SampleRegionBatchFunction sampleRegionBatchFunction() { return &sampleRegionBatch; }
 SampleBricksBatchFunction sampleBricksBatchFunction() { return &sampleBricksBatch; }
+void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
+                       uint32_t brickCount, const SampleBatch& batch, float* const* out) {
+  sampleFieldsBatchScalar(view, values, fields, brickIds, brickCount, batch, out);
+}
+SampleFieldsBatchFunction sampleFieldsBatchFunction() { return &sampleFieldsBatch; }
 const char* batchTargetName() { return "scalar"; }
 std::vector<std::string> batchTargets() { return {"scalar"}; }
 bool useBatchTarget(const std::string& name) { return name.empty() || name == "scalar"; }
@@ -142,28 +149,33 @@ template <class D> HWY_INLINE void BrickFactors(D d, const Brick& brick, hn::Vec
   }
 }
 
-// The values of the eight corners, two neighbours along x per (y, z) row: c0[z][y] the lower x
-// cell, c1[z][y] the upper. `above` is set where the pair's second cell is the lane's lower
-// existing one.
-template <class D>
-HWY_INLINE void FetchCorners(D d, const FieldView& view, const Brick& brick, BrickHats<D>& h, hn::Vec<D> (&c0)[2][2],
-                             hn::Vec<D> (&c1)[2][2], hn::Mask<D>& above) {
-  using V = hn::Vec<D>;
+// Where a brick's eight corners lie for every lane: two neighbours along x per (y, z) row, the
+// first at `at`, the rows `offset[1]` and `offset[2]` on (zero where the upper cell is missing).
+// `above` is set where the pair's second cell is the lane's lower existing one. With pair loads the
+// x hat factors move with the cells (once per brick, however many arrays are then fetched).
+template <class D> struct CornerIndex {
+  using VI = hn::Vec<hn::RebindToSigned<D>>;
+  VI at, offset[3];
+  hn::Mask<D> above;
+  bool pairs = false;
+};
+
+template <class D> HWY_INLINE void IndexCorners(D d, const Brick& brick, BrickHats<D>& h, CornerIndex<D>& ci) {
   using VI = hn::Vec<hn::RebindToSigned<D>>;
   const hn::RebindToSigned<D> di;
   const VI ione = hn::Set(di, 1);
-  const float* values = view.values + brick.valueOffset;
   const VI sx = hn::Set(di, brick.size.x), sxy = hn::Set(di, brick.size.x * brick.size.y);
-  const VI offset[3] = {hn::IfThenElseZero(hn::RebindMask(di, h.both[0]), ione),
-                        hn::IfThenElseZero(hn::RebindMask(di, h.both[1]), sx),
-                        hn::IfThenElseZero(hn::RebindMask(di, h.both[2]), sxy)};
+  ci.offset[0] = hn::IfThenElseZero(hn::RebindMask(di, h.both[0]), ione);
+  ci.offset[1] = hn::IfThenElseZero(hn::RebindMask(di, h.both[1]), sx);
+  ci.offset[2] = hn::IfThenElseZero(hn::RebindMask(di, h.both[2]), sxy);
   // Each lane's first corner: its lower x cell plus the start of its (y, z) row.
   const VI rowStart = hn::Add(hn::Mul(sx, h.lo[1]), hn::Mul(sxy, h.lo[2]));
-  VI at = hn::Add(h.lo[0], rowStart);
-  above = hn::Lt(hn::Set(d, 1.f), hn::Zero(d));
+  ci.at = hn::Add(h.lo[0], rowStart);
+  ci.above = hn::Lt(hn::Set(d, 1.f), hn::Zero(d));
 #if EXA_PAIR_LOADS
-  const bool pairs = brick.size.x >= 2;
-  if (pairs) {
+  ci.pairs = brick.size.x >= 2;
+  if (ci.pairs) {
+    using V = hn::Vec<D>;
     // Pairs along x start at cell b = clamp(floor, 0, size - 2), so that both lie in the
     // brick. Where the floor is -1 (left of the first centre) b is its upper cell; where it
     // is size - 1 (right of the last) b + 1 is its lower one. The hat factors move with the
@@ -171,26 +183,35 @@ HWY_INLINE void FetchCorners(D d, const FieldView& view, const Brick& brick, Bri
     const V magic = hn::Set(d, 8388608.f); // 2^23
     const V b = hn::Min(hn::Max(h.fl[0], hn::Zero(d)), hn::Set(d, float(brick.size.x - 2)));
     const hn::Mask<D> same = hn::Eq(b, h.fl[0]), below = hn::Lt(h.fl[0], b);
-    above = hn::Gt(h.fl[0], b);
+    ci.above = hn::Gt(h.fl[0], b);
     const V g0 = hn::IfThenElse(same, h.h0[0], hn::IfThenElseZero(below, h.h1[0]));
-    const V g1 = hn::IfThenElse(same, h.h1[0], hn::IfThenElseZero(above, h.h0[0]));
+    const V g1 = hn::IfThenElse(same, h.h1[0], hn::IfThenElseZero(ci.above, h.h0[0]));
     const V dg0 = hn::IfThenElse(same, h.dh0[0], hn::IfThenElseZero(below, h.dh1[0]));
-    const V dg1 = hn::IfThenElse(same, h.dh1[0], hn::IfThenElseZero(above, h.dh0[0]));
+    const V dg1 = hn::IfThenElse(same, h.dh1[0], hn::IfThenElseZero(ci.above, h.dh0[0]));
     h.h0[0] = g0, h.h1[0] = g1, h.dh0[0] = dg0, h.dh1[0] = dg1;
-    at = hn::Add(hn::Sub(hn::BitCast(di, hn::Add(b, magic)), hn::BitCast(di, magic)), rowStart);
+    ci.at = hn::Add(hn::Sub(hn::BitCast(di, hn::Add(b, magic)), hn::BitCast(di, magic)), rowStart);
   }
 #endif
+}
+
+// The values of the eight corners from `values` (the brick's first value): c0[z][y] the lower x
+// cell of each row, c1[z][y] the upper.
+template <class D>
+HWY_INLINE void FetchCorners(D d, const float* values, const CornerIndex<D>& ci, hn::Vec<D> (&c0)[2][2],
+                             hn::Vec<D> (&c1)[2][2]) {
+  using V = hn::Vec<D>;
+  using VI = hn::Vec<hn::RebindToSigned<D>>;
   const auto fetchRow = [&](const VI& row, V& r0, V& r1) {
 #if EXA_PAIR_LOADS
-    if (pairs) return loadPairs(d, values, row, r0, r1);
+    if (ci.pairs) return loadPairs(d, values, row, r0, r1);
 #endif
     r0 = hn::GatherIndex(d, values, row);
-    r1 = hn::GatherIndex(d, values, hn::Add(row, offset[0]));
+    r1 = hn::GatherIndex(d, values, hn::Add(row, ci.offset[0]));
   };
-  fetchRow(at, c0[0][0], c1[0][0]);
-  fetchRow(hn::Add(at, offset[1]), c0[0][1], c1[0][1]);
-  fetchRow(hn::Add(at, offset[2]), c0[1][0], c1[1][0]);
-  fetchRow(hn::Add(hn::Add(at, offset[1]), offset[2]), c0[1][1], c1[1][1]);
+  fetchRow(ci.at, c0[0][0], c1[0][0]);
+  fetchRow(hn::Add(ci.at, ci.offset[1]), c0[0][1], c1[0][1]);
+  fetchRow(hn::Add(ci.at, ci.offset[2]), c0[1][0], c1[1][0]);
+  fetchRow(hn::Add(hn::Add(ci.at, ci.offset[1]), ci.offset[2]), c0[1][1], c1[1][1]);
 }
 
 // A batch's running sums over its bricks, and the reference value they are relative to.
@@ -284,18 +305,89 @@ void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t br
       BrickHats<D> h;
       if (!BrickSupport(d, brick, p, invW, h)) continue; // no lane lies in this brick's support
       BrickFactors(d, brick, invW, h);
+      CornerIndex<D> ci;
+      IndexCorners(d, brick, h, ci);
       V c0[2][2], c1[2][2];
-      hn::Mask<D> above;
-      FetchCorners(d, view, brick, h, c0, c1, above);
+      FetchCorners(d, view.values + brick.valueOffset, ci, c0, c1);
       // The reference value: the first brick that has cells on every axis gives its first cell
       // (the lower one where it exists).
       const hn::Mask<D> newRef = hn::AndNot(s.haveRef, h.any);
-      s.v0 = hn::IfThenElse(newRef, hn::IfThenElse(above, c1[0][0], c0[0][0]), s.v0);
+      s.v0 = hn::IfThenElse(newRef, hn::IfThenElse(ci.above, c1[0][0], c0[0][0]), s.v0);
       s.haveRef = hn::Or(s.haveRef, newRef);
       AddCorners<gradient>(h, c0, c1, s);
     }
     StoreSums<gradient>(d, s, batch, base);
   }
+}
+
+// Several value arrays over the same bricks: sampleBatchFor's values-only sums once per array,
+// each brick's factors and corner indices found once.
+template <int kFields, size_t kLanes>
+void SampleFieldsFor(const float* const* values, const FieldView& view, const uint32_t* brickIds, uint32_t brickCount,
+                     const SampleBatch& batch, float* const* out) {
+  using D = hn::CappedTag<float, kLanes>;
+  const D d;
+  using V = hn::Vec<D>;
+  const size_t lanes = hn::Lanes(d);
+  const V one = hn::Set(d, 1.f), zero = hn::Zero(d);
+  // Whole vectors of positions: the lanes beyond count repeat the last one.
+  alignas(64) float pos[3][2 * kSampleBatch];
+  const int padded = int((size_t(batch.count) + lanes - 1) / lanes * lanes);
+  for (int i = 0; i < padded; ++i) {
+    const int j = std::min(i, batch.count > 0 ? batch.count - 1 : 0);
+    pos[0][i] = batch.x[j], pos[1][i] = batch.y[j], pos[2][i] = batch.z[j];
+  }
+  for (size_t base = 0; base < size_t(batch.count); base += lanes) {
+    const V p[3] = {hn::Load(d, pos[0] + base), hn::Load(d, pos[1] + base), hn::Load(d, pos[2] + base)};
+    BatchSums<D> s[kFields];
+    for (BatchSums<D>& f : s)
+      f.sumW = zero, f.sumWV = zero, f.v0 = zero;
+    hn::Mask<D> haveRef = one < zero; // all false
+    for (uint32_t k = 0; k < brickCount; ++k) {
+      const Brick& brick = view.bricks[brickIds[k]];
+      const V invW = hn::Set(d, inverseWidth(brick.level));
+      BrickHats<D> h;
+      if (!BrickSupport(d, brick, p, invW, h)) continue;
+      BrickFactors(d, brick, invW, h);
+      CornerIndex<D> ci;
+      IndexCorners(d, brick, h, ci);
+      const hn::Mask<D> newRef = hn::AndNot(haveRef, h.any);
+      haveRef = hn::Or(haveRef, newRef);
+      for (int f = 0; f < kFields; ++f) {
+        V c0[2][2], c1[2][2];
+        FetchCorners(d, values[f] + brick.valueOffset, ci, c0, c1);
+        s[f].v0 = hn::IfThenElse(newRef, hn::IfThenElse(ci.above, c1[0][0], c0[0][0]), s[f].v0);
+        AddCorners<false>(h, c0, c1, s[f]);
+      }
+    }
+    for (int f = 0; f < kFields; ++f) {
+      const hn::Mask<D> ok = s[f].sumW > zero;
+      const V safeW = hn::IfThenElse(ok, s[f].sumW, one);
+      const V v = hn::IfThenElseZero(ok, hn::Add(s[f].v0, hn::Div(s[f].sumWV, safeW)));
+      hn::StoreU(v, d, out[f] + base); // whole vectors: padded <= kSampleBatch
+    }
+  }
+}
+
+template <size_t kLanes>
+void SampleFieldsLanes(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
+                       uint32_t brickCount, const SampleBatch& batch, float* const* out) {
+  switch (fields) {
+  case 1:
+    return SampleFieldsFor<1, kLanes>(values, view, brickIds, brickCount, batch, out);
+  case 2:
+    return SampleFieldsFor<2, kLanes>(values, view, brickIds, brickCount, batch, out);
+  default:
+    return SampleFieldsFor<3, kLanes>(values, view, brickIds, brickCount, batch, out);
+  }
+}
+
+void SampleFieldsBatchImpl(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
+                           uint32_t brickCount, const SampleBatch& batch, float* const* out) {
+  if (batch.count <= 4)
+    SampleFieldsLanes<4>(view, values, fields, brickIds, brickCount, batch, out);
+  else
+    SampleFieldsLanes<kSampleBatch>(view, values, fields, brickIds, brickCount, batch, out);
 }
 
 void SampleBricksBatchImpl(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch,
@@ -329,6 +421,7 @@ namespace exa {
 
 HWY_EXPORT(SampleBatchImpl);
 HWY_EXPORT(SampleBricksBatchImpl);
+HWY_EXPORT(SampleFieldsBatchImpl);
 HWY_EXPORT(TargetName);
 
 void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
@@ -346,6 +439,15 @@ SampleRegionBatchFunction sampleRegionBatchFunction() {
 
 SampleBricksBatchFunction sampleBricksBatchFunction() {
   return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBricksBatchImpl));
+}
+
+void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
+                       uint32_t brickCount, const SampleBatch& batch, float* const* out) {
+  HWY_DYNAMIC_DISPATCH(SampleFieldsBatchImpl)(view, values, fields, brickIds, brickCount, batch, out);
+}
+
+SampleFieldsBatchFunction sampleFieldsBatchFunction() {
+  return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleFieldsBatchImpl));
 }
 
 const char* batchTargetName() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }

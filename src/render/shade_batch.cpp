@@ -21,7 +21,7 @@ void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* 
 }
 
 BatchFunctions batchFunctions() {
-  return {&placeSamples, sampleBricksBatchFunction(), &tfLookupBatch, &shadeVolumeBatch};
+  return {&placeSamples, sampleBricksBatchFunction(), sampleFieldsBatchFunction(), &tfLookupBatch, &shadeVolumeBatch};
 }
 
 } // namespace exa
@@ -238,7 +238,7 @@ void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* 
 
 BatchFunctions batchFunctions() {
   return {chosenBatchFunction(HWY_DISPATCH_TABLE(PlaceSamplesImpl)), sampleBricksBatchFunction(),
-          chosenBatchFunction(HWY_DISPATCH_TABLE(TfLookupBatchImpl)),
+          sampleFieldsBatchFunction(), chosenBatchFunction(HWY_DISPATCH_TABLE(TfLookupBatchImpl)),
           chosenBatchFunction(HWY_DISPATCH_TABLE(ShadeVolumeBatchImpl))};
 }
 

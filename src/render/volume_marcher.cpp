@@ -39,21 +39,32 @@ bool joinBrickLists(const uint32_t* a, const uint32_t* aEnd, const uint32_t* b, 
   return a == aEnd && b == bEnd;
 }
 
-/// Smooth shading's gradient at every sample of a batch: the layer's gradient fields
-/// reconstructed like its values, from the same bricks (per lattice unit; 0 where none).
-void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t count, SampleBricksBatchFunction sample,
-                     SampleBatch& batch) {
-  SampleBatch g;
-  g.count = batch.count;
-  std::copy(std::begin(batch.x), std::end(batch.x), g.x);
-  std::copy(std::begin(batch.y), std::end(batch.y), g.y);
-  std::copy(std::begin(batch.z), std::end(batch.z), g.z);
-  float* const out[3] = {batch.gx, batch.gy, batch.gz};
-  for (int a = 0; a < 3; ++a) {
-    sample(layer.grad[size_t(a)], ids, count, g, false);
-    for (int i = 0; i < batch.count; ++i)
-      out[a][i] = g.valid[i] ? g.value[i] : 0.f;
+/// Smooth shading's gradient at the samples of a batch that the transfer function shows (`tf`;
+/// the others are not lit, and get 0): the layer's three gradient fields reconstructed like its
+/// values, from the same bricks, in one pass over them, for the shown samples gathered into one
+/// batch (per lattice unit; 0 where no cell has weight).
+void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t count, SampleFieldsBatchFunction sample,
+                     const TfBatch& tf, SampleBatch& batch) {
+  const float* const values[3] = {layer.grad[0].values, layer.grad[1].values, layer.grad[2].values};
+  alignas(64) int32_t shown[kSampleBatch];
+  int m = 0;
+  for (int i = 0; i < batch.count; ++i)
+    if (tf.logT[i] < 0.f) shown[m++] = i;
+  if (m == batch.count) {
+    float* const out[3] = {batch.gx, batch.gy, batch.gz};
+    sample(layer.grad[0], values, 3, ids, count, batch, out);
+    return;
   }
+  SampleBatch gathered;
+  gathered.count = m;
+  for (int k = 0; k < m; ++k)
+    gathered.x[k] = batch.x[shown[k]], gathered.y[k] = batch.y[shown[k]], gathered.z[k] = batch.z[shown[k]];
+  float* const out[3] = {gathered.gx, gathered.gy, gathered.gz};
+  sample(layer.grad[0], values, 3, ids, count, gathered, out);
+  for (int i = 0; i < batch.count; ++i)
+    batch.gx[i] = batch.gy[i] = batch.gz[i] = 0.f;
+  for (int k = 0; k < m; ++k)
+    batch.gx[shown[k]] = gathered.gx[k], batch.gy[shown[k]] = gathered.gy[k], batch.gz[shown[k]] = gathered.gz[k];
 }
 
 /// The march of one ray in batches: the samples of one segment, or with joinSegments of several
@@ -160,7 +171,7 @@ private:
       return false;
     }
     if (wantGrad_ && !withGrad) reconstruct(layer_, batch_, true);
-    if (smooth_) smoothGradients(layer_, brickIds_, brickCount_, fn_.sample, batch_);
+    if (smooth_) smoothGradients(layer_, brickIds_, brickCount_, fn_.sampleFields, looked, batch_);
     // Opacity and colour of every sample at once, then the in-order compositing.
     ShadedBatch shaded;
     params_.fadeWidth = fades_;
@@ -185,7 +196,7 @@ private:
       reconstruct(layer, lb, wantGrad_);
       TfBatch looked;
       if (!fn_.tfLookup(layer.t, lb, looked)) continue;
-      if (smooth_) smoothGradients(layer, brickIds_, brickCount_, fn_.sample, lb);
+      if (smooth_) smoothGradients(layer, brickIds_, brickCount_, fn_.sampleFields, looked, lb);
       for (int i = 0; i < n; ++i)
         fades[i] = layer.fadeWidth(in_.model.regions.regions[regionOf_[i]], in_.meanScale);
       VolumeShadeParams params = params_;
