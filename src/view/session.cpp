@@ -204,7 +204,10 @@ void Session::serve(const Request& request) {
   }
   if (request.interactive) return;
 
-  // Then the full-resolution image, refined pass by pass.
+  // Then the full-resolution image, refined pass by pass; with parts, it ends with every level
+  // (path tracing scatters light between parts: it stays with the resident coarse levels).
+  const bool everyLevel = parts_ && request.doc.scene.integration.integrator != Integrator::PathTrace;
+  if (parts_ && !everyLevel) info.data += "; a path-traced view shows these levels only";
   info.draft = false;
   info.width = frame.width;
   info.height = frame.height;
@@ -214,14 +217,14 @@ void Session::serve(const Request& request) {
     if (!view.refine(control) || superseded(request.id)) return;
     const RenderStats& after = view.buffer().stats();
     info.passes = view.passes();
-    info.final = view.complete() && !parts_; // with parts, every level's frame ends the request
+    info.final = view.complete() && !everyLevel;
     info.renderSeconds = after.seconds - before.seconds;
     info.samples = after.samples - before.samples;
     info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
     view.buffer().resolve(image);
-    publish(request, image, info, !parts_, info.final ? options_.finalJpegQuality : options_.jpegQuality);
+    publish(request, image, info, !everyLevel, info.final ? options_.finalJpegQuality : options_.jpegQuality);
   }
-  if (parts_) serveParts(request, info, control);
+  if (everyLevel) serveParts(request, info, control);
 }
 
 void Session::serveParts(const Request& request, FrameInfo info, PassControl& control) {

@@ -105,3 +105,9 @@ def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_
     assert a.shape == b.shape and d.mean() <= 0.5 and (d <= 2).mean() >= 0.999
     if not os.environ.get("EXABRICKS_SANITIZED"):
         assert peak_kb / 1024 <= 1.15 * budget
+    # Path tracing scatters light between parts: a path-traced view ends with the coarse levels,
+    # and says so.
+    doc["integration"]["integrator"] = "pathtrace"
+    request = v.render(doc)
+    frames = frames_until(v, lambda h, i: h["request"] == request and h["final"])
+    assert "path-traced view shows these levels only" in frames[-1].get("data", ""), frames[-1]
