@@ -494,8 +494,21 @@ class Scene:
         w, h = int(width or self.width), int(height or self.height)
         target = int(spp or self.spp)
         self._update()
+        self._last_frame = (w, h, max(target, passes or 1), rate or self.rate)
         return self._renderer.render(self._frame_json(w, h, max(target, passes or 1), rate or self.rate), int(passes),
                                      depth_limit, bool(depth_limit_planar))
+
+    def _render_for_output(self, width, height, spp):
+        """What save and png write: with no size or samples given, the last render's frame (its
+        passes are kept while the scene is unchanged, so nothing renders again; after a change it
+        renders again at that size and samples); else a render of the given frame."""
+        last = getattr(self, "_last_frame", None)
+        if width is None and height is None and spp is None and last is not None:
+            w, h, samples, rate = last
+            self.render(w, h, samples, rate)
+            return w, h
+        self.render(width, height, spp)
+        return int(width or self.width), int(height or self.height)
 
     def render_draft(self, width=None, height=None, budget=0.035, spp=None, rate=None):
         """Renders the draft an interactive view shows of the frame before refining it, as the
@@ -527,18 +540,20 @@ class Scene:
         .pfm (linear RGB over the background). Without a path, DATASET-FIELD-WIDTHxHEIGHT.png in
         the current folder. Publication sizes work as any other: save("f.png", 4096, 4096, 64).
         `normalize`: rescale the colours so that the brightest channel of any pixel reaches 1,
-        as yt's own Scene.save does (a scene converted from yt then looks as yt saves it)."""
-        self.render(width, height, spp)
+        as yt's own Scene.save does (a scene converted from yt then looks as yt saves it).
+        Without `width`, `height` and `spp`, the picture of the last render is written (render(spp=64)
+        then save() saves those 64 samples per pixel, without rendering again unless the scene has
+        changed since)."""
+        w, h = self._render_for_output(width, height, spp)
         if path is None:
-            w, h = self.width, self.height
             name = os.path.splitext(os.path.basename(str(self.dataset.name).rstrip("/")))[0]
             path = "%s-%s-%dx%d.png" % (_file_stem(name), _file_stem(self.field or "volume"), w, h)
         self._renderer.save(str(path), int(bits), bool(normalize))
         return str(path)
 
     def png(self, width=None, height=None, spp=None):
-        """Renders and returns the PNG bytes."""
-        self.render(width, height, spp)
+        """Renders and returns the PNG bytes (without a size or samples: of the last render, as save)."""
+        self._render_for_output(width, height, spp)
         return self._renderer.png()
 
     def pick(self, origin, direction):

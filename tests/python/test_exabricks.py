@@ -153,6 +153,26 @@ def test_info_is_the_command_lines_dictionary(cli, tmp_path):
     assert got == want
 
 
+def test_save_and_png_write_the_last_render(cli, tmp_path):
+    # render(spp=8) then save(): the eight passes, not a new one-pass render; a change of the scene
+    # renders again at the same size and samples; a size given renders that frame.
+    subprocess.run([cli, "generate", "-s", "blobs", "-n", "8000", "-o", str(tmp_path / "b.cells")], check=True)
+    s = eb.Scene(eb.load(tmp_path / "b.cells"), width=40, height=30)
+    assert s.spp == 1
+    s.render(spp=8)
+    eight = s.image().copy()
+    seconds = s.stats()["seconds"]
+    s.save(tmp_path / "a.png")
+    assert s.stats()["passes"] == 8 and s.stats()["seconds"] == seconds  # nothing rendered again
+    assert np.array_equal(s.image(), eight)
+    assert s.png()[:8] == b"\x89PNG\r\n\x1a\n" and s.stats()["passes"] == 8
+    s.ambient += 0.05
+    s.save(tmp_path / "b.png")
+    assert s.stats()["passes"] == 8 and s.image().shape == (30, 40, 4)
+    s.save(tmp_path / "c.png", 20, 10)
+    assert s.image().shape == (10, 20, 4) and s.stats()["passes"] == 1
+
+
 def test_render_and_save_equal_the_command_line(cli, tmp_path):
     subprocess.run([cli, "generate", "-s", "blobs", "-n", "8000", "-o", str(tmp_path / "b.cells")], check=True)
     subprocess.run([cli, "render", str(tmp_path / "b.cells"), "-o", str(tmp_path / "cli.png"), "--size", "64x48",
