@@ -260,6 +260,25 @@ TEST(Defaults, RequestsThatCanNeverShowAnythingAreNamed) {
   Scene none;
   none.volume = false;
   EXPECT_EQ(sceneWarnings(none, m, info).size(), 1u);
+
+  // Settings that do nothing with the integrator chosen: path tracing's with the marcher, and a
+  // path tracer that lets no light leave the volume (zero bounces, no emission).
+  Scene marched = Scene::volumeOf(defaultTransferFunction(), "f");
+  marched.pathTracing.sunIntensity = 3.f;
+  ASSERT_EQ(sceneWarnings(marched, m, info).size(), 1u);
+  EXPECT_NE(sceneWarnings(marched, m, info)[0].find("do nothing with the ray marcher"), std::string::npos);
+  marched.pathTracing = PathTracing{};
+  marched.layers[0].tf.albedo = {{0.f, 0.5f}, {1.f, 0.9f}};
+  EXPECT_EQ(sceneWarnings(marched, m, info).size(), 1u);
+  Scene traced = Scene::volumeOf(defaultTransferFunction(), "f");
+  traced.integration.integrator = Integrator::PathTrace;
+  traced.pathTracing.sunIntensity = 3.f;
+  EXPECT_TRUE(sceneWarnings(traced, m, info).empty());
+  traced.pathTracing.bounces = 0;
+  ASSERT_EQ(sceneWarnings(traced, m, info).size(), 1u);
+  EXPECT_NE(sceneWarnings(traced, m, info)[0].find("zero bounces without emission"), std::string::npos);
+  traced.pathTracing.emission = 0.5f;
+  EXPECT_TRUE(sceneWarnings(traced, m, info).empty());
   Image empty(4, 4);
   EXPECT_TRUE(imageIsEmpty(empty));
   empty.at(1, 2).w = 0.01f;

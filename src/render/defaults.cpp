@@ -4,6 +4,7 @@
 #include "exabricks/amr/partition.h"
 #include "exabricks/core/error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -465,6 +466,16 @@ std::vector<std::string> sceneWarnings(const Scene& scene, const Model& model, c
         out.push_back(strCat("'", name, "' has no positive values (", describe(data),
                              "): with logarithmic mapping every sample maps to the low end"));
     }
+  // Settings that do nothing with the integrator chosen.
+  const bool albedoPoints =
+      std::any_of(scene.layers.begin(), scene.layers.end(), [](const VolumeLayer& l) { return !l.tf.albedo.empty(); });
+  if (scene.integration.integrator == Integrator::March && (scene.pathTracing != PathTracing{} || albedoPoints))
+    out.push_back("the path-tracing settings (pathtrace.*, albedo points) do nothing with the ray marcher: "
+                  "--integrator pathtrace (scene key integration.integrator) uses them");
+  if (scene.integration.integrator == Integrator::PathTrace && scene.volume && scene.pathTracing.bounces == 0 &&
+      !(scene.pathTracing.emission > 0.f))
+    out.push_back("zero bounces without emission: no light leaves the volume toward the camera, so it is drawn "
+                  "black; raise --bounces or give the volume --emission");
   if (!scene.iso.values.empty()) {
     const std::string& isoName = !scene.iso.field.empty() ? scene.iso.field
                                  : !scene.layers.empty()  ? scene.layers[0].field

@@ -63,7 +63,8 @@ TransferFunction widenedForSeries(const TransferFunction& adapted, const range1f
 
 /// What in a scene can never show anything, said before rendering: nothing to draw at all (no
 /// volume, iso-surface or mesh), iso-values outside their field's range, a value range that
-/// excludes all of a layer's data, logarithmic mapping of a field without positive values.
+/// excludes all of a layer's data, logarithmic mapping of a field without positive values,
+/// path-tracing settings with the ray marcher, and path tracing with zero bounces and no emission.
 std::vector<std::string> sceneWarnings(const Scene& scene, const Model& model, const DatasetInfo& dataset);
 
 /// Whether every pixel of an image is transparent (the render shows only the background).
