@@ -66,7 +66,11 @@ TEST(Partition, PartsTileTheLatticeAndBalanceTheCells) {
         for (int k = 0; k < parts; ++k)
           holders += contains(p.box(k), q);
         EXPECT_EQ(holders, 1) << d.name << " at " << q.x << " " << q.y << " " << q.z;
+        const int at = p.partAt(q); // down the tree: the part whose box holds it
+        ASSERT_TRUE(at >= 0 && at < parts);
+        EXPECT_TRUE(contains(p.box(at), q)) << d.name;
       }
+      EXPECT_EQ(p.partAt(vec3d(std::nan(""), 0.0, 0.0)), -1);
       // Balanced: with the few thousand cells of these datasets, within a quarter of the mean (the blocks
       // of the census are assumed evenly filled) once there are enough cells.
       if (d.cells.size() >= 2500 && parts <= 4) {

@@ -236,6 +236,16 @@ template <typename NearLow> std::vector<int> KdPartition::order(NearLow&& nearLo
   return out;
 }
 
+int KdPartition::partAt(const vec3d& lattice) const {
+  if (nodes_.empty() || !(std::isfinite(lattice.x) && std::isfinite(lattice.y) && std::isfinite(lattice.z))) return -1;
+  int i = 0;
+  while (nodes_[size_t(i)].axis >= 0) {
+    const Node& n = nodes_[size_t(i)];
+    i = n.child[lattice[n.axis] < double(n.split) ? 0 : 1];
+  }
+  return nodes_[size_t(i)].part;
+}
+
 std::vector<int> KdPartition::orderFrom(const vec3d& eye) const {
   return order([&](const Node& n) { return eye[n.axis] < double(n.split); });
 }

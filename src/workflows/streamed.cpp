@@ -378,17 +378,9 @@ void StreamedStep::sample(int field, const std::vector<vec3d>& points, std::vect
   gradients.assign(points.size(), vec3d(0.0));
   found.assign(points.size(), false);
   std::vector<std::vector<size_t>> ofPart(static_cast<size_t>(this->parts()));
-  for (size_t i = 0; i < points.size(); ++i) {
-    const vec3d l = skeleton_.world.toLattice(points[i]);
-    for (int p = 0; p < parts(); ++p) {
-      const box3l& b = partBox(p);
-      if (l.x >= double(b.lower.x) && l.x < double(b.upper.x) && l.y >= double(b.lower.y) && l.y < double(b.upper.y) &&
-          l.z >= double(b.lower.z) && l.z < double(b.upper.z)) {
-        ofPart[size_t(p)].push_back(i);
-        break;
-      }
-    }
-  }
+  for (size_t i = 0; i < points.size(); ++i)
+    if (const int p = plan_.partition.partAt(skeleton_.world.toLattice(points[i])); p >= 0)
+      ofPart[size_t(p)].push_back(i);
   for (int p = 0; p < parts(); ++p) {
     if (ofPart[size_t(p)].empty()) continue;
     const Model* m = part(p);

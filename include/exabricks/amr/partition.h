@@ -123,6 +123,9 @@ public:
   int parts() const { return int(boxes_.size()); }
   /// A part's lattice box, upper exclusive; faces on the outside are +-kUnboundedLattice.
   const box3l& box(int part) const { return boxes_[size_t(part)]; }
+  /// The part whose box holds a lattice point (down the tree: every finite point has one); -1 for
+  /// a point that is not finite.
+  int partAt(const vec3d& lattice) const;
   /// Parts front to back as seen from a point (perspective), lattice coordinates.
   std::vector<int> orderFrom(const vec3d& eye) const;
   /// Parts front to back along a direction (orthographic), lattice directions.
