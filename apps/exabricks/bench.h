@@ -54,6 +54,8 @@ double loadAverage();
 
 struct ImageDiff {
   double rmse = 0, maxAbs = 0;
+  double meanAbs = 0;     ///< mean absolute difference
+  double shareWithin = 1; ///< share of the channels within 2/255
 };
 
 /// Over every channel of every pixel (linear, premultiplied).

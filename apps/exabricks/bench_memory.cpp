@@ -28,25 +28,10 @@ struct BudgetedFrame {
   uint64_t peakBytes = 0;
 };
 
-/// The difference of two images (linear, premultiplied) in steps of 1/255 over every channel:
-/// mean, largest, and the share of channels within 2/255.
+/// difference() in steps of 1/255: mean, largest, and the share of channels within 2/255.
 nlohmann::json imageAgreement(const Image& a, const Image& b) {
-  double sum = 0, largest = 0;
-  size_t within = 0, n = 0;
-  for (size_t i = 0; i < a.pixels.size(); ++i) {
-    const vec4f& p = a.pixels[i];
-    const vec4f& q = b.pixels[i];
-    for (const double e : {double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z, double(p.w) - q.w}) {
-      const double d = std::abs(e) * 255.0;
-      sum += d;
-      largest = std::max(largest, d);
-      within += d <= 2.0 ? 1 : 0;
-      ++n;
-    }
-  }
-  return {{"mean_255", n ? sum / double(n) : 0.0},
-          {"max_255", largest},
-          {"share_within_2_255", n ? double(within) / double(n) : 1.0}};
+  const ImageDiff d = difference(a, b);
+  return {{"mean_255", d.meanAbs * 255.0}, {"max_255", d.maxAbs * 255.0}, {"share_within_2_255", d.shareWithin}};
 }
 
 /// The whole step read after the budgeted frames (so that their peak was measured first), the

@@ -32,16 +32,22 @@ double loadAverage() {
 
 ImageDiff difference(const Image& a, const Image& b) {
   ImageDiff d;
-  double sum = 0;
+  double sum = 0, sumAbs = 0;
+  size_t within = 0;
   for (size_t i = 0; i < a.pixels.size(); ++i) {
     const vec4f& p = a.pixels[i];
     const vec4f& q = b.pixels[i];
     for (const double e : {double(p.x) - q.x, double(p.y) - q.y, double(p.z) - q.z, double(p.w) - q.w}) {
       sum += e * e;
+      sumAbs += std::abs(e);
+      within += std::abs(e) * 255.0 <= 2.0 ? 1 : 0;
       d.maxAbs = std::max(d.maxAbs, std::abs(e));
     }
   }
-  d.rmse = a.pixels.empty() ? 0.0 : std::sqrt(sum / (4.0 * double(a.pixels.size())));
+  const double n = 4.0 * double(a.pixels.size());
+  d.rmse = a.pixels.empty() ? 0.0 : std::sqrt(sum / n);
+  d.meanAbs = a.pixels.empty() ? 0.0 : sumAbs / n;
+  d.shareWithin = a.pixels.empty() ? 1.0 : double(within) / n;
   return d;
 }
 
