@@ -83,7 +83,9 @@ def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_
     # the command line's in-core render of the same scene; the process keeps its budget.
     np = pytest.importorskip("numpy")
     image = pytest.importorskip("PIL.Image")
-    budget = 150
+    # The sanitizers' shadow memory adds about 120 MiB to the process before any data (plt_drop
+    # held whole then needs about 356 MiB): their budget is larger and still below the whole step.
+    budget = 280 if os.environ.get("EXABRICKS_SANITIZED") else 150
     v = start_viewer(str(drop()), "--size", "96x80", "--spp", "2", "--memory-budget", "%dM" % budget)
     frames = frames_until(v, lambda h, i: h["final"])
     assert "coarse levels" in frames[0].get("data", ""), frames[0]
