@@ -505,6 +505,11 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
   return set;
 }
 
+AmrexDomain amrexDomain(const std::string& path) {
+  const Plotfile pf = readHeader(path);
+  return {pf.probLo, pf.probHi};
+}
+
 Census amrexCensus(const std::string& path) {
   const Plotfile pf = readHeader(path);
   std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);

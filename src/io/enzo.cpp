@@ -1,6 +1,7 @@
 #include "exabricks/io/enzo.h"
 
 #include "checked.h"
+#include "enzo_output.h"
 #include "hdf5_file.h"
 #include "patches.h"
 
@@ -19,6 +20,13 @@
 
 namespace exa {
 namespace fs = std::filesystem;
+using io::enzo::DataFiles;
+using io::enzo::Grid;
+using io::enzo::gridGroup;
+using io::enzo::groupOf;
+using io::enzo::Output;
+using io::enzo::Parameters;
+using io::enzo::readOutput;
 
 namespace {
 
@@ -75,31 +83,6 @@ std::vector<double> numbersOf(const std::string& path, const KeyLine& k, size_t 
     if (!std::isfinite(d)) fail(path, ": line ", k.line, ": ", k.key, " is not finite");
   return v;
 }
-
-struct Parameters {
-  int rank = 3;
-  int64_t refineBy = 2;
-  vec3d left{0.0}, right{1.0};
-  SimulationState simulation;
-};
-
-struct Grid {
-  int64_t id = 0;
-  size_t line = 0;
-  int rank = 0;
-  vec3l dimension{0}, start{0}, end{0};
-  vec3d left{0.0}, right{0.0};
-  std::string file; ///< data file beside the hierarchy
-  int64_t fields = -1;
-  unsigned seen = 0;
-  vec3l active() const { return end - start + vec3l(1); }
-};
-
-struct Output {
-  std::string parameterPath, hierarchyPath;
-  Parameters params;
-  std::vector<Grid> grids;
-};
 
 Parameters readParameters(const std::string& path) {
   Parameters p;
@@ -176,6 +159,12 @@ void readGridKey(const std::string& h, const fs::path& dir, const KeyLine& k, Gr
     g.seen |= kFile;
   } else if (k.key == "NumberOfBaryonFields") {
     g.fields = integerOf(h, k);
+  } else if (k.key == "NumberOfParticles") {
+    g.particles = integerOf(h, k);
+    if (g.particles < 0 || g.particles > (int64_t(1) << 50))
+      fail(h, ": line ", k.line, ": NumberOfParticles ", g.particles, " is out of range");
+  } else if (k.key == "ParticleFileName") {
+    g.particleFile = (dir / fs::path(k.value).filename()).string();
   }
 }
 
@@ -208,6 +197,8 @@ void checkGrids(const std::string& h, const std::vector<Grid>& grids) {
     for (const auto& [bit, name] : kNeeded)
       if (!(g.seen & bit)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing ", name, " (truncated hierarchy?)");
     if (g.fields != 0 && !(g.seen & kFile)) fail(h, ": grid ", g.id, " (line ", g.line, "): missing BaryonFileName");
+    if (g.particles > 0 && g.particleFile.empty() && !(g.seen & kFile))
+      fail(h, ": grid ", g.id, " (line ", g.line, "): ", g.particles, " particles but no ParticleFileName");
     for (int a = 0; a < 3; ++a) {
       if (g.start[a] < 0 || g.end[a] < g.start[a] || g.end[a] >= g.dimension[a])
         fail(h, ": grid ", g.id, ": active zones ", g.start[a], "..", g.end[a], " on axis ", a,
@@ -218,7 +209,9 @@ void checkGrids(const std::string& h, const std::vector<Grid>& grids) {
   }
 }
 
-Output readOutput(const std::string& path) {
+} // namespace
+
+Output io::enzo::readOutput(const std::string& path) {
   Output o;
   if (endsWith(path, ".hierarchy")) {
     o.hierarchyPath = path;
@@ -236,22 +229,7 @@ Output readOutput(const std::string& path) {
   return o;
 }
 
-/// The data files, opened once each.
-class DataFiles {
-public:
-  const h5::File& get(const std::string& path) {
-    auto it = files_.find(path);
-    if (it == files_.end()) {
-      std::error_code ec;
-      if (!fs::exists(path, ec)) fail(path, ": missing data file of the Enzo output");
-      it = files_.emplace(path, std::make_unique<h5::File>(path)).first;
-    }
-    return *it->second;
-  }
-
-private:
-  std::map<std::string, std::unique_ptr<h5::File>> files_;
-};
+namespace {
 
 /// Checks a field dataset's shape (z, y, x) against its grid: false when it holds the active
 /// zones only, true when it holds the whole grid with ghost zones.
@@ -271,11 +249,15 @@ bool storedShape(const h5::File& f, const std::string& name, const Grid& g) {
                      " nor GridDimension ", g.dimension.z, "x", g.dimension.y, "x", g.dimension.x, " (z, y, x)"));
 }
 
-std::string groupOf(int64_t id) {
+} // namespace
+
+std::string io::enzo::groupOf(int64_t id) {
   char name[32];
   std::snprintf(name, sizeof name, "/Grid%08lld", static_cast<long long>(id));
   return name;
 }
+
+namespace {
 
 /// Field names of the first grid that has fields: its 3-D datasets.
 std::vector<std::string> fieldNames(const Output& o, DataFiles& files) {
@@ -333,11 +315,15 @@ std::vector<io::Patch> placeGrids(const Output& o, const vec3d& finest) {
 }
 
 /// The grid's group in its data file, which must hold it (`h` names the hierarchy).
-std::string gridGroup(const h5::File& f, const Grid& g, const std::string& h) {
+} // namespace
+
+std::string io::enzo::gridGroup(const h5::File& f, const Grid& g, const std::string& h) {
   const std::string group = groupOf(g.id);
   if (!f.exists(group)) f.bad(group, strCat("missing group of grid ", g.id, " (named by ", h, ")"));
   return group;
 }
+
+namespace {
 
 /// The picked fields' values on the grid's active zones, converted to float.
 std::vector<std::vector<float>> gridValues(const h5::File& f, const std::string& group, const Grid& g,

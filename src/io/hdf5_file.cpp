@@ -195,6 +195,13 @@ bool File::isDouble(const std::string& dataset) const {
   return H5Tget_class(type.get()) == H5T_FLOAT && H5Tget_size(type.get()) > 4;
 }
 
+bool File::isInteger(const std::string& dataset) const {
+  const Lock lock(libraryLock());
+  const Id d = openDataset(dataset);
+  Id type(H5Dget_type(d.get()), H5Tclose);
+  return H5Tget_class(type.get()) == H5T_INTEGER;
+}
+
 namespace {
 template <typename T>
 std::vector<T> readNumeric(const File& f, hid_t file, hid_t d, hid_t memType, const std::string& name) {

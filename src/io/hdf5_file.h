@@ -105,6 +105,8 @@ public:
   void requireStorage(const std::string& dataset) const;
   /// True when the dataset stores floating-point values of more than 4 bytes.
   bool isDouble(const std::string& dataset) const;
+  /// True when the dataset stores integers.
+  bool isInteger(const std::string& dataset) const;
   /// The whole dataset, converted.
   std::vector<double> readDoubles(const std::string& dataset) const;
   std::vector<int64_t> readInts(const std::string& dataset) const;

@@ -37,4 +37,10 @@ std::vector<double> amrexLevelCells(const std::string& path);
 /// Where the plotfile's leaf cells lie, from its headers alone (no cell data is read).
 Census amrexCensus(const std::string& path);
 
+/// The physical domain of a plotfile (the Header's prob_lo and prob_hi).
+struct AmrexDomain {
+  vec3d lower, upper;
+};
+AmrexDomain amrexDomain(const std::string& path);
+
 } // namespace exa
