@@ -15,7 +15,7 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build=${2:-$root/build-fuzz}
 work=${3:-$build/fuzz-runs}
 # FUZZ_TARGETS="fuzz_model fuzz_hdf5" runs only those.
-read -r -a targets <<<"${FUZZ_TARGETS:-fuzz_amrex fuzz_vtk fuzz_enzo fuzz_chombo fuzz_flash fuzz_hdf5 fuzz_native fuzz_raw fuzz_model fuzz_scene fuzz_mesh fuzz_messages}"
+read -r -a targets <<<"${FUZZ_TARGETS:-fuzz_amrex fuzz_particles fuzz_vtk fuzz_enzo fuzz_chombo fuzz_flash fuzz_hdf5 fuzz_native fuzz_raw fuzz_model fuzz_scene fuzz_mesh fuzz_messages}"
 
 cxx=$(command -v clang++ || command -v clang++-14) || { echo "fuzz/run_all.sh needs clang++ (clang-14)" >&2; exit 1; }
 cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER="$cxx" -DEXABRICKS_BUILD_FUZZERS=ON \

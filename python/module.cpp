@@ -14,6 +14,7 @@
 #include "exabricks/io/grids.h"
 #include "exabricks/io/load.h"
 #include "exabricks/io/model_info.h"
+#include "exabricks/io/particles.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene_vocabulary.h"
@@ -375,8 +376,54 @@ void bindMesh(py::module_& m) {
       .def_property_readonly("triangle_count", [](const Mesh& x) { return x.mesh->triangles.size(); });
 }
 
+/// The species of an input, each a dict of its name, count, attributes and precision.
+py::list listParticleSpecies(const std::string& path) {
+  py::list out;
+  for (const ParticleSpeciesInfo& s : listParticles(path)) {
+    py::dict d;
+    d["name"] = s.name;
+    d["count"] = s.count;
+    d["attributes"] = s.attributes;
+    d["precision"] = s.precision;
+    out.append(std::move(d));
+  }
+  return out;
+}
+
+/// Every species (or the one named) read: a dict per species name of "position" (N, 3) and each
+/// attribute (N,), float64 arrays (integer attributes as int64).
+py::dict readParticleSpecies(const std::string& path, const std::string& species) {
+  ParticleSet set;
+  {
+    py::gil_scoped_release release;
+    set = readParticles(path, species);
+  }
+  py::dict out;
+  for (const ParticleSpecies& s : set.species) {
+    py::dict d;
+    py::array_t<double> position({py::ssize_t(s.count()), py::ssize_t(3)});
+    std::copy(s.position.begin(), s.position.end(), position.mutable_data());
+    d["position"] = std::move(position);
+    for (const ParticleAttribute& a : s.attributes) {
+      if (a.integer) {
+        py::array_t<int64_t> v(py::ssize_t(a.values.size()));
+        std::transform(a.values.begin(), a.values.end(), v.mutable_data(), [](double x) { return int64_t(x); });
+        d[py::str(a.name)] = std::move(v);
+      } else {
+        py::array_t<double> v(py::ssize_t(a.values.size()));
+        std::copy(a.values.begin(), a.values.end(), v.mutable_data());
+        d[py::str(a.name)] = std::move(v);
+      }
+    }
+    out[py::str(s.name)] = std::move(d);
+  }
+  return out;
+}
+
 /// The functions that make datasets: load, from_cells, from_grids, and list_fields.
 void bindDatasetFunctions(py::module_& m) {
+  m.def("list_particles", &listParticleSpecies, py::arg("path"));
+  m.def("read_particles", &readParticleSpecies, py::arg("path"), py::arg("species") = "");
   m.def("load", &load, py::arg("path"), py::arg("fields") = std::vector<std::string>(), py::arg("max_brick_width") = 32,
         py::arg("box") = std::vector<int>(), py::arg("nan_as_holes") = false, py::arg("memory_budget") = "");
   m.def("from_cells", &fromCells, py::arg("corners"), py::arg("levels"), py::arg("fields"), py::arg("origin"),

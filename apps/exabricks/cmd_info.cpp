@@ -5,6 +5,7 @@
 #include "mpi/processes.h"
 
 #include "exabricks/io/model_info.h"
+#include "exabricks/io/particles.h"
 
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
@@ -20,6 +21,37 @@ struct InfoOptions {
   bool json = false;
   bool fieldsOnly = false;
 };
+
+/// The particle species beside the cells, from the input's headers (none for the embedded
+/// dataset, model files and formats without particles).
+std::vector<ParticleSpeciesInfo> particlesOf(const InfoOptions& o) {
+  return o.in.input.empty() ? std::vector<ParticleSpeciesInfo>{} : listParticles(o.in.input);
+}
+
+/// Bytes one particle of the species takes once read: positions and attributes in double.
+size_t bytesPerParticle(const ParticleSpeciesInfo& s) { return sizeof(double) * (3 + s.attributes.size()); }
+
+nlohmann::json particlesJson(const std::vector<ParticleSpeciesInfo>& species) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const ParticleSpeciesInfo& s : species)
+    out.push_back({{"species", s.name},
+                   {"count", s.count},
+                   {"attributes", s.attributes},
+                   {"precision", s.precision},
+                   {"bytes_per_particle", bytesPerParticle(s)}});
+  return out;
+}
+
+void printParticles(const std::vector<ParticleSpeciesInfo>& species) {
+  for (const ParticleSpeciesInfo& s : species) {
+    std::string attributes;
+    for (const std::string& a : s.attributes)
+      attributes += (attributes.empty() ? "" : ", ") + a;
+    std::printf("particles        %s: %llu (%s; %zu bytes each when read)\n", s.name.c_str(),
+                (unsigned long long)s.count, s.precision.c_str(), bytesPerParticle(s));
+    std::printf("  attributes     %s\n", attributes.empty() ? "none" : attributes.c_str());
+  }
+}
 
 void printFields(const InfoOptions& o) {
   const std::vector<std::string> names = listFields(o.in.input);
@@ -115,7 +147,9 @@ void runStreamed(const InfoOptions& o, const LoadOptions& lo, MemoryPlan plan) {
   const box3d world = model.world.toWorld(lattice);
   const MemoryPlan& p = step.plan();
   if (o.json) {
-    std::cout << step.infoJson(o.in.name(), seconds) << "\n";
+    nlohmann::json j = nlohmann::json::parse(step.infoJson(o.in.name(), seconds));
+    j["particles"] = particlesJson(particlesOf(o));
+    std::cout << j.dump(2) << "\n";
     return;
   }
   std::printf("input            %s\n", o.in.name().c_str());
@@ -137,6 +171,7 @@ void runStreamed(const InfoOptions& o, const LoadOptions& lo, MemoryPlan plan) {
   std::printf("over the parts   %llu bricks, %llu regions (halos included)\n", (unsigned long long)s.bricks,
               (unsigned long long)s.regions);
   std::printf("peak memory      %s (read in %.3f s)\n", formatBytes(peakResidentBytes()).c_str(), seconds);
+  printParticles(particlesOf(o));
 }
 
 void run(const InfoOptions& o) {
@@ -171,6 +206,7 @@ void run(const InfoOptions& o) {
         counts[field] = cells;
       j["non_finite_holes"] = {{"fields", counts}, {"cells", lo.report->holes}};
     }
+    j["particles"] = particlesJson(particlesOf(o));
     std::cout << j.dump(2) << "\n";
     return;
   }
@@ -216,6 +252,7 @@ void run(const InfoOptions& o) {
   std::printf("build time       bricks %.3f s, regions %.3f s, value ranges %.3f s (load total %.3f s)\n",
               model.stats.brickSeconds, model.stats.regionSeconds, model.stats.rangeSeconds, loadSeconds);
   if (model.stats.parts > 1) std::printf("built in parts   %d, each read alone\n", model.stats.parts);
+  printParticles(particlesOf(o));
 }
 
 } // namespace

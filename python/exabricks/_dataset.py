@@ -10,8 +10,12 @@ from . import _core
 class Dataset:
     """A built AMR dataset (bricks and active brick regions over leaf cells)."""
 
-    def __init__(self, core):
+    def __init__(self, core, path=None):
         self._core = core
+        self._path = path
+        # Where particles come from other than the input's files (from_yt: yt), given a species
+        # name ("" every species, None their list).
+        self._particle_source = None
 
     @property
     def name(self):
@@ -79,6 +83,30 @@ class Dataset:
         """The dictionary `exabricks info --json` prints."""
         return json.loads(self._core.info_json())
 
+    @property
+    def particle_species(self):
+        """The particle species beside the cells, from the input's headers: a list of dicts
+        (name, count, attributes, precision); empty for inputs without particles (the embedded
+        dataset, model files, from_cells and from_grids datasets)."""
+        if self._particle_source is not None:
+            return list(self._particle_source(None).values())
+        return _core.list_particles(self._path) if self._path else []
+
+    def particles(self, species=None):
+        """The particles of one species as a dict of numpy arrays: "position" (N, 3) in world
+        coordinates, as the cells, and each attribute by name (N,) (float64; integer attributes
+        such as ids and types int64). With no species, a dict of every species' dict by name.
+        Particles with a NaN coordinate are skipped (said on stderr)."""
+        if self._particle_source is not None:
+            read = self._particle_source(species or "")
+            return read[species] if species is not None else read
+        if not self._path:
+            if species is not None:
+                raise ValueError("no particle species '%s' (this dataset holds no particles)" % species)
+            return {}
+        read = _core.read_particles(self._path, species or "")
+        return read[species] if species is not None else read
+
     def sample(self, points, field=None):
         """Values (N,) and gradients per world unit (N, 3) at world positions (N, 3); NaN where
         no cell has weight."""
@@ -105,7 +133,8 @@ def load(path=None, fields=None, max_brick_width=32, box=None, nan_as_holes=Fals
     budget = "" if memory_budget is None else str(int(memory_budget)) if isinstance(memory_budget, int) \
         else str(memory_budget)
     return Dataset(_core.load("" if path is None else str(path), list(fields or []), max_brick_width,
-                              list(box) if box is not None else [], bool(nan_as_holes), budget))
+                              list(box) if box is not None else [], bool(nan_as_holes), budget),
+                   None if path is None else str(path))
 
 
 def _units_list(units, names):

@@ -100,7 +100,41 @@ def from_yt(ds, fields=None, max_brick_width=32):
     bbox = [[left[a], right[a]] for a in range(3)]
     dataset = from_grids(grids, names, bbox=bbox, max_brick_width=max_brick_width, units=units)
     dataset._yt_origin = _yt_origin(ds, fields, names, units)
+    dataset._particle_source = lambda species: _yt_particles(ds, species)
     return dataset
+
+
+def _yt_particles(ds, species):
+    """yt's particles of a dataset, as Dataset.particles gives them: per particle type yt reads
+    from the file (ds.particle_types_raw), "position" (N, 3) in code units and each other field of
+    the type by name without its "particle_" prefix; None lists the types with their counts and
+    attributes (Dataset.particle_species)."""
+    ad = ds.all_data()
+    out = {}
+    for ptype in ds.particle_types_raw:
+        names = sorted(f for t, f in ds.field_list if t == ptype)
+        if not all("particle_position_" + a in names for a in "xyz"):
+            continue
+        attributes = [n for n in names if not n.startswith("particle_position_")]
+        if species is None:
+            count = int(ad[ptype, "particle_position_x"].shape[0])
+            out[ptype] = {"name": ptype, "count": count, "attributes": [_strip(a) for a in attributes],
+                          "precision": "double"}
+            continue
+        if species != "" and species != ptype:
+            continue
+        d = {"position": np.stack([_yt_code(ad[ptype, "particle_position_" + a]) for a in "xyz"], axis=1)}
+        for a in attributes:
+            v = ad[ptype, a]
+            d[_strip(a)] = np.asarray(v.d if hasattr(v, "d") else v)
+        out[ptype] = d
+    if species not in (None, "") and species not in out:
+        raise ValueError("no particle species '%s' (yt reads: %s)" % (species, ", ".join(ds.particle_types_raw)))
+    return out
+
+
+def _strip(name):
+    return name[len("particle_"):] if name.startswith("particle_") else name
 
 
 def _yt_origin(ds, fields, names, units):
