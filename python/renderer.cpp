@@ -220,7 +220,7 @@ public:
     if (!renderer_.pick(vec3d(origin[0], origin[1], origin[2]), vec3d(direction[0], direction[1], direction[2]), hit))
       return py::none();
     py::dict d;
-    d["kind"] = hit.kind == SurfaceHit::Mesh ? "mesh" : "iso";
+    d["kind"] = hit.kind == SurfaceHit::Mesh ? "mesh" : hit.kind == SurfaceHit::Particle ? "particle" : "iso";
     d["index"] = hit.index;
     d["distance"] = hit.distance;
     d["position"] = py::make_tuple(hit.position.x, hit.position.y, hit.position.z);

@@ -140,6 +140,7 @@ void DeviceRenderer::sync(const Scene& s, const VolumeMarcher& volume, const Sur
   syncVolume(s, volume, update);
   syncIso(s, surfaces, update);
   syncMeshes(s, update);
+  syncParticles(surfaces, update);
   v.clipping = !s.clip.planes.empty() || !s.clip.box.empty();
   v.planeCount = int(s.clip.planes.size());
   for (size_t i = 0; i < s.clip.planes.size(); ++i)
@@ -244,6 +245,24 @@ void DeviceRenderer::syncMeshes(const Scene& s, SceneUpdate& update) {
   }
 }
 
+void DeviceRenderer::syncParticles(const Surfaces& surfaces, SceneUpdate& update) {
+  TraceView& v = base_;
+  // The CPU renderer's hierarchy and colours, copied again where they were built again.
+  if (update.particles)
+    for (const char* key : {"particle hierarchy", "particle spheres", "particle colours"})
+      if (auto it = buffers_.find(key); it != buffers_.end()) {
+        if (device_ == Device::Cuda) gpu::release(it->second.device);
+        buffers_.erase(it);
+      }
+  const SphereBvh& spheres = surfaces.spheres();
+  v.particles = !spheres.empty();
+  if (v.particles) {
+    v.particleBvh.nodes = put("particle hierarchy", spheres.nodes(), false, update);
+    v.particleBvh.spheres = put("particle spheres", spheres.spheres(), false, update);
+    v.particleColors = put("particle colours", surfaces.sphereColors(), false, update);
+  }
+}
+
 const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int tilesX, int tileBegin, int tileEnd,
                                   int tileStride, gpu::PassCounts& counts) {
   TraceView v = base_;
@@ -293,7 +312,7 @@ const vec4f* DeviceRenderer::pass(const Frame& frame, const box3d* domain, int t
     uint64_t r = 0;
     for (int x = 0; x < frame.width; ++x) {
       if (!tileSelected(x, y, tilesX, tileBegin, tileEnd, tileStride)) continue;
-      const bool surfaces = v.iso || v.meshes;
+      const bool surfaces = v.iso || v.meshes || v.particles;
       colors[size_t(y) * size_t(frame.width) + size_t(x)] =
           v.pathTrace ? (surfaces ? tracePathSample<true>(v, x, y, c) : tracePathSample<false>(v, x, y, c))
                       : (surfaces ? traceSample<true>(v, x, y, c) : traceSample<false>(v, x, y, c));

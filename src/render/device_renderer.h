@@ -54,6 +54,7 @@ private:
   void syncVolume(const Scene& scene, const VolumeMarcher& volume, SceneUpdate& update);
   void syncIso(const Scene& scene, const Surfaces& surfaces, SceneUpdate& update);
   void syncMeshes(const Scene& scene, SceneUpdate& update);
+  void syncParticles(const Surfaces& surfaces, SceneUpdate& update);
 
   struct Buffer {
     void* device = nullptr;

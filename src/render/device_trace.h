@@ -11,6 +11,7 @@
 #include "path_trace.h"
 #include "ray_program.h"
 
+#include "exabricks/accel/sphere_bvh.h"
 #include "exabricks/accel/traversal.h"
 #include "exabricks/accel/triangle_bvh.h"
 #include "exabricks/amr/basis.h"
@@ -77,6 +78,10 @@ struct TraceView {
   bool meshes = false;
   TriangleBvhView meshBvh;
   const vec3f* meshColors = nullptr; ///< per mesh, linear RGB
+  // Particles (the CPU renderer's sphere hierarchy).
+  bool particles = false;
+  SphereBvhView particleBvh;
+  const vec3f* particleColors = nullptr; ///< per sphere, linear RGB
   // Clipping.
   bool clipping = false;
   int planeCount = 0;
@@ -175,22 +180,38 @@ EXA_HOST_DEVICE inline bool traceIso(const TraceView& v, const Ray& ray, float& 
 template <bool SmoothOne> struct DeviceRays {
   const TraceView& v;
 
-  EXA_HOST_DEVICE bool hasMeshes() const { return v.meshes; }
+  EXA_HOST_DEVICE bool hasMeshes() const { return v.meshes || v.particles; }
   EXA_HOST_DEVICE bool meshHit(const DualRay& r, double s0, double s1, SurfaceHit& hit) const {
+    if (!(s1 >= s0)) return false;
+    const float f0 = float(s0 > 0.0 ? s0 : 0.0);
+    float f1 = std::isinf(s1) ? std::numeric_limits<float>::infinity() : float(s1);
+    bool found = false;
     TriangleHit th;
-    if (!(s1 >= s0) ||
-        !intersectTriangles(v.meshBvh, vec3f(r.orgW), vec3f(r.dirW), float(s0 > 0.0 ? s0 : 0.0),
-                            std::isinf(s1) ? std::numeric_limits<float>::infinity() : float(s1), false, th))
-      return false;
-    hit.distance = th.t;
-    hit.index = th.mesh;
-    hit.normal = th.normal;
-    return true;
+    if (v.meshes && intersectTriangles(v.meshBvh, vec3f(r.orgW), vec3f(r.dirW), f0, f1, false, th)) {
+      hit.kind = SurfaceHit::Mesh;
+      hit.distance = th.t;
+      hit.index = th.mesh;
+      hit.normal = th.normal;
+      f1 = th.t;
+      found = true;
+    }
+    SphereHit sh;
+    if (v.particles && intersectSpheres(v.particleBvh, vec3f(r.orgW), vec3f(r.dirW), f0, f1, false, sh)) {
+      hit.kind = SurfaceHit::Particle;
+      hit.distance = sh.t;
+      hit.index = int(sh.sphere);
+      hit.normal = sh.normal;
+      found = true;
+    }
+    return found;
   }
   EXA_HOST_DEVICE bool meshOccludes(const DualRay& r, double s0, double s1) const {
+    if (!(s1 > s0)) return false;
+    const float f0 = float(s0 > 0.0 ? s0 : 0.0), f1 = float(s1);
     TriangleHit th;
-    return s1 > s0 &&
-           intersectTriangles(v.meshBvh, vec3f(r.orgW), vec3f(r.dirW), float(s0 > 0.0 ? s0 : 0.0), float(s1), true, th);
+    SphereHit sh;
+    return (v.meshes && intersectTriangles(v.meshBvh, vec3f(r.orgW), vec3f(r.dirW), f0, f1, true, th)) ||
+           (v.particles && intersectSpheres(v.particleBvh, vec3f(r.orgW), vec3f(r.dirW), f0, f1, true, sh));
   }
   EXA_HOST_DEVICE bool hasIso() const { return v.iso; }
   EXA_HOST_DEVICE bool isoHit(const Ray& ray, float& t, uint32_t& region, int& which, RayCounts& c) const {
@@ -204,7 +225,8 @@ template <bool SmoothOne> struct DeviceRays {
   EXA_HOST_DEVICE const FieldView& isoView() const { return v.isoView; }
   EXA_HOST_DEVICE const vec3f& invScale() const { return v.invScale; }
   EXA_HOST_DEVICE vec3f surfaceColor(const SurfaceHit& hit) const {
-    const SurfaceColors colors{v.meshColors, v.isoColors, v.isoColorCount, v.isoColored, v.isoColorView, v.isoColorTf};
+    const SurfaceColors colors{v.meshColors, v.particleColors, v.isoColors, v.isoColorCount,
+                               v.isoColored, v.isoColorView,   v.isoColorTf};
     return surfaceColorOf(colors, v.world, hit);
   }
   template <bool OpacityOnly>

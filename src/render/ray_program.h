@@ -8,8 +8,8 @@
 // and nearest surface.
 //
 // RayBackEnd, as the functions below use it:
-//   bool hasMeshes() const;
-//   bool meshHit(const DualRay&, double sMin, double sMax, SurfaceHit&) const; // distance, normal, index
+//   bool hasMeshes() const;                                 // meshes or particles
+//   bool meshHit(const DualRay&, double sMin, double sMax, SurfaceHit&) const; // kind, distance, normal, index
 //   bool meshOccludes(const DualRay&, double sMin, double sMax) const;
 //   bool hasIso() const;
 //   bool isoHit(const Ray& lattice, float& t, uint32_t& region, int& which, RayCounts&) const;
@@ -132,10 +132,11 @@ EXA_HOST_DEVICE inline RayLight rayLightOf(const RaySettings& s, const vec3f& vi
   return l;
 }
 
-/// What colours a surface before lighting: per mesh, per iso-value (cycled; default colours
+/// What colours a surface before lighting: per mesh, per particle, per iso-value (cycled; default colours
 /// without them), or an iso colour field through its table.
 struct SurfaceColors {
   const vec3f* meshColors = nullptr;
+  const vec3f* particleColors = nullptr;
   const vec3f* isoColors = nullptr;
   int isoColorCount = 0;
   bool isoColored = false;
@@ -146,6 +147,7 @@ struct SurfaceColors {
 EXA_HOST_DEVICE inline vec3f surfaceColorOf(const SurfaceColors& s, const WorldTransform& world,
                                             const SurfaceHit& hit) {
   if (hit.kind == SurfaceHit::Mesh) return s.meshColors[hit.index];
+  if (hit.kind == SurfaceHit::Particle) return s.particleColors[hit.index];
   if (s.isoColored) {
     float v;
     if (sampleField(s.isoColorView, vec3f(world.toLattice(hit.position)), v)) return tfLookup(s.isoColorTable, v).rgb();
@@ -163,10 +165,7 @@ EXA_HOST_DEVICE inline bool nearestSurface(const B& b, const DualRay& r, bool cl
   if (b.hasMeshes()) {
     const double s0 = clipMeshes ? r.sMin : r.domainMin, s1 = clipMeshes ? r.sMax : r.domainMax;
     have = b.meshHit(r, s0, s1, hit);
-    if (have) {
-      hit.kind = SurfaceHit::Mesh;
-      hit.position = r.orgW + r.dirW * hit.distance;
-    }
+    if (have) hit.position = r.orgW + r.dirW * hit.distance;
   }
   if (!b.hasIso() || clippedAway(r)) return have;
   Ray lr = r.lattice;

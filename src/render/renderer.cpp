@@ -9,6 +9,7 @@
 #include "device_renderer.h"
 #include "dual_ray.h"
 #include "lighting.h"
+#include "particle_spheres.h"
 #include "path_trace.h"
 #include "surfaces.h"
 #include "volume_marcher.h"
@@ -107,6 +108,8 @@ struct Renderer::Impl {
   std::unique_ptr<DeviceRenderer> device; ///< set where passes run on a device back end
   /// The path tracer's medium: the volume's layers (their majorants are the volume's).
   std::vector<MediumLayer> mediumLayers;
+  std::shared_ptr<const ParticleSet> particles;
+  bool particlesChanged = false; ///< setParticles since the last setScene
 
   Impl(const Model& m, const DatasetInfo& d)
       : model(m), dataset(checkedDataset(m, d)), volume(m, dataset), surfaces(m, dataset) {}
@@ -478,6 +481,13 @@ size_t Renderer::isoRegions() const {
 
 size_t Renderer::meshCount() const { return impl_->surfaces.meshCount(); }
 
+void Renderer::setParticles(std::shared_ptr<const ParticleSet> particles) {
+  impl_->particles = std::move(particles);
+  impl_->particlesChanged = true;
+}
+
+size_t Renderer::particleCount() const { return impl_->surfaces.spheres().size(); }
+
 SceneUpdate Renderer::setScene(const Scene& s) {
   Impl& im = *impl_;
   s.validate();
@@ -500,11 +510,18 @@ SceneUpdate Renderer::setScene(const Scene& s) {
 
   const Scene& cur = im.scene;
   const bool first = !im.haveScene;
+  // The particles' spheres first: an unknown species or attribute leaves the scene as it is.
+  std::optional<ParticleSpheres> spheres;
+  if (first || s.particles != cur.particles || im.particlesChanged)
+    spheres = im.particles ? particleSpheres(*im.particles, s.particles, float(im.dataset.worldDiagonal / 800.0))
+                           : ParticleSpheres();
   SceneUpdate u;
   u.volume = first || s.layers != cur.layers || s.integration != cur.integration || s.debug != cur.debug;
   u.iso = first || s.iso != cur.iso ||
           s.integration.embreeBelowVisibleFraction != cur.integration.embreeBelowVisibleFraction;
   u.meshes = first || s.meshes != cur.meshes;
+  u.particles = spheres.has_value();
+  im.particlesChanged = false;
   im.scene = s;
   im.haveScene = true;
   if (u.volume) {
@@ -522,9 +539,10 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     im.surfaces.updateIso(s.iso, isoField, isoColorField, s.integration.embreeBelowVisibleFraction);
     u.isoSeconds = t.seconds();
   }
-  if (u.meshes) {
+  if (u.meshes || u.particles) {
     Timer t;
-    im.surfaces.updateMeshes(s.meshes);
+    if (u.meshes) im.surfaces.updateMeshes(s.meshes);
+    if (u.particles) im.surfaces.updateParticles(std::move(*spheres));
     u.meshSeconds = t.seconds();
   }
   if (im.device) im.device->sync(s, im.volume, im.surfaces, u);

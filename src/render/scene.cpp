@@ -317,6 +317,11 @@ json sceneJson(const SceneDocument& doc) {
     meshes.push_back(jm);
   }
   j["meshes"] = meshes;
+  j["particles"] = {{"species", s.particles.species},
+                    {"radius_by", s.particles.radiusBy},
+                    {"color", srgb(s.particles.color)},
+                    {"color_by", s.particles.colorBy},
+                    {"color_map", transferFunctionToJson(s.particles.colorTf)}};
   json planes = json::array();
   for (const ClipPlane& p : s.clip.planes)
     planes.push_back({{"point", vec(p.point)}, {"normal", vec(p.normal)}});
@@ -419,6 +424,22 @@ void readIso(const Reader& c, const std::string& source, IsoSurfaces& iso) {
   iso.colorTf = readTf(c, "color_map", iso.colorTf);
 }
 
+void readParticles(const Reader& c, const std::string& source, Scene& s) {
+  c.only("particles");
+  ParticleStyle& p = s.particles;
+  c.string("species", p.species);
+  c.string("radius_by", p.radiusBy);
+  c.string("color_by", p.colorBy);
+  if (const json* v = c.find("color")) {
+    const std::vector<double> n = c.numbers(*v, c.key("color"), 3);
+    for (double x : n)
+      if (!(x >= 0.0 && x <= 1.0)) fail(source, ": \"particles.color\" components must lie in [0, 1] (sRGB)");
+    p.color = srgbToLinear(vec3f(float(n[0]), float(n[1]), float(n[2])));
+  }
+  p.colorTf = readTf(c, "color_map", p.colorTf);
+  c.settings(sceneSettings(), "particles", s);
+}
+
 void readMeshes(const json& meshes, const std::string& source, std::vector<SceneMesh>& out) {
   if (!meshes.is_array()) fail(source, ": \"meshes\" must be an array");
   for (size_t i = 0; i < meshes.size(); ++i) {
@@ -513,6 +534,7 @@ SceneDocument readSceneJson(const std::string& text, const std::string& source) 
   if (const json* layers = r.find("layers")) readLayers(*layers, source, s.layers);
   if (r.find("iso")) readIso(r.child("iso"), source, s.iso);
   if (const json* meshes = r.find("meshes")) readMeshes(*meshes, source, s.meshes);
+  if (r.find("particles")) readParticles(r.child("particles"), source, s);
   if (r.find("clip")) readClip(r.child("clip"), source, s);
   if (r.find("light")) {
     const Reader c = r.child("light");

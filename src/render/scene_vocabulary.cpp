@@ -185,7 +185,14 @@ std::vector<Setting<Scene>> topLevelSettings() {
           "legends.level_legend", "level_legend", [](S& s) -> bool& { return s.legends.levelLegend; },
           "With the level debug view: the level colours and their cell widths at the bottom left"),
       boolean<S>(
-          "clip.meshes", "clip_meshes", [](S& s) -> bool& { return s.clip.meshes; }, "Clip meshes too"),
+          "clip.meshes", "clip_meshes", [](S& s) -> bool& { return s.clip.meshes; }, "Clip meshes and particles too"),
+      boolean<S>(
+          "particles.show", "particles", [](S& s) -> bool& { return s.particles.show; },
+          "Draw the dataset's particles as spheres (particles.species: one species only)"),
+      number<S>(
+          "particles.radius", "particle_radius", [](S& s) -> float& { return s.particles.radius; }, 0.0, kInf,
+          "The spheres' radius, world units (0: 1/800 of the data's diagonal; with particles.radius_by, the "
+          "largest sphere's)"),
   };
 }
 

@@ -1,6 +1,7 @@
 #include "surfaces.h"
 
 #include "iso_search.h"
+#include "particle_spheres.h"
 
 #include <tbb/parallel_for.h>
 
@@ -53,17 +54,43 @@ void Surfaces::updateMeshes(const std::vector<SceneMesh>& meshes) {
     meshColors_.push_back(m.color);
 }
 
+void Surfaces::updateParticles(ParticleSpheres made) {
+  std::vector<uint32_t> order;
+  spheres_.build(made.spheres, order);
+  sphereColors_.resize(order.size());
+  tbb::parallel_for(size_t(0), order.size(), [&](size_t i) { sphereColors_[i] = made.colors[order[i]]; });
+}
+
 bool Surfaces::meshHit(const DualRay& r, double sMin, double sMax, SurfaceHit& hit) const {
   MeshHit m;
-  if (!meshes_.intersect(r.orgW, r.dirW, sMin, sMax, m)) return false;
-  hit.index = m.mesh;
-  hit.distance = m.distance;
-  hit.normal = m.normal;
-  return true;
+  bool found = false;
+  if (!meshes_.empty() && meshes_.intersect(r.orgW, r.dirW, sMin, sMax, m)) {
+    hit.kind = SurfaceHit::Mesh;
+    hit.index = m.mesh;
+    hit.distance = m.distance;
+    hit.normal = m.normal;
+    sMax = m.distance;
+    found = true;
+  }
+  SphereHit sh;
+  if (!spheres_.empty() && sMax >= sMin &&
+      intersectSpheres(spheres_.view(), vec3f(r.orgW), vec3f(r.dirW), float(std::max(sMin, 0.0)), float(sMax), false,
+                       sh)) {
+    hit.kind = SurfaceHit::Particle;
+    hit.index = int(sh.sphere);
+    hit.distance = sh.t;
+    hit.normal = sh.normal;
+    found = true;
+  }
+  return found;
 }
 
 bool Surfaces::meshOccludes(const DualRay& r, double sMin, double sMax) const {
-  return meshes_.occluded(r.orgW, r.dirW, sMin, sMax);
+  if (!meshes_.empty() && meshes_.occluded(r.orgW, r.dirW, sMin, sMax)) return true;
+  SphereHit sh;
+  return !spheres_.empty() && sMax > sMin &&
+         intersectSpheres(spheres_.view(), vec3f(r.orgW), vec3f(r.dirW), float(std::max(sMin, 0.0)), float(sMax), true,
+                          sh);
 }
 
 bool Surfaces::findIso(const Ray& ray, Sampling sampling, float rate, float& tHit, uint32_t& regionHit, int& which,
@@ -77,6 +104,7 @@ bool Surfaces::findIso(const Ray& ray, Sampling sampling, float rate, float& tHi
 SurfaceColors Surfaces::colors(const std::vector<vec3f>& isoColors) const {
   SurfaceColors c;
   c.meshColors = meshColors_.data();
+  c.particleColors = sphereColors_.data();
   c.isoColors = isoColors.data();
   c.isoColorCount = int(isoColors.size());
   c.isoColored = isoColored_;

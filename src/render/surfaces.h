@@ -5,9 +5,11 @@
 
 #include "dual_ray.h"
 #include "layer_table.h"
+#include "particle_spheres.h"
 #include "ray_program.h"
 
 #include "exabricks/accel/mesh_bvh.h"
+#include "exabricks/accel/sphere_bvh.h"
 #include "exabricks/accel/traversal.h"
 #include "exabricks/render/renderer.h"
 
@@ -26,9 +28,15 @@ public:
   void updateIso(const IsoSurfaces& iso, int field, int colorField, float embreeBelowVisibleFraction);
   /// Rebuilds the mesh BVH.
   void updateMeshes(const std::vector<SceneMesh>& meshes);
+  /// Rebuilds the particles' sphere hierarchy (particleSpheres).
+  void updateParticles(ParticleSpheres spheres);
 
-  bool any() const { return isoTraversal_ || !meshes_.empty(); }
-  bool hasMeshes() const { return !meshes_.empty(); }
+  bool any() const { return isoTraversal_ || hasMeshes(); }
+  /// Meshes or particles: what meshHit finds.
+  bool hasMeshes() const { return !meshes_.empty() || !spheres_.empty(); }
+  /// The particles' spheres and their colours (hierarchy order), which the device back ends use too.
+  const SphereBvh& spheres() const { return spheres_; }
+  const std::vector<vec3f>& sphereColors() const { return sphereColors_; }
   const RegionTraversal* isoTraversal() const { return isoTraversal_.get(); }
   const std::vector<uint8_t>& isoVisible() const { return isoVisible_; }
   size_t meshCount() const { return meshColors_.size(); }
@@ -43,9 +51,10 @@ public:
   /// by one secant step. Returns the lattice t, the region and the iso-value's index.
   bool findIso(const Ray& ray, Sampling sampling, float rate, float& tHit, uint32_t& regionHit, int& which,
                uint64_t& samples) const;
-  /// The nearest mesh within [sMin, sMax] along the ray: its distance, normal and number.
+  /// The nearest mesh or particle within [sMin, sMax] along the ray: its kind, distance, normal
+  /// and number.
   bool meshHit(const DualRay& r, double sMin, double sMax, SurfaceHit& hit) const;
-  /// Whether a mesh lies within [sMin, sMax] along the ray.
+  /// Whether a mesh or a particle lies within [sMin, sMax] along the ray.
   bool meshOccludes(const DualRay& r, double sMin, double sMax) const;
   /// World units per lattice unit, inverted (iso-surface normals).
   const vec3f& invScale() const { return invScale_; }
@@ -66,6 +75,8 @@ private:
   LayerTable isoColor_; ///< colour map of the iso colour field
   MeshBvh meshes_;
   std::vector<vec3f> meshColors_;
+  SphereBvh spheres_;
+  std::vector<vec3f> sphereColors_;
 };
 
 } // namespace exa

@@ -4,6 +4,7 @@
 // [tmin, tmax], the geometric normal facing the ray's origin).
 #pragma once
 
+#include "exabricks/accel/bvh.h"
 #include "exabricks/core/math.h"
 #include "exabricks/core/mesh.h"
 
@@ -11,13 +12,6 @@
 #include <vector>
 
 namespace exa {
-
-/// A node: leaves (count > 0) hold triangles [first, first + count); inner nodes have their two
-/// children at first and first + 1.
-struct BvhNode {
-  box3f bounds;
-  uint32_t first = 0, count = 0;
-};
 
 /// A triangle as its first vertex and two edges, with the mesh it belongs to.
 struct BvhTriangle {
@@ -71,33 +65,10 @@ EXA_HOST_DEVICE inline float intersectTriangle(const BvhTriangle& tri, const vec
 EXA_HOST_DEVICE inline bool intersectTriangles(const TriangleBvhView& bvh, const vec3f& org, const vec3f& dir,
                                                float tmin, float tmax, bool any, TriangleHit& hit) {
   if (!bvh.nodes || !(tmax >= tmin)) return false;
-  const vec3f inv(dir.x != 0.f ? 1.f / dir.x : 1e30f, dir.y != 0.f ? 1.f / dir.y : 1e30f,
-                  dir.z != 0.f ? 1.f / dir.z : 1e30f);
-  auto enters = [&](const box3f& b, float far) {
-    float t0 = tmin, t1 = far;
-    for (int a = 0; a < 3; ++a) {
-      const float ta = (b.lower[a] - org[a]) * inv[a], tb = (b.upper[a] - org[a]) * inv[a];
-      t0 = std::max(t0, std::min(ta, tb));
-      t1 = std::min(t1, std::max(ta, tb));
-    }
-    return t0 <= t1;
-  };
-  uint32_t stack[64];
-  int top = 0;
-  stack[top++] = 0;
   bool found = false;
-  float best = tmax;
-  while (top > 0) {
-    const BvhNode& n = bvh.nodes[stack[--top]];
-    if (!enters(n.bounds, best)) continue;
-    if (n.count == 0) {
-      if (top < 63) {
-        stack[top++] = n.first + 1;
-        stack[top++] = n.first;
-      }
-      continue;
-    }
-    for (uint32_t i = n.first; i < n.first + n.count; ++i) {
+  float far = tmax;
+  traverseBvh(bvh.nodes, org, dir, tmin, far, [&](uint32_t first, uint32_t count, float& best) {
+    for (uint32_t i = first; i < first + count; ++i) {
       const BvhTriangle& tri = bvh.triangles[i];
       const float t = intersectTriangle(tri, org, dir);
       if (!(t >= tmin && t <= best)) continue;
@@ -110,7 +81,8 @@ EXA_HOST_DEVICE inline bool intersectTriangles(const TriangleBvhView& bvh, const
       hit.normal = nrm;
       if (any) return true;
     }
-  }
+    return false;
+  });
   return found;
 }
 

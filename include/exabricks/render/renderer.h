@@ -17,6 +17,7 @@
 // the shaded surface behind the volume.
 #pragma once
 
+#include "exabricks/amr/particles.h"
 #include "exabricks/core/image.h"
 #include "exabricks/render/frame_buffer.h"
 #include "exabricks/render/scene.h"
@@ -54,18 +55,19 @@ vec3f debugLevelColor(int level);
 
 /// The nearest surface along a ray.
 struct SurfaceHit {
-  enum Kind { Mesh, Iso } kind = Mesh;
+  enum Kind { Mesh, Iso, Particle } kind = Mesh;
   double distance = 0; ///< world distance from the ray origin along the unit direction
   vec3d position{0.0}; ///< world
   vec3f normal{0.f};   ///< world, unit, facing the ray origin
-  int index = 0;       ///< mesh number, or iso-value number
+  int index = 0;       ///< mesh number, iso-value number, or particle (in the drawn particles' order)
 };
 
 /// What setScene() rebuilt, and how long each part took.
 struct SceneUpdate {
-  bool volume = false; ///< layer tables, visible regions and traversal
-  bool iso = false;    ///< iso region set
-  bool meshes = false; ///< mesh BVH
+  bool volume = false;    ///< layer tables, visible regions and traversal
+  bool iso = false;       ///< iso region set
+  bool meshes = false;    ///< mesh BVH
+  bool particles = false; ///< the particles' spheres and their hierarchy
   double volumeSeconds = 0, isoSeconds = 0, meshSeconds = 0;
   /// A GPU renderer: bytes copied to the device (only what changed) and the time it took.
   uint64_t deviceBytes = 0;
@@ -181,6 +183,12 @@ public:
   /// field.
   SceneUpdate setScene(const Scene& scene);
   const Scene& scene() const;
+  /// The particles beside the model (null: none), drawn where the scene's particle style shows
+  /// them; the renderer keeps the set and builds their spheres at the next setScene. The set
+  /// must not change while the renderer holds it.
+  void setParticles(std::shared_ptr<const ParticleSet> particles);
+  /// Spheres drawn for the particles (0 where none are shown).
+  size_t particleCount() const;
   /// How the following passes compute (RendererOptions); takes effect at once, rebuilds nothing.
   void setOptions(const RendererOptions& options);
   const RendererOptions& options() const;
@@ -218,7 +226,8 @@ public:
   const std::array<std::vector<float>, 3>* gradients(int field) const;
   void adoptGradients(int field, std::array<std::vector<float>, 3> gradients);
 
-  /// The nearest (clipped) mesh or iso-surface hit along a world ray; false when there is none.
+  /// The nearest (clipped) mesh, particle or iso-surface hit along a world ray; false when there
+  /// is none.
   bool pick(const vec3d& origin, const vec3d& direction, SurfaceHit& hit) const;
   /// Regions that may be visible under the current transfer functions.
   size_t visibleRegions() const;

@@ -65,6 +65,22 @@ struct SceneMesh {
   friend bool operator==(const SceneMesh&, const SceneMesh&) = default;
 };
 
+/// Particles drawn as spheres with the volume: hidden by what is in front of them, dimming what is
+/// behind, shaded and coloured like the other surfaces. Their positions and attributes come with
+/// the dataset (Renderer::setParticles); this says which and how.
+struct ParticleStyle {
+  bool show = false;
+  std::string species; ///< empty: every species
+  float radius = 0.f;  ///< world units; 0: 1/800 of the data's diagonal
+  /// Not empty: radius x cbrt(value / the attribute's largest value), a sphere's volume in
+  /// proportion to the attribute (mass); particles whose value is not above zero are not drawn.
+  std::string radiusBy;
+  vec3f color = srgbToLinear(vec3f(1.f, 0.7f, 0.35f)); ///< linear RGB, where not coloured by an attribute
+  std::string colorBy;                                 ///< not empty: coloured by this attribute through colorTf ...
+  TransferFunction colorTf = defaultTransferFunction("plasma"); ///< ... its map, range (empty: the data's) and log
+  friend bool operator==(const ParticleStyle&, const ParticleStyle&) = default;
+};
+
 /// Removes the half-space the normal points into: points x with dot(x - point, normal) > 0.
 struct ClipPlane {
   vec3d point{0.0};
@@ -73,7 +89,7 @@ struct ClipPlane {
 };
 
 /// Clipping (world space): every plane removes its half-space; the box, when not empty, keeps
-/// only its inside. Applies to volume and iso-surfaces, and to meshes with `meshes`.
+/// only its inside. Applies to volume and iso-surfaces, and to meshes and particles with `meshes`.
 struct Clipping {
   std::vector<ClipPlane> planes;
   box3d box;
@@ -149,6 +165,7 @@ struct Scene {
   bool volume = true;                             ///< integrate the volume (off: surfaces only)
   IsoSurfaces iso;
   std::vector<SceneMesh> meshes;
+  ParticleStyle particles;
   Clipping clip;
   Light light;
   Shading shading = Shading::Smooth;

@@ -145,7 +145,7 @@ void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, in
   check(cudaEventCreate(&start), "timing the pass");
   check(cudaEventCreate(&stop), "timing the pass");
   cudaEventRecord(start);
-  const bool surfaces = view.iso || view.meshes, smooth = smoothOneLayer(view);
+  const bool surfaces = view.iso || view.meshes || view.particles, smooth = smoothOneLayer(view);
   if (view.pathTrace && surfaces)
     traceKernel<true, false, true><<<grid, block>>>(tilesX, tileBegin, tileEnd, tileStride, colors, passCounts);
   else if (view.pathTrace)
