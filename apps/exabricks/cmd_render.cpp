@@ -180,6 +180,7 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
   logInfo(strCat("memory budget ", formatBytes(plan.budget), ": ", plan.partition.parts(), " parts of at most ",
                  formatBytes(plan.largestPartBytes()), " each, besides ", formatBytes(plan.fixedBytes)));
   StreamedStep step(doc.input, lo, std::move(plan));
+  step.setParticles(particlesFor(doc.scene, doc.input));
   const StepSurvey& survey = step.survey();
   WholeData whole{survey.cellBounds, survey.levels, step.partialData()};
   const Model& model = step.skeleton();
@@ -273,6 +274,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   Renderer renderer(model, dataset);
   renderer.setOptions(o.march.options());
   if (part) renderer.setDomain(part->worldBox());
+  renderer.setParticles(particlesFor(scene, doc.input));
   SceneUpdate update = renderer.setScene(scene);
   {
     Timer upload;

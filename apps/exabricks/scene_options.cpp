@@ -142,6 +142,7 @@ constexpr SettingFlag kSettingFlags[] = {
     {"--debug", "debug", FlagGroup::Integration},
     {"--no-volume", "volume", FlagGroup::Integration, FlagForm::Off},
     {"--clip-meshes", "clip.meshes", FlagGroup::Surfaces, FlagForm::On},
+    {"--particle-radius", "particles.radius", FlagGroup::Surfaces},
     {"--ao", "ambient_occlusion.rays", FlagGroup::Surfaces},
     {"--ao-length", "ambient_occlusion.length", FlagGroup::Surfaces},
     {"--ao-volume", "ambient_occlusion.volume", FlagGroup::Surfaces, FlagForm::On},
@@ -273,6 +274,7 @@ void addSurfaceOptions(RenderOptions& o, CLI::App& cmd) {
                  "Remove the half-space in front of a plane: px,py,pz,nx,ny,nz (world; repeatable)");
   cmd.add_option("--clip-box", o.clipBox, sceneSettingHelp("clip.box"))->delimiter(',')->check(singleNumber());
   addSettingFlags(o, cmd, FlagGroup::Surfaces);
+  addParticleOptions(o, cmd);
 }
 
 /// Path tracing.
@@ -488,8 +490,9 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   applyPathTracingOptions(o, u, s);
   applyIsoOptions(o, u, s);
   applyMeshOptions(o, u, s);
-  if (!s.volume && s.iso.values.empty() && s.meshes.empty())
-    failUsage("--no-volume leaves nothing to draw: add --iso or --mesh");
+  applyParticleOptions(o, cmd, u.fromFile, s);
+  if (!s.volume && s.iso.values.empty() && s.meshes.empty() && !s.particles.show)
+    failUsage("--no-volume leaves nothing to draw: add --iso, --mesh or --particles");
   s.validate();
   return doc;
 }

@@ -48,6 +48,11 @@ struct RenderOptions {
   bool isoColorLog = false;
   std::vector<std::string> meshes;
   std::vector<float> meshColor;        ///< sRGB triples, one per mesh (cycled)
+  std::string particles;               ///< --particles [SPECIES]
+  std::string particleRadiusBy, particleColorBy, particleColormap = "plasma";
+  std::vector<float> particleColor;    ///< sRGB
+  std::vector<float> particleColorRange;
+  bool particleColorLog = false;
   std::vector<std::string> clipPlanes; ///< px,py,pz,nx,ny,nz each
   std::vector<double> clipBox;
   std::vector<float> environment; ///< r,g,b linear radiance
@@ -78,6 +83,13 @@ void addDeviceOption(CLI::App& cmd, std::string& device);
 /// The scene and frame the options describe, over the scene file when one is given: without a
 /// file every option applies (defaults included); with one, only the options given.
 SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd);
+/// --particles [SPECIES] and the --particle-* options (particle_options.cpp).
+void addParticleOptions(RenderOptions& o, CLI::App& cmd);
+/// Applies them to the scene: all of them without a scene file, the ones given over one.
+void applyParticleOptions(const RenderOptions& o, const CLI::App& cmd, bool fromFile, Scene& s);
+/// The particles a scene shows, read from the input (only the species it names); null where it
+/// shows none, or the input holds none (said once).
+std::shared_ptr<const ParticleSet> particlesFor(const Scene& scene, const std::string& input);
 /// Fields the scene needs; empty means all (a layer names the default field).
 std::vector<std::string> neededFields(const Scene& s);
 /// What a process that holds one part of the data (data-parallel rendering) knows of the whole,

@@ -297,6 +297,7 @@ Renderer* StreamedStep::renderer(int part, const Scene& scene, const RendererOpt
   if (!r.renderer) {
     r.renderer = std::make_unique<Renderer>(*r.model, dataset);
     r.renderer->setDomain(partWorldBox(part));
+    r.renderer->setParticles(particles_);
     for (int f = 0; f < int(r.model->fieldNames.size()); ++f)
       if (auto g = cache_->readGradients(part, f)) r.renderer->adoptGradients(f, std::move(*g));
   }

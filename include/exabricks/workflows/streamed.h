@@ -102,6 +102,9 @@ public:
   /// Part p's model, read and built unless resident (null when the part holds no cells). Makes
   /// room first by dropping the least recently used parts. Valid until the next call.
   const Model* part(int part);
+  /// The particles every part's renderer draws where its scene shows them (each part's renderer
+  /// holds all of them; its domain keeps what it draws to its part).
+  void setParticles(std::shared_ptr<const ParticleSet> particles) { particles_ = std::move(particles); }
   /// Part p's renderer over the step's dataset values, set to `scene` and `options`.
   Renderer* renderer(int part, const Scene& scene, const RendererOptions& options);
   /// Calls visit(model, owned box) for every part that holds cells, resident parts first.
@@ -145,6 +148,7 @@ private:
   uint64_t reads_ = 0;
   std::unique_ptr<Snapshot> snapshot_;
   std::unique_ptr<PartCache> cache_;
+  std::shared_ptr<const ParticleSet> particles_;
 };
 
 /// Renders `frame` (every pass) into `buffer` from the step's parts, front to back, each pass
