@@ -27,6 +27,12 @@ struct Dataset {
   std::shared_ptr<StreamedStep> streamed;
   /// The whole step's cell bounds (lattice).
   box3i cellBounds() const { return streamed ? streamed->survey().cellBounds : model->cellBounds(); }
+  /// The input read (empty: the embedded dataset, or a dataset made from arrays).
+  std::string path;
+  /// The particles beside the cells: every species of the input, read when a scene first shows
+  /// them, or given from Python (from_yt). Null: none.
+  std::shared_ptr<const ParticleSet> particles;
+  bool particlesKnown = false; ///< read or given
 };
 
 /// A triangle mesh made once from numpy arrays or read from a file (`source`, which scene files

@@ -85,6 +85,7 @@ std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::st
       d->model = std::make_shared<const Model>(step->skeleton());
       d->info = step->survey().dataset;
       d->name = path.empty() ? kDefaultDatasetName : path;
+      d->path = path;
       d->loadSeconds = t.seconds();
       d->streamed = std::move(step);
       return d;
@@ -95,7 +96,9 @@ std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::st
     py::gil_scoped_release release;
     m = loadModel(path, o);
   }
-  return makeDataset(std::move(m), path.empty() ? kDefaultDatasetName : path, t.seconds());
+  std::shared_ptr<Dataset> d = makeDataset(std::move(m), path.empty() ? kDefaultDatasetName : path, t.seconds());
+  d->path = path;
+  return d;
 }
 
 std::shared_ptr<Dataset> fromCells(py::array_t<int64_t, py::array::c_style | py::array::forcecast> corners,
@@ -147,6 +150,77 @@ std::shared_ptr<Dataset> fromCells(py::array_t<int64_t, py::array::c_style | py:
     m = buildModel(std::move(set), bo);
   }
   return makeDataset(std::move(m), "<numpy cells>", t.seconds());
+}
+
+/// The species of an input, each a dict of its name, count, attributes and precision.
+py::list listParticleSpecies(const std::string& path) {
+  py::list out;
+  for (const ParticleSpeciesInfo& s : listParticles(path)) {
+    py::dict d;
+    d["name"] = s.name;
+    d["count"] = s.count;
+    d["attributes"] = s.attributes;
+    d["precision"] = s.precision;
+    out.append(std::move(d));
+  }
+  return out;
+}
+
+/// Every species (or the one named) read: a dict per species name of "position" (N, 3) and each
+/// attribute (N,), float64 arrays (integer attributes as int64).
+py::dict readParticleSpecies(const std::string& path, const std::string& species) {
+  ParticleSet set;
+  {
+    py::gil_scoped_release release;
+    set = readParticles(path, species);
+  }
+  py::dict out;
+  for (const ParticleSpecies& s : set.species) {
+    py::dict d;
+    py::array_t<double> position({py::ssize_t(s.count()), py::ssize_t(3)});
+    std::copy(s.position.begin(), s.position.end(), position.mutable_data());
+    d["position"] = std::move(position);
+    for (const ParticleAttribute& a : s.attributes) {
+      if (a.integer) {
+        py::array_t<int64_t> v(py::ssize_t(a.values.size()));
+        std::transform(a.values.begin(), a.values.end(), v.mutable_data(), [](double x) { return int64_t(x); });
+        d[py::str(a.name)] = std::move(v);
+      } else {
+        py::array_t<double> v(py::ssize_t(a.values.size()));
+        std::copy(a.values.begin(), a.values.end(), v.mutable_data());
+        d[py::str(a.name)] = std::move(v);
+      }
+    }
+    out[py::str(s.name)] = std::move(d);
+  }
+  return out;
+}
+
+/// Particles given from Python: (name, position (N, 3), {attribute: (N,)}) per species.
+void setParticles(
+    Dataset& d,
+    const std::vector<std::tuple<std::string, py::array_t<double, py::array::c_style | py::array::forcecast>,
+                                 std::map<std::string, py::array>>>& species) {
+  auto set = std::make_shared<ParticleSet>();
+  for (const auto& [name, position, attributes] : species) {
+    if (position.ndim() != 2 || position.shape(1) != 3)
+      fail("particles '", name, "': position must be an (N, 3) array");
+    ParticleSpecies s;
+    s.name = name;
+    s.precision = "double";
+    s.position.assign(position.data(), position.data() + position.size());
+    const size_t n = size_t(position.shape(0));
+    for (const auto& [attr, values] : attributes) {
+      auto v = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(values);
+      if (!v || v.ndim() != 1 || size_t(v.shape(0)) != n)
+        fail("particles '", name, "': attribute '", attr, "' must be an (N,) array of ", n, " numbers");
+      s.attributes.push_back(
+          {attr, std::vector<double>(v.data(), v.data() + n), py::dtype::of<int64_t>().is(values.dtype())});
+    }
+    set->species.push_back(std::move(s));
+  }
+  d.particles = std::move(set);
+  d.particlesKnown = true;
 }
 
 /// grids: list of (lower xyz, upper xyz, cells xyz, [arrays per field, x fastest]).
@@ -261,6 +335,20 @@ std::shared_ptr<Mesh> makeMesh(py::array_t<float, py::array::c_style | py::array
   return m;
 }
 
+/// The command line's `info --json`: the model's description, the device object and the
+/// particle species.
+std::string infoJson(const Dataset& d) {
+  const std::string particles =
+      ",\"particles\":" +
+      particleSpeciesJson(d.path.empty() ? std::vector<ParticleSpeciesInfo>() : listParticles(d.path)) + "}";
+  std::string j =
+      d.streamed ? d.streamed->infoJson(d.name, d.loadSeconds) : modelInfoJson(*d.model, d.name, d.loadSeconds);
+  const size_t end = j.find_last_of('}');
+  if (end == std::string::npos) fail("internal: model information is not a JSON object");
+  if (d.streamed) return j.substr(0, end) + particles;
+  return j.substr(0, end) + ",\"device\":" + deviceInfoJson(*d.model) + particles;
+}
+
 void bindDataset(py::module_& m) {
   py::class_<Dataset, std::shared_ptr<Dataset>>(m, "Dataset")
       .def_property_readonly("name", [](const Dataset& d) { return d.name; })
@@ -306,16 +394,10 @@ void bindDataset(py::module_& m) {
             return double(d.info.referenceWidth) * (s.x + s.y + s.z) / 3.0;
           },
           "World length opacity is given per: the finest cell width (averaged over the axes)")
-      .def("info_json",
-           [](const Dataset& d) {
-             // The command line's `info --json`: the model's description and the device object.
-             if (d.streamed) return d.streamed->infoJson(d.name, d.loadSeconds);
-             std::string j = modelInfoJson(*d.model, d.name, d.loadSeconds);
-             const size_t end = j.find_last_of('}');
-             if (end == std::string::npos) fail("internal: model information is not a JSON object");
-             return j.substr(0, end) + ",\"device\":" + deviceInfoJson(*d.model) + "}";
-           })
+      .def("info_json", &infoJson)
       .def("sample", &sample, py::arg("points"), py::arg("field") = "")
+      .def("set_particles", &setParticles, py::arg("species"),
+           "Gives the dataset particles (from_yt): a list of (name, position (N, 3), {attribute: (N,)})")
       .def(
           "adapt_transfer_function",
           [](const Dataset& d, const std::string& field, const std::string& tfJson, bool autoLog, bool autoOpacity) {
@@ -374,50 +456,6 @@ void bindMesh(py::module_& m) {
           "The triangles' vertex indices, a (T, 3) int64 array (a copy)")
       .def_property_readonly("vertex_count", [](const Mesh& x) { return x.mesh->vertices.size(); })
       .def_property_readonly("triangle_count", [](const Mesh& x) { return x.mesh->triangles.size(); });
-}
-
-/// The species of an input, each a dict of its name, count, attributes and precision.
-py::list listParticleSpecies(const std::string& path) {
-  py::list out;
-  for (const ParticleSpeciesInfo& s : listParticles(path)) {
-    py::dict d;
-    d["name"] = s.name;
-    d["count"] = s.count;
-    d["attributes"] = s.attributes;
-    d["precision"] = s.precision;
-    out.append(std::move(d));
-  }
-  return out;
-}
-
-/// Every species (or the one named) read: a dict per species name of "position" (N, 3) and each
-/// attribute (N,), float64 arrays (integer attributes as int64).
-py::dict readParticleSpecies(const std::string& path, const std::string& species) {
-  ParticleSet set;
-  {
-    py::gil_scoped_release release;
-    set = readParticles(path, species);
-  }
-  py::dict out;
-  for (const ParticleSpecies& s : set.species) {
-    py::dict d;
-    py::array_t<double> position({py::ssize_t(s.count()), py::ssize_t(3)});
-    std::copy(s.position.begin(), s.position.end(), position.mutable_data());
-    d["position"] = std::move(position);
-    for (const ParticleAttribute& a : s.attributes) {
-      if (a.integer) {
-        py::array_t<int64_t> v(py::ssize_t(a.values.size()));
-        std::transform(a.values.begin(), a.values.end(), v.mutable_data(), [](double x) { return int64_t(x); });
-        d[py::str(a.name)] = std::move(v);
-      } else {
-        py::array_t<double> v(py::ssize_t(a.values.size()));
-        std::copy(a.values.begin(), a.values.end(), v.mutable_data());
-        d[py::str(a.name)] = std::move(v);
-      }
-    }
-    out[py::str(s.name)] = std::move(d);
-  }
-  return out;
 }
 
 /// The functions that make datasets: load, from_cells, from_grids, and list_fields.

@@ -5,6 +5,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
+#include "exabricks/io/particles.h"
 #include "exabricks/render/legends.h"
 #include "exabricks/workflows/progressive.h"
 
@@ -55,6 +56,20 @@ public:
       if (color.size() != 3) fail("a mesh colour needs three numbers (sRGB)");
       doc.scene.meshes.push_back({mesh->mesh, srgbToLinear(vec3f(color[0], color[1], color[2])), ""});
     }
+    if (doc.scene.particles.show) {
+      Dataset& d = *dataset_;
+      if (!d.particlesKnown) {
+        py::gil_scoped_release release;
+        if (!d.path.empty()) {
+          ParticleSet set = readParticles(d.path);
+          if (!set.species.empty()) d.particles = std::make_shared<const ParticleSet>(std::move(set));
+        }
+        d.particlesKnown = true;
+      }
+      if (d.streamed) d.streamed->setParticles(d.particles);
+      if (!particlesGiven_) renderer_.setParticles(d.particles);
+      particlesGiven_ = true;
+    }
     SceneUpdate u;
     if (dataset_->streamed) {
       // A step in parts: each part's renderer takes the scene when the frame is drawn.
@@ -71,6 +86,7 @@ public:
     out["volume"] = u.volume;
     out["iso"] = u.iso;
     out["meshes"] = u.meshes;
+    out["particles"] = u.particles;
     out["seconds"] = u.seconds();
     return out;
   }
@@ -377,6 +393,7 @@ private:
   }
 
   std::shared_ptr<Dataset> dataset_; ///< declared first: outlives the renderer
+  bool particlesGiven_ = false;      ///< the dataset's particles handed to the renderer
   Renderer renderer_;
   ProgressiveView view_;    ///< the passes of renderer_, on the device asked for (cpu, cuda, auto or portable)
   FrameBuffer draftBuffer_; ///< the last draft

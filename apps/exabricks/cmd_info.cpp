@@ -28,18 +28,8 @@ std::vector<ParticleSpeciesInfo> particlesOf(const InfoOptions& o) {
   return o.in.input.empty() ? std::vector<ParticleSpeciesInfo>{} : listParticles(o.in.input);
 }
 
-/// Bytes one particle of the species takes once read: positions and attributes in double.
-size_t bytesPerParticle(const ParticleSpeciesInfo& s) { return sizeof(double) * (3 + s.attributes.size()); }
-
 nlohmann::json particlesJson(const std::vector<ParticleSpeciesInfo>& species) {
-  nlohmann::json out = nlohmann::json::array();
-  for (const ParticleSpeciesInfo& s : species)
-    out.push_back({{"species", s.name},
-                   {"count", s.count},
-                   {"attributes", s.attributes},
-                   {"precision", s.precision},
-                   {"bytes_per_particle", bytesPerParticle(s)}});
-  return out;
+  return nlohmann::json::parse(particleSpeciesJson(species));
 }
 
 void printParticles(const std::vector<ParticleSpeciesInfo>& species) {

@@ -39,7 +39,7 @@ void applyParticleOptions(const RenderOptions& o, const CLI::App& cmd, bool from
   const bool shown = p.show;
   for (const char* flag : {"--particle-radius-by", "--particle-color", "--particle-color-by", "--particle-range",
                            "--particle-log", "--particle-radius"})
-    if (cmd.count(flag) && !shown) failUsage(flag, " needs --particles");
+    if (cmd.count(flag) && !shown) logWarning(strCat(flag, " does nothing without --particles"));
   if (!o.particleColorRange.empty() &&
       (o.particleColorRange.size() != 2 || !(o.particleColorRange[0] < o.particleColorRange[1])))
     failUsage("--particle-range expects LOW,HIGH with LOW < HIGH");
@@ -64,11 +64,11 @@ std::shared_ptr<const ParticleSet> particlesFor(const Scene& scene, const std::s
     logWarning("particles: the embedded dataset holds none; nothing is drawn for them");
     return nullptr;
   }
-  auto set = std::make_shared<ParticleSet>(readParticles(input, scene.particles.species));
-  if (set->species.empty()) {
+  if (listParticles(input).empty()) {
     logWarning(strCat("particles: ", input, " holds none; nothing is drawn for them"));
     return nullptr;
   }
+  auto set = std::make_shared<ParticleSet>(readParticles(input, scene.particles.species));
   uint64_t count = 0;
   for (const ParticleSpecies& s : set->species)
     count += s.count();

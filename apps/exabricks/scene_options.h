@@ -47,10 +47,10 @@ struct RenderOptions {
   std::vector<float> isoColorRange;
   bool isoColorLog = false;
   std::vector<std::string> meshes;
-  std::vector<float> meshColor;        ///< sRGB triples, one per mesh (cycled)
-  std::string particles;               ///< --particles [SPECIES]
+  std::vector<float> meshColor; ///< sRGB triples, one per mesh (cycled)
+  std::string particles;        ///< --particles [SPECIES]
   std::string particleRadiusBy, particleColorBy, particleColormap = "plasma";
-  std::vector<float> particleColor;    ///< sRGB
+  std::vector<float> particleColor; ///< sRGB
   std::vector<float> particleColorRange;
   bool particleColorLog = false;
   std::vector<std::string> clipPlanes; ///< px,py,pz,nx,ny,nz each

@@ -280,6 +280,13 @@ class Scene:
         self.iso_color_field = ""
         self.iso_color_map = TransferFunction("cool-to-warm")
         self.meshes = []  # (exabricks._core.Mesh, sRGB colour)
+        # Particles as spheres (`particles`, `particle_radius`): one species or all (""), radius
+        # by an attribute, one sRGB colour or an attribute through a colour map.
+        self.particle_species = ""
+        self.particle_radius_by = ""
+        self.particle_color = (1.0, 0.7, 0.35)
+        self.particle_color_by = ""
+        self.particle_color_map = TransferFunction("plasma")
         self.clip_planes = []  # (point, normal)
         self.clip_box = None
         self.camera_path = None  # movies: {"keyframes": [...], "constant_speed": bool}, as in the scene file
@@ -357,6 +364,9 @@ class Scene:
             "iso": {"field": self.iso_field, "values": [float(v) for v in self.iso_values],
                     "colors": [_srgb(c) for c in self.iso_colors], "color_field": self.iso_color_field,
                     "color_map": self.iso_color_map.to_dict()},
+            "particles": {"species": self.particle_species, "radius_by": self.particle_radius_by,
+                          "color": _srgb(self.particle_color), "color_by": self.particle_color_by,
+                          "color_map": self.particle_color_map.to_dict()},
             "clip": {"planes": [{"point": list(map(float, p)), "normal": list(map(float, n))} for p, n in self.clip_planes]},
             "background": _srgb(self.background),
         }
@@ -430,6 +440,12 @@ class Scene:
         s.iso_colors = [tuple(c) for c in iso["colors"]]
         s.iso_color_field = iso["color_field"]
         s.iso_color_map = TransferFunction.from_dict(iso["color_map"])
+        p = d["particles"]
+        s.particle_species = p["species"]
+        s.particle_radius_by = p["radius_by"]
+        s.particle_color = tuple(p["color"])
+        s.particle_color_by = p["color_by"]
+        s.particle_color_map = TransferFunction.from_dict(p["color_map"])
         for m in d["meshes"]:
             if "file" in m:
                 s.add_mesh(path=m["file"], color=m["color"])
@@ -468,6 +484,13 @@ class Scene:
         return json.dumps(d)
 
     def _update(self):
+        source = getattr(self.dataset, "_particle_source", None)
+        if self.particles and source is not None and not getattr(self.dataset, "_particles_given", False):
+            # A dataset made from yt: its particles come from yt, once.
+            given = [(name, d["position"], {k: v for k, v in d.items() if k != "position"})
+                     for name, d in source("").items()]
+            self.dataset._core.set_particles(given)
+            self.dataset._particles_given = True
         return self._renderer.set_scene(self._scene_json(), [(m, c) for m, c in self.meshes])
 
     def render(self, width=None, height=None, spp=None, rate=None, depth_limit=None, depth_limit_planar=False):

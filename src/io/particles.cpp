@@ -6,6 +6,8 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/load.h"
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
 
 namespace exa {
@@ -66,6 +68,19 @@ std::vector<size_t> pickSpecies(const std::string& where, const std::vector<std:
 }
 
 } // namespace io
+
+size_t bytesPerParticle(const ParticleSpeciesInfo& s) { return sizeof(double) * (3 + s.attributes.size()); }
+
+std::string particleSpeciesJson(const std::vector<ParticleSpeciesInfo>& species) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const ParticleSpeciesInfo& s : species)
+    out.push_back({{"species", s.name},
+                   {"count", s.count},
+                   {"attributes", s.attributes},
+                   {"precision", s.precision},
+                   {"bytes_per_particle", bytesPerParticle(s)}});
+  return out.dump();
+}
 
 std::vector<ParticleSpeciesInfo> listParticles(const std::string& path) {
   switch (detectInput(path)) {

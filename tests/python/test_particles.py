@@ -107,3 +107,39 @@ def test_from_yt_particles_equal_the_native_reader():
     ours = exabricks.load(str(path)).particles("dark_matter")
     order, mine = np.argsort(theirs["index"]), np.argsort(ours["index"])
     assert np.allclose(theirs["position"][order], ours["position"][mine], rtol=0, atol=1e-12)
+
+
+def test_python_renders_particles_as_the_command_line_does(tmp_path, cli):
+    import subprocess
+    from PIL import Image
+    path = shared(ENZO)
+    ds = exabricks.load(str(path))
+    s = exabricks.Scene(ds, particles=True, particle_radius=0.006, particle_color_by="mass")
+    s.particle_color_map = exabricks.TransferFunction("viridis", log=True)
+    with_particles = s.render(96, 96)
+    s.particles = False
+    without = s.render(96, 96)
+    assert np.abs(with_particles - without).max() > 0.1  # the spheres show
+    s.particles = True
+    s.save_json(tmp_path / "scene.json")
+    assert '"color_by": "mass"' in (tmp_path / "scene.json").read_text()
+    out = tmp_path / "cli.png"
+    subprocess.run([cli, "-q", "render", "--scene", str(tmp_path / "scene.json"), "--size", "96x96", "-o", str(out)],
+                   check=True)
+    s.render(96, 96)
+    s.save(tmp_path / "py.png")
+    a = np.asarray(Image.open(out).convert("RGBA")).astype(float)
+    b = np.asarray(Image.open(tmp_path / "py.png").convert("RGBA")).astype(float)
+    assert np.abs(a - b).mean() <= 0.5 and (np.abs(a - b) <= 2).mean() >= 0.999
+    again = exabricks.Scene.from_json(ds, str(tmp_path / "scene.json"))
+    assert again.particles and again.particle_color_by == "mass" and again.particle_radius == pytest.approx(0.006)
+    with pytest.raises(Exception, match="no particle attribute 'nope'"):
+        s.particle_color_by = "nope"
+        s.render(32, 32)
+
+
+def test_from_yt_particles_render(tmp_path):
+    yt = pytest.importorskip("yt")
+    ds = exabricks.from_yt(yt.load(str(shared(ENZO))))
+    s = exabricks.Scene(ds, particles=True, particle_radius=0.006)
+    assert np.abs(s.render(64, 64)[..., 3]).max() > 0.5

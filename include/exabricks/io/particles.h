@@ -27,6 +27,12 @@ namespace exa {
 /// The species of an input, from its headers (AMReX) or its hierarchy and dataset shapes (Enzo).
 std::vector<ParticleSpeciesInfo> listParticles(const std::string& path);
 
+/// Bytes one particle of the species takes once read (positions and attributes in double).
+size_t bytesPerParticle(const ParticleSpeciesInfo& s);
+/// The species as `info --json` lists them: a JSON array of {species, count, attributes,
+/// precision, bytes_per_particle}.
+std::string particleSpeciesJson(const std::vector<ParticleSpeciesInfo>& species);
+
 /// Reads every species, or the one named (an error naming the input's species when it has no
 /// such species).
 ParticleSet readParticles(const std::string& path, const std::string& species = "");
