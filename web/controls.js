@@ -4,6 +4,7 @@
 import { resetView } from './camera.js';
 import { applyClipBox, applyClipPlane } from './clip.js';
 import { iso, isoPalette, renderIsoList, sliderToIso } from './iso.js';
+import { setupParticleControls } from './particles.js';
 import { rangeValue, showRangeValue, switchField, syncControls } from './panel.js';
 import { $, api, apiJson, clearMessage, serverGone, showMessage, viewer } from './session.js';
 import { syncSettingBoxes } from './settings.js';
@@ -195,6 +196,7 @@ export function setupControls() {
   setupVolumeControls();
   setupRangeControls();
   setupIsoControls();
+  setupParticleControls();
   setupClipControls();
   setupQualityControls();
   setupFileControls();

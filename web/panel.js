@@ -3,6 +3,7 @@
 
 import { bounds } from './clip.js';
 import { iso, renderIsoList } from './iso.js';
+import { syncParticleControls } from './particles.js';
 import { $, apiJson, isNetworkError, serverGone, showMessage, viewer } from './session.js';
 import { colormapChoices } from './settings.js';
 import { requestRender } from './stream.js';
@@ -63,6 +64,7 @@ export function syncControls() {
   fillSelect($('iso-color-field'), [['', '(colour per value)']].concat(fields), s.color_field || '');
   fillColormaps($('iso-colormap'), (s.color_map || {}).colormap || 'cool-to-warm', 'iso.color_map.colormap');
   renderIsoList();
+  syncParticleControls();
   const clip = doc.clip || {};
   const plane = (clip.planes || [])[0];
   $('clip-plane-on').checked = !!plane;

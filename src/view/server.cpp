@@ -353,6 +353,7 @@ void Server::bind() {
   legends.dataset = s.content.name;
   s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, legends, s.content.parts,
                                         s.content.budget);
+  s.session->setParticleInput(s.content.input);
   if (s.content.refine || s.content.parts) s.session->setDataNote(s.content.coarseNote);
   s.session->submit(s.content.initial, false); // the first picture renders while the page loads
   if (s.content.refine) s.startRefining(legends);

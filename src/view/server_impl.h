@@ -10,6 +10,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
 #include "exabricks/documents/image.h"
+#include "exabricks/io/particles.h"
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/legends.h"
 #include "exabricks/render/scene_vocabulary.h"
@@ -192,6 +193,14 @@ struct Server::Impl {
                         {"range", rangeJson(step.dataset.valueRanges.at(i))}});
     j["fields"] = fields;
     j["default_field"] = model.fieldNames.at(size_t(model.requireField("")));
+    // The particle species beside the cells (from the input's headers): the page offers them.
+    try {
+      j["particles"] = json::parse(
+          particleSpeciesJson(step.input.empty() ? std::vector<ParticleSpeciesInfo>() : listParticles(step.input)));
+    } catch (const Error& e) {
+      j["particles"] = json::array();
+      j["particles_error"] = e.what();
+    }
     const box3d wb = model.worldBounds();
     j["bounds"] = {wb.lower.x, wb.lower.y, wb.lower.z, wb.upper.x, wb.upper.y, wb.upper.z};
     const ModelSummary summary = summarize(model);

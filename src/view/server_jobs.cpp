@@ -97,6 +97,7 @@ void Server::Impl::seriesRoutes() {
     }
     LegendText legends;
     legends.dataset = legendDatasetLabel(step.input);
+    session->setParticleInput(step.input);
     session->setModel(step.model, step.dataset, std::move(legends));
     SceneDocument doc = session->current().value_or(content.initial);
     doc.input = step.input;
@@ -118,6 +119,7 @@ void Server::Impl::seriesRoutes() {
     }
     LegendText legends;
     legends.dataset = legendDatasetLabel(step.input);
+    session->setParticleInput(step.input);
     session->setModel(step.model, step.dataset, std::move(legends));
     SceneDocument doc = session->current().value_or(content.initial);
     doc.input = step.input;

@@ -1,5 +1,7 @@
 #include "session.h"
 
+#include "exabricks/io/particles.h"
+
 #include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
@@ -67,6 +69,28 @@ void Session::setModel(std::shared_ptr<const Model> model, const DatasetInfo& da
   pendingDataset_ = dataset;
   pendingLegends_ = std::move(legends);
   cancel_ = true;
+}
+
+void Session::setParticleInput(std::string input) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (input == particleInput_) return;
+  particleInput_ = std::move(input);
+  particlesRead_ = false;
+}
+
+void Session::provideParticles(const Scene& scene) {
+  std::string input;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!scene.particles.show || particlesRead_) return;
+    input = particleInput_;
+    particlesRead_ = true;
+  }
+  particles_.reset();
+  if (!input.empty() && !listParticles(input).empty())
+    particles_ = std::make_shared<const ParticleSet>(readParticles(input));
+  renderer_->setParticles(particles_);
+  if (parts_) parts_->setParticles(particles_);
 }
 
 void Session::setDataNote(std::string note) {
@@ -158,6 +182,7 @@ void Session::loop() {
       dataset_ = dataset;
       legends_ = legends;
       renderer_ = std::make_unique<Renderer>(*model_, dataset_);
+      renderer_->setParticles(particles_);
       view_ = std::make_unique<ProgressiveView>(*renderer_, options_.device, DraftPolicy{});
     }
     try {
@@ -171,6 +196,7 @@ void Session::loop() {
 
 void Session::serve(const Request& request) {
   const Frame& frame = request.doc.frame;
+  provideParticles(request.doc.scene);
   ProgressiveView& view = *view_;
   view.show(request.doc);
   view.restart(); // every request publishes its own frames

@@ -39,6 +39,9 @@ public:
   /// Renders another dataset (a series' step) from the next request on; the request in flight is
   /// cancelled.
   void setModel(std::shared_ptr<const Model> model, const DatasetInfo& dataset, LegendText legends = {});
+  /// Where the particles of the dataset shown come from (its input; empty: none). They are read
+  /// when a scene first shows them, and again after this changes.
+  void setParticleInput(std::string input);
   /// What the frames say of the data they show ("coarse levels ..."; empty: all of it).
   void setDataNote(std::string note);
   /// Accepts a validated scene document; returns its request number. Cancels the request in
@@ -87,7 +90,12 @@ private:
   std::shared_ptr<const Model> pendingModel_; ///< the dataset of the next request (setModel)
   DatasetInfo pendingDataset_;
   LegendText pendingLegends_;
-  std::string dataNote_; ///< FrameInfo::data of the frames (guarded by mutex_)
+  std::string dataNote_;                         ///< FrameInfo::data of the frames (guarded by mutex_)
+  std::string particleInput_;                    ///< guarded by mutex_
+  bool particlesRead_ = false;                   ///< particles_ came from particleInput_ (guarded by mutex_)
+  std::shared_ptr<const ParticleSet> particles_; ///< the render thread's
+  /// The particles a request's scene shows, read once per input, handed to the renderers.
+  void provideParticles(const Scene& scene);
   ServerOptions options_;
   mutable std::mutex mutex_;
   mutable std::condition_variable requestReady_, frameReady_;
