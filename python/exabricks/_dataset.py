@@ -107,6 +107,36 @@ class Dataset:
         read = _core.read_particles(self._path, species or "")
         return read[species] if species is not None else read
 
+    def add_particles(self, species, position, **attributes):
+        """Particles from arrays, drawn by the scenes made after this: `position` (N, 3) in world
+        coordinates and each attribute an (N,) array by name (integer arrays stay integers).
+        Species added so replace the input's own particles."""
+        position = np.ascontiguousarray(position, dtype=np.float64)
+        if position.ndim != 2 or position.shape[1] != 3:
+            raise ValueError("position must be an (N, 3) array")
+        given = {"position": position}
+        for name, values in attributes.items():
+            values = np.asarray(values)
+            if values.shape != (position.shape[0],):
+                raise ValueError("attribute '%s' must be an (N,) array of %d values" % (name, position.shape[0]))
+            given[name] = values
+        arrays = getattr(self, "_arrays", {})
+        arrays[str(species)] = given
+        self._arrays = arrays
+
+        def source(wanted):
+            if wanted is None:
+                return {n: {"name": n, "count": int(d["position"].shape[0]),
+                            "attributes": [k for k in d if k != "position"], "precision": "double"}
+                        for n, d in arrays.items()}
+            if wanted and wanted not in arrays:
+                raise ValueError("no particle species '%s' (given: %s)" % (wanted, ", ".join(arrays)))
+            return {n: d for n, d in arrays.items() if not wanted or n == wanted}
+        self._particle_source = source
+        self._core.set_particles([(n, d["position"], {k: v for k, v in d.items() if k != "position"})
+                                  for n, d in arrays.items()])
+        self._particles_given = True
+
     def sample(self, points, field=None):
         """Values (N,) and gradients per world unit (N, 3) at world positions (N, 3); NaN where
         no cell has weight."""
