@@ -5,7 +5,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/concurrent_vector.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <numeric>
@@ -149,6 +151,37 @@ private:
   tbb::concurrent_vector<BvhNode> nodes_;
 };
 
+/// 10 bits of x, spread to every third bit.
+uint32_t spread(uint32_t x) {
+  x = (x | (x << 16)) & 0x030000FFu;
+  x = (x | (x << 8)) & 0x0300F00Fu;
+  x = (x | (x << 4)) & 0x030C30C3u;
+  return (x | (x << 2)) & 0x09249249u;
+}
+
+/// The primitives in the order of their centres along a Morton curve, so that the builder's
+/// passes over a node's primitives read memory mostly in order.
+std::vector<uint32_t> mortonOrder(const std::vector<vec3f>& centres) {
+  box3f bounds;
+  for (const vec3f& c : centres)
+    bounds.extend(box3f(c, c));
+  const vec3f size = bounds.upper - bounds.lower;
+  std::vector<std::pair<uint32_t, uint32_t>> keys(centres.size());
+  tbb::parallel_for(size_t(0), centres.size(), [&](size_t i) {
+    uint32_t code = 0;
+    for (int a = 0; a < 3; ++a) {
+      const float t = size[a] > 0.f ? (centres[i][a] - bounds.lower[a]) / size[a] : 0.f;
+      code |= spread(uint32_t(std::clamp(t, 0.f, 1.f) * 1023.f)) << a;
+    }
+    keys[i] = {code, uint32_t(i)};
+  });
+  tbb::parallel_sort(keys.begin(), keys.end());
+  std::vector<uint32_t> order(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i)
+    order[i] = keys[i].second;
+  return order;
+}
+
 } // namespace
 
 void buildBvh(const std::vector<box3f>& boxes, const std::vector<vec3f>& centres, uint32_t leafSize,
@@ -158,7 +191,17 @@ void buildBvh(const std::vector<box3f>& boxes, const std::vector<vec3f>& centres
   std::iota(order.begin(), order.end(), 0u);
   if (boxes.empty()) return;
   if (boxes.size() > (size_t(1) << 31)) fail(boxes.size(), " primitives are too many for one hierarchy");
-  Builder(boxes, centres, leafSize, order).run(nodes);
+  if (boxes.size() <= kParallelBelow) return Builder(boxes, centres, leafSize, order).run(nodes);
+  // Many primitives: built over copies in Morton order, then the order mapped back.
+  const std::vector<uint32_t> morton = mortonOrder(centres);
+  std::vector<box3f> sortedBoxes(boxes.size());
+  std::vector<vec3f> sortedCentres(centres.size());
+  tbb::parallel_for(size_t(0), morton.size(), [&](size_t i) {
+    sortedBoxes[i] = boxes[morton[i]];
+    sortedCentres[i] = centres[morton[i]];
+  });
+  Builder(sortedBoxes, sortedCentres, leafSize, order).run(nodes);
+  tbb::parallel_for(size_t(0), order.size(), [&](size_t i) { order[i] = morton[order[i]]; });
 }
 
 } // namespace exa

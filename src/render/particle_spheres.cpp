@@ -80,6 +80,7 @@ ParticleSpheres particleSpheres(const ParticleSet& set, const ParticleStyle& sty
       }
       if (!(r > 0.f)) continue;
       const double* x = &s.position[3 * p];
+      if (!std::isfinite(x[0]) || !std::isfinite(x[1]) || !std::isfinite(x[2]) || !std::isfinite(r)) continue;
       out.spheres.push_back({vec3f(float(x[0]), float(x[1]), float(x[2])), r});
       out.colors.push_back(colors[k] ? tf.colorMap.at(tf.normalize(float(colors[k]->values[p]))) : style.color);
     }
