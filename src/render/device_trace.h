@@ -195,23 +195,15 @@ template <bool SmoothOne> struct DeviceRays {
       f1 = th.t;
       found = true;
     }
-    SphereHit sh;
-    if (v.particles && intersectSpheres(v.particleBvh, vec3f(r.orgW), vec3f(r.dirW), f0, f1, false, sh)) {
-      hit.kind = SurfaceHit::Particle;
-      hit.distance = sh.t;
-      hit.index = int(sh.sphere);
-      hit.normal = sh.normal;
-      found = true;
-    }
+    if (v.particles && particleHit(v.particleBvh, r, s0, f1, hit)) found = true;
     return found;
   }
   EXA_HOST_DEVICE bool meshOccludes(const DualRay& r, double s0, double s1) const {
     if (!(s1 > s0)) return false;
     const float f0 = float(s0 > 0.0 ? s0 : 0.0), f1 = float(s1);
     TriangleHit th;
-    SphereHit sh;
     return (v.meshes && intersectTriangles(v.meshBvh, vec3f(r.orgW), vec3f(r.dirW), f0, f1, true, th)) ||
-           (v.particles && intersectSpheres(v.particleBvh, vec3f(r.orgW), vec3f(r.dirW), f0, f1, true, sh));
+           (v.particles && particleOccludes(v.particleBvh, r, s0, s1));
   }
   EXA_HOST_DEVICE bool hasIso() const { return v.iso; }
   EXA_HOST_DEVICE bool isoHit(const Ray& ray, float& t, uint32_t& region, int& which, RayCounts& c) const {

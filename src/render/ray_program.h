@@ -22,6 +22,7 @@
 #include "dual_ray.h"
 #include "iso_search.h"
 
+#include "exabricks/accel/sphere_bvh.h"
 #include "exabricks/core/random.h"
 #include "exabricks/render/camera.h"
 #include "exabricks/render/renderer.h"
@@ -154,6 +155,28 @@ EXA_HOST_DEVICE inline vec3f surfaceColorOf(const SurfaceColors& s, const WorldT
   }
   if (s.isoColorCount > 0) return s.isoColors[hit.index % s.isoColorCount];
   return defaultIsoColor(hit.index);
+}
+
+/// The nearest particle sphere within [s0, s1] along the ray (world distances): its kind,
+/// distance, normal and sphere number, as both back ends' meshHit find it after the meshes.
+EXA_HOST_DEVICE inline bool particleHit(const SphereBvhView& spheres, const DualRay& r, double s0, double s1,
+                                        SurfaceHit& hit) {
+  SphereHit sh;
+  if (!spheres.nodes || !(s1 >= s0) ||
+      !intersectSpheres(spheres, vec3f(r.orgW), vec3f(r.dirW), float(s0 > 0.0 ? s0 : 0.0), float(s1), false, sh))
+    return false;
+  hit.kind = SurfaceHit::Particle;
+  hit.index = int(sh.sphere);
+  hit.distance = sh.t;
+  hit.normal = sh.normal;
+  return true;
+}
+
+/// Whether a particle sphere lies within [s0, s1] along the ray.
+EXA_HOST_DEVICE inline bool particleOccludes(const SphereBvhView& spheres, const DualRay& r, double s0, double s1) {
+  SphereHit sh;
+  return spheres.nodes && s1 > s0 &&
+         intersectSpheres(spheres, vec3f(r.orgW), vec3f(r.dirW), float(s0 > 0.0 ? s0 : 0.0), float(s1), true, sh);
 }
 
 /// The nearest surface along a ray: a mesh within the clip interval (with meshes unclipped, the

@@ -72,25 +72,13 @@ bool Surfaces::meshHit(const DualRay& r, double sMin, double sMax, SurfaceHit& h
     sMax = m.distance;
     found = true;
   }
-  SphereHit sh;
-  if (!spheres_.empty() && sMax >= sMin &&
-      intersectSpheres(spheres_.view(), vec3f(r.orgW), vec3f(r.dirW), float(std::max(sMin, 0.0)), float(sMax), false,
-                       sh)) {
-    hit.kind = SurfaceHit::Particle;
-    hit.index = int(sh.sphere);
-    hit.distance = sh.t;
-    hit.normal = sh.normal;
-    found = true;
-  }
+  if (particleHit(spheres_.view(), r, sMin, sMax, hit)) found = true;
   return found;
 }
 
 bool Surfaces::meshOccludes(const DualRay& r, double sMin, double sMax) const {
   if (!meshes_.empty() && meshes_.occluded(r.orgW, r.dirW, sMin, sMax)) return true;
-  SphereHit sh;
-  return !spheres_.empty() && sMax > sMin &&
-         intersectSpheres(spheres_.view(), vec3f(r.orgW), vec3f(r.dirW), float(std::max(sMin, 0.0)), float(sMax), true,
-                          sh);
+  return particleOccludes(spheres_.view(), r, sMin, sMax);
 }
 
 bool Surfaces::findIso(const Ray& ray, Sampling sampling, float rate, float& tHit, uint32_t& regionHit, int& which,
