@@ -230,6 +230,10 @@ enzo=${EXABRICKS_DATA:-$(dirname "$0")/../../shared/data}/particles/enzo_moving7
 if [ -e "$enzo" ]; then
   check "info --json lists the Enzo output's dark matter" bash -c "'$exe' info '$enzo' --json | $py -c 'import json,sys; (p,) = json.load(sys.stdin)[\"particles\"]; assert (p[\"species\"], p[\"count\"], p[\"bytes_per_particle\"]) == (\"dark_matter\", 9233, 72), p; assert \"mass\" in p[\"attributes\"]'"
   check "info names the species and its attributes" bash -c "'$exe' info '$enzo' | grep -q 'particles        dark_matter: 9233 (double; 72 bytes each when read)'"
+  check "render --particles draws them" bash -c "'$exe' -q render '$enzo' --size 48x48 -o gas.png && '$exe' -q render '$enzo' --size 48x48 --particles --particle-radius 0.006 -o dm.png && ! cmp -s gas.png dm.png"
+  check "movie --particles draws them in every frame" bash -c "'$exe' -q movie '$enzo' --orbit 2 --size 48x48 -o gas_frames && '$exe' -q movie '$enzo' --orbit 2 --size 48x48 --particles --particle-radius 0.006 -o dm_frames && ! cmp -s gas_frames/frame_00001.png dm_frames/frame_00001.png"
+  fails_with "an attribute the particles lack is refused, naming what they have" "no particle attribute 'metallicity' (dark_matter has: index, mass" "$exe" render "$enzo" --size 16x16 --particles --particle-color-by metallicity -o bad.png
+  fails_with "a species the data lacks is refused, naming what it holds" "no particle species 'stars'" "$exe" render "$enzo" --size 16x16 --particles stars -o bad.png
 else
   echo "skip particle checks: sample data not found at $enzo (set EXABRICKS_DATA)"
 fi

@@ -504,6 +504,7 @@ void run(const MovieCmdOptions& o, const CLI::App& cmd) {
   so.reuse = !o.noReuse;
   so.renderer = o.march.options();
   so.device = o.march.device;
+  if (plan.doc.scene.particles.show) so.particles = plan.doc.scene.particles.species;
   SeriesRenderer series(plan.paths, so);
   planFirstPicture(o, cmd, plan, series);
   planFrameShare(o, plan);

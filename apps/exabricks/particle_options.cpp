@@ -64,11 +64,11 @@ std::shared_ptr<const ParticleSet> particlesFor(const Scene& scene, const std::s
     logWarning("particles: the embedded dataset holds none; nothing is drawn for them");
     return nullptr;
   }
-  if (listParticles(input).empty()) {
+  std::shared_ptr<const ParticleSet> set = readParticlesIfAny(input, scene.particles.species);
+  if (!set) {
     logWarning(strCat("particles: ", input, " holds none; nothing is drawn for them"));
     return nullptr;
   }
-  auto set = std::make_shared<ParticleSet>(readParticles(input, scene.particles.species));
   uint64_t count = 0;
   for (const ParticleSpecies& s : set->species)
     count += s.count();

@@ -93,6 +93,11 @@ std::vector<ParticleSpeciesInfo> listParticles(const std::string& path) {
   }
 }
 
+std::shared_ptr<const ParticleSet> readParticlesIfAny(const std::string& path, const std::string& species) {
+  if (path.empty() || listParticles(path).empty()) return nullptr;
+  return std::make_shared<const ParticleSet>(readParticles(path, species));
+}
+
 ParticleSet readParticles(const std::string& path, const std::string& species) {
   switch (detectInput(path)) {
   case InputKind::Amrex:

@@ -1,5 +1,7 @@
 #include "movie.h"
 
+#include "exabricks/io/particles.h"
+
 #include "exabricks/core/error.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/render/camera_path.h"
@@ -102,7 +104,9 @@ void MovieMaker::run(MovieJob& job, const MovieInput& in) {
     if (in.steps.size() > 1) {
       // Each step rendered once and held for several frames, so that a short series plays for a
       // visible time.
-      SeriesRenderer series(in.steps, in.series);
+      SeriesOptions so = in.series;
+      if (in.doc.scene.particles.show) so.particles = in.doc.scene.particles.species;
+      SeriesRenderer series(in.steps, so);
       const FramePlan plan = FramePlan::perStep(int(in.steps.size()));
       const int hold = heldFrames(plan.steps, in.fps);
       std::vector<int> frames(size_t(plan.frames));
@@ -120,6 +124,8 @@ void MovieMaker::run(MovieJob& job, const MovieInput& in) {
       plan.orbit = orbitOf(in.doc.frame.camera);
       Renderer renderer(*in.current.model, in.current.dataset);
       renderer.setOptions(in.series.renderer);
+      if (in.doc.scene.particles.show)
+        renderer.setParticles(readParticlesIfAny(in.current.input, in.doc.scene.particles.species));
       for (int i = 0; i < plan.frames; ++i) {
         if (job.cancel) throw Cancelled{};
         Scene s = in.doc.scene;

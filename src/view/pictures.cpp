@@ -1,5 +1,7 @@
 #include "pictures.h"
 
+#include "exabricks/io/particles.h"
+
 #include "exabricks/core/error.h"
 
 #include <atomic>
@@ -74,6 +76,8 @@ void PictureMaker::run(PictureJob& job, const PictureInput& in) {
   try {
     Renderer renderer(*in.step.model, in.step.dataset);
     renderer.setOptions(in.renderer);
+    if (in.doc.scene.particles.show)
+      renderer.setParticles(readParticlesIfAny(in.step.input, in.doc.scene.particles.species));
     renderer.setScene(in.doc.scene);
     const Frame& frame = in.doc.frame;
     FrameBuffer buffer(frame.width, frame.height);

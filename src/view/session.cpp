@@ -86,9 +86,7 @@ void Session::provideParticles(const Scene& scene) {
     input = particleInput_;
     particlesRead_ = true;
   }
-  particles_.reset();
-  if (!input.empty() && !listParticles(input).empty())
-    particles_ = std::make_shared<const ParticleSet>(readParticles(input));
+  particles_ = readParticlesIfAny(input);
   renderer_->setParticles(particles_);
   if (parts_) parts_->setParticles(particles_);
 }

@@ -1,5 +1,7 @@
 #include "exabricks/workflows/series.h"
 
+#include "exabricks/io/particles.h"
+
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/series.h"
@@ -58,7 +60,8 @@ SeriesRange seriesRange(const std::vector<std::string>& steps, LoadOptions optio
   return out;
 }
 
-SeriesStep loadSeriesStep(const std::string& path, const LoadOptions& options, const SeriesStep* previous, bool reuse) {
+SeriesStep loadSeriesStep(const std::string& path, const LoadOptions& options, const SeriesStep* previous, bool reuse,
+                          const std::optional<std::string>& particles) {
   Timer timer;
   SeriesStep step;
   if (detectInput(path) == InputKind::Model) {
@@ -77,6 +80,7 @@ SeriesStep loadSeriesStep(const std::string& path, const LoadOptions& options, c
     }
   }
   step.info = DatasetInfo::of(*step.model);
+  if (particles) step.particles = readParticlesIfAny(path, *particles);
   step.seconds = timer.seconds();
   return step;
 }
@@ -110,8 +114,8 @@ const SeriesStep& SeriesRenderer::load(int step) {
     if (next_.valid()) next_.get();
     nextStep_ = -1;
     renderer_.reset();
-    SeriesStep loaded =
-        loadSeriesStep(steps_[size_t(step)], options_.load, first ? nullptr : &current_, options_.reuse);
+    SeriesStep loaded = loadSeriesStep(steps_[size_t(step)], options_.load, first ? nullptr : &current_, options_.reuse,
+                                       options_.particles);
     current_ = std::move(loaded);
   }
   current_.index = step;
@@ -128,7 +132,7 @@ void SeriesRenderer::prefetch(int step) {
   nextStep_ = step;
   const SeriesStep* previous = current_.model ? &current_ : nullptr;
   next_ = std::async(std::launch::async, [this, step, previous] {
-    return loadSeriesStep(steps_[size_t(step)], options_.load, previous, options_.reuse);
+    return loadSeriesStep(steps_[size_t(step)], options_.load, previous, options_.reuse, options_.particles);
   });
 }
 
@@ -138,6 +142,7 @@ Image SeriesRenderer::render(int step, const Scene& scene, const Frame& frame) {
   if (fresh) {
     renderer_ = std::make_unique<Renderer>(*current_.model, current_.info);
     renderer_->setOptions(options_.renderer);
+    renderer_->setParticles(current_.particles);
   }
   renderer_->setScene(scene);
   if (fresh) selectDevice(*renderer_, options_.device);

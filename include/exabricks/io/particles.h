@@ -19,6 +19,7 @@
 
 #include "exabricks/amr/particles.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,10 @@ std::string particleSpeciesJson(const std::vector<ParticleSpeciesInfo>& species)
 /// Reads every species, or the one named (an error naming the input's species when it has no
 /// such species).
 ParticleSet readParticles(const std::string& path, const std::string& species = "");
+
+/// The species named ("" every one) of an input that holds particles; null for an empty path or
+/// an input without particles (the front ends draw none then).
+std::shared_ptr<const ParticleSet> readParticlesIfAny(const std::string& path, const std::string& species = "");
 
 /// AMReX and Enzo readers (listParticles and readParticles dispatch to them).
 std::vector<ParticleSpeciesInfo> listAmrexParticles(const std::string& plotfile);

@@ -13,6 +13,7 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -44,11 +45,15 @@ struct SeriesStep {
   std::shared_ptr<const ModelStructure> structure; ///< kept for reuse by the next step
   double seconds = 0;                              ///< reading and building
   bool reused = false;                             ///< built over the previous step's structure
+  std::shared_ptr<const ParticleSet> particles;    ///< where the series draws them (null: none)
 };
 
 /// Loads a step; with `reuse` the previous step's structure serves when the cells are the same
 /// (only the values are rebuilt), and the structure is kept for the next step.
-SeriesStep loadSeriesStep(const std::string& path, const LoadOptions& options, const SeriesStep* previous, bool reuse);
+/// With `particles`, the step's particles of that species ("" every one) are read too (none
+/// where the step holds none).
+SeriesStep loadSeriesStep(const std::string& path, const LoadOptions& options, const SeriesStep* previous, bool reuse,
+                          const std::optional<std::string>& particles = std::nullopt);
 
 struct SeriesOptions {
   LoadOptions load;           ///< fields to read (empty: all) and build options
@@ -56,6 +61,9 @@ struct SeriesOptions {
   bool reuse = true;          ///< rebuild only values when the hierarchy is unchanged
   RendererOptions renderer;   ///< how the march computes
   std::string device = "cpu"; ///< where passes run: cpu, cuda, auto or portable (selectDevice)
+  /// Set: each step's particles of this species ("" every one) are read with it and drawn where
+  /// the scene shows them.
+  std::optional<std::string> particles;
 };
 
 struct SeriesStats {
