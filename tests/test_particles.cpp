@@ -220,6 +220,13 @@ TEST(Particles, BadAmrexParticleFilesAreRefusedClearly) {
     expectIn(errorOf([&] { readParticles(d.string()); }), {"DM/Header", "level 0 grid 0", "DATA_00000", "only"});
   }
   {
+    // Both grids of level 0 claim the first grid's bytes (a file of 8 particles' bytes, 5 + 5 claimed).
+    const fs::path d = fresh("overlap");
+    edit(d / "DM" / "Header", "1 3 0", "0 5 0");
+    edit(d / "DM" / "Header", "\n8\n", "\n10\n");
+    expectIn(errorOf([&] { readParticles(d.string()); }), {"level 0 grid 1", "claim", "overlap"});
+  }
+  {
     const fs::path d = fresh("offset");
     edit(d / "DM" / "Header", "1 3 0", "1 3 999999");
     expectIn(errorOf([&] { readParticles(d.string()); }), {"level 0 grid 1", "offset 999999", "beyond"});

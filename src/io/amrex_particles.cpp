@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 namespace exa {
@@ -234,10 +235,21 @@ ParticleSet readAmrexParticles(const std::string& plotfile, const std::string& s
   ParticleSet set;
   for (size_t i : io::pickSpecies(plotfile, names, species)) {
     const SpeciesHeader h = readSpeciesHeader(folders[i]);
-    // Every grid's bytes are checked against its file before the species is allocated.
+    // Every grid's bytes are checked against its file before the species is allocated, and the
+    // grids of one file together claim no more bytes than it holds (grids do not overlap).
+    std::map<std::string, uint64_t> claimed;
     for (size_t l = 0; l < h.levels.size(); ++l)
-      for (size_t g = 0; g < h.levels[l].size(); ++g)
-        if (h.levels[l][g].count > 0) checkGrid(h, l, g, h.levels[l][g]);
+      for (size_t g = 0; g < h.levels[l].size(); ++g) {
+        const GridEntry& e = h.levels[l][g];
+        if (e.count == 0) continue;
+        const GridFile f = checkGrid(h, l, g, e);
+        uint64_t& bytes = claimed[f.path];
+        bytes += uint64_t(e.count) * bytesPerParticle(h);
+        std::error_code ec;
+        if (bytes > fs::file_size(f.path, ec))
+          fail(f.where, ": the grids of this file claim ", bytes, " bytes, more than its ", fs::file_size(f.path, ec),
+               " (grids overlap)");
+      }
     ParticleSpecies s;
     s.name = h.name;
     s.precision = h.single ? "single" : "double";
