@@ -12,6 +12,7 @@
 
 #include "exabricks/core/error.h"
 #include "exabricks/io/flash.h"
+#include "exabricks/io/particles.h"
 
 // The inputs are well-formed HDF5 written by libhdf5: no check of each in a child process
 // (fuzz_hdf5 fuzzes damaged files through it).
@@ -34,6 +35,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   f.nxb = 1 + in.byte() % 8;
   f.nyb = 1 + in.byte() % 8;
   f.nzb = 1 + in.byte() % 8;
+  f.particles = int(in.byte() % 8) - 1;
   const uint8_t moves = in.byte() % 8;
   for (uint8_t m = 0; m < moves; ++m) {
     flash_fixture::Block& b = f.blocks[in.byte() % f.blocks.size()];
@@ -61,11 +63,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   const hid_t file = H5Fopen(f.file.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
   if (file < 0) return 0;
-  static const char* const tables[] = {"refine level", "node type", "bounding box", "block size",
-                                       "coordinates",  "dens",      "pres",         "unknown names"};
+  static const char* const tables[] = {"refine level",     "node type",     "bounding box", "block size",
+                                       "coordinates",      "dens",          "pres",         "unknown names",
+                                       "tracer particles", "particle names"};
   while (!in.empty()) {
     const uint8_t op = in.byte();
-    const char* table = tables[(op >> 2) % 8];
+    const char* table = tables[(op >> 2) % 10];
     switch (op % 4) {
     case 0: {
       std::vector<int> v(in.byte() % 24);
@@ -94,5 +97,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   fuzz::closeAndRead(
       file, f.file.string(), [](const std::string& p) { exa::listFlashFields(p); },
       [](const std::string& p) { return exa::readFlash(p); });
+  try {
+    exa::listFlashParticles(f.file.string());
+    for (const exa::ParticleSpecies& s : exa::readFlashParticles(f.file.string()).species)
+      for (const exa::ParticleAttribute& a : s.attributes)
+        if (a.values.size() != s.count()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
   return 0;
 }

@@ -32,6 +32,7 @@ struct FlashFixture {
   bool nanValue = false;
   bool dropRow = false;      ///< variable datasets one block short
   bool latestFormat = false; ///< the newest HDF5 file format (h5w::Writer)
+  int particles = -1;        ///< >= 0: a "tracer particles" table of this many (blk, posx, posy, posz, tag)
   std::vector<Block> blocks;
 
   FlashFixture() {
@@ -86,6 +87,14 @@ struct FlashFixture {
     w.nameValueTable("integer scalars", {"nxb", "nyb", "nzb", "dimensionality", "globalnumblocks", "nstep"},
                      {double(nxb), double(nyb), double(nzb), double(dimensionality), double(n), 42.0}, true);
     w.nameValueTable("real scalars", {"time"}, {0.5}, false);
+    if (particles >= 0) {
+      // Particle p: block p % n, position (0.1 + 0.01 p, 0.2 + 0.02 p, 0.3 + 0.005 p), tag 100 + p.
+      std::vector<double> table;
+      for (int p = 0; p < particles; ++p)
+        table.insert(table.end(), {double(p % int(n)), 0.1 + 0.01 * p, 0.2 + 0.02 * p, 0.3 + 0.005 * p, 100.0 + p});
+      w.doubles("tracer particles", {hsize_t(particles), 5}, table, float32);
+      w.strings("particle names", {5, 1}, {"blk", "posx", "posy", "posz", "tag"}, 24);
+    }
     for (int var = 0; var < 2; ++var) {
       std::vector<double> v;
       const size_t rows = dropRow ? n - 1 : n;

@@ -1,6 +1,7 @@
 // Particle readers against hand-written AMReX plotfiles and Enzo outputs (both precisions,
 // several levels and grids, empty grids, packed ids), a real Enzo output, and bad input.
 #include "errors.h"
+#include "flash_fixture.h"
 #include "h5_writer.h"
 
 #include "exabricks/io/particles.h"
@@ -359,6 +360,39 @@ TEST(Particles, EnzoCountsThatDisagreeWithTheDataAreRefused) {
   e.write();
   expectIn(errorOf([&] { readParticles(e.parameterFile().string()); }),
            {"DD0003.cpu0000", "Grid00000002/particle_", "grid 2", "3 values", "NumberOfParticles = 5"});
+}
+
+TEST(Particles, FlashTracerParticlesBothPrecisions) {
+  for (bool float32 : {false, true}) {
+    SCOPED_TRACE(float32);
+    flash_fixture::FlashFixture f;
+    f.file = fs::path(EXABRICKS_TEST_TMP) / (float32 ? "flash-particles32.hdf5" : "flash-particles.hdf5");
+    f.float32 = float32;
+    f.particles = 30;
+    f.write();
+    const std::vector<ParticleSpeciesInfo> info = listParticles(f.file.string());
+    ASSERT_EQ(info.size(), 1u);
+    EXPECT_EQ(info[0].name, "particles");
+    EXPECT_EQ(info[0].count, 30u);
+    EXPECT_EQ(info[0].attributes, (std::vector<std::string>{"blk", "tag"}));
+    EXPECT_EQ(info[0].precision, float32 ? "single" : "double");
+    const ParticleSet set = readParticles(f.file.string());
+    ASSERT_EQ(set.species.size(), 1u);
+    const ParticleSpecies& s = set.species[0];
+    ASSERT_EQ(s.count(), 30u);
+    auto stored = [&](double v) { return float32 ? double(float(v)) : v; };
+    for (int p = 0; p < 30; ++p) {
+      EXPECT_EQ(s.position[size_t(3 * p)], stored(0.1 + 0.01 * p));
+      EXPECT_EQ(s.position[size_t(3 * p + 1)], stored(0.2 + 0.02 * p));
+      EXPECT_EQ(s.position[size_t(3 * p + 2)], stored(0.3 + 0.005 * p));
+      EXPECT_EQ(s.attribute("tag")->values[size_t(p)], 100 + p);
+    }
+  }
+  flash_fixture::FlashFixture none;
+  none.file = fs::path(EXABRICKS_TEST_TMP) / "flash-no-particles.hdf5";
+  none.write();
+  EXPECT_TRUE(listParticles(none.file.string()).empty());
+  expectIn(errorOf([&] { readParticles(none.file.string(), "particles"); }), {"no particle species 'particles'"});
 }
 
 TEST(Particles, FormatsWithoutParticlesListNone) {

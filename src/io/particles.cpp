@@ -88,6 +88,8 @@ std::vector<ParticleSpeciesInfo> listParticles(const std::string& path) {
     return listAmrexParticles(path);
   case InputKind::Enzo:
     return listEnzoParticles(path);
+  case InputKind::Flash:
+    return listFlashParticles(path);
   default:
     return {};
   }
@@ -104,6 +106,8 @@ ParticleSet readParticles(const std::string& path, const std::string& species) {
     return readAmrexParticles(path, species);
   case InputKind::Enzo:
     return readEnzoParticles(path, species);
+  case InputKind::Flash:
+    return readFlashParticles(path, species);
   default:
     if (!species.empty()) fail(path, ": no particle species '", species, "' (it holds no particles)");
     return {};

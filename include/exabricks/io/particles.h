@@ -7,6 +7,9 @@
 //   Enzo packed HDF5: the grids' particle_position_x/y/z and every other 1-D particle_* dataset,
 //     split into species by particle_type where the output writes it (dark_matter, star, ...)
 //     and one species "particles" otherwise. Positions are code units, as the cells' world.
+//   FLASH HDF5: the "tracer particles" table (particles x properties) with its "particle names"
+//     (posx, posy, posz, tag, velx, ...): one species "particles", every property but the
+//     positions an attribute. Positions are physical, as the cells' world.
 // Other formats hold no particles here (an empty list).
 //
 // Treatment of odd data: a particle with a NaN or infinite coordinate is skipped and counted; a
@@ -42,10 +45,12 @@ ParticleSet readParticles(const std::string& path, const std::string& species = 
 /// an input without particles (the front ends draw none then).
 std::shared_ptr<const ParticleSet> readParticlesIfAny(const std::string& path, const std::string& species = "");
 
-/// AMReX and Enzo readers (listParticles and readParticles dispatch to them).
+/// AMReX, Enzo and FLASH readers (listParticles and readParticles dispatch to them).
 std::vector<ParticleSpeciesInfo> listAmrexParticles(const std::string& plotfile);
 ParticleSet readAmrexParticles(const std::string& plotfile, const std::string& species = "");
 std::vector<ParticleSpeciesInfo> listEnzoParticles(const std::string& path);
 ParticleSet readEnzoParticles(const std::string& path, const std::string& species = "");
+std::vector<ParticleSpeciesInfo> listFlashParticles(const std::string& path);
+ParticleSet readFlashParticles(const std::string& path, const std::string& species = "");
 
 } // namespace exa
