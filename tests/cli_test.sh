@@ -233,6 +233,7 @@ if [ -e "$enzo" ]; then
   check "render --particles draws them" bash -c "'$exe' -q render '$enzo' --size 48x48 -o gas.png && '$exe' -q render '$enzo' --size 48x48 --particles --particle-radius 0.006 -o dm.png && ! cmp -s gas.png dm.png"
   check "movie --particles draws them in every frame" bash -c "'$exe' -q movie '$enzo' --orbit 2 --size 48x48 -o gas_frames && '$exe' -q movie '$enzo' --orbit 2 --size 48x48 --particles --particle-radius 0.006 -o dm_frames && ! cmp -s gas_frames/frame_00001.png dm_frames/frame_00001.png"
   fails_with "an attribute the particles lack is refused, naming what they have" "no particle attribute 'metallicity' (dark_matter has: index, mass" "$exe" render "$enzo" --size 16x16 --particles --particle-color-by metallicity -o bad.png
+  fails_with "an input taken for a species name is said" "name the input first" "$exe" render --particles "$enzo" -o bad.png
   fails_with "a species the data lacks is refused, naming what it holds" "no particle species 'stars'" "$exe" render "$enzo" --size 16x16 --particles stars -o bad.png
 else
   echo "skip particle checks: sample data not found at $enzo (set EXABRICKS_DATA)"

@@ -6,6 +6,8 @@
 #include "exabricks/core/log.h"
 #include "exabricks/io/particles.h"
 
+#include <filesystem>
+
 namespace exa::cli {
 
 void addParticleOptions(RenderOptions& o, CLI::App& cmd) {
@@ -33,6 +35,10 @@ void applyParticleOptions(const RenderOptions& o, const CLI::App& cmd, bool from
   auto apply = [&](const char* name) { return !fromFile || cmd.count(name) > 0; };
   ParticleStyle& p = s.particles;
   if (cmd.count("--particles")) {
+    std::error_code ec;
+    if (!o.particles.empty() && o.in.input.empty() && std::filesystem::exists(o.particles, ec))
+      failUsage("--particles took '", o.particles,
+                "' for a species name: name the input first (exabricks render INPUT --particles [SPECIES])");
     p.show = true;
     p.species = o.particles;
   }
