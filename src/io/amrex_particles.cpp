@@ -162,9 +162,10 @@ void unpackId(uint64_t idcpu, double& id, double& cpu) {
   cpu = double(idcpu & 0xFFFFFF);
 }
 
-/// A grid's data file, checked to hold the grid's particles at its offset.
+/// A grid's data file, checked to hold the grid's particles at its offset, and its size.
 struct GridFile {
   std::string path, where;
+  uint64_t size = 0;
 };
 GridFile checkGrid(const SpeciesHeader& h, size_t level, size_t grid, const GridEntry& e) {
   char name[32];
@@ -173,16 +174,15 @@ GridFile checkGrid(const SpeciesHeader& h, size_t level, size_t grid, const Grid
   f.path = (fs::path(h.dir) / ("Level_" + std::to_string(level)) / name).string();
   f.where = strCat(h.header, ": level ", level, " grid ", grid, " (", f.path, ")");
   std::error_code ec;
-  const uint64_t present = fs::file_size(f.path, ec);
+  f.size = fs::file_size(f.path, ec);
   if (ec) fail(f.where, ": cannot read the data file: ", ec.message());
-  if (uint64_t(e.offset) > present) fail(f.where, ": offset ", e.offset, " lies beyond the file's ", present, " bytes");
-  io::requireBytes(uint64_t(e.count), bytesPerParticle(h), present - uint64_t(e.offset), f.where);
+  if (uint64_t(e.offset) > f.size) fail(f.where, ": offset ", e.offset, " lies beyond the file's ", f.size, " bytes");
+  io::requireBytes(uint64_t(e.count), bytesPerParticle(h), f.size - uint64_t(e.offset), f.where);
   return f;
 }
 
-/// Appends one grid's particles (`e`) from its data file.
-void readGrid(const SpeciesHeader& h, size_t level, size_t grid, const GridEntry& e, ParticleSpecies& s) {
-  const GridFile f = checkGrid(h, level, grid, e);
+/// Appends one grid's particles (`e`) from its data file, checked by checkGrid.
+void readGrid(const SpeciesHeader& h, const GridEntry& e, const GridFile& f, ParticleSpecies& s) {
   const uint64_t realBytes = h.single ? 4 : 8;
   const uint64_t intsPer = 2 + h.ints.size(), realsPer = 3 + h.reals.size();
   std::ifstream in(f.path, std::ios::binary);
@@ -238,17 +238,17 @@ ParticleSet readAmrexParticles(const std::string& plotfile, const std::string& s
     // Every grid's bytes are checked against its file before the species is allocated, and the
     // grids of one file together claim no more bytes than it holds (grids do not overlap).
     std::map<std::string, uint64_t> claimed;
+    std::vector<std::pair<const GridEntry*, GridFile>> grids; ///< those with particles, in file order
     for (size_t l = 0; l < h.levels.size(); ++l)
       for (size_t g = 0; g < h.levels[l].size(); ++g) {
         const GridEntry& e = h.levels[l][g];
         if (e.count == 0) continue;
-        const GridFile f = checkGrid(h, l, g, e);
+        GridFile f = checkGrid(h, l, g, e);
         uint64_t& bytes = claimed[f.path];
         bytes += uint64_t(e.count) * bytesPerParticle(h);
-        std::error_code ec;
-        if (bytes > fs::file_size(f.path, ec))
-          fail(f.where, ": the grids of this file claim ", bytes, " bytes, more than its ", fs::file_size(f.path, ec),
-               " (grids overlap)");
+        if (bytes > f.size)
+          fail(f.where, ": the grids of this file claim ", bytes, " bytes, more than its ", f.size, " (grids overlap)");
+        grids.emplace_back(&e, std::move(f));
       }
     ParticleSpecies s;
     s.name = h.name;
@@ -260,9 +260,8 @@ ParticleSet readAmrexParticles(const std::string& plotfile, const std::string& s
     s.position.reserve(3 * size_t(h.total));
     for (ParticleAttribute& a : s.attributes)
       a.values.reserve(size_t(h.total));
-    for (size_t l = 0; l < h.levels.size(); ++l)
-      for (size_t g = 0; g < h.levels[l].size(); ++g)
-        if (h.levels[l][g].count > 0) readGrid(h, l, g, h.levels[l][g], s);
+    for (const auto& [e, f] : grids)
+      readGrid(h, *e, f, s);
     io::finishSpecies(s, domain.lower, domain.upper, plotfile, set);
   }
   return set;

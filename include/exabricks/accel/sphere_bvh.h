@@ -26,7 +26,6 @@ public:
   /// Replaces the spheres (world space, radius > 0). `order` receives, per sphere of the
   /// hierarchy (the index a hit reports), the index of the sphere given.
   void build(const std::vector<BvhSphere>& spheres, std::vector<uint32_t>& order);
-  void clear() { nodes_.clear(), spheres_.clear(); }
   bool empty() const { return nodes_.empty(); }
   size_t size() const { return spheres_.size(); }
   SphereBvhView view() const { return {nodes_.empty() ? nullptr : nodes_.data(), spheres_.data()}; }

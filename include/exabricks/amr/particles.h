@@ -30,8 +30,6 @@ struct ParticleSpecies {
       if (a.name == wanted) return &a;
     return nullptr;
   }
-  /// Bytes held per particle (positions and attributes).
-  size_t bytesPerParticle() const { return sizeof(double) * (3 + attributes.size()); }
 };
 
 /// What a file holds of one species, from its headers alone.
