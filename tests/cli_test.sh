@@ -226,6 +226,11 @@ done
 
 # Particles beside the cells: info lists each species with its count, attributes and bytes.
 check "info --json lists no particles for a native dataset" bash -c "'$exe' info s.cells --json | $py -c 'import json,sys; assert json.load(sys.stdin)[\"particles\"] == []'"
+"$exe" -q generate -s cosmic -n 20000 --particles 800 -o cosmic.cells
+check "generate writes the cosmic scene's dark matter and stars beside its cells" bash -c "'$exe' info cosmic.cells --json | $py -c 'import json,sys; p = json.load(sys.stdin)[\"particles\"]; assert [(s[\"species\"], s[\"count\"]) for s in p] == [(\"dark_matter\", 800), (\"star\", 32)], p; assert p[1][\"attributes\"] == [\"mass\", \"index\", \"type\", \"creation_time\"], p'"
+check "render --particles draws the generated particles" bash -c "'$exe' -q render cosmic.cells --size 48x48 -o gas.png && '$exe' -q render cosmic.cells --size 48x48 --particles star --particle-radius 3 -o stars.png && ! cmp -s gas.png stars.png"
+fails_with "a scene without particles refuses --particles" "scene 'blobs' has no particles" "$exe" generate -s blobs -n 1000 --particles 10 -o nop.cells
+check "a dataset written over a cosmic one leaves no particles of it" bash -c "'$exe' -q generate -s blobs -n 1000 -o cosmic.cells && [ ! -e cosmic.particles ]"
 enzo=${EXABRICKS_DATA:-$(dirname "$0")/../../shared/data}/particles/enzo_moving7_3d/DD0010/moving7_0010
 if [ -e "$enzo" ]; then
   check "info --json lists the Enzo output's dark matter" bash -c "'$exe' info '$enzo' --json | $py -c 'import json,sys; (p,) = json.load(sys.stdin)[\"particles\"]; assert (p[\"species\"], p[\"count\"], p[\"bytes_per_particle\"]) == (\"dark_matter\", 9233, 72), p; assert \"mass\" in p[\"attributes\"]'"

@@ -3,8 +3,10 @@
 #include "common.h"
 
 #include "exabricks/amr/scenes.h"
+#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/native.h"
+#include "exabricks/io/particles.h"
 
 #include <tbb/task_arena.h>
 
@@ -20,9 +22,10 @@ namespace {
 
 struct GenerateOptions {
   SceneOptions scene;
-  int steps = 0;   ///< 0: one dataset; N: a time series of N steps
-  int regrid = 1;  ///< steps between two changes of the hierarchy
-  double dt = 1.0; ///< time between steps
+  int steps = 0;          ///< 0: one dataset; N: a time series of N steps
+  int regrid = 1;         ///< steps between two changes of the hierarchy
+  double dt = 1.0;        ///< time between steps
+  int64_t particles = -1; ///< particles of the scene's main species; -1: cells / 25 where it has them
   std::string output;
   bool list = false;
   bool json = false;
@@ -30,6 +33,24 @@ struct GenerateOptions {
 
 /// Slabs generated at once when streaming to disk: enough to keep every thread busy.
 int slabsPerPiece() { return 4 * int(std::max<size_t>(1, tbb::this_task_arena::max_concurrency())); }
+
+/// The particles to write beside the cells (none for a scene without them).
+uint64_t particleCount(const GenerateOptions& o) {
+  if (o.particles < -1) failUsage("--particles must be 0 or more");
+  if (!sceneHasParticles(o.scene.name)) {
+    if (o.particles > 0) failUsage(strCat("--particles: scene '", o.scene.name, "' has no particles (cosmic has)"));
+    return 0;
+  }
+  if (o.particles > (int64_t(1) << 32)) failUsage("--particles: at most 2^32");
+  return o.particles >= 0 ? uint64_t(o.particles) : o.scene.targetCells / 25;
+}
+
+/// NAME.particles for the scene's resolved lattice, the domain its cells cover.
+std::vector<char> particleBytes(const SceneOptions& resolved, uint64_t count) {
+  const ParticleSet set = generateSceneParticles(resolved, count);
+  const double width = double(resolved.base) * double(1 << (resolved.levels - 1));
+  return nativeParticleBytes(set, vec3d(0.0), vec3d(width));
+}
 
 void run(const GenerateOptions& o) {
   if (o.list) {
@@ -41,13 +62,15 @@ void run(const GenerateOptions& o) {
   if (o.steps < 0 || o.steps > 100000) failUsage("--steps must be in 0..100000");
   if (o.regrid < 1) failUsage("--regrid must be at least 1");
   if (!(o.dt > 0 && std::isfinite(o.dt))) failUsage("--dt must be a positive number");
+  const uint64_t particles = particleCount(o);
   Timer timer;
   std::vector<std::string> outputs;
   uint64_t cellCount = 0;
   if (o.steps == 0) {
     // Written as it is generated, a few slabs at a time: memory for those alone.
     std::unique_ptr<NativeWriter> writer;
-    cellCount = generateScenePieces(o.scene, slabsPerPiece(), [&](CellSet& piece) {
+    const SceneOptions resolved = resolveSceneSize(o.scene);
+    cellCount = generateScenePieces(resolved, slabsPerPiece(), [&](CellSet& piece) {
       validateCellRecords(piece.cells, o.scene.name);
       for (const Field& f : piece.fields)
         validateFieldValues(f, piece.cells.size(), o.scene.name);
@@ -59,6 +82,7 @@ void run(const GenerateOptions& o) {
       }
       writer->append(piece);
     });
+    if (particles) writer->addFile(nativeParticlesPath(o.output), particleBytes(resolved, particles));
     writer->finish();
     outputs.push_back(o.output);
   } else {
@@ -81,6 +105,10 @@ void run(const GenerateOptions& o) {
       std::snprintf(suffix, sizeof suffix, "_%04d.cells", step);
       outputs.push_back(stem + suffix);
       writeNative(cells, outputs.back());
+      if (particles) {
+        const std::vector<char> bytes = particleBytes(so, particles);
+        writeFileAtomic(nativeParticlesPath(outputs.back()), bytes.data(), bytes.size());
+      }
       cellCount += cells.size();
       progress.advance(1);
     }
@@ -95,6 +123,7 @@ void run(const GenerateOptions& o) {
                      {"levels", o.scene.levels},
                      {"seconds", timer.seconds()}};
     if (o.steps) j["steps"] = o.steps;
+    if (particles) j["particles"] = {{"dark_matter", particles}, {"star", particles / 25}};
     std::cout << j.dump(2) << "\n";
   }
 }
@@ -113,6 +142,8 @@ void addGenerate(CLI::App& app) {
   cmd->add_option("--regrid", opts->regrid, "Steps between changes of the hierarchy in a series")
       ->capture_default_str();
   cmd->add_option("--dt", opts->dt, "Time between steps of a series")->capture_default_str();
+  cmd->add_option("--particles", opts->particles,
+                  "Dark-matter particles written to NAME.particles with count/25 stars (cosmic; default: cells/25)");
   cmd->add_flag("--list", opts->list, "List the scenes");
   cmd->add_flag("--json", opts->json, "Print a JSON summary on stdout");
   cmd->callback([opts] { run(*opts); });

@@ -5,6 +5,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -34,7 +35,30 @@ struct Scene {
   /// Refinement is decided per block of this many cells of a level per axis, as in
   /// block-structured AMR codes: a refined block becomes a patch of (2 block)^3 finer cells.
   int block = 4;
+  /// Particles in unit-cube coordinates, `count` of the main species (null: the scene has none).
+  std::function<ParticleSet(uint64_t count)> particles;
 };
+
+/// A standard normal deviate (Box-Muller).
+double gaussian(uint64_t& state) {
+  const double u = std::max(uniform(state), 0x1.0p-53), v = uniform(state);
+  return std::sqrt(-2 * std::log(u)) * std::cos(2 * M_PI * v);
+}
+
+/// Index of the first entry of an increasing cumulative sum above u.
+size_t pick(const std::vector<double>& cumulative, double u) {
+  const size_t i =
+      size_t(std::upper_bound(cumulative.begin(), cumulative.end(), u * cumulative.back()) - cumulative.begin());
+  return std::min(i, cumulative.size() - 1);
+}
+
+ParticleAttribute attribute(const std::string& name, size_t n, bool integer) {
+  ParticleAttribute a;
+  a.name = name;
+  a.values.resize(n);
+  a.integer = integer;
+  return a;
+}
 
 Scene makeBlobs(uint64_t seed, int maxLevel, double time, double gridTime) {
   struct Blob {
@@ -156,15 +180,94 @@ Scene makeRamp(uint64_t seed, int maxLevel) {
 /// wavenumber, as a power spectrum does), with compact haloes on top, spanning five to six
 /// decades; cells refine by one level per factor of eight in overdensity, so the voids keep the
 /// coarsest cells.
+struct Wave {
+  vec3d k;
+  double amplitude, phase;
+};
+struct Halo {
+  vec3d centre;
+  double sigma, mass;
+};
+
+/// Dark matter where the cosmic density is (the web's share drawn from its log-normal part on a
+/// 64^3 grid, each halo's share from its Gaussian), equal masses; stars (count / 25) in the
+/// haloes, three times more concentrated, of 1 to 30 dark-matter masses, with creation times.
+/// Species and attributes as exabricks names Enzo's: mass, index, type (1 dark matter,
+/// 2 stars) and the stars' creation_time. Unit-cube coordinates.
+ParticleSet cosmicParticles(const std::vector<Wave>& waves, const std::vector<Halo>& haloes, uint64_t seed,
+                            uint64_t count) {
+  constexpr int grid = 64;
+  std::vector<double> web(size_t(grid) * grid * grid);
+  tbb::parallel_for(0, grid, [&](int z) {
+    for (int y = 0; y < grid; ++y)
+      for (int x = 0; x < grid; ++x) {
+        const vec3d p = (vec3d(x, y, z) + vec3d(0.5)) / double(grid);
+        double d = 0;
+        for (const Wave& w : waves)
+          d += w.amplitude * std::cos(dot(w.k, p) + w.phase);
+        web[(size_t(z) * grid + size_t(y)) * grid + size_t(x)] = std::exp(d - 1.28) / double(web.size());
+      }
+  });
+  // One cumulative sum over the web's grid cells and then the haloes (mass (2 pi)^1.5 sigma^3 m).
+  std::vector<double> all(web.size() + haloes.size()), stellar(haloes.size());
+  double sum = 0;
+  for (size_t i = 0; i < web.size(); ++i)
+    all[i] = sum += web[i];
+  double stars = 0;
+  for (size_t h = 0; h < haloes.size(); ++h) {
+    const double mass = std::pow(2 * M_PI, 1.5) * std::pow(haloes[h].sigma, 3) * haloes[h].mass;
+    all[web.size() + h] = sum += mass;
+    stellar[h] = stars += mass;
+  }
+  auto inHalo = [&](const Halo& h, double sigma, uint64_t& state) {
+    vec3d p;
+    for (int a = 0; a < 3; ++a) {
+      const double x = h.centre[a] + sigma * gaussian(state);
+      p[a] = x - std::floor(x); // periodic
+    }
+    return p;
+  };
+  ParticleSet set;
+  const uint64_t starCount = count / 25;
+  for (int kind = 1; kind <= 2; ++kind) {
+    const size_t n = size_t(kind == 1 ? count : starCount);
+    ParticleSpecies sp;
+    sp.name = kind == 1 ? "dark_matter" : "star";
+    sp.precision = "double";
+    sp.position.resize(3 * n);
+    sp.attributes = {attribute("mass", n, false), attribute("index", n, true), attribute("type", n, true)};
+    if (kind == 2) sp.attributes.push_back(attribute("creation_time", n, false));
+    const uint64_t first = kind == 1 ? 0 : count;
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+      uint64_t state = mix64(seed ^ mix64(0x9a271c1e5ull + first + i));
+      vec3d p;
+      if (kind == 1) {
+        const size_t c = pick(all, uniform(state));
+        if (c < web.size()) {
+          const vec3d corner(double(c % grid), double(c / grid % grid), double(c / grid / grid));
+          const double ux = uniform(state), uy = uniform(state), uz = uniform(state);
+          p = (corner + vec3d(ux, uy, uz)) / double(grid);
+        } else {
+          p = inHalo(haloes[c - web.size()], haloes[c - web.size()].sigma, state);
+        }
+        sp.attributes[0].values[i] = sum / double(count);
+      } else {
+        const Halo& h = haloes[pick(stellar, uniform(state))];
+        p = inHalo(h, h.sigma / 3, state);
+        sp.attributes[0].values[i] = sum / double(count) * std::pow(10.0, 1.5 * uniform(state));
+        sp.attributes[3].values[i] = uniform(state);
+      }
+      for (int a = 0; a < 3; ++a)
+        sp.position[3 * i + size_t(a)] = p[a];
+      sp.attributes[1].values[i] = double(first + i);
+      sp.attributes[2].values[i] = kind;
+    });
+    set.species.push_back(std::move(sp));
+  }
+  return set;
+}
+
 Scene makeCosmic(uint64_t seed, int maxLevel) {
-  struct Wave {
-    vec3d k;
-    double amplitude, phase;
-  };
-  struct Halo {
-    vec3d centre;
-    double sigma, mass;
-  };
   uint64_t s = mix64(seed ^ 0xc05b1cull);
   std::vector<Wave> waves;
   double variance = 0;
@@ -216,6 +319,7 @@ Scene makeCosmic(uint64_t seed, int maxLevel) {
     return level;
   };
   scene.block = 2;
+  scene.particles = [waves, haloes, seed](uint64_t count) { return cosmicParticles(waves, haloes, seed, count); };
   return scene;
 }
 
@@ -402,6 +506,22 @@ CellSet generateScene(const SceneOptions& options) {
   // One piece holding every slab.
   CellSet set;
   generateScenePieces(options, std::numeric_limits<int>::max(), [&](CellSet& piece) { set = std::move(piece); });
+  return set;
+}
+
+bool sceneHasParticles(const std::string& name) { return name == "cosmic"; }
+
+ParticleSet generateSceneParticles(const SceneOptions& options, uint64_t count) {
+  const SceneOptions o = options.base > 0 ? options : resolveSceneSize(options);
+  const Scene scene = makeScene(o);
+  if (!scene.particles) fail("scene '", o.name, "' has no particles (cosmic has)");
+  if (count > (uint64_t(1) << 32)) fail("at most 2^32 particles, asked for ", count);
+  ParticleSet set = scene.particles(count);
+  // Unit-cube coordinates to the lattice's (the world of a native dataset).
+  const double width = double(o.base) * double(1 << (o.levels - 1));
+  for (ParticleSpecies& sp : set.species)
+    for (double& x : sp.position)
+      x *= width;
   return set;
 }
 

@@ -1,4 +1,5 @@
 #include "exabricks/io/native.h"
+#include "exabricks/io/particles.h"
 
 #include "exabricks/core/error.h"
 
@@ -237,7 +238,17 @@ void NativeWriter::append(const CellSet& piece) {
   cells_ += piece.cells.size();
 }
 
-void NativeWriter::finish() { files_.commit(); }
+void NativeWriter::addFile(const std::string& path, const std::vector<char>& bytes) {
+  files_.write(path, bytes.data(), bytes.size());
+  if (path == nativeParticlesPath(cellsPath_)) wroteParticles_ = true;
+}
+
+void NativeWriter::finish() {
+  files_.commit();
+  // The particles of an earlier dataset of this name are not this one's.
+  std::error_code ec;
+  if (!wroteParticles_) std::filesystem::remove(nativeParticlesPath(cellsPath_), ec);
+}
 
 void writeNative(const CellSet& set, const std::string& cellsPath) {
   std::vector<std::string> names;

@@ -90,6 +90,8 @@ std::vector<ParticleSpeciesInfo> listParticles(const std::string& path) {
     return listEnzoParticles(path);
   case InputKind::Flash:
     return listFlashParticles(path);
+  case InputKind::Native:
+    return listNativeParticles(path);
   default:
     return {};
   }
@@ -108,6 +110,8 @@ ParticleSet readParticles(const std::string& path, const std::string& species) {
     return readEnzoParticles(path, species);
   case InputKind::Flash:
     return readFlashParticles(path, species);
+  case InputKind::Native:
+    return readNativeParticles(path, species);
   default:
     if (!species.empty()) fail(path, ": no particle species '", species, "' (it holds no particles)");
     return {};

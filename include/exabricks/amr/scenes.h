@@ -3,6 +3,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/particles.h"
 
 #include <cstdint>
 #include <functional>
@@ -42,6 +43,13 @@ uint64_t generateScenePieces(const SceneOptions& options, int slabsPerPiece,
 /// The options with the levels and base resolution generateScene would choose made explicit, so
 /// that every step of a series has the same lattice.
 SceneOptions resolveSceneSize(const SceneOptions& options);
+
+/// Whether the scene has particles (cosmic: dark matter and stars).
+bool sceneHasParticles(const std::string& name);
+/// The scene's particles, `count` of its main species (cosmic: dark matter following the density,
+/// count / 25 stars in its haloes), in the lattice coordinates of the cells generateScene makes
+/// for the same options; deterministic for a seed. An error for a scene without particles.
+ParticleSet generateSceneParticles(const SceneOptions& options, uint64_t count);
 
 /// The dataset commands use when given no input.
 CellSet defaultDataset();

@@ -48,12 +48,14 @@ constexpr uint64_t kMaxGridsCells = uint64_t(1) << 26;
 CellSet readGrids(const std::string& path);
 
 /// Writes NAME.cells and its field files in pieces, in order; finish() publishes them together
-/// (nothing appears when it is not called).
+/// (nothing appears when it is not called) and removes a NAME.particles it did not write.
 class NativeWriter {
 public:
   NativeWriter(const std::string& cellsPath, const std::vector<std::string>& fieldNames);
   /// Appends cells with one value per cell of every field, fields in the constructor's order.
   void append(const CellSet& piece);
+  /// A further file published with the dataset (its particles).
+  void addFile(const std::string& path, const std::vector<char>& bytes);
   void finish();
   uint64_t cellCount() const { return cells_; }
 
@@ -62,6 +64,7 @@ private:
   std::vector<std::string> fieldNames_;
   AtomicFiles files_;
   uint64_t cells_ = 0;
+  bool wroteParticles_ = false;
 };
 
 } // namespace exa

@@ -7,6 +7,8 @@
 //   Enzo packed HDF5: the grids' particle_position_x/y/z and every other 1-D particle_* dataset,
 //     split into species by particle_type where the output writes it (dark_matter, star, ...)
 //     and one species "particles" otherwise. Positions are code units, as the cells' world.
+//   NAME.particles beside a native NAME.cells (exabricks generate writes it): every species with
+//     its attributes in double precision, positions in the cells' world (the lattice).
 //   FLASH HDF5: the "tracer particles" table (particles x properties) with its "particle names"
 //     (posx, posy, posz, tag, velx, ...): one species "particles", every property but the
 //     positions an attribute. Positions are physical, as the cells' world.
@@ -21,6 +23,7 @@
 #pragma once
 
 #include "exabricks/amr/particles.h"
+#include "exabricks/core/math.h"
 
 #include <memory>
 #include <string>
@@ -52,5 +55,15 @@ std::vector<ParticleSpeciesInfo> listEnzoParticles(const std::string& path);
 ParticleSet readEnzoParticles(const std::string& path, const std::string& species = "");
 std::vector<ParticleSpeciesInfo> listFlashParticles(const std::string& path);
 ParticleSet readFlashParticles(const std::string& path, const std::string& species = "");
+std::vector<ParticleSpeciesInfo> listNativeParticles(const std::string& cellsPath);
+ParticleSet readNativeParticles(const std::string& cellsPath, const std::string& species = "");
+
+/// NAME.particles for NAME.cells (or for any other path: PATH.particles).
+std::string nativeParticlesPath(const std::string& cellsPath);
+/// The bytes of NAME.particles for a set of particles in a domain [lower, upper] (world
+/// coordinates); an error names a species or attribute the format cannot hold.
+std::vector<char> nativeParticleBytes(const ParticleSet& set, const vec3d& lower, const vec3d& upper);
+/// Writes NAME.particles beside NAME.cells, whole or not at all.
+void writeNativeParticles(const ParticleSet& set, const std::string& cellsPath, const vec3d& lower, const vec3d& upper);
 
 } // namespace exa
