@@ -275,11 +275,14 @@ private:
     constexpr int kDivisor = 4;
     Frame draft = frame.preview(kDivisor, frame.rate * 0.5f);
     draft.samplesPerPixel = 1;
+    // Spheres sized in pixels keep the frame's size in the draft's larger pixels.
+    Scene scene = streamedScene_;
+    resolveParticleRadius(scene, frame);
+    scene.particles.radiusPixels = 0.f;
     bool interrupted = false, cancelled = false, complete = false;
     const std::exception_ptr error = renderInWorker(
         [&](const PassControl& control) {
-          complete =
-              renderStreamed(*dataset_->streamed, streamedScene_, RendererOptions(), draft, draftBuffer_, control);
+          complete = renderStreamed(*dataset_->streamed, scene, RendererOptions(), draft, draftBuffer_, control);
         },
         interrupted, cancelled);
     if (interrupted) throw py::error_already_set();

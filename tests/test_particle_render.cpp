@@ -188,6 +188,50 @@ TEST(ParticleRender, ColoursAndRadiiFromAttributesAndOneSpeciesOnly) {
   EXPECT_TRUE(r.pick(vec3d(4.0, 8.0, 100.0), vec3d(0, 0, -1), hit));
 }
 
+TEST(ParticleRender, ARadiusInPixelsIsMeasuredAtTheLookAtPointsDistance) {
+  const Model m = buildModel(uniformCells(16, {"f"}, [](const vec3d&) { return 0.0; }));
+  RenderSetup o = surfaceOptions(64);
+  o.scene.volume = false;
+  SceneRenderer r(m, 0, o);
+  r.renderer.setParticles(speciesOf({{8.0, 8.0, 8.0}}));
+  r.scene.particles.show = true;
+  r.scene.particles.radius = 0.5f; // replaced by the radius in pixels
+  r.scene.particles.radiusPixels = 6.f;
+  // The sphere's radius as rays straight down find it (bisection on their offset from the centre).
+  auto radiusFound = [&](const Camera& camera) {
+    Frame frame;
+    frame.camera = camera;
+    frame.width = frame.height = 64;
+    Scene placed = r.scene;
+    resolveParticleRadius(placed, frame);
+    r.renderer.setScene(placed);
+    double hit = 0.0, miss = 8.0;
+    SurfaceHit h;
+    for (int i = 0; i < 40; ++i) {
+      const double mid = 0.5 * (hit + miss);
+      (r.pick(vec3d(8.0 + mid, 8.0, 100.0), vec3d(0, 0, -1), h) ? hit : miss) = mid;
+    }
+    return hit;
+  };
+  // Orthographic, 16 world units over 64 pixels: 6 pixels are 1.5.
+  EXPECT_NEAR(radiusFound(kDown), 1.5, 1e-4);
+  const Image im = r.render(kDown);
+  int lit = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x)
+      lit += im.at(x, y).w > 0.5f;
+  EXPECT_NEAR(lit, M_PI * 36, 12);           // a disc of 6 pixels' radius
+  EXPECT_EQ(r.scene.particles.radius, 0.5f); // the scene itself keeps its settings
+  // Perspective, fovy 40, at distances 92 and 46: the world radius follows the distance.
+  for (double distance : {92.0, 46.0}) {
+    Camera c;
+    c.position = vec3d(8.0, 8.0, 8.0 + distance);
+    c.lookAt = vec3d(8.0);
+    c.fovy = 40.0;
+    EXPECT_NEAR(radiusFound(c), 6.0 * 2.0 * distance * std::tan(20.0 * M_PI / 180.0) / 64.0, 1e-4) << distance;
+  }
+}
+
 TEST(ParticleRender, TheDevicePathDrawsTheSameParticles) {
   SlabScene s(6.f, 10.f);
   std::mt19937 rng(11);

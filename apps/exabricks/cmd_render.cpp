@@ -234,6 +234,14 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
   }
 }
 
+/// Spheres sized in pixels, once the camera is known.
+void sizeSpheresInPixels(Renderer& renderer, const Scene& scene, const Frame& frame) {
+  if (!scene.particles.show || !(scene.particles.radiusPixels > 0.f)) return;
+  Scene placed = scene;
+  resolveParticleRadius(placed, frame);
+  renderer.setScene(placed);
+}
+
 void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   if (o.frames < 1 || o.frames > 1000) failUsage("--frames must be in 1..1000");
   const ImageFormat format = imageFormatFor(o.output, o.bits);
@@ -287,6 +295,7 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   frame.camera = cameraFromOptions(o.scene, cmd, doc, model,
                                    part ? mpi::agreedVisibleBounds(renderer, *part) : renderer.visibleBounds(), whole);
   frame.validate();
+  sizeSpheresInPixels(renderer, scene, frame);
   const std::vector<int> order = part ? part->order(frame.camera) : std::vector<int>();
   doc.hasCamera = true;
   if (!o.writeScene.empty() && root) writeSceneFile(o.writeScene, withAbsolutePaths(doc));

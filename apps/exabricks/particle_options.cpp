@@ -44,7 +44,7 @@ void applyParticleOptions(const RenderOptions& o, const CLI::App& cmd, bool from
   }
   const bool shown = p.show;
   for (const char* flag : {"--particle-radius-by", "--particle-color", "--particle-color-by", "--particle-range",
-                           "--particle-log", "--particle-radius"})
+                           "--particle-log", "--particle-radius", "--particle-radius-pixels"})
     if (cmd.count(flag) && !shown) logWarning(strCat(flag, " does nothing without --particles"));
   if (!o.particleColorRange.empty() &&
       (o.particleColorRange.size() != 2 || !(o.particleColorRange[0] < o.particleColorRange[1])))

@@ -143,6 +143,7 @@ constexpr SettingFlag kSettingFlags[] = {
     {"--no-volume", "volume", FlagGroup::Integration, FlagForm::Off},
     {"--clip-meshes", "clip.meshes", FlagGroup::Surfaces, FlagForm::On},
     {"--particle-radius", "particles.radius", FlagGroup::Surfaces},
+    {"--particle-radius-pixels", "particles.radius_pixels", FlagGroup::Surfaces},
     {"--ao", "ambient_occlusion.rays", FlagGroup::Surfaces},
     {"--ao-length", "ambient_occlusion.length", FlagGroup::Surfaces},
     {"--ao-volume", "ambient_occlusion.volume", FlagGroup::Surfaces, FlagForm::On},

@@ -10,12 +10,23 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cmath>
+
 namespace exa {
 
 Scene Scene::volumeOf(const TransferFunction& tf, const std::string& field) {
   Scene s;
   s.layers = {VolumeLayer{field, tf}};
   return s;
+}
+
+void resolveParticleRadius(Scene& scene, const Frame& frame) {
+  ParticleStyle& p = scene.particles;
+  if (!(p.radiusPixels > 0.f) || frame.height < 1) return;
+  const Camera& c = frame.camera;
+  const double viewHeight =
+      c.orthographic ? c.orthoHeight : 2.0 * length(c.lookAt - c.position) * std::tan(0.5 * c.fovy * kDegree);
+  p.radius = float(double(p.radiusPixels) * viewHeight / double(frame.height));
 }
 
 void Scene::validate() const {

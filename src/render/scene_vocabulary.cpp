@@ -193,6 +193,11 @@ std::vector<Setting<Scene>> topLevelSettings() {
           "particles.radius", "particle_radius", [](S& s) -> float& { return s.particles.radius; }, 0.0, kInf,
           "The spheres' radius, world units (0: 1/800 of the data's diagonal; with particles.radius_by, the "
           "largest sphere's)"),
+      number<S>(
+          "particles.radius_pixels", "particle_radius_pixels", [](S& s) -> float& { return s.particles.radiusPixels; },
+          0.0, 10000.0,
+          "Above 0: the spheres' radius in pixels at the distance of the camera's look-at point, instead of "
+          "particles.radius (with particles.radius_by, the largest sphere's)"),
   };
 }
 

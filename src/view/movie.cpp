@@ -131,7 +131,9 @@ void MovieMaker::run(MovieJob& job, const MovieInput& in) {
         Scene s = in.doc.scene;
         Frame f = in.doc.frame;
         plan.view(i, s, f);
-        renderer.setScene(s);
+        Scene placed = s;
+        resolveParticleRadius(placed, f);
+        renderer.setScene(placed);
         Image image = renderer.render(f);
         write(i, s, f, *in.current.model, in.current.dataset, in.current.input, image);
       }

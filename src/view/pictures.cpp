@@ -78,8 +78,10 @@ void PictureMaker::run(PictureJob& job, const PictureInput& in) {
     renderer.setOptions(in.renderer);
     if (in.doc.scene.particles.show)
       renderer.setParticles(readParticlesIfAny(in.step.input, in.doc.scene.particles.species));
-    renderer.setScene(in.doc.scene);
     const Frame& frame = in.doc.frame;
+    Scene scene = in.doc.scene;
+    resolveParticleRadius(scene, frame);
+    renderer.setScene(scene);
     FrameBuffer buffer(frame.width, frame.height);
     job.tilesAll = uint64_t(buffer.tileCount()) * uint64_t(frame.samplesPerPixel);
     PassControl control;

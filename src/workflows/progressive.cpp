@@ -94,7 +94,10 @@ bool ProgressiveView::takeScene(const Scene& scene, SceneUpdate* update, std::st
   return true;
 }
 
-SceneUpdate ProgressiveView::placeScene(const Scene& scene, bool changed, std::string& fallback) {
+SceneUpdate ProgressiveView::placeScene(const Scene& given, bool changed, std::string& fallback) {
+  Scene scene = given;
+  resolveParticleRadius(scene, doc_.frame);
+  placedRadius_ = scene.particles.radius;
   SceneUpdate u;
   try {
     u = renderer_.setScene(scene);
@@ -152,6 +155,16 @@ bool ProgressiveView::showFrame(const Frame& frame) {
   }
   doc_.frame = frame;
   doc_.frame.depthLimit = frame.depthLimit ? depthLimit_.data() : nullptr;
+  if (doc_.scene.particles.show && doc_.scene.particles.radiusPixels > 0.f) {
+    // Spheres sized in pixels follow the camera's distance to its look-at point.
+    Scene placed = doc_.scene;
+    resolveParticleRadius(placed, doc_.frame);
+    if (placed.particles.radius != placedRadius_) {
+      std::string fallback;
+      placeScene(doc_.scene, false, fallback);
+      reportFallback(fallback);
+    }
+  }
   return changed(frameKey_, std::move(key));
 }
 

@@ -144,7 +144,9 @@ Image SeriesRenderer::render(int step, const Scene& scene, const Frame& frame) {
     renderer_->setOptions(options_.renderer);
     renderer_->setParticles(current_.particles);
   }
-  renderer_->setScene(scene);
+  Scene placed = scene;
+  resolveParticleRadius(placed, frame);
+  renderer_->setScene(placed);
   if (fresh) selectDevice(*renderer_, options_.device);
   Timer t;
   Image image = renderer_->render(frame);

@@ -437,8 +437,10 @@ std::string StreamedStep::infoJson(const std::string& name, double seconds) {
   return j.dump(2);
 }
 
-bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOptions& options, const Frame& frame,
+bool renderStreamed(StreamedStep& step, const Scene& sceneIn, const RendererOptions& options, const Frame& frame,
                     FrameBuffer& buffer, const PassControl& control) {
+  Scene scene = sceneIn;
+  resolveParticleRadius(scene, frame);
   if (scene.integration.integrator == Integrator::PathTrace)
     fail("a step drawn in parts is ray-marched: path tracing scatters light between the parts and needs the whole "
          "step (a larger --memory-budget)");

@@ -39,7 +39,7 @@ def every_setting(mesh):
                 "color_field": "radius",
                 "color_map": {"colormap": "inferno", "range": [0.1, 0.8], "opacity_scale": 0.7}},
         "meshes": [{"file": str(mesh), "color": [0.7, 0.2, 0.3]}],
-        "particles": {"show": True, "species": "stars", "radius": 0.5, "radius_by": "mass", "color": [0.2, 0.4, 0.6],
+        "particles": {"show": True, "species": "stars", "radius": 0.5, "radius_pixels": 3, "radius_by": "mass", "color": [0.2, 0.4, 0.6],
                       "color_by": "mass", "color_map": {"colormap": "viridis", "range": [1, 2], "log": True}},
         "clip": {"planes": [{"point": [32, 32, 32], "normal": [0, 0, 1]}], "box": [1, 2, 3, 60, 61, 62],
                  "meshes": True},

@@ -72,6 +72,9 @@ struct ParticleStyle {
   bool show = false;
   std::string species; ///< empty: every species
   float radius = 0.f;  ///< world units; 0: 1/800 of the data's diagonal
+  /// Above 0: the radius in pixels at the distance of the camera's look-at point, which
+  /// resolveParticleRadius turns into radius (nearer spheres look larger, as spheres do).
+  float radiusPixels = 0.f;
   /// Not empty: radius x cbrt(value / the attribute's largest value), a sphere's volume in
   /// proportion to the attribute (mass); particles whose value is not above zero are not drawn.
   std::string radiusBy;
@@ -219,6 +222,11 @@ struct Frame {
   /// Throws exa::Error naming the first invalid setting.
   void validate() const;
 };
+
+/// With particles.radiusPixels above 0: particles.radius set to that many of the frame's pixels at
+/// the distance of its camera's look-at point (front ends call it before Renderer::setScene; a
+/// camera moving nearer or farther then rebuilds the spheres).
+void resolveParticleRadius(Scene& scene, const Frame& frame);
 
 /// A scene file: the scene, the frame, and optionally the input they were made for.
 struct SceneDocument {

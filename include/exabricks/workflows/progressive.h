@@ -120,6 +120,7 @@ private:
   SceneDocument doc_;
   std::vector<float> depthLimit_;              ///< doc_.frame's depth limit, when it has one
   std::string sceneKey_, frameKey_, draftKey_; ///< the scene and frame shown, and those of the last draft
+  float placedRadius_ = 0.f; ///< the particles' world radius the renderer holds (resolveParticleRadius)
   FrameBuffer buffer_;
   int passes_ = 0;
   bool cleared_ = false; ///< buffer_ holds the passes counted (else it is cleared before the next)
