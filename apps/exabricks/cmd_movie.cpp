@@ -402,6 +402,7 @@ private:
     step_.reset(); // the step before is dropped before the next is read
     step_ = std::make_unique<StreamedStep>(p_.paths[size_t(k)], p_.lo,
                                            planWithin(p_.paths[size_t(k)], p_.lo, budget_, frameBytes_));
+    step_->setParticles(particlesFor(p_.doc.scene, p_.paths[size_t(k)]));
     current_ = k;
     ++stepsOpened_;
     largestParts_ = std::max(largestParts_, step_->parts());
