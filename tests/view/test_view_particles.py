@@ -51,6 +51,18 @@ def test_the_viewer_lists_and_draws_particles_as_the_command_line_does(start_vie
     out = tmp_path / "cli.png"
     subprocess.run([cli, "-q", "render", "--scene", str(scene), "-o", str(out)], check=True)
     assert with_particles == out.read_bytes()
+    # Spheres sized in pixels, and again with the camera halfway to its look-at point: the viewer
+    # resizes them with the distance as the command line sizes them for its camera.
+    doc["particles"]["radius_pixels"] = 2
+    for step in range(2):
+        if step:
+            camera = doc["camera"]
+            camera["position"] = [a + 0.5 * (p - a) for p, a in zip(camera["position"], camera["look_at"])]
+        png = final_png(v, doc)
+        scene.write_text(json.dumps(doc))
+        subprocess.run([cli, "-q", "render", "--scene", str(scene), "-o", str(out)], check=True)
+        assert png == out.read_bytes(), step
+    doc["particles"]["radius_pixels"] = 0
     # A species the data lacks is refused with its name, and the viewer goes on.
     doc["particles"]["species"] = "stars"
     request = v.render(doc)
