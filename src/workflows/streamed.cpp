@@ -6,6 +6,7 @@
 #include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
+#include "exabricks/io/model_info.h"
 #include "exabricks/render/composite.h"
 
 #include <nlohmann/json.hpp>
@@ -393,37 +394,12 @@ void StreamedStep::sample(int field, const std::vector<vec3d>& points, std::vect
 
 std::string StreamedStep::infoJson(const std::string& name, double seconds) {
   const StepSurvey& s = survey();
-  const box3i lattice = s.cellBounds;
-  const box3d world = skeleton_.world.toWorld(lattice);
-  auto range = [](const range1f& r) -> nlohmann::json {
-    if (r.empty()) return {{"min", nullptr}, {"max", nullptr}};
-    return {{"min", r.lower}, {"max", r.upper}};
-  };
-  nlohmann::json j;
-  j["input"] = name;
-  j["cells"] = s.cells;
-  j["bounds"] = {{"lattice",
-                  {{"lower", {lattice.lower.x, lattice.lower.y, lattice.lower.z}},
-                   {"upper", {lattice.upper.x, lattice.upper.y, lattice.upper.z}}}},
-                 {"world",
-                  {{"lower", {world.lower.x, world.lower.y, world.lower.z}},
-                   {"upper", {world.upper.x, world.upper.y, world.upper.z}}}}};
-  const SimulationState& sim = skeleton_.simulation;
-  j["simulation"] = {{"time", sim.hasTime() ? nlohmann::json(sim.time) : nlohmann::json()},
-                     {"cycle", sim.hasCycle() ? nlohmann::json(sim.cycle) : nlohmann::json()},
-                     {"redshift", sim.hasRedshift() ? nlohmann::json(sim.redshift) : nlohmann::json()}};
-  j["world"] = {{"origin", {skeleton_.world.origin.x, skeleton_.world.origin.y, skeleton_.world.origin.z}},
-                {"scale", {skeleton_.world.scale.x, skeleton_.world.scale.y, skeleton_.world.scale.z}}};
+  nlohmann::json j =
+      nlohmann::json::parse(datasetInfoJson(skeleton_, name, s.cells, s.cellBounds, s.dataset.valueRanges));
   nlohmann::json levels = nlohmann::json::array();
   for (auto l = s.levels.begin(); l != s.levels.end(); ++l)
     levels.push_back({{"level", *l}, {"cell_width", 1 << *l}, {"cells", s.levelCells[size_t(*l)]}});
   j["levels"] = levels;
-  nlohmann::json fields = nlohmann::json::array();
-  for (size_t f = 0; f < skeleton_.fieldNames.size(); ++f)
-    fields.push_back({{"name", skeleton_.fieldNames[f]},
-                      {"units", skeleton_.unitsOf(int(f))},
-                      {"range", range(s.dataset.valueRanges.at(f))}});
-  j["fields"] = fields;
   j["memory"] = {{"budget_bytes", plan_.budget},
                  {"parts", parts()},
                  {"largest_part_bytes", plan_.largestPartBytes()},

@@ -13,4 +13,10 @@ namespace exa {
 /// time to load and build, as the caller measured it.
 std::string modelInfoJson(const Model& model, const std::string& input, double loadSeconds);
 
+/// The entries every description of a dataset shares, whole or held in parts: input, cells,
+/// bounds (the cells' lattice box and its world box), simulation, world, and fields (names and
+/// units of `described`, one range per field). A JSON object.
+std::string datasetInfoJson(const Model& described, const std::string& input, uint64_t cells, const box3i& lattice,
+                            const std::vector<range1f>& fieldRanges);
+
 } // namespace exa
