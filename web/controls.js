@@ -4,6 +4,7 @@
 import { resetView } from './camera.js';
 import { applyClipBox, applyClipPlane } from './clip.js';
 import { iso, isoPalette, renderIsoList, sliderToIso } from './iso.js';
+import { syncLightControls } from './lights.js';
 import { setupParticleControls } from './particles.js';
 import { rangeValue, showRangeValue, switchField, syncControls } from './panel.js';
 import { $, api, apiJson, clearMessage, serverGone, showMessage, viewer } from './session.js';
@@ -147,9 +148,10 @@ function setupQualityControls() {
     $('ao-rays-out').textContent = n;
   });
   on('ao-rays', 'change', () => requestRender(false));
-  on('spp', 'input', () => ($('spp-out').textContent = $('spp').value));
+  // Samples per pixel in powers of two, 1 to 1024 (path-traced views converge slowly).
+  on('spp', 'input', () => ($('spp-out').textContent = 2 ** Number($('spp').value)));
   on('spp', 'change', () => {
-    viewer.doc.frame.samples_per_pixel = Number($('spp').value);
+    viewer.doc.frame.samples_per_pixel = 2 ** Number($('spp').value);
     requestRender(false);
   });
   on('rate', 'input', () => ($('rate-out').textContent = (2 ** Number($('rate').value)).toPrecision(3)));
@@ -273,4 +275,5 @@ export function adoptDocument(doc, hasCamera = true) {
   if (!Array.isArray(doc.layers) || doc.layers.length === 0) doc.layers = [{ field: '' }];
   syncControls();
   syncSettingBoxes();
+  syncLightControls();
 }

@@ -87,7 +87,7 @@ export function syncControls() {
   const ao = (doc.ambient_occlusion && doc.ambient_occlusion.rays) || 0;
   $('ao-rays').value = ao;
   $('ao-rays-out').textContent = ao;
-  $('spp').value = doc.frame.samples_per_pixel;
+  $('spp').value = Math.round(Math.log2(doc.frame.samples_per_pixel || 1));
   $('spp-out').textContent = doc.frame.samples_per_pixel;
   $('rate').value = Math.log2(doc.frame.rate || 1);
   $('rate-out').textContent = doc.frame.rate;

@@ -5,6 +5,7 @@
 import { setupCameraControls } from './camera.js';
 import { buildClipBoxSliders } from './clip.js';
 import { adoptDocument, setupControls } from './controls.js';
+import { setupLightControls } from './lights.js';
 import { fillSelect, setupRangeBoxes, syncControls } from './panel.js';
 import './picture.js';
 import { startSeries } from './series.js';
@@ -43,6 +44,7 @@ async function start() {
   setupEditor();
   setupControls();
   setupSettingBoxes();
+  setupLightControls();
   setupStructureInputs();
   setupRangeBoxes();
   $('banner-close').addEventListener('click', () => showMessage(''));

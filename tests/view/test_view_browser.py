@@ -367,6 +367,56 @@ def test_path_tracing_from_the_page_equals_the_command_line(start_viewer, cli, b
     assert json.loads(v.request("GET", "/api/scene")[1])["pathtrace"]["albedo"] == pytest.approx(0.8)
 
 
+def test_the_sun_and_the_environment_from_the_page_equal_the_command_line(start_viewer, cli, browser, tmp_path,
+                                                                         artifacts):
+    """The path tracer's light from the panel: the sun's azimuth and elevation sliders set the way
+    its light travels (from the sun at that azimuth around the camera's up and that height), the
+    sky-and-ground box sets both colours, a picked environment colour keeps its brightness, and the
+    snapshot equals the command line's render of the saved scene. The samples slider reaches 1024."""
+    v = start_viewer()
+    browser.get(v.url + "&size=%d" % SIZE)
+    first = wait_refined(browser)
+    Select(browser.find_element(By.ID, "integrator")).select_by_value("pathtrace")
+    traced = wait_refined(browser, first["request"])
+
+    def slide(element_id, value):
+        browser.execute_script("const e = document.getElementById(arguments[0]); e.value = arguments[1];"
+                               "e.dispatchEvent(new Event('input')); e.dispatchEvent(new Event('change'));",
+                               element_id, value)
+
+    slide("sun-azimuth", 90)
+    slide("sun-elevation", 30)
+    browser.find_element(By.ID, "sky-and-ground").click()
+    browser.execute_script("const e = document.getElementById('environment-colour'); e.value = '#ff8000';"
+                           "e.dispatchEvent(new Event('change'));")
+    # Several requests were sent: the last one's refined frame, once no other follows it.
+    def last_refined():
+        h = latest(browser)
+        last = browser.execute_script("return window.exabricksViewer.lastRequest")
+        return h if h and h["final"] and h["request"] == last and h["request"] > traced["request"] else None
+    wait_for(browser, last_refined, 240, "the last request refined")
+    time.sleep(0.5)
+    wait_for(browser, last_refined, 240, "the last request refined")
+    saved = json.loads(v.request("GET", "/api/scene")[1])
+    p = saved["pathtrace"]
+    up = np.array(saved["camera"]["up"], float)
+    up /= np.linalg.norm(up)
+    to_sun = -np.array(p["sun_direction"], float)
+    to_sun /= np.linalg.norm(to_sun)
+    assert np.degrees(np.arcsin(np.dot(to_sun, up))) == pytest.approx(30, abs=0.01)
+    assert p["sky"] and p["ground"] and p["sky"][2] > p["sky"][0]
+    # Orange at the brightness the environment had (1): red channel 1, green sRGB 0x80 in linear.
+    assert p["environment"][0] == pytest.approx(1) and p["environment"][1] == pytest.approx(0.2158605, abs=1e-6)
+    assert p["environment"][2] == pytest.approx(0)
+    browser.save_screenshot(str(artifacts / "viewer-lights.png"))
+    expect_snapshot_equals_cli(v, cli, tmp_path, saved, "lit")
+    assert browser.find_element(By.ID, "spp").get_attribute("max") == "10"
+    slide("spp", 10)
+    wait_for(browser, lambda: json.loads(v.request("GET", "/api/scene")[1])["frame"]["samples_per_pixel"] == 1024,
+             30, "1024 samples per pixel")
+    assert browser.find_element(By.ID, "spp-out").text == "1024"
+
+
 def test_a_loaded_scene_keeps_every_described_key(start_viewer, browser, scene_example, tmp_path, artifacts):
     """A scene loaded through the page (the example of every structured key) renders, and the scene
     in effect (what the page sent) still holds every key at its value, those the page does not edit
