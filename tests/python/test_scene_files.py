@@ -258,7 +258,10 @@ def test_front_end_controls_offer_only_what_the_vocabulary_accepts():
     for element, key in VIEWER_KEYS.items():
         tag = html[html.index('id="%s"' % element):].split(">", 1)[0]
         attrs = dict(part.split("=", 1) for part in tag.replace('"', "").split() if "=" in part)
-        within_vocabulary(vocabulary[key], float(attrs["min"]), float(attrs["max"]), "the viewer's %s" % element)
+        low, high = float(attrs["min"]), float(attrs["max"])
+        if "data-log2" in attrs:  # the slider's value is the setting's base-2 logarithm
+            low, high = 2 ** low, 2 ** high
+        within_vocabulary(vocabulary[key], low, high, "the viewer's %s" % element)
 
 
 TRIANGLE_PLY = """ply
