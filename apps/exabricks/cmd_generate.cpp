@@ -3,7 +3,6 @@
 #include "common.h"
 
 #include "exabricks/amr/scenes.h"
-#include "exabricks/core/files.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/native.h"
 #include "exabricks/io/particles.h"
@@ -37,7 +36,7 @@ int slabsPerPiece() { return 4 * int(std::max<size_t>(1, tbb::this_task_arena::m
 /// The particles to write beside the cells (none for a scene without them).
 uint64_t particleCount(const GenerateOptions& o) {
   if (o.particles < -1) failUsage("--particles must be 0 or more");
-  if (!sceneHasParticles(o.scene.name)) {
+  if (!sceneHasParticles(o.scene)) {
     if (o.particles > 0) failUsage(strCat("--particles: scene '", o.scene.name, "' has no particles (cosmic has)"));
     return 0;
   }
@@ -47,9 +46,7 @@ uint64_t particleCount(const GenerateOptions& o) {
 
 /// NAME.particles for the scene's resolved lattice, the domain its cells cover.
 std::vector<char> particleBytes(const SceneOptions& resolved, uint64_t count) {
-  const ParticleSet set = generateSceneParticles(resolved, count);
-  const double width = double(resolved.base) * double(1 << (resolved.levels - 1));
-  return nativeParticleBytes(set, vec3d(0.0), vec3d(width));
+  return nativeParticleBytes(generateSceneParticles(resolved, count), vec3d(0.0), vec3d(sceneLatticeWidth(resolved)));
 }
 
 void run(const GenerateOptions& o) {
@@ -105,10 +102,6 @@ void run(const GenerateOptions& o) {
       std::snprintf(suffix, sizeof suffix, "_%04d.cells", step);
       outputs.push_back(stem + suffix);
       writeNative(cells, outputs.back());
-      if (particles) {
-        const std::vector<char> bytes = particleBytes(so, particles);
-        writeFileAtomic(nativeParticlesPath(outputs.back()), bytes.data(), bytes.size());
-      }
       cellCount += cells.size();
       progress.advance(1);
     }

@@ -234,9 +234,12 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
   }
 }
 
-/// Spheres sized in pixels, once the camera is known.
+/// Spheres sized in pixels wait for the camera, which frames what the first scene shows (volume
+/// and iso-surfaces): the first scene holds them back, and they are built once, when it is known.
+bool spheresInPixels(const Scene& scene) { return scene.particles.show && scene.particles.radiusPixels > 0.f; }
+
 void sizeSpheresInPixels(Renderer& renderer, const Scene& scene, const Frame& frame) {
-  if (!scene.particles.show || !(scene.particles.radiusPixels > 0.f)) return;
+  if (!spheresInPixels(scene)) return;
   Scene placed = scene;
   resolveParticleRadius(placed, frame);
   renderer.setScene(placed);
@@ -283,7 +286,9 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
   renderer.setOptions(o.march.options());
   if (part) renderer.setDomain(part->worldBox());
   renderer.setParticles(particlesFor(scene, doc.input));
-  SceneUpdate update = renderer.setScene(scene);
+  Scene first = scene;
+  first.particles.show = first.particles.show && !spheresInPixels(scene);
+  SceneUpdate update = renderer.setScene(first);
   {
     Timer upload;
     selectDevice(renderer, o.march.device);

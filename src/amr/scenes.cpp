@@ -509,7 +509,11 @@ CellSet generateScene(const SceneOptions& options) {
   return set;
 }
 
-bool sceneHasParticles(const std::string& name) { return name == "cosmic"; }
+bool sceneHasParticles(const SceneOptions& options) { return bool(makeScene(options).particles); }
+
+double sceneLatticeWidth(const SceneOptions& resolved) {
+  return double(resolved.base) * double(1 << (resolved.levels - 1));
+}
 
 ParticleSet generateSceneParticles(const SceneOptions& options, uint64_t count) {
   const SceneOptions o = options.base > 0 ? options : resolveSceneSize(options);
@@ -518,7 +522,7 @@ ParticleSet generateSceneParticles(const SceneOptions& options, uint64_t count) 
   if (count > (uint64_t(1) << 32)) fail("at most 2^32 particles, asked for ", count);
   ParticleSet set = scene.particles(count);
   // Unit-cube coordinates to the lattice's (the world of a native dataset).
-  const double width = double(o.base) * double(1 << (o.levels - 1));
+  const double width = sceneLatticeWidth(o);
   for (ParticleSpecies& sp : set.species)
     for (double& x : sp.position)
       x *= width;

@@ -38,6 +38,12 @@ std::string stemOf(const std::string& cellsPath) {
   return cellsPath.substr(0, cellsPath.size() - ext.size());
 }
 
+} // namespace
+
+std::string nativeParticlesPath(const std::string& cellsPath) { return stemOf(cellsPath) + ".particles"; }
+
+namespace {
+
 std::string scalarsPath(const std::string& stem, const std::string& field) {
   return field == "scalar" ? stem + ".scalars" : stem + "." + field + ".scalars";
 }

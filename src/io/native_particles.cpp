@@ -153,12 +153,6 @@ void appendName(std::vector<char>& out, const std::string& name, const std::stri
 
 } // namespace
 
-std::string nativeParticlesPath(const std::string& cellsPath) {
-  std::string stem = cellsPath;
-  if (stem.size() > 6 && stem.compare(stem.size() - 6, 6, ".cells") == 0) stem.resize(stem.size() - 6);
-  return stem + ".particles";
-}
-
 std::vector<ParticleSpeciesInfo> listNativeParticles(const std::string& cellsPath) {
   const std::string path = nativeParticlesPath(cellsPath);
   if (!std::filesystem::exists(path)) return {};

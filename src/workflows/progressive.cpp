@@ -55,7 +55,8 @@ ProgressiveView::ProgressiveView(Renderer& renderer, std::string device, DraftPo
 
 bool ProgressiveView::show(const SceneDocument& doc) {
   std::string fallback;
-  const bool sceneChanged = takeScene(doc.scene, nullptr, fallback);
+  // Spheres sized in pixels take the document's frame: showFrame then keeps them.
+  const bool sceneChanged = takeScene(doc.scene, doc.frame, nullptr, fallback);
   doc_.input = doc.input;
   doc_.hasCamera = doc.hasCamera;
   doc_.path = doc.path;
@@ -67,7 +68,7 @@ bool ProgressiveView::show(const SceneDocument& doc) {
 SceneUpdate ProgressiveView::showScene(const Scene& scene) {
   SceneUpdate update;
   std::string fallback;
-  takeScene(scene, &update, fallback);
+  takeScene(scene, doc_.frame, &update, fallback);
   reportFallback(fallback);
   return update;
 }
@@ -80,10 +81,10 @@ void ProgressiveView::setDevice(std::string device) {
   deviceAwaitsScene_ = false;
 }
 
-bool ProgressiveView::takeScene(const Scene& scene, SceneUpdate* update, std::string& fallback) {
+bool ProgressiveView::takeScene(const Scene& scene, const Frame& frame, SceneUpdate* update, std::string& fallback) {
   std::string sceneKey = sceneKeyOf(scene);
   const bool same = sceneKey == sceneKey_ && sameMeshData(doc_.scene.meshes, scene.meshes);
-  const SceneUpdate u = placeScene(scene, !same, fallback);
+  const SceneUpdate u = placeScene(scene, frame, !same, fallback);
   if (update) *update = u;
   doc_.scene = scene;
   const Device device = renderer_.device();
@@ -94,9 +95,9 @@ bool ProgressiveView::takeScene(const Scene& scene, SceneUpdate* update, std::st
   return true;
 }
 
-SceneUpdate ProgressiveView::placeScene(const Scene& given, bool changed, std::string& fallback) {
+SceneUpdate ProgressiveView::placeScene(const Scene& given, const Frame& frame, bool changed, std::string& fallback) {
   Scene scene = given;
-  resolveParticleRadius(scene, doc_.frame);
+  resolveParticleRadius(scene, frame);
   placedRadius_ = scene.particles.radius;
   SceneUpdate u;
   try {
@@ -161,7 +162,7 @@ bool ProgressiveView::showFrame(const Frame& frame) {
     resolveParticleRadius(placed, doc_.frame);
     if (placed.particles.radius != placedRadius_) {
       std::string fallback;
-      placeScene(doc_.scene, false, fallback);
+      placeScene(doc_.scene, doc_.frame, false, fallback);
       reportFallback(fallback);
     }
   }

@@ -45,7 +45,10 @@ uint64_t generateScenePieces(const SceneOptions& options, int slabsPerPiece,
 SceneOptions resolveSceneSize(const SceneOptions& options);
 
 /// Whether the scene has particles (cosmic: dark matter and stars).
-bool sceneHasParticles(const std::string& name);
+bool sceneHasParticles(const SceneOptions& options);
+/// The width of the lattice the resolved options' cells cover, [0, width]^3: base cells of the
+/// coarsest level, each 2^(levels - 1) finest cells wide.
+double sceneLatticeWidth(const SceneOptions& resolved);
 /// The scene's particles, `count` of its main species (cosmic: dark matter following the density,
 /// count / 25 stars in its haloes), in the lattice coordinates of the cells generateScene makes
 /// for the same options; deterministic for a seed. An error for a scene without particles.

@@ -58,7 +58,7 @@ ParticleSet readFlashParticles(const std::string& path, const std::string& speci
 std::vector<ParticleSpeciesInfo> listNativeParticles(const std::string& cellsPath);
 ParticleSet readNativeParticles(const std::string& cellsPath, const std::string& species = "");
 
-/// NAME.particles for NAME.cells (or for any other path: PATH.particles).
+/// NAME.particles for NAME.cells (an error for a path that does not end in .cells).
 std::string nativeParticlesPath(const std::string& cellsPath);
 /// The bytes of NAME.particles for a set of particles in a domain [lower, upper] (world
 /// coordinates); an error names a species or attribute the format cannot hold.

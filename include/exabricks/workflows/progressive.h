@@ -99,10 +99,11 @@ public:
 private:
   /// Shows `scene` (its update in `update`, unless null); true when the refinement starts over.
   /// Why the CPU draws it rather than the device chosen goes to `fallback` (empty otherwise).
-  bool takeScene(const Scene& scene, SceneUpdate* update, std::string& fallback);
-  /// Makes `scene` the renderer's on the device chosen, where it can draw it; `changed`: the
-  /// scene differs from the one shown.
-  SceneUpdate placeScene(const Scene& scene, bool changed, std::string& fallback);
+  /// `frame` sizes spheres given in pixels (resolveParticleRadius).
+  bool takeScene(const Scene& scene, const Frame& frame, SceneUpdate* update, std::string& fallback);
+  /// Makes `scene` the renderer's on the device chosen, where it can draw it, its spheres sized
+  /// for `frame`; `changed`: the scene differs from the one shown.
+  SceneUpdate placeScene(const Scene& scene, const Frame& frame, bool changed, std::string& fallback);
   /// Says why the CPU draws the scene (`fallback`, unless empty), as show() describes.
   void reportFallback(const std::string& fallback);
   /// Holds `key` in `held`; true (and the refinement starts over) when it differs from the key held.
