@@ -15,10 +15,13 @@
 #ifdef EXABRICKS_HAVE_VIEWER
 #include "view/server.h"
 
+#include <algorithm>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <limits>
 #include <pthread.h>
 #include <thread>
 #include <unistd.h>
@@ -129,23 +132,69 @@ uint64_t viewerFrameBytes(const Frame& frame) {
   return streamedFrameBytes(frame.width, frame.height, frame.samplesPerPixel) + pixels * 2 * (sizeof(vec4f) + 4);
 }
 
+/// The most cells the viewer's coarse levels may hold under `budget`: half of what the budget
+/// leaves beside the process (`fixedBytes`), or fewer when --coarse-first (`given` > 0) says so.
+double coarseRoom(uint64_t budget, uint64_t fixedBytes, uint64_t bytesPerCell, double given) {
+  const double room = (double(budget) - double(fixedBytes)) / 2 / double(bytesPerCell);
+  return given > 0 ? std::min(given, room) : room;
+}
+
+/// The smallest budget under which the viewer holds the coarse levels coarseRoom chooses and,
+/// beside them, the largest part of every level, as `refused` (a refusal of the parts alone)
+/// sizes the process and that part. Candidates: for each coarse choice, the budget that holds
+/// it beside the part and the one that leaves the part its half (always enough).
+uint64_t viewerSmallestBudget(const std::string& input, const BudgetTooSmall& refused, double given) {
+  const double fixed = double(refused.fixedBytes), part = double(refused.smallestPartBytes);
+  const double perCell = double(refused.bytesPerCell);
+  double best = std::numeric_limits<double>::infinity();
+  for (const CoarseFirst& choice : coarseFirstChoices(input)) {
+    if (choice.level == 0) continue;
+    const double coarse = choice.coarseCells * perCell;
+    for (double budget : {fixed + std::max(2 * coarse, coarse + part), fixed + 2 * std::max(coarse, part)}) {
+      const CoarseFirst chosen =
+          coarseFirstLevel(input, coarseRoom(uint64_t(budget), refused.fixedBytes, refused.bytesPerCell, given));
+      if (chosen.level > 0 && fixed + chosen.coarseCells * perCell + part <= budget) best = std::min(best, budget);
+    }
+  }
+  if (!std::isfinite(best)) return refused.smallest;
+  const uint64_t mebibyte = uint64_t(1) << 20;
+  return (uint64_t(std::ceil(best)) + mebibyte - 1) / mebibyte * mebibyte;
+}
+
 /// Under --memory-budget, or for a step too large for the memory available: 0 when the step fits
 /// (it is viewed as without a budget); else the budget, with `coarseFirst` lowered to the cells
-/// half of it holds: the view shows the coarse levels resident and draws every level in parts.
-/// Only inputs whose coarse levels can be read alone (AMReX plotfiles) are viewed in parts.
+/// coarseRoom gives: the view shows the coarse levels resident and draws every level in parts
+/// beside them. Only inputs whose coarse levels can be read alone (AMReX plotfiles) are viewed in
+/// parts. A budget too small for both is refused naming the smallest that holds both.
 uint64_t viewBudget(const InputOptions& in, const std::string& input, const LoadOptions& lo, uint64_t frameBytes,
                     double& coarseFirst) {
   const std::optional<uint64_t> budget = memoryBudgetFor(in, input, lo, frameBytes, false);
   if (!budget) return 0;
-  const MemoryPlan whole = planWithin(input, lo, *budget, frameBytes);
-  if (!whole.streamed()) return 0;
-  const double room = (double(*budget) - double(whole.fixedBytes)) / 2 / double(whole.bytesPerCell);
-  coarseFirst = coarseFirst > 0 ? std::min(coarseFirst, room) : room;
-  if (coarseFirstLevel(input, coarseFirst).level == 0)
-    failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
-              ": the viewer shows such a step from its coarse levels while it draws every level in parts, and only "
-              "an AMReX plotfile's coarse levels can be read alone; `render` and `movie` draw it with "
-              "--memory-budget");
+  const double given = coarseFirst;
+  try {
+    const MemoryPlan whole = planMemory(input, lo, *budget, frameBytes);
+    if (!whole.streamed()) return 0;
+    coarseFirst = coarseRoom(*budget, whole.fixedBytes, whole.bytesPerCell, given);
+    const CoarseFirst coarse = coarseFirstLevel(input, coarseFirst);
+    if (coarse.level == 0)
+      failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
+                ": the viewer shows such a step from its coarse levels while it draws every level in parts, and "
+                "only an AMReX plotfile's coarse levels can be read alone; `render` and `movie` draw it with "
+                "--memory-budget");
+    // The parts beside the coarse levels.
+    const uint64_t coarseBytes = uint64_t(std::ceil(coarse.coarseCells)) * whole.bytesPerCell;
+    planMemory(input, lo, *budget > coarseBytes ? *budget - coarseBytes : 0, frameBytes);
+  } catch (const BudgetTooSmall& refused) {
+    // The refusal's figures after its "(N cells): ", said of the user's budget.
+    const std::string& said = refused.situation;
+    const size_t figures = said.find(" cells): ");
+    failUsage(BudgetTooSmall(strCat("a memory budget of ", formatBytes(*budget), " cannot hold ", input,
+                                    " for the viewer", figures == std::string::npos ? "" : said.substr(figures + 7)),
+                             viewerSmallestBudget(input, refused, given), refused.fixedBytes, refused.smallestPartBytes,
+                             refused.bytesPerCell,
+                             "with the coarse levels the viewer holds for its drafts beside the parts")
+                  .what());
+  }
   return *budget;
 }
 

@@ -391,34 +391,42 @@ std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std
   return reader->fieldRange(path, field);
 }
 
-CoarseFirst coarseFirstLevel(const std::string& path, double maxCells) {
-  CoarseFirst c;
-  if (path.empty() || detectInput(path) == InputKind::Model) return c;
+std::vector<CoarseFirst> coarseFirstChoices(const std::string& path) {
+  std::vector<CoarseFirst> choices;
+  if (path.empty() || detectInput(path) == InputKind::Model) return choices;
   const FormatReader* reader = findReader(path);
-  if (!reader || !reader->levelCells) return c;
+  if (!reader || !reader->levelCells) return choices;
   const std::vector<double> cells = reader->levelCells(path);
-  c.finestLevel = -1;
+  CoarseFirst whole;
+  whole.finestLevel = -1;
   for (int l = 0; l < int(cells.size()); ++l) {
-    c.cells += cells[size_t(l)];
-    if (c.finestLevel < 0 && cells[size_t(l)] > 0) c.finestLevel = l;
+    whole.cells += cells[size_t(l)];
+    if (whole.finestLevel < 0 && cells[size_t(l)] > 0) whole.finestLevel = l;
   }
-  c.finestLevel = std::max(c.finestLevel, 0);
-  if (c.cells <= maxCells) return c;
-  // The finest level whose cells, with those of every coarser level, stay within maxCells (the
-  // coarsest level alone when it holds more).
-  int level = 0;
+  whole.finestLevel = std::max(whole.finestLevel, 0);
+  choices.push_back(whole);
   double coarse = 0;
-  for (int l = int(cells.size()) - 1; l >= 0; --l) {
+  for (int l = int(cells.size()) - 1; l > whole.finestLevel; --l) {
     if (cells[size_t(l)] == 0) continue;
-    if (coarse > 0 && coarse + cells[size_t(l)] > maxCells) break;
     coarse += cells[size_t(l)];
-    level = l;
-  }
-  if (level > c.finestLevel) { // only a coarser picture than the whole is worth drawing first
-    c.level = level;
+    CoarseFirst c = whole;
+    c.level = l;
     c.coarseCells = coarse;
+    choices.push_back(c);
   }
-  return c;
+  return choices;
+}
+
+CoarseFirst coarseFirstLevel(const std::string& path, double maxCells) {
+  const std::vector<CoarseFirst> choices = coarseFirstChoices(path);
+  if (choices.empty() || choices[0].cells <= maxCells) return choices.empty() ? CoarseFirst() : choices[0];
+  // The finest level whose cells, with those of every coarser level, stay within maxCells (the
+  // coarsest level alone when it holds more). Only a coarser picture than the whole is worth
+  // drawing first.
+  CoarseFirst best = choices[0];
+  for (size_t k = 1; k < choices.size() && (k == 1 || choices[k].coarseCells <= maxCells); ++k)
+    best = choices[k];
+  return best;
 }
 
 std::vector<std::string> listFields(const std::string& path) {

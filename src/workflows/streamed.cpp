@@ -70,6 +70,18 @@ size_t loadedFields(const std::string& input, const LoadOptions& options) {
 
 } // namespace
 
+namespace {
+std::string smallestSaid(uint64_t smallest, const std::string& why) {
+  return strCat("; the smallest budget that works is ", formatBytes(smallest), " (--memory-budget ", smallest >> 20,
+                "M)", why.empty() ? "" : ", ", why);
+}
+} // namespace
+
+BudgetTooSmall::BudgetTooSmall(std::string what, uint64_t smallestBudget, uint64_t fixed, uint64_t partBytes,
+                               uint64_t perCell, const std::string& why)
+    : Error(what + smallestSaid(smallestBudget, why)), situation(std::move(what)), smallest(smallestBudget),
+      fixedBytes(fixed), smallestPartBytes(partBytes), bytesPerCell(perCell) {}
+
 uint64_t residentBytesNow() { return statusKiB("/proc/self/status", "VmRSS:"); }
 uint64_t peakResidentBytes() { return statusKiB("/proc/self/status", "VmHWM:"); }
 uint64_t availableMemoryBytes() { return statusKiB("/proc/meminfo", "MemAvailable:"); }
@@ -127,14 +139,13 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   // Named with a few MiB to spare: the process's own size varies a little from run to run.
   const uint64_t smallest =
       mib(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell + (uint64_t(4) << 20));
-  throw BudgetTooSmall(
-      strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
-             input.empty() ? std::string(kDefaultDatasetName) : input, " (", std::llround(plan.cells),
-             " cells): this process needs ", formatBytes(plan.fixedBytes), " without data, the whole step about ",
-             formatBytes(whole - plan.fixedBytes), " more (held whole: --memory-budget ", mib(whole) >> 20,
-             "M) and its smallest part about ", formatBytes(smallest - plan.fixedBytes),
-             "; the smallest budget that works is ", formatBytes(smallest), " (--memory-budget ", smallest >> 20, "M)"),
-      smallest);
+  throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
+                              input.empty() ? std::string(kDefaultDatasetName) : input, " (", std::llround(plan.cells),
+                              " cells): this process needs ", formatBytes(plan.fixedBytes),
+                              " without data, the whole step about ", formatBytes(whole - plan.fixedBytes),
+                              " more (held whole: --memory-budget ", mib(whole) >> 20,
+                              "M) and its smallest part about ", formatBytes(smallest - plan.fixedBytes)),
+                       smallest, plan.fixedBytes, smallest - plan.fixedBytes, plan.bytesPerCell);
 }
 
 std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options, uint64_t frameBytes) {

@@ -78,20 +78,36 @@ def test_finer_levels_that_cannot_be_read_leave_the_coarse_view_running(start_vi
     assert "could not be read" in v.stderr_path.read_text()
 
 
-def budget_between_smallest_and_whole(cli, args):
-    """A budget in MiB that cannot hold the step whole but holds its parts. What the process needs
-    before any data differs between machines and builds (the sanitizers' shadow memory alone takes
-    from 120 to 250 MiB), so the viewer is asked: refused a budget of 1 MiB, it names the smallest
-    budget that works and the one that holds the step whole."""
+def budget_between_smallest_and_whole(refusal):
+    """A budget in MiB, two fifths of the way from the smallest budget a refusal names to the one
+    that holds the step whole: it cannot hold the step whole but holds its parts."""
+    smallest = re.search(r"the smallest budget that works is .*--memory-budget (\d+)M", refusal)
+    whole = re.search(r"held whole: --memory-budget (\d+)M", refusal)
+    assert smallest and whole, refusal
+    low, high = int(smallest.group(1)), int(whole.group(1))
+    assert low < high, refusal
+    return low + (high - low) * 2 // 5
+
+
+def start_between_smallest_and_whole(start_viewer, cli, args):
+    """A viewer under a budget between the smallest that works and the whole step's. What the
+    process needs before any data differs between machines and builds (the sanitizers' shadow
+    memory alone takes from 120 to 250 MiB), so the viewer is asked: refused a budget of 1 MiB, it
+    names both. Under the sanitizers the process grows by what their quarantine keeps of memory
+    already freed (the first picture's automatic choices read the coarse levels), which no
+    estimate foresees: there a refusal's figures are taken for another try."""
     run = subprocess.run([cli, "view", "--port", "0"] + args + ["--memory-budget", "1M"],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode != 0, run.stderr
-    smallest = re.search(r"the smallest budget that works is .*--memory-budget (\d+)M", run.stderr)
-    whole = re.search(r"held whole: --memory-budget (\d+)M", run.stderr)
-    assert smallest and whole, run.stderr
-    low, high = int(smallest.group(1)), int(whole.group(1))
-    assert low < high, run.stderr
-    return low + (high - low) * 2 // 5
+    budget = budget_between_smallest_and_whole(run.stderr)
+    tries = 3 if os.environ.get("EXABRICKS_SANITIZED") else 1
+    for attempt in range(tries):
+        try:
+            return start_viewer(*args, "--memory-budget", "%dM" % budget), budget
+        except AssertionError as refused:
+            if attempt + 1 == tries:
+                raise
+            budget = budget_between_smallest_and_whole(str(refused))
 
 
 def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_in_parts(start_viewer, cli, tmp_path):
@@ -101,8 +117,7 @@ def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_
     np = pytest.importorskip("numpy")
     image = pytest.importorskip("PIL.Image")
     args = [str(drop()), "--size", "96x80", "--spp", "2"]
-    budget = budget_between_smallest_and_whole(cli, args)
-    v = start_viewer(*args, "--memory-budget", "%dM" % budget)
+    v, budget = start_between_smallest_and_whole(start_viewer, cli, args)
     frames = frames_until(v, lambda h, i: h["final"])
     assert "coarse levels" in frames[0].get("data", ""), frames[0]
     assert "every level, drawn in" in frames[-1].get("data", ""), frames[-1]
@@ -129,3 +144,17 @@ def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_
     request = v.render(doc)
     frames = frames_until(v, lambda h, i: h["request"] == request and h["final"])
     assert "path-traced view shows these levels only" in frames[-1].get("data", ""), frames[-1]
+
+
+def test_the_smallest_budget_a_refusal_names_starts_the_viewer(start_viewer, cli):
+    # The budget the viewer names holds its coarse levels and, beside them, its largest part.
+    if os.environ.get("EXABRICKS_SANITIZED"):
+        pytest.skip("the sanitizers' quarantine grows the process beyond any estimate")
+    args = [str(drop()), "--size", "96x80", "--spp", "2"]
+    run = subprocess.run([cli, "view", "--port", "0"] + args + ["--memory-budget", "1M"],
+                         capture_output=True, text=True, timeout=120)
+    smallest = re.search(r"the smallest budget that works is .*--memory-budget (\d+)M", run.stderr)
+    assert run.returncode == 2 and smallest, run.stderr
+    v = start_viewer(*args, "--memory-budget", "%sM" % smallest.group(1))
+    frames = frames_until(v, lambda h, i: h["final"])
+    assert "every level, drawn in" in frames[-1].get("data", ""), frames[-1]

@@ -68,6 +68,10 @@ struct CoarseFirst {
 /// that, or its format cannot read coarse levels alone (AMReX plotfiles can: their headers list
 /// every level's boxes and every level's values are stored).
 CoarseFirst coarseFirstLevel(const std::string& path, double maxCells);
+/// Every choice coarseFirstLevel can make: first the whole (level 0), then each level finer than
+/// the finest with the cells of it and every coarser level, from the coarsest alone to the finer;
+/// the whole alone when the format cannot read coarse levels alone, none for a model file.
+std::vector<CoarseFirst> coarseFirstChoices(const std::string& path);
 
 /// Names of the fields an input holds, without building anything.
 std::vector<std::string> listFields(const std::string& path);

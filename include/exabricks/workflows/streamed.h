@@ -23,8 +23,14 @@ namespace exa {
 /// A budget that cannot hold the process and the smallest part it can be split into.
 class BudgetTooSmall : public Error {
 public:
-  BudgetTooSmall(const std::string& message, uint64_t smallestBudget) : Error(message), smallest(smallestBudget) {}
-  uint64_t smallest; ///< the smallest budget that works, bytes
+  BudgetTooSmall(std::string what, uint64_t smallestBudget, uint64_t fixed, uint64_t partBytes, uint64_t perCell,
+                 const std::string& why = "");
+
+  std::string situation;      ///< the refusal without its smallest budget
+  uint64_t smallest;          ///< the smallest budget that works, bytes
+  uint64_t fixedBytes;        ///< the process without data (MemoryPlan::fixedBytes)
+  uint64_t smallestPartBytes; ///< what the largest part of the finest partition needs beside it
+  uint64_t bytesPerCell;      ///< MemoryPlan::bytesPerCell
 };
 
 /// This process's resident memory now (VmRSS), its peak so far (VmHWM) and the memory the system
