@@ -134,6 +134,14 @@ fails_with "--anisotropy 1 names the key" 'pathtrace.anisotropy" must be in (-1,
 fails_with "a negative sun" 'pathtrace.sun_intensity" must be a finite number >= 0' "$exe" render s.cells -o x.png --sun 0,0,-1,-3
 fails_with "a sun without intensity" "--sun expects dx,dy,dz,INTENSITY" "$exe" render s.cells -o x.png --sun 0,0,-1
 fails_with "an unknown integrator" "pathtrace" "$exe" render s.cells -o x.png --integrator photon
+# Path tracing passes to a noise target by default; --spp forces a count; a target needs the path tracer.
+check "path tracing by default: to a noise target, said once" bash -c "'$exe' render s.cells -o ptn.png --size 48x32 --integrator pathtrace --json 2>ptn.err > ptn.json && [ \$(grep -c 'until its noise is at most 2/255' ptn.err) -eq 1 ] && $py -c 'import json; j = json.load(open(\"ptn.json\")); assert j[\"noise_target\"] == 2 and j[\"samples_per_pixel\"] == 1024 and 16 <= j[\"mean_samples_per_pixel\"] < 1024, j'"
+check "--spp forces the count" bash -c "'$exe' render s.cells -o pts.png --size 48x32 --integrator pathtrace --spp 3 --json 2>/dev/null | $py -c 'import json,sys; j = json.load(sys.stdin); assert j[\"noise_target\"] == 0 and j[\"mean_samples_per_pixel\"] == 3, j'"
+check "--noise-target 0: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --integrator pathtrace --noise-target 0
+fails_with "a negative noise target" "--noise-target: \"frame.noise_target\" must be in [0, 255], not -1" "$exe" render s.cells -o x.png --integrator pathtrace --noise-target -1
+fails_with "a noise target with the marcher" "the noise target is for --integrator pathtrace" "$exe" render s.cells -o x.png --noise-target 1
+check "a noise target with the marcher: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --noise-target 1
+check "--spp 100000: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --spp 100000
 # A scene names its input; the default dataset's scene says so, and one without an input is refused.
 "$exe" -q render -o emb.png --size 24x16 --write-scene emb.json
 check "the default dataset's scene names it" $py -c 'import json; assert json.load(open("emb.json"))["input"] == "<embedded>"'

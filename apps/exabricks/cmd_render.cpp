@@ -45,9 +45,19 @@ struct RenderReport {
   size_t frames = 1; ///< timed frames (the median's)
   SceneUpdate update;
   double loadSeconds = 0;
+  double meanPasses = 0; ///< samples per pixel taken, averaged (below the count with a noise target)
   bool dataParallel = false, part = false;
   std::vector<double> partCells, partRss; ///< per process, where several render
 };
+
+/// The samples per pixel a frame took, averaged; said where a noise target chose them.
+double noteSamplesTaken(const Scene& scene, const Frame& frame, const FrameBuffer& buffer) {
+  const double mean = buffer.meanPasses();
+  if (frame.noiseTarget > 0.f && scene.integration.integrator == Integrator::PathTrace)
+    logNote(strCat("noise target ", frame.noiseTarget, "/255: ", std::round(mean * 10) / 10,
+                   " samples per pixel on average (", frame.samplesPerPixel, " at most)"));
+  return mean;
+}
 
 /// Renders the frame into the buffer (samplesPerPixel passes, with its progress: Progress);
 /// with --stats, a warm-up and then --frames timed frames, their median kept.
@@ -71,6 +81,7 @@ void renderTimed(const RenderCmdOptions& o, const Renderer& renderer, const Fram
   };
   if (!o.stats) {
     report.stats = renderFrame();
+    if (mpi::processes().root()) report.meanPasses = noteSamplesTaken(renderer.scene(), frame, buffer);
     return;
   }
   renderFrame(); // warm-up, not counted
@@ -82,6 +93,7 @@ void renderTimed(const RenderCmdOptions& o, const Renderer& renderer, const Fram
   std::sort(frameSeconds.begin(), frameSeconds.end());
   report.stats.seconds = frameSeconds[frameSeconds.size() / 2];
   report.frames = frameSeconds.size();
+  report.meanPasses = buffer.meanPasses();
 }
 
 /// The statistics as one JSON object on stdout.
@@ -92,6 +104,8 @@ void printJson(const RenderCmdOptions& o, const Frame& frame, const Renderer& re
   j["width"] = frame.width;
   j["height"] = frame.height;
   j["samples_per_pixel"] = frame.samplesPerPixel;
+  j["noise_target"] = frame.noiseTarget;
+  j["mean_samples_per_pixel"] = r.meanPasses;
   j["frame_seconds"] = r.stats.seconds;
   j["frames"] = r.frames;
   j["rays"] = r.stats.rays;

@@ -127,6 +127,7 @@ struct SettingFlag {
 
 constexpr SettingFlag kSettingFlags[] = {
     {"--spp", "frame.samples_per_pixel", FlagGroup::Image},
+    {"--noise-target", "frame.noise_target", FlagGroup::Image},
     {"--rate", "frame.rate", FlagGroup::Image},
     {"--seed", "frame.seed", FlagGroup::Image},
     {"--no-jitter", "frame.jitter", FlagGroup::Image, FlagForm::Off},
@@ -489,6 +490,7 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd) {
   applyLightOptions(o, u, s);
   applyClipOptions(o, u, s);
   applyPathTracingOptions(o, u, s);
+  applySampling(cmd, fromFile, doc);
   applyIsoOptions(o, u, s);
   applyMeshOptions(o, u, s);
   applyParticleOptions(o, cmd, u.fromFile, s);

@@ -87,6 +87,9 @@ SceneDocument sceneFromOptions(const RenderOptions& o, const CLI::App& cmd);
 void addParticleOptions(RenderOptions& o, CLI::App& cmd);
 /// Applies them to the scene: all of them without a scene file, the ones given over one.
 void applyParticleOptions(const RenderOptions& o, const CLI::App& cmd, bool fromFile, Scene& s);
+/// A noise target's checks (--noise-target above 0, with the path tracer), and path tracing given
+/// neither --spp nor --noise-target passing to the default target (sampling_options.cpp).
+void applySampling(const CLI::App& cmd, bool fromFile, SceneDocument& doc);
 /// The particles a scene shows, read from the input (only the species it names); null where it
 /// shows none, or the input holds none (said once).
 std::shared_ptr<const ParticleSet> particlesFor(const Scene& scene, const std::string& input);

@@ -471,9 +471,9 @@ class Scene:
 
     # -- rendering ----------------------------------------------------------------------------
     def _frame_json(self, width, height, spp, rate):
-        return json.dumps({"camera": self.camera.to_dict(),
-                           "frame": {"width": int(width), "height": int(height), "samples_per_pixel": int(spp),
-                                     "rate": float(rate), "jitter": bool(self.jitter), "seed": int(self.seed)}})
+        frame = {"width": int(width), "height": int(height), "samples_per_pixel": int(spp), "rate": float(rate),
+                 "noise_target": float(self.noise_target), "jitter": bool(self.jitter), "seed": int(self.seed)}
+        return json.dumps({"camera": self.camera.to_dict(), "frame": frame})
 
     def _scene_json(self):
         """The scene without camera, frame, input, camera path and mesh files (the meshes go to the

@@ -3,7 +3,11 @@
 #include "exabricks/core/error.h"
 #include "exabricks/render/transfer_function.h"
 
+#include "exabricks/core/color.h"
+
 #include <algorithm>
+#include <cmath>
+#include <limits>
 
 namespace exa {
 
@@ -28,14 +32,17 @@ void FrameBuffer::resize(int width, int height) {
   tilesX_ = (width + kRenderTile - 1) / kRenderTile;
   tilesY_ = (height + kRenderTile - 1) / kRenderTile;
   sum_.resize(size_t(width) * size_t(height));
+  squares_.resize(size_t(width) * size_t(height));
   steps_.resize(size_t(width) * size_t(height));
   tilePasses_.resize(size_t(tilesX_) * size_t(tilesY_));
   counters_.resize(size_t(tilesX_) * size_t(tilesY_));
+  passTiles_.reserve(counters_.size());
   clear();
 }
 
 void FrameBuffer::clear() {
   std::fill(sum_.begin(), sum_.end(), vec4f());
+  std::fill(squares_.begin(), squares_.end(), vec4f());
   std::fill(steps_.begin(), steps_.end(), 0.f);
   std::fill(tilePasses_.begin(), tilePasses_.end(), 0u);
   stats_ = RenderStats();
@@ -44,6 +51,7 @@ void FrameBuffer::clear() {
 FrameBuffer::Sums FrameBuffer::sums() {
   static_assert(sizeof(vec4f) == 4 * sizeof(float), "vec4f must be four packed floats");
   return {reinterpret_cast<float*>(sum_.data()),
+          reinterpret_cast<float*>(squares_.data()),
           steps_.data(),
           sum_.size(),
           tilePasses_.data(),
@@ -55,6 +63,53 @@ FrameBuffer::Sums FrameBuffer::sums() {
 uint32_t FrameBuffer::passes() const {
   if (tilePasses_.empty()) return 0;
   return *std::min_element(tilePasses_.begin(), tilePasses_.end());
+}
+
+double FrameBuffer::meanPasses() const {
+  double passes = 0, pixels = 0;
+  for (int t = 0; t < tileCount(); ++t) {
+    if (tilePasses_[size_t(t)] == 0) continue;
+    const int tx = t % tilesX_, ty = t / tilesX_;
+    const double area = double(std::min(kRenderTile, width_ - tx * kRenderTile)) *
+                        double(std::min(kRenderTile, height_ - ty * kRenderTile));
+    passes += area * tilePasses_[size_t(t)];
+    pixels += area;
+  }
+  return pixels > 0 ? passes / pixels : 0.0;
+}
+
+float FrameBuffer::tileNoise(int tile, const vec3f& background) const {
+  const uint32_t n = tilePasses_.at(size_t(tile));
+  if (n < 2) return std::numeric_limits<float>::infinity();
+  const float inv = 1.f / float(n);
+  // The squared standard error of a mean of n samples: (E[x²] - E[x]²) / (n - 1).
+  auto error = [&](float sum, float squares) {
+    const float mean = sum * inv;
+    return std::sqrt(std::max(0.f, squares * inv - mean * mean) / float(n - 1));
+  };
+  const int tx = tile % tilesX_, ty = tile / tilesX_;
+  double squared = 0;
+  int count = 0;
+  for (int y = ty * kRenderTile; y < std::min(height_, (ty + 1) * kRenderTile); ++y)
+    for (int x = tx * kRenderTile; x < std::min(width_, (tx + 1) * kRenderTile); ++x) {
+      const size_t i = size_t(y) * size_t(width_) + size_t(x);
+      const vec4f& s = sum_[i];
+      const vec4f& q = squares_[i];
+      const float alphaError = error(s.w, q.w);
+      const float sums[3] = {s.x, s.y, s.z}, squares[3] = {q.x, q.y, q.z},
+                  behind[3] = {background.x, background.y, background.z};
+      for (int c = 0; c < 3; ++c) {
+        // Over the background: colour + (1 - alpha) background; its error at most the sum of both.
+        const float shown = sums[c] * inv + (1.f - s.w * inv) * behind[c];
+        const float e = error(sums[c], squares[c]) + behind[c] * alphaError;
+        const float steps =
+            (linearToSrgb(std::clamp(shown + e, 0.f, 1.f)) - linearToSrgb(std::clamp(shown - e, 0.f, 1.f))) * 0.5f *
+            255.f;
+        squared += double(steps) * double(steps);
+        ++count;
+      }
+    }
+  return count ? float(std::sqrt(squared / count)) : 0.f;
 }
 
 void FrameBuffer::resolve(Image& out) const {

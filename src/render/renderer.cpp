@@ -193,20 +193,22 @@ struct Renderer::Impl {
                        : marchSample<false>(b, ps.ray, model.world, &clip, dr, rho, rng, c, front);
   }
 
-  /// The one pass loop of every back end, over the tiles begin, begin + stride, ... below end:
-  /// each tile in parallel (none once cancelled) has its counters reset, `traceTile(tile,
-  /// counters)` add its pixels to the buffer, and its pass counted, with progress per tile. The
-  /// pass's statistics are its tiles' counters summed, plus `whole` (what a back end counts for
-  /// the pass as a whole). False when cancelled.
+  /// The one pass loop of every back end, over the tiles the control selects: each tile in
+  /// parallel (none once cancelled) has its counters reset, `traceTile(tile, counters)` add its
+  /// pixels to the buffer, and its pass counted, with progress per tile. The pass's statistics
+  /// are its tiles' counters summed, plus `whole` (what a back end counts for the pass as a
+  /// whole). False when cancelled.
   template <typename TraceTile>
-  static bool runPass(FrameBuffer& buffer, int begin, int end, int stride, const PassControl& control,
-                      const RenderStats& whole, TraceTile&& traceTile) {
-    const int passTiles = end > begin ? (end - begin + stride - 1) / stride : 0;
+  static bool runPass(FrameBuffer& buffer, const PassControl& control, const RenderStats& whole,
+                      TraceTile&& traceTile) {
+    std::vector<int>& tiles = buffer.passTiles_;
+    control.selected(buffer.tileCount(), tiles);
+    const int passTiles = int(tiles.size());
     std::atomic<bool> cancelled{false};
     std::atomic<uint64_t> done{0};
     Timer timer;
     tbb::parallel_for(0, passTiles, [&](int i) {
-      const int tile = begin + i * stride;
+      const int tile = tiles[size_t(i)];
       Counters& c = buffer.counters_[size_t(tile)];
       c = Counters();
       if (control.cancel && control.cancel->load(std::memory_order_relaxed)) {
@@ -221,7 +223,7 @@ struct Renderer::Impl {
     RenderStats st = whole;
     st.seconds += timer.seconds();
     for (int i = 0; i < passTiles; ++i) {
-      const Counters& c = buffer.counters_[size_t(begin + i * stride)];
+      const Counters& c = buffer.counters_[size_t(tiles[size_t(i)])];
       st.rays += c.rays;
       st.samples += c.samples;
       st.regionsVisited += c.regions;
@@ -243,18 +245,17 @@ struct Renderer::Impl {
   }
 
   /// A pass on CPU threads: the ray program per pixel (ray-marched or path-traced, or a debug view).
-  bool cpuPass(const Frame& frame, FrameBuffer& buffer, int begin, int end, int stride,
-               const PassControl& control) const {
+  bool cpuPass(const Frame& frame, FrameBuffer& buffer, const PassControl& control) const {
     const PassSetup ps = passSetup(frame);
     const bool steps = scene.debug == DebugView::Steps;
     const bool pathTraced = scene.integration.integrator == Integrator::PathTrace && scene.debug == DebugView::None;
     buffer.stepsView_ = steps;
-    return runPass(buffer, begin, end, stride, control, RenderStats(), [&](int tile, Counters& c) {
+    return runPass(buffer, control, RenderStats(), [&](int tile, Counters& c) {
       forTilePixels(buffer, frame, tile, [&](int x, int y, size_t p) {
         RayCounts rc;
         const vec4f acc = pathTraced ? tracePathPixel(x, y, frame, ps, rc) : tracePixel(x, y, frame, ps, c, rc);
         addCounts(c, rc);
-        buffer.sum_[p] += acc;
+        buffer.add(p, acc);
         if (steps) buffer.steps_[p] += float(rc.marchSamples);
       });
     });
@@ -277,8 +278,8 @@ struct Renderer::Impl {
     whole.isoSamples = counts.isoSamples;
     whole.aoRays = counts.aoRays;
     whole.deviceSeconds = counts.kernelSeconds;
-    return runPass(buffer, begin, end, stride, control, whole, [&](int tile, Counters&) {
-      forTilePixels(buffer, frame, tile, [&](int, int, size_t p) { buffer.sum_[p] += colors[p]; });
+    return runPass(buffer, control, whole, [&](int tile, Counters&) {
+      forTilePixels(buffer, frame, tile, [&](int, int, size_t p) { buffer.add(p, colors[p]); });
     });
   }
 };
@@ -575,8 +576,7 @@ bool Renderer::renderPass(const Frame& frame, FrameBuffer& buffer, const PassCon
   const int end = control.tileEnd < 0 ? tileCount : std::min(control.tileEnd, tileCount);
   const int stride = std::max(1, control.tileStride);
   const int begin = std::max(0, control.tileBegin);
-  return im.device ? im.devicePass(frame, buffer, begin, end, stride, control)
-                   : im.cpuPass(frame, buffer, begin, end, stride, control);
+  return im.device ? im.devicePass(frame, buffer, begin, end, stride, control) : im.cpuPass(frame, buffer, control);
 }
 
 bool Renderer::renderPasses(const Frame& frame, FrameBuffer& buffer, int passes, const PassControl& control) const {
@@ -592,7 +592,7 @@ bool Renderer::renderPasses(const Frame& frame, FrameBuffer& buffer, int passes,
 Image Renderer::render(const Frame& frame, RenderStats* stats) const {
   frame.validate();
   FrameBuffer buffer(frame.width, frame.height);
-  renderPasses(frame, buffer, frame.samplesPerPixel);
+  renderSampled(frame, buffer);
   if (stats) *stats = buffer.stats();
   return buffer.resolve();
 }

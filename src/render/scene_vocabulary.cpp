@@ -346,7 +346,11 @@ const std::vector<Setting<Frame>>& frameSettings() {
           "frame.height", "height", [](F& f) -> int& { return f.height; }, 1, 32768, "Image height in pixels"),
       number<F>(
           "frame.samples_per_pixel", "spp", [](F& f) -> int& { return f.samplesPerPixel; }, 1, 65536,
-          "Jittered samples per pixel, accumulated"),
+          "Jittered samples per pixel, accumulated (with a noise target: the most a tile takes)"),
+      number<F>(
+          "frame.noise_target", "noise_target", [](F& f) -> float& { return f.noiseTarget; }, 0.0, 255.0,
+          "Path tracing: stop each tile once its estimated noise is at most this many 1/255 steps of the 8-bit "
+          "image (0: take samples_per_pixel everywhere)"),
       number<F>(
           "frame.rate", "rate", [](F& f) -> float& { return f.rate; }, 0.0, 1024.0,
           "Quality factor: step = region's finest width x 0.5 / rate", true),

@@ -179,6 +179,12 @@ bool ProgressiveView::changed(std::string& held, std::string key) {
 void ProgressiveView::restart() {
   passes_ = 0;
   cleared_ = false;
+  rounds_ = NoiseRounds();
+  noiseReached_ = false;
+}
+
+bool ProgressiveView::complete() const {
+  return NoiseRounds::applies(doc_.scene, doc_.frame) ? noiseReached_ : passes_ >= targetPasses();
 }
 
 Frame ProgressiveView::draftFrame() const {
@@ -209,12 +215,20 @@ bool ProgressiveView::refineTo(int passes, const PassControl& control) {
     cleared_ = true;
   }
   Frame pass = doc_.frame;
-  while (passes_ < passes) {
+  const bool toNoise = NoiseRounds::applies(doc_.scene, doc_.frame);
+  while (passes_ < passes && !(toNoise && noiseReached_)) {
+    // With a noise target, a pass is the next round of the tiles that want more.
+    PassControl some = control;
     pass.frameIndex = passes_;
+    if (toNoise) {
+      if (!rounds_.started()) rounds_.start(pass, buffer_, control);
+      noiseReached_ = !rounds_.next(pass, buffer_, doc_.scene.background, some, pass.frameIndex);
+      if (noiseReached_) break;
+    }
     bool rendered = false;
     try {
       const bool cancelled = control.cancel && control.cancel->load(std::memory_order_relaxed);
-      rendered = !cancelled && renderer_.renderPass(pass, buffer_, control);
+      rendered = !cancelled && renderer_.renderPass(pass, buffer_, some);
     } catch (...) {
       restart();
       throw;

@@ -27,7 +27,8 @@ def every_setting(mesh):
             {"time": 0, "camera": CAMERA, "opacity_scale": 0.02, "range": [0.01, 1.4], "iso_values": [0.5]},
             {"time": 2, "camera": dict(CAMERA, position=[60.0, 150.0, 80.0], fov=30.0), "opacity_scale": 0.2,
              "range": [0.1, 1.4], "iso_values": [0.9]}]},
-        "frame": {"width": 40, "height": 30, "samples_per_pixel": 2, "rate": 0.75, "jitter": False, "seed": 7},
+        "frame": {"width": 40, "height": 30, "samples_per_pixel": 2, "noise_target": 3, "rate": 0.75, "jitter": False,
+                  "seed": 7},
         "layers": [
             {"field": "scalar", "transfer_function": {"colormap": "magma", "opacity": [[0, 0], [0.5, 0.2], [1, 0.9]], "albedo": [[0, 0.2], [1, 0.9]],
                                                       "range": [0.05, 1.3], "log": True, "opacity_scale": 0.5}},

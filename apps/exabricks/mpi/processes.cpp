@@ -115,6 +115,7 @@ void combineOnRoot(FrameBuffer& buffer) {
     }
   };
   reduce(s.colors, 4 * s.pixels, MPI_FLOAT, MPI_SUM);
+  reduce(s.squares, 4 * s.pixels, MPI_FLOAT, MPI_SUM);
   reduce(s.steps, s.pixels, MPI_FLOAT, MPI_SUM);
   reduce(s.tilePasses, s.tiles, MPI_UINT32_T, MPI_SUM);
   reduceStats(*s.stats);
@@ -124,17 +125,13 @@ void combineOnRoot(FrameBuffer& buffer) {
 }
 
 bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control) {
-  if (state().size <= 1) return renderer.renderPasses(frame, buffer, frame.samplesPerPixel, control);
-  // Image-parallel: process r renders tiles r, r + N, r + 2N, ... of every pass; the root adds
+  if (state().size <= 1) return renderer.renderSampled(frame, buffer, control);
+  // Image-parallel: process r renders tiles r, r + N, r + 2N, ... of every pass (a noise target
+  // is met tile by tile, so each process's tiles take the passes they would alone); the root adds
   // the shares (random numbers depend on pixel, pass and seed only, so the image is the serial one).
   control.tileBegin = state().rank;
   control.tileStride = state().size;
-  Frame pass = frame;
-  bool complete = true;
-  for (int k = 0; k < frame.samplesPerPixel && complete; ++k) {
-    pass.frameIndex = k;
-    complete = renderer.renderPass(pass, buffer, control);
-  }
+  const bool complete = renderer.renderSampled(frame, buffer, control);
   const auto start = std::chrono::steady_clock::now();
   combineOnRoot(buffer);
   lastCombineSeconds() = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -24,6 +24,10 @@ EXA_HOST_DEVICE constexpr vec4f operator-(const vec4f& a, const vec4f& b) {
 }
 EXA_HOST_DEVICE constexpr vec4f operator*(const vec4f& a, float s) { return {a.x * s, a.y * s, a.z * s, a.w * s}; }
 EXA_HOST_DEVICE constexpr vec4f operator*(float s, const vec4f& a) { return a * s; }
+/// Component by component.
+EXA_HOST_DEVICE constexpr vec4f operator*(const vec4f& a, const vec4f& b) {
+  return {a.x * b.x, a.y * b.y, a.z * b.z, a.w * b.w};
+}
 EXA_HOST_DEVICE constexpr vec4f& operator+=(vec4f& a, const vec4f& b) {
   a.x += b.x, a.y += b.y, a.z += b.z, a.w += b.w;
   return a;

@@ -47,8 +47,10 @@ inline void addComposited(const float* result, size_t pixels, FrameBuffer& buffe
   const FrameBuffer::Sums out = buffer.sums();
   for (size_t p = 0; p < pixels; ++p) {
     const float* c = result + p * kCompositeChannels;
-    for (size_t ch = 0; ch < 4; ++ch)
+    for (size_t ch = 0; ch < 4; ++ch) {
       out.colors[4 * p + ch] += c[ch];
+      out.squares[4 * p + ch] += c[ch] * c[ch];
+    }
     out.steps[p] += c[4];
   }
   for (size_t t = 0; t < out.tiles; ++t)

@@ -11,6 +11,11 @@
 
 namespace exa {
 
+/// A path-traced frame given neither a sample count nor a noise target: passes to this noise (in
+/// 1/255 steps of the 8-bit image), at most kDefaultPathTracedPasses per pixel.
+constexpr float kDefaultNoiseTarget = 2.f;
+constexpr int kDefaultPathTracedPasses = 1024;
+
 /// A model that holds one part of a dataset (with its halo): the defaults count only the cells
 /// whose centres lie in `owned` (lattice), and `sumOverParts` adds the histograms of every part
 /// element by element (an all-reduce), so that every part chooses what the whole data would.

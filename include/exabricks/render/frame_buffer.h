@@ -26,8 +26,8 @@ struct RenderStats {
 /// Square tiles of this many pixels are the unit of work, progress and cancellation.
 constexpr int kRenderTile = 16;
 
-/// The sums of a progressive image: per pixel the premultiplied colours of every pass and per
-/// tile the number of passes added. Owned by the caller; resize() allocates, passes do not.
+/// The sums of a progressive image: per pixel the premultiplied colours of every pass and their
+/// squares, and per tile the number of passes added. Owned by the caller; resize() allocates, passes do not.
 class FrameBuffer {
 public:
   /// Counters of one tile in the last pass that covered it.
@@ -48,6 +48,12 @@ public:
   /// Passes added to a tile, and the fewest over all tiles (complete passes).
   uint32_t tilePasses(int tile) const { return tilePasses_[size_t(tile)]; }
   uint32_t passes() const;
+  /// Passes per pixel, averaged over the pixels of the tiles that hold any.
+  double meanPasses() const;
+  /// The noise a tile's passes estimate in its 8-bit sRGB image composited over `background`
+  /// (linear RGB): per pixel and channel the standard error of the mean, carried through the sRGB
+  /// curve, in 1/255 steps; RMS over the tile. Infinite with fewer than two passes.
+  float tileNoise(int tile, const vec3f& background) const;
   /// The mean of the passes (each tile divided by its own count; tiles without a pass are
   /// transparent black). The steps debug view resolves to a heat map scaled to its maximum.
   void resolve(Image& out) const;
@@ -59,8 +65,9 @@ public:
   /// rendered into buffers of one size: adding the arrays element by element (tiles a process did
   /// not render hold zeros) gives the buffer of all the shares, bit for bit.
   struct Sums {
-    float* colors; ///< 4 per pixel (premultiplied RGBA)
-    float* steps;  ///< 1 per pixel (steps debug view)
+    float* colors;  ///< 4 per pixel (premultiplied RGBA)
+    float* squares; ///< 4 per pixel, the colours' squares
+    float* steps;   ///< 1 per pixel (steps debug view)
     size_t pixels;
     uint32_t* tilePasses; ///< 1 per tile
     size_t tiles;
@@ -71,11 +78,16 @@ public:
 
 private:
   friend class Renderer;
+  void add(size_t pixel, const vec4f& color) {
+    sum_[pixel] += color;
+    squares_[pixel] += color * color;
+  }
   int width_ = 0, height_ = 0, tilesX_ = 0, tilesY_ = 0;
-  std::vector<vec4f> sum_;
+  std::vector<vec4f> sum_, squares_;
   std::vector<float> steps_; ///< samples per pixel, summed (steps debug view)
   std::vector<uint32_t> tilePasses_;
   std::vector<TileCounters> counters_;
+  std::vector<int> passTiles_; ///< the tiles of the pass under way (room for every tile)
   bool stepsView_ = false;
   RenderStats stats_;
 };

@@ -150,6 +150,11 @@ struct RendererOptions {
 struct PassControl {
   /// Tiles tileBegin, tileBegin + tileStride, ... below tileEnd (-1: all), row-major.
   int tileBegin = 0, tileEnd = -1, tileStride = 1;
+  /// Optional, one entry per tile of the buffer: of the tiles above, only those whose entry is
+  /// not 0 (null: all of them).
+  const std::vector<uint8_t>* tileMask = nullptr;
+  /// The tiles selected among `tileCount`, in order, into `tiles` (its memory kept).
+  void selected(int tileCount, std::vector<int>& tiles) const;
   /// Checked before every tile; once true, the pass adds no further tile and returns false.
   const std::atomic<bool>* cancel = nullptr;
   /// Called from worker threads after each tile with (tiles done, tiles in the pass).
@@ -168,6 +173,33 @@ struct VisibleExtent {
   /// The framed lattice box: the opaque cells with a margin of a twentieth of their size, within
   /// the volume's regions (the regions alone where no cell is that opaque), and the iso regions.
   box3f framed() const;
+};
+
+/// Passes every tile takes before its noise is estimated (Frame::noiseTarget).
+constexpr int kNoiseFirstPasses = 16;
+
+/// Passes to a frame's noise target, tile by tile (Renderer::renderSampled, progressive views):
+/// next() names the tiles that take the next pass and its frame index, those holding the fewest
+/// passes among the tiles that want more, so that every tile takes its passes in order. A tile
+/// wants kNoiseFirstPasses, then, while its noise (FrameBuffer::tileNoise) is above the target,
+/// the passes its noise predicts (between a quarter more and twice as many), at most the frame's
+/// samplesPerPixel.
+class NoiseRounds {
+public:
+  /// Whether a frame of the scene takes its passes to its noise target (path tracing, a target
+  /// above 0, more than one sample per pixel, no debug view).
+  static bool applies(const Scene& scene, const Frame& frame);
+  /// Starts over for the tiles `control` selects in `buffer` (to be cleared).
+  void start(const Frame& frame, const FrameBuffer& buffer, const PassControl& control);
+  bool started() const { return !goal_.empty(); }
+  /// The next pass: `control`'s mask (this object's) selects its tiles and `frameIndex` is its
+  /// index; false when every tile holds its passes.
+  bool next(const Frame& frame, const FrameBuffer& buffer, const vec3f& background, PassControl& control,
+            int& frameIndex);
+
+private:
+  std::vector<uint32_t> goal_;
+  std::vector<uint8_t> mask_;
 };
 
 class Renderer {
@@ -209,7 +241,13 @@ public:
   /// Adds passes (frame index = the passes the buffer holds) until the buffer holds `passes`;
   /// false when cancelled.
   bool renderPasses(const Frame& frame, FrameBuffer& buffer, int passes, const PassControl& control = {}) const;
-  /// A whole frame: passes 0..samplesPerPixel-1 into a fresh buffer, resolved.
+  /// Every pass of a frame, into a cleared buffer, for the tiles the control selects: passes
+  /// 0..samplesPerPixel-1, or with a noise target (Frame::noiseTarget) when path tracing, each
+  /// tile's passes 0..n-1 for the n that brings its noise (FrameBuffer::tileNoise) to the target
+  /// (at least kNoiseFirstPasses, at most samplesPerPixel): a tile equals the same tile of an
+  /// n-sample render. False when cancelled.
+  bool renderSampled(const Frame& frame, FrameBuffer& buffer, const PassControl& control = {}) const;
+  /// A whole frame: renderSampled into a fresh buffer, resolved.
   Image render(const Frame& frame, RenderStats* stats = nullptr) const;
 
   /// Restricts primary rays to the inside of a world box, for a renderer that holds one part of

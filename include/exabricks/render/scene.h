@@ -197,6 +197,10 @@ struct Frame {
   Camera camera;
   int width = 800, height = 800;
   int samplesPerPixel = 1;
+  /// Above 0: path-traced passes stop, tile by tile, once the noise a tile's passes estimate
+  /// (the standard error of its 8-bit sRGB values, RMS over its pixels) is at most this many
+  /// 1/255 steps, after at least kNoiseFirstPasses and at most samplesPerPixel passes.
+  float noiseTarget = 0.f;
   int frameIndex = 0;
   float rate = 1.f;   ///< quality factor: step = region's finest width x 0.5 / rate
   bool jitter = true; ///< random offsets of the sample positions

@@ -75,7 +75,9 @@ public:
   bool draftIsCurrent() const { return !sceneKey_.empty() && !frameKey_.empty() && draftKey_ == key(); }
 
   /// Adds the next full-resolution pass to buffer(); false when cancelled (the pass is then not
-  /// counted, and the refinement starts over) or when the view already holds its passes.
+  /// counted, and the refinement starts over) or when the view already holds its passes. With a
+  /// noise target, the call that finds every tile at its passes adds none and returns true
+  /// (complete() then holds).
   bool refine(const PassControl& control);
   /// Adds full-resolution passes until the view holds `passes`, which may go past
   /// targetPasses() (more samples of the same frame); false when cancelled, as refine(). A pass
@@ -85,7 +87,10 @@ public:
   const FrameBuffer& buffer() const { return buffer_; }
   int passes() const { return passes_; }
   int targetPasses() const { return doc_.frame.samplesPerPixel; }
-  bool complete() const { return passes_ >= targetPasses(); }
+  /// Whether the view holds its passes: targetPasses(), or with a noise target
+  /// (NoiseRounds::applies), every tile its own, at the target or at targetPasses(); passes()
+  /// then counts the rounds of tiles added.
+  bool complete() const;
 
   /// Moves the view to `device` with the next scene shown (show(), showScene()); the refinement
   /// starts over there where the renderer's device changes.
@@ -124,7 +129,9 @@ private:
   float placedRadius_ = 0.f; ///< the particles' world radius the renderer holds (resolveParticleRadius)
   FrameBuffer buffer_;
   int passes_ = 0;
-  bool cleared_ = false; ///< buffer_ holds the passes counted (else it is cleared before the next)
+  NoiseRounds rounds_;        ///< with a noise target: the tiles that take the next pass
+  bool noiseReached_ = false; ///< every tile holds the passes its noise wants
+  bool cleared_ = false;      ///< buffer_ holds the passes counted (else it is cleared before the next)
 };
 
 } // namespace exa

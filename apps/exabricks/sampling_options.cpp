@@ -1,0 +1,32 @@
+// The command line's sampling: a noise target's checks, and the passes path tracing takes by
+// default.
+#include "common.h"
+#include "scene_options.h"
+
+#include "exabricks/core/log.h"
+#include "exabricks/core/text.h"
+#include "exabricks/render/defaults.h"
+
+namespace exa::cli {
+
+/// A noise target is above 0 and for the path tracer; path tracing given neither --spp nor
+/// --noise-target (nor a scene file; the viewer keeps its passes) passes to kDefaultNoiseTarget.
+void applySampling(const CLI::App& cmd, bool fromFile, SceneDocument& doc) {
+  Frame& f = doc.frame;
+  const bool pathTraced = doc.scene.integration.integrator == Integrator::PathTrace,
+             given = cmd.count("--noise-target");
+  if (given && !(f.noiseTarget > 0.f))
+    failUsage("--noise-target: ", f.noiseTarget, " is not above 0 (the noise in 1/255 steps at which a tile stops)");
+  if (given && !pathTraced)
+    failUsage("--noise-target: the ray marcher takes --spp passes everywhere; the noise target is for "
+              "--integrator pathtrace");
+  if (!pathTraced || doc.scene.debug != DebugView::None || fromFile || given || cmd.count("--spp") ||
+      cmd.get_name() == "view")
+    return;
+  f.noiseTarget = kDefaultNoiseTarget;
+  f.samplesPerPixel = kDefaultPathTracedPasses;
+  logNote(strCat("path tracing each tile until its noise is at most ", kDefaultNoiseTarget, "/255 (at most ",
+                 kDefaultPathTracedPasses, " samples per pixel; --noise-target or --spp to choose)"));
+}
+
+} // namespace exa::cli

@@ -1,0 +1,196 @@
+// Passes to a noise target: the noise a frame buffer estimates per tile against its definition
+// (the standard error of the mean, through the sRGB curve), and a path-traced frame that stops
+// each tile at the target: every tile equals the same tile of a render with its pass count, the
+// tiles that stopped early meet the target, and two seeds differ by about the target.
+#include "exabricks/amr/model.h"
+#include "exabricks/core/color.h"
+#include "exabricks/render/renderer.h"
+#include "exabricks/workflows/progressive.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+using namespace exa;
+
+namespace {
+
+/// One tile (16 x 16) whose pixels all took `passes` passes, alternating between grey levels
+/// `a` and `b` (opaque).
+FrameBuffer alternating(float a, float b, uint32_t passes) {
+  FrameBuffer buffer(kRenderTile, kRenderTile);
+  const FrameBuffer::Sums s = buffer.sums();
+  for (uint32_t k = 0; k < passes; ++k) {
+    const float v = k % 2 ? b : a;
+    for (size_t p = 0; p < s.pixels; ++p)
+      for (int c = 0; c < 4; ++c) {
+        const float x = c == 3 ? 1.f : v;
+        s.colors[4 * p + size_t(c)] += x;
+        s.squares[4 * p + size_t(c)] += x * x;
+      }
+  }
+  s.tilePasses[0] = passes;
+  return buffer;
+}
+
+/// A ball of scattering medium lit by the sun, seen from the side: noisy where it is, empty
+/// around it.
+struct LitBall {
+  Model model;
+  Scene scene;
+  Frame frame;
+  LitBall() {
+    CellSet cells;
+    cells.fields.push_back({"d", {}});
+    for (int z = 0; z < 32; ++z)
+      for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+          cells.cells.push_back({vec3i(x, y, z), 0});
+          const vec3f d = vec3f(float(x), float(y), float(z)) + vec3f(0.5f) - vec3f(16.f);
+          cells.fields[0].values.push_back(std::max(0.f, 1.f - length(d) / 10.f));
+        }
+    model = buildModel(std::move(cells));
+    TransferFunction tf;
+    tf.colorMap.positions = {0.f, 1.f};
+    tf.colorMap.colors = {vec3f(1.f), vec3f(0.9f, 0.6f, 0.3f)};
+    tf.opacity = {{0.f, 0.f}, {1.f, 0.2f}};
+    tf.valueRange = range1f{0.f, 1.f};
+    scene = Scene::volumeOf(tf, "d");
+    scene.shading = Shading::None;
+    scene.integration.integrator = Integrator::PathTrace;
+    scene.pathTracing.albedo = 0.8f;
+    scene.pathTracing.bounces = 4;
+    scene.pathTracing.sunDirection = vec3f(-1.f, -1.f, -0.5f);
+    scene.pathTracing.sunIntensity = 3.f;
+    scene.pathTracing.environment = vec3f(0.1f);
+    frame.width = frame.height = 64;
+    frame.camera.position = vec3d(16.0, 16.0, 90.0);
+    frame.camera.lookAt = vec3d(16.0);
+    frame.camera.up = vec3d(0.0, 1.0, 0.0);
+    frame.camera.fovy = 30.f;
+  }
+};
+
+/// The RMS difference of two images' 8-bit sRGB colours over black, in 1/255 steps.
+double rmsSteps(const Image& a, const Image& b) {
+  double sum = 0;
+  for (size_t p = 0; p < a.pixels.size(); ++p) {
+    const vec3f x = linearToSrgb(a.pixels[p].rgb()), y = linearToSrgb(b.pixels[p].rgb());
+    for (float d : {x.x - y.x, x.y - y.y, x.z - y.z})
+      sum += double(d * 255.f) * double(d * 255.f);
+  }
+  return std::sqrt(sum / double(3 * a.pixels.size()));
+}
+
+} // namespace
+
+TEST(NoiseTarget, ATilesNoiseIsTheStandardErrorThroughTheSrgbCurve) {
+  // Alternating a and b over n passes: the mean's standard error is |b - a| / 2 / sqrt(n - 1).
+  const float a = 0.2f, b = 0.3f;
+  for (uint32_t n : {4u, 16u, 64u}) {
+    const FrameBuffer buffer = alternating(a, b, n);
+    const float mean = (a + b) / 2, error = (b - a) / 2 / std::sqrt(float(n - 1));
+    const float want = (linearToSrgb(mean + error) - linearToSrgb(mean - error)) / 2 * 255.f;
+    EXPECT_NEAR(buffer.tileNoise(0, vec3f(0.f)), want, 1e-3f * want) << n;
+  }
+  EXPECT_FLOAT_EQ(alternating(0.4f, 0.4f, 8).tileNoise(0, vec3f(0.f)), 0.f);
+  EXPECT_EQ(alternating(0.2f, 0.3f, 1).tileNoise(0, vec3f(0.f)), std::numeric_limits<float>::infinity());
+  EXPECT_DOUBLE_EQ(alternating(0.2f, 0.3f, 12).meanPasses(), 12.0);
+}
+
+TEST(NoiseTarget, EachTileStopsAtTheTargetAndEqualsARenderOfItsPasses) {
+  LitBall ball;
+  Renderer renderer(ball.model);
+  renderer.setScene(ball.scene);
+  Frame frame = ball.frame;
+  frame.samplesPerPixel = 512;
+  frame.noiseTarget = 2.f;
+  FrameBuffer adaptive(frame.width, frame.height);
+  ASSERT_TRUE(renderer.renderSampled(frame, adaptive));
+  uint32_t fewest = 100000, most = 0;
+  for (int t = 0; t < adaptive.tileCount(); ++t) {
+    const uint32_t n = adaptive.tilePasses(t);
+    fewest = std::min(fewest, n);
+    most = std::max(most, n);
+    EXPECT_GE(n, uint32_t(kNoiseFirstPasses));
+    if (n < 512) EXPECT_LE(adaptive.tileNoise(t, ball.scene.background), 2.f) << "tile " << t;
+  }
+  EXPECT_LT(fewest, most); // the empty corners stop first
+  EXPECT_GT(most, uint32_t(kNoiseFirstPasses));
+  EXPECT_LT(adaptive.meanPasses(), 512.0);
+
+  // Tile by tile, the n-pass render's tile.
+  const Image image = adaptive.resolve();
+  for (uint32_t n : {fewest, most}) {
+    Frame fixed = frame;
+    fixed.noiseTarget = 0.f;
+    fixed.samplesPerPixel = int(n);
+    const Image reference = renderer.render(fixed);
+    int compared = 0;
+    for (int t = 0; t < adaptive.tileCount(); ++t) {
+      if (adaptive.tilePasses(t) != n) continue;
+      const int tx = t % adaptive.tilesX(), ty = t / adaptive.tilesX();
+      for (int y = ty * kRenderTile; y < (ty + 1) * kRenderTile; ++y)
+        for (int x = tx * kRenderTile; x < (tx + 1) * kRenderTile; ++x) {
+          const size_t p = size_t(y) * size_t(frame.width) + size_t(x);
+          ASSERT_EQ(image.pixels[p], reference.pixels[p]) << "pixel " << x << "," << y << " of " << n << " passes";
+        }
+      ++compared;
+    }
+    EXPECT_GT(compared, 0);
+  }
+
+  // Another seed: the two differ by about sqrt(2) times the noise each holds.
+  frame.seed = 7;
+  const Image other = renderer.render(frame);
+  const double noise = rmsSteps(image, other) / std::sqrt(2.0);
+  std::printf("passes %u..%u, mean %.1f; noise of two seeds %.2f/255\n", fewest, most, adaptive.meanPasses(), noise);
+  EXPECT_LE(noise, 2.0 * 1.25);
+  EXPECT_GT(noise, 0.2);
+}
+
+TEST(NoiseTarget, WithoutATargetOrWhenMarchingEveryTileTakesTheCount) {
+  LitBall ball;
+  Renderer renderer(ball.model);
+  Frame frame = ball.frame;
+  frame.samplesPerPixel = 24;
+  for (Integrator integrator : {Integrator::PathTrace, Integrator::March})
+    for (float target : {0.f, 100.f}) {
+      Scene s = ball.scene;
+      s.integration.integrator = integrator;
+      renderer.setScene(s);
+      frame.noiseTarget = integrator == Integrator::March ? target : 0.f;
+      FrameBuffer buffer(frame.width, frame.height);
+      ASSERT_TRUE(renderer.renderSampled(frame, buffer));
+      for (int t = 0; t < buffer.tileCount(); ++t)
+        EXPECT_EQ(buffer.tilePasses(t), 24u);
+    }
+}
+
+TEST(NoiseTarget, AProgressiveViewRefinesToTheTargetAndEqualsTheFrame) {
+  // Pass by pass, the rounds of tiles that want more, until every tile holds its passes: the same
+  // image as the frame rendered at once.
+  LitBall ball;
+  Renderer renderer(ball.model);
+  ProgressiveView view(renderer, "cpu");
+  SceneDocument doc;
+  doc.scene = ball.scene;
+  doc.frame = ball.frame;
+  doc.frame.samplesPerPixel = 256;
+  doc.frame.noiseTarget = 3.f;
+  doc.hasCamera = true;
+  view.show(doc);
+  const PassControl control;
+  int refinements = 0;
+  while (!view.complete() && refinements < 100000) {
+    ASSERT_TRUE(view.refine(control));
+    ++refinements;
+  }
+  ASSERT_TRUE(view.complete());
+  EXPECT_FALSE(view.refine(control));
+  renderer.setScene(ball.scene);
+  EXPECT_EQ(view.buffer().resolve().pixels, renderer.render(doc.frame).pixels);
+  EXPECT_LT(view.buffer().meanPasses(), 256.0);
+}
