@@ -182,7 +182,7 @@ constexpr int kNoiseFirstPasses = 16;
 /// next() names the tiles that take the next pass and its frame index, those holding the fewest
 /// passes among the tiles that want more, so that every tile takes its passes in order. A tile
 /// wants kNoiseFirstPasses, then, while its noise (FrameBuffer::tileNoise) is above the target,
-/// the passes its noise predicts (between a quarter more and twice as many), at most the frame's
+/// the passes its noise predicts (between a sixteenth more and twice as many), at most the frame's
 /// samplesPerPixel.
 class NoiseRounds {
 public:
