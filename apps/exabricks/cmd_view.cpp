@@ -300,7 +300,8 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   if (!o.token.empty() && o.token.size() < 16) failUsage("--token must have at least 16 characters");
   view::checkListenAddress(o.host, o.port); // before the dataset loads: a taken port fails at once
   SceneDocument doc = sceneFromOptions(o.scene, cmd);
-  if (!cmd.count("--spp") && o.scene.sceneFile.empty()) doc.frame.samplesPerPixel = kDefaultViewerPasses;
+  if (!cmd.count("--spp") && o.scene.sceneFile.empty() && !(doc.frame.noiseTarget > 0.f))
+    doc.frame.samplesPerPixel = kDefaultViewerPasses;
 
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);

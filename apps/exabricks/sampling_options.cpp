@@ -10,7 +10,7 @@
 namespace exa::cli {
 
 /// A noise target is above 0 and for the path tracer; path tracing given neither --spp nor
-/// --noise-target (nor a scene file; the viewer keeps its passes) passes to kDefaultNoiseTarget.
+/// --noise-target (nor a scene file) passes to kDefaultNoiseTarget.
 void applySampling(const CLI::App& cmd, bool fromFile, SceneDocument& doc) {
   Frame& f = doc.frame;
   const bool pathTraced = doc.scene.integration.integrator == Integrator::PathTrace,
@@ -20,9 +20,7 @@ void applySampling(const CLI::App& cmd, bool fromFile, SceneDocument& doc) {
   if (given && !pathTraced)
     failUsage("--noise-target: the ray marcher takes --spp passes everywhere; the noise target is for "
               "--integrator pathtrace");
-  if (!pathTraced || doc.scene.debug != DebugView::None || fromFile || given || cmd.count("--spp") ||
-      cmd.get_name() == "view")
-    return;
+  if (!pathTraced || doc.scene.debug != DebugView::None || fromFile || given || cmd.count("--spp")) return;
   f.noiseTarget = kDefaultNoiseTarget;
   f.samplesPerPixel = kDefaultPathTracedPasses;
   logNote(strCat("path tracing each tile until its noise is at most ", kDefaultNoiseTarget, "/255 (at most ",

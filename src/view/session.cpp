@@ -133,7 +133,8 @@ Session::Snapshot Session::snapshot() const {
 Session::Wait Session::waitSnapshot(uint64_t id, int timeoutMs, Snapshot& out) const {
   std::unique_lock<std::mutex> lock(mutex_);
   auto complete = [&] {
-    return snapshot_.image && snapshot_.request == id && snapshot_.passes >= snapshot_.targetPasses;
+    return snapshot_.image && snapshot_.request == id &&
+           (snapshot_.final || snapshot_.passes >= snapshot_.targetPasses);
   };
   if (id == 0 || id > newest_) return Wait::Unknown;
   std::optional<Wait> answer;
@@ -242,6 +243,10 @@ void Session::serve(const Request& request) {
     const RenderStats& after = view.buffer().stats();
     info.passes = view.passes();
     info.final = view.complete() && !everyLevel;
+    if (info.final && NoiseRounds::applies(request.doc.scene, frame))
+      info.data +=
+          strCat(info.data.empty() ? "" : "; ", "noise target ", frame.noiseTarget,
+                 "/255 reached: ", std::round(view.buffer().meanPasses() * 10) / 10, " samples per pixel on average");
     info.renderSeconds = after.seconds - before.seconds;
     info.samples = after.samples - before.samples;
     info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
@@ -291,6 +296,7 @@ void Session::publish(const Request& request, const Image& rendered, FrameInfo i
     snapshot_.request = request.id;
     snapshot_.passes = info.passes;
     snapshot_.targetPasses = info.targetPasses;
+    snapshot_.final = info.final;
     snapshot_.background = scene.background;
     snapshot_.keepAlpha = scene.keepAlpha;
   }

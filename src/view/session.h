@@ -55,6 +55,7 @@ public:
     std::shared_ptr<const Image> image;
     uint64_t request = 0;
     int passes = 0, targetPasses = 0;
+    bool final = false; ///< the request's last frame (a noise target may end it below targetPasses)
     vec3f background{0.f};
     bool keepAlpha = false;
   };

@@ -78,6 +78,22 @@ def test_drafts_come_first_and_refinement_adds_passes(start_viewer):
     assert headers.get("X-Exabricks-Request") != str(request)
 
 
+def test_a_path_traced_view_refines_to_its_noise_target_and_equals_the_command_line(start_viewer, cli, tmp_path):
+    # --integrator pathtrace without --spp: rounds of the tiles above 2/255 until none is; the
+    # last frame says so, and the picture is the command line's of the same scene.
+    v = start_viewer("--integrator", "pathtrace", "--size", "48x40")
+    doc = v.info()["document"]
+    assert doc["frame"]["noise_target"] == 2 and doc["frame"]["samples_per_pixel"] == 1024
+    request = v.render(doc)
+    frames, _ = v.wait_final(request)
+    final = frames[-1]
+    assert "noise target 2/255 reached" in final.get("data", ""), final
+    refined = [f["passes"] for f in frames if f["request"] == request and not f["draft"]]
+    assert refined == sorted(refined) and len(refined) >= 16
+    status, png, _ = v.request("GET", "/api/snapshot.png?request=%d" % request)
+    assert status == 200 and png == cli_png(cli, tmp_path, doc)
+
+
 def test_a_newer_request_supersedes_the_one_in_flight(start_viewer):
     v = start_viewer()
     slow = v.render(small_scene(v, width=256, height=256, samples_per_pixel=200))
