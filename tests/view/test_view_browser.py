@@ -415,6 +415,12 @@ def test_the_sun_and_the_environment_from_the_page_equal_the_command_line(start_
     wait_for(browser, lambda: json.loads(v.request("GET", "/api/scene")[1])["frame"]["samples_per_pixel"] == 1024,
              30, "1024 samples per pixel")
     assert browser.find_element(By.ID, "spp-out").text == "1024"
+    # The noise target's box (path tracing only): each tile refines to it, the slider its most.
+    box = browser.find_element(By.CSS_SELECTOR, "input[data-setting='frame.noise_target']")
+    assert box.is_displayed() and box.get_attribute("max") == "255"
+    browser.execute_script("const e = arguments[0]; e.value = '3'; e.dispatchEvent(new Event('change'));", box)
+    wait_for(browser, lambda: json.loads(v.request("GET", "/api/scene")[1])["frame"]["noise_target"] == 3,
+             30, "a noise target of 3/255")
 
 
 def test_a_loaded_scene_keeps_every_described_key(start_viewer, browser, scene_example, tmp_path, artifacts):
