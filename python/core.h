@@ -18,13 +18,14 @@ namespace exa::pymod {
 
 /// A built model, shared by every renderer made from it (they keep it alive).
 struct Dataset {
-  std::shared_ptr<const Model> model; ///< a step held in parts: its skeleton (no cells)
+  std::shared_ptr<const Model> model; ///< a step held in parts: its coarse levels (`coarse`), else its skeleton
   DatasetInfo info;                   ///< computed once, shared by its renderers, defaults and warnings
   std::string name;
   double loadSeconds = 0;
   /// A step larger than its memory budget, held in parts (null: `model` holds it whole). Its
   /// parts are read as renders and samples need them; one thread at a time uses it.
   std::shared_ptr<StreamedStep> streamed;
+  bool coarse = false; ///< held in parts, `model` holds its coarse levels: drafts come from them
   /// The whole step's cell bounds (lattice).
   box3i cellBounds() const { return streamed ? streamed->survey().cellBounds : model->cellBounds(); }
   /// The input read (empty: the embedded dataset, or a dataset made from arrays).

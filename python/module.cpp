@@ -18,6 +18,7 @@
 #include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene_vocabulary.h"
+#include "exabricks/workflows/coarse_first.h"
 #include "exabricks/workflows/progressive.h"
 
 #include "core.h"
@@ -71,18 +72,22 @@ std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::st
       fail("memory_budget: '", memoryBudget, "' is not a size (e.g. 512M, 2G, or a number of bytes)");
     if (!box.empty()) fail("memory_budget and box: choose one (a box already reads only its cells)");
     std::shared_ptr<StreamedStep> step;
+    std::optional<CoarseLevels> coarse;
     {
       py::gil_scoped_release release;
-      // Room for a 1024² frame of a few passes beside the parts.
-      MemoryPlan plan = planMemory(path, o, budget, streamedFrameBytes(1024, 1024, 4));
-      if (plan.streamed()) {
-        step = std::make_shared<StreamedStep>(path, o, std::move(plan));
+      // Room for a 1024² frame of a few passes beside the coarse levels that drafts come from
+      // (where the format reads them alone) and the parts.
+      const uint64_t frameBytes = streamedFrameBytes(1024, 1024, 4);
+      if (const std::optional<CoarseFirst> c = coarseBesideParts(path, o, budget, frameBytes, 0, "a Scene")) {
+        if (c->level > 0) coarse = loadCoarseLevels(path, o, *c);
+        step = std::make_shared<StreamedStep>(path, o, planMemory(path, o, budget, frameBytes));
         step->survey();
       }
     }
     if (step) {
       auto d = std::make_shared<Dataset>();
-      d->model = std::make_shared<const Model>(step->skeleton());
+      d->model = coarse ? coarse->model : std::make_shared<const Model>(step->skeleton());
+      d->coarse = coarse.has_value();
       d->info = step->survey().dataset;
       d->name = path.empty() ? kDefaultDatasetName : path;
       d->path = path;

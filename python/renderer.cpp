@@ -77,6 +77,10 @@ public:
                        exactSceneJson(documentOf(doc.scene)) == exactSceneJson(documentOf(streamedScene_)) &&
                        doc.scene.meshes.empty();
       streamedScene_ = doc.scene;
+      if (dataset_->coarse) { // drafts from the coarse levels
+        py::gil_scoped_release release;
+        u = view_.showScene(doc.scene);
+      }
     } else {
       // Any change of the scene starts the accumulation over.
       py::gil_scoped_release release;
@@ -121,7 +125,7 @@ public:
   /// cancelled; Ctrl-C cancels as in render().
   py::object renderDraft(const std::string& frameJson, double budget) {
     if (!(budget >= 0.0) || !std::isfinite(budget)) fail("budget must be a number of seconds >= 0, not ", budget);
-    if (dataset_->streamed) return renderStreamedDraft(parseFrame(frameJson));
+    if (dataset_->streamed && !dataset_->coarse) return renderStreamedDraft(parseFrame(frameJson));
     view_.showFrame(parseFrame(frameJson)); // a change starts the accumulation over
     const Frame draft = view_.draftFrame();
     const int divisor = view_.draftDivisor();
@@ -208,6 +212,7 @@ public:
       d["parts"] = dataset_->streamed->parts();
       d["parts_read"] = dataset_->streamed->partsRead();
       d["regions"] = dataset_->streamed->survey().regions;
+      d["drafts"] = dataset_->coarse ? "coarse levels" : "parts";
       return d;
     }
     d["visible_regions"] = renderer_.visibleRegions();

@@ -7,6 +7,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
 #include "exabricks/render/renderer.h"
+#include "exabricks/workflows/coarse_first.h"
 #include "exabricks/workflows/series.h"
 #include "exabricks/workflows/streamed.h"
 
@@ -84,17 +85,10 @@ FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& in
   FirstStep f;
   if (steps.size() <= 1 && coarseFirst > 0) f.coarse = coarseFirstLevel(input, coarseFirst);
   if (f.coarse.level > 0) {
-    // The coarse levels first: a plotfile stores every level's values, so cells 2^level wide and
-    // wider are leaves where the finer levels are not read. The dataset's values are the whole
-    // step's where its metadata holds them (finest level; AMReX value ranges per box).
-    LoadOptions coarse = lo;
-    coarse.finestLevel = f.coarse.level;
-    f.model = std::make_shared<const Model>(loadModel(input, coarse));
-    const DatasetInfo own = DatasetInfo::of(*f.model);
-    std::vector<range1f> ranges = own.valueRanges;
-    for (size_t k = 0; k < ranges.size(); ++k)
-      if (const std::optional<range1f> r = fieldRangeFromMetadata(input, f.model->fieldNames[k])) ranges[k] = *r;
-    f.dataset = DatasetInfo::from(f.coarse.finestLevel, f.model->cellBounds(), f.model->world.scale, ranges);
+    // The coarse levels first: a plotfile stores every level's values.
+    CoarseLevels levels = loadCoarseLevels(input, lo, f.coarse);
+    f.model = std::move(levels.model);
+    f.dataset = std::move(levels.dataset);
     logNote(strCat("showing the coarse levels first (cells ", 1 << f.coarse.level, " finest cells wide and wider, ",
                    std::llround(f.coarse.coarseCells), " of ", std::llround(f.coarse.cells),
                    " cells in boxes); every level follows"));
@@ -132,69 +126,28 @@ uint64_t viewerFrameBytes(const Frame& frame) {
   return streamedFrameBytes(frame.width, frame.height, frame.samplesPerPixel) + pixels * 2 * (sizeof(vec4f) + 4);
 }
 
-/// The most cells the viewer's coarse levels may hold under `budget`: half of what the budget
-/// leaves beside the process (`fixedBytes`), or fewer when --coarse-first (`given` > 0) says so.
-double coarseRoom(uint64_t budget, uint64_t fixedBytes, uint64_t bytesPerCell, double given) {
-  const double room = (double(budget) - double(fixedBytes)) / 2 / double(bytesPerCell);
-  return given > 0 ? std::min(given, room) : room;
-}
-
-/// The smallest budget under which the viewer holds the coarse levels coarseRoom chooses and,
-/// beside them, the largest part of every level, as `refused` (a refusal of the parts alone)
-/// sizes the process and that part. Candidates: for each coarse choice, the budget that holds
-/// it beside the part and the one that leaves the part its half (always enough).
-uint64_t viewerSmallestBudget(const std::string& input, const BudgetTooSmall& refused, double given) {
-  const double fixed = double(refused.fixedBytes), part = double(refused.smallestPartBytes);
-  const double perCell = double(refused.bytesPerCell);
-  double best = std::numeric_limits<double>::infinity();
-  for (const CoarseFirst& choice : coarseFirstChoices(input)) {
-    if (choice.level == 0) continue;
-    const double coarse = choice.coarseCells * perCell;
-    for (double budget : {fixed + std::max(2 * coarse, coarse + part), fixed + 2 * std::max(coarse, part)}) {
-      const CoarseFirst chosen =
-          coarseFirstLevel(input, coarseRoom(uint64_t(budget), refused.fixedBytes, refused.bytesPerCell, given));
-      if (chosen.level > 0 && fixed + chosen.coarseCells * perCell + part <= budget) best = std::min(best, budget);
-    }
-  }
-  if (!std::isfinite(best)) return refused.smallest;
-  const uint64_t mebibyte = uint64_t(1) << 20;
-  return (uint64_t(std::ceil(best)) + mebibyte - 1) / mebibyte * mebibyte;
-}
-
 /// Under --memory-budget, or for a step too large for the memory available: 0 when the step fits
-/// (it is viewed as without a budget); else the budget, with `coarseFirst` lowered to the cells
-/// coarseRoom gives: the view shows the coarse levels resident and draws every level in parts
-/// beside them. Only inputs whose coarse levels can be read alone (AMReX plotfiles) are viewed in
-/// parts. A budget too small for both is refused naming the smallest that holds both.
+/// (it is viewed as without a budget); else the budget, with `coarseFirst` set to the cells of
+/// the coarse levels the view holds resident (coarseBesideParts) while it draws every level in
+/// parts beside them. Only inputs whose coarse levels can be read alone (AMReX plotfiles) are
+/// viewed in parts. A budget too small for both is refused naming the smallest that holds both.
 uint64_t viewBudget(const InputOptions& in, const std::string& input, const LoadOptions& lo, uint64_t frameBytes,
                     double& coarseFirst) {
   const std::optional<uint64_t> budget = memoryBudgetFor(in, input, lo, frameBytes, false);
   if (!budget) return 0;
-  const double given = coarseFirst;
+  std::optional<CoarseFirst> coarse;
   try {
-    const MemoryPlan whole = planMemory(input, lo, *budget, frameBytes);
-    if (!whole.streamed()) return 0;
-    coarseFirst = coarseRoom(*budget, whole.fixedBytes, whole.bytesPerCell, given);
-    const CoarseFirst coarse = coarseFirstLevel(input, coarseFirst);
-    if (coarse.level == 0)
-      failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
-                ": the viewer shows such a step from its coarse levels while it draws every level in parts, and "
-                "only an AMReX plotfile's coarse levels can be read alone; `render` and `movie` draw it with "
-                "--memory-budget");
-    // The parts beside the coarse levels.
-    const uint64_t coarseBytes = uint64_t(std::ceil(coarse.coarseCells)) * whole.bytesPerCell;
-    planMemory(input, lo, *budget > coarseBytes ? *budget - coarseBytes : 0, frameBytes);
+    coarse = coarseBesideParts(input, lo, *budget, frameBytes, coarseFirst, "the viewer");
   } catch (const BudgetTooSmall& refused) {
-    // The refusal's figures after its "(N cells): ", said of the user's budget.
-    const std::string& said = refused.situation;
-    const size_t figures = said.find(" cells): ");
-    failUsage(BudgetTooSmall(strCat("a memory budget of ", formatBytes(*budget), " cannot hold ", input,
-                                    " for the viewer", figures == std::string::npos ? "" : said.substr(figures + 7)),
-                             viewerSmallestBudget(input, refused, given), refused.fixedBytes, refused.smallestPartBytes,
-                             refused.bytesPerCell,
-                             "with the coarse levels the viewer holds for its drafts beside the parts")
-                  .what());
+    failUsage(refused.what());
   }
+  if (!coarse) return 0;
+  if (coarse->level == 0)
+    failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
+              ": the viewer shows such a step from its coarse levels while it draws every level in parts, and "
+              "only an AMReX plotfile's coarse levels can be read alone; `render` and `movie` draw it with "
+              "--memory-budget");
+  coarseFirst = coarse->coarseCells;
   return *budget;
 }
 

@@ -72,3 +72,33 @@ def test_bad_budgets_are_refused(step):
     for bad in ("lots", "0", "-2G"):
         with pytest.raises(Exception, match="not a size"):
             exabricks.load(step, memory_budget=bad)
+
+
+def test_a_plotfile_in_parts_drafts_from_its_coarse_levels():
+    # An AMReX plotfile reads its coarse levels alone: under a budget that holds them beside the
+    # parts, drafts come from them without reading a part, and the render from every level equals
+    # the whole step's.
+    import os
+    from pathlib import Path
+    data = Path(os.environ.get("EXABRICKS_DATA", Path(__file__).resolve().parents[3] / "shared" / "data"))
+    drop = data / "amrex" / "advection_3d" / "plt_drop"
+    if not drop.exists():
+        pytest.skip("shared sample %s is absent (set EXABRICKS_DATA to the folder of shared samples)" % drop)
+    with pytest.raises(Exception, match="with the coarse levels a Scene holds for drafts") as refused:
+        exabricks.load(drop, memory_budget="1M")
+    text = str(refused.value)
+    smallest = int(text.split("the smallest budget that works is")[1].split("(--memory-budget ")[1].split("M)")[0])
+    whole_budget = int(text.split("held whole: --memory-budget ")[1].split("M)")[0])
+    parted = exabricks.load(drop, memory_budget="%dM" % (smallest + (whole_budget - smallest) * 2 // 5))
+    assert parted.memory is not None and parted.memory["parts"] > 1, parted.memory
+    whole = exabricks.load(drop)
+    a, b = exabricks.Scene(whole), exabricks.Scene(parted)
+    assert a.transfer_function.to_dict() == b.transfer_function.to_dict()
+    b.camera = a.camera
+    read = b.stats().get("parts_read", 0)
+    draft = b.render_draft(96, 80)
+    assert draft.shape[2] == 4 and draft[..., 3].max() > 0
+    assert b.stats()["drafts"] == "coarse levels" and b.stats()["parts_read"] == read
+    one, parts = a.render(96, 80), b.render(96, 80)
+    d = np.abs(one - parts) * 255
+    assert d.mean() <= 0.5 and (d <= 2).mean() >= 0.999, (d.mean(), d.max())

@@ -1,0 +1,79 @@
+#include "exabricks/workflows/coarse_first.h"
+
+#include "exabricks/core/text.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace exa {
+
+double coarseRoom(uint64_t budget, uint64_t fixedBytes, uint64_t bytesPerCell, double maxCells) {
+  const double room = (double(budget) - double(fixedBytes)) / 2 / double(bytesPerCell);
+  return maxCells > 0 ? std::min(maxCells, room) : room;
+}
+
+namespace {
+
+/// The smallest budget under which the coarse levels coarseRoom chooses and, beside them, the
+/// largest part of every level fit, as `refused` (a refusal of the parts alone) sizes the process
+/// and that part. Candidates: for each coarse choice, the budget that holds it beside the part
+/// and the one that leaves the part its half (always enough).
+uint64_t smallestBesideCoarse(const std::string& input, const BudgetTooSmall& refused, double maxCoarseCells) {
+  const double fixed = double(refused.fixedBytes), part = double(refused.smallestPartBytes);
+  const double perCell = double(refused.bytesPerCell);
+  double best = std::numeric_limits<double>::infinity();
+  for (const CoarseFirst& choice : coarseFirstChoices(input)) {
+    if (choice.level == 0) continue;
+    const double coarse = choice.coarseCells * perCell;
+    for (double budget : {fixed + std::max(2 * coarse, coarse + part), fixed + 2 * std::max(coarse, part)}) {
+      const CoarseFirst chosen = coarseFirstLevel(
+          input, coarseRoom(uint64_t(budget), refused.fixedBytes, refused.bytesPerCell, maxCoarseCells));
+      if (chosen.level > 0 && fixed + chosen.coarseCells * perCell + part <= budget) best = std::min(best, budget);
+    }
+  }
+  if (!std::isfinite(best)) return refused.smallest;
+  const uint64_t mebibyte = uint64_t(1) << 20;
+  return (uint64_t(std::ceil(best)) + mebibyte - 1) / mebibyte * mebibyte;
+}
+
+} // namespace
+
+std::optional<CoarseFirst> coarseBesideParts(const std::string& input, const LoadOptions& options, uint64_t budget,
+                                             uint64_t frameBytes, double maxCoarseCells, const std::string& who) {
+  try {
+    const MemoryPlan whole = planMemory(input, options, budget, frameBytes);
+    if (!whole.streamed()) return std::nullopt;
+    const CoarseFirst coarse =
+        coarseFirstLevel(input, coarseRoom(budget, whole.fixedBytes, whole.bytesPerCell, maxCoarseCells));
+    if (coarse.level == 0) return coarse;
+    // The parts beside the coarse levels.
+    const uint64_t coarseBytes = uint64_t(std::ceil(coarse.coarseCells)) * whole.bytesPerCell;
+    planMemory(input, options, budget > coarseBytes ? budget - coarseBytes : 0, frameBytes);
+    return coarse;
+  } catch (const BudgetTooSmall& refused) {
+    if (coarseFirstChoices(input).size() < 2) throw; // no coarse levels to hold: the parts' refusal
+    // The refusal's figures after its "(N cells): ", said of the budget given.
+    const std::string& said = refused.situation;
+    const size_t figures = said.find(" cells): ");
+    throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ", input, " for ", who,
+                                figures == std::string::npos ? "" : said.substr(figures + 7)),
+                         smallestBesideCoarse(input, refused, maxCoarseCells), refused.fixedBytes,
+                         refused.smallestPartBytes, refused.bytesPerCell,
+                         strCat("with the coarse levels ", who, " holds for drafts beside the parts"));
+  }
+}
+
+CoarseLevels loadCoarseLevels(const std::string& input, const LoadOptions& options, const CoarseFirst& coarse) {
+  LoadOptions o = options;
+  o.finestLevel = coarse.level;
+  CoarseLevels c;
+  c.model = std::make_shared<const Model>(loadModel(input, o));
+  std::vector<range1f> ranges = DatasetInfo::of(*c.model).valueRanges;
+  for (size_t k = 0; k < ranges.size(); ++k)
+    if (const std::optional<range1f> r = fieldRangeFromMetadata(input, c.model->fieldNames[k])) ranges[k] = *r;
+  c.dataset = DatasetInfo::from(coarse.finestLevel, c.model->cellBounds(), c.model->world.scale, ranges);
+  return c;
+}
+
+} // namespace exa
