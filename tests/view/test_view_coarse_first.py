@@ -78,36 +78,47 @@ def test_finer_levels_that_cannot_be_read_leave_the_coarse_view_running(start_vi
     assert "could not be read" in v.stderr_path.read_text()
 
 
-def budget_between_smallest_and_whole(refusal):
-    """A budget in MiB, two fifths of the way from the smallest budget a refusal names to the one
-    that holds the step whole: it cannot hold the step whole but holds its parts."""
+def budgets_named(refusal):
+    """The smallest budget a refusal names and the one that holds the step whole, in MiB."""
     smallest = re.search(r"the smallest budget that works is .*--memory-budget (\d+)M", refusal)
     whole = re.search(r"held whole: --memory-budget (\d+)M", refusal)
     assert smallest and whole, refusal
     low, high = int(smallest.group(1)), int(whole.group(1))
     assert low < high, refusal
-    return low + (high - low) * 2 // 5
+    return low, high
 
 
-def start_between_smallest_and_whole(start_viewer, cli, args):
-    """A viewer under a budget between the smallest that works and the whole step's. What the
+def start_in_parts(start_viewer, cli, args):
+    """A viewer under a budget that holds plt_drop's parts but not the whole step. What the
     process needs before any data differs between machines and builds (the sanitizers' shadow
     memory alone takes from 120 to 250 MiB), so the viewer is asked: refused a budget of 1 MiB, it
-    names both. Under the sanitizers the process grows by what their quarantine keeps of memory
-    already freed (the first picture's automatic choices read the coarse levels), which no
-    estimate foresees: there a refusal's figures are taken for another try."""
+    names the smallest budget that works and the one that holds the step whole, and the budget is
+    two fifths of the way between them. Under the sanitizers the process's size moves by what
+    their quarantine keeps of freed memory, which no estimate foresees: there the budget is the
+    smallest named, a refusal's figures are taken for another try, and a budget under which the
+    step was held whole is lowered."""
+    sanitized = bool(os.environ.get("EXABRICKS_SANITIZED"))
     run = subprocess.run([cli, "view", "--port", "0"] + args + ["--memory-budget", "1M"],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode != 0, run.stderr
-    budget = budget_between_smallest_and_whole(run.stderr)
-    tries = 4 if os.environ.get("EXABRICKS_SANITIZED") else 1
+    low, high = budgets_named(run.stderr)
+    budget = low if sanitized else low + (high - low) * 2 // 5
+    tries = 5 if sanitized else 1
     for attempt in range(tries):
+        last = attempt + 1 == tries
         try:
-            return start_viewer(*args, "--memory-budget", "%dM" % budget), budget
+            v = start_viewer(*args, "--memory-budget", "%dM" % budget)
         except AssertionError as refused:
-            if attempt + 1 == tries:
+            if last:
                 raise
-            budget = budget_between_smallest_and_whole(str(refused))
+            low, high = budgets_named(str(refused))
+            budget = low
+            continue
+        if last or "drawn from every level in" in v.stderr_path.read_text():
+            return v, budget
+        v.stop()  # held whole: the process was smaller than when it was asked
+        budget = max(1, budget - (high - low) // 2)
+    raise AssertionError("unreachable")
 
 
 def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_in_parts(start_viewer, cli, tmp_path):
@@ -118,7 +129,7 @@ def test_a_step_over_the_memory_budget_shows_its_coarse_levels_then_every_level_
     image = pytest.importorskip("PIL.Image")
     # The coarse levels held are the same at every budget tried (the coarsest, 884,736 cells).
     args = [str(drop()), "--size", "96x80", "--spp", "2", "--coarse-first", "1000000"]
-    v, budget = start_between_smallest_and_whole(start_viewer, cli, args)
+    v, budget = start_in_parts(start_viewer, cli, args)
     frames = frames_until(v, lambda h, i: h["final"])
     assert "coarse levels" in frames[0].get("data", ""), frames[0]
     assert "every level, drawn in" in frames[-1].get("data", ""), frames[-1]
