@@ -53,7 +53,7 @@ struct RenderReport {
 /// The samples per pixel a frame took, averaged; said where a noise target chose them.
 double noteSamplesTaken(const Scene& scene, const Frame& frame, const FrameBuffer& buffer) {
   const double mean = buffer.meanPasses();
-  if (frame.noiseTarget > 0.f && scene.integration.integrator == Integrator::PathTrace)
+  if (NoiseRounds::applies(scene, frame))
     logNote(strCat("noise target ", frame.noiseTarget, "/255: ", std::round(mean * 10) / 10,
                    " samples per pixel on average (", frame.samplesPerPixel, " at most)"));
   return mean;

@@ -16,13 +16,10 @@
 #ifdef EXABRICKS_HAVE_VIEWER
 #include "view/server.h"
 
-#include <algorithm>
-#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
-#include <limits>
 #include <pthread.h>
 #include <thread>
 #include <unistd.h>
