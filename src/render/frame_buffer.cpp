@@ -87,28 +87,25 @@ float FrameBuffer::tileNoise(int tile, const vec3f& background) const {
     const float mean = sum * inv;
     return std::sqrt(std::max(0.f, squares * inv - mean * mean) / float(n - 1));
   };
-  const int tx = tile % tilesX_, ty = tile / tilesX_;
   double squared = 0;
   int count = 0;
-  for (int y = ty * kRenderTile; y < std::min(height_, (ty + 1) * kRenderTile); ++y)
-    for (int x = tx * kRenderTile; x < std::min(width_, (tx + 1) * kRenderTile); ++x) {
-      const size_t i = size_t(y) * size_t(width_) + size_t(x);
-      const vec4f& s = sum_[i];
-      const vec4f& q = squares_[i];
-      const float alphaError = error(s.w, q.w);
-      const float sums[3] = {s.x, s.y, s.z}, squares[3] = {q.x, q.y, q.z},
-                  behind[3] = {background.x, background.y, background.z};
-      for (int c = 0; c < 3; ++c) {
-        // Over the background: colour + (1 - alpha) background; its error at most the sum of both.
-        const float shown = sums[c] * inv + (1.f - s.w * inv) * behind[c];
-        const float e = error(sums[c], squares[c]) + behind[c] * alphaError;
-        const float steps =
-            (linearToSrgb(std::clamp(shown + e, 0.f, 1.f)) - linearToSrgb(std::clamp(shown - e, 0.f, 1.f))) * 0.5f *
-            255.f;
-        squared += double(steps) * double(steps);
-        ++count;
-      }
+  forTilePixels(tile, [&](int, int, size_t i) {
+    const vec4f& s = sum_[i];
+    const vec4f& q = squares_[i];
+    const float alphaError = error(s.w, q.w);
+    const float sums[3] = {s.x, s.y, s.z}, squares[3] = {q.x, q.y, q.z},
+                behind[3] = {background.x, background.y, background.z};
+    for (int c = 0; c < 3; ++c) {
+      // Over the background: colour + (1 - alpha) background; its error at most the sum of both.
+      const float shown = sums[c] * inv + (1.f - s.w * inv) * behind[c];
+      const float e = error(sums[c], squares[c]) + behind[c] * alphaError;
+      const float steps =
+          (linearToSrgb(std::clamp(shown + e, 0.f, 1.f)) - linearToSrgb(std::clamp(shown - e, 0.f, 1.f))) * 0.5f *
+          255.f;
+      squared += double(steps) * double(steps);
+      ++count;
     }
+  });
   return count ? float(std::sqrt(squared / count)) : 0.f;
 }
 

@@ -236,14 +236,6 @@ struct Renderer::Impl {
     return !cancelled.load();
   }
 
-  /// Calls f(x, y, pixel index) for the pixels of `tile`.
-  template <typename F> static void forTilePixels(const FrameBuffer& buffer, const Frame& frame, int tile, F&& f) {
-    const int tx = tile % buffer.tilesX_, ty = tile / buffer.tilesX_;
-    for (int y = ty * kRenderTile; y < std::min(frame.height, (ty + 1) * kRenderTile); ++y)
-      for (int x = tx * kRenderTile; x < std::min(frame.width, (tx + 1) * kRenderTile); ++x)
-        f(x, y, size_t(y) * size_t(frame.width) + size_t(x));
-  }
-
   /// A pass on CPU threads: the ray program per pixel (ray-marched or path-traced, or a debug view).
   bool cpuPass(const Frame& frame, FrameBuffer& buffer, const PassControl& control) const {
     const PassSetup ps = passSetup(frame);
@@ -251,7 +243,7 @@ struct Renderer::Impl {
     const bool pathTraced = scene.integration.integrator == Integrator::PathTrace && scene.debug == DebugView::None;
     buffer.stepsView_ = steps;
     return runPass(buffer, control, RenderStats(), [&](int tile, Counters& c) {
-      forTilePixels(buffer, frame, tile, [&](int x, int y, size_t p) {
+      buffer.forTilePixels(tile, [&](int x, int y, size_t p) {
         RayCounts rc;
         const vec4f acc = pathTraced ? tracePathPixel(x, y, frame, ps, rc) : tracePixel(x, y, frame, ps, c, rc);
         addCounts(c, rc);
@@ -279,7 +271,7 @@ struct Renderer::Impl {
     whole.aoRays = counts.aoRays;
     whole.deviceSeconds = counts.kernelSeconds;
     return runPass(buffer, control, whole, [&](int tile, Counters&) {
-      forTilePixels(buffer, frame, tile, [&](int, int, size_t p) { buffer.add(p, colors[p]); });
+      buffer.forTilePixels(tile, [&](int, int, size_t p) { buffer.add(p, colors[p]); });
     });
   }
 };

@@ -4,6 +4,7 @@
 
 #include "exabricks/core/image.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -48,6 +49,13 @@ public:
   /// Passes added to a tile, and the fewest over all tiles (complete passes).
   uint32_t tilePasses(int tile) const { return tilePasses_[size_t(tile)]; }
   uint32_t passes() const;
+  /// Calls f(x, y, pixel index) for the pixels of `tile`, row by row.
+  template <typename F> void forTilePixels(int tile, F&& f) const {
+    const int tx = tile % tilesX_, ty = tile / tilesX_;
+    for (int y = ty * kRenderTile; y < std::min(height_, (ty + 1) * kRenderTile); ++y)
+      for (int x = tx * kRenderTile; x < std::min(width_, (tx + 1) * kRenderTile); ++x)
+        f(x, y, size_t(y) * size_t(width_) + size_t(x));
+  }
   /// Passes per pixel, averaged over the pixels of the tiles that hold any.
   double meanPasses() const;
   /// The noise a tile's passes estimate in its 8-bit sRGB image composited over `background`
