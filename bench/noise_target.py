@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
-"""Path tracing to a noise target against a fixed sample count, side by side in one run: for each
-dataset, the default ray-marched frame, the default path-traced frame (passes to the noise
-target, tile by tile) and a path-traced frame that spends the same mean samples per pixel on every
-pixel. The noise of each path-traced picture is measured as the RMS difference of two seeds'
-8-bit images / sqrt(2). Prints times, samples, noise and ratios. Not a test.
+"""The default path-traced picture against the ray-marched one, side by side in one run: for each
+dataset, the default ray-marched frame, the default path-traced frame (denoised, passes to the
+noise target of the denoised picture, tile by tile) and, unless --quick, the same target without
+the denoiser. The noise of each path-traced picture is the RMS difference of two seeds' 8-bit
+images / sqrt(2); with --reference N, the bias of the default picture is its low frequencies (a
+5x5 box) against an N-sample undenoised render (mean and 99th percentile of the absolute
+difference). Prints times, samples, noise and ratios. Not a test.
 
-usage: bench/noise_target.py EXABRICKS [--data DIR] [--size 512] [--target 2] [--work DIR]
+usage: bench/noise_target.py EXABRICKS [--data DIR] [--size 512] [--target 2] [--quick]
+                             [--reference 2048] [--work DIR]
 
 --data is $EXABRICKS_DATA (default /work/shared/data); a generated cosmology-like step (1M cells)
 is always measured; shared samples that are absent are skipped with a note. Needs numpy and PIL.
@@ -42,18 +45,31 @@ def noise(a, b):
     return float(np.sqrt(((pixels(a) - pixels(b)) ** 2).mean()) / np.sqrt(2.0))
 
 
+def box5(a):
+    from numpy.lib.stride_tricks import sliding_window_view
+    return sliding_window_view(a, (5, 5), axis=(0, 1)).mean(axis=(-1, -2))
+
+
+def bias(image, reference):
+    d = np.abs(box5(pixels(image)) - box5(pixels(reference)))
+    return float(d.mean()), float(np.percentile(d, 99))
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("exe")
     p.add_argument("--data", default=os.environ.get("EXABRICKS_DATA", "/work/shared/data"))
     p.add_argument("--size", type=int, default=512)
     p.add_argument("--target", type=float, default=2.0)
+    p.add_argument("--quick", action="store_true", help="skip the undenoised target")
+    p.add_argument("--reference", type=int, default=0, help="samples of the undenoised reference (0: none)")
     p.add_argument("--work", default="/tmp/noise-target-bench")
     a = p.parse_args()
     os.makedirs(a.work, exist_ok=True)
     size = ["--size", "%dx%d" % (a.size, a.size)]
-    print("%-12s %9s %9s %9s %8s %8s %9s %8s %8s" % ("dataset", "march s", "target s", "mean spp", "noise",
-                                                      "x march", "fixed s", "noise", "x march"))
+    print("%-12s %8s | %8s %8s %6s %7s | %8s %8s %6s %7s | %s" % (
+        "dataset", "march s", "denoised", "mean spp", "noise", "x march", "undenois", "mean spp", "noise", "x march",
+        "bias mean / p99"))
     for name, rel, common, pt in CASES:
         if rel is None:
             path = os.path.join(a.work, "cosmic.cells")
@@ -67,16 +83,24 @@ def main():
         base = [path] + size + common
         w = lambda tag: os.path.join(a.work, "%s-%s.png" % (name.replace(" ", "_"), tag))
         march = render(a.exe, base, w("march"))
-        pathtraced = base + ["--integrator", "pathtrace"] + pt
-        t1 = render(a.exe, pathtraced + ["--noise-target", str(a.target), "--spp", "1024", "--seed", "1"], w("t1"))
-        render(a.exe, pathtraced + ["--noise-target", str(a.target), "--spp", "1024", "--seed", "2"], w("t2"))
-        spp = max(1, int(round(t1["mean_samples_per_pixel"])))
-        f1 = render(a.exe, pathtraced + ["--spp", str(spp), "--seed", "1"], w("f1"))
-        render(a.exe, pathtraced + ["--spp", str(spp), "--seed", "2"], w("f2"))
         m = march["frame_seconds"]
-        print("%-12s %9.2f %9.2f %9.1f %8.2f %8.1f %9.2f %8.2f %8.1f" % (
-            name, m, t1["frame_seconds"], t1["mean_samples_per_pixel"], noise(w("t1"), w("t2")),
-            t1["frame_seconds"] / m, f1["frame_seconds"], noise(w("f1"), w("f2")), f1["frame_seconds"] / m))
+        pathtraced = base + ["--integrator", "pathtrace"] + pt
+        target = ["--noise-target", str(a.target), "--spp", "1024"]
+        d1 = render(a.exe, pathtraced + target + ["--seed", "1"], w("d1"))
+        render(a.exe, pathtraced + target + ["--seed", "2"], w("d2"))
+        row = "%-12s %8.2f | %8.2f %8.1f %6.2f %7.1f |" % (
+            name, m, d1["frame_seconds"], d1["mean_samples_per_pixel"], noise(w("d1"), w("d2")), d1["frame_seconds"] / m)
+        if a.quick:
+            row += " %8s %8s %6s %7s |" % ("-", "-", "-", "-")
+        else:
+            u1 = render(a.exe, pathtraced + target + ["--denoise", "off", "--seed", "1"], w("u1"))
+            render(a.exe, pathtraced + target + ["--denoise", "off", "--seed", "2"], w("u2"))
+            row += " %8.2f %8.1f %6.2f %7.1f |" % (u1["frame_seconds"], u1["mean_samples_per_pixel"],
+                                                  noise(w("u1"), w("u2")), u1["frame_seconds"] / m)
+        if a.reference > 0:
+            render(a.exe, pathtraced + ["--spp", str(a.reference), "--denoise", "off", "--seed", "7"], w("ref"))
+            row += " %.2f / %.2f" % bias(w("d1"), w("ref"))
+        print(row)
         sys.stdout.flush()
 
 

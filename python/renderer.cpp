@@ -164,7 +164,7 @@ public:
       drawLegends(streamedScene_, streamedFrame_, *dataset_->model, dataset_->info, legendText(), img);
       return img;
     }
-    view_.buffer().resolve(img);
+    view_.resolve(img);
     drawLegends(view_.shown().scene, view_.shown().frame, *dataset_->model, dataset_->info, legendText(), img);
     return img;
   }

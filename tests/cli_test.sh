@@ -134,9 +134,16 @@ fails_with "--anisotropy 1 names the key" 'pathtrace.anisotropy" must be in (-1,
 fails_with "a negative sun" 'pathtrace.sun_intensity" must be a finite number >= 0' "$exe" render s.cells -o x.png --sun 0,0,-1,-3
 fails_with "a sun without intensity" "--sun expects dx,dy,dz,INTENSITY" "$exe" render s.cells -o x.png --sun 0,0,-1
 fails_with "an unknown integrator" "pathtrace" "$exe" render s.cells -o x.png --integrator photon
-# Path tracing passes to a noise target by default; --spp forces a count; a target needs the path tracer.
-check "path tracing by default: to a noise target, said once" bash -c "'$exe' render s.cells -o ptn.png --size 48x32 --integrator pathtrace --json 2>ptn.err > ptn.json && [ \$(grep -c 'until its noise is at most 2/255' ptn.err) -eq 1 ] && $py -c 'import json; j = json.load(open(\"ptn.json\")); assert j[\"noise_target\"] == 2 and j[\"samples_per_pixel\"] == 1024 and 16 <= j[\"mean_samples_per_pixel\"] < 1024, j'"
-check "--spp forces the count" bash -c "'$exe' render s.cells -o pts.png --size 48x32 --integrator pathtrace --spp 3 --json 2>/dev/null | $py -c 'import json,sys; j = json.load(sys.stdin); assert j[\"noise_target\"] == 0 and j[\"mean_samples_per_pixel\"] == 3, j'"
+# Path tracing is denoised and passes to a noise target by default; --spp forces a count;
+# --denoise off keeps the passes' mean; a target and the denoiser need the path tracer.
+check "path tracing by default: denoised, to a noise target, said once" bash -c "'$exe' render s.cells -o ptn.png --size 48x32 --integrator pathtrace --json 2>ptn.err > ptn.json && [ \$(grep -c \"until its denoised picture's noise is at most 2/255\" ptn.err) -eq 1 ] && $py -c 'import json; j = json.load(open(\"ptn.json\")); assert j[\"noise_target\"] == 2 and j[\"samples_per_pixel\"] == 1024 and 8 <= j[\"mean_samples_per_pixel\"] < 1024 and j[\"denoised\"] and j[\"denoise_seconds\"][\"guide\"] > 0, j'"
+check "--spp forces the count, still denoised" bash -c "'$exe' render s.cells -o pts.png --size 48x32 --integrator pathtrace --spp 3 --json 2>/dev/null | $py -c 'import json,sys; j = json.load(sys.stdin); assert j[\"noise_target\"] == 0 and j[\"mean_samples_per_pixel\"] == 3 and j[\"denoised\"], j'"
+check "--denoise off: the passes' mean" bash -c "'$exe' render s.cells -o ptu.png --size 48x32 --integrator pathtrace --spp 3 --denoise off --json 2>/dev/null | $py -c 'import json,sys; j = json.load(sys.stdin); assert not j[\"denoised\"], j' && ! cmp -s pts.png ptu.png"
+check "a denoised scene file reproduces the image" bash -c "'$exe' -q render s.cells -o ptd1.png --size 48x32 --integrator pathtrace --spp 4 --write-scene ptd.json && $py -c 'import json; assert json.load(open(\"ptd.json\"))[\"frame\"][\"denoise\"] is True' && '$exe' -q render s.cells --scene ptd.json -o ptd2.png && cmp ptd1.png ptd2.png"
+fails_with "the denoiser with the marcher" "the denoiser is for --integrator pathtrace" "$exe" render s.cells -o x.png --denoise on
+check "the denoiser with the marcher: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --denoise on
+fails_with "--denoise maybe" "must be true or false (on or off), not 'maybe'" "$exe" render s.cells -o x.png --integrator pathtrace --denoise maybe
+check "--denoise maybe: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --integrator pathtrace --denoise maybe
 check "--noise-target 0: exit 2, one line" one_usage_line "$exe" render s.cells -o x.png --integrator pathtrace --noise-target 0
 fails_with "a negative noise target" "--noise-target: \"frame.noise_target\" must be in [0, 255], not -1" "$exe" render s.cells -o x.png --integrator pathtrace --noise-target -1
 fails_with "a noise target with the marcher" "the noise target is for --integrator pathtrace" "$exe" render s.cells -o x.png --noise-target 1

@@ -4,7 +4,7 @@
 // server's description of the scene's structure.
 
 import { fillSelect } from './panel.js';
-import { showMessage, viewer } from './session.js';
+import { $, showMessage, viewer } from './session.js';
 import { requestRender } from './stream.js';
 
 /// Fills every select bound to a choice setting (data-setting="KEY") with the names the server's
@@ -48,6 +48,19 @@ export function syncSettingBoxes() {
   syncStructureInputs();
 }
 
+/// Path tracing chosen on the page samples as the command line's path tracer does unless the
+/// view already has a noise target: the server's defaults (a target, at most that many samples,
+/// denoised).
+function startPathTracing(integrator) {
+  const defaults = viewer.info.path_tracing_defaults;
+  if (integrator !== 'pathtrace' || !defaults || settingValue('frame.noise_target') > 0) return;
+  setSettingValue('frame.noise_target', defaults.noise_target);
+  setSettingValue('frame.samples_per_pixel', defaults.samples_per_pixel);
+  setSettingValue('frame.denoise', defaults.denoise);
+  $('spp').value = Math.round(Math.log2(defaults.samples_per_pixel));
+  $('spp-out').textContent = defaults.samples_per_pixel;
+}
+
 export function setupSettingBoxes() {
   for (const box of document.querySelectorAll('input[type=checkbox][data-setting]')) {
     const setting = viewer.vocabulary.find((s) => s.key === box.dataset.setting);
@@ -73,6 +86,7 @@ export function setupSettingBoxes() {
         return;
       }
       setSettingValue(input.dataset.setting, value);
+      if (input.dataset.setting === 'integration.integrator') startPathTracing(value);
       syncSettingBoxes();
       requestRender(false);
     });

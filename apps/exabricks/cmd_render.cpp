@@ -12,6 +12,7 @@
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
 #include "exabricks/render/defaults.h"
+#include "exabricks/render/denoise.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene_vocabulary.h"
 #include "exabricks/workflows/streamed.h"
@@ -46,6 +47,9 @@ struct RenderReport {
   SceneUpdate update;
   double loadSeconds = 0;
   double meanPasses = 0; ///< samples per pixel taken, averaged (below the count with a noise target)
+  Image image;           ///< the frame (on the root): the passes' mean, or denoised
+  bool denoised = false;
+  double guideSeconds = 0, filterSeconds = 0; ///< a denoised frame's guide and filter (in its seconds)
   bool dataParallel = false, part = false;
   std::vector<double> partCells, partRss; ///< per process, where several render
 };
@@ -59,12 +63,22 @@ double noteSamplesTaken(const Scene& scene, const Frame& frame, const FrameBuffe
   return mean;
 }
 
-/// Renders the frame into the buffer (samplesPerPixel passes, with its progress: Progress);
-/// with --stats, a warm-up and then --frames timed frames, their median kept.
-void renderTimed(const RenderCmdOptions& o, const Renderer& renderer, const Frame& frame, FrameBuffer& buffer,
+/// Renders the frame into the buffer (samplesPerPixel passes, with its progress: Progress) and
+/// its image into the report (denoised where the frame asks: the guide, the passes to the
+/// denoised picture's noise target, the filter, all in the frame's seconds); with --stats, a
+/// warm-up and then --frames timed frames, their median kept.
+void renderTimed(const RenderCmdOptions& o, Renderer& renderer, const Frame& frame, FrameBuffer& buffer,
                  bool dataParallel, const std::vector<int>& order, RenderReport& report) {
   const bool showProgress = logLevel() >= LogLevel::Warning;
+  const bool root = mpi::processes().root();
   auto renderFrame = [&]() {
+    Timer whole;
+    std::optional<DenoiseGuide> guide;
+    std::optional<TileNoiseEstimate> estimate;
+    if (!dataParallel && denoises(renderer.scene(), frame)) {
+      guide = renderDenoiseGuide(renderer, frame);
+      estimate = mpi::wholeImage(denoisedNoise(*guide, renderer.scene().background));
+    }
     buffer.clear();
     const uint64_t share = dataParallel ? 1 : uint64_t(mpi::processes().size);
     Progress progress("rendering",
@@ -75,13 +89,24 @@ void renderTimed(const RenderCmdOptions& o, const Renderer& renderer, const Fram
     if (dataParallel)
       mpi::renderFrameComposited(&renderer, frame, buffer, order, control);
     else
-      mpi::renderFrame(renderer, frame, buffer, control);
+      mpi::renderFrame(renderer, frame, buffer, control, estimate ? &*estimate : nullptr);
     progress.finish();
-    return buffer.stats();
+    RenderStats stats = buffer.stats();
+    report.denoised = guide.has_value();
+    if (guide) {
+      Timer filter;
+      if (root) report.image = denoise(buffer, *guide, renderer.scene().background);
+      report.guideSeconds = guide->seconds;
+      report.filterSeconds = filter.seconds();
+      stats.seconds = whole.seconds();
+    } else if (root) {
+      report.image = buffer.resolve();
+    }
+    return stats;
   };
   if (!o.stats) {
     report.stats = renderFrame();
-    if (mpi::processes().root()) report.meanPasses = noteSamplesTaken(renderer.scene(), frame, buffer);
+    if (root) report.meanPasses = noteSamplesTaken(renderer.scene(), frame, buffer);
     return;
   }
   renderFrame(); // warm-up, not counted
@@ -106,6 +131,8 @@ void printJson(const RenderCmdOptions& o, const Frame& frame, const Renderer& re
   j["samples_per_pixel"] = frame.samplesPerPixel;
   j["noise_target"] = frame.noiseTarget;
   j["mean_samples_per_pixel"] = r.meanPasses;
+  j["denoised"] = r.denoised;
+  if (r.denoised) j["denoise_seconds"] = {{"guide", r.guideSeconds}, {"filter", r.filterSeconds}};
   j["frame_seconds"] = r.stats.seconds;
   j["frames"] = r.frames;
   j["rays"] = r.stats.rays;
@@ -146,6 +173,8 @@ void printJson(const RenderCmdOptions& o, const Frame& frame, const Renderer& re
 void printStats(const RenderCmdOptions& o, const Scene& scene, const Renderer& renderer, const Model& model,
                 const RenderReport& r) {
   std::printf("frame time       %.4f s (median of %d after one warm-up)\n", r.stats.seconds, o.frames);
+  if (r.denoised)
+    std::printf("denoised         guide %.4f s, filter %.4f s (in the frame time)\n", r.guideSeconds, r.filterSeconds);
   std::printf("rays             %llu\n", (unsigned long long)r.stats.rays);
   std::printf("samples          %llu (%.2f per ray)\n", (unsigned long long)r.stats.samples,
               double(r.stats.samples) / double(std::max<uint64_t>(r.stats.rays, 1)));
@@ -171,10 +200,9 @@ void printStats(const RenderCmdOptions& o, const Scene& scene, const Renderer& r
 }
 
 /// Writes the image of a render: legends, the empty-image warning, the outputs.
-void writeOutputs(const RenderCmdOptions& o, const SceneDocument& doc, const FrameBuffer& buffer, const Model& model,
+void writeOutputs(const RenderCmdOptions& o, const SceneDocument& doc, Image image, const Model& model,
                   const DatasetInfo& dataset, const WholeData* whole, size_t visibleRegions, size_t regions) {
   const ImageFormat format = imageFormatFor(o.output, o.bits);
-  Image image = buffer.resolve();
   drawLegends(doc.scene, doc.frame, model, dataset, legendText(doc.input, whole), image);
   if (imageIsEmpty(image))
     logWarning(strCat("the image is empty: nothing in view is visible (", visibleRegions, " of ", regions,
@@ -218,7 +246,7 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
   renderStreamed(step, scene, options, frame, buffer, control);
   progress.finish();
   const double renderSeconds = renderTimer.seconds();
-  writeOutputs(o, doc, buffer, model, survey.dataset, &whole, 0, 0);
+  writeOutputs(o, doc, buffer.resolve(), model, survey.dataset, &whole, 0, 0);
   const RenderStats& stats = buffer.stats();
   if (o.json) {
     nlohmann::json j;
@@ -332,8 +360,8 @@ void run(const RenderCmdOptions& o, const CLI::App& cmd) {
     report.partRss = mpi::allGather(double(peakResidentBytes()));
   }
   if (!root) return; // the first process writes the image and the statistics
-  writeOutputs(o, doc, buffer, model, dataset, whole, renderer.visibleRegions(), model.regions.regions.size());
-
+  writeOutputs(o, doc, std::move(report.image), model, dataset, whole, renderer.visibleRegions(),
+               model.regions.regions.size());
   if (o.json)
     printJson(o, frame, renderer, model, report);
   else if (o.stats)

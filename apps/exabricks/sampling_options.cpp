@@ -9,8 +9,9 @@
 
 namespace exa::cli {
 
-/// A noise target is above 0 and for the path tracer; path tracing given neither --spp nor
-/// --noise-target (nor a scene file) passes to kDefaultNoiseTarget.
+/// A noise target is above 0 and for the path tracer, and so is the denoiser; path tracing
+/// without a scene file is denoised unless --denoise off, and given neither --spp nor
+/// --noise-target passes to kDefaultNoiseTarget.
 void applySampling(const CLI::App& cmd, bool fromFile, SceneDocument& doc) {
   Frame& f = doc.frame;
   const bool pathTraced = doc.scene.integration.integrator == Integrator::PathTrace,
@@ -20,11 +21,17 @@ void applySampling(const CLI::App& cmd, bool fromFile, SceneDocument& doc) {
   if (given && !pathTraced)
     failUsage("--noise-target: the ray marcher takes --spp passes everywhere; the noise target is for "
               "--integrator pathtrace");
-  if (!pathTraced || doc.scene.debug != DebugView::None || fromFile || given || cmd.count("--spp")) return;
+  if (cmd.count("--denoise") && f.denoise && !pathTraced)
+    failUsage("--denoise: the ray marcher's pictures have no noise to remove; the denoiser is for "
+              "--integrator pathtrace");
+  if (!pathTraced || doc.scene.debug != DebugView::None || fromFile) return;
+  if (!cmd.count("--denoise")) f.denoise = true;
+  if (given || cmd.count("--spp")) return;
   f.noiseTarget = kDefaultNoiseTarget;
   f.samplesPerPixel = kDefaultPathTracedPasses;
-  logNote(strCat("path tracing each tile until its noise is at most ", kDefaultNoiseTarget, "/255 (at most ",
-                 kDefaultPathTracedPasses, " samples per pixel; --noise-target or --spp to choose)"));
+  logNote(strCat("path tracing each tile until its ", f.denoise ? "denoised picture's " : "", "noise is at most ",
+                 kDefaultNoiseTarget, "/255 (at most ", kDefaultPathTracedPasses,
+                 " samples per pixel; --noise-target or --spp to choose)"));
 }
 
 } // namespace exa::cli

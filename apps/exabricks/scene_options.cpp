@@ -128,6 +128,7 @@ struct SettingFlag {
 constexpr SettingFlag kSettingFlags[] = {
     {"--spp", "frame.samples_per_pixel", FlagGroup::Image},
     {"--noise-target", "frame.noise_target", FlagGroup::Image},
+    {"--denoise", "frame.denoise", FlagGroup::Image},
     {"--rate", "frame.rate", FlagGroup::Image},
     {"--seed", "frame.seed", FlagGroup::Image},
     {"--no-jitter", "frame.jitter", FlagGroup::Image, FlagForm::Off},
@@ -168,7 +169,10 @@ void addSettingFlags(RenderOptions& o, CLI::App& cmd, FlagGroup group) {
           ->description((f.form == FlagForm::Off ? "Off: " : "") + help + " (scene key " + key + ")");
       continue;
     }
-    std::string typeName = type == "integer" ? "INT" : type == "number" ? "FLOAT" : "TEXT";
+    std::string typeName = type == "integer"   ? "INT"
+                           : type == "number"  ? "FLOAT"
+                           : type == "boolean" ? "{on,off}"
+                                               : "TEXT";
     if (type == "choice") {
       typeName.clear();
       for (const nlohmann::json& c : (*s)["choices"])
@@ -177,7 +181,7 @@ void addSettingFlags(RenderOptions& o, CLI::App& cmd, FlagGroup group) {
     }
     cmd.add_option(f.flag, o.settings[f.flag], help + " (scene key " + key + ")")
         ->type_name(typeName)
-        ->default_str(sceneSettingDefaultText(key));
+        ->default_str(type == "boolean" ? ((*s)["default"].get<bool>() ? "on" : "off") : sceneSettingDefaultText(key));
   }
 }
 

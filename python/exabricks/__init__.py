@@ -460,19 +460,19 @@ class Scene:
 
     @classmethod
     def from_yt(cls, scene, dataset=None, source=None, **settings):
-        """The scene of a yt Scene: the field of its volume source (the first unless `source` is
-        given) as a dataset (from_yt, unless `dataset` is given), its transfer function with the
-        opacity converted for its camera (TransferFunction.from_yt), its camera and resolution,
-        no shading (yt's volume rendering does not light) and 8 samples per pixel (yt's pictures
-        show no sampling noise; 8 jittered passes hide it at yt's resolutions). The settings of an
-        exabricks.yt.ExaBricksSource apply over these, and `settings` over all. Its render's image
-        array agrees in exposure with the one yt's render returns."""
+        """The scene of a yt Scene: the field of its volume source (the first unless `source` is given)
+        as a dataset (from_yt, unless `dataset` is given), its transfer function with the opacity
+        converted for its camera (TransferFunction.from_yt), its camera and resolution, no shading
+        (yt's volume rendering does not light) and 8 samples per pixel (yt's pictures show no sampling
+        noise; 8 jittered passes hide it at yt's resolutions). The settings of an ExaBricksSource
+        apply over these, and `settings` over all. Its image agrees in exposure with yt's."""
         return scene_from_yt(cls, scene, dataset, source, **settings)
 
     # -- rendering ----------------------------------------------------------------------------
     def _frame_json(self, width, height, spp, rate):
         frame = {"width": int(width), "height": int(height), "samples_per_pixel": int(spp), "rate": float(rate),
-                 "noise_target": float(self.noise_target), "jitter": bool(self.jitter), "seed": int(self.seed)}
+                 "noise_target": float(self.noise_target), "denoise": bool(self.denoise), "jitter": bool(self.jitter),
+                 "seed": int(self.seed)}
         return json.dumps({"camera": self.camera.to_dict(), "frame": frame})
 
     def _scene_json(self):

@@ -78,33 +78,55 @@ double FrameBuffer::meanPasses() const {
   return pixels > 0 ? passes / pixels : 0.0;
 }
 
-float FrameBuffer::tileNoise(int tile, const vec3f& background) const {
-  const uint32_t n = tilePasses_.at(size_t(tile));
-  if (n < 2) return std::numeric_limits<float>::infinity();
+uint32_t FrameBuffer::pixelPasses(size_t pixel) const {
+  const size_t x = pixel % size_t(width_), y = pixel / size_t(width_);
+  return tilePasses_[(y / kRenderTile) * size_t(tilesX_) + x / kRenderTile];
+}
+
+vec4f FrameBuffer::pixelError(size_t pixel) const {
+  const uint32_t n = pixelPasses(pixel);
+  if (n < 2) {
+    const float inf = std::numeric_limits<float>::infinity();
+    return {inf, inf, inf, inf};
+  }
   const float inv = 1.f / float(n);
   // The squared standard error of a mean of n samples: (E[x²] - E[x]²) / (n - 1).
   auto error = [&](float sum, float squares) {
     const float mean = sum * inv;
     return std::sqrt(std::max(0.f, squares * inv - mean * mean) / float(n - 1));
   };
+  const vec4f& s = sum_[pixel];
+  const vec4f& q = squares_[pixel];
+  return {error(s.x, q.x), error(s.y, q.y), error(s.z, q.z), error(s.w, q.w)};
+}
+
+vec3f FrameBuffer::pixelNoise(size_t pixel, const vec3f& background) const {
+  const uint32_t n = pixelPasses(pixel);
+  if (n < 2) return vec3f(std::numeric_limits<float>::infinity());
+  const float inv = 1.f / float(n);
+  const vec4f s = sum_[pixel] * inv, e = pixelError(pixel);
+  const float means[3] = {s.x, s.y, s.z}, errors[3] = {e.x, e.y, e.z},
+              behind[3] = {background.x, background.y, background.z};
+  float steps[3];
+  for (int c = 0; c < 3; ++c) {
+    // Over the background: colour + (1 - alpha) background; its error at most the sum of both.
+    const float shown = means[c] + (1.f - s.w) * behind[c];
+    const float err = errors[c] + behind[c] * e.w;
+    steps[c] = (linearToSrgb(std::clamp(shown + err, 0.f, 1.f)) - linearToSrgb(std::clamp(shown - err, 0.f, 1.f))) *
+               0.5f * 255.f;
+  }
+  return {steps[0], steps[1], steps[2]};
+}
+
+float FrameBuffer::tileNoise(int tile, const vec3f& background) const {
+  if (tilePasses_.at(size_t(tile)) < 2) return std::numeric_limits<float>::infinity();
   double squared = 0;
   int count = 0;
   forTilePixels(tile, [&](int, int, size_t i) {
-    const vec4f& s = sum_[i];
-    const vec4f& q = squares_[i];
-    const float alphaError = error(s.w, q.w);
-    const float sums[3] = {s.x, s.y, s.z}, squares[3] = {q.x, q.y, q.z},
-                behind[3] = {background.x, background.y, background.z};
-    for (int c = 0; c < 3; ++c) {
-      // Over the background: colour + (1 - alpha) background; its error at most the sum of both.
-      const float shown = sums[c] * inv + (1.f - s.w * inv) * behind[c];
-      const float e = error(sums[c], squares[c]) + behind[c] * alphaError;
-      const float steps =
-          (linearToSrgb(std::clamp(shown + e, 0.f, 1.f)) - linearToSrgb(std::clamp(shown - e, 0.f, 1.f))) * 0.5f *
-          255.f;
-      squared += double(steps) * double(steps);
-      ++count;
-    }
+    const vec3f steps = pixelNoise(i, background);
+    squared +=
+        double(steps.x) * double(steps.x) + double(steps.y) * double(steps.y) + double(steps.z) * double(steps.z);
+    count += 3;
   });
   return count ? float(std::sqrt(squared / count)) : 0.f;
 }

@@ -2,6 +2,8 @@
 // noise they estimate reaches the frame's target.
 #include "exabricks/render/renderer.h"
 
+#include "exabricks/core/error.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -28,11 +30,16 @@ void NoiseRounds::start(const Frame& frame, const FrameBuffer& buffer, const Pas
   std::vector<int> selected;
   control.selected(tiles, selected);
   for (int t : selected)
-    goal_[size_t(t)] = uint32_t(std::min(frame.samplesPerPixel, kNoiseFirstPasses));
+    goal_[size_t(t)] =
+        uint32_t(std::min(frame.samplesPerPixel, frame.denoise ? kDenoisedFirstPasses : kNoiseFirstPasses));
+}
+
+bool denoises(const Scene& scene, const Frame& frame) {
+  return frame.denoise && scene.integration.integrator == Integrator::PathTrace && scene.debug == DebugView::None;
 }
 
 bool NoiseRounds::next(const Frame& frame, const FrameBuffer& buffer, const vec3f& background, PassControl& control,
-                       int& frameIndex) {
+                       int& frameIndex, const TileNoiseEstimate* estimate) {
   const int tiles = int(goal_.size());
   const uint32_t most = uint32_t(frame.samplesPerPixel), none = std::numeric_limits<uint32_t>::max();
   for (;;) {
@@ -51,10 +58,14 @@ bool NoiseRounds::next(const Frame& frame, const FrameBuffer& buffer, const vec3
     // 1/sqrt(n), predicts with 5 % to spare, between a sixteenth more and twice as many (the
     // estimate is noisy too: a tile far above the target is estimated again on the way).
     bool more = false;
+    if (estimate) {
+      estimate->measure(buffer, noise_);
+      if (int(noise_.size()) != tiles) fail("a noise estimate gave ", noise_.size(), " tiles of ", tiles);
+    }
     for (int t = 0; t < tiles; ++t) {
       const uint32_t n = buffer.tilePasses(t);
       if (goal_[size_t(t)] == 0 || n >= most) continue;
-      const float noise = buffer.tileNoise(t, background);
+      const float noise = estimate ? noise_[size_t(t)] : buffer.tileNoise(t, background);
       if (noise <= frame.noiseTarget) continue;
       const double ratio = double(noise) / double(frame.noiseTarget);
       const double predicted = std::ceil(1.05 * double(n) * ratio * ratio);
@@ -62,11 +73,13 @@ bool NoiseRounds::next(const Frame& frame, const FrameBuffer& buffer, const vec3
       goal_[size_t(t)] = uint32_t(std::min(double(most), next));
       more = true;
     }
+    if (estimate && estimate->agree) more = estimate->agree(more); // another round for all, or none
     if (!more) return false;
   }
 }
 
-bool Renderer::renderSampled(const Frame& frame, FrameBuffer& buffer, const PassControl& control) const {
+bool Renderer::renderSampled(const Frame& frame, FrameBuffer& buffer, const PassControl& control,
+                             const TileNoiseEstimate* estimate) const {
   Frame pass = frame;
   if (!NoiseRounds::applies(scene(), frame)) {
     for (int k = 0; k < frame.samplesPerPixel; ++k) {
@@ -78,7 +91,7 @@ bool Renderer::renderSampled(const Frame& frame, FrameBuffer& buffer, const Pass
   NoiseRounds rounds;
   rounds.start(frame, buffer, control);
   PassControl some = control;
-  while (rounds.next(frame, buffer, scene().background, some, pass.frameIndex))
+  while (rounds.next(frame, buffer, scene().background, some, pass.frameIndex, estimate))
     if (!renderPass(pass, buffer, some)) return false;
   return true;
 }

@@ -351,6 +351,10 @@ const std::vector<Setting<Frame>>& frameSettings() {
           "frame.noise_target", "noise_target", [](F& f) -> float& { return f.noiseTarget; }, 0.0, 255.0,
           "Path tracing: stop each tile once its estimated noise is at most this many 1/255 steps of the 8-bit "
           "image (0: take samples_per_pixel everywhere)"),
+      boolean<F>(
+          "frame.denoise", "denoise", [](F& f) -> bool& { return f.denoise; },
+          "Path tracing: denoise the picture, guided by the frame ray-marched (a noise target is then the "
+          "denoised picture's)"),
       number<F>(
           "frame.rate", "rate", [](F& f) -> float& { return f.rate; }, 0.0, 1024.0,
           "Quality factor: step = region's finest width x 0.5 / rate", true),
@@ -495,8 +499,9 @@ template <typename Owner> json valueOfText(const Setting<Owner>& s, const std::s
   };
   switch (s.type) {
   case SettingType::Boolean:
-    if (text != "true" && text != "false") fail("\"", s.key, "\" must be true or false, not '", text, "'");
-    return text == "true";
+    if (text != "true" && text != "false" && text != "on" && text != "off")
+      fail("\"", s.key, "\" must be true or false (on or off), not '", text, "'");
+    return text == "true" || text == "on";
   case SettingType::Choice:
     return text;
   case SettingType::Vector: {

@@ -186,6 +186,9 @@ struct Server::Impl {
     j["simulation"] = simulationJson(model.simulation);
     j["can_encode_movies"] = MovieMaker::canEncode();
     j["nan_as_holes"] = steps->loadOptions().nonFinite == NonFinite::Holes;
+    // What path tracing chosen on the page samples with, as the command line's does.
+    j["path_tracing_defaults"] = {
+        {"noise_target", kDefaultNoiseTarget}, {"samples_per_pixel", kDefaultPathTracedPasses}, {"denoise", true}};
     json fields = json::array();
     for (size_t i = 0; i < model.fieldNames.size(); ++i)
       fields.push_back({{"name", model.fieldNames[i]},

@@ -245,12 +245,13 @@ void Session::serve(const Request& request) {
     info.final = view.complete() && !everyLevel;
     if (info.final && NoiseRounds::applies(request.doc.scene, frame))
       info.data +=
-          strCat(info.data.empty() ? "" : "; ", "noise target ", frame.noiseTarget,
-                 "/255 reached: ", std::round(view.buffer().meanPasses() * 10) / 10, " samples per pixel on average");
+          strCat(info.data.empty() ? "" : "; ", "noise target ", frame.noiseTarget, "/255",
+                 view.showsDenoised() ? " (denoised)" : "",
+                 " reached: ", std::round(view.buffer().meanPasses() * 10) / 10, " samples per pixel on average");
     info.renderSeconds = after.seconds - before.seconds;
     info.samples = after.samples - before.samples;
     info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
-    view.buffer().resolve(image);
+    view.resolve(image);
     publish(request, image, info, !everyLevel, info.final ? options_.finalJpegQuality : options_.jpegQuality);
   }
   if (everyLevel) serveParts(request, info, control);

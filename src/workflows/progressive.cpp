@@ -181,6 +181,15 @@ void ProgressiveView::restart() {
   cleared_ = false;
   rounds_ = NoiseRounds();
   noiseReached_ = false;
+  guide_.reset();
+  denoisedAt_ = -1;
+}
+
+void ProgressiveView::resolve(Image& out) const {
+  if (showsDenoised())
+    out = denoised_;
+  else
+    buffer_.resolve(out);
 }
 
 bool ProgressiveView::complete() const {
@@ -214,6 +223,20 @@ bool ProgressiveView::refineTo(int passes, const PassControl& control) {
     buffer_.resize(doc_.frame.width, doc_.frame.height); // cleared
     cleared_ = true;
   }
+  const vec3f background = doc_.scene.background;
+  if (denoises(doc_.scene, doc_.frame) && !guide_) {
+    try {
+      guide_ = renderDenoiseGuide(renderer_, doc_.frame);
+    } catch (...) {
+      restart();
+      throw;
+    }
+  }
+  TileNoiseEstimate estimate; // the denoised picture's noise, keeping that picture
+  estimate.measure = [&](const FrameBuffer& buffer, std::vector<float>& noise) {
+    denoised_ = denoise(buffer, *guide_, background, &noise);
+    denoisedAt_ = passes_;
+  };
   Frame pass = doc_.frame;
   const bool toNoise = NoiseRounds::applies(doc_.scene, doc_.frame);
   while (passes_ < passes && !(toNoise && noiseReached_)) {
@@ -222,7 +245,7 @@ bool ProgressiveView::refineTo(int passes, const PassControl& control) {
     pass.frameIndex = passes_;
     if (toNoise) {
       if (!rounds_.started()) rounds_.start(pass, buffer_, control);
-      noiseReached_ = !rounds_.next(pass, buffer_, doc_.scene.background, some, pass.frameIndex);
+      noiseReached_ = !rounds_.next(pass, buffer_, background, some, pass.frameIndex, guide_ ? &estimate : nullptr);
       if (noiseReached_) break;
     }
     bool rendered = false;
@@ -239,6 +262,10 @@ bool ProgressiveView::refineTo(int passes, const PassControl& control) {
       return false;
     }
     ++passes_;
+  }
+  if (guide_ && complete() && denoisedAt_ != passes_) {
+    denoised_ = denoise(buffer_, *guide_, background);
+    denoisedAt_ = passes_;
   }
   return true;
 }

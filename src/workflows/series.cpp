@@ -5,6 +5,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/series.h"
+#include "exabricks/render/denoise.h"
 
 #include <unordered_set>
 
@@ -149,7 +150,7 @@ Image SeriesRenderer::render(int step, const Scene& scene, const Frame& frame) {
   renderer_->setScene(placed);
   if (fresh) selectDevice(*renderer_, options_.device);
   Timer t;
-  Image image = renderer_->render(frame);
+  Image image = renderPicture(*renderer_, frame);
   stats_.renderSeconds += t.seconds();
   return image;
 }

@@ -27,7 +27,8 @@ def every_setting(mesh):
             {"time": 0, "camera": CAMERA, "opacity_scale": 0.02, "range": [0.01, 1.4], "iso_values": [0.5]},
             {"time": 2, "camera": dict(CAMERA, position=[60.0, 150.0, 80.0], fov=30.0), "opacity_scale": 0.2,
              "range": [0.1, 1.4], "iso_values": [0.9]}]},
-        "frame": {"width": 40, "height": 30, "samples_per_pixel": 2, "noise_target": 3, "rate": 0.75, "jitter": False,
+        "frame": {"width": 40, "height": 30, "samples_per_pixel": 2, "noise_target": 3, "denoise": True, "rate": 0.75,
+                  "jitter": False,
                   "seed": 7},
         "layers": [
             {"field": "scalar", "transfer_function": {"colormap": "magma", "opacity": [[0, 0], [0.5, 0.2], [1, 0.9]], "albedo": [[0, 0.2], [1, 0.9]],
@@ -389,7 +390,9 @@ def test_every_setting_flag_sets_its_key(cli, dataset_file, tmp_path):
     for flag, key in flags:
         s = vocabulary[key]
         value = other_value(s)
-        if s["type"] == "boolean":
+        if s["type"] == "boolean" and re.search(r"^\s+%s \{on,off\}" % re.escape(flag), help_text, re.M):
+            args += [flag, "on" if value else "off"]  # a switch that takes its value
+        elif s["type"] == "boolean":
             args.append(flag)  # a switch: on where the default is off, off where it is on
             assert value == (not flag.startswith("--no-")), flag
         else:

@@ -339,8 +339,8 @@ def test_the_legend_toggles_draw_the_legends_as_the_command_line_does(start_view
 
 
 def test_path_tracing_from_the_page_equals_the_command_line(start_viewer, cli, browser, tmp_path, artifacts):
-    """Choosing path tracing in the panel shows its settings (hidden while marching), refines the
-    path-traced picture, and the saved scene rendered by the command line gives the snapshot's
+    """Choosing path tracing in the panel shows its settings (hidden while marching), samples as
+    the command line's path tracer (denoised, to its noise target), refines the path-traced picture, and the saved scene rendered by the command line gives the snapshot's
     bytes; an albedo outside [0, 1] is refused in the banner and leaves the scene as it was."""
     v = start_viewer()
     browser.get(v.url + "&size=%d" % SIZE)
@@ -352,6 +352,12 @@ def test_path_tracing_from_the_page_equals_the_command_line(start_viewer, cli, b
     traced = wait_refined(browser, first["request"])
     assert albedo.is_displayed() and float(albedo.get_attribute("value")) == pytest.approx(0.8)
     assert np.abs(canvas_pixels(browser).astype(int) - marched.astype(int)).mean() > 0.5
+    # It samples as the command line's path tracer does: to the denoised picture's noise target.
+    frame = json.loads(v.request("GET", "/api/scene")[1])["frame"]
+    assert frame["noise_target"] == 2 and frame["samples_per_pixel"] == 1024 and frame["denoise"], frame
+    denoise = browser.find_element(By.CSS_SELECTOR, "input[data-setting='frame.denoise']")
+    assert denoise.is_displayed() and denoise.is_selected()
+    assert browser.find_element(By.ID, "spp-out").text == "1024"
     browser.save_screenshot(str(artifacts / "viewer-pathtrace.png"))
     sun = browser.find_element(By.CSS_SELECTOR, "input[data-setting='pathtrace.sun_intensity']")
     sun.clear()

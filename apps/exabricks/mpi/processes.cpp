@@ -124,14 +124,44 @@ void combineOnRoot(FrameBuffer& buffer) {
 #endif
 }
 
-bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control) {
-  if (state().size <= 1) return renderer.renderSampled(frame, buffer, control);
+TileNoiseEstimate wholeImage(TileNoiseEstimate estimate) {
+#ifdef EXABRICKS_HAVE_MPI
+  if (state().size <= 1) return estimate;
+  TileNoiseEstimate whole;
+  whole.agree = [](bool more) {
+    int mine = more ? 1 : 0, any = 0;
+    MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    return any != 0;
+  };
+  whole.measure = [measure = estimate.measure](const FrameBuffer& share, std::vector<float>& tileNoise) {
+    FrameBuffer all = share;
+    const FrameBuffer::Sums s = all.sums();
+    auto sum = [](void* data, size_t count, MPI_Datatype type) {
+      const size_t chunk = size_t(1) << 28, bytes = type == MPI_FLOAT ? sizeof(float) : 4;
+      for (size_t at = 0; at < count; at += chunk)
+        MPI_Allreduce(MPI_IN_PLACE, static_cast<char*>(data) + at * bytes, int(std::min(chunk, count - at)), type,
+                      MPI_SUM, MPI_COMM_WORLD);
+    };
+    sum(s.colors, 4 * s.pixels, MPI_FLOAT);
+    sum(s.squares, 4 * s.pixels, MPI_FLOAT);
+    sum(s.tilePasses, s.tiles, MPI_UINT32_T);
+    measure(all, tileNoise);
+  };
+  return whole;
+#else
+  return estimate;
+#endif
+}
+
+bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control,
+                 const TileNoiseEstimate* estimate) {
+  if (state().size <= 1) return renderer.renderSampled(frame, buffer, control, estimate);
   // Image-parallel: process r renders tiles r, r + N, r + 2N, ... of every pass (a noise target
   // is met tile by tile, so each process's tiles take the passes they would alone); the root adds
   // the shares (random numbers depend on pixel, pass and seed only, so the image is the serial one).
   control.tileBegin = state().rank;
   control.tileStride = state().size;
-  const bool complete = renderer.renderSampled(frame, buffer, control);
+  const bool complete = renderer.renderSampled(frame, buffer, control, estimate);
   const auto start = std::chrono::steady_clock::now();
   combineOnRoot(buffer);
   lastCombineSeconds() = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -41,7 +41,15 @@ void combineOnRoot(FrameBuffer& buffer);
 
 /// A frame's samplesPerPixel passes into a cleared buffer: in one process all of them; under MPI
 /// each process renders an interleaved share of the tiles and the root receives the whole image.
-bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control = {});
+/// `estimate` (may be null) measures the tiles' noise against a noise target over the whole image
+/// (wholeImage()).
+bool renderFrame(const Renderer& renderer, const Frame& frame, FrameBuffer& buffer, PassControl control = {},
+                 const TileNoiseEstimate* estimate = nullptr);
+
+/// An estimate made over the whole image: under MPI every process's share of the tiles is added
+/// into a copy of the buffer on every process first (a collective, in every round), so that an
+/// estimate that reads neighbouring tiles (the denoised picture's) sees what one process sees.
+TileNoiseEstimate wholeImage(TileNoiseEstimate estimate);
 
 /// Data-parallel rendering: every process holds one part of the data and its renderer is
 /// restricted to the part's box (null: the process holds nothing). Each pass is rendered by every

@@ -62,6 +62,14 @@ public:
   /// (linear RGB): per pixel and channel the standard error of the mean, carried through the sRGB
   /// curve, in 1/255 steps; RMS over the tile. Infinite with fewer than two passes.
   float tileNoise(int tile, const vec3f& background) const;
+  /// Passes added to the tile of a pixel.
+  uint32_t pixelPasses(size_t pixel) const;
+  /// A pixel's standard error of the mean of its passes, per premultiplied channel (infinite with
+  /// fewer than two passes).
+  vec4f pixelError(size_t pixel) const;
+  /// A pixel's noise per channel as tileNoise() measures it, in 1/255 steps of its 8-bit sRGB
+  /// value over `background`.
+  vec3f pixelNoise(size_t pixel, const vec3f& background) const;
   /// The mean of the passes (each tile divided by its own count; tiles without a pass are
   /// transparent black). The steps debug view resolves to a heat map scaled to its maximum.
   void resolve(Image& out) const;

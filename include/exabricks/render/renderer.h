@@ -177,6 +177,20 @@ struct VisibleExtent {
 
 /// Passes every tile takes before its noise is estimated (Frame::noiseTarget).
 constexpr int kNoiseFirstPasses = 16;
+/// The same for a denoised frame (Frame::denoise): the filter averages each pixel's passes with
+/// its neighbours', so fewer estimate the noise as well.
+constexpr int kDenoisedFirstPasses = 8;
+
+/// How the rounds to a noise target measure: per tile, the noise a buffer's passes leave in the
+/// picture made of them (`measure`: one value per tile), and whether any of the processes that
+/// share the frame's tiles takes another round (`agree`, given this one's wish; null: alone).
+struct TileNoiseEstimate {
+  std::function<void(const FrameBuffer& buffer, std::vector<float>& tileNoise)> measure;
+  std::function<bool(bool more)> agree;
+};
+
+/// Whether a frame of the scene is denoised: Frame::denoise, path tracing, no debug view.
+bool denoises(const Scene& scene, const Frame& frame);
 
 /// Passes to a frame's noise target, tile by tile (Renderer::renderSampled, progressive views):
 /// next() names the tiles that take the next pass and its frame index, those holding the fewest
@@ -194,12 +208,15 @@ public:
   bool started() const { return !goal_.empty(); }
   /// The next pass: `control`'s mask (this object's) selects its tiles and `frameIndex` is its
   /// index; false when every tile holds its passes.
+  /// `estimate`, where given, measures the tiles' noise instead of FrameBuffer::tileNoise (the
+  /// denoised picture's: denoisedNoise()).
   bool next(const Frame& frame, const FrameBuffer& buffer, const vec3f& background, PassControl& control,
-            int& frameIndex);
+            int& frameIndex, const TileNoiseEstimate* estimate = nullptr);
 
 private:
   std::vector<uint32_t> goal_;
   std::vector<uint8_t> mask_;
+  std::vector<float> noise_;
 };
 
 class Renderer {
@@ -246,7 +263,9 @@ public:
   /// tile's passes 0..n-1 for the n that brings its noise (FrameBuffer::tileNoise) to the target
   /// (at least kNoiseFirstPasses, at most samplesPerPixel): a tile equals the same tile of an
   /// n-sample render. False when cancelled.
-  bool renderSampled(const Frame& frame, FrameBuffer& buffer, const PassControl& control = {}) const;
+  /// `estimate`, where given, measures the noise instead (NoiseRounds::next).
+  bool renderSampled(const Frame& frame, FrameBuffer& buffer, const PassControl& control = {},
+                     const TileNoiseEstimate* estimate = nullptr) const;
   /// A whole frame: renderSampled into a fresh buffer, resolved.
   Image render(const Frame& frame, RenderStats* stats = nullptr) const;
 

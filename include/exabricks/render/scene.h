@@ -201,6 +201,9 @@ struct Frame {
   /// (the standard error of its 8-bit sRGB values, RMS over its pixels) is at most this many
   /// 1/255 steps, after at least kNoiseFirstPasses and at most samplesPerPixel passes.
   float noiseTarget = 0.f;
+  /// Path tracing: the picture is denoised (render/denoise.h), guided by the frame ray-marched;
+  /// a noise target is then the denoised picture's.
+  bool denoise = false;
   int frameIndex = 0;
   float rate = 1.f;   ///< quality factor: step = region's finest width x 0.5 / rate
   bool jitter = true; ///< random offsets of the sample positions

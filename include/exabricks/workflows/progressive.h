@@ -6,14 +6,17 @@
 // starts the refinement over, and the renderer rebuilds only what the change needs; a cancel flag
 // ends a pass early. The device is chosen on the first scene (and on the first after the choice
 // changes); where it cannot be used, or cannot draw a scene, the CPU draws that scene, and the
-// next scene that differs tries the device again.
+// next scene that differs tries the device again. A denoised frame (denoises()) renders its
+// guide before its first pass, and shows the denoised picture of its passes once there is one.
 #pragma once
 
 #include "exabricks/core/error.h"
+#include "exabricks/render/denoise.h"
 #include "exabricks/render/frame_buffer.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/scene.h"
 
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -85,6 +88,12 @@ public:
   bool refineTo(int passes, const PassControl& control);
   /// The passes added up; after a restart, until the next pass, the passes from before it.
   const FrameBuffer& buffer() const { return buffer_; }
+  /// The picture of the passes: their mean, or for a denoised frame the denoised picture (made at
+  /// the end of each round to a noise target, and when the view is complete; until the first,
+  /// the mean).
+  void resolve(Image& out) const;
+  /// Whether resolve() gives a denoised picture.
+  bool showsDenoised() const { return guide_.has_value() && denoisedAt_ >= 0; }
   int passes() const { return passes_; }
   int targetPasses() const { return doc_.frame.samplesPerPixel; }
   /// Whether the view holds its passes: targetPasses(), or with a noise target
@@ -129,9 +138,12 @@ private:
   float placedRadius_ = 0.f; ///< the particles' world radius the renderer holds (resolveParticleRadius)
   FrameBuffer buffer_;
   int passes_ = 0;
-  NoiseRounds rounds_;        ///< with a noise target: the tiles that take the next pass
-  bool noiseReached_ = false; ///< every tile holds the passes its noise wants
-  bool cleared_ = false;      ///< buffer_ holds the passes counted (else it is cleared before the next)
+  NoiseRounds rounds_;                ///< with a noise target: the tiles that take the next pass
+  bool noiseReached_ = false;         ///< every tile holds the passes its noise wants
+  std::optional<DenoiseGuide> guide_; ///< a denoised frame's, from its first pass
+  Image denoised_;                    ///< the last denoised picture of buffer_
+  int denoisedAt_ = -1;               ///< passes_ when denoised_ was made (-1: none)
+  bool cleared_ = false;              ///< buffer_ holds the passes counted (else it is cleared before the next)
 };
 
 } // namespace exa

@@ -1,0 +1,283 @@
+// The denoiser of path-traced frames: on buffers of known noise it lowers the noise and keeps the
+// mean, stops at the guide's edges and at edges of the light the guide lacks, and its probe
+// predicts the noise the denoised picture keeps; on a path-traced frame it reaches a noise
+// target with fewer passes and keeps the low frequencies of a converged render; the view and
+// the whole-frame function show the same picture.
+#include "exabricks/amr/model.h"
+#include "exabricks/core/color.h"
+#include "exabricks/render/denoise.h"
+#include "exabricks/render/renderer.h"
+#include "exabricks/workflows/progressive.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <random>
+
+using namespace exa;
+
+namespace {
+
+constexpr int kSize = 64;
+
+/// A buffer whose passes are `truth(x, y)` (opaque grey) plus Gaussian noise of `sigma`.
+FrameBuffer noisyBuffer(const std::function<float(int, int)>& truth, float sigma, uint32_t passes, unsigned seed) {
+  FrameBuffer buffer(kSize, kSize);
+  const FrameBuffer::Sums s = buffer.sums();
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.f, sigma);
+  for (uint32_t k = 0; k < passes; ++k)
+    for (int y = 0; y < kSize; ++y)
+      for (int x = 0; x < kSize; ++x) {
+        const size_t p = size_t(y) * kSize + size_t(x);
+        const float v = truth(x, y) + noise(rng);
+        for (int c = 0; c < 4; ++c) {
+          const float value = c == 3 ? 1.f : v;
+          s.colors[4 * p + size_t(c)] += value;
+          s.squares[4 * p + size_t(c)] += value * value;
+        }
+      }
+  for (size_t t = 0; t < s.tiles; ++t)
+    s.tilePasses[t] = passes;
+  return buffer;
+}
+
+/// A guide whose albedo picture is `albedo(x, y)` (opaque grey), without a shaded picture.
+DenoiseGuide guideOf(const std::function<float(int, int)>& albedo) {
+  DenoiseGuide g;
+  g.albedo = Image(kSize, kSize);
+  for (int y = 0; y < kSize; ++y)
+    for (int x = 0; x < kSize; ++x) {
+      const float v = albedo(x, y);
+      g.albedo.at(x, y) = {v, v, v, 1.f};
+    }
+  return g;
+}
+
+/// RMS of an image's red channel against `truth`.
+double rmsError(const Image& image, const std::function<float(int, int)>& truth) {
+  double sum = 0;
+  for (int y = 0; y < kSize; ++y)
+    for (int x = 0; x < kSize; ++x) {
+      const double d = image.at(x, y).x - truth(x, y);
+      sum += d * d;
+    }
+  return std::sqrt(sum / double(kSize * kSize));
+}
+
+/// The RMS difference of two images' 8-bit sRGB colours over black, in 1/255 steps.
+double rmsSteps(const Image& a, const Image& b) {
+  double sum = 0;
+  for (size_t p = 0; p < a.pixels.size(); ++p) {
+    const vec3f x = linearToSrgb(a.pixels[p].rgb()), y = linearToSrgb(b.pixels[p].rgb());
+    for (float d : {x.x - y.x, x.y - y.y, x.z - y.z})
+      sum += double(d * 255.f) * double(d * 255.f);
+  }
+  return std::sqrt(sum / double(3 * a.pixels.size()));
+}
+
+/// The mean absolute difference of two images' 5×5 box means, in 8-bit sRGB steps.
+double lowFrequencyDifference(const Image& a, const Image& b) {
+  double sum = 0;
+  int count = 0;
+  for (int y = 2; y + 2 < a.height; ++y)
+    for (int x = 2; x + 2 < a.width; ++x) {
+      vec3f ma(0.f), mb(0.f);
+      for (int dy = -2; dy <= 2; ++dy)
+        for (int dx = -2; dx <= 2; ++dx) {
+          ma = ma + linearToSrgb(a.at(x + dx, y + dy).rgb()) * (1.f / 25.f);
+          mb = mb + linearToSrgb(b.at(x + dx, y + dy).rgb()) * (1.f / 25.f);
+        }
+      const vec3f d = ma - mb;
+      sum += (std::fabs(d.x) + std::fabs(d.y) + std::fabs(d.z)) / 3.0 * 255.0;
+      ++count;
+    }
+  return sum / count;
+}
+
+/// A ball of scattering medium lit by the sun (as the noise-target tests use).
+struct LitBall {
+  Model model;
+  Scene scene;
+  Frame frame;
+  LitBall() {
+    CellSet cells;
+    cells.fields.push_back({"d", {}});
+    for (int z = 0; z < 32; ++z)
+      for (int y = 0; y < 32; ++y)
+        for (int x = 0; x < 32; ++x) {
+          cells.cells.push_back({vec3i(x, y, z), 0});
+          const vec3f d = vec3f(float(x), float(y), float(z)) + vec3f(0.5f) - vec3f(16.f);
+          cells.fields[0].values.push_back(std::max(0.f, 1.f - length(d) / 10.f));
+        }
+    model = buildModel(std::move(cells));
+    TransferFunction tf;
+    tf.colorMap.positions = {0.f, 1.f};
+    tf.colorMap.colors = {vec3f(1.f), vec3f(0.9f, 0.6f, 0.3f)};
+    tf.opacity = {{0.f, 0.f}, {1.f, 0.2f}};
+    tf.valueRange = range1f{0.f, 1.f};
+    scene = Scene::volumeOf(tf, "d");
+    scene.integration.integrator = Integrator::PathTrace;
+    scene.pathTracing.sunDirection = vec3f(-1.f, -1.f, -0.5f);
+    scene.pathTracing.sunIntensity = 3.f;
+    scene.pathTracing.environment = vec3f(0.1f);
+    frame.width = frame.height = kSize;
+    frame.camera.position = vec3d(16.0, 16.0, 90.0);
+    frame.camera.lookAt = vec3d(16.0);
+    frame.camera.up = vec3d(0.0, 1.0, 0.0);
+    frame.camera.fovy = 30.f;
+  }
+};
+
+} // namespace
+
+TEST(Denoise, FlatNoiseFallsAndItsMeanStays) {
+  const auto flat = [](int, int) { return 0.4f; };
+  const FrameBuffer buffer = noisyBuffer(flat, 0.2f, 16, 1);
+  const Image noisy = buffer.resolve(), denoised = denoise(buffer, guideOf(flat), vec3f(0.f));
+  const double before = rmsError(noisy, flat), after = rmsError(denoised, flat);
+  EXPECT_NEAR(before, 0.05, 0.005); // 0.2 / sqrt(16)
+  EXPECT_LT(after, before / 4) << before << " -> " << after;
+  double mean = 0;
+  for (const vec4f& p : denoised.pixels)
+    mean += p.x / double(denoised.pixels.size());
+  EXPECT_NEAR(mean, 0.4, 0.003);
+}
+
+TEST(Denoise, StopsAtTheGuidesEdges) {
+  // Left 0.1, right 0.7; the guide has the same edge.
+  const auto step = [](int x, int) { return x < kSize / 2 ? 0.1f : 0.7f; };
+  const FrameBuffer buffer = noisyBuffer(step, 0.3f, 16, 2);
+  const Image denoised = denoise(buffer, guideOf(step), vec3f(0.f));
+  for (int x : {kSize / 2 - 1, kSize / 2}) {
+    double column = 0;
+    for (int y = 0; y < kSize; ++y)
+      column += denoised.at(x, y).x / double(kSize);
+    EXPECT_NEAR(column, step(x, 0), 0.02) << "column " << x;
+  }
+}
+
+TEST(Denoise, StopsAtEdgesOfTheLightThatTheGuideLacks) {
+  // A shadow's edge: the guide is flat, the light steps by far more than its noise.
+  const auto light = [](int x, int) { return x < kSize / 2 ? 0.1f : 0.7f; };
+  const FrameBuffer buffer = noisyBuffer(light, 0.05f, 16, 3);
+  const Image denoised = denoise(buffer, guideOf([](int, int) { return 0.5f; }), vec3f(0.f));
+  for (int x : {kSize / 2 - 2, kSize / 2 - 1, kSize / 2, kSize / 2 + 1}) {
+    double column = 0;
+    for (int y = 0; y < kSize; ++y)
+      column += denoised.at(x, y).x / double(kSize);
+    EXPECT_NEAR(column, light(x, 0), 0.03) << "column " << x;
+  }
+}
+
+/// A buffer of `truth` with noise and another with other noise, each denoised: the noise each
+/// keeps (half the RMS difference squared, as two seeds measure it) against the probe's estimate
+/// from the first. Both in 8-bit steps.
+struct ProbeCheck {
+  double predicted = 0, measured = 0, raw = 0;
+  explicit ProbeCheck(const std::function<float(int, int)>& truth) {
+    const DenoiseGuide guide = guideOf(truth);
+    const FrameBuffer a = noisyBuffer(truth, 0.25f, 16, 4), b = noisyBuffer(truth, 0.25f, 16, 5);
+    std::vector<float> tiles;
+    const Image da = denoise(a, guide, vec3f(0.f), &tiles), db = denoise(b, guide, vec3f(0.f));
+    for (float t : tiles)
+      predicted += double(t) * t / double(tiles.size());
+    predicted = std::sqrt(predicted);
+    measured = rmsSteps(da, db) / std::sqrt(2.0);
+    for (int t = 0; t < a.tileCount(); ++t)
+      raw += double(a.tileNoise(t, vec3f(0.f))) / a.tileCount();
+  }
+};
+
+TEST(Denoise, ItsProbePredictsTheNoiseTheDenoisedPictureKeeps) {
+  const ProbeCheck flat([](int, int) { return 0.4f; });
+  EXPECT_NEAR(flat.predicted, flat.measured, 0.3 * flat.measured) << flat.predicted << " " << flat.measured;
+  EXPECT_LT(flat.measured, flat.raw / 10);
+  // On a steep gradient of light the colour term's weights follow the noise (a pixel's own noise
+  // draws it towards the neighbours it resembles), so the picture keeps more than the weights
+  // carry: measured up to about twice the prediction.
+  const ProbeCheck ramp([](int x, int y) { return 0.2f + 0.5f * float(x + y) / float(2 * kSize); });
+  EXPECT_GT(ramp.measured, 0.8 * ramp.predicted);
+  EXPECT_LT(ramp.measured, 2.5 * ramp.predicted) << ramp.predicted << " " << ramp.measured;
+  EXPECT_LT(ramp.measured, ramp.raw / 5);
+}
+
+TEST(Denoise, TheGuideIsTheMarchedFrameAndLeavesTheScene) {
+  LitBall ball;
+  Renderer renderer(ball.model);
+  renderer.setScene(ball.scene);
+  auto json = [&] {
+    SceneDocument doc;
+    doc.scene = renderer.scene();
+    return exactSceneJson(doc);
+  };
+  const std::string before = json();
+  const DenoiseGuide guide = renderDenoiseGuide(renderer, ball.frame);
+  EXPECT_EQ(json(), before);
+  EXPECT_TRUE(guide.shaded.pixels.empty()); // a medium without surfaces: the albedo guides alone
+  Scene marched = ball.scene;
+  marched.integration.integrator = Integrator::March;
+  marched.shading = Shading::None;
+  Renderer march(ball.model);
+  march.setScene(marched);
+  Frame one = ball.frame;
+  one.samplesPerPixel = 1;
+  const Image want = march.render(one);
+  ASSERT_EQ(guide.albedo.pixels.size(), want.pixels.size());
+  for (size_t p = 0; p < want.pixels.size(); ++p)
+    ASSERT_EQ(guide.albedo.pixels[p], want.pixels[p]) << p;
+  // With a surface, the shaded picture too.
+  Scene withIso = ball.scene;
+  withIso.iso.values = {0.5f};
+  renderer.setScene(withIso);
+  EXPECT_EQ(renderDenoiseGuide(renderer, ball.frame).shaded.pixels.size(), want.pixels.size());
+}
+
+TEST(Denoise, AFrameMeetsItsTargetWithFewerPassesAndKeepsItsLight) {
+  LitBall ball;
+  Renderer renderer(ball.model);
+  renderer.setScene(ball.scene);
+  Frame frame = ball.frame;
+  frame.samplesPerPixel = 512;
+  frame.noiseTarget = 2.f;
+  frame.denoise = true;
+  RenderStats first, plain;
+  const Image a = renderPicture(renderer, frame, &first);
+  frame.seed = 1;
+  const Image b = renderPicture(renderer, frame);
+  EXPECT_LT(rmsSteps(a, b) / std::sqrt(2.0), 2.5);
+  frame.denoise = false;
+  frame.seed = 0;
+  renderer.render(frame, &plain);
+  EXPECT_LT(first.rays * 3, plain.rays) << "denoised " << first.rays << " rays, undenoised " << plain.rays;
+  // Its low frequencies are those of a converged render.
+  Frame converged = ball.frame;
+  converged.samplesPerPixel = 1024;
+  converged.seed = 7;
+  EXPECT_LT(lowFrequencyDifference(a, renderer.render(converged)), 1.0);
+}
+
+TEST(Denoise, AViewShowsTheFramesDenoisedPicture) {
+  LitBall ball;
+  Renderer renderer(ball.model);
+  ProgressiveView view(renderer, "cpu");
+  SceneDocument doc;
+  doc.scene = ball.scene;
+  doc.frame = ball.frame;
+  doc.frame.samplesPerPixel = 256;
+  doc.frame.noiseTarget = 2.f;
+  doc.frame.denoise = true;
+  view.show(doc);
+  while (!view.complete())
+    ASSERT_TRUE(view.refine({}));
+  EXPECT_TRUE(view.showsDenoised());
+  Image shown;
+  view.resolve(shown);
+  Renderer other(ball.model);
+  other.setScene(ball.scene);
+  const Image want = renderPicture(other, doc.frame);
+  ASSERT_EQ(shown.pixels.size(), want.pixels.size());
+  for (size_t p = 0; p < want.pixels.size(); ++p)
+    ASSERT_EQ(shown.pixels[p], want.pixels[p]) << p;
+}
