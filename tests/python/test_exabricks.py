@@ -174,8 +174,9 @@ def test_save_and_png_write_the_last_render(cli, tmp_path):
 
 
 def test_a_path_traced_render_to_a_noise_target_equals_the_command_line(cli, tmp_path):
-    # The command line's default path tracing (to a noise of 2/255) written as a scene; Python
-    # reads it and renders the same picture, each tile stopping where the command line's did.
+    # The command line's default path tracing (denoised, to a noise of 2/255) written as a scene;
+    # Python reads it and renders the same picture, each tile stopping where the command line's
+    # did, and turning the denoiser off gives another.
     subprocess.run([cli, "generate", "-s", "blobs", "-n", "8000", "-o", str(tmp_path / "b.cells")], check=True)
     run = subprocess.run([cli, "render", str(tmp_path / "b.cells"), "-o", str(tmp_path / "cli.png"), "--size", "48x32",
                           "--integrator", "pathtrace", "--write-scene", str(tmp_path / "s.json"), "--json"],
@@ -183,10 +184,14 @@ def test_a_path_traced_render_to_a_noise_target_equals_the_command_line(cli, tmp
     measured = json.loads(run.stdout)
     assert measured["noise_target"] == 2 and measured["mean_samples_per_pixel"] < measured["samples_per_pixel"]
     s = eb.Scene.from_json(eb.load(tmp_path / "b.cells"), tmp_path / "s.json")
-    assert s.noise_target == 2 and s.spp == 1024
+    assert s.noise_target == 2 and s.spp == 1024 and s.denoise and measured["denoised"]
     s.render()
     s.save(tmp_path / "py.png")
     assert (tmp_path / "py.png").read_bytes() == (tmp_path / "cli.png").read_bytes()
+    s.denoise = False
+    s.render()
+    s.save(tmp_path / "raw.png")
+    assert (tmp_path / "raw.png").read_bytes() != (tmp_path / "cli.png").read_bytes()
 
 
 def test_render_and_save_equal_the_command_line(cli, tmp_path):
