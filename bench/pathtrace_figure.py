@@ -1,9 +1,10 @@
 #!/usr/bin/env python3
 """Regenerate docs/images/pathtrace-compare.png: plt_drop, the PeleLM plotfile (temp) and a
 generated cosmology-like density, each ray-marched (top row) and path-traced (bottom row) from
-the same camera, over the same ground plane. Prints every command and its time. Not a test.
+the same camera, over the same ground plane; the path tracer as it draws by default (denoised, to
+its noise target). Prints every command and its time. Not a test.
 
-usage: pathtrace_figure.py EXABRICKS [--data DIR] [--work DIR] [--spp-scale F] [-o OUT]
+usage: pathtrace_figure.py EXABRICKS [--data DIR] [--work DIR] [-o OUT]
 
 --data is $EXABRICKS_DATA (default /work/shared/data); --work holds the floor meshes, the
 generated cosmic.cells and the six panels (default /tmp/pathtrace-figure). Needs PIL.
@@ -32,20 +33,20 @@ DATASETS = [
          floor=(-3, -3, 4, 4, 0.0), floor_color="0.55,0.55,0.55",
          camera=["--look-at", "0.55,0.74,0.33", "--position", "1.65,1.375,1.219"],
          common=["--colormap", "cool-to-warm", "--opacity-scale", "0.15"],
-         pathtrace=["--spp", "384", "--albedo", "0.95"]),
+         pathtrace=["--albedo", "0.95"]),
     dict(name="pelelm", label="PeleLM (temp)",
          input="{data}/amrex/pelelm_3lev_3d/example_plt_3d",
          floor=(-0.05, -0.05, 0.066, 0.066, -0.0002), floor_color="0.55,0.55,0.55",
          camera=["--look-at", "0.008,0.006,0.005", "--position", "0.0455,0.02765,0.03"],
          common=["-f", "temp", "--colormap", "inferno", "--range", "298,1580",
                  "--opacity", "0,0,0.25,0,0.5,1,0.75,0,1,0.05", "--opacity-scale", "0.5"],
-         pathtrace=["--spp", "512", "--albedo", "0.9"]),
+         pathtrace=["--albedo", "0.9"]),
     dict(name="cosmic", label="cosmic (density, log)",
          input="{work}/cosmic.cells",
          floor=(-800, -800, 1100, 1100, -2), floor_color="0.55,0.55,0.55",
          camera=["--look-at", "150,170,105", "--position", "717.5,497.7,563.9"],
          common=["--colormap", "plasma", "--opacity-scale", "0.25"],
-         pathtrace=["--spp", "256", "--albedo", "0.9"]),
+         pathtrace=["--albedo", "0.9"]),
 ]
 
 
@@ -65,20 +66,11 @@ def write_floor(path, x0, y0, x1, y1, z):
                 "f 1 2 3\nf 1 3 4\n")
 
 
-def scaled_spp(opts, scale):
-    out = list(opts)
-    if "--spp" in out:
-        i = out.index("--spp") + 1
-        out[i] = str(max(1, round(int(out[i]) * scale)))
-    return out
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("exabricks")
     ap.add_argument("--data", default=os.environ.get("EXABRICKS_DATA", "/work/shared/data"))
     ap.add_argument("--work", default="/tmp/pathtrace-figure")
-    ap.add_argument("--spp-scale", type=float, default=1.0, help="quick previews: < 1")
     ap.add_argument("--only", help="render only this dataset (no figure)")
     ap.add_argument("-o", "--output", default=os.path.join(
         os.path.dirname(os.path.abspath(__file__)), "..", "docs", "images",
@@ -101,7 +93,7 @@ def main():
         march = os.path.join(a.work, f"{d['name']}-march.png")
         trace = os.path.join(a.work, f"{d['name']}-pathtrace.png")
         run(base + ["-o", march])
-        run(base + ["--integrator", "pathtrace"] + scaled_spp(d["pathtrace"], a.spp_scale) +
+        run(base + ["--integrator", "pathtrace"] + d["pathtrace"] +
             LIGHTS + ["-o", trace])
         panels.append((d["label"], march, trace))
     if a.only:
