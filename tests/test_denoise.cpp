@@ -9,6 +9,8 @@
 #include "exabricks/render/renderer.h"
 #include "exabricks/workflows/progressive.h"
 
+#include "lit_ball.h"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -16,6 +18,8 @@
 #include <random>
 
 using namespace exa;
+using exa::test::LitBall;
+using exa::test::rmsSteps;
 
 namespace {
 
@@ -66,17 +70,6 @@ double rmsError(const Image& image, const std::function<float(int, int)>& truth)
   return std::sqrt(sum / double(kSize * kSize));
 }
 
-/// The RMS difference of two images' 8-bit sRGB colours over black, in 1/255 steps.
-double rmsSteps(const Image& a, const Image& b) {
-  double sum = 0;
-  for (size_t p = 0; p < a.pixels.size(); ++p) {
-    const vec3f x = linearToSrgb(a.pixels[p].rgb()), y = linearToSrgb(b.pixels[p].rgb());
-    for (float d : {x.x - y.x, x.y - y.y, x.z - y.z})
-      sum += double(d * 255.f) * double(d * 255.f);
-  }
-  return std::sqrt(sum / double(3 * a.pixels.size()));
-}
-
 /// The mean absolute difference of two images' 5×5 box means, in 8-bit sRGB steps.
 double lowFrequencyDifference(const Image& a, const Image& b) {
   double sum = 0;
@@ -95,40 +88,6 @@ double lowFrequencyDifference(const Image& a, const Image& b) {
     }
   return sum / count;
 }
-
-/// A ball of scattering medium lit by the sun (as the noise-target tests use).
-struct LitBall {
-  Model model;
-  Scene scene;
-  Frame frame;
-  LitBall() {
-    CellSet cells;
-    cells.fields.push_back({"d", {}});
-    for (int z = 0; z < 32; ++z)
-      for (int y = 0; y < 32; ++y)
-        for (int x = 0; x < 32; ++x) {
-          cells.cells.push_back({vec3i(x, y, z), 0});
-          const vec3f d = vec3f(float(x), float(y), float(z)) + vec3f(0.5f) - vec3f(16.f);
-          cells.fields[0].values.push_back(std::max(0.f, 1.f - length(d) / 10.f));
-        }
-    model = buildModel(std::move(cells));
-    TransferFunction tf;
-    tf.colorMap.positions = {0.f, 1.f};
-    tf.colorMap.colors = {vec3f(1.f), vec3f(0.9f, 0.6f, 0.3f)};
-    tf.opacity = {{0.f, 0.f}, {1.f, 0.2f}};
-    tf.valueRange = range1f{0.f, 1.f};
-    scene = Scene::volumeOf(tf, "d");
-    scene.integration.integrator = Integrator::PathTrace;
-    scene.pathTracing.sunDirection = vec3f(-1.f, -1.f, -0.5f);
-    scene.pathTracing.sunIntensity = 3.f;
-    scene.pathTracing.environment = vec3f(0.1f);
-    frame.width = frame.height = kSize;
-    frame.camera.position = vec3d(16.0, 16.0, 90.0);
-    frame.camera.lookAt = vec3d(16.0);
-    frame.camera.up = vec3d(0.0, 1.0, 0.0);
-    frame.camera.fovy = 30.f;
-  }
-};
 
 } // namespace
 
