@@ -39,15 +39,15 @@ DenoiseGuide renderDenoiseGuide(Renderer& renderer, const Frame& frame) {
   const bool surfaces = !original.iso.values.empty() || !original.meshes.empty() || original.particles.show;
   try {
     pass(Shading::None, guide.albedo);
+    try {
+      if (surfaces) pass(Shading::Analytic, guide.shaded);
+    } catch (const Error& e) { // a device without analytic shading: the albedo guides alone
+      logInfo(strCat("denoising without the shaded guide: ", e.what()));
+      guide.shaded = Image();
+    }
   } catch (...) {
     renderer.setScene(original);
     throw;
-  }
-  try {
-    if (surfaces) pass(Shading::Analytic, guide.shaded);
-  } catch (const Error& e) { // a device without analytic shading: the albedo guides alone
-    logInfo(strCat("denoising without the shaded guide: ", e.what()));
-    guide.shaded = Image();
   }
   renderer.setScene(original);
   guide.seconds = timer.seconds();
