@@ -75,9 +75,11 @@ void renderTimed(const RenderCmdOptions& o, Renderer& renderer, const Frame& fra
     Timer whole;
     std::optional<DenoiseGuide> guide;
     std::optional<TileNoiseEstimate> estimate;
+    Image measured; // one process's rounds to a noise target end with their picture
+    const bool alone = mpi::processes().size == 1;
     if (!dataParallel && denoises(renderer.scene(), frame)) {
       guide = renderDenoiseGuide(renderer, frame);
-      estimate = mpi::wholeImage(denoisedNoise(*guide, renderer.scene().background));
+      estimate = mpi::wholeImage(denoisedNoise(*guide, renderer.scene().background, alone ? &measured : nullptr));
     }
     buffer.clear();
     const uint64_t share = dataParallel ? 1 : uint64_t(mpi::processes().size);
@@ -95,7 +97,10 @@ void renderTimed(const RenderCmdOptions& o, Renderer& renderer, const Frame& fra
     report.denoised = guide.has_value();
     if (guide) {
       Timer filter;
-      if (root) report.image = denoise(buffer, *guide, renderer.scene().background);
+      if (alone && NoiseRounds::applies(renderer.scene(), frame))
+        report.image = std::move(measured);
+      else if (root)
+        report.image = denoise(buffer, *guide, renderer.scene().background);
       report.guideSeconds = guide->seconds;
       report.filterSeconds = filter.seconds();
       stats.seconds = whole.seconds();

@@ -248,10 +248,11 @@ Image renderPicture(Renderer& renderer, const Frame& frame, RenderStats* stats) 
   if (!denoises(renderer.scene(), frame)) return renderer.render(frame, stats);
   Timer timer;
   const DenoiseGuide guide = renderDenoiseGuide(renderer, frame);
-  const TileNoiseEstimate estimate = denoisedNoise(guide, renderer.scene().background);
+  Image image; // rounds to a noise target end with the picture of their last measure
+  const TileNoiseEstimate estimate = denoisedNoise(guide, renderer.scene().background, &image);
   FrameBuffer buffer(frame.width, frame.height);
   renderer.renderSampled(frame, buffer, {}, &estimate);
-  Image image = denoise(buffer, guide, renderer.scene().background);
+  if (!NoiseRounds::applies(renderer.scene(), frame)) image = denoise(buffer, guide, renderer.scene().background);
   if (stats) {
     *stats = buffer.stats();
     stats->seconds = timer.seconds();
@@ -259,10 +260,12 @@ Image renderPicture(Renderer& renderer, const Frame& frame, RenderStats* stats) 
   return image;
 }
 
-TileNoiseEstimate denoisedNoise(const DenoiseGuide& guide, const vec3f& background, const DenoiseSettings& settings) {
+TileNoiseEstimate denoisedNoise(const DenoiseGuide& guide, const vec3f& background, Image* picture,
+                                const DenoiseSettings& settings) {
   TileNoiseEstimate estimate;
-  estimate.measure = [&guide, background, settings](const FrameBuffer& buffer, std::vector<float>& tileNoise) {
-    denoise(buffer, guide, background, &tileNoise, settings);
+  estimate.measure = [&guide, background, picture, settings](const FrameBuffer& buffer, std::vector<float>& tileNoise) {
+    Image denoised = denoise(buffer, guide, background, &tileNoise, settings);
+    if (picture) *picture = std::move(denoised);
   };
   return estimate;
 }

@@ -60,8 +60,10 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
 Image renderPicture(Renderer& renderer, const Frame& frame, RenderStats* stats = nullptr);
 
 /// The noise a frame's denoised picture keeps, per tile (for Renderer::renderSampled): denoise()'s
-/// tile noise. The guide must outlive the estimate.
-TileNoiseEstimate denoisedNoise(const DenoiseGuide& guide, const vec3f& background,
+/// tile noise. The guide (and `picture`) must outlive the estimate. `picture`, where given,
+/// receives the denoised picture of each measure: after rounds to a noise target, the picture of
+/// the buffer as they left it.
+TileNoiseEstimate denoisedNoise(const DenoiseGuide& guide, const vec3f& background, Image* picture = nullptr,
                                 const DenoiseSettings& settings = {});
 
 } // namespace exa
