@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <limits>
 
 namespace exa {
 
@@ -225,18 +224,7 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
   if (tileNoise) {
     tileNoise->assign(size_t(buffer.tileCount()), 0.f);
     tbb::parallel_for(0, buffer.tileCount(), [&](int tile) {
-      if (buffer.tilePasses(tile) < 2) {
-        (*tileNoise)[size_t(tile)] = std::numeric_limits<float>::infinity();
-        return;
-      }
-      double squared = 0;
-      int count = 0;
-      buffer.forTilePixels(tile, [&](int, int, size_t p) {
-        const vec3f& z = a.probe[p];
-        squared += double(z.x) * z.x + double(z.y) * z.y + double(z.z) * z.z;
-        count += 3;
-      });
-      (*tileNoise)[size_t(tile)] = count ? float(std::sqrt(squared / count)) : 0.f;
+      (*tileNoise)[size_t(tile)] = buffer.tileRms(tile, [&](size_t p) { return a.probe[p]; });
     });
   }
   Image out(width, height);

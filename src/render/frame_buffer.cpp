@@ -119,16 +119,7 @@ vec3f FrameBuffer::pixelNoise(size_t pixel, const vec3f& background) const {
 }
 
 float FrameBuffer::tileNoise(int tile, const vec3f& background) const {
-  if (tilePasses_.at(size_t(tile)) < 2) return std::numeric_limits<float>::infinity();
-  double squared = 0;
-  int count = 0;
-  forTilePixels(tile, [&](int, int, size_t i) {
-    const vec3f steps = pixelNoise(i, background);
-    squared +=
-        double(steps.x) * double(steps.x) + double(steps.y) * double(steps.y) + double(steps.z) * double(steps.z);
-    count += 3;
-  });
-  return count ? float(std::sqrt(squared / count)) : 0.f;
+  return tileRms(tile, [&](size_t i) { return pixelNoise(i, background); });
 }
 
 void FrameBuffer::resolve(Image& out) const {

@@ -5,7 +5,9 @@
 #include "exabricks/core/image.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace exa {
@@ -55,6 +57,19 @@ public:
     for (int y = ty * kRenderTile; y < std::min(height_, (ty + 1) * kRenderTile); ++y)
       for (int x = tx * kRenderTile; x < std::min(width_, (tx + 1) * kRenderTile); ++x)
         f(x, y, size_t(y) * size_t(width_) + size_t(x));
+  }
+  /// The RMS over a tile's pixels and channels of `perPixel(pixel index)` (a vec3f each);
+  /// infinite for a tile with fewer than two passes (its noise is not known).
+  template <typename F> float tileRms(int tile, F&& perPixel) const {
+    if (tilePasses_.at(size_t(tile)) < 2) return std::numeric_limits<float>::infinity();
+    double squared = 0;
+    int count = 0;
+    forTilePixels(tile, [&](int, int, size_t i) {
+      const vec3f v = perPixel(i);
+      squared += double(v.x) * double(v.x) + double(v.y) * double(v.y) + double(v.z) * double(v.z);
+      count += 3;
+    });
+    return count ? float(std::sqrt(squared / count)) : 0.f;
   }
   /// Passes per pixel, averaged over the pixels of the tiles that hold any.
   double meanPasses() const;
