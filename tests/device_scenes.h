@@ -211,6 +211,14 @@ inline std::vector<Variant> pathTracingVariants() {
          f.samplesPerPixel = 4;
        },
        false, false, true},
+      {"path tracing: a dense medium, through the majorant grid",
+       [](Scene& s, Frame& f, const DatasetInfo&, const box3d&) {
+         s.integration.integrator = Integrator::PathTrace;
+         s.pathTracing.sunIntensity = 2.f;
+         s.layers[0].tf.opacityScale = 30.f;
+         f.samplesPerPixel = 4;
+       },
+       false, false, true},
   };
 }
 

@@ -325,6 +325,8 @@ void MarchFlags::add(CLI::App& cmd) {
                "Measurement: reconstruct gradients with every batch, also after samples the transfer function hides");
   cmd.add_flag("--no-join-segments", noJoinSegments,
                "Measurement: one batch per region segment, instead of batches filled from consecutive segments");
+  cmd.add_flag("--no-majorant-grid", noMajorantGrid,
+               "Measurement: path tracing against the regions' majorants alone, without the majorant grid");
 }
 
 RendererOptions MarchFlags::options() const {
@@ -332,6 +334,7 @@ RendererOptions MarchFlags::options() const {
   r.vectorized = !scalar;
   r.lazyGradients = !noLazyGradients;
   r.joinSegments = !noJoinSegments;
+  r.majorantGrid = !noMajorantGrid;
   return r;
 }
 

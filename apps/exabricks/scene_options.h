@@ -72,6 +72,7 @@ struct MarchFlags {
   bool scalar = false;
   bool noLazyGradients = false;
   bool noJoinSegments = false;
+  bool noMajorantGrid = false;
 
   void add(CLI::App& cmd);
   RendererOptions options() const;

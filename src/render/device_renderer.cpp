@@ -183,6 +183,9 @@ void DeviceRenderer::syncVolume(const Scene& s, const VolumeMarcher& volume, Sce
                            albedo.empty() ? nullptr : put("albedo " + std::to_string(i), albedo, true, update)};
     }
     v.majorants = put("majorants", volume.majorants(), true, update);
+    v.majorantGrid = volume.majorantGrid().view();
+    if (v.majorantGrid.majorant)
+      v.majorantGrid.majorant = put("majorant grid", volume.majorantGrid().majorants(), true, update);
     v.extinctionPerLog2 = volume.extinctionPerLog2();
     v.path = pathSettingsOf(s.pathTracing, dataset_.worldDiagonal);
   }

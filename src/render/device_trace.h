@@ -61,6 +61,7 @@ struct TraceView {
   bool pathTrace = false;
   MediumLayer mediumLayers[kTraceMaxLayers];
   const float* majorants = nullptr;
+  MajorantGridView majorantGrid;
   float extinctionPerLog2 = 1.f;
   PathSettings path;
   // Iso-surfaces.
@@ -247,7 +248,8 @@ template <bool Surfaces> EXA_HOST_DEVICE inline vec4f tracePathSample(const Trac
   float rho;
   const ClipView clip{v.planes, v.planeCount, v.clipBox};
   const DualRay dr = cameraRay(v.frame, v.world, &clip, x, y, rng, rho);
-  const MediumView medium{v.mediumLayers, v.volume ? v.layerCount : 0, v.majorants, v.extinctionPerLog2, v.path.albedo};
+  const MediumView medium{v.mediumLayers, v.volume ? v.layerCount : 0, v.majorants,
+                          v.majorantGrid, v.extinctionPerLog2,         v.path.albedo};
   auto traverse = [&](const Ray& ray, auto&& emit) {
     if (v.volume) walkRegionTree(v.volumeTree, ray, emit);
   };

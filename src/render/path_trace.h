@@ -30,14 +30,76 @@ struct MediumLayer {
   const float* albedo = nullptr;
 };
 
+/// A majorant grid: macrocells (amr/macrocells.h) over the regions' box, each with the largest
+/// extinction (per lattice unit) the medium reaches anywhere in it (0: none). Null `majorant`:
+/// no grid, the regions' majorants alone.
+struct MajorantGridView {
+  const float* majorant = nullptr;
+  vec3i dims{0};
+  vec3f lower{0.f};
+  float cellSize = 1.f;
+};
+
+/// The macrocells of a majorant grid that a lattice ray crosses from t on, in order (a 3-D DDA
+/// over the grid's planes): the current one's majorant and the t where the ray leaves it. Outside
+/// the grid, or without one, the majorant is unbounded (infinity) and the exit never comes.
+struct MacrocellWalk {
+  vec3i cell{0}, step{0};
+  vec3f tNext{0.f}, tDelta{0.f};
+  bool inside = false;
+
+  /// Continues to the macrocell at t (ahead along the ray): a few steps, or a new start (also
+  /// where `started` is false).
+  EXA_HOST_DEVICE void moveTo(const MajorantGridView& g, const Ray& ray, float t, bool started) {
+    if (!g.majorant) return;
+    for (int k = 0; started && k < 4; ++k) {
+      if (!inside) break;
+      if (exit() > t) return;
+      advance(g);
+    }
+    start(g, ray, t);
+  }
+  /// Starts at the macrocell that holds the point at t (the nearest one where rounding puts the
+  /// point just outside the grid).
+  EXA_HOST_DEVICE void start(const MajorantGridView& g, const Ray& ray, float t) {
+    inside = g.majorant != nullptr;
+    if (!inside) return;
+    const vec3f p = ray.org + ray.dir * t;
+    for (int a = 0; a < 3; ++a) {
+      const int c = int(floorf((p[a] - g.lower[a]) / g.cellSize));
+      cell[a] = c < 0 ? 0 : (c > g.dims[a] - 1 ? g.dims[a] - 1 : c);
+      const float d = ray.dir[a];
+      step[a] = d > 0.f ? 1 : (d < 0.f ? -1 : 0);
+      const float plane = g.lower[a] + float(cell[a] + (d > 0.f ? 1 : 0)) * g.cellSize;
+      tNext[a] = d != 0.f ? (plane - ray.org[a]) / d : INFINITY;
+      tDelta[a] = d != 0.f ? g.cellSize / fabsf(d) : INFINITY;
+    }
+  }
+  EXA_HOST_DEVICE int axis() const {
+    return tNext.x <= tNext.y ? (tNext.x <= tNext.z ? 0 : 2) : (tNext.y <= tNext.z ? 1 : 2);
+  }
+  EXA_HOST_DEVICE float exit() const { return inside ? tNext[axis()] : INFINITY; }
+  EXA_HOST_DEVICE float majorant(const MajorantGridView& g) const {
+    return inside ? g.majorant[cell.x + size_t(g.dims.x) * (cell.y + size_t(g.dims.y) * cell.z)] : INFINITY;
+  }
+  EXA_HOST_DEVICE void advance(const MajorantGridView& g) {
+    const int a = axis();
+    cell[a] += step[a];
+    tNext[a] += tDelta[a];
+    inside = cell[a] >= 0 && cell[a] < g.dims[a];
+  }
+};
+
 /// The medium as plain data: the layers (their extinctions add), a majorant per region
-/// (extinction per lattice unit; 0 where nothing can be seen), and the factor from a table's
-/// -log2 transmittance to extinction per lattice unit (ln 2 over the reference width), and the
-/// albedo of layers without one of their own.
+/// (extinction per lattice unit; 0 where nothing can be seen) and a majorant grid (the smaller
+/// of the two bounds holds), the factor from a table's -log2 transmittance to extinction per
+/// lattice unit (ln 2 over the reference width), and the albedo of layers without one of their
+/// own.
 struct MediumView {
   const MediumLayer* layers = nullptr;
   int layerCount = 0;
   const float* majorant = nullptr;
+  MajorantGridView grid;
   float extinctionPerLog2 = 1.f;
   float albedo = 0.8f;
 };
@@ -184,24 +246,54 @@ EXA_HOST_DEVICE inline vec3d sampleHenyeyGreenstein(const vec3d& dir, float g, P
   return aroundAxis(dir, fmin(1.0, fmax(-1.0, double(cosTheta))), phi);
 }
 
+/// The optical depth of a macrocell at its region's majorant below which tentativeCollisions
+/// leaves the majorant grid aside in that region.
+constexpr float kMajorantGridMinDepth = 0.25f;
+
 /// Tentative collisions along a lattice ray (unit direction) within [tmin, tmax]: exponential
-/// steps against each region's majorant, and at each `visit(t, ratio, color)` with the ratio of
-/// the extinction there to the majorant and the medium there, until it returns false.
-/// `samples` counts them.
+/// steps against a piecewise-constant majorant (in each region segment, per macrocell the smaller
+/// of the region's and the macrocell's). Each step draws an optical depth and spends it piece by
+/// piece (a piece costs its length times its majorant), so crossing a piece costs no random
+/// number. At each collision `visit(t, ratio, color)` gets the ratio of the extinction there to
+/// the majorant and the medium there, until it returns false. `samples` counts them.
 template <typename Traverse, typename Visit>
 EXA_HOST_DEVICE inline void tentativeCollisions(const MediumView& m, Traverse&& traverse, const Ray& ray,
                                                 PixelRandom& rng, uint64_t& samples, Visit&& visit) {
+  float depth = -logf(1.f - rng.next()); // optical depth left to the next tentative collision
+  MacrocellWalk walk;                    // carried from segment to segment along the ray
+  bool walking = false;
   traverse(ray, [&](const Segment& seg) {
-    const float majorant = m.majorant[seg.region];
-    if (!(majorant > 0.f)) return true;
+    const float regionMajorant = m.majorant[seg.region];
+    if (!(regionMajorant > 0.f)) return true;
     float t = fmaxf(seg.t0, ray.tmin);
     const float end = fminf(seg.t1, ray.tmax);
+    if (!(t < end)) return true;
+    // Where even the region's majorant gives a macrocell little optical depth, the grid would
+    // save few collisions for the steps it costs: the region's majorant alone.
+    const bool gridded = m.grid.majorant && regionMajorant * m.grid.cellSize >= kMajorantGridMinDepth;
+    if (gridded) {
+      walk.moveTo(m.grid, ray, t, walking);
+      walking = true;
+    }
     for (;;) {
-      t -= logf(1.f - rng.next()) / majorant;
-      if (t >= end) return true;
-      ++samples;
-      const MediumSample here = mediumAt(m, seg.region, ray.org + ray.dir * t);
-      if (!visit(t, fminf(1.f, here.extinction / majorant), here)) return false;
+      const float pieceEnd = gridded ? fminf(walk.exit(), end) : end;
+      const float majorant = gridded ? fminf(regionMajorant, walk.majorant(m.grid)) : regionMajorant;
+      if (majorant > 0.f)
+        for (;;) {
+          const float reach = (pieceEnd - t) * majorant;
+          if (!(depth < reach)) {
+            depth -= fmaxf(reach, 0.f);
+            break;
+          }
+          t += depth / majorant;
+          depth = -logf(1.f - rng.next());
+          ++samples;
+          const MediumSample here = mediumAt(m, seg.region, ray.org + ray.dir * t);
+          if (!visit(t, fminf(1.f, here.extinction / majorant), here)) return false;
+        }
+      if (pieceEnd >= end) return true;
+      t = fmaxf(t, pieceEnd);
+      walk.advance(m.grid);
     }
   });
 }

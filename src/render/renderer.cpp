@@ -140,12 +140,12 @@ struct Renderer::Impl {
     mediumLayers.clear();
     for (const LayerTable& layer : volume.layers())
       mediumLayers.push_back({layer.view, layer.t, layer.albedo.empty() ? nullptr : layer.albedo.data()});
-    volume.updateMajorants();
+    volume.updateMajorants(options.majorantGrid);
   }
 
   MediumView medium() const {
-    return {mediumLayers.data(), int(mediumLayers.size()), volume.majorants().data(), volume.extinctionPerLog2(),
-            scene.pathTracing.albedo};
+    return {mediumLayers.data(),          int(mediumLayers.size()),   volume.majorants().data(),
+            volume.majorantGrid().view(), volume.extinctionPerLog2(), scene.pathTracing.albedo};
   }
 
   /// One path-traced sample of pixel (x, y): premultiplied radiance and whether the path met the
@@ -353,7 +353,15 @@ Device Renderer::device() const { return impl_->device ? impl_->device->device()
 DeviceMemory Renderer::deviceMemory() const { return impl_->device ? impl_->device->memory() : DeviceMemory(); }
 
 const Scene& Renderer::scene() const { return impl_->scene; }
-void Renderer::setOptions(const RendererOptions& options) { impl_->options = options; }
+void Renderer::setOptions(const RendererOptions& options) {
+  Impl& im = *impl_;
+  const bool majorants = options.majorantGrid != im.options.majorantGrid;
+  im.options = options;
+  if (!majorants || !im.haveScene || im.scene.integration.integrator != Integrator::PathTrace) return;
+  im.updateMedium();
+  SceneUpdate u{.volume = true};
+  if (im.device) im.device->sync(im.scene, im.volume, im.surfaces, u);
+}
 const RendererOptions& Renderer::options() const { return impl_->options; }
 const DatasetInfo& Renderer::dataset() const { return impl_->dataset; }
 const Model& Renderer::model() const { return impl_->model; }

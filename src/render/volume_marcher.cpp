@@ -319,7 +319,8 @@ MarchSettings MarchSettings::of(const Scene& scene, const RendererOptions& optio
   return m;
 }
 
-VolumeMarcher::VolumeMarcher(const Model& model, const DatasetInfo& dataset) : model_(model), dataset_(dataset) {
+VolumeMarcher::VolumeMarcher(const Model& model, const DatasetInfo& dataset)
+    : model_(model), dataset_(dataset), majorantGrid_(model) {
   referenceWidth_ = dataset.referenceWidth;
   invScale_ = vec3f(1.0 / model.world.scale.x, 1.0 / model.world.scale.y, 1.0 / model.world.scale.z);
   meanScale_ = float((model.world.scale.x + model.world.scale.y + model.world.scale.z) / 3.0);
@@ -357,7 +358,7 @@ void VolumeMarcher::update(const std::vector<VolumeLayer>& layers, const std::ve
 
 float VolumeMarcher::extinctionPerLog2() const { return float(std::log(2.0)) / referenceWidth_; }
 
-void VolumeMarcher::updateMajorants() {
+void VolumeMarcher::updateMajorants(bool grid) {
   const float perLog2 = extinctionPerLog2();
   majorants_.assign(model_.regions.regions.size(), 0.f);
   tbb::parallel_for(size_t(0), majorants_.size(), [&](size_t i) {
@@ -367,6 +368,7 @@ void VolumeMarcher::updateMajorants() {
       sum += tableMaxExtinction(layer.t, model_.regions.valueRanges[size_t(layer.field)][i], perLog2);
     majorants_[i] = sum;
   });
+  majorantGrid_.update(grid ? layers_ : std::vector<LayerTable>(), perLog2);
 }
 
 const std::array<std::vector<float>, 3>* VolumeMarcher::gradients(int field) const {

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "layer_table.h"
+#include "majorant_grid.h"
 #include "ray_program.h"
 
 #include "exabricks/accel/traversal.h"
@@ -50,10 +51,11 @@ public:
   const RegionTraversal* traversal() const { return traversal_.get(); }
   const std::vector<uint8_t>& visible() const { return visible_; }
   /// The path tracer's majorants: per region, the largest extinction (per lattice unit) its
-  /// value ranges reach through every layer's table, summed (0 for hidden regions). Rebuilt by
-  /// updateMajorants from the current tables.
-  void updateMajorants();
+  /// value ranges reach through every layer's table, summed (0 for hidden regions), and the
+  /// majorant grid's (`grid` false: none). Rebuilt by updateMajorants from the current tables.
+  void updateMajorants(bool grid = true);
   const std::vector<float>& majorants() const { return majorants_; }
+  const MajorantGrid& majorantGrid() const { return majorantGrid_; }
   /// Extinction per lattice unit of a table entry's -log2 transmittance (ln 2 / reference width).
   float extinctionPerLog2() const;
 
@@ -75,6 +77,7 @@ private:
   std::map<int, std::array<std::vector<float>, 3>> gradientFields_;
   std::vector<uint8_t> visible_;
   std::vector<float> majorants_;
+  MajorantGrid majorantGrid_;
   std::unique_ptr<RegionTraversal> traversal_;
   std::unique_ptr<CellLocator> locator_; ///< only for Reconstruction::CellLocation
   float referenceWidth_ = 1.f;           ///< opacity reference (dataset's finest cell width), lattice units

@@ -143,6 +143,9 @@ struct RendererOptions {
   /// Fill each batch with the samples of consecutive region segments (reconstructed over the
   /// union of their regions' brick lists); off: one batch per segment.
   bool joinSegments = true;
+  /// Path tracing: delta tracking against a majorant grid (macrocells over the regions) as well
+  /// as the regions' majorants; off: the regions' majorants alone.
+  bool majorantGrid = true;
   friend bool operator==(const RendererOptions&, const RendererOptions&) = default;
 };
 
@@ -238,7 +241,8 @@ public:
   void setParticles(std::shared_ptr<const ParticleSet> particles);
   /// Spheres drawn for the particles (0 where none are shown).
   size_t particleCount() const;
-  /// How the following passes compute (RendererOptions); takes effect at once, rebuilds nothing.
+  /// How the following passes compute (RendererOptions); takes effect at once, rebuilding only the
+  /// path tracer's majorants when majorantGrid changes.
   void setOptions(const RendererOptions& options);
   const RendererOptions& options() const;
   /// Where the following passes run. Device::Cuda copies the model (bricks, regions, k-d tree,

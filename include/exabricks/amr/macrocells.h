@@ -1,0 +1,38 @@
+// Macrocells: a coarse uniform grid of cubic cells over a box of the lattice, and per macrocell
+// the range of a field's values over every cell whose basis support meets it, which bounds the
+// reconstruction anywhere in the macrocell (a weighted mean of those cells' values). The path
+// tracer's majorant grid is built on it. Its size is bounded whatever the box's volume.
+#pragma once
+
+#include "exabricks/amr/bricks.h"
+
+#include <cstddef>
+#include <vector>
+
+namespace exa {
+
+struct MacrocellGrid {
+  vec3f lower{0.f};   ///< lattice
+  float cellSize = 1; ///< lattice units per macrocell edge
+  vec3i dims{0};      ///< macrocells per axis, x fastest in arrays over the grid
+
+  size_t count() const { return size_t(dims.x) * size_t(dims.y) * size_t(dims.z); }
+  size_t index(const vec3i& c) const { return size_t(c.x) + size_t(dims.x) * (size_t(c.y) + size_t(dims.y) * c.z); }
+  /// Closed lattice box of macrocell c.
+  box3f bounds(const vec3i& c) const {
+    const vec3f lo = lower + vec3f(c) * cellSize;
+    return {lo, lo + vec3f(cellSize)};
+  }
+};
+
+/// Cubic macrocells covering `bounds` (lattice): at most `perAxis` along its longest axis and at
+/// least `minWidth` lattice units wide (an integer width).
+MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis = 64, int minWidth = 4);
+
+/// For every macrocell, the range of `values` (brick-ordered, one per cell of `bricks`) over the
+/// cells whose support (open, centre ± cell width) meets the macrocell or touches its faces;
+/// empty where none does.
+std::vector<range1f> macrocellValueRanges(const MacrocellGrid& grid, const std::vector<Brick>& bricks,
+                                          const float* values);
+
+} // namespace exa

@@ -1,0 +1,75 @@
+#include "exabricks/amr/macrocells.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace exa {
+
+MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis, int minWidth) {
+  MacrocellGrid g;
+  const vec3f extent = bounds.upper - bounds.lower;
+  const float longest = std::max({extent.x, extent.y, extent.z, 0.f});
+  g.cellSize = std::max(float(std::max(1, minWidth)), std::ceil(longest / float(std::max(1, perAxis))));
+  g.lower = bounds.lower;
+  for (int a = 0; a < 3; ++a)
+    g.dims[a] = std::max(1, int(std::ceil(std::max(0.f, extent[a]) / g.cellSize)));
+  return g;
+}
+
+namespace {
+
+/// The macrocells [first, last] along one axis that the closed lattice interval [a, b] meets.
+void macrocellSpan(const MacrocellGrid& g, int axis, double a, double b, int& first, int& last) {
+  const double lower = double(g.lower[axis]), size = double(g.cellSize);
+  first = int(std::max(0.0, std::floor((a - lower) / size)));
+  last = int(std::min(double(g.dims[axis] - 1), std::floor((b - lower) / size)));
+}
+
+} // namespace
+
+std::vector<range1f> macrocellValueRanges(const MacrocellGrid& g, const std::vector<Brick>& bricks,
+                                          const float* values) {
+  const size_t layerSize = size_t(g.dims.x) * size_t(g.dims.y);
+  std::vector<range1f> ranges(g.count());
+  // Each layer of macrocells (along z) is filled by one task from the bricks whose supports reach
+  // it: no two tasks write the same macrocell. Cell i's support along an axis is
+  // (lower + (i - 0.5) w, lower + (i + 1.5) w).
+  std::vector<std::vector<uint32_t>> bricksOfLayer(size_t(g.dims.z));
+  for (size_t b = 0; b < bricks.size(); ++b) {
+    const Brick& brick = bricks[b];
+    const double w = brick.cellWidth();
+    int first, last;
+    macrocellSpan(g, 2, brick.lower.z - 0.5 * w, brick.lower.z + (brick.size.z + 0.5) * w, first, last);
+    for (int z = first; z <= last; ++z)
+      bricksOfLayer[size_t(z)].push_back(uint32_t(b));
+  }
+  tbb::parallel_for(0, g.dims.z, [&](int mz) {
+    const double slab0 = double(g.lower.z) + double(mz) * g.cellSize, slab1 = slab0 + g.cellSize;
+    range1f* layer = ranges.data() + layerSize * size_t(mz);
+    for (uint32_t b : bricksOfLayer[size_t(mz)]) {
+      const Brick& brick = bricks[b];
+      const double w = brick.cellWidth();
+      // The cells whose support meets the slab: lower + (z + 1.5) w > slab0, lower + (z - 0.5) w < slab1.
+      const int z0 = std::max(0, int(std::floor((slab0 - brick.lower.z) / w - 1.5)) + 1);
+      const int z1 = std::min(brick.size.z - 1, int(std::ceil((slab1 - brick.lower.z) / w + 0.5)) - 1);
+      for (int z = z0; z <= z1; ++z)
+        for (int y = 0; y < brick.size.y; ++y) {
+          int y0, y1;
+          macrocellSpan(g, 1, brick.lower.y + (y - 0.5) * w, brick.lower.y + (y + 1.5) * w, y0, y1);
+          const float* row = values + brick.valueOffset + size_t(brick.size.x) * (y + size_t(brick.size.y) * z);
+          for (int x = 0; x < brick.size.x; ++x) {
+            int x0, x1;
+            macrocellSpan(g, 0, brick.lower.x + (x - 0.5) * w, brick.lower.x + (x + 1.5) * w, x0, x1);
+            for (int my = y0; my <= y1; ++my)
+              for (int mx = x0; mx <= x1; ++mx)
+                layer[size_t(mx) + size_t(g.dims.x) * size_t(my)].extend(row[x]);
+          }
+        }
+    }
+  });
+  return ranges;
+}
+
+} // namespace exa
