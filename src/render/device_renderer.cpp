@@ -184,8 +184,10 @@ void DeviceRenderer::syncVolume(const Scene& s, const VolumeMarcher& volume, Sce
     }
     v.majorants = put("majorants", volume.majorants(), true, update);
     v.majorantGrid = volume.majorantGrid().view();
-    if (v.majorantGrid.majorant)
+    if (v.majorantGrid.majorant) {
       v.majorantGrid.majorant = put("majorant grid", volume.majorantGrid().majorants(), true, update);
+      v.majorantGrid.gridded = put("gridded regions", volume.majorantGrid().gridded(), true, update);
+    }
     v.extinctionPerLog2 = volume.extinctionPerLog2();
     v.path = pathSettingsOf(s.pathTracing, dataset_.worldDiagonal);
   }

@@ -2,14 +2,19 @@
 
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cmath>
+
 namespace exa {
 
 MajorantGrid::MajorantGrid(const Model& model) : model_(model) {
   if (!model.regions.regions.empty()) grid_ = macrocellsOver(model.regions.bounds);
 }
 
-void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctionPerLog2) {
+void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctionPerLog2,
+                          const std::vector<float>& regionMajorants) {
   majorants_.clear();
+  gridded_.clear();
   if (model_.regions.regions.empty() || layers.empty()) return;
   std::vector<const std::vector<range1f>*> ranges;
   for (const LayerTable& layer : layers) {
@@ -28,11 +33,31 @@ void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctio
       sum += tableMaxExtinction(layers[l].t, (*ranges[l])[i], extinctionPerLog2);
     majorants_[i] = sum;
   });
+  // Per region, the mean over the macrocells it overlaps of the majorant a ray there would use.
+  const std::vector<Region>& regions = model_.regions.regions;
+  gridded_.assign(regions.size(), 0);
+  tbb::parallel_for(size_t(0), regions.size(), [&](size_t r) {
+    const float own = regionMajorants[r];
+    if (!(own > 0.f)) return;
+    const box3f b = regions[r].bounds();
+    vec3i lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::clamp(int(std::floor((b.lower[a] - grid_.lower[a]) / grid_.cellSize)), 0, grid_.dims[a] - 1);
+      hi[a] = std::clamp(int(std::ceil((b.upper[a] - grid_.lower[a]) / grid_.cellSize)) - 1, lo[a], grid_.dims[a] - 1);
+    }
+    double sum = 0;
+    for (int z = lo.z; z <= hi.z; ++z)
+      for (int y = lo.y; y <= hi.y; ++y)
+        for (int x = lo.x; x <= hi.x; ++x)
+          sum += std::min(own, majorants_[grid_.index({x, y, z})]);
+    const double cells = double(hi.x - lo.x + 1) * double(hi.y - lo.y + 1) * double(hi.z - lo.z + 1);
+    gridded_[r] = (double(own) - sum / cells) * double(grid_.cellSize) >= double(kMajorantGridMinSaving);
+  });
 }
 
 MajorantGridView MajorantGrid::view() const {
   if (majorants_.empty()) return {};
-  return {majorants_.data(), grid_.dims, grid_.lower, grid_.cellSize};
+  return {majorants_.data(), gridded_.data(), grid_.dims, grid_.lower, grid_.cellSize};
 }
 
 } // namespace exa

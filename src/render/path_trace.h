@@ -31,10 +31,12 @@ struct MediumLayer {
 };
 
 /// A majorant grid: macrocells (amr/macrocells.h) over the regions' box, each with the largest
-/// extinction (per lattice unit) the medium reaches anywhere in it (0: none). Null `majorant`:
-/// no grid, the regions' majorants alone.
+/// extinction (per lattice unit) the medium reaches anywhere in it (0: none), and per region
+/// whether a ray there walks the grid (where it saves more collisions than its steps cost). Null
+/// `majorant`: no grid, the regions' majorants alone.
 struct MajorantGridView {
   const float* majorant = nullptr;
+  const uint8_t* gridded = nullptr;
   vec3i dims{0};
   vec3f lower{0.f};
   float cellSize = 1.f;
@@ -246,10 +248,6 @@ EXA_HOST_DEVICE inline vec3d sampleHenyeyGreenstein(const vec3d& dir, float g, P
   return aroundAxis(dir, fmin(1.0, fmax(-1.0, double(cosTheta))), phi);
 }
 
-/// The optical depth of a macrocell at its region's majorant below which tentativeCollisions
-/// leaves the majorant grid aside in that region.
-constexpr float kMajorantGridMinDepth = 0.25f;
-
 /// Tentative collisions along a lattice ray (unit direction) within [tmin, tmax]: exponential
 /// steps against a piecewise-constant majorant (in each region segment, per macrocell the smaller
 /// of the region's and the macrocell's). Each step draws an optical depth and spends it piece by
@@ -268,9 +266,7 @@ EXA_HOST_DEVICE inline void tentativeCollisions(const MediumView& m, Traverse&& 
     float t = fmaxf(seg.t0, ray.tmin);
     const float end = fminf(seg.t1, ray.tmax);
     if (!(t < end)) return true;
-    // Where even the region's majorant gives a macrocell little optical depth, the grid would
-    // save few collisions for the steps it costs: the region's majorant alone.
-    const bool gridded = m.grid.majorant && regionMajorant * m.grid.cellSize >= kMajorantGridMinDepth;
+    const bool gridded = m.grid.majorant && m.grid.gridded[seg.region];
     if (gridded) {
       walk.moveTo(m.grid, ray, t, walking);
       walking = true;

@@ -368,7 +368,7 @@ void VolumeMarcher::updateMajorants(bool grid) {
       sum += tableMaxExtinction(layer.t, model_.regions.valueRanges[size_t(layer.field)][i], perLog2);
     majorants_[i] = sum;
   });
-  majorantGrid_.update(grid ? layers_ : std::vector<LayerTable>(), perLog2);
+  majorantGrid_.update(grid ? layers_ : std::vector<LayerTable>(), perLog2, majorants_);
 }
 
 const std::array<std::vector<float>, 3>* VolumeMarcher::gradients(int field) const {
