@@ -11,9 +11,12 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <vector>
 
 using namespace exa;
 using exa::test::LitBall;
@@ -63,7 +66,17 @@ TEST(NoiseTarget, EachTileStopsAtTheTargetAndEqualsARenderOfItsPasses) {
   frame.samplesPerPixel = 512;
   frame.noiseTarget = 2.f;
   FrameBuffer adaptive(frame.width, frame.height);
-  ASSERT_TRUE(renderer.renderSampled(frame, adaptive));
+  // The progress total: the tile passes planned, growing round by round to those taken.
+  std::vector<uint64_t> planned;
+  std::atomic<uint64_t> tilePasses{0};
+  PassControl control;
+  control.planned = [&](uint64_t n) { planned.push_back(n); };
+  control.progress = [&](uint64_t, uint64_t) { ++tilePasses; };
+  ASSERT_TRUE(renderer.renderSampled(frame, adaptive, control));
+  ASSERT_GE(planned.size(), 2u);
+  EXPECT_EQ(planned.front(), uint64_t(adaptive.tileCount()) * kNoiseFirstPasses);
+  EXPECT_TRUE(std::is_sorted(planned.begin(), planned.end()));
+  EXPECT_EQ(planned.back(), tilePasses.load());
   uint32_t fewest = 100000, most = 0;
   for (int t = 0; t < adaptive.tileCount(); ++t) {
     const uint32_t n = adaptive.tilePasses(t);

@@ -88,6 +88,7 @@ void renderTimed(const RenderCmdOptions& o, Renderer& renderer, const Frame& fra
     if (!showProgress) progress.finish();
     PassControl control;
     control.progress = [&](uint64_t, uint64_t) { progress.advance(1); };
+    control.planned = [&](uint64_t passes) { progress.setTotal(passes); };
     if (dataParallel)
       mpi::renderFrameComposited(&renderer, frame, buffer, order, control);
     else

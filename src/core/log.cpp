@@ -1,5 +1,6 @@
 #include "exabricks/core/log.h"
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -36,7 +37,7 @@ void logDebug(const std::string& m) {
 
 struct Progress::Impl {
   std::string label;
-  uint64_t total;
+  std::atomic<uint64_t> total;
   std::atomic<uint64_t> done{0};
   bool enabled;
   bool terminal; ///< redraw one line; else append lines now and then
@@ -59,7 +60,8 @@ struct Progress::Impl {
     std::lock_guard<std::mutex> lock(gMutex);
     if (finished) return;
     drawn = true;
-    const double fraction = total ? double(done) / double(total) : 1.0;
+    const uint64_t all = total;
+    const double fraction = all ? std::min(1.0, double(done) / double(all)) : 1.0;
     const double seconds = timer.seconds();
     if (terminal)
       std::fprintf(stderr, "\rexabricks: %s %5.1f%% (%.1f s)", label.c_str(), 100.0 * fraction, seconds);
@@ -95,6 +97,8 @@ void Progress::advance(uint64_t amount) {
   if (!impl_->enabled || impl_->finished || !impl_->terminal) return;
   impl_->draw();
 }
+
+void Progress::setTotal(uint64_t total) { impl_->total = total; }
 
 void Progress::finish() {
   if (!impl_->enabled || impl_->finished.exchange(true)) return;

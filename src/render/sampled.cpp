@@ -32,6 +32,15 @@ void NoiseRounds::start(const Frame& frame, const FrameBuffer& buffer, const Pas
   for (int t : selected)
     goal_[size_t(t)] =
         uint32_t(std::min(frame.samplesPerPixel, frame.denoise ? kDenoisedFirstPasses : kNoiseFirstPasses));
+  tellPlanned(control);
+}
+
+void NoiseRounds::tellPlanned(const PassControl& control) const {
+  if (!control.planned) return;
+  uint64_t sum = 0;
+  for (uint32_t g : goal_)
+    sum += g;
+  control.planned(sum);
 }
 
 bool denoises(const Scene& scene, const Frame& frame) {
@@ -75,6 +84,7 @@ bool NoiseRounds::next(const Frame& frame, const FrameBuffer& buffer, const vec3
     }
     if (estimate && estimate->agree) more = estimate->agree(more); // another round for all, or none
     if (!more) return false;
+    tellPlanned(control);
   }
 }
 

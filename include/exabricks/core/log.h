@@ -38,6 +38,8 @@ public:
   Progress(std::string label, uint64_t total);
   ~Progress();
   void advance(uint64_t amount);
+  /// The work's total, where it grows as the work goes (passes planned round by round).
+  void setTotal(uint64_t total);
   void finish();
 
 private:

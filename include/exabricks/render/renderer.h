@@ -162,6 +162,9 @@ struct PassControl {
   const std::atomic<bool>* cancel = nullptr;
   /// Called from worker threads after each tile with (tiles done, tiles in the pass).
   std::function<void(uint64_t, uint64_t)> progress;
+  /// Under a noise target (NoiseRounds), called with the tile passes planned so far for the
+  /// selected tiles, at the start and whenever a round plans more: a progress total that grows.
+  std::function<void(uint64_t)> planned;
 };
 
 /// What a first view frames, in lattice units: the regions that may show the volume, the cells in
@@ -217,6 +220,7 @@ public:
             int& frameIndex, const TileNoiseEstimate* estimate = nullptr);
 
 private:
+  void tellPlanned(const PassControl& control) const;
   std::vector<uint32_t> goal_;
   std::vector<uint8_t> mask_;
   std::vector<float> noise_;
