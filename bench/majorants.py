@@ -16,15 +16,12 @@ usage: bench/majorants.py EXABRICKS [--data DIR] [--size 256] [--spp 8] [--frame
 is always measured; shared samples that are absent are skipped with a note. Needs numpy and PIL.
 """
 import argparse
-import json
 import os
-import subprocess
-import sys
 
 import numpy as np
-from PIL import Image
 
-SUN = ["--sun", "-0.75,0.5,-0.7,5", "--bounces", "4"]
+from pathtrace_bench import SUN, dataset, pixels, render
+
 # name, input relative to --data (None: generated), options of both integrators.
 CASES = [
     ("plt_drop", "amrex/advection_3d/plt_drop", []),
@@ -32,17 +29,6 @@ CASES = [
     ("plt_eb_3d", "amrex/pele_eb_3d/plt_eb_3d", []),
     ("cosmic 1M", None, []),
 ]
-
-
-def render(exe, args, out):
-    run = subprocess.run([exe, "render"] + args + ["-o", out, "--json"], capture_output=True, text=True)
-    if run.returncode != 0:
-        sys.exit("failed: %s\n%s" % (" ".join(args), run.stderr))
-    return json.loads(run.stdout)
-
-
-def pixels(path):
-    return np.asarray(Image.open(path).convert("RGB")).astype(float)
 
 
 def rms(a, b):
@@ -68,15 +54,9 @@ def main():
         "build s", "rms grid/regions, seeds"))
     rows = []
     for name, rel, common in CASES:
-        if rel is None:
-            path = os.path.join(a.work, "cosmic.cells")
-            if not os.path.exists(path):
-                subprocess.run([a.exe, "-q", "generate", "-s", "cosmic", "-n", "1000000", "-o", path], check=True)
-        else:
-            path = os.path.join(a.data, rel)
-            if not os.path.exists(path):
-                print("%-12s skipped: %s is absent" % (name, path))
-                continue
+        path = dataset(a.exe, name, rel, a.data, a.work)
+        if path is None:
+            continue
         rows.append((name, path, common))
         size = ["--size", "%dx%d" % (a.size, a.size)]
         w = lambda tag: os.path.join(a.work, "%s-%s.png" % (name.replace(" ", "_"), tag))
@@ -94,8 +74,8 @@ def main():
     if a.no_target:
         return
     print("\nAt %d², the default path-traced frame (denoised, to the noise target):" % a.target_size)
-    print("%-12s %8s | %8s %8s | %8s %8s | %s" % ("dataset", "march s", "grid s", "x march", "regions", "x march",
-                                                  "regions / grid"))
+    print("%-12s %8s | %8s %8s %8s | %8s %8s %8s | %s" % ("dataset", "march s", "grid s", "mean spp", "x march",
+                                                          "regions", "mean spp", "x march", "regions / grid"))
     for name, path, common in rows:
         size = ["--size", "%dx%d" % (a.target_size, a.target_size)]
         w = lambda tag: os.path.join(a.work, "%s-target-%s.png" % (name.replace(" ", "_"), tag))
@@ -104,7 +84,9 @@ def main():
         grid = render(a.exe, pt, w("grid"))
         regions = render(a.exe, pt + ["--no-majorant-grid"], w("regions"))
         m, g, r = march["frame_seconds"], grid["frame_seconds"], regions["frame_seconds"]
-        print("%-12s %8.2f | %8.2f %8.1f | %8.2f %8.1f | %.2f" % (name, m, g, g / m, r, r / m, r / g), flush=True)
+        print("%-12s %8.2f | %8.2f %8.1f %8.1f | %8.2f %8.1f %8.1f | %.2f" % (
+            name, m, g, grid["mean_samples_per_pixel"], g / m, r, regions["mean_samples_per_pixel"], r / m, r / g),
+            flush=True)
 
 
 if __name__ == "__main__":

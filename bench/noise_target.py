@@ -14,31 +14,19 @@ usage: bench/noise_target.py EXABRICKS [--data DIR] [--size 512] [--target 2] [-
 is always measured; shared samples that are absent are skipped with a note. Needs numpy and PIL.
 """
 import argparse
-import json
 import os
-import subprocess
 import sys
 
 import numpy as np
-from PIL import Image
+
+from pathtrace_bench import SUN, dataset, pixels, render
 
 # name, input relative to --data (None: generated), options of both integrators, path-tracing options.
 CASES = [
-    ("plt_drop", "amrex/advection_3d/plt_drop", [], ["--sun", "-0.75,0.5,-0.7,5", "--bounces", "4"]),
-    ("pelelm temp", "amrex/pelelm_3lev_3d/example_plt_3d", ["--field", "temp"], ["--sun", "-0.75,0.5,-0.7,5", "--bounces", "4"]),
-    ("cosmic 1M", None, [], ["--sun", "-0.75,0.5,-0.7,5", "--bounces", "4"]),
+    ("plt_drop", "amrex/advection_3d/plt_drop", [], SUN),
+    ("pelelm temp", "amrex/pelelm_3lev_3d/example_plt_3d", ["--field", "temp"], SUN),
+    ("cosmic 1M", None, [], SUN),
 ]
-
-
-def render(exe, args, out):
-    run = subprocess.run([exe, "render"] + args + ["-o", out, "--json"], capture_output=True, text=True)
-    if run.returncode != 0:
-        sys.exit("failed: %s\n%s" % (" ".join(args), run.stderr))
-    return json.loads(run.stdout)
-
-
-def pixels(path):
-    return np.asarray(Image.open(path).convert("RGB")).astype(float)
 
 
 def noise(a, b):
@@ -71,15 +59,9 @@ def main():
         "dataset", "march s", "denoised", "mean spp", "noise", "x march", "undenois", "mean spp", "noise", "x march",
         "bias mean / p99"))
     for name, rel, common, pt in CASES:
-        if rel is None:
-            path = os.path.join(a.work, "cosmic.cells")
-            if not os.path.exists(path):
-                subprocess.run([a.exe, "-q", "generate", "-s", "cosmic", "-n", "1000000", "-o", path], check=True)
-        else:
-            path = os.path.join(a.data, rel)
-            if not os.path.exists(path):
-                print("%-12s skipped: %s is absent" % (name, path))
-                continue
+        path = dataset(a.exe, name, rel, a.data, a.work)
+        if path is None:
+            continue
         base = [path] + size + common
         w = lambda tag: os.path.join(a.work, "%s-%s.png" % (name.replace(" ", "_"), tag))
         march = render(a.exe, base, w("march"))
