@@ -19,8 +19,8 @@ void sampleBricksBatch(const FieldView& view, const uint32_t* brickIds, uint32_t
 SampleRegionBatchFunction sampleRegionBatchFunction() { return &sampleRegionBatch; }
 SampleBricksBatchFunction sampleBricksBatchFunction() { return &sampleBricksBatch; }
 void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out) {
-  sampleFieldsBatchScalar(view, values, fields, brickIds, brickCount, batch, out);
+                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
+  sampleFieldsBatchScalar(view, values, fields, brickIds, brickCount, batch, out, valid);
 }
 SampleFieldsBatchFunction sampleFieldsBatchFunction() { return &sampleFieldsBatch; }
 const char* batchTargetName() { return "scalar"; }
@@ -324,9 +324,10 @@ void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t br
 // each brick's factors and corner indices found once.
 template <int kFields, size_t kLanes>
 void SampleFieldsFor(const float* const* values, const FieldView& view, const uint32_t* brickIds, uint32_t brickCount,
-                     const SampleBatch& batch, float* const* out) {
+                     const SampleBatch& batch, float* const* out, int32_t* valid) {
   using D = hn::CappedTag<float, kLanes>;
   const D d;
+  const hn::RebindToSigned<D> di;
   using V = hn::Vec<D>;
   const size_t lanes = hn::Lanes(d);
   const V one = hn::Set(d, 1.f), zero = hn::Zero(d);
@@ -365,29 +366,32 @@ void SampleFieldsFor(const float* const* values, const FieldView& view, const ui
       const V safeW = hn::IfThenElse(ok, s[f].sumW, one);
       const V v = hn::IfThenElseZero(ok, hn::Add(s[f].v0, hn::Div(s[f].sumWV, safeW)));
       hn::StoreU(v, d, out[f] + base); // whole vectors: padded <= kSampleBatch
+      if (f == 0 && valid) hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, ok)), di, valid + base);
     }
   }
 }
 
 template <size_t kLanes>
 void SampleFieldsLanes(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out) {
+                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
   switch (fields) {
   case 1:
-    return SampleFieldsFor<1, kLanes>(values, view, brickIds, brickCount, batch, out);
+    return SampleFieldsFor<1, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
   case 2:
-    return SampleFieldsFor<2, kLanes>(values, view, brickIds, brickCount, batch, out);
+    return SampleFieldsFor<2, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
+  case 3:
+    return SampleFieldsFor<3, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
   default:
-    return SampleFieldsFor<3, kLanes>(values, view, brickIds, brickCount, batch, out);
+    return SampleFieldsFor<4, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
   }
 }
 
 void SampleFieldsBatchImpl(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                           uint32_t brickCount, const SampleBatch& batch, float* const* out) {
+                           uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
   if (batch.count <= 4)
-    SampleFieldsLanes<4>(view, values, fields, brickIds, brickCount, batch, out);
+    SampleFieldsLanes<4>(view, values, fields, brickIds, brickCount, batch, out, valid);
   else
-    SampleFieldsLanes<kSampleBatch>(view, values, fields, brickIds, brickCount, batch, out);
+    SampleFieldsLanes<kSampleBatch>(view, values, fields, brickIds, brickCount, batch, out, valid);
 }
 
 void SampleBricksBatchImpl(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch,
@@ -442,8 +446,8 @@ SampleBricksBatchFunction sampleBricksBatchFunction() {
 }
 
 void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out) {
-  HWY_DYNAMIC_DISPATCH(SampleFieldsBatchImpl)(view, values, fields, brickIds, brickCount, batch, out);
+                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
+  HWY_DYNAMIC_DISPATCH(SampleFieldsBatchImpl)(view, values, fields, brickIds, brickCount, batch, out, valid);
 }
 
 SampleFieldsBatchFunction sampleFieldsBatchFunction() {

@@ -52,7 +52,7 @@ void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t coun
     if (tf.logT[i] < 0.f) shown[m++] = i;
   if (m == batch.count) {
     float* const out[3] = {batch.gx, batch.gy, batch.gz};
-    sample(layer.grad[0], values, 3, ids, count, batch, out);
+    sample(layer.grad[0], values, 3, ids, count, batch, out, nullptr);
     return;
   }
   SampleBatch gathered;
@@ -60,7 +60,7 @@ void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t coun
   for (int k = 0; k < m; ++k)
     gathered.x[k] = batch.x[shown[k]], gathered.y[k] = batch.y[shown[k]], gathered.z[k] = batch.z[shown[k]];
   float* const out[3] = {gathered.gx, gathered.gy, gathered.gz};
-  sample(layer.grad[0], values, 3, ids, count, gathered, out);
+  sample(layer.grad[0], values, 3, ids, count, gathered, out, nullptr);
   for (int i = 0; i < batch.count; ++i)
     batch.gx[i] = batch.gy[i] = batch.gz[i] = 0.f;
   for (int k = 0; k < m; ++k)
@@ -160,18 +160,32 @@ private:
   bool flushLayer() {
     const int n = batch_.count;
     const bool withGrad = wantGrad_ && !(s_.options.lazyGradients && lastHidden_);
-    reconstruct(layer_, batch_, withGrad);
+    // Smooth shading where the ray's last batch showed more samples than a narrow batch holds (4):
+    // the values and the three gradient fields in one pass over the bricks. A second pass for the
+    // shown samples would find every brick's factors and corners again, as wide as the batch's.
+    const bool together = smooth_ && !in_.locator && lastShown_ > 4;
+    if (together) {
+      const float* const values[4] = {layer_.view.values, layer_.grad[0].values, layer_.grad[1].values,
+                                      layer_.grad[2].values};
+      float* const out[4] = {batch_.value, batch_.gx, batch_.gy, batch_.gz};
+      fn_.sampleFields(layer_.view, values, 4, brickIds_, brickCount_, batch_, out, batch_.valid);
+    } else {
+      reconstruct(layer_, batch_, withGrad);
+    }
     // The transfer function at every sample (log2 transmittance 0: transparent).
     TfBatch looked;
     const bool anyShown = fn_.tfLookup(layer_.t, batch_, looked);
     lastHidden_ = !anyShown;
+    lastShown_ = 0;
+    for (int i = 0; i < n; ++i)
+      lastShown_ += looked.logT[i] < 0.f;
     if (!anyShown) {
       raySamples_ += uint64_t(n);
       batch_.count = 0;
       return false;
     }
     if (wantGrad_ && !withGrad) reconstruct(layer_, batch_, true);
-    if (smooth_) smoothGradients(layer_, brickIds_, brickCount_, fn_.sampleFields, looked, batch_);
+    if (smooth_ && !together) smoothGradients(layer_, brickIds_, brickCount_, fn_.sampleFields, looked, batch_);
     // Opacity and colour of every sample at once, then the in-order compositing.
     ShadedBatch shaded;
     params_.fadeWidth = fades_;
@@ -295,6 +309,7 @@ private:
   uint64_t& raySamples_;
   bool wantGrad_ = false, smooth_ = false, central_ = false;
   bool lastHidden_ = true; // the last batch showed nothing: reconstruct values first
+  int lastShown_ = 0;       // samples the last batch showed
   BatchFunctions fn_{};
   VolumeShadeParams params_; // what the batches' shading needs besides the samples
   SampleBatch batch_;

@@ -60,21 +60,23 @@ inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex,
   sampleBricksBatchScalar(view, view.brickIds + region.brickBegin, region.brickCount, batch, gradient);
 }
 
-/// Most value arrays sampleFieldsBatch reconstructs in one pass.
-constexpr int kMaxBatchFields = 3;
+/// Most value arrays sampleFieldsBatch reconstructs in one pass (a field and its three gradient
+/// fields).
+constexpr int kMaxBatchFields = 4;
 
-/// `fields` (1..kMaxBatchFields) value arrays laid out as view.values (the same bricks: a field's
-/// gradient fields, say) reconstructed at every sample of the batch in one pass over the bricks:
-/// each brick's hat factors and corner indices are found once and applied to every array, so
-/// out[f][i] equals sampleBricksBatch's value of view with its values replaced by values[f] (0
-/// where no cell has weight). The batch's own results are left as they are.
+/// `fields` (1..kMaxBatchFields) value arrays laid out as view.values (the same bricks: a field and
+/// its gradient fields, say) reconstructed at every sample of the batch in one pass over the
+/// bricks: each brick's hat factors and corner indices are found once and applied to every array,
+/// so out[f][i] equals sampleBricksBatch's value of view with its values replaced by values[f] (0
+/// where no cell has weight), to the bit. `valid`, where not null, gets sampleBricksBatch's valid
+/// flags (the same for every array). The batch's own results are left as they are.
 void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out);
+                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid = nullptr);
 
 /// The same field after field through sampleBricksBatchScalar (the reference).
 inline void sampleFieldsBatchScalar(const FieldView& view, const float* const* values, int fields,
                                     const uint32_t* brickIds, uint32_t brickCount, const SampleBatch& batch,
-                                    float* const* out) {
+                                    float* const* out, int32_t* valid = nullptr) {
   for (int f = 0; f < fields; ++f) {
     FieldView v = view;
     v.values = values[f];
@@ -83,8 +85,10 @@ inline void sampleFieldsBatchScalar(const FieldView& view, const float* const* v
     for (int i = 0; i < batch.count; ++i)
       b.x[i] = batch.x[i], b.y[i] = batch.y[i], b.z[i] = batch.z[i];
     sampleBricksBatchScalar(v, brickIds, brickCount, b, false);
-    for (int i = 0; i < batch.count; ++i)
+    for (int i = 0; i < batch.count; ++i) {
       out[f][i] = b.valid[i] ? b.value[i] : 0.f;
+      if (valid && f == 0) valid[i] = b.valid[i];
+    }
   }
 }
 
@@ -98,7 +102,7 @@ using SampleBricksBatchFunction = void (*)(const FieldView&, const uint32_t*, ui
 SampleBricksBatchFunction sampleBricksBatchFunction();
 /// sampleFieldsBatch's implementation for the instruction set chosen now (as above).
 using SampleFieldsBatchFunction = void (*)(const FieldView&, const float* const*, int, const uint32_t*, uint32_t,
-                                           const SampleBatch&, float* const*);
+                                           const SampleBatch&, float* const*, int32_t*);
 SampleFieldsBatchFunction sampleFieldsBatchFunction();
 
 /// The instruction set sampleRegionBatch runs with on this CPU ("AVX2", "AVX3", "SSE4", ...;
