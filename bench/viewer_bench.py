@@ -7,7 +7,7 @@
 - time from the end of an interaction to the refined full-resolution image on the page, against
   the command line's frame time for the same scene (`render --scene ... --stats`).
 
-    /usr/bin/python3 bench/viewer_bench.py build/exabricks DATASET [--size 1024] [--spp 1]
+    /usr/bin/python3 bench/viewer_bench.py build/exabricks DATASET [--size 1024 | --size 1060x807] [--spp 1]
 """
 import argparse
 import json
@@ -30,12 +30,22 @@ def parse_arguments():
     ap = argparse.ArgumentParser()
     ap.add_argument("exabricks")
     ap.add_argument("input", nargs="?", default="")
-    ap.add_argument("--size", type=int, default=1024)
+    ap.add_argument("--size", default="1024", help="N (N x N pixels) or WxH")
     ap.add_argument("--spp", type=int, default=1)
     ap.add_argument("--orbit-seconds", type=float, default=4.0)
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--json", action="store_true")
     return ap.parse_args()
+
+
+def frame_size(a):
+    """--size as the command line's WxH."""
+    if a.size.isdigit():
+        return "%sx%s" % (a.size, a.size)
+    w, _, h = a.size.partition("x")
+    if not (w.isdigit() and h.isdigit()):
+        raise SystemExit("viewer_bench.py: error: --size %s is neither N nor WxH" % a.size)
+    return a.size
 
 
 def start_browser():
@@ -147,7 +157,8 @@ def measure_orbit(a, driver, request):
 
 
 def measure(a, driver, url):
-    driver.get(url + "&size=%d" % a.size)
+    # A square size through the page's resolution choice, another through the scene's own size.
+    driver.get(url + "&size=" + (a.size if a.size.isdigit() else "scene"))
     token = urllib.parse.parse_qs(urllib.parse.urlparse(url).query)["token"][0]
     tmp = tempfile.mkdtemp()
 
@@ -179,7 +190,7 @@ def print_results(a, results):
     if a.json:
         print(json.dumps(results, indent=2))
     else:
-        print("viewer at %d^2, %d sample(s) per pixel" % (a.size, a.spp))
+        print("viewer at %s, %d sample(s) per pixel" % (frame_size(a), a.spp))
         print("  TF edit -> first draft on the page   %s ms" % ", ".join("%.0f" % v for v in results["tf_edit_to_first_draft_ms"]))
         print("  orbit start -> first draft           %s ms" % ", ".join("%.0f" % v for v in results["orbit_to_first_draft_ms"]))
         print("  drafts per second while orbiting     %.1f (%d drafts)" % (results["orbit_drafts_per_second"], results["orbit_drafts"]))
@@ -190,7 +201,7 @@ def print_results(a, results):
 
 def main():
     a = parse_arguments()
-    args = [a.exabricks, "view", "--port", "0", "--spp", str(a.spp), "--size", "%dx%d" % (a.size, a.size)]
+    args = [a.exabricks, "view", "--port", "0", "--spp", str(a.spp), "--size", frame_size(a)]
     if a.input:
         args.insert(2, a.input)
     server = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)

@@ -35,7 +35,8 @@ async function start() {
   fillChoices();
   adoptDocument(viewer.info.document);
   viewer.initialCamera = JSON.parse(JSON.stringify(viewer.doc.camera));
-  if (urlSize && /^\d+$/.test(urlSize)) {
+  // ?size=N (N² pixels), ?size=scene (the scene's own width and height) or ?size=window.
+  if (urlSize && /^(\d+|scene|window)$/.test(urlSize)) {
     const sel = $('resolution');
     if (![...sel.options].some((o) => o.value === urlSize)) fillSelect(sel, [...sel.options].map((o) => [o.value, o.textContent]).concat([[urlSize, `${urlSize}²`]]));
     sel.value = urlSize;
