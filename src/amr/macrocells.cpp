@@ -21,11 +21,6 @@ MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis, int minWidth) {
 namespace {
 
 /// The macrocells [first, last] along one axis that the closed lattice interval [a, b] meets.
-void macrocellSpan(const MacrocellGrid& g, int axis, double a, double b, int& first, int& last) {
-  const double lower = double(g.lower[axis]), size = double(g.cellSize);
-  first = int(std::max(0.0, std::floor((a - lower) / size)));
-  last = int(std::min(double(g.dims[axis] - 1), std::floor((b - lower) / size)));
-}
 
 } // namespace
 
@@ -41,7 +36,7 @@ std::vector<range1f> macrocellValueRanges(const MacrocellGrid& g, const std::vec
     const Brick& brick = bricks[b];
     const double w = brick.cellWidth();
     int first, last;
-    macrocellSpan(g, 2, brick.lower.z - 0.5 * w, brick.lower.z + (brick.size.z + 0.5) * w, first, last);
+    g.span(2, brick.lower.z - 0.5 * w, brick.lower.z + (brick.size.z + 0.5) * w, true, first, last);
     for (int z = first; z <= last; ++z)
       bricksOfLayer[size_t(z)].push_back(uint32_t(b));
   }
@@ -57,11 +52,11 @@ std::vector<range1f> macrocellValueRanges(const MacrocellGrid& g, const std::vec
       for (int z = z0; z <= z1; ++z)
         for (int y = 0; y < brick.size.y; ++y) {
           int y0, y1;
-          macrocellSpan(g, 1, brick.lower.y + (y - 0.5) * w, brick.lower.y + (y + 1.5) * w, y0, y1);
+          g.span(1, brick.lower.y + (y - 0.5) * w, brick.lower.y + (y + 1.5) * w, true, y0, y1);
           const float* row = values + brick.valueOffset + size_t(brick.size.x) * (y + size_t(brick.size.y) * z);
           for (int x = 0; x < brick.size.x; ++x) {
             int x0, x1;
-            macrocellSpan(g, 0, brick.lower.x + (x - 0.5) * w, brick.lower.x + (x + 1.5) * w, x0, x1);
+            g.span(0, brick.lower.x + (x - 0.5) * w, brick.lower.x + (x + 1.5) * w, true, x0, x1);
             for (int my = y0; my <= y1; ++my)
               for (int mx = x0; mx <= x1; ++mx)
                 layer[size_t(mx) + size_t(g.dims.x) * size_t(my)].extend(row[x]);

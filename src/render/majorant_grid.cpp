@@ -42,8 +42,8 @@ void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctio
     const box3f b = regions[r].bounds();
     vec3i lo, hi;
     for (int a = 0; a < 3; ++a) {
-      lo[a] = std::clamp(int(std::floor((b.lower[a] - grid_.lower[a]) / grid_.cellSize)), 0, grid_.dims[a] - 1);
-      hi[a] = std::clamp(int(std::ceil((b.upper[a] - grid_.lower[a]) / grid_.cellSize)) - 1, lo[a], grid_.dims[a] - 1);
+      grid_.span(a, b.lower[a], b.upper[a], false, lo[a], hi[a]);
+      lo[a] = std::min(lo[a], grid_.dims[a] - 1), hi[a] = std::max(hi[a], lo[a]); // at least one
     }
     double sum = 0;
     for (int z = lo.z; z <= hi.z; ++z)
@@ -57,7 +57,7 @@ void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctio
 
 MajorantGridView MajorantGrid::view() const {
   if (majorants_.empty()) return {};
-  return {majorants_.data(), gridded_.data(), grid_.dims, grid_.lower, grid_.cellSize};
+  return {majorants_.data(), gridded_.data(), grid_};
 }
 
 } // namespace exa

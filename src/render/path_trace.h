@@ -14,6 +14,7 @@
 
 #include "exabricks/accel/traversal.h"
 #include "exabricks/amr/basis.h"
+#include "exabricks/amr/macrocells.h"
 #include "exabricks/core/random.h"
 #include "exabricks/render/sample_math.h"
 
@@ -37,9 +38,7 @@ struct MediumLayer {
 struct MajorantGridView {
   const float* majorant = nullptr;
   const uint8_t* gridded = nullptr;
-  vec3i dims{0};
-  vec3f lower{0.f};
-  float cellSize = 1.f;
+  MacrocellGrid grid;
 };
 
 /// The macrocells of a majorant grid that a lattice ray crosses from t on, in order (a 3-D DDA
@@ -68,13 +67,12 @@ struct MacrocellWalk {
     if (!inside) return;
     const vec3f p = ray.org + ray.dir * t;
     for (int a = 0; a < 3; ++a) {
-      const int c = int(floorf((p[a] - g.lower[a]) / g.cellSize));
-      cell[a] = c < 0 ? 0 : (c > g.dims[a] - 1 ? g.dims[a] - 1 : c);
+      cell[a] = g.grid.cellAlong(a, p[a]);
       const float d = ray.dir[a];
       step[a] = d > 0.f ? 1 : (d < 0.f ? -1 : 0);
-      const float plane = g.lower[a] + float(cell[a] + (d > 0.f ? 1 : 0)) * g.cellSize;
+      const float plane = g.grid.lower[a] + float(cell[a] + (d > 0.f ? 1 : 0)) * g.grid.cellSize;
       tNext[a] = d != 0.f ? (plane - ray.org[a]) / d : INFINITY;
-      tDelta[a] = d != 0.f ? g.cellSize / fabsf(d) : INFINITY;
+      tDelta[a] = d != 0.f ? g.grid.cellSize / fabsf(d) : INFINITY;
     }
   }
   EXA_HOST_DEVICE int axis() const {
@@ -82,13 +80,13 @@ struct MacrocellWalk {
   }
   EXA_HOST_DEVICE float exit() const { return inside ? tNext[axis()] : INFINITY; }
   EXA_HOST_DEVICE float majorant(const MajorantGridView& g) const {
-    return inside ? g.majorant[cell.x + size_t(g.dims.x) * (cell.y + size_t(g.dims.y) * cell.z)] : INFINITY;
+    return inside ? g.majorant[g.grid.index(cell)] : INFINITY;
   }
   EXA_HOST_DEVICE void advance(const MajorantGridView& g) {
     const int a = axis();
     cell[a] += step[a];
     tNext[a] += tDelta[a];
-    inside = cell[a] >= 0 && cell[a] < g.dims[a];
+    inside = cell[a] >= 0 && cell[a] < g.grid.dims[a];
   }
 };
 

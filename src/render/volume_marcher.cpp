@@ -309,7 +309,7 @@ private:
   uint64_t& raySamples_;
   bool wantGrad_ = false, smooth_ = false, central_ = false;
   bool lastHidden_ = true; // the last batch showed nothing: reconstruct values first
-  int lastShown_ = 0;       // samples the last batch showed
+  int lastShown_ = 0;      // samples the last batch showed
   BatchFunctions fn_{};
   VolumeShadeParams params_; // what the batches' shading needs besides the samples
   SampleBatch batch_;

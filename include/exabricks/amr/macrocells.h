@@ -6,6 +6,8 @@
 
 #include "exabricks/amr/bricks.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -17,11 +19,27 @@ struct MacrocellGrid {
   vec3i dims{0};      ///< macrocells per axis, x fastest in arrays over the grid
 
   size_t count() const { return size_t(dims.x) * size_t(dims.y) * size_t(dims.z); }
-  size_t index(const vec3i& c) const { return size_t(c.x) + size_t(dims.x) * (size_t(c.y) + size_t(dims.y) * c.z); }
+  EXA_HOST_DEVICE size_t index(const vec3i& c) const {
+    return size_t(c.x) + size_t(dims.x) * (size_t(c.y) + size_t(dims.y) * size_t(c.z));
+  }
   /// Closed lattice box of macrocell c.
   box3f bounds(const vec3i& c) const {
     const vec3f lo = lower + vec3f(c) * cellSize;
     return {lo, lo + vec3f(cellSize)};
+  }
+  /// The macrocell along `axis` that lattice coordinate x lies in, clamped into the grid.
+  EXA_HOST_DEVICE int cellAlong(int axis, float x) const {
+    const int c = int(floorf((x - lower[axis]) / cellSize));
+    return c < 0 ? 0 : (c > dims[axis] - 1 ? dims[axis] - 1 : c);
+  }
+  /// The macrocells along `axis` that the lattice interval from a to b overlaps, clamped into the
+  /// grid: first..last, none where last < first. With `touching`, also one that b only touches
+  /// (b on its lower face).
+  void span(int axis, double a, double b, bool touching, int& first, int& last) const {
+    const double o = double(lower[axis]), size = double(cellSize);
+    first = int(std::max(0.0, std::floor((a - o) / size)));
+    const double end = touching ? std::floor((b - o) / size) : std::ceil((b - o) / size) - 1.0;
+    last = int(std::min(double(dims[axis] - 1), end));
   }
 };
 
