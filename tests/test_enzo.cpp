@@ -155,6 +155,63 @@ TEST(Enzo, LeafCellsGhostZonesSeveralFilesBothPrecisions) {
   }
 }
 
+TEST(Enzo, CoarseLevelsAloneFromTheHierarchy) {
+  // The hierarchy alone gives each level's cells; a read of the coarse levels leaves out the finer
+  // grids, and the cells under them are leaves with the values their own grid stores.
+  EnzoFixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "enzo-coarse" / "DD0010";
+  f.write();
+  const std::string path = f.parameterFile().string();
+  std::vector<double> expectedCells(size_t(kMaxLevel) + 1, 0.0);
+  expectedCells[0] = 64, expectedCells[1] = 128 + 64, expectedCells[2] = 512;
+  EXPECT_EQ(enzoLevelCells(path), expectedCells);
+  const std::vector<CoarseFirst> choices = coarseFirstChoices(path);
+  ASSERT_EQ(choices.size(), 3u);
+  EXPECT_EQ(choices[1].level, 2);
+  EXPECT_EQ(choices[1].coarseCells, 512);
+  EXPECT_EQ(choices[2].level, 1);
+  EXPECT_EQ(choices[2].coarseCells, 512 + 192);
+  for (int finest = 0; finest <= 2; ++finest) {
+    SCOPED_TRACE(finest);
+    LoadOptions options;
+    options.finestLevel = finest;
+    const CellSet s = loadCells(path, options);
+    EXPECT_EQ(s.world.scale, vec3d(1.0 / 32)); // the whole step's lattice
+    // Independent truth: a cell of a grid read is a leaf unless a grid read one level finer
+    // contains it.
+    const int maxEnzoLevel = 2 - finest;
+    std::map<std::tuple<int, int, int, int>, int> expected;
+    for (const EGrid& g : f.grids) {
+      if (g.level > maxEnzoLevel) continue;
+      const int w = 4 >> g.level;
+      for (int k = 0; k < EnzoFixture::cells(g, 2); ++k)
+        for (int j = 0; j < EnzoFixture::cells(g, 1); ++j)
+          for (int i = 0; i < EnzoFixture::cells(g, 0); ++i) {
+            const int x = int(std::lround(g.left[0] * 32)) + i * w, y = int(std::lround(g.left[1] * 32)) + j * w,
+                      z = int(std::lround(g.left[2] * 32)) + k * w;
+            bool covered = false;
+            for (const EGrid& c : f.grids)
+              covered |= c.level == g.level + 1 && c.level <= maxEnzoLevel && x >= c.left[0] * 32 &&
+                         x < c.right[0] * 32 && y >= c.left[1] * 32 && y < c.right[1] * 32 && z >= c.left[2] * 32 &&
+                         z < c.right[2] * 32;
+            if (!covered) expected[{x, y, z, 2 - g.level}] = g.level;
+          }
+    }
+    ASSERT_EQ(s.size(), expected.size());
+    double volume = 0;
+    for (size_t i = 0; i < s.size(); ++i) {
+      const Cell& c = s.cells[i];
+      EXPECT_GE(c.level, finest);
+      volume += std::pow(double(c.width()), 3);
+      const auto it = expected.find({c.lower.x, c.lower.y, c.lower.z, c.level});
+      ASSERT_NE(it, expected.end()) << c.lower.x << " " << c.lower.y << " " << c.lower.z << " level " << c.level;
+      const vec3d centre = s.world.toWorld(vec3d(c.lower) + vec3d(0.5 * c.width()));
+      EXPECT_NEAR(s.fields[1].values[i], 10 * truth(centre.x, centre.y, centre.z) + it->second, 1e-5 * 20);
+    }
+    EXPECT_EQ(volume, 32.0 * 32.0 * 32.0); // the whole domain, whichever levels
+  }
+}
+
 TEST(Enzo, BadOutputsAreRejectedClearly) {
   const fs::path base = fs::path(EXABRICKS_TEST_TMP) / "enzo-bad";
   auto errorFor = [&](const std::string& name, auto change) {

@@ -368,21 +368,37 @@ std::vector<std::string> listEnzoFields(const std::string& path) {
   return fieldNames(o, files);
 }
 
-CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted) {
+std::vector<double> enzoLevelCells(const std::string& path) {
+  const Output o = readOutput(path);
+  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
+  for (const io::Patch& p : placeGrids(o, finestCellSize(o)))
+    cells[size_t(std::clamp(io::log2Exact(p.width), 0, kMaxLevel))] +=
+        double(p.cells.x) * double(p.cells.y) * double(p.cells.z);
+  return cells;
+}
+
+CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
   const Output o = readOutput(path);
   const std::string& h = o.hierarchyPath;
   DataFiles files;
   const std::vector<std::string> available = fieldNames(o, files);
   const std::vector<size_t> picked = io::pickFields(path, available, wanted);
 
+  // The lattice is the whole step's (its finest grids' cells), whichever levels are read; grids
+  // finer than finestLevel are left out, and the coarser cells under them are leaves (Enzo stores
+  // every grid's values, those under its children included).
   const vec3d finest = finestCellSize(o);
-  const std::vector<io::Patch> patches = placeGrids(o, finest);
-  auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[i].id); };
+  const std::vector<io::Patch> placed = placeGrids(o, finest);
+  std::vector<size_t> grid; // the grids read, as indices into o.grids
+  std::vector<io::Patch> patches;
+  for (size_t i = 0; i < placed.size(); ++i)
+    if (placed[i].width >= (int64_t(1) << finestLevel)) grid.push_back(i), patches.push_back(placed[i]);
+  auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[grid[i]].id); };
   // Every dataset's shape is checked (and its storage against the file, by the reads) before
   // per-cell memory is reserved for its grid; a grid without fields must be covered by finer ones.
-  std::vector<uint8_t> backed(o.grids.size(), 0);
-  for (size_t i = 0; i < o.grids.size(); ++i) {
-    const Grid& g = o.grids[i];
+  std::vector<uint8_t> backed(grid.size(), 0);
+  for (size_t i = 0; i < grid.size(); ++i) {
+    const Grid& g = o.grids[grid[i]];
     if (g.fields == 0) continue;
     const h5::File& f = files.get(g.file);
     const std::string group = gridGroup(f, g, h);
@@ -398,9 +414,9 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   CellSet set;
   for (size_t k : picked)
     set.fields.push_back({available[k], {}});
-  Progress progress("reading " + path, o.grids.size());
-  for (size_t i = 0; i < o.grids.size(); ++i) {
-    const Grid& g = o.grids[i];
+  Progress progress("reading " + path, grid.size());
+  for (size_t i = 0; i < grid.size(); ++i) {
+    const Grid& g = o.grids[grid[i]];
     const std::vector<uint8_t> covered = coverage.covered(i);
     if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
       progress.advance(1); // fully refined: its data is not needed
@@ -416,7 +432,7 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   set.world.origin = o.params.left;
   set.simulation = o.params.simulation;
   set.world.scale = finest;
-  logInfo(strCat("read ", set.cells.size(), " leaf cells of ", o.grids.size(), " grids from ", path));
+  logInfo(strCat("read ", set.cells.size(), " leaf cells of ", grid.size(), " grids from ", path));
   return set;
 }
 

@@ -82,8 +82,9 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Enzo, "Enzo output", isEnzoOutput, listEnzoFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
-         return readEnzo(p, r.fields);
-       }},
+         return readEnzo(p, r.fields, r.finestLevel);
+       },
+       nullptr, nullptr, enzoLevelCells},
       {InputKind::VtkAmr, "VTK overlapping AMR file", isVtkAmrFile, listVtkAmrFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -195,7 +196,8 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     request.keepNonFinite = options.nonFinite == NonFinite::Holes;
     const FormatReader* reader = findReader(path);
     if (options.finestLevel > 0 && !reader->levelCells)
-      fail(path, ": a ", reader->name, " is read with all its levels (coarse levels alone: AMReX plotfiles)");
+      fail(path, ": a ", reader->name,
+           " is read with all its levels (coarse levels alone: AMReX plotfiles, Enzo outputs)");
     request.finestLevel = options.finestLevel;
     set = reader->read(path, request);
     assignConventionalUnits(reader->kind, set);

@@ -20,7 +20,12 @@ bool isEnzoOutput(const std::string& path);
 std::vector<std::string> listEnzoFields(const std::string& path);
 
 /// Reads the leaf cells with the requested fields (all when empty). The world transform maps
-/// the finest grid cell size onto code units, with DomainLeftEdge as origin.
-CellSet readEnzo(const std::string& path, const std::vector<std::string>& fields = {});
+/// the finest grid cell size onto code units, with DomainLeftEdge as origin. Grids whose cells are
+/// narrower than 2^finestLevel finest cells are not read, and the cells under them are leaves
+/// (the lattice stays the whole step's).
+CellSet readEnzo(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
+
+/// Cells in each level's grids (index: exabricks level), from the hierarchy file alone.
+std::vector<double> enzoLevelCells(const std::string& path);
 
 } // namespace exa
