@@ -68,6 +68,17 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   } catch (const exa::Error&) {
   }
   try {
+    // The coarse levels alone: the hierarchy's counts, then a read without the finest grids.
+    double cells = 0;
+    for (double c : exa::enzoLevelCells(path))
+      cells += c;
+    if (!(cells >= 0)) __builtin_trap();
+    const exa::CellSet s = exa::readEnzo(path, {}, 1);
+    for (const exa::Cell& c : s.cells)
+      if (c.level < 1) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  try {
     exa::listEnzoParticles(path);
     for (const exa::ParticleSpecies& s : exa::readEnzoParticles(path).species)
       for (const exa::ParticleAttribute& a : s.attributes)
