@@ -89,18 +89,19 @@ struct ChomboFixture {
     }
   }
 
-  /// Expected leaf cells: (x, y, z, level) on the finest lattice -> level index.
-  std::map<std::tuple<int, int, int, int>, int> expectedLeaves() const {
+  /// Expected leaf cells of the first `levelsRead` levels: (x, y, z, level) on the finest
+  /// lattice -> level index.
+  std::map<std::tuple<int, int, int, int>, int> expectedLeaves(int levelsRead = 3) const {
     std::map<std::tuple<int, int, int, int>, int> out;
     const int widths[3] = {2 * ratio1, ratio1, 1};
     const int exaLevels[3] = {ratio1 == 4 ? 3 : 2, ratio1 == 4 ? 2 : 1, 0};
-    for (int l = 0; l < 3; ++l)
+    for (int l = 0; l < levelsRead; ++l)
       for (const Box& b : levels[size_t(l)])
         for (int k = b.lo[2]; k <= b.hi[2]; ++k)
           for (int j = b.lo[1]; j <= b.hi[1]; ++j)
             for (int i = b.lo[0]; i <= b.hi[0]; ++i) {
               bool covered = false;
-              if (l < 2) {
+              if (l + 1 < levelsRead) {
                 const int r = ratios()[size_t(l)];
                 for (const Box& f : levels[size_t(l) + 1])
                   covered |= f.contains(i * r, j * r, k * r);

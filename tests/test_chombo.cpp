@@ -71,6 +71,45 @@ TEST(Chombo, FieldSelectionAndRatioTwoEverywhere) {
   }
 }
 
+TEST(Chombo, CoarseLevelsAloneFromTheBoxTables) {
+  // The box tables give each level's cells; a read of the coarse levels leaves out the finer
+  // ones, and the cells under them are leaves with their own level's stored values.
+  ChomboFixture f;
+  f.file = fs::path(EXABRICKS_TEST_TMP) / "chombo" / "coarse.3d.hdf5";
+  f.write();
+  const std::string path = f.file.string();
+  std::vector<double> expectedCells(size_t(kMaxLevel) + 1, 0.0);
+  expectedCells[0] = 8 * 8 * 8 + 4 * 4 * 4, expectedCells[2] = 4 * 4 * 4, expectedCells[3] = 2 * 4 * 8 * 8;
+  EXPECT_EQ(chomboLevelCells(path), expectedCells);
+  const std::vector<CoarseFirst> choices = coarseFirstChoices(path);
+  ASSERT_EQ(choices.size(), 3u);
+  EXPECT_EQ(choices[1].level, 3);
+  EXPECT_EQ(choices[2].level, 2);
+  EXPECT_EQ(choices[2].coarseCells, 512 + 64);
+  const int levelsRead[4] = {3, 2, 2, 1}; // for finestLevel 0..3
+  for (int finest = 0; finest <= 3; ++finest) {
+    SCOPED_TRACE(finest);
+    LoadOptions o;
+    o.finestLevel = finest;
+    const CellSet s = loadCells(path, o);
+    EXPECT_EQ(s.world.scale, vec3d(1.0 / 8)); // the whole file's lattice
+    const auto expected = f.expectedLeaves(levelsRead[finest]);
+    ASSERT_EQ(s.size(), expected.size());
+    double volume = 0;
+    for (size_t i = 0; i < s.size(); ++i) {
+      const Cell& c = s.cells[i];
+      EXPECT_GE(c.level, finest);
+      volume += std::pow(double(c.width()), 3);
+      const auto it = expected.find({c.lower.x, c.lower.y, c.lower.z, c.level});
+      ASSERT_NE(it, expected.end()) << c.lower.x << " " << c.lower.y << " " << c.lower.z << " level " << c.level;
+      const vec3d centre = s.world.toWorld(vec3d(c.lower) + vec3d(0.5 * c.width()));
+      const double v = truth(centre.x, centre.y, centre.z);
+      EXPECT_NEAR(s.fields[1].values[i], 2 * v + it->second, 4e-6 * (1 + std::abs(v)));
+    }
+    EXPECT_EQ(volume, 64.0 * 64.0 * 64.0); // the whole domain, whichever levels
+  }
+}
+
 TEST(Chombo, BadFilesAreRejectedClearly) {
   const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "chombo-bad";
   auto errorFor = [&](const std::string& name, auto change) {

@@ -183,21 +183,44 @@ bool isChomboFile(const std::string& path) {
 
 std::vector<std::string> listChomboFields(const std::string& path) { return componentNames(h5::File(path)); }
 
-CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted) {
-  const h5::File f(path);
-  const ChomboHeader h = readHeader(f);
-  const std::vector<size_t> comps = io::pickFields(path, h.names, wanted);
+namespace {
 
-  // Width of each level's cells in finest cells.
+/// Width of each level's cells in finest cells.
+std::vector<int64_t> levelWidths(const h5::File& f, const ChomboHeader& h) {
   const size_t nl = h.levels.size();
   std::vector<int64_t> width(nl, 1);
   for (size_t l = nl - 1; l-- > 0;) {
     width[l] = width[l + 1] * h.levels[l].ratio;
     if (width[l] > (int64_t(1) << kMaxLevel)) f.bad(h.levels[l].group, "refinement too deep for the lattice");
   }
+  return width;
+}
+
+} // namespace
+
+std::vector<double> chomboLevelCells(const std::string& path) {
+  const h5::File f(path);
+  const ChomboHeader h = readHeader(f);
+  const std::vector<int64_t> width = levelWidths(f, h);
+  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
+  for (size_t l = 0; l < h.levels.size(); ++l)
+    for (const io::Patch& box : h.levels[l].boxes)
+      cells[size_t(std::clamp(io::log2Exact(width[l]), 0, kMaxLevel))] +=
+          double(box.cells.x) * double(box.cells.y) * double(box.cells.z);
+  return cells;
+}
+
+CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+  const h5::File f(path);
+  const ChomboHeader h = readHeader(f);
+  const std::vector<size_t> comps = io::pickFields(path, h.names, wanted);
+
+  const std::vector<int64_t> width = levelWidths(f, h);
+  // Levels finer than finestLevel are not read: the coarser cells under them are leaves (every
+  // level's values are stored, those under finer boxes included).
   std::vector<io::Patch> patches;
   std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
-  for (size_t l = 0; l < nl; ++l)
+  for (size_t l = 0; l < h.levels.size() && width[l] >= (int64_t(1) << finestLevel); ++l)
     for (size_t b = 0; b < h.levels[l].boxes.size(); ++b) {
       const io::Patch& box = h.levels[l].boxes[b];
       patches.push_back({box.lower * width[l], box.cells, width[l]});

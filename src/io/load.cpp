@@ -72,8 +72,9 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
-         return readChombo(p, r.fields);
-       }},
+         return readChombo(p, r.fields, r.finestLevel);
+       },
+       nullptr, nullptr, chomboLevelCells},
       {InputKind::Flash, "FLASH HDF5 file", isFlashFile, listFlashFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -197,7 +198,7 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     const FormatReader* reader = findReader(path);
     if (options.finestLevel > 0 && !reader->levelCells)
       fail(path, ": a ", reader->name,
-           " is read with all its levels (coarse levels alone: AMReX plotfiles, Enzo outputs)");
+           " is read with all its levels (coarse levels alone: AMReX plotfiles, Chombo files, Enzo outputs)");
     request.finestLevel = options.finestLevel;
     set = reader->read(path, request);
     assignConventionalUnits(reader->kind, set);

@@ -17,7 +17,12 @@ bool isChomboFile(const std::string& path);
 std::vector<std::string> listChomboFields(const std::string& path);
 
 /// Reads the leaf cells with the requested fields (all when empty). The world transform maps
-/// the finest level's index space onto index × dx (Chombo stores no origin).
-CellSet readChombo(const std::string& path, const std::vector<std::string>& fields = {});
+/// the finest level's index space onto index × dx (Chombo stores no origin). Levels whose cells
+/// are narrower than 2^finestLevel finest cells are not read, and the cells under them are leaves
+/// (the lattice stays the whole file's).
+CellSet readChombo(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
+
+/// Cells in each level's boxes (index: exabricks level), from the box tables alone.
+std::vector<double> chomboLevelCells(const std::string& path);
 
 } // namespace exa
