@@ -270,6 +270,55 @@ TEST(VtkAmr, LeafCellsInEveryEncoding) {
   }
 }
 
+TEST(VtkAmr, CoarseLevelsAloneFromTheBoxes) {
+  // The .vthb file's boxes give each level's cells; a read of the coarse levels leaves out the
+  // finer boxes' pieces, and the cells under them are leaves with their own stored values.
+  VtkFixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "vtk-coarse";
+  f.write();
+  const std::string path = f.file().string();
+  std::vector<double> expectedCells(size_t(kMaxLevel) + 1, 0.0);
+  expectedCells[0] = 8 * 8 * 4, expectedCells[2] = 4 * 4 * 2, expectedCells[3] = 4 * 4 * 4;
+  EXPECT_EQ(vtkAmrLevelCells(path), expectedCells);
+  ASSERT_EQ(coarseFirstChoices(path).size(), 3u);
+  const int widths[3] = {8, 4, 1};
+  for (int finest = 0; finest <= 3; ++finest) {
+    SCOPED_TRACE(finest);
+    LoadOptions o;
+    o.finestLevel = finest;
+    const CellSet s = loadCells(path, o);
+    EXPECT_EQ(s.world.scale, vec3d(0.125 / 4)); // the finest level's lattice, whichever are read
+    std::vector<VBox> read;
+    for (const VBox& b : f.boxes)
+      if (widths[b.level] >= (1 << finest)) read.push_back(b);
+    std::map<std::tuple<int, int, int, int>, int> expected;
+    for (const VBox& b : read)
+      for (int k = b.lo[2]; k <= b.hi[2]; ++k)
+        for (int j = b.lo[1]; j <= b.hi[1]; ++j)
+          for (int i = b.lo[0]; i <= b.hi[0]; ++i) {
+            const int w = widths[b.level];
+            bool covered = false;
+            for (const VBox& c : read) {
+              if (c.level != b.level + 1) continue;
+              const int cw = widths[c.level];
+              covered |= i * w >= c.lo[0] * cw && i * w < (c.hi[0] + 1) * cw && j * w >= c.lo[1] * cw &&
+                         j * w < (c.hi[1] + 1) * cw && k * w >= c.lo[2] * cw && k * w < (c.hi[2] + 1) * cw;
+            }
+            if (!covered) expected[{i * w, j * w, k * w, b.level == 0 ? 3 : b.level == 1 ? 2 : 0}] = b.level;
+          }
+    ASSERT_EQ(s.size(), expected.size());
+    for (size_t i = 0; i < s.size(); ++i) {
+      const Cell& c = s.cells[i];
+      EXPECT_GE(c.level, finest);
+      const auto it = expected.find({c.lower.x, c.lower.y, c.lower.z, c.level});
+      ASSERT_NE(it, expected.end()) << c.lower.x << " " << c.lower.y << " " << c.lower.z << " level " << c.level;
+      const vec3d centre = s.world.toWorld(vec3d(c.lower) + vec3d(0.5 * c.width()));
+      const double t = truth(centre.x, centre.y, centre.z);
+      EXPECT_NEAR(s.fields[1].values[i], 2 * t + it->second, 1e-5 * (1 + std::abs(t)));
+    }
+  }
+}
+
 TEST(VtkAmr, BadFilesAreRejectedClearly) {
   const fs::path base = fs::path(EXABRICKS_TEST_TMP) / "vtk-bad";
   auto errorFor = [&](const std::string& name, auto change) {

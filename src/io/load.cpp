@@ -89,8 +89,9 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::VtkAmr, "VTK overlapping AMR file", isVtkAmrFile, listVtkAmrFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
-         return readVtkAmr(p, r.fields);
-       }},
+         return readVtkAmr(p, r.fields, r.finestLevel);
+       },
+       nullptr, nullptr, vtkAmrLevelCells},
       {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -198,7 +199,7 @@ CellSet loadCells(const std::string& path, const LoadOptions& options) {
     const FormatReader* reader = findReader(path);
     if (options.finestLevel > 0 && !reader->levelCells)
       fail(path, ": a ", reader->name,
-           " is read with all its levels (coarse levels alone: AMReX plotfiles, Chombo files, Enzo outputs)");
+           " is read with all its levels (coarse levels alone: AMReX, Chombo, Enzo and VTK overlapping AMR files)");
     request.finestLevel = options.finestLevel;
     set = reader->read(path, request);
     assignConventionalUnits(reader->kind, set);

@@ -295,8 +295,20 @@ std::vector<std::string> listVtkAmrFields(const std::string& path) {
   return readPiece(h.sets.front().file, nullptr).names;
 }
 
-CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& wanted) {
+std::vector<double> vtkAmrLevelCells(const std::string& path) {
   const Hierarchy h = readHierarchy(path);
+  int finestLevel = 0;
+  for (const DataSetRef& d : h.sets)
+    finestLevel = std::max(finestLevel, d.level);
+  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
+  for (const io::Patch& p : placeDataSets(path, h, finestLevel))
+    cells[size_t(std::clamp(io::log2Exact(p.width), 0, kMaxLevel))] +=
+        double(p.cells.x) * double(p.cells.y) * double(p.cells.z);
+  return cells;
+}
+
+CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& wanted, int coarsest) {
+  Hierarchy h = readHierarchy(path);
   const std::vector<std::string> available = readPiece(h.sets.front().file, nullptr).names;
   const std::vector<size_t> picked = io::pickFields(path, available, wanted);
   std::vector<std::string> names;
@@ -306,7 +318,14 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
   int finestLevel = 0;
   for (const DataSetRef& d : h.sets)
     finestLevel = std::max(finestLevel, d.level);
-  const std::vector<io::Patch> patches = placeDataSets(path, h, finestLevel);
+  std::vector<io::Patch> patches = placeDataSets(path, h, finestLevel);
+  // Boxes with cells narrower than 2^coarsest finest cells are left out (the lattice stays the
+  // finest level's): the coarser cells under them are leaves, with their own stored values.
+  size_t kept = 0;
+  for (size_t i = 0; i < patches.size(); ++i)
+    if (patches[i].width >= (int64_t(1) << coarsest)) h.sets[kept] = h.sets[i], patches[kept] = patches[i], ++kept;
+  h.sets.resize(kept);
+  patches.resize(kept);
   auto name = [&](size_t i) { return strCat(path, ": level ", h.sets[i].level, " DataSet ", h.sets[i].index); };
   checkPieceSizes(h, patches, name);
   const io::Coverage coverage(patches, name);

@@ -35,7 +35,7 @@ struct LoadOptions {
   /// one part only. 0: always in one piece.
   uint64_t partCells = uint64_t(1) << 27;
   NonFinite nonFinite = NonFinite::Refuse;
-  /// Coarse levels only (ReadRequest::finestLevel; AMReX, Chombo, Enzo): cells narrower than
+  /// Coarse levels only (ReadRequest::finestLevel; AMReX, Chombo, Enzo, VTK): cells narrower than
   /// 2^finestLevel finest cells are not read, the coarser cells under them are leaves. 0: all.
   int finestLevel = 0;
   /// Not null: receives what the load made holes of (counts add up over the parts of a build).
@@ -65,8 +65,8 @@ struct CoarseFirst {
 };
 /// The finest level whose boxes, with those of every coarser level, hold at most `maxCells`
 /// cells (read alone with LoadOptions::finestLevel); level 0 when the input holds no more than
-/// that, or its format cannot read coarse levels alone (AMReX plotfiles, Chombo files and Enzo outputs
-/// can: they list every level's boxes apart from the values, and store every level's values).
+/// that, or its format cannot read coarse levels alone (AMReX, Chombo, Enzo and VTK overlapping AMR
+/// files can: they list every level's boxes apart from the values, and store every level's values).
 CoarseFirst coarseFirstLevel(const std::string& path, double maxCells);
 /// Every choice coarseFirstLevel can make: first the whole (level 0), then each level finer than
 /// the finest with the cells of it and every coarser level, from the coarsest alone to the finer;

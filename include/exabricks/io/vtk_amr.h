@@ -19,7 +19,11 @@ bool isVtkAmrFile(const std::string& path);
 std::vector<std::string> listVtkAmrFields(const std::string& path);
 
 /// Reads the leaf cells with the requested fields (all when empty). The world transform is
-/// the file's origin with the finest level's spacing.
-CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& fields = {});
+/// the file's origin with the finest level's spacing. Boxes whose cells are narrower than
+/// 2^finestLevel finest cells are not read, and the cells under them are leaves.
+CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
+
+/// Cells in each level's boxes (index: exabricks level), from the .vthb file alone.
+std::vector<double> vtkAmrLevelCells(const std::string& path);
 
 } // namespace exa
