@@ -23,7 +23,7 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd.add_option("--part-cells", partCells,
-                 "Build NAME.cells and AMReX inputs of more cells in parts of about this many, each read "
+                 "Build NAME.cells, AMReX and Enzo inputs of more cells in parts of about this many, each read "
                  "alone (less memory; 0: in one piece)")
       ->capture_default_str();
   cmd.add_option("--raw-dims", rawDims,

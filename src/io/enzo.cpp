@@ -377,7 +377,21 @@ std::vector<double> enzoLevelCells(const std::string& path) {
   return cells;
 }
 
-CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+Census enzoCensus(const std::string& path) {
+  const Output o = readOutput(path);
+  const std::vector<io::Patch> patches = placeGrids(o, finestCellSize(o));
+  // Leaf cells per grid from the hierarchy alone: its cells less those finer grids cover.
+  const io::Coverage coverage(patches, [&](size_t i) { return strCat(o.hierarchyPath, ": grid ", o.grids[i].id); });
+  Census census;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    census.coarsestLevel = std::max(census.coarsestLevel, io::log2Exact(patches[i].width));
+    const uint64_t leaves = coverage.leafCount(i);
+    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
+  }
+  return census;
+}
+
+CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
   const Output o = readOutput(path);
   const std::string& h = o.hierarchyPath;
   DataFiles files;
@@ -417,6 +431,12 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   Progress progress("reading " + path, grid.size());
   for (size_t i = 0; i < grid.size(); ++i) {
     const Grid& g = o.grids[grid[i]];
+    const vec3l lo = patches[i].lower, hi = patches[i].upper();
+    if (!box.empty() && (hi.x <= box.lower.x || hi.y <= box.lower.y || hi.z <= box.lower.z || lo.x >= box.upper.x ||
+                         lo.y >= box.upper.y || lo.z >= box.upper.z)) {
+      progress.advance(1);
+      continue; // outside the requested box: its data is not read
+    }
     const std::vector<uint8_t> covered = coverage.covered(i);
     if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
       progress.advance(1); // fully refined: its data is not needed

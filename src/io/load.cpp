@@ -83,9 +83,9 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Enzo, "Enzo output", isEnzoOutput, listEnzoFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
-         return readEnzo(p, r.fields, r.finestLevel);
+         return readEnzo(p, r.fields, r.finestLevel, r.box);
        },
-       nullptr, nullptr, enzoLevelCells},
+       nullptr, enzoCensus, enzoLevelCells},
       {InputKind::VtkAmr, "VTK overlapping AMR file", isVtkAmrFile, listVtkAmrFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -225,11 +225,12 @@ box3i readBoxOf(const box3l& part) {
 }
 
 /// The census of an input with more than `partCells` cells, when its reader counts them without
-/// reading the cells (NAME.cells by its size, then a streamed census; AMReX from its headers),
+/// reading the cells (NAME.cells by its size, then a streamed census; AMReX and Enzo from their
+/// headers),
 /// and its cell count; none otherwise.
 std::optional<Census> censusIfLarger(const std::string& path, InputKind kind, const FormatReader& reader,
                                      uint64_t partCells, uint64_t& cells) {
-  if (!reader.census || (kind != InputKind::Native && kind != InputKind::Amrex)) return std::nullopt;
+  if (!reader.census) return std::nullopt;
   if (kind == InputKind::Native && fileSize(path) / sizeof(Cell) <= partCells) return std::nullopt;
   Census census = reader.census(path);
   cells = uint64_t(std::llround(census.cells()));

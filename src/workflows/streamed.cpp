@@ -151,14 +151,15 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
 std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadOptions& options, uint64_t frameBytes) {
   if (input.empty()) return std::nullopt;
   const InputKind kind = detectInput(input);
-  if (kind != InputKind::Amrex && kind != InputKind::Native) return std::nullopt; // counted only by reading
+  const FormatReader* reader = findReader(input);
+  if (!reader || !reader->census) return std::nullopt; // counted only by reading
   const uint64_t available = availableMemoryBytes();
   if (available == 0) return std::nullopt;
   const uint64_t budget = available / 4 * 3;
   const double perCell = double(bytesPerResidentCell(loadedFields(input, options)));
   const double fixed = double(residentBytesNow() + kProcessSlack + frameBytes);
-  // An upper bound from sizes alone first (the records of NAME.cells, the cells in an AMReX
-  // plotfile's boxes): a step that fits by it is read as before, without a census.
+  // An upper bound from sizes alone first (the records of NAME.cells, the cells in the boxes of
+  // an AMReX plotfile or Enzo output): a step that fits by it is read as before, without a census.
   const double most = kind == InputKind::Native ? double(fileSize(input) / sizeof(Cell))
                                                 : coarseFirstLevel(input, std::numeric_limits<double>::max()).cells;
   if (fixed + most * perCell <= double(budget)) return std::nullopt;

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
 
 #include <string>
 #include <vector>
@@ -23,7 +24,13 @@ std::vector<std::string> listEnzoFields(const std::string& path);
 /// the finest grid cell size onto code units, with DomainLeftEdge as origin. Grids whose cells are
 /// narrower than 2^finestLevel finest cells are not read, and the cells under them are leaves
 /// (the lattice stays the whole step's).
-CellSet readEnzo(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
+/// With a box (finest lattice), the grids that do not overlap it are not read.
+CellSet readEnzo(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0,
+                 const box3i& box = {});
+
+/// Where the leaf cells lie, from the hierarchy file alone (per grid, its cells less those finer
+/// grids cover).
+Census enzoCensus(const std::string& path);
 
 /// Cells in each level's grids (index: exabricks level), from the hierarchy file alone.
 std::vector<double> enzoLevelCells(const std::string& path);
