@@ -3,6 +3,8 @@
 #include "exabricks/io/amrex.h"
 #include "exabricks/io/load.h"
 
+#include "parts_check.h"
+
 #include <gtest/gtest.h>
 
 #include <limits>
@@ -282,32 +284,7 @@ TEST(Amrex, SharedSampleCensusMatchesTheLeafCount) {
 
 TEST(Amrex, SharedSampleBuiltInPartsEqualsTheWholeBuild) {
   REQUIRE_DATA("amrex/advection_3d/plt_small");
-  LoadOptions whole, inParts;
-  whole.partCells = 0;
-  inParts.partCells = 300000;
-  const Model a = loadModel(data.string(), whole), b = loadModel(data.string(), inParts);
-  EXPECT_EQ(a.stats.parts, 1);
-  EXPECT_EQ(b.stats.parts, 4);
-  ASSERT_EQ(b.cellCount(), 1036288u);
-  EXPECT_DOUBLE_EQ(b.world.scale.x, a.world.scale.x);
-  EXPECT_EQ(b.simulation.cycle, a.simulation.cycle);
-  const box3i cb = a.cellBounds();
-  std::mt19937 rng{3};
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (int i = 0; i < 5000; ++i) {
-    vec3d q;
-    for (int k = 0; k < 3; ++k)
-      q[k] = double(cb.lower[k]) + u(rng) * double(cb.upper[k] - cb.lower[k]);
-    double v0 = 0, v1 = 0;
-    vec3d g0, g1;
-    const bool h0 = a.sampleWorld(0, a.world.toWorld(q), v0, g0);
-    const bool h1 = b.sampleWorld(0, b.world.toWorld(q), v1, g1);
-    ASSERT_EQ(h0, h1);
-    if (!h0) continue;
-    EXPECT_NEAR(v0, v1, 1e-5 * (1.0 + std::abs(v0)));
-    for (int k = 0; k < 3; ++k)
-      EXPECT_NEAR(g0[k], g1[k], 1e-4 * (1.0 + std::abs(g0[k])));
-  }
+  test::expectPartsEqualWhole(data.string(), 300000, 3, 1036288u);
 }
 
 TEST(Amrex, TheRegistryNamesEveryFormatOnce) {

@@ -4,6 +4,7 @@
 #include "exabricks/io/load.h"
 
 #include "chombo_fixture.h"
+#include "parts_check.h"
 
 #include <gtest/gtest.h>
 
@@ -108,6 +109,17 @@ TEST(Chombo, CoarseLevelsAloneFromTheBoxTables) {
     }
     EXPECT_EQ(volume, 64.0 * 64.0 * 64.0); // the whole domain, whichever levels
   }
+}
+
+TEST(Chombo, CensusFromTheBoxTablesAndABuildInPartsEqualTheWhole) {
+  ChomboFixture f;
+  f.file = fs::path(EXABRICKS_TEST_TMP) / "chombo" / "parts.3d.hdf5";
+  f.write();
+  const std::string path = f.file.string();
+  const Census census = chomboCensus(path);
+  EXPECT_EQ(census.cells(), double(f.expectedLeaves().size()));
+  EXPECT_EQ(census.coarsestLevel, 3);
+  expectPartsEqualWhole(path, 200, 2, f.expectedLeaves().size());
 }
 
 TEST(Chombo, BadFilesAreRejectedClearly) {

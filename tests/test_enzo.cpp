@@ -1,10 +1,10 @@
 #include "errors.h"
-#include "exabricks/amr/model.h"
 #include "exabricks/core/error.h"
 #include "exabricks/io/enzo.h"
 #include "exabricks/io/load.h"
 
 #include "h5_writer.h"
+#include "parts_check.h"
 
 #include <gtest/gtest.h>
 
@@ -13,7 +13,6 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <random>
 #include <sstream>
 #include <tuple>
 
@@ -225,27 +224,7 @@ TEST(Enzo, CensusFromTheHierarchyAndABuildInPartsEqualTheWhole) {
   const Census census = enzoCensus(path);
   EXPECT_EQ(census.cells(), double(all.size()));
   EXPECT_EQ(census.coarsestLevel, 2);
-  LoadOptions whole, inParts;
-  whole.partCells = 0;
-  inParts.partCells = 150;
-  const Model a = loadModel(path, whole), b = loadModel(path, inParts);
-  EXPECT_EQ(a.stats.parts, 1);
-  EXPECT_GT(b.stats.parts, 2);
-  ASSERT_EQ(b.cellCount(), all.size());
-  const box3i cb = a.cellBounds();
-  std::mt19937 rng{7};
-  std::uniform_real_distribution<double> u(0.0, 1.0);
-  for (int i = 0; i < 3000; ++i) {
-    vec3d q;
-    for (int k = 0; k < 3; ++k)
-      q[k] = double(cb.lower[k]) + u(rng) * double(cb.upper[k] - cb.lower[k]);
-    double v0 = 0, v1 = 0;
-    vec3d g0, g1;
-    const bool h0 = a.sampleWorld(0, a.world.toWorld(q), v0, g0);
-    const bool h1 = b.sampleWorld(0, b.world.toWorld(q), v1, g1);
-    ASSERT_EQ(h0, h1);
-    if (h0) EXPECT_NEAR(v0, v1, 1e-5 * (1.0 + std::abs(v0)));
-  }
+  expectPartsEqualWhole(path, 150, 2, all.size());
 }
 
 TEST(Enzo, BadOutputsAreRejectedClearly) {

@@ -2,6 +2,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/io/load.h"
 #include "exabricks/io/vtk_amr.h"
+#include "parts_check.h"
 
 #include <gtest/gtest.h>
 #include <zlib.h>
@@ -317,6 +318,18 @@ TEST(VtkAmr, CoarseLevelsAloneFromTheBoxes) {
       EXPECT_NEAR(s.fields[1].values[i], 2 * t + it->second, 1e-5 * (1 + std::abs(t)));
     }
   }
+}
+
+TEST(VtkAmr, CensusFromTheBoxesAndABuildInPartsEqualTheWhole) {
+  VtkFixture f;
+  f.dir = fs::path(EXABRICKS_TEST_TMP) / "vtk-parts";
+  f.write();
+  const std::string path = f.file().string();
+  const size_t leaves = loadCells(path).size();
+  const Census census = vtkAmrCensus(path);
+  EXPECT_EQ(census.cells(), double(leaves));
+  EXPECT_EQ(census.coarsestLevel, 3);
+  expectPartsEqualWhole(path, 120, 2, leaves);
 }
 
 TEST(VtkAmr, BadFilesAreRejectedClearly) {

@@ -210,7 +210,31 @@ std::vector<double> chomboLevelCells(const std::string& path) {
   return cells;
 }
 
-CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+Census chomboCensus(const std::string& path) {
+  const h5::File f(path);
+  const ChomboHeader h = readHeader(f);
+  const std::vector<int64_t> width = levelWidths(f, h);
+  std::vector<io::Patch> patches;
+  std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
+  for (size_t l = 0; l < h.levels.size(); ++l)
+    for (size_t b = 0; b < h.levels[l].boxes.size(); ++b) {
+      const io::Patch& box = h.levels[l].boxes[b];
+      patches.push_back({box.lower * width[l], box.cells, width[l]});
+      owner.push_back({l, b});
+    }
+  // Leaf cells per box from the box tables alone: its cells less those the next finer level covers.
+  const io::Coverage coverage(
+      patches, [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); });
+  Census census;
+  census.coarsestLevel = std::max(0, io::log2Exact(width.front()));
+  for (size_t i = 0; i < patches.size(); ++i) {
+    const uint64_t leaves = coverage.leafCount(i);
+    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
+  }
+  return census;
+}
+
+CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
   const h5::File f(path);
   const ChomboHeader h = readHeader(f);
   const std::vector<size_t> comps = io::pickFields(path, h.names, wanted);
@@ -246,6 +270,12 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
   for (size_t i = 0; i < patches.size(); ++i) {
     const size_t l = owner[i].first, b = owner[i].second; // (named variables: lambdas below capture them)
     const ChomboLevel& lv = h.levels[l];
+    const vec3l lo = patches[i].lower, hi = patches[i].upper();
+    if (!box.empty() && (hi.x <= box.lower.x || hi.y <= box.lower.y || hi.z <= box.lower.z || lo.x >= box.upper.x ||
+                         lo.y >= box.upper.y || lo.z >= box.upper.z)) {
+      progress.advance(1);
+      continue; // outside the requested box: its data is not read
+    }
     const std::vector<uint8_t> covered = coverage.covered(i);
     if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
       progress.advance(1); // fully refined: its data is not needed

@@ -72,9 +72,9 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
-         return readChombo(p, r.fields, r.finestLevel);
+         return readChombo(p, r.fields, r.finestLevel, r.box);
        },
-       nullptr, nullptr, chomboLevelCells},
+       nullptr, chomboCensus, chomboLevelCells},
       {InputKind::Flash, "FLASH HDF5 file", isFlashFile, listFlashFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -89,9 +89,9 @@ const std::vector<FormatReader>& formatReaders() {
       {InputKind::VtkAmr, "VTK overlapping AMR file", isVtkAmrFile, listVtkAmrFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
-         return readVtkAmr(p, r.fields, r.finestLevel);
+         return readVtkAmr(p, r.fields, r.finestLevel, r.box);
        },
-       nullptr, nullptr, vtkAmrLevelCells},
+       nullptr, vtkAmrCensus, vtkAmrLevelCells},
       {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -225,8 +225,8 @@ box3i readBoxOf(const box3l& part) {
 }
 
 /// The census of an input with more than `partCells` cells, when its reader counts them without
-/// reading the cells (NAME.cells by its size, then a streamed census; AMReX and Enzo from their
-/// headers),
+/// reading the cells (NAME.cells by its size, then a streamed census; AMReX, Chombo, Enzo and VTK
+/// from their box lists),
 /// and its cell count; none otherwise.
 std::optional<Census> censusIfLarger(const std::string& path, InputKind kind, const FormatReader& reader,
                                      uint64_t partCells, uint64_t& cells) {

@@ -4,6 +4,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
 
 #include <string>
 #include <vector>
@@ -20,7 +21,13 @@ std::vector<std::string> listChomboFields(const std::string& path);
 /// the finest level's index space onto index × dx (Chombo stores no origin). Levels whose cells
 /// are narrower than 2^finestLevel finest cells are not read, and the cells under them are leaves
 /// (the lattice stays the whole file's).
-CellSet readChombo(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
+/// With a box (finest lattice), the boxes that do not overlap it are not read.
+CellSet readChombo(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0,
+                   const box3i& box = {});
+
+/// Where the leaf cells lie, from the box tables alone (per box, its cells less those the next
+/// finer level covers).
+Census chomboCensus(const std::string& path);
 
 /// Cells in each level's boxes (index: exabricks level), from the box tables alone.
 std::vector<double> chomboLevelCells(const std::string& path);

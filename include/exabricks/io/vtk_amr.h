@@ -6,6 +6,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
 
 #include <string>
 #include <vector>
@@ -21,7 +22,13 @@ std::vector<std::string> listVtkAmrFields(const std::string& path);
 /// Reads the leaf cells with the requested fields (all when empty). The world transform is
 /// the file's origin with the finest level's spacing. Boxes whose cells are narrower than
 /// 2^finestLevel finest cells are not read, and the cells under them are leaves.
-CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
+/// With a box (finest lattice), the pieces of boxes that do not overlap it are not read.
+CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0,
+                   const box3i& box = {});
+
+/// Where the leaf cells lie, from the .vthb file alone (per box, its cells less those the next
+/// finer level covers).
+Census vtkAmrCensus(const std::string& path);
 
 /// Cells in each level's boxes (index: exabricks level), from the .vthb file alone.
 std::vector<double> vtkAmrLevelCells(const std::string& path);
