@@ -72,7 +72,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     double cells = 0;
     for (double c : exa::enzoLevelCells(path))
       cells += c;
-    if (!(cells >= 0)) __builtin_trap();
+    if (!(cells >= 0) || !(exa::enzoCensus(path).cells() >= 0)) __builtin_trap();
     const exa::CellSet s = exa::readEnzo(path, {}, 1);
     for (const exa::Cell& c : s.cells)
       if (c.level < 1) __builtin_trap();
