@@ -48,6 +48,27 @@ struct EnzoFixture {
   static constexpr int kGhost = 3;
 
   fs::path parameterFile() const { return dir / "DD0010"; }
+  /// Independent truth for the grids up to Enzo level `maxLevel`: a cell of such a grid is a leaf
+  /// unless one of them, one level finer, contains it. (x, y, z, level) -> Enzo level.
+  std::map<std::tuple<int, int, int, int>, int> expectedLeaves(int maxLevel = 2) const {
+    std::map<std::tuple<int, int, int, int>, int> expected;
+    for (const EGrid& g : grids) {
+      if (g.level > maxLevel) continue;
+      const int w = 4 >> g.level;
+      for (int k = 0; k < cells(g, 2); ++k)
+        for (int j = 0; j < cells(g, 1); ++j)
+          for (int i = 0; i < cells(g, 0); ++i) {
+            const int x = int(std::lround(g.left[0] * 32)) + i * w, y = int(std::lround(g.left[1] * 32)) + j * w,
+                      z = int(std::lround(g.left[2] * 32)) + k * w;
+            bool covered = false;
+            for (const EGrid& c : grids)
+              covered |= c.level == g.level + 1 && c.level <= maxLevel && x >= c.left[0] * 32 && x < c.right[0] * 32 &&
+                         y >= c.left[1] * 32 && y < c.right[1] * 32 && z >= c.left[2] * 32 && z < c.right[2] * 32;
+            if (!covered) expected[{x, y, z, 2 - g.level}] = g.level;
+          }
+    }
+    return expected;
+  }
   static int cells(const EGrid& g, int a) { return int(std::lround((g.right[a] - g.left[a]) * 8 * (1 << g.level))); }
 
   void write() const {
@@ -127,22 +148,7 @@ TEST(Enzo, LeafCellsGhostZonesSeveralFilesBothPrecisions) {
     EXPECT_EQ(s.simulation.time, 0.5);
     EXPECT_EQ(s.simulation.timeUnits, "code units");
     EXPECT_EQ(s.simulation.redshift, 3.25);
-    // Independent truth: a cell of grid g is a leaf unless a grid one level finer contains it.
-    std::map<std::tuple<int, int, int, int>, int> expected;
-    for (const EGrid& g : f.grids) {
-      const int w = 4 >> g.level;
-      for (int k = 0; k < EnzoFixture::cells(g, 2); ++k)
-        for (int j = 0; j < EnzoFixture::cells(g, 1); ++j)
-          for (int i = 0; i < EnzoFixture::cells(g, 0); ++i) {
-            const int x = int(std::lround(g.left[0] * 32)) + i * w, y = int(std::lround(g.left[1] * 32)) + j * w,
-                      z = int(std::lround(g.left[2] * 32)) + k * w;
-            bool covered = false;
-            for (const EGrid& c : f.grids)
-              covered |= c.level == g.level + 1 && x >= c.left[0] * 32 && x < c.right[0] * 32 && y >= c.left[1] * 32 &&
-                         y < c.right[1] * 32 && z >= c.left[2] * 32 && z < c.right[2] * 32;
-            if (!covered) expected[{x, y, z, 2 - g.level}] = g.level;
-          }
-    }
+    const auto expected = f.expectedLeaves();
     ASSERT_EQ(s.size(), expected.size());
     for (size_t i = 0; i < s.size(); ++i) {
       const Cell& c = s.cells[i];
@@ -178,26 +184,7 @@ TEST(Enzo, CoarseLevelsAloneFromTheHierarchy) {
     options.finestLevel = finest;
     const CellSet s = loadCells(path, options);
     EXPECT_EQ(s.world.scale, vec3d(1.0 / 32)); // the whole step's lattice
-    // Independent truth: a cell of a grid read is a leaf unless a grid read one level finer
-    // contains it.
-    const int maxEnzoLevel = 2 - finest;
-    std::map<std::tuple<int, int, int, int>, int> expected;
-    for (const EGrid& g : f.grids) {
-      if (g.level > maxEnzoLevel) continue;
-      const int w = 4 >> g.level;
-      for (int k = 0; k < EnzoFixture::cells(g, 2); ++k)
-        for (int j = 0; j < EnzoFixture::cells(g, 1); ++j)
-          for (int i = 0; i < EnzoFixture::cells(g, 0); ++i) {
-            const int x = int(std::lround(g.left[0] * 32)) + i * w, y = int(std::lround(g.left[1] * 32)) + j * w,
-                      z = int(std::lround(g.left[2] * 32)) + k * w;
-            bool covered = false;
-            for (const EGrid& c : f.grids)
-              covered |= c.level == g.level + 1 && c.level <= maxEnzoLevel && x >= c.left[0] * 32 &&
-                         x < c.right[0] * 32 && y >= c.left[1] * 32 && y < c.right[1] * 32 && z >= c.left[2] * 32 &&
-                         z < c.right[2] * 32;
-            if (!covered) expected[{x, y, z, 2 - g.level}] = g.level;
-          }
-    }
+    const auto expected = f.expectedLeaves(2 - finest);
     ASSERT_EQ(s.size(), expected.size());
     double volume = 0;
     for (size_t i = 0; i < s.size(); ++i) {

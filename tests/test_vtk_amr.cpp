@@ -194,6 +194,28 @@ struct VtkFixture {
   }
 };
 
+/// Independent truth for the fixture's boxes `read`: the cells of each box not under a box of the
+/// next level among them. (x, y, z, exabricks level) -> VTK level.
+std::map<std::tuple<int, int, int, int>, int> expectedLeaves(const std::vector<VBox>& read) {
+  const int widths[3] = {8, 4, 1};
+  std::map<std::tuple<int, int, int, int>, int> expected;
+  for (const VBox& b : read)
+    for (int k = b.lo[2]; k <= b.hi[2]; ++k)
+      for (int j = b.lo[1]; j <= b.hi[1]; ++j)
+        for (int i = b.lo[0]; i <= b.hi[0]; ++i) {
+          const int w = widths[b.level];
+          bool covered = false;
+          for (const VBox& c : read) {
+            if (c.level != b.level + 1) continue;
+            const int cw = widths[c.level];
+            covered |= i * w >= c.lo[0] * cw && i * w < (c.hi[0] + 1) * cw && j * w >= c.lo[1] * cw &&
+                       j * w < (c.hi[1] + 1) * cw && k * w >= c.lo[2] * cw && k * w < (c.hi[2] + 1) * cw;
+          }
+          if (!covered) expected[{i * w, j * w, k * w, b.level == 0 ? 3 : b.level == 1 ? 2 : 0}] = b.level;
+        }
+  return expected;
+}
+
 } // namespace
 
 TEST(VtkAmr, LeafCellsInEveryEncoding) {
@@ -240,23 +262,7 @@ TEST(VtkAmr, LeafCellsInEveryEncoding) {
     const CellSet s = loadCells(path);
     EXPECT_EQ(s.world.origin, vec3d(1, 2, 3));
     EXPECT_EQ(s.world.scale, vec3d(0.125 / 4));
-    // Independent truth: cells of each box not under a box of the next level.
-    const int widths[3] = {8, 4, 1};
-    std::map<std::tuple<int, int, int, int>, int> expected;
-    for (const VBox& b : f.boxes)
-      for (int k = b.lo[2]; k <= b.hi[2]; ++k)
-        for (int j = b.lo[1]; j <= b.hi[1]; ++j)
-          for (int i = b.lo[0]; i <= b.hi[0]; ++i) {
-            const int w = widths[b.level];
-            bool covered = false;
-            for (const VBox& c : f.boxes) {
-              if (c.level != b.level + 1) continue;
-              const int cw = widths[c.level];
-              covered |= i * w >= c.lo[0] * cw && i * w < (c.hi[0] + 1) * cw && j * w >= c.lo[1] * cw &&
-                         j * w < (c.hi[1] + 1) * cw && k * w >= c.lo[2] * cw && k * w < (c.hi[2] + 1) * cw;
-            }
-            if (!covered) expected[{i * w, j * w, k * w, b.level == 0 ? 3 : b.level == 1 ? 2 : 0}] = b.level;
-          }
+    const auto expected = expectedLeaves(f.boxes);
     ASSERT_EQ(s.size(), expected.size());
     ASSERT_EQ(s.fields.size(), 2u);
     for (size_t i = 0; i < s.size(); ++i) {
@@ -292,21 +298,7 @@ TEST(VtkAmr, CoarseLevelsAloneFromTheBoxes) {
     std::vector<VBox> read;
     for (const VBox& b : f.boxes)
       if (widths[b.level] >= (1 << finest)) read.push_back(b);
-    std::map<std::tuple<int, int, int, int>, int> expected;
-    for (const VBox& b : read)
-      for (int k = b.lo[2]; k <= b.hi[2]; ++k)
-        for (int j = b.lo[1]; j <= b.hi[1]; ++j)
-          for (int i = b.lo[0]; i <= b.hi[0]; ++i) {
-            const int w = widths[b.level];
-            bool covered = false;
-            for (const VBox& c : read) {
-              if (c.level != b.level + 1) continue;
-              const int cw = widths[c.level];
-              covered |= i * w >= c.lo[0] * cw && i * w < (c.hi[0] + 1) * cw && j * w >= c.lo[1] * cw &&
-                         j * w < (c.hi[1] + 1) * cw && k * w >= c.lo[2] * cw && k * w < (c.hi[2] + 1) * cw;
-            }
-            if (!covered) expected[{i * w, j * w, k * w, b.level == 0 ? 3 : b.level == 1 ? 2 : 0}] = b.level;
-          }
+    const auto expected = expectedLeaves(read);
     ASSERT_EQ(s.size(), expected.size());
     for (size_t i = 0; i < s.size(); ++i) {
       const Cell& c = s.cells[i];

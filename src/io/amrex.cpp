@@ -482,9 +482,7 @@ CellSet readAmrex(const std::string& path, const std::vector<std::string>& wante
   for (size_t i = 0; i < patches.size(); ++i) {
     const auto [l, bi] = origin[i];
     const LevelData& ld = levels[size_t(l)];
-    const vec3l lo = patches[i].lower, hi = patches[i].upper();
-    if (!box.empty() && (hi.x <= box.lower.x || hi.y <= box.lower.y || hi.z <= box.lower.z || lo.x >= box.upper.x ||
-                         lo.y >= box.upper.y || lo.z >= box.upper.z)) {
+    if (!io::patchInBox(patches[i], box)) {
       progress.advance(1);
       continue; // outside the requested box: its data is not read
     }
@@ -529,16 +527,8 @@ Census amrexCensus(const std::string& path) {
   }
   // The boxes are counted from the headers, but only as far as the data files can hold them.
   checkFabBytes(pf, levels);
-  // Leaf cells per box from the boxes alone: its cells less those the next finer level covers.
-  const io::Coverage coverage(
+  return io::censusOfPatches(
       patches, [&](size_t i) { return strCat(path, ": level ", origin[i].first, " box ", origin[i].second); });
-  Census census;
-  census.coarsestLevel = std::max(0, io::log2Exact(width[0]));
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const uint64_t leaves = coverage.leafCount(i);
-    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
-  }
-  return census;
 }
 
 } // namespace exa

@@ -222,16 +222,8 @@ Census chomboCensus(const std::string& path) {
       patches.push_back({box.lower * width[l], box.cells, width[l]});
       owner.push_back({l, b});
     }
-  // Leaf cells per box from the box tables alone: its cells less those the next finer level covers.
-  const io::Coverage coverage(
+  return io::censusOfPatches(
       patches, [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); });
-  Census census;
-  census.coarsestLevel = std::max(0, io::log2Exact(width.front()));
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const uint64_t leaves = coverage.leafCount(i);
-    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
-  }
-  return census;
 }
 
 CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
@@ -270,9 +262,7 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
   for (size_t i = 0; i < patches.size(); ++i) {
     const size_t l = owner[i].first, b = owner[i].second; // (named variables: lambdas below capture them)
     const ChomboLevel& lv = h.levels[l];
-    const vec3l lo = patches[i].lower, hi = patches[i].upper();
-    if (!box.empty() && (hi.x <= box.lower.x || hi.y <= box.lower.y || hi.z <= box.lower.z || lo.x >= box.upper.x ||
-                         lo.y >= box.upper.y || lo.z >= box.upper.z)) {
+    if (!io::patchInBox(patches[i], box)) {
       progress.advance(1);
       continue; // outside the requested box: its data is not read
     }

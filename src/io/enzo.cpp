@@ -348,6 +348,27 @@ std::vector<std::vector<float>> gridValues(const h5::File& f, const std::string&
   return values;
 }
 
+/// Every dataset of the fields `picked` in the grids `grid` (indices into o.grids, placed as
+/// `patches`): its shape checked, and its storage against the file, before per-cell memory is
+/// reserved for its grid; a grid without fields must be covered by finer ones.
+void checkGridData(const Output& o, DataFiles& files, const std::vector<std::string>& available,
+                   const std::vector<size_t>& picked, const std::vector<size_t>& grid,
+                   const std::vector<io::Patch>& patches, const std::function<std::string(size_t)>& gridName) {
+  std::vector<uint8_t> backed(grid.size(), 0);
+  for (size_t i = 0; i < grid.size(); ++i) {
+    const Grid& g = o.grids[grid[i]];
+    if (g.fields == 0) continue;
+    const h5::File& f = files.get(g.file);
+    const std::string group = gridGroup(f, g, o.hierarchyPath);
+    for (size_t k : picked) {
+      storedShape(f, group + "/" + available[k], g);
+      f.requireStorage(group + "/" + available[k]);
+    }
+    backed[i] = 1;
+  }
+  io::checkUnbackedPatches(patches, backed, gridName);
+}
+
 } // namespace
 
 bool isEnzoOutput(const std::string& path) {
@@ -380,15 +401,17 @@ std::vector<double> enzoLevelCells(const std::string& path) {
 Census enzoCensus(const std::string& path) {
   const Output o = readOutput(path);
   const std::vector<io::Patch> patches = placeGrids(o, finestCellSize(o));
-  // Leaf cells per grid from the hierarchy alone: its cells less those finer grids cover.
-  const io::Coverage coverage(patches, [&](size_t i) { return strCat(o.hierarchyPath, ": grid ", o.grids[i].id); });
-  Census census;
-  for (size_t i = 0; i < patches.size(); ++i) {
-    census.coarsestLevel = std::max(census.coarsestLevel, io::log2Exact(patches[i].width));
-    const uint64_t leaves = coverage.leafCount(i);
-    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
-  }
-  return census;
+  auto gridName = [&](size_t i) { return strCat(o.hierarchyPath, ": grid ", o.grids[i].id); };
+  // The grids are counted from the hierarchy, but only as far as the data files hold them (the
+  // first field's datasets).
+  DataFiles files;
+  const std::vector<std::string> available = fieldNames(o, files);
+  std::vector<size_t> all(o.grids.size());
+  for (size_t i = 0; i < all.size(); ++i)
+    all[i] = i;
+  checkGridData(o, files, available, available.empty() ? std::vector<size_t>{} : std::vector<size_t>{0}, all, patches,
+                gridName);
+  return io::censusOfPatches(patches, gridName);
 }
 
 CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
@@ -408,21 +431,7 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   for (size_t i = 0; i < placed.size(); ++i)
     if (placed[i].width >= (int64_t(1) << finestLevel)) grid.push_back(i), patches.push_back(placed[i]);
   auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[grid[i]].id); };
-  // Every dataset's shape is checked (and its storage against the file, by the reads) before
-  // per-cell memory is reserved for its grid; a grid without fields must be covered by finer ones.
-  std::vector<uint8_t> backed(grid.size(), 0);
-  for (size_t i = 0; i < grid.size(); ++i) {
-    const Grid& g = o.grids[grid[i]];
-    if (g.fields == 0) continue;
-    const h5::File& f = files.get(g.file);
-    const std::string group = gridGroup(f, g, h);
-    for (size_t k : picked) {
-      storedShape(f, group + "/" + available[k], g);
-      f.requireStorage(group + "/" + available[k]);
-    }
-    backed[i] = 1;
-  }
-  io::checkUnbackedPatches(patches, backed, gridName);
+  checkGridData(o, files, available, picked, grid, patches, gridName);
   const io::Coverage coverage(patches, gridName);
 
   CellSet set;
@@ -431,9 +440,7 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   Progress progress("reading " + path, grid.size());
   for (size_t i = 0; i < grid.size(); ++i) {
     const Grid& g = o.grids[grid[i]];
-    const vec3l lo = patches[i].lower, hi = patches[i].upper();
-    if (!box.empty() && (hi.x <= box.lower.x || hi.y <= box.lower.y || hi.z <= box.lower.z || lo.x >= box.upper.x ||
-                         lo.y >= box.upper.y || lo.z >= box.upper.z)) {
+    if (!io::patchInBox(patches[i], box)) {
       progress.advance(1);
       continue; // outside the requested box: its data is not read
     }

@@ -126,6 +126,17 @@ std::vector<uint8_t> Coverage::covered(size_t i) const {
   return mask;
 }
 
+Census censusOfPatches(const std::vector<Patch>& patches, const std::function<std::string(size_t)>& name) {
+  const Coverage coverage(patches, name);
+  Census census;
+  for (size_t i = 0; i < patches.size(); ++i) {
+    census.coarsestLevel = std::max(census.coarsestLevel, log2Exact(patches[i].width));
+    const uint64_t leaves = coverage.leafCount(i);
+    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
+  }
+  return census;
+}
+
 uint64_t Coverage::leafCount(size_t i) const {
   const Patch& p = patches_[i];
   // The covering boxes (in p's cells) and their bounding box: a mask over that box alone.

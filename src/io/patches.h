@@ -4,6 +4,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
 
 #include <cmath>
 #include <cstdint>
@@ -65,6 +66,20 @@ private:
   std::vector<int64_t> widths_; ///< distinct widths, ascending
   std::function<std::string(size_t)> name_;
 };
+
+/// Where the leaf cells of `patches` lie, from the boxes alone: per patch, its cells less those
+/// that patches of the next finer width cover (patches without leaves left out); the coarsest
+/// level is the widest patch's.
+Census censusOfPatches(const std::vector<Patch>& patches, const std::function<std::string(size_t)>& name);
+
+/// Whether a read through `box` (finest lattice; empty: everything) needs patch p: its cells
+/// overlap the box.
+inline bool patchInBox(const Patch& p, const box3i& box) {
+  if (box.empty()) return true;
+  const vec3l lo = p.lower, hi = p.upper();
+  return hi.x > box.lower.x && hi.y > box.lower.y && hi.z > box.lower.z && lo.x < box.upper.x && lo.y < box.upper.y &&
+         lo.z < box.upper.z;
+}
 
 /// Throws the error for a value that is not a finite float32; `where` names file, record, field.
 [[noreturn]] void badValue(double value, const std::string& where);

@@ -313,16 +313,9 @@ Census vtkAmrCensus(const std::string& path) {
   for (const DataSetRef& d : h.sets)
     finestLevel = std::max(finestLevel, d.level);
   const std::vector<io::Patch> patches = placeDataSets(path, h, finestLevel);
-  // Leaf cells per box from the boxes alone: its cells less those the next finer level covers.
-  const io::Coverage coverage(
-      patches, [&](size_t i) { return strCat(path, ": level ", h.sets[i].level, " DataSet ", h.sets[i].index); });
-  Census census;
-  for (size_t i = 0; i < patches.size(); ++i) {
-    census.coarsestLevel = std::max(census.coarsestLevel, io::log2Exact(patches[i].width));
-    const uint64_t leaves = coverage.leafCount(i);
-    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
-  }
-  return census;
+  auto name = [&](size_t i) { return strCat(path, ": level ", h.sets[i].level, " DataSet ", h.sets[i].index); };
+  checkPieceSizes(h, patches, name); // counted from the boxes, but only as far as the pieces hold them
+  return io::censusOfPatches(patches, name);
 }
 
 CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& wanted, int coarsest, const box3i& box) {
@@ -353,9 +346,7 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
     set.fields.push_back({n, {}});
   Progress progress("reading " + path, patches.size());
   for (size_t i = 0; i < patches.size(); ++i) {
-    const vec3l lo = patches[i].lower, hi = patches[i].upper();
-    if (!box.empty() && (hi.x <= box.lower.x || hi.y <= box.lower.y || hi.z <= box.lower.z || lo.x >= box.upper.x ||
-                         lo.y >= box.upper.y || lo.z >= box.upper.z)) {
+    if (!io::patchInBox(patches[i], box)) {
       progress.advance(1);
       continue; // outside the requested box: its piece is not read
     }
