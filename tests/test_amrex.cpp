@@ -3,7 +3,7 @@
 #include "exabricks/io/amrex.h"
 #include "exabricks/io/load.h"
 
-#include "parts_check.h"
+#include "reader_checks.h"
 
 #include <gtest/gtest.h>
 

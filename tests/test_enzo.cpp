@@ -4,7 +4,7 @@
 #include "exabricks/io/load.h"
 
 #include "h5_writer.h"
-#include "parts_check.h"
+#include "reader_checks.h"
 
 #include <gtest/gtest.h>
 
@@ -184,19 +184,9 @@ TEST(Enzo, CoarseLevelsAloneFromTheHierarchy) {
     options.finestLevel = finest;
     const CellSet s = loadCells(path, options);
     EXPECT_EQ(s.world.scale, vec3d(1.0 / 32)); // the whole step's lattice
-    const auto expected = f.expectedLeaves(2 - finest);
-    ASSERT_EQ(s.size(), expected.size());
-    double volume = 0;
-    for (size_t i = 0; i < s.size(); ++i) {
-      const Cell& c = s.cells[i];
-      EXPECT_GE(c.level, finest);
-      volume += std::pow(double(c.width()), 3);
-      const auto it = expected.find({c.lower.x, c.lower.y, c.lower.z, c.level});
-      ASSERT_NE(it, expected.end()) << c.lower.x << " " << c.lower.y << " " << c.lower.z << " level " << c.level;
-      const vec3d centre = s.world.toWorld(vec3d(c.lower) + vec3d(0.5 * c.width()));
-      EXPECT_NEAR(s.fields[1].values[i], 10 * truth(centre.x, centre.y, centre.z) + it->second, 1e-5 * 20);
-    }
-    EXPECT_EQ(volume, 32.0 * 32.0 * 32.0); // the whole domain, whichever levels
+    expectCoarseLeaves(
+        s, f.expectedLeaves(2 - finest), finest, 32.0,
+        [](const vec3d& p, int level) { return 10 * truth(p.x, p.y, p.z) + level; }, 1e-5 * 20);
   }
 }
 

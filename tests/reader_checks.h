@@ -1,5 +1,6 @@
-// A check shared by the readers that count their cells from metadata: a build in parts (each part
-// read through its box) reconstructs what the whole build does.
+// Checks shared by the readers of patch-based formats that work from their box lists: a read of
+// the coarse levels alone against brute force, and a build in parts (each part read through its
+// box) against the whole build.
 #pragma once
 
 #include "exabricks/amr/model.h"
@@ -8,8 +9,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
+#include <map>
 #include <random>
 #include <string>
+#include <tuple>
 
 namespace exa::test {
 
@@ -42,6 +46,26 @@ inline void expectPartsEqualWhole(const std::string& path, uint64_t partCells, i
     for (int k = 0; k < 3; ++k)
       EXPECT_NEAR(g0[k], g1[k], 1e-4 * (1.0 + std::abs(g0[k])));
   }
+}
+
+/// The cells `s` read with LoadOptions::finestLevel `finest` are exactly `expected` ((x, y, z,
+/// level) -> the format's level), none finer than 2^finest, together the whole domain of `side`^3
+/// finest cells, and field 1 holds `value`(cell centre in world units, the format's level).
+inline void expectCoarseLeaves(const CellSet& s, const std::map<std::tuple<int, int, int, int>, int>& expected,
+                               int finest, double side, const std::function<double(const vec3d&, int)>& value,
+                               double tolerance) {
+  ASSERT_EQ(s.size(), expected.size());
+  double volume = 0;
+  for (size_t i = 0; i < s.size(); ++i) {
+    const Cell& c = s.cells[i];
+    EXPECT_GE(c.level, finest);
+    volume += std::pow(double(c.width()), 3);
+    const auto it = expected.find({c.lower.x, c.lower.y, c.lower.z, c.level});
+    ASSERT_NE(it, expected.end()) << c.lower.x << " " << c.lower.y << " " << c.lower.z << " level " << c.level;
+    const vec3d centre = s.world.toWorld(vec3d(c.lower) + vec3d(0.5 * c.width()));
+    EXPECT_NEAR(s.fields[1].values[i], value(centre, it->second), tolerance);
+  }
+  EXPECT_EQ(volume, side * side * side); // the whole domain, whichever levels
 }
 
 } // namespace exa::test
