@@ -238,8 +238,8 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
   std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
   for (size_t l = 0; l < h.levels.size() && width[l] >= (int64_t(1) << finestLevel); ++l)
     for (size_t b = 0; b < h.levels[l].boxes.size(); ++b) {
-      const io::Patch& box = h.levels[l].boxes[b];
-      patches.push_back({box.lower * width[l], box.cells, width[l]});
+      const io::Patch& stored = h.levels[l].boxes[b];
+      patches.push_back({stored.lower * width[l], stored.cells, width[l]});
       owner.push_back({l, b});
     }
   auto patchName = [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); };
