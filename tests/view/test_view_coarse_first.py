@@ -41,7 +41,9 @@ def test_coarse_levels_first_then_every_level_equal_to_the_command_line(start_vi
     v = start_viewer(str(path), "--size", "96x80", "--spp", "2")
     address = time.time() - started
     print("address after %.2f s" % address)
-    assert address < 10  # the coarse levels only (the goal: 2 s; the whole step takes longer)
+    # The coarse levels only (the goal: 2 s; the whole step takes longer). The sanitizers slow the
+    # read and build of the coarse levels about tenfold (10.9 s seen on 2 cores beside other tests).
+    assert address < (30 if os.environ.get("EXABRICKS_SANITIZED") else 10)
     frames = frames_until(v, lambda h, i: h["final"] and "data" not in h)
     first = frames[0]
     assert "coarse levels" in first.get("data", ""), first
