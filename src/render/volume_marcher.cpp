@@ -159,7 +159,7 @@ private:
   /// One layer (the common case).
   bool flushLayer() {
     const int n = batch_.count;
-    const bool withGrad = wantGrad_ && !(s_.options.lazyGradients && lastHidden_);
+    const bool withGrad = wantGrad_ && !(s_.options.lazyGradients && lastShown_ == 0);
     // Smooth shading where the ray's last batch showed more samples than a narrow batch holds (4):
     // the values and the three gradient fields in one pass over the bricks. A second pass for the
     // shown samples would find every brick's factors and corners again, as wide as the batch's.
@@ -175,7 +175,6 @@ private:
     // The transfer function at every sample (log2 transmittance 0: transparent).
     TfBatch looked;
     const bool anyShown = fn_.tfLookup(layer_.t, batch_, looked);
-    lastHidden_ = !anyShown;
     lastShown_ = 0;
     for (int i = 0; i < n; ++i)
       lastShown_ += looked.logT[i] < 0.f;
@@ -308,8 +307,7 @@ private:
   vec4f& acc_;
   uint64_t& raySamples_;
   bool wantGrad_ = false, smooth_ = false, central_ = false;
-  bool lastHidden_ = true; // the last batch showed nothing: reconstruct values first
-  int lastShown_ = 0;      // samples the last batch showed
+  int lastShown_ = 0; // samples the ray's last batch showed (none: reconstruct values first)
   BatchFunctions fn_{};
   VolumeShadeParams params_; // what the batches' shading needs besides the samples
   SampleBatch batch_;
