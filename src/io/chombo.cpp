@@ -196,32 +196,34 @@ std::vector<int64_t> levelWidths(const h5::File& f, const ChomboHeader& h) {
   return width;
 }
 
+/// Every level's boxes on the finest lattice (`width`: levelWidths), and the (level, box) of each.
+std::vector<io::Patch> placeBoxes(const ChomboHeader& h, const std::vector<int64_t>& width,
+                                  std::vector<std::pair<size_t, size_t>>& owner) {
+  std::vector<io::Patch> patches;
+  owner.clear();
+  for (size_t l = 0; l < h.levels.size(); ++l)
+    for (size_t b = 0; b < h.levels[l].boxes.size(); ++b) {
+      const io::Patch& stored = h.levels[l].boxes[b];
+      patches.push_back({stored.lower * width[l], stored.cells, width[l]});
+      owner.push_back({l, b});
+    }
+  return patches;
+}
+
 } // namespace
 
 std::vector<double> chomboLevelCells(const std::string& path) {
   const h5::File f(path);
   const ChomboHeader h = readHeader(f);
-  const std::vector<int64_t> width = levelWidths(f, h);
-  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
-  for (size_t l = 0; l < h.levels.size(); ++l)
-    for (const io::Patch& box : h.levels[l].boxes)
-      cells[size_t(std::clamp(io::log2Exact(width[l]), 0, kMaxLevel))] +=
-          double(box.cells.x) * double(box.cells.y) * double(box.cells.z);
-  return cells;
+  std::vector<std::pair<size_t, size_t>> owner;
+  return io::levelCellsOfPatches(placeBoxes(h, levelWidths(f, h), owner));
 }
 
 Census chomboCensus(const std::string& path) {
   const h5::File f(path);
   const ChomboHeader h = readHeader(f);
-  const std::vector<int64_t> width = levelWidths(f, h);
-  std::vector<io::Patch> patches;
   std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
-  for (size_t l = 0; l < h.levels.size(); ++l)
-    for (size_t b = 0; b < h.levels[l].boxes.size(); ++b) {
-      const io::Patch& box = h.levels[l].boxes[b];
-      patches.push_back({box.lower * width[l], box.cells, width[l]});
-      owner.push_back({l, b});
-    }
+  const std::vector<io::Patch> patches = placeBoxes(h, levelWidths(f, h), owner);
   return io::censusOfPatches(
       patches, [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); });
 }
@@ -231,17 +233,13 @@ CellSet readChombo(const std::string& path, const std::vector<std::string>& want
   const ChomboHeader h = readHeader(f);
   const std::vector<size_t> comps = io::pickFields(path, h.names, wanted);
 
-  const std::vector<int64_t> width = levelWidths(f, h);
   // Levels finer than finestLevel are not read: the coarser cells under them are leaves (every
   // level's values are stored, those under finer boxes included).
-  std::vector<io::Patch> patches;
   std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
-  for (size_t l = 0; l < h.levels.size() && width[l] >= (int64_t(1) << finestLevel); ++l)
-    for (size_t b = 0; b < h.levels[l].boxes.size(); ++b) {
-      const io::Patch& stored = h.levels[l].boxes[b];
-      patches.push_back({stored.lower * width[l], stored.cells, width[l]});
-      owner.push_back({l, b});
-    }
+  std::vector<io::Patch> patches = placeBoxes(h, levelWidths(f, h), owner);
+  const std::vector<size_t> kept = io::coarsePatches(patches, finestLevel);
+  io::keepOnly(patches, kept);
+  io::keepOnly(owner, kept);
   auto patchName = [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); };
   const io::Coverage coverage(patches, patchName);
 

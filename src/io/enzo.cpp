@@ -391,11 +391,7 @@ std::vector<std::string> listEnzoFields(const std::string& path) {
 
 std::vector<double> enzoLevelCells(const std::string& path) {
   const Output o = readOutput(path);
-  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
-  for (const io::Patch& p : placeGrids(o, finestCellSize(o)))
-    cells[size_t(std::clamp(io::log2Exact(p.width), 0, kMaxLevel))] +=
-        double(p.cells.x) * double(p.cells.y) * double(p.cells.z);
-  return cells;
+  return io::levelCellsOfPatches(placeGrids(o, finestCellSize(o)));
 }
 
 Census enzoCensus(const std::string& path) {
@@ -425,11 +421,9 @@ CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted
   // finer than finestLevel are left out, and the coarser cells under them are leaves (Enzo stores
   // every grid's values, those under its children included).
   const vec3d finest = finestCellSize(o);
-  const std::vector<io::Patch> placed = placeGrids(o, finest);
-  std::vector<size_t> grid; // the grids read, as indices into o.grids
-  std::vector<io::Patch> patches;
-  for (size_t i = 0; i < placed.size(); ++i)
-    if (placed[i].width >= (int64_t(1) << finestLevel)) grid.push_back(i), patches.push_back(placed[i]);
+  std::vector<io::Patch> patches = placeGrids(o, finest);
+  const std::vector<size_t> grid = io::coarsePatches(patches, finestLevel); // the grids read
+  io::keepOnly(patches, grid);
   auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[grid[i]].id); };
   checkGridData(o, files, available, picked, grid, patches, gridName);
   const io::Coverage coverage(patches, gridName);

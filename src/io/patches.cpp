@@ -137,6 +137,21 @@ Census censusOfPatches(const std::vector<Patch>& patches, const std::function<st
   return census;
 }
 
+std::vector<double> levelCellsOfPatches(const std::vector<Patch>& patches) {
+  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
+  for (const Patch& p : patches)
+    cells[size_t(std::clamp(log2Exact(p.width), 0, kMaxLevel))] +=
+        double(p.cells.x) * double(p.cells.y) * double(p.cells.z);
+  return cells;
+}
+
+std::vector<size_t> coarsePatches(const std::vector<Patch>& patches, int finestLevel) {
+  std::vector<size_t> kept;
+  for (size_t i = 0; i < patches.size(); ++i)
+    if (patches[i].width >= (int64_t(1) << finestLevel)) kept.push_back(i);
+  return kept;
+}
+
 uint64_t Coverage::leafCount(size_t i) const {
   const Patch& p = patches_[i];
   // The covering boxes (in p's cells) and their bounding box: a mask over that box alone.

@@ -72,6 +72,21 @@ private:
 /// level is the widest patch's.
 Census censusOfPatches(const std::vector<Patch>& patches, const std::function<std::string(size_t)>& name);
 
+/// Cells in the patches of each width (index: exabricks level, log2 of the width), from the boxes
+/// alone.
+std::vector<double> levelCellsOfPatches(const std::vector<Patch>& patches);
+
+/// The patches a read of the coarse levels alone keeps (LoadOptions::finestLevel): those whose
+/// cells are 2^finestLevel finest cells wide or wider, as indices in order.
+std::vector<size_t> coarsePatches(const std::vector<Patch>& patches, int finestLevel);
+
+/// Keeps the entries `kept` (ascending indices) of v, in order.
+template <typename T> void keepOnly(std::vector<T>& v, const std::vector<size_t>& kept) {
+  for (size_t k = 0; k < kept.size(); ++k)
+    v[k] = v[kept[k]];
+  v.resize(kept.size());
+}
+
 /// Whether a read through `box` (finest lattice; empty: everything) needs patch p: its cells
 /// overlap the box.
 inline bool patchInBox(const Patch& p, const box3i& box) {

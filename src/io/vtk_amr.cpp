@@ -218,15 +218,24 @@ Hierarchy readHierarchy(const std::string& path) {
   return h;
 }
 
+/// The finest level that has datasets.
+int finestLevel(const Hierarchy& h) {
+  int finest = 0;
+  for (const DataSetRef& d : h.sets)
+    finest = std::max(finest, d.level);
+  return finest;
+}
+
 /// Every dataset's box on the finest level's lattice, its width from the levels' spacings.
-std::vector<io::Patch> placeDataSets(const std::string& path, const Hierarchy& h, int finestLevel) {
+std::vector<io::Patch> placeDataSets(const std::string& path, const Hierarchy& h) {
+  const int finest = finestLevel(h);
   std::vector<io::Patch> patches;
   for (const DataSetRef& d : h.sets) {
     const vec3d s = h.spacing.size() > size_t(d.level) ? h.spacing[size_t(d.level)] : vec3d(0.0);
     if (!(s.x > 0)) fail(path, ": level ", d.level, " has datasets but no Block spacing");
     int64_t width = 0;
     for (int a = 0; a < 3; ++a) {
-      const double r = s[a] / h.spacing[size_t(finestLevel)][a];
+      const double r = s[a] / h.spacing[size_t(finest)][a];
       const double w = std::round(r);
       if (!(w >= 1 && w <= double(int64_t(1) << kMaxLevel)) || std::abs(r - w) > 1e-6 * w ||
           io::log2Exact(int64_t(w)) < 0)
@@ -297,22 +306,12 @@ std::vector<std::string> listVtkAmrFields(const std::string& path) {
 
 std::vector<double> vtkAmrLevelCells(const std::string& path) {
   const Hierarchy h = readHierarchy(path);
-  int finestLevel = 0;
-  for (const DataSetRef& d : h.sets)
-    finestLevel = std::max(finestLevel, d.level);
-  std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
-  for (const io::Patch& p : placeDataSets(path, h, finestLevel))
-    cells[size_t(std::clamp(io::log2Exact(p.width), 0, kMaxLevel))] +=
-        double(p.cells.x) * double(p.cells.y) * double(p.cells.z);
-  return cells;
+  return io::levelCellsOfPatches(placeDataSets(path, h));
 }
 
 Census vtkAmrCensus(const std::string& path) {
   const Hierarchy h = readHierarchy(path);
-  int finestLevel = 0;
-  for (const DataSetRef& d : h.sets)
-    finestLevel = std::max(finestLevel, d.level);
-  const std::vector<io::Patch> patches = placeDataSets(path, h, finestLevel);
+  const std::vector<io::Patch> patches = placeDataSets(path, h);
   auto name = [&](size_t i) { return strCat(path, ": level ", h.sets[i].level, " DataSet ", h.sets[i].index); };
   checkPieceSizes(h, patches, name); // counted from the boxes, but only as far as the pieces hold them
   return io::censusOfPatches(patches, name);
@@ -326,17 +325,13 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
   for (size_t k : picked)
     names.push_back(available[k]);
 
-  int finestLevel = 0;
-  for (const DataSetRef& d : h.sets)
-    finestLevel = std::max(finestLevel, d.level);
-  std::vector<io::Patch> patches = placeDataSets(path, h, finestLevel);
-  // Boxes with cells narrower than 2^coarsest finest cells are left out (the lattice stays the
-  // finest level's): the coarser cells under them are leaves, with their own stored values.
-  size_t kept = 0;
-  for (size_t i = 0; i < patches.size(); ++i)
-    if (patches[i].width >= (int64_t(1) << coarsest)) h.sets[kept] = h.sets[i], patches[kept] = patches[i], ++kept;
-  h.sets.resize(kept);
-  patches.resize(kept);
+  std::vector<io::Patch> patches = placeDataSets(path, h);
+  const vec3d finestSpacing = h.spacing[size_t(finestLevel(h))]; // the lattice, whichever boxes are read
+  // Boxes with cells narrower than 2^coarsest finest cells are left out: the coarser cells under
+  // them are leaves, with their own stored values.
+  const std::vector<size_t> kept = io::coarsePatches(patches, coarsest);
+  io::keepOnly(h.sets, kept);
+  io::keepOnly(patches, kept);
   auto name = [&](size_t i) { return strCat(path, ": level ", h.sets[i].level, " DataSet ", h.sets[i].index); };
   checkPieceSizes(h, patches, name);
   const io::Coverage coverage(patches, name);
@@ -367,7 +362,7 @@ CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& want
   }
   progress.finish();
   set.world.origin = h.origin;
-  set.world.scale = h.spacing[size_t(finestLevel)];
+  set.world.scale = finestSpacing;
   logInfo(strCat("read ", set.cells.size(), " leaf cells of ", patches.size(), " boxes from ", path));
   return set;
 }

@@ -158,8 +158,8 @@ std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadO
   const uint64_t budget = available / 4 * 3;
   const double perCell = double(bytesPerResidentCell(loadedFields(input, options)));
   const double fixed = double(residentBytesNow() + kProcessSlack + frameBytes);
-  // An upper bound from sizes alone first (the records of NAME.cells, the cells in the boxes of
-  // an AMReX plotfile or Enzo output): a step that fits by it is read as before, without a census.
+  // An upper bound from sizes alone first (the records of NAME.cells, the cells in the boxes of a
+  // patch-based file): a step that fits by it is read as before, without a census.
   const double most = kind == InputKind::Native ? double(fileSize(input) / sizeof(Cell))
                                                 : coarseFirstLevel(input, std::numeric_limits<double>::max()).cells;
   if (fixed + most * perCell <= double(budget)) return std::nullopt;
