@@ -1,7 +1,7 @@
 // libFuzzer entry for the AMReX plotfile reader: the input holds the Header, a level's Cell_H
 // and its FAB data file (Level_0/Cell_D_00000), cut at "--8<--" lines; the plotfile is read
 // whole and by field list, its fields' ranges from the Cell_H min/max tables, its census from the
-// headers, and the part of it inside a box.
+// headers, the part of it inside a box, and its build from the boxes.
 #include "fuzz_files.h"
 
 #include "exabricks/core/error.h"
@@ -27,5 +27,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
   } catch (const exa::Error&) {
   }
+  fuzz::boxBuildMatchesRead([&] { return exa::readAmrex(dir); }, [&] { return exa::amrexPatches(dir); });
   return 0;
 }

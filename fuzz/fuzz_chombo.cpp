@@ -114,6 +114,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
           if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
         } catch (const exa::Error&) {
         }
+        fuzz::boxBuildMatchesRead([&] { return exa::readChombo(p); }, [&] { return exa::chomboPatches(p); });
       },
       [](const std::string& p) { return exa::readChombo(p); });
   return 0;

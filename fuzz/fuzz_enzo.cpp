@@ -78,6 +78,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
       if (c.level < 1) __builtin_trap();
   } catch (const exa::Error&) {
   }
+  fuzz::boxBuildMatchesRead([&] { return exa::readEnzo(path); }, [&] { return exa::enzoPatches(path); });
   try {
     exa::listEnzoParticles(path);
     for (const exa::ParticleSpecies& s : exa::readEnzoParticles(path).species)

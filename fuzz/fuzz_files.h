@@ -3,6 +3,9 @@
 // there. Only exa::Error may escape a reader.
 #pragma once
 
+#include "exabricks/core/error.h"
+#include "exabricks/io/patch_source.h"
+
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
@@ -73,5 +76,22 @@ private:
   const uint8_t* p_;
   size_t n_, i_ = 0;
 };
+
+/// A build from the input's boxes (structure without values) holds exactly the cells its read
+/// returns, where both succeed (the build also refuses leaves that overlap, which a read keeps).
+template <typename Read, typename Patches> void boxBuildMatchesRead(Read&& read, Patches&& patches) {
+  bool readable = false;
+  size_t cells = 0;
+  try {
+    cells = read().cells.size();
+    readable = true;
+  } catch (const exa::Error&) {
+  }
+  try {
+    const exa::Model m = exa::buildModelOfPatches(patches());
+    if (readable && m.cellCount() != cells) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+}
 
 } // namespace fuzz

@@ -25,5 +25,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     if (!s.fields.empty() && s.fields[0].values.size() != s.cells.size()) __builtin_trap();
   } catch (const exa::Error&) {
   }
+  fuzz::boxBuildMatchesRead([&] { return exa::readVtkAmr(path); }, [&] { return exa::vtkAmrPatches(path); });
   return 0;
 }

@@ -262,11 +262,11 @@ std::shared_ptr<Dataset> fromGrids(const py::list& grids, const std::vector<std:
   Model m;
   {
     py::gil_scoped_release release;
-    CellSet set = cellsFromGrids(patches, names, "grids", origin.empty() ? nullptr : &o);
-    patches.clear();
-    for (size_t f = 0; f < units.size() && f < set.fields.size(); ++f)
-      set.fields[f].units = units[f];
-    m = buildModel(std::move(set), bo);
+    PatchSource source = patchesOfGrids(std::move(patches), names, "grids", origin.empty() ? nullptr : &o);
+    for (size_t f = 0; f < units.size() && f < source.fieldUnits.size(); ++f)
+      source.fieldUnits[f] = units[f];
+    m = buildModelOfPatches(source, {}, bo);
+    if (m.bricks.empty()) fail("grids: no cells");
   }
   return makeDataset(std::move(m), "<grids>", t.seconds());
 }

@@ -426,81 +426,68 @@ std::vector<double> amrexLevelCells(const std::string& path) {
   return cells;
 }
 
-CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted, const box3i& box, int finestLevel) {
-  const Plotfile pf = readHeader(path);
-  std::vector<int> components;
-  std::vector<std::string> names = wanted.empty() ? pf.names : wanted;
-  for (const std::string& name : names) {
-    const auto it = std::find(pf.names.begin(), pf.names.end(), name);
-    if (it == pf.names.end()) {
-      std::string known;
-      for (const std::string& n : pf.names)
-        known += (known.empty() ? "" : ", ") + n;
-      fail(path, ": unknown field '", name, "' (fields: ", known, ")");
-    }
-    components.push_back(int(it - pf.names.begin()));
-  }
+PatchSource amrexPatches(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+  struct State {
+    Plotfile pf;
+    std::vector<LevelData> levels;
+    std::vector<int> components;
+    std::vector<std::pair<int, size_t>> origin; // level and box of each patch
+  };
+  auto st = std::make_shared<State>();
+  st->pf = readHeader(path);
+  const Plotfile& pf = st->pf;
+  PatchSource source;
+  source.input = path;
+  source.fieldNames = wanted.empty() ? pf.names : wanted;
+  for (size_t c : io::pickFields(path, pf.names, source.fieldNames))
+    st->components.push_back(int(c));
+  source.fieldUnits.assign(source.fieldNames.size(), "");
 
-  // Width of a level-l cell in finest cells, and its exabricks level.
+  // Width of a level-l cell in finest cells.
   std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
   for (int l = pf.finestLevel - 1; l >= 0; --l)
     width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
-  std::vector<LevelData> levels;
   for (int l = 0; l <= pf.finestLevel; ++l)
-    levels.push_back(readCellHeader(pf, l));
-
-  CellSet set;
-  set.fields.resize(names.size());
-  for (size_t k = 0; k < names.size(); ++k)
-    set.fields[k].name = names[k];
-  uint64_t totalBoxes = 0;
-  for (const LevelData& ld : levels)
-    totalBoxes += ld.boxes.size();
-  Progress progress("reading " + path, totalBoxes);
-
-  // Every box of every level on the finest lattice; a cell is a leaf unless a box of the next
-  // finer level covers it.
-  std::vector<io::Patch> patches;
-  std::vector<std::pair<int, size_t>> origin; // level and box of each patch
+    st->levels.push_back(readCellHeader(pf, l));
+  // Every box of every level read on the finest lattice; a cell is a leaf unless a box of the
+  // next finer level covers it.
   for (int l = 0; l <= pf.finestLevel; ++l)
-    for (size_t bi = 0; bi < levels[size_t(l)].boxes.size(); ++bi) {
+    for (size_t bi = 0; bi < st->levels[size_t(l)].boxes.size(); ++bi) {
       if (width[size_t(l)] < (int64_t(1) << finestLevel)) break; // finer than asked: its cover stays a leaf
-      const IndexBox& b = levels[size_t(l)].boxes[bi];
+      const IndexBox& b = st->levels[size_t(l)].boxes[bi];
       const int64_t w = width[size_t(l)];
-      patches.push_back({b.lo * w, b.hi - b.lo + vec3l(1), w});
-      origin.push_back({l, bi});
+      source.patches.push_back({b.lo * w, b.hi - b.lo + vec3l(1), w});
+      st->origin.push_back({l, bi});
     }
   {
     // The data of the levels read must be there (coarse levels alone: not the finer ones').
-    std::vector<LevelData> read = levels;
+    std::vector<LevelData> read = st->levels;
     for (int l = 0; l <= pf.finestLevel; ++l)
       if (width[size_t(l)] < (int64_t(1) << finestLevel)) read[size_t(l)] = LevelData();
     checkFabBytes(pf, read);
   }
-  const io::Coverage coverage(
-      patches, [&](size_t i) { return strCat(path, ": level ", origin[i].first, " box ", origin[i].second); });
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const auto [l, bi] = origin[i];
-    const LevelData& ld = levels[size_t(l)];
-    if (!io::patchInBox(patches[i], box)) {
-      progress.advance(1);
-      continue; // outside the requested box: its data is not read
-    }
-    std::vector<std::vector<float>> values(components.size());
-    readFab(ld.files[bi], ld.offsets[bi], ld.boxes[bi], ld.nghost, components, values, pf.names);
-    io::appendLeafCells(set, patches[i], coverage.covered(i), values, strCat(path, ": level ", l, " box ", bi));
-    progress.advance(1);
-  }
-  progress.finish();
+  source.name = [st, path](size_t i) {
+    return strCat(path, ": level ", st->origin[i].first, " box ", st->origin[i].second);
+  };
+  source.read = [st](size_t i, std::vector<std::vector<float>>& values) {
+    const auto [l, bi] = st->origin[i];
+    const LevelData& ld = st->levels[size_t(l)];
+    values.assign(st->components.size(), {});
+    readFab(ld.files[bi], ld.offsets[bi], ld.boxes[bi], ld.nghost, st->components, values, st->pf.names);
+  };
+  source.concurrentReads = true;
   // Finest index space onto the physical domain.
   const IndexBox& fineDomain = pf.domains[size_t(pf.finestLevel)];
   const vec3d dx = pf.dx[size_t(pf.finestLevel)];
-  set.world.scale = dx;
-  set.world.origin = pf.probLo - vec3d(fineDomain.lo) * dx;
-  set.simulation.time = pf.time;
-  set.simulation.cycle = pf.cycle;
-  logInfo(strCat("read ", set.cells.size(), " leaf cells from ", path));
-  return set;
+  source.world.scale = dx;
+  source.world.origin = pf.probLo - vec3d(fineDomain.lo) * dx;
+  source.simulation.time = pf.time;
+  source.simulation.cycle = pf.cycle;
+  return source;
+}
+
+CellSet readAmrex(const std::string& path, const std::vector<std::string>& wanted, const box3i& box, int finestLevel) {
+  return io::readPatchCells(amrexPatches(path, wanted, finestLevel), box);
 }
 
 AmrexDomain amrexDomain(const std::string& path) {

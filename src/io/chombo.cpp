@@ -228,76 +228,78 @@ Census chomboCensus(const std::string& path) {
       patches, [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); });
 }
 
-CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
-  const h5::File f(path);
-  const ChomboHeader h = readHeader(f);
-  const std::vector<size_t> comps = io::pickFields(path, h.names, wanted);
+PatchSource chomboPatches(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+  struct State {
+    h5::File file;
+    ChomboHeader header;
+    std::vector<size_t> comps;
+    std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
+    explicit State(const std::string& path) : file(path) {}
+  };
+  auto st = std::make_shared<State>(path);
+  st->header = readHeader(st->file);
+  const ChomboHeader& h = st->header;
+  const h5::File& f = st->file;
+  st->comps = io::pickFields(path, h.names, wanted);
 
+  PatchSource source;
+  source.input = path;
+  for (size_t c : st->comps)
+    source.fieldNames.push_back(h.names[c]);
+  source.fieldUnits.assign(source.fieldNames.size(), "");
   // Levels finer than finestLevel are not read: the coarser cells under them are leaves (every
   // level's values are stored, those under finer boxes included).
-  std::vector<std::pair<size_t, size_t>> owner; // (level, box) per patch
-  std::vector<io::Patch> patches = placeBoxes(h, levelWidths(f, h), owner);
-  const std::vector<size_t> kept = io::coarsePatches(patches, finestLevel);
-  io::keepOnly(patches, kept);
-  io::keepOnly(owner, kept);
-  auto patchName = [&](size_t i) { return strCat(path, ": level ", owner[i].first, " box ", owner[i].second); };
-  const io::Coverage coverage(patches, patchName);
-
-  CellSet set;
-  for (size_t c : comps)
-    set.fields.push_back({h.names[c], {}});
-  // The simulation's time and step, where the coarsest level's attributes hold them.
-  if (f.hasAttribute("/level_0", "time")) {
-    const std::vector<double> t = f.attrNumbers("/level_0", "time");
-    if (t.size() == 1 && std::isfinite(t[0])) set.simulation.time = t[0];
-  }
-  for (const char* stepName : {"step", "iteration"})
-    if (set.simulation.cycle < 0 && f.hasAttribute("/level_0", stepName)) {
-      const std::vector<double> c = f.attrNumbers("/level_0", stepName);
-      if (c.size() == 1 && c[0] >= 0 && c[0] < 9.0e18 && c[0] == std::floor(c[0])) set.simulation.cycle = int64_t(c[0]);
-    }
-  Progress progress("reading " + path, patches.size());
-  for (size_t i = 0; i < patches.size(); ++i) {
-    const size_t l = owner[i].first, b = owner[i].second; // (named variables: lambdas below capture them)
-    const ChomboLevel& lv = h.levels[l];
-    if (!io::patchInBox(patches[i], box)) {
-      progress.advance(1);
-      continue; // outside the requested box: its data is not read
-    }
-    const std::vector<uint8_t> covered = coverage.covered(i);
-    if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
-      progress.advance(1); // fully refined: its data is not needed
-      continue;
-    }
+  source.patches = placeBoxes(h, levelWidths(f, h), st->owner);
+  const std::vector<size_t> kept = io::coarsePatches(source.patches, finestLevel);
+  io::keepOnly(source.patches, kept);
+  io::keepOnly(st->owner, kept);
+  source.name = [st, path](size_t i) {
+    return strCat(path, ": level ", st->owner[i].first, " box ", st->owner[i].second);
+  };
+  source.read = [st, name = source.name](size_t i, std::vector<std::vector<float>>& values) {
+    const size_t l = st->owner[i].first, b = st->owner[i].second;
+    const ChomboHeader& hd = st->header;
+    const ChomboLevel& lv = hd.levels[l];
     const vec3l g = lv.ghost;
     const vec3l n = lv.boxes[b].cells + g * int64_t(2);
     const int64_t stored = n.x * n.y * n.z;
-    const std::vector<double> raw =
-        f.readRows(lv.group + "/data:datatype=0", uint64_t(lv.offsets[b]), uint64_t(lv.offsets[b + 1] - lv.offsets[b]));
-    std::vector<std::vector<float>> values(comps.size());
+    const std::vector<double> raw = st->file.readRows(lv.group + "/data:datatype=0", uint64_t(lv.offsets[b]),
+                                                      uint64_t(lv.offsets[b + 1] - lv.offsets[b]));
+    values.assign(st->comps.size(), {});
     const vec3l cells = lv.boxes[b].cells;
-    for (size_t k = 0; k < comps.size(); ++k) {
+    for (size_t k = 0; k < st->comps.size(); ++k) {
       values[k].reserve(size_t(cells.x * cells.y * cells.z));
-      const double* src = raw.data() + int64_t(comps[k]) * stored;
+      const double* src = raw.data() + int64_t(st->comps[k]) * stored;
       for (int64_t z = 0; z < cells.z; ++z)
         for (int64_t y = 0; y < cells.y; ++y)
           for (int64_t x = 0; x < cells.x; ++x) {
             const double v = src[((z + g.z) * n.y + (y + g.y)) * n.x + (x + g.x)];
             values[k].push_back(io::toFloat32(v, [&] {
               const vec3l at = lv.boxes[b].lower + vec3l(x, y, z);
-              return strCat(patchName(i), ": component '", h.names[comps[k]], "' at index (", at.x, ",", at.y, ",",
-                            at.z, ")");
+              return strCat(name(i), ": component '", hd.names[st->comps[k]], "' at index (", at.x, ",", at.y, ",", at.z,
+                            ")");
             }));
           }
     }
-    io::appendLeafCells(set, patches[i], covered, values, patchName(i));
-    progress.advance(1);
+  };
+  // The simulation's time and step, where the coarsest level's attributes hold them.
+  if (f.hasAttribute("/level_0", "time")) {
+    const std::vector<double> t = f.attrNumbers("/level_0", "time");
+    if (t.size() == 1 && std::isfinite(t[0])) source.simulation.time = t[0];
   }
-  progress.finish();
-  set.world.scale = h.levels.back().dx;
-  set.world.origin = vec3d(0.0);
-  logInfo(strCat("read ", set.cells.size(), " leaf cells from ", path));
-  return set;
+  for (const char* stepName : {"step", "iteration"})
+    if (source.simulation.cycle < 0 && f.hasAttribute("/level_0", stepName)) {
+      const std::vector<double> c = f.attrNumbers("/level_0", stepName);
+      if (c.size() == 1 && c[0] >= 0 && c[0] < 9.0e18 && c[0] == std::floor(c[0]))
+        source.simulation.cycle = int64_t(c[0]);
+    }
+  source.world.scale = h.levels.back().dx;
+  source.world.origin = vec3d(0.0);
+  return source;
+}
+
+CellSet readChombo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
+  return io::readPatchCells(chomboPatches(path, wanted, finestLevel), box);
 }
 
 } // namespace exa

@@ -410,51 +410,48 @@ Census enzoCensus(const std::string& path) {
   return io::censusOfPatches(patches, gridName);
 }
 
-CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
-  const Output o = readOutput(path);
-  const std::string& h = o.hierarchyPath;
-  DataFiles files;
-  const std::vector<std::string> available = fieldNames(o, files);
-  const std::vector<size_t> picked = io::pickFields(path, available, wanted);
+PatchSource enzoPatches(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+  struct State {
+    Output o;
+    DataFiles files;
+    std::vector<std::string> available;
+    std::vector<size_t> picked;
+    std::vector<size_t> grid; // the grids read, per patch
+  };
+  auto st = std::make_shared<State>();
+  st->o = readOutput(path);
+  const Output& o = st->o;
+  st->available = fieldNames(o, st->files);
+  st->picked = io::pickFields(path, st->available, wanted);
 
+  PatchSource source;
+  source.input = path;
+  for (size_t k : st->picked)
+    source.fieldNames.push_back(st->available[k]);
+  source.fieldUnits.assign(source.fieldNames.size(), "");
   // The lattice is the whole step's (its finest grids' cells), whichever levels are read; grids
   // finer than finestLevel are left out, and the coarser cells under them are leaves (Enzo stores
   // every grid's values, those under its children included).
   const vec3d finest = finestCellSize(o);
-  std::vector<io::Patch> patches = placeGrids(o, finest);
-  const std::vector<size_t> grid = io::coarsePatches(patches, finestLevel); // the grids read
-  io::keepOnly(patches, grid);
-  auto gridName = [&](size_t i) { return strCat(h, ": grid ", o.grids[grid[i]].id); };
-  checkGridData(o, files, available, picked, grid, patches, gridName);
-  const io::Coverage coverage(patches, gridName);
+  source.patches = placeGrids(o, finest);
+  st->grid = io::coarsePatches(source.patches, finestLevel);
+  io::keepOnly(source.patches, st->grid);
+  source.name = [st](size_t i) { return strCat(st->o.hierarchyPath, ": grid ", st->o.grids[st->grid[i]].id); };
+  checkGridData(o, st->files, st->available, st->picked, st->grid, source.patches, source.name);
+  source.read = [st, name = source.name](size_t i, std::vector<std::vector<float>>& values) {
+    const Grid& g = st->o.grids[st->grid[i]];
+    if (g.fields == 0) fail(name(i), ": has leaf cells but no fields");
+    const h5::File& f = st->files.get(g.file);
+    values = gridValues(f, gridGroup(f, g, st->o.hierarchyPath), g, st->available, st->picked);
+  };
+  source.world.origin = o.params.left;
+  source.world.scale = finest;
+  source.simulation = o.params.simulation;
+  return source;
+}
 
-  CellSet set;
-  for (size_t k : picked)
-    set.fields.push_back({available[k], {}});
-  Progress progress("reading " + path, grid.size());
-  for (size_t i = 0; i < grid.size(); ++i) {
-    const Grid& g = o.grids[grid[i]];
-    if (!io::patchInBox(patches[i], box)) {
-      progress.advance(1);
-      continue; // outside the requested box: its data is not read
-    }
-    const std::vector<uint8_t> covered = coverage.covered(i);
-    if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
-      progress.advance(1); // fully refined: its data is not needed
-      continue;
-    }
-    if (g.fields == 0) fail(gridName(i), ": has leaf cells but no fields");
-    const h5::File& f = files.get(g.file);
-    const std::string group = gridGroup(f, g, h);
-    io::appendLeafCells(set, patches[i], covered, gridValues(f, group, g, available, picked), gridName(i));
-    progress.advance(1);
-  }
-  progress.finish();
-  set.world.origin = o.params.left;
-  set.simulation = o.params.simulation;
-  set.world.scale = finest;
-  logInfo(strCat("read ", set.cells.size(), " leaf cells of ", grid.size(), " grids from ", path));
-  return set;
+CellSet readEnzo(const std::string& path, const std::vector<std::string>& wanted, int finestLevel, const box3i& box) {
+  return io::readPatchCells(enzoPatches(path, wanted, finestLevel), box);
 }
 
 } // namespace exa

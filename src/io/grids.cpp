@@ -4,15 +4,19 @@
 
 #include "patches.h"
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 
 namespace exa {
 
-CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<std::string>& fieldNames,
-                       const std::string& source, const vec3d* originIn) {
-  if (grids.empty()) fail(source, ": no grids");
-  // The finest spacing per axis and the lowest corner.
-  vec3d finest(std::numeric_limits<double>::infinity()), lowest(std::numeric_limits<double>::infinity());
+namespace {
+
+/// Every grid's box and values against its cell counts; the finest spacing per axis and the
+/// lowest corner.
+void checkGrids(const std::vector<GridPatch>& grids, const std::vector<std::string>& fieldNames,
+                const std::string& source, vec3d& finest, vec3d& lowest) {
+  finest = lowest = vec3d(std::numeric_limits<double>::infinity());
   for (size_t g = 0; g < grids.size(); ++g) {
     const GridPatch& p = grids[g];
     for (int a = 0; a < 3; ++a) {
@@ -34,6 +38,17 @@ CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<st
         fail(source, ": grid ", g, ": field '", fieldNames[f], "' has ", p.values[f].size(), " values for ",
              p.cells.x * p.cells.y * p.cells.z, " cells");
   }
+}
+
+} // namespace
+
+PatchSource patchesOfGrids(std::vector<GridPatch> gridsIn, const std::vector<std::string>& fieldNames,
+                           const std::string& source, const vec3d* originIn) {
+  auto held = std::make_shared<std::vector<GridPatch>>(std::move(gridsIn));
+  const std::vector<GridPatch>& grids = *held;
+  if (grids.empty()) fail(source, ": no grids");
+  vec3d finest, lowest;
+  checkGrids(grids, fieldNames, source, finest, lowest);
   const vec3d origin = originIn ? *originIn : lowest;
   // Grids on the lattice of the finest spacing.
   std::vector<io::Patch> patches;
@@ -63,26 +78,35 @@ CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<st
     patch.width = width;
     patches.push_back(patch);
   }
-  const io::Coverage coverage(patches, [](size_t g) { return strCat("grid ", g); });
-  CellSet set;
-  for (const std::string& name : fieldNames)
-    set.fields.push_back({name, {}});
-  bool anyElsewhere = false;
-  for (size_t g = 0; g < grids.size(); ++g) {
-    anyElsewhere = anyElsewhere || grids[g].elsewhere;
-    if (grids[g].elsewhere) continue;
-    std::vector<std::vector<float>> values(fieldNames.size());
+  PatchSource out;
+  out.input = source;
+  out.fieldNames = fieldNames;
+  out.fieldUnits.assign(fieldNames.size(), "");
+  out.patches = std::move(patches);
+  for (const GridPatch& g : grids)
+    out.elsewhere.push_back(g.elsewhere ? 1 : 0);
+  out.name = [source](size_t g) { return strCat(source, ": grid ", g); };
+  out.read = [held, fieldNames, source](size_t g, std::vector<std::vector<float>>& values) {
+    const GridPatch& grid = (*held)[g];
+    values.assign(fieldNames.size(), {});
     for (size_t f = 0; f < fieldNames.size(); ++f) {
-      values[f].reserve(grids[g].values[f].size());
-      for (size_t i = 0; i < grids[g].values[f].size(); ++i)
-        values[f].push_back(io::toFloat32(grids[g].values[f][i], [&] {
+      values[f].reserve(grid.values[f].size());
+      for (size_t i = 0; i < grid.values[f].size(); ++i)
+        values[f].push_back(io::toFloat32(grid.values[f][i], [&] {
           return strCat(source, ": grid ", g, ": field '", fieldNames[f], "' value ", i);
         }));
     }
-    io::appendLeafCells(set, patches[g], coverage.covered(g), values, strCat(source, ": grid ", g));
-  }
-  set.world.origin = origin;
-  set.world.scale = finest;
+  };
+  out.concurrentReads = true;
+  out.world.origin = origin;
+  out.world.scale = finest;
+  return out;
+}
+
+CellSet cellsFromGrids(std::vector<GridPatch> grids, const std::vector<std::string>& fieldNames,
+                       const std::string& source, const vec3d* origin) {
+  const bool anyElsewhere = std::any_of(grids.begin(), grids.end(), [](const GridPatch& g) { return g.elsewhere; });
+  CellSet set = io::readPatchCells(patchesOfGrids(std::move(grids), fieldNames, source, origin), box3i());
   if (anyElsewhere && set.cells.empty()) return set; // the cells are all held elsewhere
   validateCells(set, source);
   return set;

@@ -9,6 +9,7 @@
 #include "exabricks/io/flash.h"
 #include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
+#include "exabricks/io/patch_source.h"
 #include "exabricks/io/units.h"
 #include "exabricks/io/vtk_amr.h"
 
@@ -68,13 +69,13 @@ const std::vector<FormatReader>& formatReaders() {
          const io::KeepNonFinite keep(r.keepNonFinite);
          return readAmrex(p, r.fields, r.box, r.finestLevel);
        },
-       amrexFieldRange, amrexCensus, amrexLevelCells},
+       amrexFieldRange, amrexCensus, amrexLevelCells, amrexPatches},
       {InputKind::Chombo, "Chombo HDF5 file", isChomboFile, listChomboFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
          return readChombo(p, r.fields, r.finestLevel, r.box);
        },
-       nullptr, chomboCensus, chomboLevelCells},
+       nullptr, chomboCensus, chomboLevelCells, chomboPatches},
       {InputKind::Flash, "FLASH HDF5 file", isFlashFile, listFlashFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -85,13 +86,13 @@ const std::vector<FormatReader>& formatReaders() {
          const io::KeepNonFinite keep(r.keepNonFinite);
          return readEnzo(p, r.fields, r.finestLevel, r.box);
        },
-       nullptr, enzoCensus, enzoLevelCells},
+       nullptr, enzoCensus, enzoLevelCells, enzoPatches},
       {InputKind::VtkAmr, "VTK overlapping AMR file", isVtkAmrFile, listVtkAmrFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
          return readVtkAmr(p, r.fields, r.finestLevel, r.box);
        },
-       nullptr, vtkAmrCensus, vtkAmrLevelCells},
+       nullptr, vtkAmrCensus, vtkAmrLevelCells, vtkAmrPatches},
       {InputKind::Raw, "raw volume", isRawVolume, scalarOnly,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
@@ -356,6 +357,28 @@ Model loadNativeValuesAfter(const std::string& path, const LoadOptions& options,
   }
 }
 
+/// A patch-based input built from its boxes (structure without values): the cells `keep` keeps
+/// of the levels the options ask for. A model without bricks when none is kept.
+Model loadModelOfPatches(const std::string& path, const FormatReader& reader, const LoadOptions& options,
+                         int finestLevel, const PatchKeep& keep) {
+  PatchSource source = reader.patches(path, options.fields, finestLevel);
+  CellSet named; // the format's conventional units, where the file states none
+  for (size_t f = 0; f < source.fieldNames.size(); ++f)
+    named.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});
+  assignConventionalUnits(reader.kind, named);
+  for (size_t f = 0; f < named.fields.size(); ++f)
+    source.fieldUnits[f] = named.fields[f].units;
+  return buildModelOfPatches(source, keep, options.build);
+}
+
+/// Whether a load of this kind is built from the input's boxes: readers that give them, unless
+/// non-finite values are to become holes (cells dropped one by one).
+const FormatReader* patchReader(InputKind kind, const std::string& path, const LoadOptions& options) {
+  if (kind == InputKind::Default || kind == InputKind::Model || options.nonFinite != NonFinite::Refuse) return nullptr;
+  const FormatReader* reader = findReader(path);
+  return reader && reader->patches ? reader : nullptr;
+}
+
 } // namespace
 
 Model loadModel(const std::string& path, const LoadOptions& options) {
@@ -369,6 +392,15 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
   }
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   const InputKind kind = detectInput(path);
+  if (const FormatReader* reader = patchReader(kind, path, options)) {
+    PatchKeep keep;
+    if (!options.box.empty())
+      keep = {PatchKeep::Rule::Overlapping, box3l(vec3l(options.box.lower), vec3l(options.box.upper))};
+    Model m = loadModelOfPatches(path, *reader, options, options.finestLevel, keep);
+    if (m.bricks.empty()) fail(path, ": no cells", options.box.empty() ? "" : " in the box asked for");
+    logInfo(strCat("read and built in ", timer.seconds(), " s"));
+    return m;
+  }
   if (options.partCells > 0 && options.box.empty() && kind != InputKind::Default && options.finestLevel == 0) {
     const FormatReader* reader = findReader(path);
     uint64_t count = 0;
@@ -487,6 +519,11 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     for (auto& v : values)
       m.fieldValues.push_back(std::move(v));
     buildRegionsOf(m, options.build.regions);
+    return m;
+  }
+  if (const FormatReader* reader = patchReader(detectInput(path), path, options)) {
+    Model m = loadModelOfPatches(path, *reader, options, 0, {PatchKeep::Rule::Reaching, reach});
+    if (m.bricks.empty()) return std::nullopt;
     return m;
   }
   CellSet set;

@@ -3,6 +3,7 @@
 #include "checked.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
 
 #include <algorithm>
 #include <cmath>
@@ -176,6 +177,83 @@ uint64_t Coverage::leafCount(size_t i) const {
         std::fill_n(mask.begin() + (((z - blo.z) * n.y + (y - blo.y)) * n.x + (clo.x - blo.x)), chi.x - clo.x,
                     uint8_t(1));
   return all - uint64_t(std::count(mask.begin(), mask.end(), uint8_t(1)));
+}
+
+std::vector<std::pair<vec3l, vec3l>> Coverage::leafBoxes(size_t i) const {
+  const Patch& p = patches_[i];
+  std::vector<std::pair<vec3l, vec3l>> boxes{{vec3l(0), p.cells}}, next;
+  forEachCover(i, [&](const vec3l& clo, const vec3l& chi) {
+    next.clear();
+    for (auto [lo, hi] : boxes) {
+      if (!(clo.x < hi.x && clo.y < hi.y && clo.z < hi.z && lo.x < chi.x && lo.y < chi.y && lo.z < chi.z)) {
+        next.push_back({lo, hi});
+        continue;
+      }
+      // The slabs beside the cover, axis by axis; what is left lies inside the cover.
+      for (int a = 0; a < 3; ++a) {
+        if (lo[a] < clo[a]) {
+          vec3l h = hi;
+          h[a] = clo[a];
+          next.push_back({lo, h});
+          lo[a] = clo[a];
+        }
+        if (hi[a] > chi[a]) {
+          vec3l l = lo;
+          l[a] = chi[a];
+          next.push_back({l, hi});
+          hi[a] = chi[a];
+        }
+      }
+    }
+    boxes.swap(next);
+  });
+  return boxes;
+}
+
+std::optional<std::pair<size_t, size_t>> Coverage::firstOverlap() const {
+  for (size_t i = 0; i < patches_.size(); ++i) {
+    const vec3l plo = patches_[i].lower, phi = patches_[i].upper();
+    auto overlaps = [&](const vec3l& lo, const vec3l& hi) {
+      return lo.x < phi.x && lo.y < phi.y && lo.z < phi.z && plo.x < hi.x && plo.y < hi.y && plo.z < hi.z;
+    };
+    std::vector<uint32_t> stack{0};
+    while (!stack.empty()) {
+      const Node& n = nodes_[stack.back()];
+      stack.pop_back();
+      if (!overlaps(n.lo, n.hi)) continue;
+      if (n.count == 0) {
+        stack.push_back(n.first);
+        stack.push_back(n.first + 1);
+        continue;
+      }
+      for (uint32_t k = n.first; k < n.first + n.count; ++k)
+        if (items_[k] != i && overlaps(patches_[items_[k]].lower, patches_[items_[k]].upper()))
+          return std::pair<size_t, size_t>(std::min<size_t>(i, items_[k]), std::max<size_t>(i, items_[k]));
+    }
+  }
+  return std::nullopt;
+}
+
+CellSet readPatchCells(const PatchSource& source, const box3i& box) {
+  CellSet set;
+  for (size_t f = 0; f < source.fieldNames.size(); ++f)
+    set.fields.push_back(Field{source.fieldNames[f], {}, f < source.fieldUnits.size() ? source.fieldUnits[f] : ""});
+  set.world = source.world;
+  set.simulation = source.simulation;
+  const Coverage coverage(source.patches, source.name);
+  Progress progress("reading " + source.input, source.patches.size());
+  std::vector<std::vector<float>> values;
+  for (size_t i = 0; i < source.patches.size(); ++i) {
+    progress.advance(1);
+    if (!patchInBox(source.patches[i], box) || source.heldElsewhere(i)) continue; // its data is not read
+    const std::vector<uint8_t> covered = coverage.covered(i);
+    if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) continue; // fully refined
+    source.read(i, values);
+    appendLeafCells(set, source.patches[i], covered, values, source.name(i));
+  }
+  progress.finish();
+  logInfo(strCat("read ", set.cells.size(), " leaf cells from ", source.input));
+  return set;
 }
 
 void badValue(double value, const std::string& where) {

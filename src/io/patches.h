@@ -5,25 +5,16 @@
 
 #include "exabricks/amr/cells.h"
 #include "exabricks/amr/partition.h"
+#include "exabricks/io/patch_source.h"
 
 #include <cmath>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
 namespace exa::io {
-
-/// A box of cells of one width. `lower` is in finest-lattice units, `cells` counts cells per
-/// axis (so the box spans [lower, lower + cells * width) on the lattice).
-struct Patch {
-  vec3l lower;
-  vec3l cells;
-  int64_t width = 1;
-  vec3l upper() const { return lower + cells * width; }
-  /// Cells of the patch; readers bound `cells` (checkPatchCells) before anything uses this.
-  int64_t cellCount() const { return cells.x * cells.y * cells.z; }
-};
 
 /// Fails unless every axis of `cells` is positive and the patch holds at most 2^40 cells, so
 /// that cellCount() and every index into the patch stay in range.
@@ -50,6 +41,12 @@ public:
   /// Cells of patch i that no patch of the next finer width covers, without a mask over the
   /// whole patch (only over the bounding box of its covered parts).
   uint64_t leafCount(size_t i) const;
+  /// The boxes of patch i's cells that no patch of the next finer width covers, in its cells
+  /// (exclusive upper): the patch less the covered parts, cut into disjoint boxes.
+  std::vector<std::pair<vec3l, vec3l>> leafBoxes(size_t i) const;
+  /// Two patches that overlap, whatever their widths (none among the leaves of a valid input),
+  /// or none.
+  std::optional<std::pair<size_t, size_t>> firstOverlap() const;
 
 private:
   struct Node {
@@ -128,6 +125,10 @@ template <typename Where> inline float toFloat32(double value, Where&& where) {
 /// field f (x fastest, one per cell). Checks the lattice range.
 void appendLeafCells(CellSet& set, const Patch& patch, const std::vector<uint8_t>& covered,
                      const std::vector<std::vector<float>>& values, const std::string& where);
+
+/// The leaf cells of the source's patches that overlap `box` (empty: every patch), read patch
+/// by patch: the cells of a read without structure (FormatReader::read).
+CellSet readPatchCells(const PatchSource& source, const box3i& box);
 
 /// Indices into `available` of the wanted fields (all when `wanted` is empty); an unknown name
 /// throws "SOURCE: unknown field 'x' (fields: ...)".

@@ -317,54 +317,52 @@ Census vtkAmrCensus(const std::string& path) {
   return io::censusOfPatches(patches, name);
 }
 
-CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& wanted, int coarsest, const box3i& box) {
-  Hierarchy h = readHierarchy(path);
+PatchSource vtkAmrPatches(const std::string& path, const std::vector<std::string>& wanted, int coarsest) {
+  struct State {
+    Hierarchy h;
+    std::vector<std::string> names;
+  };
+  auto st = std::make_shared<State>();
+  st->h = readHierarchy(path);
+  Hierarchy& h = st->h;
   const std::vector<std::string> available = readPiece(h.sets.front().file, nullptr).names;
-  const std::vector<size_t> picked = io::pickFields(path, available, wanted);
-  std::vector<std::string> names;
-  for (size_t k : picked)
-    names.push_back(available[k]);
+  for (size_t k : io::pickFields(path, available, wanted))
+    st->names.push_back(available[k]);
 
-  std::vector<io::Patch> patches = placeDataSets(path, h);
+  PatchSource source;
+  source.input = path;
+  source.fieldNames = st->names;
+  source.fieldUnits.assign(source.fieldNames.size(), "");
+  source.patches = placeDataSets(path, h);
   const vec3d finestSpacing = h.spacing[size_t(finestLevel(h))]; // the lattice, whichever boxes are read
   // Boxes with cells narrower than 2^coarsest finest cells are left out: the coarser cells under
   // them are leaves, with their own stored values.
-  const std::vector<size_t> kept = io::coarsePatches(patches, coarsest);
+  const std::vector<size_t> kept = io::coarsePatches(source.patches, coarsest);
   io::keepOnly(h.sets, kept);
-  io::keepOnly(patches, kept);
-  auto name = [&](size_t i) { return strCat(path, ": level ", h.sets[i].level, " DataSet ", h.sets[i].index); };
-  checkPieceSizes(h, patches, name);
-  const io::Coverage coverage(patches, name);
-
-  CellSet set;
-  for (const std::string& n : names)
-    set.fields.push_back({n, {}});
-  Progress progress("reading " + path, patches.size());
-  for (size_t i = 0; i < patches.size(); ++i) {
-    if (!io::patchInBox(patches[i], box)) {
-      progress.advance(1);
-      continue; // outside the requested box: its piece is not read
-    }
-    const std::vector<uint8_t> covered = coverage.covered(i);
-    if (std::find(covered.begin(), covered.end(), uint8_t(0)) == covered.end()) {
-      progress.advance(1);
-      continue;
-    }
+  io::keepOnly(source.patches, kept);
+  source.name = [st, path](size_t i) {
+    return strCat(path, ": level ", st->h.sets[i].level, " DataSet ", st->h.sets[i].index);
+  };
+  checkPieceSizes(h, source.patches, source.name);
+  source.read = [st, name = source.name, patches = source.patches](size_t i, std::vector<std::vector<float>>& values) {
+    const std::string& file = st->h.sets[i].file;
     std::error_code ec;
-    if (!fs::exists(h.sets[i].file, ec)) fail(h.sets[i].file, ": missing piece named by ", name(i));
-    const Piece piece = readPiece(h.sets[i].file, &names);
+    if (!fs::exists(file, ec)) fail(file, ": missing piece named by ", name(i));
+    const Piece piece = readPiece(file, &st->names);
     if (!(piece.cells == patches[i].cells))
       fail(piece.path, ": Piece Extent holds ", piece.cells.x, "x", piece.cells.y, "x", piece.cells.z,
            " cells, but the amr_box of ", name(i), " holds ", patches[i].cells.x, "x", patches[i].cells.y, "x",
            patches[i].cells.z);
-    io::appendLeafCells(set, patches[i], covered, pieceValues(piece, names), name(i));
-    progress.advance(1);
-  }
-  progress.finish();
-  set.world.origin = h.origin;
-  set.world.scale = finestSpacing;
-  logInfo(strCat("read ", set.cells.size(), " leaf cells of ", patches.size(), " boxes from ", path));
-  return set;
+    values = pieceValues(piece, st->names);
+  };
+  source.concurrentReads = true;
+  source.world.origin = h.origin;
+  source.world.scale = finestSpacing;
+  return source;
+}
+
+CellSet readVtkAmr(const std::string& path, const std::vector<std::string>& wanted, int coarsest, const box3i& box) {
+  return io::readPatchCells(vtkAmrPatches(path, wanted, coarsest), box);
 }
 
 } // namespace exa

@@ -98,10 +98,14 @@ def test_from_grids_equals_from_cells():
     a = eb.from_cells(corners, levels, {"density": values})
     b = eb.from_grids(grids_of(corners, levels, values))
     assert a.cells == b.cells
+    # Grids are built from their boxes and cells by their own bricks: the same reconstruction,
+    # summed over the bricks in another order.
     pts = np.random.default_rng(5).uniform(0, 16, size=(300, 3))
-    np.testing.assert_array_equal(a.sample(pts)[0], b.sample(pts)[0])
+    np.testing.assert_allclose(a.sample(pts)[0], b.sample(pts)[0], rtol=1e-6, atol=1e-7)
     sa, sb = eb.Scene(a, width=48, height=40), eb.Scene(b, width=48, height=40)
-    np.testing.assert_array_equal(sa.render(), sb.render())
+    ra, rb = np.asarray(sa.render(), dtype=np.float64), np.asarray(sb.render(), dtype=np.float64)
+    scale = 255.0 if ra.max() > 1.5 else 1.0
+    assert np.abs(ra - rb).max() <= scale / 255
 
 
 def test_from_yt_stream_dataset_equals_from_grids():

@@ -5,6 +5,7 @@
 
 #include "exabricks/amr/cells.h"
 #include "exabricks/amr/partition.h"
+#include "exabricks/io/patch_source.h"
 
 #include <optional>
 #include <string>
@@ -30,6 +31,11 @@ std::optional<range1f> amrexFieldRange(const std::string& path, const std::strin
 /// read and the coarser cells under them are leaves (a plotfile stores every level's values).
 CellSet readAmrex(const std::string& path, const std::vector<std::string>& fields = {}, const box3i& box = {},
                   int finestLevel = 0);
+
+/// The plotfile's boxes from its headers and a reader of each box's values (its FAB), for the
+/// fields asked for (all when empty) and the levels of cells 2^finestLevel finest cells wide and
+/// wider; every box is bounded by the bytes of its data file first.
+PatchSource amrexPatches(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
 
 /// Cells in each level's boxes (index: exabricks level), from the headers alone.
 std::vector<double> amrexLevelCells(const std::string& path);

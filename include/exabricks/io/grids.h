@@ -4,6 +4,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/io/patch_source.h"
 
 #include <string>
 #include <vector>
@@ -24,7 +25,12 @@ struct GridPatch {
 /// multiple of it, equal on all axes in lattice units, and its corner must lie on the lattice.
 /// Errors name `source`, the grid and the problem. With grids held elsewhere, the cells of the
 /// others may be none (a process whose grids are all covered or that holds no grids).
-CellSet cellsFromGrids(const std::vector<GridPatch>& grids, const std::vector<std::string>& fieldNames,
+CellSet cellsFromGrids(std::vector<GridPatch> grids, const std::vector<std::string>& fieldNames,
                        const std::string& source, const vec3d* origin = nullptr);
+
+/// The same grids as patches on the lattice (checked as above), their values read from the grids
+/// (which the source keeps), for a build from the boxes (buildModelOfPatches).
+PatchSource patchesOfGrids(std::vector<GridPatch> grids, const std::vector<std::string>& fieldNames,
+                           const std::string& source, const vec3d* origin = nullptr);
 
 } // namespace exa

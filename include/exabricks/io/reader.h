@@ -5,6 +5,7 @@
 
 #include "exabricks/amr/cells.h"
 #include "exabricks/amr/partition.h"
+#include "exabricks/io/patch_source.h"
 #include "exabricks/io/raw.h"
 
 #include <optional>
@@ -47,6 +48,10 @@ struct FormatReader {
   /// stores every level's values so that coarse levels can be read alone (ReadRequest::finestLevel);
   /// else null.
   std::vector<double> (*levelCells)(const std::string& path) = nullptr;
+  /// The input's patches from metadata and a reader of each patch's values (structure without
+  /// values: io/patch_source.h), for the fields asked for (all when empty) and the levels of
+  /// cells 2^finestLevel finest cells wide and wider; else null.
+  PatchSource (*patches)(const std::string& path, const std::vector<std::string>& fields, int finestLevel) = nullptr;
 };
 
 /// The registered readers, in the order in which inputs are probed.

@@ -7,6 +7,7 @@
 
 #include "exabricks/amr/cells.h"
 #include "exabricks/amr/partition.h"
+#include "exabricks/io/patch_source.h"
 
 #include <string>
 #include <vector>
@@ -32,5 +33,10 @@ Census vtkAmrCensus(const std::string& path);
 
 /// Cells in each level's boxes (index: exabricks level), from the .vthb file alone.
 std::vector<double> vtkAmrLevelCells(const std::string& path);
+
+/// The boxes from the file's metadata and a reader of each box's values (structure without
+/// values), for the fields asked for (all when empty) and the levels of cells 2^finestLevel
+/// finest cells wide and wider; the read above is this, box by box.
+PatchSource vtkAmrPatches(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
 
 } // namespace exa

@@ -2,6 +2,7 @@
 
 #include "exabricks/core/error.h"
 #include "exabricks/io/grids.h"
+#include "exabricks/io/patch_source.h"
 
 #include <vtkCellData.h>
 #include <vtkDataArray.h>
@@ -48,7 +49,11 @@ std::vector<GridPatch> amrBlockBoxes(vtkOverlappingAMR* amr) {
   return boxes;
 }
 
-CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name, const std::vector<GridPatch>& elsewhere) {
+namespace {
+
+/// The blocks this process holds with the values of `name`, and the boxes of `elsewhere`.
+std::vector<GridPatch> amrGrids(vtkOverlappingAMR* amr, const std::string& name,
+                                const std::vector<GridPatch>& elsewhere) {
   std::vector<GridPatch> grids;
   forBlocks(amr, [&](unsigned level, unsigned id, vtkUniformGrid* grid, GridPatch& p) {
     vtkDataArray* values = grid->GetCellData()->GetArray(name.c_str());
@@ -68,9 +73,28 @@ CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name, const std:
   });
   if (grids.empty() && elsewhere.empty()) fail("ExaBricks: the AMR data holds no blocks here");
   grids.insert(grids.end(), elsewhere.begin(), elsewhere.end());
+  return grids;
+}
+
+vec3d originOf(vtkOverlappingAMR* amr) {
   const double* o = amr->GetOrigin();
-  const vec3d origin(o[0], o[1], o[2]);
-  return cellsFromGrids(grids, {name}, "ParaView AMR data", &origin);
+  return vec3d(o[0], o[1], o[2]);
+}
+
+} // namespace
+
+CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name, const std::vector<GridPatch>& elsewhere) {
+  std::vector<GridPatch> grids = amrGrids(amr, name, elsewhere);
+  const vec3d origin = originOf(amr);
+  return cellsFromGrids(std::move(grids), {name}, "ParaView AMR data", &origin);
+}
+
+Model amrModel(vtkOverlappingAMR* amr, const std::string& name) {
+  std::vector<GridPatch> grids = amrGrids(amr, name, {});
+  const vec3d origin = originOf(amr);
+  Model m = buildModelOfPatches(patchesOfGrids(std::move(grids), {name}, "ParaView AMR data", &origin));
+  if (m.bricks.empty()) fail("ExaBricks: the AMR data holds no cells");
+  return m;
 }
 
 } // namespace exa::paraview

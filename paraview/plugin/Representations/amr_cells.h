@@ -3,6 +3,7 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/model.h"
 #include "exabricks/io/grids.h"
 
 #include <string>
@@ -18,6 +19,10 @@ namespace exa::paraview {
 /// multiples of the finest. `elsewhere`: the blocks other processes hold (boxes only), which set
 /// the lattice and cover coarser cells here; with them, this process may give no cells.
 CellSet amrLeafCells(vtkOverlappingAMR* amr, const std::string& name, const std::vector<GridPatch>& elsewhere = {});
+
+/// The model of all the blocks of `amr` (one process), built from the blocks as boxes
+/// (buildModelOfPatches): the same bricks as a plotfile's own read, when the blocks are its boxes.
+Model amrModel(vtkOverlappingAMR* amr, const std::string& name);
 
 /// The boxes of the blocks this process holds (no values), marked as held elsewhere: what the
 /// other processes need of them.

@@ -200,7 +200,7 @@ void vtkExaBricksRepresentation::UpdateEngine() {
       std::copy(part.bounds, part.bounds + 6, engine->bounds);
       in.PartsJson = part.partsJson;
     } else {
-      engine->model = std::make_unique<exa::Model>(exa::buildModel(exa::paraview::amrLeafCells(in.Data, name)));
+      engine->model = std::make_unique<exa::Model>(exa::paraview::amrModel(in.Data, name));
       engine->renderer = std::make_unique<exa::Renderer>(*engine->model);
       std::copy(in.Bounds, in.Bounds + 6, engine->bounds);
       const exa::paraview::PartNumbers whole = exa::paraview::partNumbers(engine->model.get(), 0);
