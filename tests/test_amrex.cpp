@@ -1,6 +1,8 @@
 #include "exabricks/amr/model.h"
+#include "exabricks/amr/scenes.h"
 #include "exabricks/core/error.h"
 #include "exabricks/io/amrex.h"
+#include "exabricks/io/amrex_write.h"
 #include "exabricks/io/load.h"
 
 #include "reader_checks.h"
@@ -14,6 +16,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <random>
 #include <sstream>
 
@@ -381,4 +384,89 @@ TEST(Amrex, FieldRangesFromMetadataHoldTheData) {
   }
   EXPECT_FALSE(
       fieldRangeFromMetadata(sharedData().string() + "/amrex/advection_3d/plt_drop", "no-such-field").has_value());
+}
+
+TEST(AmrexWrite, GeneratedScenesReadBackLeafForLeafWithCoveredCellsTheMeanOfTheirChildren) {
+  // Every scene without holes (level jumps, two block sizes) written piece by piece, in both precisions:
+  // its leaves read back exactly (float64; float32 stores the same floats), and a coarse read
+  // gives each covered cell the mean of the leaves under it.
+  for (const char* name : {"blobs", "ramp", "cosmic"})
+    for (const bool float32 : {false, true}) {
+      SceneOptions so;
+      so.name = name;
+      so.targetCells = 30000;
+      so.levels = 4;
+      so.seed = 3;
+      const SceneOptions resolved = resolveSceneSize(so);
+      const CellSet truth = generateScene(resolved);
+      const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / (std::string("written_") + name);
+      std::unique_ptr<AmrexPlotfileWriter> writer;
+      generateScenePieces(resolved, AmrexPlotfileWriter::kSlabCells, [&](CellSet& piece) {
+        if (!writer) {
+          std::vector<std::string> names;
+          for (const Field& f : piece.fields)
+            names.push_back(f.name);
+          writer = std::make_unique<AmrexPlotfileWriter>(dir.string(), names, resolved.levels,
+                                                         int64_t(sceneLatticeWidth(resolved)), float32);
+        }
+        writer->append(piece);
+      });
+      EXPECT_GT(writer->finish(), 1u);
+      const CellSet back = loadCells(dir.string());
+      ASSERT_EQ(back.size(), truth.size()) << name;
+      std::map<std::tuple<int, int, int, int>, std::vector<float>> want;
+      for (size_t i = 0; i < truth.size(); ++i) {
+        const Cell& c = truth.cells[i];
+        std::vector<float>& v = want[{c.lower.x, c.lower.y, c.lower.z, c.level}];
+        for (const Field& f : truth.fields)
+          v.push_back(f.values[i]);
+      }
+      for (size_t i = 0; i < back.size(); ++i) {
+        const Cell& c = back.cells[i];
+        const auto it = want.find({c.lower.x, c.lower.y, c.lower.z, c.level});
+        ASSERT_NE(it, want.end()) << name;
+        for (size_t f = 0; f < back.fields.size(); ++f)
+          ASSERT_EQ(back.fields[f].values[i], it->second[f]) << name;
+      }
+      // Level 1 and coarser alone: a cell that covers finer leaves holds their mean (weighted by
+      // volume: each child the mean of its own).
+      LoadOptions coarse;
+      coarse.finestLevel = 1;
+      const CellSet top = loadCells(dir.string(), coarse);
+      std::map<std::tuple<int, int, int>, std::pair<double, int>> children; // level-1 cell -> sum, count
+      for (size_t i = 0; i < truth.size(); ++i)
+        if (truth.cells[i].level == 0) {
+          auto& s = children[{truth.cells[i].lower.x & ~1, truth.cells[i].lower.y & ~1, truth.cells[i].lower.z & ~1}];
+          s.first += truth.fields[0].values[i];
+          s.second += 1;
+        }
+      int checked = 0;
+      for (size_t i = 0; i < top.size(); ++i) {
+        const Cell& c = top.cells[i];
+        if (c.level != 1) continue;
+        const auto it = children.find({c.lower.x, c.lower.y, c.lower.z});
+        if (it == children.end() || it->second.second != 8) continue;
+        EXPECT_NEAR(top.fields[0].values[i], it->second.first / 8, 1e-5 * (1 + std::abs(it->second.first)));
+        ++checked;
+      }
+      EXPECT_GT(checked, 0) << name;
+    }
+  // Holes (space without cells under a refined cell) have no place in a plotfile: refused, and
+  // nothing is left behind.
+  SceneOptions so;
+  so.name = "shells";
+  so.targetCells = 30000;
+  const SceneOptions resolved = resolveSceneSize(so);
+  const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "written_shells";
+  try {
+    AmrexPlotfileWriter writer(dir.string(), {"scalar", "radius"}, resolved.levels,
+                               int64_t(sceneLatticeWidth(resolved)), false);
+    generateScenePieces(resolved, AmrexPlotfileWriter::kSlabCells, [&](CellSet& piece) { writer.append(piece); });
+    writer.finish();
+    ADD_FAILURE() << "holes were written";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("data with holes"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(dir));
+  EXPECT_FALSE(fs::exists(dir.string() + ".partial"));
 }

@@ -1,9 +1,10 @@
-// exabricks generate: deterministic synthetic AMR datasets in the native format.
+// exabricks generate: deterministic synthetic AMR datasets in the native format or as AMReX plotfiles.
 #include "commands.h"
 #include "common.h"
 
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/log.h"
+#include "exabricks/io/amrex_write.h"
 #include "exabricks/io/native.h"
 #include "exabricks/io/particles.h"
 
@@ -26,6 +27,8 @@ struct GenerateOptions {
   double dt = 1.0;        ///< time between steps
   int64_t particles = -1; ///< particles of the scene's main species; -1: cells / 25 where it has them
   std::string output;
+  std::string format = "native"; ///< native (NAME.cells) or amrex (a plotfile folder)
+  int precision = 64;            ///< bits per value in an AMReX plotfile
   bool list = false;
   bool json = false;
 };
@@ -49,13 +52,42 @@ std::vector<char> particleBytes(const SceneOptions& resolved, uint64_t count) {
   return nativeParticleBytes(generateSceneParticles(resolved, count), vec3d(0.0), vec3d(sceneLatticeWidth(resolved)));
 }
 
+/// The scene as an AMReX plotfile, written as it is generated: slabs of whole coarsest boxes.
+uint64_t writePlotfile(const GenerateOptions& o, uint64_t particles) {
+  if (o.steps) failUsage("--steps writes native datasets (--format native)");
+  if (o.precision != 32 && o.precision != 64) failUsage("--precision must be 32 or 64");
+  if (particles && o.particles > 0) failUsage("--particles: an AMReX plotfile is written without particles");
+  if (particles) logNote("the plotfile holds the gas alone (particles are written with --format native)");
+  const SceneOptions resolved = resolveSceneSize(o.scene);
+  std::unique_ptr<AmrexPlotfileWriter> writer;
+  const int slabs = AmrexPlotfileWriter::kSlabCells * std::max(1, slabsPerPiece() / AmrexPlotfileWriter::kSlabCells);
+  const uint64_t cells = generateScenePieces(resolved, slabs, [&](CellSet& piece) {
+    validateCellRecords(piece.cells, o.scene.name);
+    for (const Field& f : piece.fields)
+      validateFieldValues(f, piece.cells.size(), o.scene.name);
+    if (!writer) {
+      std::vector<std::string> names;
+      for (const Field& f : piece.fields)
+        names.push_back(f.name);
+      writer = std::make_unique<AmrexPlotfileWriter>(o.output, names, resolved.levels,
+                                                     int64_t(sceneLatticeWidth(resolved)), o.precision == 32);
+    }
+    writer->append(piece);
+  });
+  const uint64_t boxes = writer->finish();
+  logInfo(strCat("wrote ", boxes, " boxes on ", resolved.levels, " levels to ", o.output));
+  return cells;
+}
+
 void run(const GenerateOptions& o) {
   if (o.list) {
     for (const SceneInfo& s : sceneList())
       std::printf("%-8s %s\n", s.name.c_str(), s.description.c_str());
     return;
   }
-  if (o.output.empty()) fail("generate: an output NAME.cells is required (-o)");
+  if (o.output.empty())
+    fail("generate: an output NAME.cells (or a plotfile folder with --format amrex) is required (-o)");
+  if (o.format != "native" && o.format != "amrex") failUsage("--format must be native or amrex");
   if (o.steps < 0 || o.steps > 100000) failUsage("--steps must be in 0..100000");
   if (o.regrid < 1) failUsage("--regrid must be at least 1");
   if (!(o.dt > 0 && std::isfinite(o.dt))) failUsage("--dt must be a positive number");
@@ -63,7 +95,10 @@ void run(const GenerateOptions& o) {
   Timer timer;
   std::vector<std::string> outputs;
   uint64_t cellCount = 0;
-  if (o.steps == 0) {
+  if (o.format == "amrex") {
+    cellCount = writePlotfile(o, particles);
+    outputs.push_back(o.output);
+  } else if (o.steps == 0) {
     // Written as it is generated, a few slabs at a time: memory for those alone.
     std::unique_ptr<NativeWriter> writer;
     const SceneOptions resolved = resolveSceneSize(o.scene);
@@ -137,6 +172,12 @@ void addGenerate(CLI::App& app) {
   cmd->add_option("--dt", opts->dt, "Time between steps of a series")->capture_default_str();
   cmd->add_option("--particles", opts->particles,
                   "Dark-matter particles written to NAME.particles with count/25 stars (cosmic; default: cells/25)");
+  cmd->add_option("--format", opts->format,
+                  "native: NAME.cells and its fields; amrex: an AMReX plotfile folder (every level in boxes, covered "
+                  "cells the mean of their children)")
+      ->capture_default_str();
+  cmd->add_option("--precision", opts->precision, "Bits per value of an AMReX plotfile: 64 or 32")
+      ->capture_default_str();
   cmd->add_flag("--list", opts->list, "List the scenes");
   cmd->add_flag("--json", opts->json, "Print a JSON summary on stdout");
   cmd->callback([opts] { run(*opts); });

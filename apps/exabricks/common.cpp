@@ -23,8 +23,9 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
   cmd.add_option("--part-cells", partCells,
-                 "Build NAME.cells, AMReX, Chombo, Enzo and VTK AMR inputs of more cells in parts of about this "
-                 "many, each read alone (less memory; 0: in one piece)")
+                 "Build NAME.cells inputs of more cells in parts of about this many, each read alone (less memory; 0: "
+                 "in one piece); AMReX, Chombo, Enzo and VTK AMR inputs are built from their boxes without cell records, "
+                 "in parts only with --nan-as-holes")
       ->capture_default_str();
   cmd.add_option("--raw-dims", rawDims,
                  "Raw volume: voxels per axis as NXxNYxNZ (default: from NAME_NXxNYxNZ_TYPE.raw)");

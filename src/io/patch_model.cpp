@@ -57,15 +57,10 @@ void cutIntoBricks(const vec3l& lo, const vec3l& hi, int64_t maxWidth, std::vect
         out.push_back({vec3l(cut(0, x), cut(1, y), cut(2, z)), vec3l(cut(0, x + 1), cut(1, y + 1), cut(2, z + 1))});
 }
 
-} // namespace
-
-Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, const BuildOptions& options) {
-  Timer timer;
+/// Each patch's bricks: its leaf boxes, cropped to the kept cells, cut to the brick width.
+std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const io::Coverage& coverage,
+                                           const PatchKeep& keep, int64_t maxWidth) {
   const std::vector<io::Patch>& patches = source.patches;
-  const io::Coverage coverage(patches, source.name);
-  const int64_t maxWidth = std::clamp(options.bricks.maxBrickWidth, 1, kMaxBrickWidth);
-
-  // Each patch's bricks: its leaf boxes, cropped to the kept cells, cut to the brick width.
   std::vector<std::vector<Piece>> pieces(patches.size());
   tbb::parallel_for(size_t(0), patches.size(), [&](size_t i) {
     const io::Patch& p = patches[i];
@@ -80,6 +75,58 @@ Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, cons
       if (p.lower[a] < -kLatticeLimit || p.upper()[a] > kLatticeLimit)
         fail(source.name(i), ": lies outside the supported lattice range (±2^29 finest cells)");
   });
+  return pieces;
+}
+
+/// No two leaves may overlap: boxes of one level that overlap, or a level that the next coarser
+/// does not hold, would give a point two cells.
+void checkDisjoint(const PatchSource& source, const std::vector<Brick>& bricks, const std::vector<size_t>& patchOf) {
+  std::vector<io::Patch> boxes;
+  boxes.reserve(bricks.size());
+  for (const Brick& b : bricks)
+    boxes.push_back({vec3l(b.lower), vec3l(b.size), int64_t(b.cellWidth())});
+  const io::Coverage leaves(std::move(boxes), [&](size_t k) { return source.name(patchOf[k]); });
+  if (const auto pair = leaves.firstOverlap()) {
+    const size_t a = patchOf[pair->first], b = patchOf[pair->second];
+    if (a == b) fail(source.name(a), ": overlaps itself");
+    fail(source.name(a), " and ", source.name(b),
+         " hold cells that overlap (boxes of one level must not overlap, and each level must lie within the",
+         " next coarser)");
+  }
+}
+
+/// Reads patch i once and copies its kept cells into the slots of its bricks.
+void placeValues(const PatchSource& source, size_t i, const std::vector<Piece>& pieces, const Brick* bricks,
+                 std::vector<std::vector<float>>& values) {
+  const io::Patch& p = source.patches[i];
+  std::vector<std::vector<float>> read;
+  source.read(i, read);
+  if (read.size() != values.size())
+    fail(source.name(i), ": ", read.size(), " fields read, ", values.size(), " asked for");
+  for (const auto& v : read)
+    if (int64_t(v.size()) != p.cellCount())
+      fail(source.name(i), ": ", v.size(), " values for ", p.cellCount(), " cells");
+  for (size_t k = 0; k < pieces.size(); ++k) {
+    const Piece& piece = pieces[k];
+    const Brick& b = bricks[k];
+    const size_t row = size_t(b.size.x);
+    for (size_t f = 0; f < values.size(); ++f) {
+      float* dst = values[f].data() + b.valueOffset;
+      for (int64_t z = piece.lower.z; z < piece.upper.z; ++z)
+        for (int64_t y = piece.lower.y; y < piece.upper.y; ++y, dst += row)
+          std::memcpy(dst, read[f].data() + ((z * p.cells.y + y) * p.cells.x + piece.lower.x), row * sizeof(float));
+    }
+  }
+}
+
+} // namespace
+
+Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, const BuildOptions& options) {
+  Timer timer;
+  const std::vector<io::Patch>& patches = source.patches;
+  const io::Coverage coverage(patches, source.name);
+  const std::vector<std::vector<Piece>> pieces =
+      cutPatches(source, coverage, keep, std::clamp(options.bricks.maxBrickWidth, 1, kMaxBrickWidth));
 
   Model model;
   model.world = source.world;
@@ -87,17 +134,15 @@ Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, cons
   model.fieldNames = source.fieldNames;
   model.fieldUnits = source.fieldUnits;
   model.fieldUnits.resize(model.fieldNames.size());
-  std::vector<size_t> firstBrick(patches.size() + 1, 0);
-  std::vector<size_t> patchOf; // per brick
+  std::vector<size_t> firstBrick(patches.size() + 1, 0), patchOf; // per patch; per brick
   uint64_t cells = 0;
   for (size_t i = 0; i < patches.size(); ++i) {
-    const io::Patch& p = patches[i];
     firstBrick[i] = model.bricks.size();
     for (const Piece& piece : pieces[i]) {
-      const vec3l n = piece.upper - piece.lower, lower = p.lower + piece.lower * p.width;
+      const vec3l n = piece.upper - piece.lower, lower = patches[i].lower + piece.lower * patches[i].width;
       Brick b;
       b.lower = vec3i(int32_t(lower.x), int32_t(lower.y), int32_t(lower.z));
-      b.level = io::log2Exact(p.width);
+      b.level = io::log2Exact(patches[i].width);
       b.size = vec3i(int32_t(n.x), int32_t(n.y), int32_t(n.z));
       b.valueOffset = uint32_t(cells);
       cells += uint64_t(n.x * n.y * n.z);
@@ -109,23 +154,7 @@ Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, cons
   }
   firstBrick[patches.size()] = model.bricks.size();
   if (model.bricks.empty()) return model;
-
-  // No two leaves may overlap: boxes of one level that overlap, or a level that the next coarser
-  // does not hold, would give a point two cells.
-  {
-    std::vector<io::Patch> boxes;
-    boxes.reserve(model.bricks.size());
-    for (const Brick& b : model.bricks)
-      boxes.push_back({vec3l(b.lower), vec3l(b.size), int64_t(b.cellWidth())});
-    const io::Coverage leaves(std::move(boxes), [&](size_t k) { return source.name(patchOf[k]); });
-    if (const auto pair = leaves.firstOverlap()) {
-      const size_t a = patchOf[pair->first], b = patchOf[pair->second];
-      if (a == b) fail(source.name(a), ": overlaps itself");
-      fail(source.name(a), " and ", source.name(b),
-           " hold cells that overlap (boxes of one level must not overlap, and each level must lie within the",
-           " next coarser)");
-    }
-  }
+  checkDisjoint(source, model.bricks, patchOf);
 
   // Each patch's values, read once, into its bricks' slots.
   std::vector<std::vector<float>> values(model.fieldNames.size());
@@ -133,26 +162,7 @@ Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, cons
     v = io::allocate<float>(cells, [&] { return strCat(source.input, ": the values of ", cells, " cells"); });
   Progress progress("reading " + source.input, patches.size());
   auto place = [&](size_t i) {
-    if (pieces[i].empty()) return progress.advance(1);
-    const io::Patch& p = patches[i];
-    std::vector<std::vector<float>> read;
-    source.read(i, read);
-    if (read.size() != values.size())
-      fail(source.name(i), ": ", read.size(), " fields read, ", values.size(), " asked for");
-    for (const auto& v : read)
-      if (int64_t(v.size()) != p.cellCount())
-        fail(source.name(i), ": ", v.size(), " values for ", p.cellCount(), " cells");
-    for (size_t k = firstBrick[i]; k < firstBrick[i + 1]; ++k) {
-      const Piece& piece = pieces[i][k - firstBrick[i]];
-      const Brick& b = model.bricks[k];
-      const size_t row = size_t(b.size.x);
-      for (size_t f = 0; f < values.size(); ++f) {
-        float* dst = values[f].data() + b.valueOffset;
-        for (int64_t z = piece.lower.z; z < piece.upper.z; ++z)
-          for (int64_t y = piece.lower.y; y < piece.upper.y; ++y, dst += row)
-            std::memcpy(dst, read[f].data() + ((z * p.cells.y + y) * p.cells.x + piece.lower.x), row * sizeof(float));
-      }
-    }
+    if (!pieces[i].empty()) placeValues(source, i, pieces[i], model.bricks.data() + firstBrick[i], values);
     progress.advance(1);
   };
   if (source.concurrentReads)

@@ -29,10 +29,10 @@ struct LoadOptions {
   BuildOptions build;
   RawOptions raw; ///< dimensions, type and merging of raw volumes
   box3i box;      ///< finest-lattice box: only cells that overlap it (empty: all)
-  /// Inputs with more cells than this whose reader takes a census without reading the cells
-  /// (NAME.cells, AMReX plotfiles) are built in parts of about this many cells, each read
-  /// through the reader's box: the build then holds the values of all cells but the records of
-  /// one part only. 0: always in one piece.
+  /// Inputs with more cells than this whose reader takes a census without reading the cells and
+  /// that are not built from their boxes (NAME.cells; patch-based files with NonFinite::Holes)
+  /// are built in parts of about this many cells, each read through the reader's box: the build
+  /// then holds the values of all cells but the records of one part only. 0: always in one piece.
   uint64_t partCells = uint64_t(1) << 27;
   NonFinite nonFinite = NonFinite::Refuse;
   /// Coarse levels only (ReadRequest::finestLevel; AMReX, Chombo, Enzo, VTK): cells narrower than
@@ -49,7 +49,9 @@ InputKind detectInput(const std::string& path);
 /// Reads raw cells (not for model files).
 CellSet loadCells(const std::string& path, const LoadOptions& options = {});
 
-/// Reads a model file, or reads cells and builds the model. Errors name the input.
+/// Reads a model file, or builds the model: from the input's boxes where its reader gives them
+/// (FormatReader::patches, unless NonFinite::Holes), else from the cells read. Errors name the
+/// input.
 Model loadModel(const std::string& path, const LoadOptions& options = {});
 
 /// A field's value range from the input's metadata alone, where its format records one (AMReX
