@@ -381,6 +381,10 @@ const FormatReader* patchReader(InputKind kind, const std::string& path, const L
 
 } // namespace
 
+bool buildsFromBoxes(const std::string& path, const LoadOptions& options) {
+  return !path.empty() && patchReader(detectInput(path), path, options) != nullptr;
+}
+
 Model loadModel(const std::string& path, const LoadOptions& options) {
   Timer timer;
   if (detectInput(path) == InputKind::Model) {

@@ -86,11 +86,12 @@ uint64_t residentBytesNow() { return statusKiB("/proc/self/status", "VmRSS:"); }
 uint64_t peakResidentBytes() { return statusKiB("/proc/self/status", "VmHWM:"); }
 uint64_t availableMemoryBytes() { return statusKiB("/proc/meminfo", "MemAvailable:"); }
 
-uint64_t bytesPerResidentCell(size_t fields) {
+uint64_t bytesPerResidentCell(size_t fields, bool fromBoxes) {
   // Per loaded field: 4 bytes of values and 12 of smooth shading's gradient field, which the
   // renderer builds for the shaded field; the build's records and slot index, bricks, regions
-  // and the renderer's tables come to about 24 bytes per cell more.
-  return 24 + 4 * uint64_t(fields) + 12;
+  // and the renderer's tables come to about 24 bytes per cell more, 8 without records (a build
+  // from boxes: bricks, regions and tables alone).
+  return (fromBoxes ? 8 : 24) + 4 * uint64_t(fields) + 12;
 }
 
 uint64_t MemoryPlan::partBytes(int part) const {
@@ -108,7 +109,7 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   MemoryPlan plan;
   plan.budget = budget;
   plan.fixedBytes = residentBytesNow() + kProcessSlack + frameBytes;
-  plan.bytesPerCell = bytesPerResidentCell(loadedFields(input, options));
+  plan.bytesPerCell = bytesPerResidentCell(loadedFields(input, options), buildsFromBoxes(input, options));
   const Census census = loadCensus(input, options);
   plan.fixedBytes = std::max(plan.fixedBytes, residentBytesNow() + kProcessSlack + frameBytes);
   plan.cells = census.cells();
@@ -156,7 +157,7 @@ std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadO
   const uint64_t available = availableMemoryBytes();
   if (available == 0) return std::nullopt;
   const uint64_t budget = available / 4 * 3;
-  const double perCell = double(bytesPerResidentCell(loadedFields(input, options)));
+  const double perCell = double(bytesPerResidentCell(loadedFields(input, options), buildsFromBoxes(input, options)));
   const double fixed = double(residentBytesNow() + kProcessSlack + frameBytes);
   // An upper bound from sizes alone first (the records of NAME.cells, the cells in the boxes of a
   // patch-based file): a step that fits by it is read as before, without a census.

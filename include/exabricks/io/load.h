@@ -46,6 +46,9 @@ struct LoadOptions {
 /// Determines the kind of input; throws with the path when it is not recognised.
 InputKind detectInput(const std::string& path);
 
+/// Whether loadModel builds this input from its boxes (structure without values, no cell records).
+bool buildsFromBoxes(const std::string& path, const LoadOptions& options = {});
+
 /// Reads raw cells (not for model files).
 CellSet loadCells(const std::string& path, const LoadOptions& options = {});
 

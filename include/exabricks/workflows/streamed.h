@@ -41,8 +41,9 @@ uint64_t availableMemoryBytes();
 
 /// What a resident part costs per cell it holds (halo included) when `fields` fields are loaded:
 /// the values, smooth shading's gradients, bricks, regions, the renderer's structures and the
-/// build's working memory, as measured on AMReX and generated inputs (docs/performance.md).
-uint64_t bytesPerResidentCell(size_t fields);
+/// build's working memory (cell records and slot indices, none for inputs built from their
+/// boxes), as measured on AMReX and generated inputs (docs/performance.md).
+uint64_t bytesPerResidentCell(size_t fields, bool fromBoxes);
 
 /// How a step is held under a memory budget.
 struct MemoryPlan {
