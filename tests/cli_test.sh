@@ -247,6 +247,12 @@ check "render --particles draws the generated particles" bash -c "'$exe' -q rend
 check "--particle-radius-pixels sizes the spheres in pixels: twice the pixels, larger spheres" bash -c "'$exe' -q render cosmic.cells --size 64x64 --particles --particle-radius-pixels 1 -o px1.png --write-scene px1.json && '$exe' -q render cosmic.cells --size 64x64 --particles --particle-radius-pixels 2 -o px2.png && $py -c 'import json; assert json.load(open(\"px1.json\"))[\"particles\"][\"radius_pixels\"] == 1' && '$exe' -q render --scene px1.json -o px1again.png && cmp px1.png px1again.png && ! cmp -s px1.png px2.png"
 fails_with "a scene without particles refuses --particles" "scene 'blobs' has no particles" "$exe" generate -s blobs -n 1000 --particles 10 -o nop.cells
 check "a dataset written over a cosmic one leaves no particles of it" bash -c "'$exe' -q generate -s blobs -n 1000 -o cosmic.cells && [ ! -e cosmic.particles ]"
+check "generate --format amrex writes a plotfile the readers take, every level in boxes" bash -c "'$exe' -q generate -s ramp -n 20000 --format amrex --precision 32 -o gplt && '$exe' info gplt --json | $py -c 'import json,sys; d = json.load(sys.stdin); assert d[\"cells\"] > 15000 and len(d[\"levels\"]) == 4, d' && '$exe' -q render gplt --size 32x32 -o gplt.png"
+fails_with "generate --format amrex refuses a scene with holes, leaving nothing" "data with holes" "$exe" -q generate -s shells -n 20000 --format amrex -o holes.plt
+check "a refused plotfile leaves no folder behind" bash -c "[ ! -e holes.plt ] && [ ! -e holes.plt.partial ]"
+fails_with "generate --format amrex will not write over a folder that is not a plotfile" "is not an AMReX plotfile; not overwritten" bash -c "mkdir -p notplt && touch notplt/keep && '$exe' -q generate -n 20000 --format amrex -o notplt"
+fails_with "generate --precision takes 32 or 64" "--precision must be 32 or 64" "$exe" generate -n 1000 --format amrex --precision 16 -o p16
+fails_with "generate --format amrex writes no series" "--steps writes native datasets" "$exe" generate -n 1000 --format amrex --steps 2 -o series
 enzo=${EXABRICKS_DATA:-$(dirname "$0")/../../shared/data}/particles/enzo_moving7_3d/DD0010/moving7_0010
 if [ -e "$enzo" ]; then
   check "info --json lists the Enzo output's dark matter" bash -c "'$exe' info '$enzo' --json | $py -c 'import json,sys; (p,) = json.load(sys.stdin)[\"particles\"]; assert (p[\"species\"], p[\"count\"], p[\"bytes_per_particle\"]) == (\"dark_matter\", 9233, 72), p; assert \"mass\" in p[\"attributes\"]'"

@@ -19,6 +19,8 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <mutex>
+#include <optional>
 
 namespace exa {
 namespace {
@@ -359,9 +361,47 @@ Model loadNativeValuesAfter(const std::string& path, const LoadOptions& options,
 
 /// A patch-based input built from its boxes (structure without values): the cells `keep` keeps
 /// of the levels the options ask for. A model without bricks when none is kept.
+/// When an input's metadata were last written, and how large they are: its path's, a folder's
+/// Header's and an Enzo hierarchy's.
+std::string metadataStamp(const std::string& path) {
+  std::string stamp;
+  std::error_code ec;
+  for (const std::filesystem::path& p : {std::filesystem::path(path), std::filesystem::path(path) / "Header",
+                                         std::filesystem::path(path + ".hierarchy")}) {
+    const auto t = std::filesystem::last_write_time(p, ec);
+    if (ec) continue;
+    stamp += strCat(p.string(), ":", t.time_since_epoch().count(), ":",
+                    std::filesystem::is_regular_file(p, ec) ? std::filesystem::file_size(p, ec) : 0, ";");
+  }
+  return stamp;
+}
+
+/// The input's patches, read from its metadata once while they are unchanged: the parts of a
+/// step under a memory budget, each built through the same box lists, parse them once. Only
+/// sources of plain files are kept, whose reads any thread may share.
+PatchSource patchesOf(const std::string& path, const FormatReader& reader, const std::vector<std::string>& fields,
+                      int finestLevel) {
+  static std::mutex mutex;
+  static std::string lastKey;
+  static std::optional<PatchSource> last;
+  std::string key = strCat(path, "|", finestLevel, "|", metadataStamp(path));
+  for (const std::string& f : fields)
+    key += "|" + f;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (last && key == lastKey) return *last;
+  }
+  PatchSource source = reader.patches(path, fields, finestLevel);
+  if (!source.concurrentReads) return source; // its reads share a library handle (HDF5): not across builds
+  const std::lock_guard<std::mutex> lock(mutex);
+  lastKey = key;
+  last = source;
+  return source;
+}
+
 Model loadModelOfPatches(const std::string& path, const FormatReader& reader, const LoadOptions& options,
                          int finestLevel, const PatchKeep& keep) {
-  PatchSource source = reader.patches(path, options.fields, finestLevel);
+  PatchSource source = patchesOf(path, reader, options.fields, finestLevel);
   CellSet named; // the format's conventional units, where the file states none
   for (size_t f = 0; f < source.fieldNames.size(); ++f)
     named.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});

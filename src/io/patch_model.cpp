@@ -64,7 +64,8 @@ std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const io::
   std::vector<std::vector<Piece>> pieces(patches.size());
   tbb::parallel_for(size_t(0), patches.size(), [&](size_t i) {
     const io::Patch& p = patches[i];
-    if (source.heldElsewhere(i)) return;
+    vec3l all(0), allUp = p.cells;
+    if (source.heldElsewhere(i) || !cropToKept(p, keep, all, allUp)) return; // none of its cells is kept
     for (auto [lo, hi] : coverage.leafBoxes(i))
       if (cropToKept(p, keep, lo, hi)) cutIntoBricks(lo, hi, maxWidth, pieces[i]);
     if (pieces[i].empty()) return;
