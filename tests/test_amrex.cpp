@@ -451,8 +451,10 @@ TEST(AmrexWrite, GeneratedScenesReadBackLeafForLeafWithCoveredCellsTheMeanOfThei
       }
       EXPECT_GT(checked, 0) << name;
     }
-  // Holes (space without cells under a refined cell) have no place in a plotfile: refused, and
-  // nothing is left behind.
+}
+
+TEST(AmrexWrite, HolesAreRefusedLeavingNothingBehind) {
+  // Holes (space without cells under a refined cell) have no place in a plotfile.
   SceneOptions so;
   so.name = "shells";
   so.targetCells = 30000;
