@@ -52,6 +52,17 @@ std::vector<char> particleBytes(const SceneOptions& resolved, uint64_t count) {
   return nativeParticleBytes(generateSceneParticles(resolved, count), vec3d(0.0), vec3d(sceneLatticeWidth(resolved)));
 }
 
+/// Checks a generated piece's cells and values; its fields' names.
+std::vector<std::string> checkedFields(const CellSet& piece, const std::string& scene) {
+  validateCellRecords(piece.cells, scene);
+  std::vector<std::string> names;
+  for (const Field& f : piece.fields) {
+    validateFieldValues(f, piece.cells.size(), scene);
+    names.push_back(f.name);
+  }
+  return names;
+}
+
 /// The scene as an AMReX plotfile, written as it is generated: slabs of whole coarsest boxes.
 uint64_t writePlotfile(const GenerateOptions& o, uint64_t particles) {
   if (o.steps) failUsage("--steps writes native datasets (--format native)");
@@ -62,16 +73,10 @@ uint64_t writePlotfile(const GenerateOptions& o, uint64_t particles) {
   std::unique_ptr<AmrexPlotfileWriter> writer;
   const int slabs = AmrexPlotfileWriter::kSlabCells * std::max(1, slabsPerPiece() / AmrexPlotfileWriter::kSlabCells);
   const uint64_t cells = generateScenePieces(resolved, slabs, [&](CellSet& piece) {
-    validateCellRecords(piece.cells, o.scene.name);
-    for (const Field& f : piece.fields)
-      validateFieldValues(f, piece.cells.size(), o.scene.name);
-    if (!writer) {
-      std::vector<std::string> names;
-      for (const Field& f : piece.fields)
-        names.push_back(f.name);
+    const std::vector<std::string> names = checkedFields(piece, o.scene.name);
+    if (!writer)
       writer = std::make_unique<AmrexPlotfileWriter>(o.output, names, resolved.levels,
                                                      int64_t(sceneLatticeWidth(resolved)), o.precision == 32);
-    }
     writer->append(piece);
   });
   const uint64_t boxes = writer->finish();
@@ -103,15 +108,8 @@ void run(const GenerateOptions& o) {
     std::unique_ptr<NativeWriter> writer;
     const SceneOptions resolved = resolveSceneSize(o.scene);
     cellCount = generateScenePieces(resolved, slabsPerPiece(), [&](CellSet& piece) {
-      validateCellRecords(piece.cells, o.scene.name);
-      for (const Field& f : piece.fields)
-        validateFieldValues(f, piece.cells.size(), o.scene.name);
-      if (!writer) {
-        std::vector<std::string> names;
-        for (const Field& f : piece.fields)
-          names.push_back(f.name);
-        writer = std::make_unique<NativeWriter>(o.output, names);
-      }
+      const std::vector<std::string> names = checkedFields(piece, o.scene.name);
+      if (!writer) writer = std::make_unique<NativeWriter>(o.output, names);
       writer->append(piece);
     });
     if (particles) writer->addFile(nativeParticlesPath(o.output), particleBytes(resolved, particles));

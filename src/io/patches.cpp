@@ -81,16 +81,9 @@ void Coverage::build(uint32_t node, uint32_t begin, uint32_t end) {
   build(child + 1, mid, end);
 }
 
-void Coverage::forEachCover(size_t i, const std::function<void(const vec3l&, const vec3l&)>& use) const {
-  const Patch& p = patches_[i];
-  // Only the next finer width decides: the formats nest each level inside the one above, so a
-  // deeper patch lies under next-finer patches and may legitimately cut coarse cells.
-  const auto next = std::lower_bound(widths_.begin(), widths_.end(), p.width);
-  if (next == widths_.begin()) return;
-  const int64_t coverWidth = *(next - 1);
-  const vec3l plo = p.lower, phi = p.upper();
-  auto overlaps = [&](const vec3l& lo, const vec3l& hi) {
-    return lo.x < phi.x && lo.y < phi.y && lo.z < phi.z && plo.x < hi.x && plo.y < hi.y && plo.z < hi.z;
+void Coverage::forEachOverlapping(const vec3l& lo, const vec3l& hi, const std::function<void(size_t)>& visit) const {
+  auto overlaps = [&](const vec3l& a, const vec3l& b) {
+    return a.x < hi.x && a.y < hi.y && a.z < hi.z && lo.x < b.x && lo.y < b.y && lo.z < b.z;
   };
   std::vector<uint32_t> stack{0};
   while (!stack.empty()) {
@@ -102,18 +95,29 @@ void Coverage::forEachCover(size_t i, const std::function<void(const vec3l&, con
       stack.push_back(n.first + 1);
       continue;
     }
-    for (uint32_t k = n.first; k < n.first + n.count; ++k) {
-      const Patch& q = patches_[items_[k]];
-      if (q.width != coverWidth || !overlaps(q.lower, q.upper())) continue;
-      const vec3l lo = max(q.lower, plo), hi = min(q.upper(), phi);
-      // The overlap must consist of whole cells of p: a finer patch never splits a cell.
-      for (int a = 0; a < 3; ++a)
-        if ((lo[a] - plo[a]) % p.width != 0 || (hi[a] - plo[a]) % p.width != 0)
-          fail(name_(items_[k]), " covers only part of a cell of ", name_(i),
-               " (finer patches must cover whole coarser cells)");
-      use((lo - plo) / p.width, (hi - plo) / p.width);
-    }
+    for (uint32_t k = n.first; k < n.first + n.count; ++k)
+      if (overlaps(patches_[items_[k]].lower, patches_[items_[k]].upper())) visit(items_[k]);
   }
+}
+
+void Coverage::forEachCover(size_t i, const std::function<void(const vec3l&, const vec3l&)>& use) const {
+  const Patch& p = patches_[i];
+  // Only the next finer width decides: the formats nest each level inside the one above, so a
+  // deeper patch lies under next-finer patches and may legitimately cut coarse cells.
+  const auto next = std::lower_bound(widths_.begin(), widths_.end(), p.width);
+  if (next == widths_.begin()) return;
+  const int64_t coverWidth = *(next - 1);
+  const vec3l plo = p.lower, phi = p.upper();
+  forEachOverlapping(plo, phi, [&](size_t j) {
+    const Patch& q = patches_[j];
+    if (q.width != coverWidth) return;
+    const vec3l lo = max(q.lower, plo), hi = min(q.upper(), phi);
+    // The overlap must consist of whole cells of p: a finer patch never splits a cell.
+    for (int a = 0; a < 3; ++a)
+      if ((lo[a] - plo[a]) % p.width != 0 || (hi[a] - plo[a]) % p.width != 0)
+        fail(name_(j), " covers only part of a cell of ", name_(i), " (finer patches must cover whole coarser cells)");
+    use((lo - plo) / p.width, (hi - plo) / p.width);
+  });
 }
 
 std::vector<uint8_t> Coverage::covered(size_t i) const {
@@ -212,24 +216,11 @@ std::vector<std::pair<vec3l, vec3l>> Coverage::leafBoxes(size_t i) const {
 
 std::optional<std::pair<size_t, size_t>> Coverage::firstOverlap() const {
   for (size_t i = 0; i < patches_.size(); ++i) {
-    const vec3l plo = patches_[i].lower, phi = patches_[i].upper();
-    auto overlaps = [&](const vec3l& lo, const vec3l& hi) {
-      return lo.x < phi.x && lo.y < phi.y && lo.z < phi.z && plo.x < hi.x && plo.y < hi.y && plo.z < hi.z;
-    };
-    std::vector<uint32_t> stack{0};
-    while (!stack.empty()) {
-      const Node& n = nodes_[stack.back()];
-      stack.pop_back();
-      if (!overlaps(n.lo, n.hi)) continue;
-      if (n.count == 0) {
-        stack.push_back(n.first);
-        stack.push_back(n.first + 1);
-        continue;
-      }
-      for (uint32_t k = n.first; k < n.first + n.count; ++k)
-        if (items_[k] != i && overlaps(patches_[items_[k]].lower, patches_[items_[k]].upper()))
-          return std::pair<size_t, size_t>(std::min<size_t>(i, items_[k]), std::max<size_t>(i, items_[k]));
-    }
+    std::optional<size_t> other;
+    forEachOverlapping(patches_[i].lower, patches_[i].upper(), [&](size_t j) {
+      if (j != i && !other) other = j;
+    });
+    if (other) return std::pair<size_t, size_t>(std::min(i, *other), std::max(i, *other));
   }
   return std::nullopt;
 }

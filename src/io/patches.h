@@ -57,6 +57,8 @@ private:
   /// Calls `use(lo, hi)` with each part of patch i that a patch of the next finer width covers,
   /// in p's cells (exclusive upper).
   void forEachCover(size_t i, const std::function<void(const vec3l&, const vec3l&)>& use) const;
+  /// Calls visit(j) for every patch j that overlaps the lattice box [lo, hi).
+  void forEachOverlapping(const vec3l& lo, const vec3l& hi, const std::function<void(size_t)>& visit) const;
   std::vector<Patch> patches_;
   std::vector<uint32_t> items_;
   std::vector<Node> nodes_;
