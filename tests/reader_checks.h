@@ -11,9 +11,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <optional>
 #include <functional>
 #include <map>
+#include <optional>
 #include <random>
 #include <string>
 #include <tuple>
@@ -79,7 +79,8 @@ inline void expectBoxBuildEqualsCells(const std::string& path, int minParts, siz
       vec3d q;
       for (int k = 0; k < 3; ++k)
         q[k] = double(std::max<int64_t>(part.lower[k], cb.lower[k])) +
-               u(rng) * double(std::min<int64_t>(part.upper[k], cb.upper[k]) - std::max<int64_t>(part.lower[k], cb.lower[k]));
+               u(rng) * double(std::min<int64_t>(part.upper[k], cb.upper[k]) -
+                               std::max<int64_t>(part.lower[k], cb.lower[k]));
       double v0 = 0, v1 = 0;
       vec3d g0, g1;
       const bool h0 = whole.sampleWorld(0, whole.world.toWorld(q), v0, g0);

@@ -22,10 +22,11 @@ void InputOptions::add(CLI::App& cmd, bool fieldOption) {
                  "neighbouring regions of one level merge where that is cheaper (0: one region per set of bricks)")
       ->check(CLI::NonNegativeNumber)
       ->capture_default_str();
-  cmd.add_option("--part-cells", partCells,
-                 "Build NAME.cells inputs of more cells in parts of about this many, each read alone (less memory; 0: "
-                 "in one piece); AMReX, Chombo, Enzo and VTK AMR inputs are built from their boxes without cell records, "
-                 "in parts only with --nan-as-holes")
+  cmd.add_option(
+         "--part-cells", partCells,
+         "Build NAME.cells inputs of more cells in parts of about this many, each read alone (less memory; 0: "
+         "in one piece); AMReX, Chombo, Enzo and VTK AMR inputs are built from their boxes without cell records, "
+         "in parts only with --nan-as-holes")
       ->capture_default_str();
   cmd.add_option("--raw-dims", rawDims,
                  "Raw volume: voxels per axis as NXxNYxNZ (default: from NAME_NXxNYxNZ_TYPE.raw)");

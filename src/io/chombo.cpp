@@ -276,8 +276,8 @@ PatchSource chomboPatches(const std::string& path, const std::vector<std::string
             const double v = src[((z + g.z) * n.y + (y + g.y)) * n.x + (x + g.x)];
             values[k].push_back(io::toFloat32(v, [&] {
               const vec3l at = lv.boxes[b].lower + vec3l(x, y, z);
-              return strCat(name(i), ": component '", hd.names[st->comps[k]], "' at index (", at.x, ",", at.y, ",", at.z,
-                            ")");
+              return strCat(name(i), ": component '", hd.names[st->comps[k]], "' at index (", at.x, ",", at.y, ",",
+                            at.z, ")");
             }));
           }
     }
