@@ -496,26 +496,10 @@ AmrexDomain amrexDomain(const std::string& path) {
 }
 
 Census amrexCensus(const std::string& path) {
-  const Plotfile pf = readHeader(path);
-  std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
-  for (int l = pf.finestLevel - 1; l >= 0; --l)
-    width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
-  std::vector<io::Patch> patches;
-  std::vector<std::pair<int, size_t>> origin;
-  std::vector<LevelData> levels;
-  for (int l = 0; l <= pf.finestLevel; ++l) {
-    levels.push_back(readCellHeader(pf, l));
-    const LevelData& ld = levels.back();
-    for (size_t bi = 0; bi < ld.boxes.size(); ++bi) {
-      const IndexBox& b = ld.boxes[bi];
-      patches.push_back({b.lo * width[size_t(l)], b.hi - b.lo + vec3l(1), width[size_t(l)]});
-      origin.push_back({l, bi});
-    }
-  }
-  // The boxes are counted from the headers, but only as far as the data files can hold them.
-  checkFabBytes(pf, levels);
-  return io::censusOfPatches(
-      patches, [&](size_t i) { return strCat(path, ": level ", origin[i].first, " box ", origin[i].second); });
+  // The boxes are counted from the headers, but only as far as the data files can hold them
+  // (amrexPatches bounds every box by its FAB file).
+  const PatchSource source = amrexPatches(path);
+  return io::censusOfPatches(source.patches, source.name);
 }
 
 } // namespace exa

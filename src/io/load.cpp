@@ -359,8 +359,6 @@ Model loadNativeValuesAfter(const std::string& path, const LoadOptions& options,
   }
 }
 
-/// A patch-based input built from its boxes (structure without values): the cells `keep` keeps
-/// of the levels the options ask for. A model without bricks when none is kept.
 /// When an input's metadata were last written, and how large they are: its path's, a folder's
 /// Header's and an Enzo hierarchy's.
 std::string metadataStamp(const std::string& path) {
@@ -399,6 +397,8 @@ PatchSource patchesOf(const std::string& path, const FormatReader& reader, const
   return source;
 }
 
+/// A patch-based input built from its boxes (structure without values): the cells `keep` keeps
+/// of the levels the options ask for. A model without bricks when none is kept.
 Model loadModelOfPatches(const std::string& path, const FormatReader& reader, const LoadOptions& options,
                          int finestLevel, const PatchKeep& keep) {
   PatchSource source = patchesOf(path, reader, options.fields, finestLevel);
