@@ -83,7 +83,9 @@ TEST(NoiseTarget, EachTileStopsAtTheTargetAndEqualsARenderOfItsPasses) {
     fewest = std::min(fewest, n);
     most = std::max(most, n);
     EXPECT_GE(n, uint32_t(kNoiseFirstPasses));
-    if (n < 512) EXPECT_LE(adaptive.tileNoise(t, ball.scene.background), 2.f) << "tile " << t;
+    if (n < 512) {
+      EXPECT_LE(adaptive.tileNoise(t, ball.scene.background), 2.f) << "tile " << t;
+    }
   }
   EXPECT_LT(fewest, most); // the empty corners stop first
   EXPECT_GT(most, uint32_t(kNoiseFirstPasses));

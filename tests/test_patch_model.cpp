@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <map>
 #include <random>
 
 using namespace exa;
@@ -165,4 +167,39 @@ TEST(PatchModel, ValuesThatAreNotFloat32AreRefusedNamingTheGridAndTheValue) {
   grids[0].values[1][5] = std::nan("");
   const std::string e = errorOf(grids);
   EXPECT_NE(e.find("grids: grid 0: field 'b' value 5 is NaN"), std::string::npos) << e;
+}
+
+TEST(PatchModel, MergedCellsHoldTheMeanOfTheCellsTheyMerge) {
+  // One level of three boxes, two of them aligned to blocks of 4 cells and one to blocks of 2:
+  // merged by 2, each merged cell (two lattice units wide, at a corner on the blocks' lattice)
+  // holds the mean of the 8 cells it covers, field by field.
+  std::mt19937 rng{11};
+  const std::vector<Box> boxes{
+      {vec3l(0), vec3l(8, 4, 4), 1}, {vec3l(8, 0, 0), vec3l(4, 4, 8), 1}, {vec3l(0, 6, 0), vec3l(2, 2, 2), 1}};
+  const std::vector<GridPatch> grids = gridsOf(boxes, rng);
+  const PatchSource source = patchesOfGrids(grids, kNames, "grids", &kOrigin);
+  EXPECT_EQ(alignedMerge(source.patches, 8), 2);
+  EXPECT_EQ(alignedMerge({source.patches[0], source.patches[1]}, 8), 4);
+  const Model whole = buildModelOfPatches(source);
+  std::map<std::array<int64_t, 3>, std::vector<double>> sums; // per merged corner: the fields' sums
+  for (const std::vector<double>& c : test::cellsOf(whole)) {
+    std::vector<double>& s = sums[{int64_t(c[0]) / 2 * 2, int64_t(c[1]) / 2 * 2, int64_t(c[2]) / 2 * 2}];
+    s.resize(c.size() - 4, 0.0);
+    for (size_t f = 4; f < c.size(); ++f)
+      s[f - 4] += c[f];
+  }
+  const Model merged = buildModelOfPatches(mergedPatches(source, 2));
+  EXPECT_EQ(merged.fieldNames, whole.fieldNames);
+  EXPECT_EQ(merged.world.scale, whole.world.scale);
+  const std::vector<std::vector<double>> cells = test::cellsOf(merged);
+  ASSERT_EQ(cells.size(), sums.size());
+  ASSERT_EQ(whole.cellCount(), 8 * sums.size());
+  for (const std::vector<double>& c : cells) {
+    EXPECT_EQ(c[3], 1.0); // cells two lattice units wide
+    const std::vector<double>& s = sums.at({int64_t(c[0]), int64_t(c[1]), int64_t(c[2])});
+    for (size_t f = 4; f < c.size(); ++f)
+      EXPECT_NEAR(c[f], s[f - 4] / 8, 1e-6);
+  }
+  // A merge the boxes are not aligned to is refused.
+  EXPECT_THROW(mergedPatches(source, 4), Error);
 }

@@ -199,7 +199,9 @@ TEST(SceneVocabulary, EveryStructuredKeyIsDescribedAndRoundTrips) {
     collect(example, key, values);
     EXPECT_FALSE(values.empty()) << key << " is not in the example document";
     for (const json& v : values) {
-      if (type != "object") EXPECT_NE(v, e["default"]) << key;
+      if (type != "object") {
+        EXPECT_NE(v, e["default"]) << key;
+      }
       if (type == "camera" || type == "transfer_function") objects[type].push_back(v);
     }
   }

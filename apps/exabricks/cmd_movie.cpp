@@ -11,6 +11,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/documents/image.h"
 #include "exabricks/documents/scene_file.h"
+#include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/workflows/encode.h"
 #include "exabricks/workflows/series.h"
@@ -208,9 +209,7 @@ void planFirstPicture(const MovieCmdOptions& o, const CLI::App& cmd, MoviePlan& 
   } else if (p.rangeMode == RangeMode::PerStep && !cmd.count("--range")) {
     scene.layers[0].tf.valueRange = range1f();
   }
-  Renderer framing(model0, first.info);
-  framing.setScene(scene);
-  frameMovie(o, cmd, p, model0, model0.worldBounds(), framing.visibleBounds());
+  frameMovie(o, cmd, p, model0, model0.worldBounds(), visibleBoundsOf(model0, first.info, scene));
 }
 
 /// Plan, last part: the manifest. Frames already rendered for this very movie are kept (a movie

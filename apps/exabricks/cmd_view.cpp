@@ -6,6 +6,7 @@
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
+#include "exabricks/render/defaults.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/workflows/coarse_first.h"
 #include "exabricks/workflows/series.h"
@@ -73,14 +74,43 @@ struct FirstStep {
   int index = 0;                                       ///< the step shown first
   std::vector<std::pair<int, std::string>> unreadable; ///< steps before it that could not be read
   CoarseFirst coarse;                                  ///< level > 0: `model` holds the coarse levels
+  int64_t merged = 1; ///< above 1: `model` holds the coarsest level's cells merged by this per axis
+  int mergedLevel = 0;
 };
 
+/// What a view shows of a step with the coarse levels `coarse` (level > 0), for the page.
+std::string coarseShown(const CoarseFirst& coarse) {
+  return strCat("coarse levels: cells ", 1 << coarse.level, " wide and wider (", std::llround(coarse.coarseCells),
+                " of ", std::llround(coarse.cells), " cells in boxes); ");
+}
+
+/// The same for the coarsest level merged (FirstStep::merged).
+std::string mergedShown(const FirstStep& f) {
+  const double cells = f.model->cellCount();
+  return strCat("the coarsest level merged: cells ", int64_t(1) << f.mergedLevel, " wide by ", f.merged, " per axis (",
+                std::llround(cells), " cells for ", std::llround(f.coarse.cells), " in boxes); ");
+}
+
 /// The dataset, or the first readable step of a series (a step that cannot be read is said on
-/// stderr and skipped; when none can be read, the first one's error).
+/// stderr and skipped; when none can be read, the first one's error). A dataset of more than
+/// `coarseFirst` cells comes as its coarse levels (those cells at most, or the coarsest level
+/// alone), and one whose coarsest level alone holds more than `firstCells` as that level merged.
 FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo,
-                    double coarseFirst) {
+                    double coarseFirst, double firstCells) {
   FirstStep f;
   if (steps.size() <= 1 && coarseFirst > 0) f.coarse = coarseFirstLevel(input, coarseFirst);
+  // A coarsest level alone larger than coarseFirst: first a picture of it merged, then the rest.
+  const bool large = f.coarse.level > 0 ? f.coarse.coarseCells > firstCells : f.coarse.cells > firstCells;
+  if (large && firstCells > 0) {
+    if (std::optional<CoarseLevels> merged = loadMergedFirst(input, lo, f.coarse, firstCells)) {
+      f.model = std::move(merged->model);
+      f.dataset = std::move(merged->dataset);
+      f.merged = merged->mergedFactor;
+      f.mergedLevel = merged->mergedLevel;
+      logNote(strCat("showing ", mergedShown(f), "every level follows"));
+      return f;
+    }
+  }
   if (f.coarse.level > 0) {
     // The coarse levels first: a plotfile stores every level's values.
     CoarseLevels levels = loadCoarseLevels(input, lo, f.coarse);
@@ -187,25 +217,39 @@ void applySeriesRange(const FirstStep& first, const std::vector<std::string>& st
                  "]); --range per-step or LOW,HIGH to choose"));
 }
 
-/// How the view gets from the coarse levels to every level: in parts under a memory budget, or
-/// by reading the whole step on a thread of its own.
+/// How the view gets from what it shows first to every level: in parts under a memory budget
+/// (after the coarse levels, where it shows the coarsest level merged first), or by reading the
+/// coarse levels and then the whole step on a thread of its own.
 void addRefinement(view::ViewContent& content, const FirstStep& first, const std::string& input, const LoadOptions& lo,
                    uint64_t budget, uint64_t frameBytes) {
-  const std::string shown =
-      strCat("coarse levels: cells ", 1 << first.coarse.level, " wide and wider (",
-             std::llround(first.coarse.coarseCells), " of ", std::llround(first.coarse.cells), " cells in boxes); ");
+  const std::string shown = first.merged > 1 ? mergedShown(first) : coarseShown(first.coarse);
+  const CoarseFirst coarse = first.coarse;
+  auto coarseLevels = [input, lo, coarse] {
+    CoarseLevels c = loadCoarseLevels(input, lo, coarse);
+    return std::make_pair(c.model, c.dataset);
+  };
   if (budget) {
     // Every level in parts, planned beside the coarse levels now resident.
-    content.parts = std::make_shared<StreamedStep>(input, lo, planWithin(input, lo, budget, frameBytes));
+    content.parts =
+        std::make_shared<StreamedStep>(input, lo, planWithin(input, lo, budget, frameBytes), first.model.get());
     content.budget = budget;
-    content.coarseNote = strCat(shown, "every level follows in ", content.parts->parts(), " parts within a budget of ",
-                                formatBytes(budget));
+    const std::string parts =
+        strCat("every level follows in ", content.parts->parts(), " parts within a budget of ", formatBytes(budget));
+    content.coarseNote = shown + parts;
+    if (first.merged > 1) content.refine.push_back({coarseLevels, coarseShown(coarse) + parts});
     logNote(strCat("memory budget ", formatBytes(budget), ": a still view is drawn from every level in ",
                    content.parts->parts(), " parts, its drafts from the coarse levels"));
-  } else if (first.coarse.level > 0) {
-    content.refine = [input, lo] { return std::make_shared<const Model>(loadModel(input, lo)); };
-    content.coarseNote = shown + "reading the finer levels";
+    return;
   }
+  if (first.merged == 1 && first.coarse.level == 0) return;
+  content.coarseNote = shown + "reading the finer levels";
+  if (first.merged > 1 && coarse.level > 0)
+    content.refine.push_back({coarseLevels, coarseShown(coarse) + "reading the finer levels"});
+  content.refine.push_back({[input, lo] {
+                              auto model = std::make_shared<const Model>(loadModel(input, lo));
+                              return std::make_pair(std::shared_ptr<const Model>(model), DatasetInfo::of(*model));
+                            },
+                            ""});
 }
 
 /// Serves the content until Ctrl-C, SIGTERM (`stopSignals`, blocked in every thread) or the
@@ -261,18 +305,14 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
     failUsage("--memory-budget views one step; a series' steps are each held whole");
   const uint64_t frameBytes = viewerFrameBytes(doc.frame);
   const uint64_t budget = steps.size() > 1 ? 0 : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
-  const FirstStep first = loadFirst(steps, doc.input, lo, coarseFirst);
+  const FirstStep first = loadFirst(steps, doc.input, lo, coarseFirst, steps.size() > 1 ? 0 : o.coarseFirst);
   if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
   applyDataDefaults(o.scene, cmd, doc.scene, *model, dataset);
   std::vector<std::pair<int, std::string>> unreadable = first.unreadable;
   applySeriesRange(first, steps, lo, !o.scene.range.empty(), perStep, doc.scene, unreadable);
-  {
-    Renderer framing(*model, dataset);
-    framing.setScene(doc.scene);
-    doc.frame.camera = cameraFromOptions(o.scene, cmd, doc, *model, framing.visibleBounds());
-  }
+  doc.frame.camera = cameraFromOptions(o.scene, cmd, doc, *model, visibleBoundsOf(*model, dataset, doc.scene));
   doc.frame.validate();
   doc.hasCamera = true;
   doc = withAbsolutePaths(doc);
@@ -300,7 +340,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
   serve(std::move(content), options, o.scene.in.name(), stopSignals);
   logNote("viewer stopped");
-  if (first.coarse.level > 0) {
+  if (first.coarse.level > 0 || first.merged > 1) {
     // The whole dataset may still be being read on its own thread: end the process here, before
     // static objects that thread may use are destroyed.
     std::fflush(nullptr);

@@ -11,13 +11,17 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <charconv>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
+#include <mutex>
 #include <optional>
 #include <sstream>
+#include <string_view>
 
 namespace exa {
 namespace fs = std::filesystem;
@@ -57,14 +61,27 @@ private:
   size_t pos_ = 0, lineNo_ = 0;
 };
 
-std::vector<double> numbers(TextReader& r, const std::string& line, size_t expected, const char* what) {
-  std::string cleaned = line;
-  for (char& c : cleaned)
-    if (c == '(' || c == ')' || c == ',') c = ' ';
-  std::istringstream in(cleaned);
+/// The numbers of a line, separated by blanks, parentheses and commas, up to the first word that
+/// is not one.
+std::vector<double> numbers(TextReader& r, std::string_view line, size_t expected, const char* what) {
   std::vector<double> v;
-  for (double d; in >> d;)
+  auto separator = [](char c) { return c == '(' || c == ')' || c == ',' || std::isspace((unsigned char)c); };
+  for (size_t at = 0; at < line.size();) {
+    if (separator(line[at])) {
+      ++at;
+      continue;
+    }
+    size_t end = at;
+    while (end < line.size() && !separator(line[end]))
+      ++end;
+    const char* first = line.data() + at + (line[at] == '+' ? 1 : 0);
+    double d = 0;
+    const auto [ptr, ec] = std::from_chars(first, line.data() + end, d);
+    if (ec != std::errc() || first == line.data() + end) break;
     v.push_back(d);
+    if (ptr != line.data() + end) break; // a number glued to a word ends the numbers
+    at = end;
+  }
   if (expected && v.size() < expected) r.bad(strCat("expected ", expected, " numbers for ", what));
   return v;
 }
@@ -81,7 +98,7 @@ std::vector<IndexBox> parseBoxes(TextReader& r, const std::string& line) {
   while ((pos = line.find("((", pos)) != std::string::npos) {
     const size_t end = line.find("))", pos);
     if (end == std::string::npos) r.bad("unterminated box");
-    const std::vector<double> v = numbers(r, line.substr(pos, end - pos + 2), 9, "a box");
+    const std::vector<double> v = numbers(r, std::string_view(line).substr(pos, end - pos + 2), 9, "a box");
     IndexBox b;
     for (int a = 0; a < 3; ++a) {
       b.lo[a] = r.integer(v[size_t(a)], -kLatticeLimit, kLatticeLimit, "a box corner");
@@ -95,10 +112,13 @@ std::vector<IndexBox> parseBoxes(TextReader& r, const std::string& line) {
 }
 
 struct LevelData {
-  std::vector<IndexBox> boxes;    ///< valid regions (ghost cells stripped)
-  std::vector<std::string> files; ///< data file per box
-  std::vector<uint64_t> offsets;  ///< byte offset per box
+  std::vector<IndexBox> boxes;        ///< valid regions (ghost cells stripped)
+  std::vector<std::string> fileNames; ///< the level's data files
+  std::vector<uint32_t> fileOf;       ///< data file of each box (into fileNames)
+  std::vector<uint64_t> offsets;      ///< byte offset per box
+  std::vector<range1f> ranges;        ///< per component, from the min/max tables (empty: none)
   int nghost = 0;
+  const std::string& file(size_t box) const { return fileNames[fileOf[box]]; }
 };
 
 struct Plotfile {
@@ -215,9 +235,10 @@ Plotfile readHeader(const std::string& dir) {
   return pf;
 }
 
-/// Reads a level's Cell_H; with `ranges`, also the per-FAB minima and maxima of every component
-/// that follow the FAB list (one range per component; empty when the file has none).
-LevelData readCellHeader(const Plotfile& pf, int level, std::vector<range1f>* ranges = nullptr) {
+/// Reads a level's Cell_H: its boxes, where their FABs are, and the per-FAB minima and maxima of
+/// every component that follow the FAB list (one range per component; none when the file has no
+/// such tables).
+LevelData readCellHeader(const Plotfile& pf, int level) {
   const fs::path prefix = fs::path(pf.dir) / pf.levelPrefixes[size_t(level)];
   TextReader r(prefix.string() + "_H");
   LevelData ld;
@@ -238,16 +259,39 @@ LevelData readCellHeader(const Plotfile& pf, int level, std::vector<range1f>* ra
   r.line(); // ")"
   const int64_t nfabs = r.integer(numbers(r, r.line(), 1, "the FAB count")[0], 0, 100000000, "the FAB count");
   if (nfabs != nboxes) r.bad(strCat(nfabs, " FabOnDisk entries for ", nboxes, " boxes"));
+  std::map<std::string, uint32_t, std::less<>> fileIndex;
   for (int64_t b = 0; b < nfabs; ++b) {
-    std::istringstream in(r.line());
-    std::string tag, file;
+    const std::string line = r.line();
+    const std::string_view tag = "FabOnDisk:";
+    std::string_view rest(line);
+    if (rest.substr(0, tag.size()) != tag) r.bad("expected 'FabOnDisk: FILE OFFSET'");
+    rest.remove_prefix(tag.size());
+    auto word = [&rest] {
+      while (!rest.empty() && std::isspace((unsigned char)rest.front()))
+        rest.remove_prefix(1);
+      size_t n = 0;
+      while (n < rest.size() && !std::isspace((unsigned char)rest[n]))
+        ++n;
+      const std::string_view w = rest.substr(0, n);
+      rest.remove_prefix(n);
+      return w;
+    };
+    const std::string_view file = word(), number = word();
     uint64_t offset = 0;
-    if (!(in >> tag >> file >> offset) || tag != "FabOnDisk:") r.bad("expected 'FabOnDisk: FILE OFFSET'");
-    ld.files.push_back((prefix.parent_path() / file).string());
+    const auto [end, ec] = std::from_chars(number.data(), number.data() + number.size(), offset);
+    if (file.empty() || number.empty() || ec != std::errc() || end != number.data() + number.size())
+      r.bad("expected 'FabOnDisk: FILE OFFSET'");
+    auto it = fileIndex.find(file);
+    if (it == fileIndex.end()) {
+      it = fileIndex.emplace(std::string(file), uint32_t(ld.fileNames.size())).first;
+      ld.fileNames.push_back((prefix.parent_path() / std::string(file)).string());
+    }
+    ld.fileOf.push_back(it->second);
     ld.offsets.push_back(offset);
   }
-  if (ranges) {
+  {
     // A table that is absent or malformed only means that the data must be read for the range.
+    std::vector<range1f>* ranges = &ld.ranges;
     try {
       ranges->assign(size_t(ncomp), range1f());
       for (int pass = 0; pass < 2; ++pass) { // minima, then maxima
@@ -268,6 +312,64 @@ LevelData readCellHeader(const Plotfile& pf, int level, std::vector<range1f>* ra
     }
   }
   return ld;
+}
+
+/// A plotfile's metadata: its Header and every level's Cell_H.
+struct PlotfileMeta {
+  Plotfile pf;
+  std::vector<LevelData> levels;
+  std::vector<int64_t> width; ///< of a level's cells, in finest cells
+};
+
+/// What tells a file's versions apart: its contents up to 1 MiB (a file rewritten within the
+/// file system's clock tick at the same size, as a fuzzer does, is still told apart), else the
+/// time it was last written and its size; "" when it cannot be read.
+std::string fileStamp(const fs::path& p) {
+  std::error_code ec;
+  const auto size = fs::file_size(p, ec);
+  if (ec) return {};
+  if (size <= (1u << 20)) {
+    std::ifstream in(p, std::ios::binary);
+    std::string bytes(size, '\0');
+    if (!in.read(bytes.data(), std::streamsize(size))) return {};
+    return strCat(std::hash<std::string>()(bytes), ":", size, ";");
+  }
+  const auto t = fs::last_write_time(p, ec);
+  return ec ? std::string() : strCat(t.time_since_epoch().count(), ":", size, ";");
+}
+
+std::string metaStamp(const std::string& dir, const std::vector<std::string>& levelPrefixes) {
+  std::string stamp = fileStamp(fs::path(dir) / "Header");
+  for (const std::string& prefix : levelPrefixes)
+    stamp += fileStamp((fs::path(dir) / prefix).string() + "_H");
+  return stamp;
+}
+
+/// The plotfile's metadata, parsed once while its Header and Cell_H files are unchanged: the
+/// census, the memory plan, the coarse levels and every part of a step ask for them, and a large
+/// step's box lists take seconds to parse. The last two plotfiles are kept.
+std::shared_ptr<const PlotfileMeta> plotfileMeta(const std::string& dir) {
+  static std::mutex mutex;
+  static std::vector<std::tuple<std::string, std::string, std::shared_ptr<const PlotfileMeta>>> kept;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& [keptDir, stamp, meta] : kept)
+      if (keptDir == dir && stamp == metaStamp(dir, meta->pf.levelPrefixes)) return meta;
+  }
+  auto meta = std::make_shared<PlotfileMeta>();
+  meta->pf = readHeader(dir);
+  const Plotfile& pf = meta->pf;
+  const std::string stamp = metaStamp(dir, pf.levelPrefixes);
+  meta->width.assign(size_t(pf.finestLevel) + 1, 1);
+  for (int l = pf.finestLevel - 1; l >= 0; --l)
+    meta->width[size_t(l)] = meta->width[size_t(l) + 1] * pf.ratios[size_t(l)];
+  for (int l = 0; l <= pf.finestLevel; ++l)
+    meta->levels.push_back(readCellHeader(pf, l));
+  const std::lock_guard<std::mutex> lock(mutex);
+  std::erase_if(kept, [&](const auto& k) { return std::get<0>(k) == dir; });
+  if (kept.size() >= 2) kept.erase(kept.begin());
+  kept.emplace_back(dir, stamp, meta);
+  return meta;
 }
 
 /// Reads one FAB: its header line, then the requested components as float.
@@ -343,16 +445,16 @@ void readFab(const std::string& file, uint64_t offset, const IndexBox& valid, in
 /// holds at least 4 bytes (float32) per cell and component, the FABs of one file do not share
 /// bytes, and a file shorter than what its boxes need is refused naming the file, the level and
 /// the box. Each file is measured once.
-void checkFabBytes(const Plotfile& pf, const std::vector<LevelData>& levels) {
+void checkFabBytes(const Plotfile& pf, const std::vector<const LevelData*>& levels) {
   struct FileUse {
     uint64_t size = 0, needed = 0;
   };
   std::map<std::string, FileUse> files;
   const uint64_t ncomp = pf.names.size();
   for (size_t l = 0; l < levels.size(); ++l) {
-    const LevelData& ld = levels[l];
+    const LevelData& ld = *levels[l];
     for (size_t b = 0; b < ld.boxes.size(); ++b) {
-      const std::string& file = ld.files[b];
+      const std::string& file = ld.file(b);
       auto it = files.find(file);
       if (it == files.end()) {
         std::error_code ec;
@@ -396,29 +498,25 @@ bool isAmrexPlotfile(const std::string& path) {
 std::vector<std::string> listAmrexFields(const std::string& path) { return readHeader(path).names; }
 
 std::optional<range1f> amrexFieldRange(const std::string& path, const std::string& field) {
-  const Plotfile pf = readHeader(path);
-  const auto it = std::find(pf.names.begin(), pf.names.end(), field);
-  if (it == pf.names.end()) return std::nullopt;
-  const size_t component = size_t(it - pf.names.begin());
+  const std::shared_ptr<const PlotfileMeta> meta = plotfileMeta(path);
+  const std::vector<std::string>& names = meta->pf.names;
+  const auto it = std::find(names.begin(), names.end(), field);
+  if (it == names.end()) return std::nullopt;
+  const size_t component = size_t(it - names.begin());
   range1f all;
-  for (int l = 0; l <= pf.finestLevel; ++l) {
-    std::vector<range1f> ranges;
-    readCellHeader(pf, l, &ranges);
-    if (ranges.size() <= component) return std::nullopt; // no table: the data must be read
-    if (!ranges[component].empty()) all.extend(ranges[component]);
+  for (const LevelData& ld : meta->levels) {
+    if (ld.ranges.size() <= component) return std::nullopt; // no table: the data must be read
+    if (!ld.ranges[component].empty()) all.extend(ld.ranges[component]);
   }
   return all;
 }
 
 std::vector<double> amrexLevelCells(const std::string& path) {
-  const Plotfile pf = readHeader(path);
-  std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
-  for (int l = pf.finestLevel - 1; l >= 0; --l)
-    width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
+  const std::shared_ptr<const PlotfileMeta> meta = plotfileMeta(path);
   std::vector<double> cells(size_t(kMaxLevel) + 1, 0.0);
-  for (int l = 0; l <= pf.finestLevel; ++l) {
-    const int level = std::clamp(io::log2Exact(width[size_t(l)]), 0, kMaxLevel);
-    for (const IndexBox& b : readCellHeader(pf, l).boxes) {
+  for (int l = 0; l <= meta->pf.finestLevel; ++l) {
+    const int level = std::clamp(io::log2Exact(meta->width[size_t(l)]), 0, kMaxLevel);
+    for (const IndexBox& b : meta->levels[size_t(l)].boxes) {
       const vec3l n = b.hi - b.lo + vec3l(1);
       cells[size_t(level)] += double(n.x) * double(n.y) * double(n.z);
     }
@@ -428,14 +526,14 @@ std::vector<double> amrexLevelCells(const std::string& path) {
 
 PatchSource amrexPatches(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
   struct State {
-    Plotfile pf;
-    std::vector<LevelData> levels;
+    std::shared_ptr<const PlotfileMeta> meta;
     std::vector<int> components;
     std::vector<std::pair<int, size_t>> origin; // level and box of each patch
   };
   auto st = std::make_shared<State>();
-  st->pf = readHeader(path);
-  const Plotfile& pf = st->pf;
+  st->meta = plotfileMeta(path);
+  const Plotfile& pf = st->meta->pf;
+  const std::vector<int64_t>& width = st->meta->width;
   PatchSource source;
   source.input = path;
   source.fieldNames = wanted.empty() ? pf.names : wanted;
@@ -443,27 +541,21 @@ PatchSource amrexPatches(const std::string& path, const std::vector<std::string>
     st->components.push_back(int(c));
   source.fieldUnits.assign(source.fieldNames.size(), "");
 
-  // Width of a level-l cell in finest cells.
-  std::vector<int64_t> width(size_t(pf.finestLevel) + 1, 1);
-  for (int l = pf.finestLevel - 1; l >= 0; --l)
-    width[size_t(l)] = width[size_t(l) + 1] * pf.ratios[size_t(l)];
-  for (int l = 0; l <= pf.finestLevel; ++l)
-    st->levels.push_back(readCellHeader(pf, l));
   // Every box of every level read on the finest lattice; a cell is a leaf unless a box of the
   // next finer level covers it.
   for (int l = 0; l <= pf.finestLevel; ++l)
-    for (size_t bi = 0; bi < st->levels[size_t(l)].boxes.size(); ++bi) {
+    for (size_t bi = 0; bi < st->meta->levels[size_t(l)].boxes.size(); ++bi) {
       if (width[size_t(l)] < (int64_t(1) << finestLevel)) break; // finer than asked: its cover stays a leaf
-      const IndexBox& b = st->levels[size_t(l)].boxes[bi];
+      const IndexBox& b = st->meta->levels[size_t(l)].boxes[bi];
       const int64_t w = width[size_t(l)];
       source.patches.push_back({b.lo * w, b.hi - b.lo + vec3l(1), w});
       st->origin.push_back({l, bi});
     }
   {
     // The data of the levels read must be there (coarse levels alone: not the finer ones').
-    std::vector<LevelData> read = st->levels;
+    std::vector<const LevelData*> read;
     for (int l = 0; l <= pf.finestLevel; ++l)
-      if (width[size_t(l)] < (int64_t(1) << finestLevel)) read[size_t(l)] = LevelData();
+      if (width[size_t(l)] >= (int64_t(1) << finestLevel)) read.push_back(&st->meta->levels[size_t(l)]);
     checkFabBytes(pf, read);
   }
   source.name = [st, path](size_t i) {
@@ -471,9 +563,9 @@ PatchSource amrexPatches(const std::string& path, const std::vector<std::string>
   };
   source.read = [st](size_t i, std::vector<std::vector<float>>& values) {
     const auto [l, bi] = st->origin[i];
-    const LevelData& ld = st->levels[size_t(l)];
+    const LevelData& ld = st->meta->levels[size_t(l)];
     values.assign(st->components.size(), {});
-    readFab(ld.files[bi], ld.offsets[bi], ld.boxes[bi], ld.nghost, st->components, values, st->pf.names);
+    readFab(ld.file(bi), ld.offsets[bi], ld.boxes[bi], ld.nghost, st->components, values, st->meta->pf.names);
   };
   source.concurrentReads = true;
   // Finest index space onto the physical domain.

@@ -14,6 +14,7 @@
 #include "exabricks/io/vtk_amr.h"
 
 #include "hdf5_file.h"
+#include "patch_load.h"
 #include "patches.h"
 
 #include <algorithm>
@@ -359,70 +360,10 @@ Model loadNativeValuesAfter(const std::string& path, const LoadOptions& options,
   }
 }
 
-/// When an input's metadata were last written, and how large they are: its path's, a folder's
-/// Header's and an Enzo hierarchy's.
-std::string metadataStamp(const std::string& path) {
-  std::string stamp;
-  std::error_code ec;
-  for (const std::filesystem::path& p : {std::filesystem::path(path), std::filesystem::path(path) / "Header",
-                                         std::filesystem::path(path + ".hierarchy")}) {
-    const auto t = std::filesystem::last_write_time(p, ec);
-    if (ec) continue;
-    stamp += strCat(p.string(), ":", t.time_since_epoch().count(), ":",
-                    std::filesystem::is_regular_file(p, ec) ? std::filesystem::file_size(p, ec) : 0, ";");
-  }
-  return stamp;
-}
-
-/// The input's patches, read from its metadata once while they are unchanged: the parts of a
-/// step under a memory budget, each built through the same box lists, parse them once. Only
-/// sources of plain files are kept, whose reads any thread may share.
-PatchSource patchesOf(const std::string& path, const FormatReader& reader, const std::vector<std::string>& fields,
-                      int finestLevel) {
-  static std::mutex mutex;
-  static std::string lastKey;
-  static std::optional<PatchSource> last;
-  std::string key = strCat(path, "|", finestLevel, "|", metadataStamp(path));
-  for (const std::string& f : fields)
-    key += "|" + f;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (last && key == lastKey) return *last;
-  }
-  PatchSource source = reader.patches(path, fields, finestLevel);
-  if (!source.concurrentReads) return source; // its reads share a library handle (HDF5): not across builds
-  const std::lock_guard<std::mutex> lock(mutex);
-  lastKey = key;
-  last = source;
-  return source;
-}
-
-/// A patch-based input built from its boxes (structure without values): the cells `keep` keeps
-/// of the levels the options ask for. A model without bricks when none is kept.
-Model loadModelOfPatches(const std::string& path, const FormatReader& reader, const LoadOptions& options,
-                         int finestLevel, const PatchKeep& keep) {
-  PatchSource source = patchesOf(path, reader, options.fields, finestLevel);
-  CellSet named; // the format's conventional units, where the file states none
-  for (size_t f = 0; f < source.fieldNames.size(); ++f)
-    named.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});
-  assignConventionalUnits(reader.kind, named);
-  for (size_t f = 0; f < named.fields.size(); ++f)
-    source.fieldUnits[f] = named.fields[f].units;
-  return buildModelOfPatches(source, keep, options.build);
-}
-
-/// Whether a load of this kind is built from the input's boxes: readers that give them, unless
-/// non-finite values are to become holes (cells dropped one by one).
-const FormatReader* patchReader(InputKind kind, const std::string& path, const LoadOptions& options) {
-  if (kind == InputKind::Default || kind == InputKind::Model || options.nonFinite != NonFinite::Refuse) return nullptr;
-  const FormatReader* reader = findReader(path);
-  return reader && reader->patches ? reader : nullptr;
-}
-
 } // namespace
 
 bool buildsFromBoxes(const std::string& path, const LoadOptions& options) {
-  return !path.empty() && patchReader(detectInput(path), path, options) != nullptr;
+  return !path.empty() && io::patchReader(detectInput(path), path, options) != nullptr;
 }
 
 Model loadModel(const std::string& path, const LoadOptions& options) {
@@ -436,11 +377,11 @@ Model loadModel(const std::string& path, const LoadOptions& options) {
   }
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   const InputKind kind = detectInput(path);
-  if (const FormatReader* reader = patchReader(kind, path, options)) {
+  if (const FormatReader* reader = io::patchReader(kind, path, options)) {
     PatchKeep keep;
     if (!options.box.empty())
       keep = {PatchKeep::Rule::Overlapping, box3l(vec3l(options.box.lower), vec3l(options.box.upper))};
-    Model m = loadModelOfPatches(path, *reader, options, options.finestLevel, keep);
+    Model m = io::loadModelOfPatches(path, *reader, options, options.finestLevel, keep);
     if (m.bricks.empty()) fail(path, ": no cells", options.box.empty() ? "" : " in the box asked for");
     logInfo(strCat("read and built in ", timer.seconds(), " s"));
     return m;
@@ -472,44 +413,6 @@ std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std
   return reader->fieldRange(path, field);
 }
 
-std::vector<CoarseFirst> coarseFirstChoices(const std::string& path) {
-  std::vector<CoarseFirst> choices;
-  if (path.empty() || detectInput(path) == InputKind::Model) return choices;
-  const FormatReader* reader = findReader(path);
-  if (!reader || !reader->levelCells) return choices;
-  const std::vector<double> cells = reader->levelCells(path);
-  CoarseFirst whole;
-  whole.finestLevel = -1;
-  for (int l = 0; l < int(cells.size()); ++l) {
-    whole.cells += cells[size_t(l)];
-    if (whole.finestLevel < 0 && cells[size_t(l)] > 0) whole.finestLevel = l;
-  }
-  whole.finestLevel = std::max(whole.finestLevel, 0);
-  choices.push_back(whole);
-  double coarse = 0;
-  for (int l = int(cells.size()) - 1; l > whole.finestLevel; --l) {
-    if (cells[size_t(l)] == 0) continue;
-    coarse += cells[size_t(l)];
-    CoarseFirst c = whole;
-    c.level = l;
-    c.coarseCells = coarse;
-    choices.push_back(c);
-  }
-  return choices;
-}
-
-CoarseFirst coarseFirstLevel(const std::string& path, double maxCells) {
-  const std::vector<CoarseFirst> choices = coarseFirstChoices(path);
-  if (choices.empty() || choices[0].cells <= maxCells) return choices.empty() ? CoarseFirst() : choices[0];
-  // The finest level whose cells, with those of every coarser level, stay within maxCells (the
-  // coarsest level alone when it holds more). Only a coarser picture than the whole is worth
-  // drawing first.
-  CoarseFirst best = choices[0];
-  for (size_t k = 1; k < choices.size() && (k == 1 || choices[k].coarseCells <= maxCells); ++k)
-    best = choices[k];
-  return best;
-}
-
 std::vector<std::string> listFields(const std::string& path) {
   const InputKind kind = detectInput(path);
   if (kind == InputKind::Model) return readModel(path).fieldNames;
@@ -525,7 +428,7 @@ Census loadCensus(const std::string& path, const LoadOptions& options) {
   if (kind == InputKind::Model) return censusOfBricks(readModel(path).bricks);
   if (kind != InputKind::Default) {
     const FormatReader* reader = findReader(path);
-    if (reader->census) return reader->census(path);
+    if (reader->census) return io::censusOfInput(path, *reader);
   }
   LoadOptions cellsOnly = options;
   cellsOnly.box = box3i();
@@ -565,8 +468,8 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     buildRegionsOf(m, options.build.regions);
     return m;
   }
-  if (const FormatReader* reader = patchReader(detectInput(path), path, options)) {
-    Model m = loadModelOfPatches(path, *reader, options, 0, {PatchKeep::Rule::Reaching, reach});
+  if (const FormatReader* reader = io::patchReader(detectInput(path), path, options)) {
+    Model m = io::loadModelOfPatches(path, *reader, options, 0, {PatchKeep::Rule::Reaching, reach});
     if (m.bricks.empty()) return std::nullopt;
     return m;
   }

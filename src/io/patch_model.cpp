@@ -182,3 +182,49 @@ Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, cons
 }
 
 } // namespace exa
+
+namespace exa {
+
+int64_t alignedMerge(const std::vector<io::Patch>& patches, int64_t most) {
+  int64_t factor = most;
+  for (const io::Patch& p : patches)
+    for (int a = 0; a < 3; ++a)
+      while (factor > 1 && (p.cells[a] % factor != 0 || p.lower[a] % (p.width * factor) != 0))
+        factor /= 2;
+  return std::max<int64_t>(factor, 1);
+}
+
+PatchSource mergedPatches(const PatchSource& source, int64_t factor) {
+  if (factor < 1 || (factor & (factor - 1)) != 0 || alignedMerge(source.patches, factor) != factor)
+    fail(source.input, ": cells cannot be merged by ", factor);
+  PatchSource merged = source;
+  for (io::Patch& p : merged.patches) {
+    p.cells = p.cells / factor;
+    p.width *= factor;
+  }
+  merged.read = [read = source.read, name = source.name, patches = source.patches,
+                 factor](size_t i, std::vector<std::vector<float>>& values) {
+    std::vector<std::vector<float>> fine;
+    read(i, fine);
+    const vec3l n = patches[i].cells, m = n / factor;
+    const double share = 1.0 / double(factor * factor * factor);
+    values.assign(fine.size(), std::vector<float>(size_t(m.x * m.y * m.z)));
+    for (size_t f = 0; f < fine.size(); ++f) {
+      if (int64_t(fine[f].size()) != n.x * n.y * n.z)
+        fail(name(i), ": ", fine[f].size(), " values for ", n.x * n.y * n.z, " cells");
+      std::vector<double> sums(size_t(m.x * m.y * m.z), 0.0);
+      for (int64_t z = 0; z < n.z; ++z)
+        for (int64_t y = 0; y < n.y; ++y) {
+          const float* row = fine[f].data() + (z * n.y + y) * n.x;
+          double* out = sums.data() + ((z / factor) * m.y + y / factor) * m.x;
+          for (int64_t x = 0; x < n.x; ++x)
+            out[x / factor] += row[x];
+        }
+      for (size_t k = 0; k < sums.size(); ++k)
+        values[f][k] = float(sums[k] * share);
+    }
+  };
+  return merged;
+}
+
+} // namespace exa

@@ -496,4 +496,15 @@ bool imageIsEmpty(const Image& image) {
   return true;
 }
 
+Scene framingScene(Scene scene) {
+  scene.shading = Shading::None;
+  return scene;
+}
+
+box3d visibleBoundsOf(const Model& model, const DatasetInfo& dataset, const Scene& scene) {
+  Renderer framing(model, dataset);
+  framing.setScene(framingScene(scene));
+  return framing.visibleBounds();
+}
+
 } // namespace exa

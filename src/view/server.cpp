@@ -354,38 +354,45 @@ void Server::bind() {
   s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, legends, s.content.parts,
                                         s.content.budget);
   s.session->setParticleInput(s.content.input);
-  if (s.content.refine || s.content.parts) s.session->setDataNote(s.content.coarseNote);
+  if (!s.content.refine.empty() || s.content.parts) s.session->setDataNote(s.content.coarseNote);
   s.session->submit(s.content.initial, false); // the first picture renders while the page loads
-  if (s.content.refine) s.startRefining(legends);
+  if (!s.content.refine.empty()) s.startRefining(legends);
 }
 
-/// Reads the whole dataset on a thread of its own while the coarse levels are shown, then draws
-/// the view on screen again from it. The thread is detached: a viewer stopped meanwhile leaves it
-/// to the process's end, and it touches the server only while `alive` says the server is there.
+/// Reads more of the dataset, step by step, on a thread of its own while less of it is shown,
+/// and draws the view on screen again from each step's data. The thread is detached: a viewer
+/// stopped meanwhile leaves it to the process's end, and it touches the server only while
+/// `alive` says the server is there.
 void Server::Impl::startRefining(const LegendText& legends) {
-  std::thread([refine = content.refine, refining = refining, session = session.get(), steps = steps.get(), legends] {
-    std::shared_ptr<const Model> model;
-    std::string error;
-    Timer t;
-    try {
-      model = refine();
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    std::lock_guard<std::mutex> lock(refining->mutex);
-    if (!refining->alive) return;
-    if (!model) {
-      logWarning(strCat("the finer levels could not be read; the view keeps the coarse levels: ", error));
-      session->setDataNote("coarse levels only: the finer levels could not be read (" + error + ")");
+  std::thread([refine = content.refine, shown = content.coarseNote, refining = refining, session = session.get(),
+               steps = steps.get(), legends]() mutable {
+    for (const Refinement& step : refine) {
+      std::pair<std::shared_ptr<const Model>, DatasetInfo> data;
+      std::string error;
+      Timer t;
+      try {
+        data = step.load();
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+      std::lock_guard<std::mutex> lock(refining->mutex);
+      if (!refining->alive) return;
+      if (!data.first) {
+        // What the view keeps, as its note says before the "; " that tells what follows.
+        const std::string kept = shown.substr(0, shown.find("; "));
+        logWarning(strCat("the finer levels could not be read; the view keeps ", kept, ": ", error));
+        session->setDataNote(strCat(kept, " only: the finer levels could not be read (", error, ")"));
+        if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
+        return;
+      }
+      logNote(strCat(step.note.empty() ? "every level" : step.note, ": read and built in ", t.seconds(),
+                     " s; the view refines"));
+      steps->refine(data.first, data.second);
+      session->setModel(data.first, data.second, legends);
+      session->setDataNote(step.note);
+      shown = step.note;
       if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
-      return;
     }
-    logNote(strCat("every level read and built in ", t.seconds(), " s: the view refines"));
-    const DatasetInfo dataset = DatasetInfo::of(*model);
-    steps->refine(model, dataset);
-    session->setModel(model, dataset, legends);
-    session->setDataNote("");
-    if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
   }).detach();
 }
 

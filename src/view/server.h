@@ -46,6 +46,13 @@ struct ServerOptions {
   std::string device = "auto";       ///< where frames render: cpu, cuda, auto or portable
 };
 
+/// One step of a view from less than a dataset toward all of it: what it reads and builds, and
+/// what the view then shows (empty once it shows every level).
+struct Refinement {
+  std::function<std::pair<std::shared_ptr<const Model>, DatasetInfo>()> load;
+  std::string note;
+};
+
 /// What the viewer shows: the dataset, its name, and the first scene (defaults already adapted
 /// to the data, camera set). Meshes of the first scene, by their file name, are the only meshes
 /// a request may name.
@@ -63,10 +70,11 @@ struct ViewContent {
   std::vector<std::pair<int, std::string>> unreadable; ///< steps that could not be read, and why
   RendererOptions rendererOptions;                     ///< how movies march
   LoadOptions load;                                    ///< how the datasets were read (NaN as holes or not)
-  /// Coarse levels first: `model` holds a dataset's coarse levels, `refine` reads all of it (on
-  /// a thread of its own once the server is bound; its dataset then replaces `model`, and the view
-  /// on screen is drawn again from it), and `coarseNote` says what the first frames show.
-  std::function<std::shared_ptr<const Model>()> refine;
+  /// Coarse levels first: `model` holds less than the whole dataset (its coarse levels, or its
+  /// coarsest level merged), `coarseNote` says what the first frames show, and `refine` reads
+  /// more of it in steps (on a thread of its own once the server is bound; each step's data then
+  /// replace `model`, and the view on screen is drawn again from them).
+  std::vector<Refinement> refine;
   std::string coarseNote;
   /// A step larger than the memory budget: `model` holds its coarse levels (drafts and the first
   /// passes), and every still view is then drawn from all levels in these parts, one part

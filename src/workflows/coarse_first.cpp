@@ -64,15 +64,35 @@ std::optional<CoarseFirst> coarseBesideParts(const std::string& input, const Loa
   }
 }
 
+namespace {
+/// The dataset of a model that holds less than the step: value ranges the whole step's where its
+/// metadata record them, the finest level the step's.
+DatasetInfo partialDataset(const std::string& input, const Model& model, int finestLevel) {
+  std::vector<range1f> ranges = DatasetInfo::of(model).valueRanges;
+  for (size_t k = 0; k < ranges.size(); ++k)
+    if (const std::optional<range1f> r = fieldRangeFromMetadata(input, model.fieldNames[k])) ranges[k] = *r;
+  return DatasetInfo::from(finestLevel, model.cellBounds(), model.world.scale, ranges);
+}
+} // namespace
+
 CoarseLevels loadCoarseLevels(const std::string& input, const LoadOptions& options, const CoarseFirst& coarse) {
   LoadOptions o = options;
   o.finestLevel = coarse.level;
   CoarseLevels c;
   c.model = std::make_shared<const Model>(loadModel(input, o));
-  std::vector<range1f> ranges = DatasetInfo::of(*c.model).valueRanges;
-  for (size_t k = 0; k < ranges.size(); ++k)
-    if (const std::optional<range1f> r = fieldRangeFromMetadata(input, c.model->fieldNames[k])) ranges[k] = *r;
-  c.dataset = DatasetInfo::from(coarse.finestLevel, c.model->cellBounds(), c.model->world.scale, ranges);
+  c.dataset = partialDataset(input, *c.model, coarse.finestLevel);
+  return c;
+}
+
+std::optional<CoarseLevels> loadMergedFirst(const std::string& input, const LoadOptions& options,
+                                            const CoarseFirst& coarse, double maxCells) {
+  std::optional<MergedCoarsest> merged = loadMergedCoarsest(input, options, maxCells);
+  if (!merged) return std::nullopt;
+  CoarseLevels c;
+  c.model = std::make_shared<const Model>(std::move(merged->model));
+  c.dataset = partialDataset(input, *c.model, coarse.finestLevel);
+  c.mergedFactor = merged->factor;
+  c.mergedLevel = merged->level;
   return c;
 }
 

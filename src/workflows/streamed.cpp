@@ -8,6 +8,7 @@
 #include "exabricks/core/text.h"
 #include "exabricks/io/model_info.h"
 #include "exabricks/render/composite.h"
+#include "exabricks/render/defaults.h"
 
 #include <nlohmann/json.hpp>
 
@@ -17,6 +18,7 @@
 #include <fstream>
 #include <limits>
 #include <malloc.h>
+#include <mutex>
 #include <tuple>
 
 namespace exa {
@@ -105,6 +107,30 @@ uint64_t MemoryPlan::largestPartBytes() const {
   return most;
 }
 
+namespace {
+/// The census balanced into `parts` parts with the cells each reads (its halo's included), kept
+/// for the process: a viewer plans its step more than once (for the budget's refusal, beside its
+/// coarse levels, and for the parts it draws), and each plan tries the same part counts.
+std::pair<KdPartition, std::vector<double>> balancedParts(const std::string& input, const Census& census, int parts,
+                                                          int64_t grain) {
+  static std::mutex mutex;
+  static std::vector<std::pair<std::string, std::pair<KdPartition, std::vector<double>>>> kept;
+  const std::string key = strCat(input, "|", census.boxes.size(), "|", census.cells(), "|", census.bounds().lower.x,
+                                 ",", census.bounds().upper.x, "|", parts, "|", grain);
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    for (const auto& [k, balanced] : kept)
+      if (k == key) return balanced;
+  }
+  KdPartition partition = KdPartition::balance(census, parts, grain);
+  std::vector<double> cells = haloCells(census, partition);
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (kept.size() >= 32) kept.erase(kept.begin());
+  kept.emplace_back(key, std::make_pair(partition, cells));
+  return {std::move(partition), std::move(cells)};
+}
+} // namespace
+
 MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes) {
   MemoryPlan plan;
   plan.budget = budget;
@@ -126,8 +152,7 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   double bestLargest = std::numeric_limits<double>::infinity();
   int worse = 0;
   for (int parts = 2; parts <= 65536 && worse < 3; parts = parts % 3 == 0 ? parts / 3 * 4 : parts / 2 * 3) {
-    KdPartition partition = KdPartition::balance(census, parts, grain);
-    std::vector<double> cells = haloCells(census, partition);
+    auto [partition, cells] = balancedParts(input, census, parts, grain);
     const double largest = *std::max_element(cells.begin(), cells.end());
     if (plan.fixedBytes + uint64_t(std::ceil(largest)) * plan.bytesPerCell <= budget) {
       plan.partition = std::move(partition);
@@ -223,7 +248,7 @@ struct StreamedStep::Resident {
   uint64_t bytes = 0;
 };
 
-StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan plan)
+StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan plan, const Model* like)
     : input_(std::move(input)), options_(std::move(options)), plan_(std::move(plan)),
       snapshot_(std::make_unique<Snapshot>(Snapshot{snapshotOf(input_)})) {
   options_.partCells = 0; // the parts are this step's own
@@ -234,14 +259,17 @@ StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan pl
   cache_ = std::make_unique<PartCache>(parts(), parts() > 1 ? partsBytes : 0);
   // The skeleton: the step's world, fields and simulation from a part that holds cells.
   for (int p = 0; p < parts(); ++p) {
-    Resident& r = bring(p);
-    if (!r.model) continue;
-    const Model& m = *r.model;
-    skeleton_.world = m.world;
-    skeleton_.simulation = m.simulation;
-    skeleton_.fieldNames = m.fieldNames;
-    skeleton_.fieldUnits = m.fieldUnits;
-    skeleton_.fieldValues.assign(m.fieldNames.size(), ValueArray());
+    const Model* m = like;
+    if (!m) {
+      Resident& r = bring(p);
+      if (!r.model) continue;
+      m = r.model.get();
+    }
+    skeleton_.world = m->world;
+    skeleton_.simulation = m->simulation;
+    skeleton_.fieldNames = m->fieldNames;
+    skeleton_.fieldUnits = m->fieldUnits;
+    skeleton_.fieldValues.assign(m->fieldNames.size(), ValueArray());
     return;
   }
   fail(input_.empty() ? std::string(kDefaultDatasetName) : input_, ": no part holds any cells");
@@ -381,8 +409,9 @@ std::vector<int> StreamedStep::order(const Camera& camera) const {
 
 box3d StreamedStep::visibleBounds(const Scene& scene, const RendererOptions& options) {
   VisibleExtent all;
+  const Scene framing = framingScene(scene); // no gradients: the frame's own set-up adds them
   for (int p : residentFirst())
-    if (const Renderer* r = renderer(p, scene, options)) all.extend(r->visibleExtent().within(partBox(p)));
+    if (const Renderer* r = renderer(p, framing, options)) all.extend(r->visibleExtent().within(partBox(p)));
   const box3f framed = all.framed();
   return framed.empty() ? box3d() : skeleton_.world.toWorld(framed);
 }

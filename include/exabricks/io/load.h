@@ -78,6 +78,19 @@ CoarseFirst coarseFirstLevel(const std::string& path, double maxCells);
 /// the whole alone when the format cannot read coarse levels alone, none for a model file.
 std::vector<CoarseFirst> coarseFirstChoices(const std::string& path);
 
+/// A first picture before the coarse levels: the coarsest level's cells merged in blocks of
+/// factor^3 into about `maxCells` cells, each the mean of its cells (factor: the fewest merges
+/// that get there, a power of two to which every box of that level is aligned). None where the
+/// input is not built from its boxes, its coarsest level holds no more than `maxCells` cells, or
+/// its boxes allow no merge.
+struct MergedCoarsest {
+  Model model;
+  int64_t factor = 1; ///< cells merged per axis
+  int level = 0;      ///< the coarsest level's
+  double cells = 0;   ///< in the coarsest level's boxes
+};
+std::optional<MergedCoarsest> loadMergedCoarsest(const std::string& path, const LoadOptions& options, double maxCells);
+
 /// Names of the fields an input holds, without building anything.
 std::vector<std::string> listFields(const std::string& path);
 

@@ -74,4 +74,14 @@ struct PatchKeep {
 /// that overlap, or a level not nested in the next coarser), and none when no cell is kept.
 Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep = {}, const BuildOptions& options = {});
 
+/// The largest factor (a power of two, at most `most`) by which the patches' cells can be merged
+/// in blocks of factor^3 that never straddle two patches: every patch's corner and extent are
+/// whole multiples of the merged width. 1 when none can.
+int64_t alignedMerge(const std::vector<io::Patch>& patches, int64_t most);
+
+/// The patches with their cells merged in blocks of factor^3 (alignedMerge's factor at most):
+/// each merged cell holds the mean of its cells, as a level coarser than the patches' own would.
+/// For a first picture drawn before the cells themselves.
+PatchSource mergedPatches(const PatchSource& source, int64_t factor);
+
 } // namespace exa

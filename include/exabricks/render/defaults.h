@@ -75,4 +75,13 @@ std::vector<std::string> sceneWarnings(const Scene& scene, const Model& model, c
 /// Whether every pixel of an image is transparent (the render shows only the background).
 bool imageIsEmpty(const Image& image);
 
+/// The scene as far as what it shows goes, without its shading: a renderer set up only to frame
+/// a view (visibleExtent, visibleBounds) then computes no gradients. What is visible does not
+/// depend on the shading.
+Scene framingScene(Scene scene);
+
+/// What a first view of the scene frames (Renderer::visibleBounds), from a renderer set up for
+/// it alone.
+box3d visibleBoundsOf(const Model& model, const DatasetInfo& dataset, const Scene& scene);
+
 } // namespace exa

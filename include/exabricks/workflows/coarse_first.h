@@ -29,7 +29,15 @@ std::optional<CoarseFirst> coarseBesideParts(const std::string& input, const Loa
 struct CoarseLevels {
   std::shared_ptr<const Model> model;
   DatasetInfo dataset;
+  int64_t mergedFactor = 1; ///< loadMergedFirst: the coarsest level's cells merged per axis
+  int mergedLevel = 0;      ///< loadMergedFirst: the coarsest level's
 };
 CoarseLevels loadCoarseLevels(const std::string& input, const LoadOptions& options, const CoarseFirst& coarse);
+
+/// A picture before the coarse levels, for steps whose coarsest level alone holds more than
+/// `maxCells` cells: that level's cells merged into about `maxCells` (loadMergedCoarsest), with
+/// the dataset as loadCoarseLevels gives it. None where the step cannot be merged so.
+std::optional<CoarseLevels> loadMergedFirst(const std::string& input, const LoadOptions& options,
+                                            const CoarseFirst& coarse, double maxCells);
 
 } // namespace exa

@@ -91,7 +91,9 @@ class PartCache;
 /// twice.
 class StreamedStep {
 public:
-  StreamedStep(std::string input, LoadOptions options, MemoryPlan plan);
+  /// The step's world, fields and simulation come from `like` (a model of some of its levels,
+  /// read with the same options) or, without it, from the first part that holds cells.
+  StreamedStep(std::string input, LoadOptions options, MemoryPlan plan, const Model* like = nullptr);
   ~StreamedStep();
   StreamedStep(const StreamedStep&) = delete;
   StreamedStep& operator=(const StreamedStep&) = delete;

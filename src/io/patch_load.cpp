@@ -1,0 +1,157 @@
+#include "patch_load.h"
+#include "patches.h"
+
+#include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+#include "exabricks/io/units.h"
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+#include <mutex>
+#include <optional>
+
+namespace exa {
+namespace io {
+
+std::string metadataStamp(const std::string& path) {
+  std::string stamp;
+  std::error_code ec;
+  for (const std::filesystem::path& p : {std::filesystem::path(path), std::filesystem::path(path) / "Header",
+                                         std::filesystem::path(path + ".hierarchy")}) {
+    const auto t = std::filesystem::last_write_time(p, ec);
+    if (ec) continue;
+    stamp += strCat(p.string(), ":", t.time_since_epoch().count(), ":",
+                    std::filesystem::is_regular_file(p, ec) ? std::filesystem::file_size(p, ec) : 0, ";");
+  }
+  return stamp;
+}
+
+/// The input's patches, read from its metadata once while they are unchanged: the parts of a
+/// step under a memory budget, each built through the same box lists, parse them once. Only
+/// sources of plain files are kept, whose reads any thread may share.
+PatchSource patchesOf(const std::string& path, const FormatReader& reader, const std::vector<std::string>& fields,
+                      int finestLevel) {
+  static std::mutex mutex;
+  static std::string lastKey;
+  static std::optional<PatchSource> last;
+  std::string key = strCat(path, "|", finestLevel, "|", metadataStamp(path));
+  for (const std::string& f : fields)
+    key += "|" + f;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (last && key == lastKey) return *last;
+  }
+  PatchSource source = reader.patches(path, fields, finestLevel);
+  if (!source.concurrentReads) return source; // its reads share a library handle (HDF5): not across builds
+  const std::lock_guard<std::mutex> lock(mutex);
+  lastKey = key;
+  last = source;
+  return source;
+}
+
+namespace {
+/// The format's conventional units where the file states none.
+void nameUnits(const FormatReader& reader, PatchSource& source) {
+  CellSet named;
+  for (size_t f = 0; f < source.fieldNames.size(); ++f)
+    named.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});
+  assignConventionalUnits(reader.kind, named);
+  for (size_t f = 0; f < named.fields.size(); ++f)
+    source.fieldUnits[f] = named.fields[f].units;
+}
+} // namespace
+
+Model loadModelOfPatches(const std::string& path, const FormatReader& reader, const LoadOptions& options,
+                         int finestLevel, const PatchKeep& keep) {
+  PatchSource source = patchesOf(path, reader, options.fields, finestLevel);
+  nameUnits(reader, source);
+  return buildModelOfPatches(source, keep, options.build);
+}
+
+const FormatReader* patchReader(InputKind kind, const std::string& path, const LoadOptions& options) {
+  if (kind == InputKind::Default || kind == InputKind::Model || options.nonFinite != NonFinite::Refuse) return nullptr;
+  const FormatReader* reader = findReader(path);
+  return reader && reader->patches ? reader : nullptr;
+}
+
+Census censusOfInput(const std::string& path, const FormatReader& reader) {
+  static std::mutex mutex;
+  static std::string lastKey;
+  static std::shared_ptr<const Census> last;
+  const std::string key = strCat(path, "|", metadataStamp(path));
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (last && key == lastKey) return *last;
+  }
+  auto census = std::make_shared<const Census>(reader.census(path));
+  const std::lock_guard<std::mutex> lock(mutex);
+  lastKey = key;
+  last = census;
+  return *census;
+}
+
+} // namespace io
+
+std::optional<MergedCoarsest> loadMergedCoarsest(const std::string& path, const LoadOptions& options, double maxCells) {
+  const FormatReader* reader = path.empty() ? nullptr : io::patchReader(detectInput(path), path, options);
+  const std::vector<CoarseFirst> choices = reader ? coarseFirstChoices(path) : std::vector<CoarseFirst>();
+  if (choices.empty()) return std::nullopt;
+  MergedCoarsest m;
+  m.level = choices.size() > 1 ? choices[1].level : choices[0].finestLevel; // choices[1]: the coarsest alone
+  m.cells = choices.size() > 1 ? choices[1].coarseCells : choices[0].cells;
+  int64_t factor = 1; // the fewest merges that bring the coarsest level within maxCells
+  while (m.cells / double(factor * factor * factor) > maxCells && m.level + io::log2Exact(factor) < kMaxLevel)
+    factor *= 2;
+  if (factor == 1) return std::nullopt;
+  PatchSource source = io::patchesOf(path, *reader, options.fields, m.level);
+  m.factor = alignedMerge(source.patches, factor);
+  if (m.factor == 1) return std::nullopt;
+  Timer timer;
+  source = mergedPatches(source, m.factor);
+  io::nameUnits(*reader, source);
+  m.model = buildModelOfPatches(source, {}, options.build);
+  logInfo(strCat("the coarsest level's ", std::llround(m.cells), " cells merged by ", m.factor, " per axis in ",
+                 timer.seconds(), " s"));
+  return m;
+}
+
+std::vector<CoarseFirst> coarseFirstChoices(const std::string& path) {
+  std::vector<CoarseFirst> choices;
+  if (path.empty() || detectInput(path) == InputKind::Model) return choices;
+  const FormatReader* reader = findReader(path);
+  if (!reader || !reader->levelCells) return choices;
+  const std::vector<double> cells = reader->levelCells(path);
+  CoarseFirst whole;
+  whole.finestLevel = -1;
+  for (int l = 0; l < int(cells.size()); ++l) {
+    whole.cells += cells[size_t(l)];
+    if (whole.finestLevel < 0 && cells[size_t(l)] > 0) whole.finestLevel = l;
+  }
+  whole.finestLevel = std::max(whole.finestLevel, 0);
+  choices.push_back(whole);
+  double coarse = 0;
+  for (int l = int(cells.size()) - 1; l > whole.finestLevel; --l) {
+    if (cells[size_t(l)] == 0) continue;
+    coarse += cells[size_t(l)];
+    CoarseFirst c = whole;
+    c.level = l;
+    c.coarseCells = coarse;
+    choices.push_back(c);
+  }
+  return choices;
+}
+
+CoarseFirst coarseFirstLevel(const std::string& path, double maxCells) {
+  const std::vector<CoarseFirst> choices = coarseFirstChoices(path);
+  if (choices.empty() || choices[0].cells <= maxCells) return choices.empty() ? CoarseFirst() : choices[0];
+  // The finest level whose cells, with those of every coarser level, stay within maxCells (the
+  // coarsest level alone when it holds more). Only a coarser picture than the whole is worth
+  // drawing first.
+  CoarseFirst best = choices[0];
+  for (size_t k = 1; k < choices.size() && (k == 1 || choices[k].coarseCells <= maxCells); ++k)
+    best = choices[k];
+  return best;
+}
+
+} // namespace exa
