@@ -10,7 +10,7 @@ against the RMS difference of two seeds without the grid: equal means only noise
 Not a test.
 
 usage: bench/majorants.py EXABRICKS [--data DIR] [--size 256] [--spp 8] [--frames 3]
-                          [--target-size 1024] [--no-target] [--work DIR]
+                          [--target-size 1024] [--no-target] [--device cuda] [--work DIR]
 
 --data is $EXABRICKS_DATA (default /work/shared/data); a generated cosmology-like step (1M cells)
 is always measured; shared samples that are absent are skipped with a note. Needs numpy and PIL.
@@ -44,8 +44,10 @@ def main():
     p.add_argument("--frames", type=int, default=3, help="timed frames at equal samples (median)")
     p.add_argument("--target-size", type=int, default=1024)
     p.add_argument("--no-target", action="store_true", help="skip the frames to the noise target")
+    p.add_argument("--device", help="render --device of every frame (default: the command's own)")
     p.add_argument("--work", default="/tmp/majorant-bench")
     a = p.parse_args()
+    device = ["--device", a.device] if a.device else []
     os.makedirs(a.work, exist_ok=True)
     print("At %d², %d samples per pixel, undenoised (samples: reconstructions or tentative collisions):" %
           (a.size, a.spp))
@@ -61,8 +63,9 @@ def main():
         size = ["--size", "%dx%d" % (a.size, a.size)]
         w = lambda tag: os.path.join(a.work, "%s-%s.png" % (name.replace(" ", "_"), tag))
         timed = ["--stats", "--frames", str(a.frames)]
-        march = render(a.exe, [path] + common + size + timed + ["--spp", str(a.spp)], w("march"))
-        pt = [path] + common + size + timed + SUN + ["--integrator", "pathtrace", "--spp", str(a.spp), "--denoise", "off"]
+        march = render(a.exe, [path] + common + device + size + timed + ["--spp", str(a.spp)], w("march"))
+        pt = [path] + common + device + size + timed + SUN + ["--integrator", "pathtrace", "--spp", str(a.spp),
+                                                              "--denoise", "off"]
         grid = render(a.exe, pt, w("grid"))
         regions = render(a.exe, pt + ["--no-majorant-grid"], w("regions"))
         render(a.exe, pt + ["--no-majorant-grid", "--seed", "1"], w("regions-seed1"))
@@ -79,8 +82,8 @@ def main():
     for name, path, common in rows:
         size = ["--size", "%dx%d" % (a.target_size, a.target_size)]
         w = lambda tag: os.path.join(a.work, "%s-target-%s.png" % (name.replace(" ", "_"), tag))
-        march = render(a.exe, [path] + common + size, w("march"))
-        pt = [path] + common + size + SUN + ["--integrator", "pathtrace"]
+        march = render(a.exe, [path] + common + device + size, w("march"))
+        pt = [path] + common + device + size + SUN + ["--integrator", "pathtrace"]
         grid = render(a.exe, pt, w("grid"))
         regions = render(a.exe, pt + ["--no-majorant-grid"], w("regions"))
         m, g, r = march["frame_seconds"], grid["frame_seconds"], regions["frame_seconds"]

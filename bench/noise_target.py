@@ -8,7 +8,7 @@ images / sqrt(2); with --reference N, the bias of the default picture is its low
 difference). Prints times, samples, noise and ratios. Not a test.
 
 usage: bench/noise_target.py EXABRICKS [--data DIR] [--size 512] [--target 2] [--quick]
-                             [--reference 2048] [--work DIR]
+                             [--reference 2048] [--device cuda] [--work DIR]
 
 --data is $EXABRICKS_DATA (default /work/shared/data); a generated cosmology-like step (1M cells)
 is always measured; shared samples that are absent are skipped with a note. Needs numpy and PIL.
@@ -25,6 +25,7 @@ from pathtrace_bench import SUN, dataset, pixels, render
 CASES = [
     ("plt_drop", "amrex/advection_3d/plt_drop", [], SUN),
     ("pelelm temp", "amrex/pelelm_3lev_3d/example_plt_3d", ["--field", "temp"], SUN),
+    ("plt_eb_3d", "amrex/pele_eb_3d/plt_eb_3d", [], SUN),
     ("cosmic 1M", None, [], SUN),
 ]
 
@@ -51,8 +52,10 @@ def main():
     p.add_argument("--target", type=float, default=2.0)
     p.add_argument("--quick", action="store_true", help="skip the undenoised target")
     p.add_argument("--reference", type=int, default=0, help="samples of the undenoised reference (0: none)")
+    p.add_argument("--device", help="render --device of every frame (default: the command's own)")
     p.add_argument("--work", default="/tmp/noise-target-bench")
     a = p.parse_args()
+    device = ["--device", a.device] if a.device else []
     os.makedirs(a.work, exist_ok=True)
     size = ["--size", "%dx%d" % (a.size, a.size)]
     print("%-12s %8s | %8s %8s %6s %7s | %8s %8s %6s %7s | %s" % (
@@ -62,7 +65,7 @@ def main():
         path = dataset(a.exe, name, rel, a.data, a.work)
         if path is None:
             continue
-        base = [path] + size + common
+        base = [path] + size + common + device
         w = lambda tag: os.path.join(a.work, "%s-%s.png" % (name.replace(" ", "_"), tag))
         march = render(a.exe, base, w("march"))
         m = march["frame_seconds"]

@@ -2,8 +2,11 @@
 // the bound of device_scenes.h, N passes against N passes, what setScene copies, device memory.
 // Each test skips, saying why, where no GPU can be used.
 #include "device_scenes.h"
+#include "lit_ball.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/log.h"
+#include "exabricks/render/denoise.h"
 
 #include <gtest/gtest.h>
 
@@ -71,6 +74,41 @@ TEST(Gpu, ASceneChangeCopiesOnlyWhatChanged) {
   const SceneUpdate iso = r.setScene(scene);
   EXPECT_LT(iso.deviceBytes, first.deviceBytes / 4);
   EXPECT_GT(r.deviceMemory().total(), memory.total() / 2);
+}
+
+// The denoiser's levels as CUDA kernels against the CPU's threads: the same per-pixel code on the
+// same path-traced passes and guide gives the same picture and the same tile noise, and a frame
+// drawn on the GPU is filtered there.
+TEST(Gpu, TheDenoiserEqualsTheCpus) {
+  REQUIRE_GPU();
+  test::LitBall ball;
+  ball.frame.width = 1024;
+  ball.frame.height = 768;
+  Renderer r(ball.model, DatasetInfo::of(ball.model));
+  r.setScene(ball.scene);
+  DenoiseGuide guide = renderDenoiseGuide(r, ball.frame);
+  EXPECT_EQ(guide.device, Device::Cpu);
+  FrameBuffer buffer(ball.frame.width, ball.frame.height);
+  ASSERT_TRUE(r.renderPasses(ball.frame, buffer, 6));
+  std::vector<float> cpuNoise, gpuNoise;
+  Timer timer;
+  const Image cpu = denoise(buffer, guide, ball.scene.background, &cpuNoise);
+  const double cpuSeconds = timer.seconds();
+  guide.device = Device::Cuda;
+  denoise(buffer, guide, ball.scene.background); // the first call starts the GPU
+  timer.reset();
+  const Image gpu = denoise(buffer, guide, ball.scene.background, &gpuNoise);
+  std::printf("denoise 1024x768 with its tile noise: CPU threads %.1f ms, GPU %.1f ms\n", 1e3 * cpuSeconds,
+              1e3 * timer.seconds());
+  const ImageDifference d = difference(gpu, cpu);
+  std::printf("denoised on the GPU against the CPU: %s\n", describe(d).c_str());
+  EXPECT_TRUE(withinBound(d)) << describe(d);
+  EXPECT_NE(cpu.pixels, buffer.resolve().pixels);
+  ASSERT_EQ(gpuNoise.size(), cpuNoise.size());
+  for (size_t t = 0; t < cpuNoise.size(); ++t)
+    EXPECT_NEAR(gpuNoise[t], cpuNoise[t], 1e-3f * std::max(1.f, cpuNoise[t])) << "tile " << t;
+  r.setDevice(Device::Cuda);
+  EXPECT_EQ(renderDenoiseGuide(r, ball.frame).device, Device::Cuda);
 }
 
 } // namespace

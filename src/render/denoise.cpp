@@ -6,10 +6,12 @@
 #include "exabricks/core/log.h"
 #include "exabricks/render/renderer.h"
 
+#include "denoise_filter.h"
+#include "gpu_api.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 
 namespace exa {
@@ -49,16 +51,12 @@ DenoiseGuide renderDenoiseGuide(Renderer& renderer, const Frame& frame) {
     throw;
   }
   renderer.setScene(original);
+  guide.device = renderer.device();
   guide.seconds = timer.seconds();
   return guide;
 }
 
 namespace {
-
-constexpr float kB3[5] = {1.f / 16.f, 1.f / 4.f, 3.f / 8.f, 1.f / 4.f, 1.f / 16.f};
-constexpr int kFeatures = 7;
-
-float luminance(const vec3f& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
 
 /// A random sign per pixel and channel, fixed by their numbers (the probe's).
 float probeSign(size_t pixel, int channel) {
@@ -69,107 +67,34 @@ float probeSign(size_t pixel, int channel) {
   return (h & 1) ? 1.f : -1.f;
 }
 
-/// What one level filters: the colour (premultiplied RGBA) and two probes of its noise, carried
-/// with the same weights: per channel in 1/255 steps of the 8-bit sRGB picture, and its luminance
-/// over the background (linear), whose square estimates the variance the colour term compares.
-struct Level {
+/// One level's arrays on the host.
+struct LevelArrays {
   std::vector<vec4f> color;
   std::vector<vec3f> probe;
   std::vector<float> lumProbe;
-  void resize(size_t n) {
-    color.resize(n);
-    probe.resize(n);
-    lumProbe.resize(n);
-  }
+  explicit LevelArrays(size_t n) : color(n), probe(n), lumProbe(n) {}
+  DenoiseLevel view() { return {color.data(), probe.data(), lumProbe.data()}; }
 };
 
-struct Filter {
-  int width, height;
-  const DenoiseSettings& settings;
-  vec3f background;
-  std::vector<std::array<float, kFeatures>> features;
-  std::vector<uint8_t> valid;   ///< the pixel's tile holds passes
-  std::vector<uint8_t> unknown; ///< fewer than two passes: no estimate of the noise (no colour term)
-
-  float shownLuminance(const vec4f& c) const { return luminance(c.rgb() + background * (1.f - c.w)); }
-
-  /// The variance of each pixel's luminance that the colour term compares: the passes' own
-  /// estimate (a 3×3 binomial blur of it: one pixel's is noisy) before the first level, then the
-  /// luminance probe's square averaged over 5×5 pixels. The probe carries the correlation the
-  /// levels leave between neighbours, which a variance filtered with the squared weights misses;
-  /// missed, the colour term would take the blotches of the remaining noise for edges.
-  void variances(const Level& in, const std::vector<float>* first, std::vector<float>& out) const {
-    const int r = first ? 1 : 2;
-    tbb::parallel_for(0, height, [&](int y) {
-      for (int x = 0; x < width; ++x) {
-        const size_t p = size_t(y) * size_t(width) + size_t(x);
-        if (unknown[p]) {
-          out[p] = 1e30f; // finite: its weights squared may be zero
-          continue;
-        }
-        float sum = 0.f, weights = 0.f;
-        for (int dy = -r; dy <= r; ++dy)
-          for (int dx = -r; dx <= r; ++dx) {
-            const int qx = x + dx, qy = y + dy;
-            if (qx < 0 || qy < 0 || qx >= width || qy >= height) continue;
-            const size_t q = size_t(qy) * size_t(width) + size_t(qx);
-            if (!valid[q] || unknown[q]) continue;
-            const float w = first ? (dx == 0 ? 2.f : 1.f) * (dy == 0 ? 2.f : 1.f) : 1.f;
-            sum += w * (first ? (*first)[q] : in.lumProbe[q] * in.lumProbe[q]);
-            weights += w;
-          }
-        out[p] = weights > 0.f ? sum / weights : 0.f;
-      }
+/// The levels on the CPU's threads: the same per-pixel steps as the GPU's kernels.
+void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<float>& first, int levels) {
+  const size_t n = a.color.size();
+  LevelArrays b(n);
+  std::vector<float> variance(n);
+  for (int l = 0; l < levels; ++l) {
+    const DenoiseLevel in = a.view(), out = b.view();
+    const float* from = l == 0 ? first.data() : nullptr;
+    tbb::parallel_for(0, im.height, [&](int y) {
+      for (int x = 0; x < im.width; ++x)
+        variance[size_t(y) * size_t(im.width) + size_t(x)] = denoiseVariance(im, in, from, x, y);
     });
-  }
-
-  /// One à-trous level at `step` pixels.
-  void level(const Level& in, const std::vector<float>& variance, int step, Level& out) const {
-    const float guideScale = 1.f / (settings.guideSigma * settings.guideSigma);
-    tbb::parallel_for(0, height, [&](int y) {
-      for (int x = 0; x < width; ++x) {
-        const size_t p = size_t(y) * size_t(width) + size_t(x);
-        if (!valid[p]) {
-          out.color[p] = in.color[p];
-          out.probe[p] = in.probe[p];
-          out.lumProbe[p] = in.lumProbe[p];
-          continue;
-        }
-        const float lp = shownLuminance(in.color[p]);
-        const float colorScale = 1.f / (settings.colorSigma * std::sqrt(variance[p]) + 1e-6f);
-        const std::array<float, kFeatures>& fp = features[p];
-        vec4f color;
-        vec3f probe(0.f);
-        float weights = 0.f, lumProbe = 0.f;
-        for (int j = 0; j < 5; ++j) {
-          const int qy = y + (j - 2) * step;
-          if (qy < 0 || qy >= height) continue;
-          for (int i = 0; i < 5; ++i) {
-            const int qx = x + (i - 2) * step;
-            if (qx < 0 || qx >= width) continue;
-            const size_t q = size_t(qy) * size_t(width) + size_t(qx);
-            if (!valid[q]) continue;
-            float distance = 0.f;
-            for (int k = 0; k < kFeatures; ++k) {
-              const float d = fp[size_t(k)] - features[q][size_t(k)];
-              distance += d * d;
-            }
-            const float colorTerm = std::fabs(lp - shownLuminance(in.color[q])) * colorScale;
-            const float w = kB3[i] * kB3[j] * std::exp(-distance * guideScale - colorTerm);
-            color += in.color[q] * w;
-            probe = probe + in.probe[q] * w;
-            lumProbe += w * in.lumProbe[q];
-            weights += w;
-          }
-        }
-        const float inv = 1.f / weights; // the pixel itself weighs kB3[2]² > 0
-        out.color[p] = color * inv;
-        out.probe[p] = probe * inv;
-        out.lumProbe[p] = lumProbe * inv;
-      }
+    tbb::parallel_for(0, im.height, [&](int y) {
+      for (int x = 0; x < im.width; ++x)
+        denoiseLevelPixel(im, in, variance.data(), 1 << l, x, y, out);
     });
+    std::swap(a, b);
   }
-};
+}
 
 /// Features of one guide pixel: square roots of its premultiplied colour, so that dark colours
 /// differ as much as the eye sees.
@@ -190,37 +115,41 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
     if ((g == &guide.albedo || shaded) && (g->width != width || g->height != height))
       fail("denoise: the guide is ", g->width, "x", g->height, ", the frame ", width, "x", height);
   const size_t n = size_t(width) * size_t(height);
-  Filter filter{width, height, settings, background, {}, {}, {}};
-  filter.features.resize(n);
-  filter.valid.resize(n);
-  filter.unknown.resize(n);
-  Level a, b;
-  a.resize(n);
-  b.resize(n);
-  std::vector<float> first(n), variance(n);
+  std::vector<float> features(n * kDenoiseFeatures, 0.f), first(n, 0.f);
+  std::vector<uint8_t> valid(n), unknown(n);
+  LevelArrays a(n);
   const Image mean = buffer.resolve();
+  const float backgroundLuminance = denoiseLuminance(background);
   tbb::parallel_for(size_t(0), n, [&](size_t p) {
-    addFeatures(guide.albedo.pixels[p], filter.features[p].data(), true);
-    if (shaded) addFeatures(guide.shaded.pixels[p], filter.features[p].data() + 4, false);
+    addFeatures(guide.albedo.pixels[p], &features[p * kDenoiseFeatures], true);
+    if (shaded) addFeatures(guide.shaded.pixels[p], &features[p * kDenoiseFeatures + 4], false);
     const uint32_t passes = buffer.pixelPasses(p);
-    filter.valid[p] = passes > 0;
-    filter.unknown[p] = passes < 2;
+    valid[p] = passes > 0;
+    unknown[p] = passes < 2;
     a.color[p] = mean.pixels[p];
     a.probe[p] = vec3f(0.f);
     a.lumProbe[p] = 0.f;
     if (passes < 2) return; // no estimate of the noise: kept as it is
     const vec4f e = buffer.pixelError(p);
-    const float shownError = luminance(e.rgb()) + luminance(background) * e.w;
+    const float shownError = denoiseLuminance(e.rgb()) + backgroundLuminance * e.w;
     first[p] = shownError * shownError;
     a.lumProbe[p] = shownError * probeSign(p, 3);
     const vec3f steps = buffer.pixelNoise(p, background);
     a.probe[p] = {steps.x * probeSign(p, 0), steps.y * probeSign(p, 1), steps.z * probeSign(p, 2)};
   });
-  for (int l = 0; l < settings.levels; ++l) {
-    filter.variances(a, l == 0 ? &first : nullptr, variance);
-    filter.level(a, variance, 1 << l, b);
-    std::swap(a, b);
-  }
+  DenoiseImages im;
+  im.width = width;
+  im.height = height;
+  im.features = features.data();
+  im.valid = valid.data();
+  im.unknown = unknown.data();
+  im.background = background;
+  im.guideScale = 1.f / (settings.guideSigma * settings.guideSigma);
+  im.colorSigma = settings.colorSigma;
+  if (guide.device == Device::Cuda)
+    gpu::denoiseLevels(im, a.view(), first.data(), settings.levels);
+  else
+    filterOnCpu(im, a, first, settings.levels);
   if (tileNoise) {
     tileNoise->assign(size_t(buffer.tileCount()), 0.f);
     tbb::parallel_for(0, buffer.tileCount(), [&](int tile) {

@@ -3,6 +3,7 @@
 // CUDA"). Device memory is handed around as opaque pointers.
 #pragma once
 
+#include "denoise_filter.h"
 #include "device_trace.h"
 
 #include "exabricks/render/renderer.h"
@@ -31,5 +32,10 @@ struct PassCounts {
 /// PassCounts on the device.
 void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, int tileStride, void* deviceColors,
                void* deviceCounts, vec4f* hostColors, PassCounts& counts);
+
+/// The denoiser's levels (denoise_filter.h) on the GPU, from and back into `level`: host arrays
+/// of the images' size, as are the images' own arrays and `first` (the passes' variance
+/// estimate). Waits for the GPU.
+void denoiseLevels(const DenoiseImages& images, const DenoiseLevel& level, const float* first, int levels);
 
 } // namespace exa::gpu

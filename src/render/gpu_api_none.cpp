@@ -21,4 +21,8 @@ void tracePass(const TraceView&, int, int, int, int, void*, void*, vec4f*, PassC
   fail("this exabricks was built without CUDA");
 }
 
+void denoiseLevels(const DenoiseImages&, const DenoiseLevel&, const float*, int) {
+  fail("this exabricks was built without CUDA");
+}
+
 } // namespace exa::gpu

@@ -30,6 +30,9 @@ struct DenoiseGuide {
   /// scenes with surfaces; empty otherwise).
   Image shaded;
   double seconds = 0; ///< time the two pictures took
+  /// Where the filter runs: where the guide was rendered (a frame drawn on the GPU is filtered
+  /// there; the CPU and the portable back end filter on the CPU's threads).
+  Device device = Device::Cpu;
   bool empty() const { return albedo.pixels.empty(); }
 };
 

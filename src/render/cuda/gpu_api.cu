@@ -68,6 +68,28 @@ __global__ void __launch_bounds__(64, (SmoothOne && !Surfaces) ? 10 : 8)
   }
 }
 
+__global__ void denoiseVarianceKernel(DenoiseImages im, DenoiseLevel in, const float* first, float* variance) {
+  const int x = int(blockIdx.x * blockDim.x + threadIdx.x), y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  if (x < im.width && y < im.height)
+    variance[size_t(y) * size_t(im.width) + size_t(x)] = denoiseVariance(im, in, first, x, y);
+}
+
+__global__ void denoiseLevelKernel(DenoiseImages im, DenoiseLevel in, const float* variance, int step,
+                                   DenoiseLevel out) {
+  const int x = int(blockIdx.x * blockDim.x + threadIdx.x), y = int(blockIdx.y * blockDim.y + threadIdx.y);
+  if (x < im.width && y < im.height) denoiseLevelPixel(im, in, variance, step, x, y, out);
+}
+
+/// Device memory released with its owner.
+struct DeviceArray {
+  void* p = nullptr;
+  DeviceArray(uint64_t bytes, const char* what) : p(allocate(bytes, what)) {}
+  DeviceArray(const DeviceArray&) = delete;
+  DeviceArray& operator=(const DeviceArray&) = delete;
+  ~DeviceArray() { release(p); }
+  template <typename T> T* as() const { return static_cast<T*>(p); }
+};
+
 } // namespace
 
 CudaStatus status() {
@@ -168,6 +190,41 @@ void tracePass(const TraceView& view, int tilesX, int tileBegin, int tileEnd, in
   counts.kernelSeconds = 1e-3 * ms;
   cudaEventDestroy(start);
   cudaEventDestroy(stop);
+}
+
+void denoiseLevels(const DenoiseImages& images, const DenoiseLevel& level, const float* first, int levels) {
+  useDevice();
+  const size_t n = size_t(images.width) * size_t(images.height);
+  const char* what = "the denoiser's images";
+  DeviceArray features(n * kDenoiseFeatures * sizeof(float), what), valid(n, what), unknown(n, what);
+  DeviceArray firstVariance(n * sizeof(float), what), variance(n * sizeof(float), what);
+  DeviceArray colors(2 * n * sizeof(vec4f), what), probes(2 * n * sizeof(vec3f), what), lums(2 * n * sizeof(float), what);
+  copyToDevice(features.p, images.features, n * kDenoiseFeatures * sizeof(float));
+  copyToDevice(valid.p, images.valid, n);
+  copyToDevice(unknown.p, images.unknown, n);
+  copyToDevice(firstVariance.p, first, n * sizeof(float));
+  copyToDevice(colors.p, level.color, n * sizeof(vec4f));
+  copyToDevice(probes.p, level.probe, n * sizeof(vec3f));
+  copyToDevice(lums.p, level.lumProbe, n * sizeof(float));
+  DenoiseImages im = images;
+  im.features = features.as<float>();
+  im.valid = valid.as<uint8_t>();
+  im.unknown = unknown.as<uint8_t>();
+  DenoiseLevel a{colors.as<vec4f>(), probes.as<vec3f>(), lums.as<float>()};
+  DenoiseLevel b{a.color + n, a.probe + n, a.lumProbe + n};
+  const dim3 block(16, 8);
+  const dim3 grid(unsigned(images.width + 15) / 16, unsigned(images.height + 7) / 8);
+  for (int l = 0; l < levels; ++l) {
+    denoiseVarianceKernel<<<grid, block>>>(im, a, l == 0 ? firstVariance.as<float>() : nullptr, variance.as<float>());
+    denoiseLevelKernel<<<grid, block>>>(im, a, variance.as<float>(), 1 << l, b);
+    check(cudaGetLastError(), "launching the denoiser");
+    const DenoiseLevel t = a;
+    a = b;
+    b = t;
+  }
+  check(cudaMemcpy(level.color, a.color, n * sizeof(vec4f), cudaMemcpyDeviceToHost), "the denoised picture");
+  check(cudaMemcpy(level.probe, a.probe, n * sizeof(vec3f), cudaMemcpyDeviceToHost), "the denoised picture");
+  check(cudaMemcpy(level.lumProbe, a.lumProbe, n * sizeof(float), cudaMemcpyDeviceToHost), "the denoised picture");
 }
 
 } // namespace exa::gpu
