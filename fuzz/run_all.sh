@@ -17,9 +17,13 @@ work=${3:-$build/fuzz-runs}
 # FUZZ_TARGETS="fuzz_model fuzz_hdf5" runs only those.
 read -r -a targets <<<"${FUZZ_TARGETS:-fuzz_amrex fuzz_particles fuzz_vtk fuzz_enzo fuzz_chombo fuzz_flash fuzz_hdf5 fuzz_native fuzz_raw fuzz_model fuzz_scene fuzz_mesh fuzz_messages}"
 
-cxx=$(command -v clang++ || command -v clang++-14) || { echo "fuzz/run_all.sh needs clang++ (clang-14)" >&2; exit 1; }
-cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER="$cxx" -DEXABRICKS_BUILD_FUZZERS=ON \
-  -DEXABRICKS_BUILD_TESTS=OFF -DEXABRICKS_PYTHON=OFF >/dev/null || exit 1
+# A build folder already configured with the fuzz targets (a Clang sanitizer build, say) is used
+# as it is; any other is configured as a Clang release build of the fuzz targets alone.
+if ! grep -q '^EXABRICKS_BUILD_FUZZERS:BOOL=ON$' "$build/CMakeCache.txt" 2>/dev/null; then
+  cxx=$(command -v clang++ || command -v clang++-14) || { echo "fuzz/run_all.sh needs clang++ (clang-14)" >&2; exit 1; }
+  cmake -S "$root" -B "$build" -DCMAKE_BUILD_TYPE=Release -DCMAKE_CXX_COMPILER="$cxx" -DEXABRICKS_BUILD_FUZZERS=ON \
+    -DEXABRICKS_BUILD_TESTS=OFF -DEXABRICKS_PYTHON=OFF >/dev/null || exit 1
+fi
 nice -n 10 cmake --build "$build" -j2 --target "${targets[@]}" fuzz_seeds || exit 1
 
 status=0

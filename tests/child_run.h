@@ -13,13 +13,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define EXABRICKS_ASAN 1
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define EXABRICKS_ASAN 1
-#endif
-#endif
+#include "asan.h"
 
 namespace exa::test {
 
@@ -41,7 +35,8 @@ struct ChildOutcome {
 /// Runs `body` in a forked child whose address space may grow by `extraBytes` beyond the
 /// parent's (not under AddressSanitizer) and that an alarm ends after `alarmSeconds` (0: none).
 /// `body` sets the message and returns the exit code.
-inline ChildOutcome runInChild(long extraBytes, unsigned alarmSeconds, const std::function<int(std::string&)>& body) {
+inline ChildOutcome runInChild([[maybe_unused]] long extraBytes, unsigned alarmSeconds,
+                               const std::function<int(std::string&)>& body) {
   ChildOutcome out;
   int fds[2];
   if (pipe(fds) != 0) return out;

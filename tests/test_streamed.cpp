@@ -2,6 +2,7 @@
 // budget (or name the smallest that works), frames drawn part by part equal to the in-core render
 // (several passes, so the per-pass compositing counts) and the same when the parts come back from
 // the disk, and a step that changes while its parts are read is reported instead of drawn mixed.
+#include "asan.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/text.h"
@@ -54,7 +55,7 @@ TEST(Streamed, ByteSizesAsPeopleWriteThem) {
 }
 
 TEST(Streamed, PlansFitTheBudgetOrNameTheSmallestThatWorks) {
-#if defined(__SANITIZE_ADDRESS__)
+#ifdef EXABRICKS_ASAN
   GTEST_SKIP() << "under AddressSanitizer the process's size grows with its quarantine from one plan to the next; "
                   "plans are checked in the other builds";
 #endif

@@ -18,12 +18,12 @@ constexpr int kDenoiseFeatures = 7;
 /// What stays the same through the levels.
 struct DenoiseImages {
   int width = 0, height = 0;
-  const float* features = nullptr; ///< kDenoiseFeatures per pixel
+  const float* features = nullptr;  ///< kDenoiseFeatures per pixel
   const uint8_t* valid = nullptr;   ///< the pixel's tile holds passes
   const uint8_t* unknown = nullptr; ///< fewer than two passes: no estimate of the noise (no colour term)
   vec3f background{0.f};
-  float guideScale = 0.f;  ///< 1 / guide sigma²
-  float colorSigma = 0.f;  ///< colour difference at 1/e, in standard errors of the noise
+  float guideScale = 0.f; ///< 1 / guide sigma²
+  float colorSigma = 0.f; ///< colour difference at 1/e, in standard errors of the noise
 };
 
 /// What one level filters: the colour (premultiplied RGBA) and two probes of its noise, carried
@@ -50,8 +50,8 @@ EXA_HOST_DEVICE inline float denoiseShownLuminance(const DenoiseImages& im, cons
 /// the correlation the levels leave between neighbours, which a variance filtered with the
 /// squared weights misses; missed, the colour term would take the blotches of the remaining
 /// noise for edges.
-EXA_HOST_DEVICE inline float denoiseVariance(const DenoiseImages& im, const DenoiseLevel& in, const float* first,
-                                             int x, int y) {
+EXA_HOST_DEVICE inline float denoiseVariance(const DenoiseImages& im, const DenoiseLevel& in, const float* first, int x,
+                                             int y) {
   const size_t p = size_t(y) * size_t(im.width) + size_t(x);
   if (im.unknown[p]) return 1e30f; // finite: its weights squared may be zero
   const int r = first ? 1 : 2;

@@ -198,7 +198,8 @@ void denoiseLevels(const DenoiseImages& images, const DenoiseLevel& level, const
   const char* what = "the denoiser's images";
   DeviceArray features(n * kDenoiseFeatures * sizeof(float), what), valid(n, what), unknown(n, what);
   DeviceArray firstVariance(n * sizeof(float), what), variance(n * sizeof(float), what);
-  DeviceArray colors(2 * n * sizeof(vec4f), what), probes(2 * n * sizeof(vec3f), what), lums(2 * n * sizeof(float), what);
+  DeviceArray colors(2 * n * sizeof(vec4f), what), probes(2 * n * sizeof(vec3f), what),
+      lums(2 * n * sizeof(float), what);
   copyToDevice(features.p, images.features, n * kDenoiseFeatures * sizeof(float));
   copyToDevice(valid.p, images.valid, n);
   copyToDevice(unknown.p, images.unknown, n);
