@@ -17,6 +17,7 @@
 #ifdef EXABRICKS_HAVE_VIEWER
 #include "view/server.h"
 
+#include <atomic>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -252,31 +253,56 @@ void addRefinement(view::ViewContent& content, const FirstStep& first, const std
                             ""});
 }
 
-/// Serves the content until Ctrl-C, SIGTERM (`stopSignals`, blocked in every thread) or the
-/// server's own end; prints the address, and how to reach it, first.
-void serve(view::ViewContent content, const view::ServerOptions& options, const std::string& name,
-           const sigset_t& stopSignals) {
-  view::Server server(std::move(content), options);
-  server.bind();
-
-  std::cout << server.url() << std::endl;
-  if (logLevel() >= LogLevel::Warning) {
-    std::fprintf(stderr,
-                 "exabricks: viewing %s at %s\n"
-                 "  from another machine: ssh -L %d:localhost:%d %s, then open the address there\n"
-                 "  Ctrl-C stops the viewer\n",
-                 name.c_str(), server.url().c_str(), server.port(), server.port(), hostName().c_str());
+/// A viewer's server, bound and its address printed before the dataset is read (a browser
+/// opened at once waits for the first picture), and the thread that takes Ctrl-C and SIGTERM
+/// (`stopSignals`, blocked in every thread): while the dataset is still being read they end the
+/// process, then they stop the server cleanly.
+class BoundViewer {
+public:
+  BoundViewer(const view::ServerOptions& options, const std::string& name, const sigset_t& stopSignals)
+      : server_(options) {
+    server_.bind();
+    std::cout << server_.url() << std::endl;
+    if (logLevel() >= LogLevel::Warning) {
+      std::fprintf(stderr,
+                   "exabricks: viewing %s at %s\n"
+                   "  from another machine: ssh -L %d:localhost:%d %s, then open the address there\n"
+                   "  Ctrl-C stops the viewer\n",
+                   name.c_str(), server_.url().c_str(), server_.port(), server_.port(), hostName().c_str());
+    }
+    waiter_ = std::thread([this, stopSignals] {
+      int signal = 0;
+      sigwait(&stopSignals, &signal);
+      if (ending_ || (signal != SIGINT && signal != SIGTERM)) return;
+      if (!serving_) { // the dataset is still being read: nothing to stop cleanly
+        logNote("viewer stopped");
+        std::fflush(nullptr);
+        std::_Exit(0);
+      }
+      server_.stop();
+    });
   }
-  std::thread signalWaiter([&] {
-    int signal = 0;
-    sigwait(&stopSignals, &signal);
-    if (signal == SIGINT || signal == SIGTERM) server.stop();
-  });
-  server.run();
-  server.stop();
-  pthread_kill(signalWaiter.native_handle(), SIGTERM); // wakes the waiter when the server ended by itself
-  signalWaiter.join();
-}
+  ~BoundViewer() {
+    ending_ = true;
+    pthread_kill(waiter_.native_handle(), SIGTERM); // wakes the waiter
+    waiter_.join();
+  }
+  BoundViewer(const BoundViewer&) = delete;
+  BoundViewer& operator=(const BoundViewer&) = delete;
+
+  /// Serves the content until Ctrl-C, SIGTERM or the server's own end.
+  void serve(view::ViewContent content) {
+    server_.show(std::move(content));
+    serving_ = true;
+    server_.run();
+    server_.stop();
+  }
+
+private:
+  view::Server server_;
+  std::thread waiter_;
+  std::atomic<bool> serving_{false}, ending_{false};
+};
 
 void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   ViewCmdOptions o = given;
@@ -292,10 +318,18 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
 
   if (o.port < 0 || o.port > 65535) failUsage("--port must be in 0..65535 (0: any free port)");
   if (!o.token.empty() && o.token.size() < 16) failUsage("--token must have at least 16 characters");
-  view::checkListenAddress(o.host, o.port); // before the dataset loads: a taken port fails at once
   SceneDocument doc = sceneFromOptions(o.scene, cmd);
   if (!cmd.count("--spp") && o.scene.sceneFile.empty() && !(doc.frame.noiseTarget > 0.f))
     doc.frame.samplesPerPixel = kDefaultViewerPasses;
+
+  view::ServerOptions options;
+  options.host = o.host;
+  options.port = o.port;
+  options.token = o.token;
+  options.device = o.device;
+  if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
+  // Bound before the dataset loads: a taken port fails at once, and the address comes first.
+  BoundViewer viewer(options, o.scene.in.name(), stopSignals);
 
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
@@ -332,13 +366,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
     content.firstStep = first.index;
     content.unreadable = unreadable;
   }
-  view::ServerOptions options;
-  options.host = o.host;
-  options.port = o.port;
-  options.token = o.token;
-  options.device = o.device;
-  if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
-  serve(std::move(content), options, o.scene.in.name(), stopSignals);
+  viewer.serve(std::move(content));
   logNote("viewer stopped");
   if (first.coarse.level > 0 || first.merged > 1) {
     // The whole dataset may still be being read on its own thread: end the process here, before

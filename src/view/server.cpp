@@ -318,45 +318,61 @@ Server::Server(ViewContent content, ServerOptions options) : impl_(std::make_uni
 
 Server::~Server() { stop(); }
 
-void Server::bind() {
-  Impl& s = *impl_;
-  if (!s.content.model) fail("viewer: no dataset");
-  s.http.set_payload_max_length(s.options.maxRequestBytes);
-  s.http.set_read_timeout(10, 0);
-  s.http.set_write_timeout(10, 0);
-  s.http.set_keep_alive_timeout(1); // idle connections close soon, so that stopping is quick
-  s.http.set_tcp_nodelay(true);
-  s.http.set_socket_options(listenSocketOptions);
+Server::Server(ServerOptions options) : Server(ViewContent(), std::move(options)) {}
+
+void Server::Impl::listen() {
+  http.set_payload_max_length(options.maxRequestBytes);
+  http.set_read_timeout(10, 0);
+  http.set_write_timeout(10, 0);
+  http.set_keep_alive_timeout(1); // idle connections close soon, so that stopping is quick
+  http.set_tcp_nodelay(true);
+  http.set_socket_options(listenSocketOptions);
   // Streams hold a worker each; leave room for the API requests beside them.
-  const size_t workers = size_t(std::max(4, s.options.maxStreams + 4));
-  s.http.new_task_queue = [workers] { return new httplib::ThreadPool(workers); };
-  s.routes();
-  if (s.options.port == 0) {
-    s.port = s.http.bind_to_any_port(s.options.host);
-    if (s.port < 0) fail("viewer: cannot listen on ", s.options.host, " (any port)");
+  const size_t workers = size_t(std::max(4, options.maxStreams + 4));
+  http.new_task_queue = [workers] { return new httplib::ThreadPool(workers); };
+  routes();
+  if (options.port == 0) {
+    port = http.bind_to_any_port(options.host);
+    if (port < 0) fail("viewer: cannot listen on ", options.host, " (any port)");
   } else {
-    if (!s.http.bind_to_port(s.options.host, s.options.port)) {
-      checkListenAddress(s.options.host, s.options.port);
-      fail("viewer: cannot listen on ", s.options.host, " port ", s.options.port,
+    if (!http.bind_to_port(options.host, options.port)) {
+      checkListenAddress(options.host, options.port);
+      fail("viewer: cannot listen on ", options.host, " port ", options.port,
            " (is it an address of this machine? --port 0 picks a free port)");
     }
-    s.port = s.options.port;
+    port = options.port;
   }
-  s.steps =
-      std::make_unique<ViewSteps>(StepView{s.content.firstStep, s.content.model, s.content.dataset, s.content.input},
-                                  s.content.series, s.content.steps, s.content.load);
-  for (const auto& [index, why] : s.content.unreadable)
-    s.steps->markUnreadable(index, why);
-  s.movies = std::make_unique<MovieMaker>();
-  s.pictures = std::make_unique<PictureMaker>();
+  bound = true;
+}
+
+void Server::Impl::start() {
+  steps = std::make_unique<ViewSteps>(StepView{content.firstStep, content.model, content.dataset, content.input},
+                                      content.series, content.steps, content.load);
+  for (const auto& [index, why] : content.unreadable)
+    steps->markUnreadable(index, why);
+  movies = std::make_unique<MovieMaker>();
+  pictures = std::make_unique<PictureMaker>();
   LegendText legends;
-  legends.dataset = s.content.name;
-  s.session = std::make_unique<Session>(s.content.model, s.content.dataset, s.options, legends, s.content.parts,
-                                        s.content.budget);
-  s.session->setParticleInput(s.content.input);
-  if (!s.content.refine.empty() || s.content.parts) s.session->setDataNote(s.content.coarseNote);
-  s.session->submit(s.content.initial, false); // the first picture renders while the page loads
-  if (!s.content.refine.empty()) s.startRefining(legends);
+  legends.dataset = content.name;
+  session = std::make_unique<Session>(content.model, content.dataset, options, legends, content.parts, content.budget);
+  session->setParticleInput(content.input);
+  if (!content.refine.empty() || content.parts) session->setDataNote(content.coarseNote);
+  session->submit(content.initial, false); // the first picture renders while the page loads
+  if (!content.refine.empty()) startRefining(legends);
+}
+
+void Server::bind() {
+  Impl& s = *impl_;
+  if (!s.bound) s.listen();
+  if (s.content.model && !s.session) s.start();
+}
+
+void Server::show(ViewContent content) {
+  Impl& s = *impl_;
+  if (s.session) fail("viewer: a dataset is already shown");
+  if (!content.model) fail("viewer: no dataset");
+  s.content = std::move(content);
+  bind();
 }
 
 /// Reads more of the dataset, step by step, on a thread of its own while less of it is shown,
@@ -418,7 +434,8 @@ std::string Server::url() const {
 }
 
 void Server::run() {
-  if (!impl_->session) bind();
+  bind();
+  if (!impl_->session) fail("viewer: no dataset");
   impl_->http.listen_after_bind();
 }
 

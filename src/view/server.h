@@ -107,12 +107,19 @@ void checkListenAddress(const std::string& host, int port);
 class Server {
 public:
   Server(ViewContent content, ServerOptions options);
+  /// A server whose content comes later (show()): it can bind, and so print its address, while
+  /// the dataset is still being read; connections wait until it runs.
+  explicit Server(ServerOptions options);
   ~Server();
   Server(const Server&) = delete;
   Server& operator=(const Server&) = delete;
 
-  /// Binds the socket (throws exa::Error when it cannot) and starts the render thread.
+  /// Binds the socket (throws exa::Error when it cannot) and, where the content is there,
+  /// starts the render thread.
   void bind();
+  /// The content of a server made without it (once; throws exa::Error for a second or an empty
+  /// one); binds where bind() has not.
+  void show(ViewContent content);
   int port() const;
   const std::string& token() const;
   /// The address to open, token included.

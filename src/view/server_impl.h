@@ -100,6 +100,7 @@ struct Server::Impl {
   std::atomic<int> snapshotWaits{0};
   std::atomic<bool> stopping{false};
   int port = 0;
+  bool bound = false; ///< the socket listens (connections wait there until the server runs)
   /// Whether the server is still there for a thread that reads the whole dataset (coarse levels
   /// first), which holds the mutex while it hands the dataset over.
   struct Refining {
@@ -109,6 +110,10 @@ struct Server::Impl {
   std::shared_ptr<Refining> refining = std::make_shared<Refining>();
   /// Reads the whole dataset on a detached thread, then shows it (ViewContent::refine).
   void startRefining(const LegendText& legends);
+  /// Binds the socket with the routes (throws exa::Error when it cannot).
+  void listen();
+  /// The content's steps, session and refinement; the first picture starts rendering.
+  void start();
 
   /// The name a download of the view takes, as Save picture names its files: the dataset shown,
   /// the first layer's field and the size (`extension` replaces the picture's), in a
