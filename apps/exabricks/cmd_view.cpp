@@ -82,14 +82,14 @@ struct FirstStep {
 /// What a view shows of a step with the coarse levels `coarse` (level > 0), for the page.
 std::string coarseShown(const CoarseFirst& coarse) {
   return strCat("coarse levels: cells ", 1 << coarse.level, " wide and wider (", std::llround(coarse.coarseCells),
-                " of ", std::llround(coarse.cells), " cells in boxes); ");
+                " of ", std::llround(coarse.cells), " cells in boxes)");
 }
 
 /// The same for the coarsest level merged (FirstStep::merged).
 std::string mergedShown(const FirstStep& f) {
   const double cells = f.model->cellCount();
   return strCat("the coarsest level merged: cells ", int64_t(1) << f.mergedLevel, " wide by ", f.merged, " per axis (",
-                std::llround(cells), " cells for ", std::llround(f.coarse.cells), " in boxes); ");
+                std::llround(cells), " cells for ", std::llround(f.coarse.cells), " in boxes)");
 }
 
 /// The dataset, or the first readable step of a series (a step that cannot be read is said on
@@ -108,7 +108,7 @@ FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& in
       f.dataset = std::move(merged->dataset);
       f.merged = merged->mergedFactor;
       f.mergedLevel = merged->mergedLevel;
-      logNote(strCat("showing ", mergedShown(f), "every level follows"));
+      logNote(strCat("showing ", mergedShown(f), "; every level follows"));
       return f;
     }
   }
@@ -236,21 +236,21 @@ void addRefinement(view::ViewContent& content, const FirstStep& first, const std
     content.budget = budget;
     const std::string parts =
         strCat("every level follows in ", content.parts->parts(), " parts within a budget of ", formatBytes(budget));
-    content.coarseNote = shown + parts;
-    if (first.merged > 1) content.refine.push_back({coarseLevels, coarseShown(coarse) + parts});
+    content.coarse = {shown, parts};
+    if (first.merged > 1) content.refine.push_back({coarseLevels, {coarseShown(coarse), parts}});
     logNote(strCat("memory budget ", formatBytes(budget), ": a still view is drawn from every level in ",
                    content.parts->parts(), " parts, its drafts from the coarse levels"));
     return;
   }
   if (first.merged == 1 && first.coarse.level == 0) return;
-  content.coarseNote = shown + "reading the finer levels";
+  content.coarse = {shown, "reading the finer levels"};
   if (first.merged > 1 && coarse.level > 0)
-    content.refine.push_back({coarseLevels, coarseShown(coarse) + "reading the finer levels"});
+    content.refine.push_back({coarseLevels, {coarseShown(coarse), "reading the finer levels"}});
   content.refine.push_back({[input, lo] {
                               auto model = std::make_shared<const Model>(loadModel(input, lo));
                               return std::make_pair(std::shared_ptr<const Model>(model), DatasetInfo::of(*model));
                             },
-                            ""});
+                            {}});
 }
 
 /// A viewer's server, bound and its address printed before the dataset is read (a browser

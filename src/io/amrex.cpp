@@ -1,6 +1,7 @@
 #include "exabricks/io/amrex.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/kept.h"
 #include "exabricks/core/log.h"
 
 #include "checked.h"
@@ -18,7 +19,6 @@
 #include <fstream>
 #include <map>
 #include <memory>
-#include <mutex>
 #include <optional>
 #include <sstream>
 #include <string_view>
@@ -319,6 +319,7 @@ struct PlotfileMeta {
   Plotfile pf;
   std::vector<LevelData> levels;
   std::vector<int64_t> width; ///< of a level's cells, in finest cells
+  std::string stamp;          ///< of the Header and Cell_H files parsed (metaStamp)
 };
 
 /// What tells a file's versions apart: its contents up to 1 MiB (a file rewritten within the
@@ -349,27 +350,19 @@ std::string metaStamp(const std::string& dir, const std::vector<std::string>& le
 /// census, the memory plan, the coarse levels and every part of a step ask for them, and a large
 /// step's box lists take seconds to parse. The last two plotfiles are kept.
 std::shared_ptr<const PlotfileMeta> plotfileMeta(const std::string& dir) {
-  static std::mutex mutex;
-  static std::vector<std::tuple<std::string, std::string, std::shared_ptr<const PlotfileMeta>>> kept;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    for (const auto& [keptDir, stamp, meta] : kept)
-      if (keptDir == dir && stamp == metaStamp(dir, meta->pf.levelPrefixes)) return meta;
-  }
-  auto meta = std::make_shared<PlotfileMeta>();
-  meta->pf = readHeader(dir);
-  const Plotfile& pf = meta->pf;
-  const std::string stamp = metaStamp(dir, pf.levelPrefixes);
-  meta->width.assign(size_t(pf.finestLevel) + 1, 1);
+  static KeptResults<PlotfileMeta> kept(2);
+  if (auto meta = kept.find(dir, [&](const PlotfileMeta& m) { return m.stamp == metaStamp(dir, m.pf.levelPrefixes); }))
+    return meta;
+  PlotfileMeta meta;
+  meta.pf = readHeader(dir);
+  const Plotfile& pf = meta.pf;
+  meta.stamp = metaStamp(dir, pf.levelPrefixes);
+  meta.width.assign(size_t(pf.finestLevel) + 1, 1);
   for (int l = pf.finestLevel - 1; l >= 0; --l)
-    meta->width[size_t(l)] = meta->width[size_t(l) + 1] * pf.ratios[size_t(l)];
+    meta.width[size_t(l)] = meta.width[size_t(l) + 1] * pf.ratios[size_t(l)];
   for (int l = 0; l <= pf.finestLevel; ++l)
-    meta->levels.push_back(readCellHeader(pf, l));
-  const std::lock_guard<std::mutex> lock(mutex);
-  std::erase_if(kept, [&](const auto& k) { return std::get<0>(k) == dir; });
-  if (kept.size() >= 2) kept.erase(kept.begin());
-  kept.emplace_back(dir, stamp, meta);
-  return meta;
+    meta.levels.push_back(readCellHeader(pf, l));
+  return kept.keep(dir, std::move(meta));
 }
 
 /// Reads one FAB: its header line, then the requested components as float.

@@ -2,13 +2,13 @@
 #include "patches.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/core/kept.h"
 #include "exabricks/core/log.h"
 #include "exabricks/io/units.h"
 
 #include <cmath>
 #include <filesystem>
 #include <memory>
-#include <mutex>
 #include <optional>
 
 namespace exa {
@@ -32,21 +32,13 @@ std::string metadataStamp(const std::string& path) {
 /// sources of plain files are kept, whose reads any thread may share.
 PatchSource patchesOf(const std::string& path, const FormatReader& reader, const std::vector<std::string>& fields,
                       int finestLevel) {
-  static std::mutex mutex;
-  static std::string lastKey;
-  static std::optional<PatchSource> last;
+  static KeptResults<PatchSource> kept(1);
   std::string key = strCat(path, "|", finestLevel, "|", metadataStamp(path));
   for (const std::string& f : fields)
     key += "|" + f;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (last && key == lastKey) return *last;
-  }
+  if (std::shared_ptr<const PatchSource> source = kept.find(key)) return *source;
   PatchSource source = reader.patches(path, fields, finestLevel);
-  if (!source.concurrentReads) return source; // its reads share a library handle (HDF5): not across builds
-  const std::lock_guard<std::mutex> lock(mutex);
-  lastKey = key;
-  last = source;
+  if (source.concurrentReads) kept.keep(key, source); // else its reads share a library handle (HDF5)
   return source;
 }
 
@@ -76,19 +68,10 @@ const FormatReader* patchReader(InputKind kind, const std::string& path, const L
 }
 
 Census censusOfInput(const std::string& path, const FormatReader& reader) {
-  static std::mutex mutex;
-  static std::string lastKey;
-  static std::shared_ptr<const Census> last;
+  static KeptResults<Census> kept(1);
   const std::string key = strCat(path, "|", metadataStamp(path));
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (last && key == lastKey) return *last;
-  }
-  auto census = std::make_shared<const Census>(reader.census(path));
-  const std::lock_guard<std::mutex> lock(mutex);
-  lastKey = key;
-  last = census;
-  return *census;
+  if (std::shared_ptr<const Census> census = kept.find(key)) return *census;
+  return *kept.keep(key, reader.census(path));
 }
 
 } // namespace io

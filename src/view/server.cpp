@@ -356,7 +356,7 @@ void Server::Impl::start() {
   legends.dataset = content.name;
   session = std::make_unique<Session>(content.model, content.dataset, options, legends, content.parts, content.budget);
   session->setParticleInput(content.input);
-  if (!content.refine.empty() || content.parts) session->setDataNote(content.coarseNote);
+  if (!content.refine.empty() || content.parts) session->setDataNote(content.coarse.note());
   session->submit(content.initial, false); // the first picture renders while the page loads
   if (!content.refine.empty()) startRefining(legends);
 }
@@ -380,7 +380,7 @@ void Server::show(ViewContent content) {
 /// stopped meanwhile leaves it to the process's end, and it touches the server only while
 /// `alive` says the server is there.
 void Server::Impl::startRefining(const LegendText& legends) {
-  std::thread([refine = content.refine, shown = content.coarseNote, refining = refining, session = session.get(),
+  std::thread([refine = content.refine, shown = content.coarse.shown, refining = refining, session = session.get(),
                steps = steps.get(), legends]() mutable {
     for (const Refinement& step : refine) {
       std::pair<std::shared_ptr<const Model>, DatasetInfo> data;
@@ -394,19 +394,17 @@ void Server::Impl::startRefining(const LegendText& legends) {
       std::lock_guard<std::mutex> lock(refining->mutex);
       if (!refining->alive) return;
       if (!data.first) {
-        // What the view keeps, as its note says before the "; " that tells what follows.
-        const std::string kept = shown.substr(0, shown.find("; "));
-        logWarning(strCat("the finer levels could not be read; the view keeps ", kept, ": ", error));
-        session->setDataNote(strCat(kept, " only: the finer levels could not be read (", error, ")"));
+        logWarning(strCat("the finer levels could not be read; the view keeps ", shown, ": ", error));
+        session->setDataNote(strCat(shown, " only: the finer levels could not be read (", error, ")"));
         if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
         return;
       }
-      logNote(strCat(step.note.empty() ? "every level" : step.note, ": read and built in ", t.seconds(),
+      logNote(strCat(step.then.shown.empty() ? "every level" : step.then.note(), ": read and built in ", t.seconds(),
                      " s; the view refines"));
       steps->refine(data.first, data.second);
       session->setModel(data.first, data.second, legends);
-      session->setDataNote(step.note);
-      shown = step.note;
+      session->setDataNote(step.then.note());
+      shown = step.then.shown;
       if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
     }
   }).detach();

@@ -46,11 +46,19 @@ struct ServerOptions {
   std::string device = "auto";       ///< where frames render: cpu, cuda, auto or portable
 };
 
+/// What a view of less than a dataset shows and what follows: the frames' `data` note.
+struct DataShown {
+  std::string shown; ///< empty once every level is shown
+  std::string follows;
+  /// "SHOWN; FOLLOWS" (or SHOWN alone), empty once every level is shown.
+  std::string note() const { return shown.empty() || follows.empty() ? shown : shown + "; " + follows; }
+};
+
 /// One step of a view from less than a dataset toward all of it: what it reads and builds, and
-/// what the view then shows (empty once it shows every level).
+/// what the view then shows.
 struct Refinement {
   std::function<std::pair<std::shared_ptr<const Model>, DatasetInfo>()> load;
-  std::string note;
+  DataShown then;
 };
 
 /// What the viewer shows: the dataset, its name, and the first scene (defaults already adapted
@@ -71,11 +79,11 @@ struct ViewContent {
   RendererOptions rendererOptions;                     ///< how movies march
   LoadOptions load;                                    ///< how the datasets were read (NaN as holes or not)
   /// Coarse levels first: `model` holds less than the whole dataset (its coarse levels, or its
-  /// coarsest level merged), `coarseNote` says what the first frames show, and `refine` reads
+  /// coarsest level merged), `coarse` says what the first frames show, and `refine` reads
   /// more of it in steps (on a thread of its own once the server is bound; each step's data then
   /// replace `model`, and the view on screen is drawn again from them).
   std::vector<Refinement> refine;
-  std::string coarseNote;
+  DataShown coarse;
   /// A step larger than the memory budget: `model` holds its coarse levels (drafts and the first
   /// passes), and every still view is then drawn from all levels in these parts, one part
   /// resident at a time, within `budget` bytes (instead of `refine`).

@@ -4,6 +4,7 @@
 
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/files.h"
+#include "exabricks/core/kept.h"
 #include "exabricks/core/log.h"
 #include "exabricks/core/text.h"
 #include "exabricks/io/model_info.h"
@@ -18,7 +19,6 @@
 #include <fstream>
 #include <limits>
 #include <malloc.h>
-#include <mutex>
 #include <tuple>
 
 namespace exa {
@@ -113,21 +113,13 @@ namespace {
 /// coarse levels, and for the parts it draws), and each plan tries the same part counts.
 std::pair<KdPartition, std::vector<double>> balancedParts(const std::string& input, const Census& census, int parts,
                                                           int64_t grain) {
-  static std::mutex mutex;
-  static std::vector<std::pair<std::string, std::pair<KdPartition, std::vector<double>>>> kept;
+  static KeptResults<std::pair<KdPartition, std::vector<double>>> kept(32);
   const std::string key = strCat(input, "|", census.boxes.size(), "|", census.cells(), "|", census.bounds().lower.x,
                                  ",", census.bounds().upper.x, "|", parts, "|", grain);
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    for (const auto& [k, balanced] : kept)
-      if (k == key) return balanced;
-  }
+  if (auto balanced = kept.find(key)) return *balanced;
   KdPartition partition = KdPartition::balance(census, parts, grain);
   std::vector<double> cells = haloCells(census, partition);
-  const std::lock_guard<std::mutex> lock(mutex);
-  if (kept.size() >= 32) kept.erase(kept.begin());
-  kept.emplace_back(key, std::make_pair(partition, cells));
-  return {std::move(partition), std::move(cells)};
+  return *kept.keep(key, std::make_pair(std::move(partition), std::move(cells)));
 }
 } // namespace
 
@@ -148,10 +140,17 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   // The fewest parts whose largest part fits, trying 2, 3, 4, 6, 8, 12, ... parts (the same
   // counts for any budget, so the smallest budget named below is one that works). Halos stop
   // shrinking the largest part beyond some count.
+  // Counts whose parts could not fit even without halos are not balanced where some count up to
+  // 256 might (every cell belongs to a part, so the largest holds at least plan.cells / parts).
+  // Where none can (a budget far too small), every count is tried as before, for the smallest
+  // budget the refusal names.
   const int64_t grain = int64_t(1) << census.coarsestLevel;
+  const double room = budget > plan.fixedBytes ? double(budget - plan.fixedBytes) / double(plan.bytesPerCell) : 0.0;
+  const bool skipSmall = plan.cells <= 256.0 * room;
   double bestLargest = std::numeric_limits<double>::infinity();
   int worse = 0;
   for (int parts = 2; parts <= 65536 && worse < 3; parts = parts % 3 == 0 ? parts / 3 * 4 : parts / 2 * 3) {
+    if (skipSmall && plan.cells > double(parts) * room) continue;
     auto [partition, cells] = balancedParts(input, census, parts, grain);
     const double largest = *std::max_element(cells.begin(), cells.end());
     if (plan.fixedBytes + uint64_t(std::ceil(largest)) * plan.bytesPerCell <= budget) {
