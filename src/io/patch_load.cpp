@@ -71,7 +71,11 @@ Census censusOfInput(const std::string& path, const FormatReader& reader) {
   static KeptResults<Census> kept(1);
   const std::string key = strCat(path, "|", metadataStamp(path));
   if (std::shared_ptr<const Census> census = kept.find(key)) return *census;
-  return *kept.keep(key, reader.census(path));
+  Timer timer;
+  Census census = reader.census(path);
+  logInfo(strCat("census of ", path, ": ", census.boxes.size(), " boxes, ", std::llround(census.cells()),
+                 " leaf cells, in ", timer.seconds(), " s"));
+  return *kept.keep(key, std::move(census));
 }
 
 } // namespace io

@@ -5,6 +5,9 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/log.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -133,11 +136,15 @@ std::vector<uint8_t> Coverage::covered(size_t i) const {
 
 Census censusOfPatches(const std::vector<Patch>& patches, const std::function<std::string(size_t)>& name) {
   const Coverage coverage(patches, name);
+  std::vector<uint64_t> leaves(patches.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, patches.size(), 256), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      leaves[i] = coverage.leafCount(i);
+  });
   Census census;
   for (size_t i = 0; i < patches.size(); ++i) {
     census.coarsestLevel = std::max(census.coarsestLevel, log2Exact(patches[i].width));
-    const uint64_t leaves = coverage.leafCount(i);
-    if (leaves > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves)});
+    if (leaves[i] > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves[i])});
   }
   return census;
 }

@@ -12,6 +12,7 @@
 #include "exabricks/render/defaults.h"
 
 #include <nlohmann/json.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -58,11 +59,11 @@ double cellsIn(const Census& census, const box3l& box) {
 
 /// The cells part p reads: those of its shading reach grown by the coarsest width (its halo).
 std::vector<double> haloCells(const Census& census, const KdPartition& partition) {
-  std::vector<double> cells;
-  for (int p = 0; p < partition.parts(); ++p) {
+  std::vector<double> cells(size_t(partition.parts()));
+  tbb::parallel_for(0, partition.parts(), [&](int p) {
     const box3i read = haloReadBox(shadingReach(partition.box(p), census.coarsestLevel), census.coarsestLevel);
-    cells.push_back(cellsIn(census, box3l(vec3l(read.lower), vec3l(read.upper))));
-  }
+    cells[size_t(p)] = cellsIn(census, box3l(vec3l(read.lower), vec3l(read.upper)));
+  });
   return cells;
 }
 
@@ -129,6 +130,7 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   plan.fixedBytes = residentBytesNow() + kProcessSlack + frameBytes;
   plan.bytesPerCell = bytesPerResidentCell(loadedFields(input, options), buildsFromBoxes(input, options));
   const Census census = loadCensus(input, options);
+  const Timer timer;
   plan.fixedBytes = std::max(plan.fixedBytes, residentBytesNow() + kProcessSlack + frameBytes);
   plan.cells = census.cells();
   plan.coarsestLevel = census.coarsestLevel;
@@ -156,6 +158,7 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
     if (plan.fixedBytes + uint64_t(std::ceil(largest)) * plan.bytesPerCell <= budget) {
       plan.partition = std::move(partition);
       plan.partCells = std::move(cells);
+      logInfo(strCat("memory plan: ", parts, " parts within ", formatBytes(budget), " in ", timer.seconds(), " s"));
       return plan;
     }
     worse = largest < 0.97 * bestLargest ? 0 : worse + 1;
