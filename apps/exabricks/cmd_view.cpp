@@ -253,23 +253,15 @@ void addRefinement(view::ViewContent& content, const FirstStep& first, const std
                             {}});
 }
 
-/// A viewer's server, bound and its address printed before the dataset is read (a browser
-/// opened at once waits for the first picture), and the thread that takes Ctrl-C and SIGTERM
-/// (`stopSignals`, blocked in every thread): while the dataset is still being read they end the
-/// process, then they stop the server cleanly.
+/// A viewer's server, bound before the dataset is read (a taken port fails at once) and its
+/// address printed as soon as the viewer knows it will serve (announce(): a browser opened then
+/// waits for the first picture), and the thread that takes Ctrl-C and SIGTERM (`stopSignals`,
+/// blocked in every thread): while the dataset is still being read they end the process, then
+/// they stop the server cleanly.
 class BoundViewer {
 public:
-  BoundViewer(const view::ServerOptions& options, const std::string& name, const sigset_t& stopSignals)
-      : server_(options) {
+  BoundViewer(const view::ServerOptions& options, const sigset_t& stopSignals) : server_(options) {
     server_.bind();
-    std::cout << server_.url() << std::endl;
-    if (logLevel() >= LogLevel::Warning) {
-      std::fprintf(stderr,
-                   "exabricks: viewing %s at %s\n"
-                   "  from another machine: ssh -L %d:localhost:%d %s, then open the address there\n"
-                   "  Ctrl-C stops the viewer\n",
-                   name.c_str(), server_.url().c_str(), server_.port(), server_.port(), hostName().c_str());
-    }
     waiter_ = std::thread([this, stopSignals] {
       int signal = 0;
       sigwait(&stopSignals, &signal);
@@ -289,6 +281,18 @@ public:
   }
   BoundViewer(const BoundViewer&) = delete;
   BoundViewer& operator=(const BoundViewer&) = delete;
+
+  /// Prints the address, and how to reach it.
+  void announce(const std::string& name) const {
+    std::cout << server_.url() << std::endl;
+    if (logLevel() >= LogLevel::Warning) {
+      std::fprintf(stderr,
+                   "exabricks: viewing %s at %s\n"
+                   "  from another machine: ssh -L %d:localhost:%d %s, then open the address there\n"
+                   "  Ctrl-C stops the viewer\n",
+                   name.c_str(), server_.url().c_str(), server_.port(), server_.port(), hostName().c_str());
+    }
+  }
 
   /// Serves the content until Ctrl-C, SIGTERM or the server's own end.
   void serve(view::ViewContent content) {
@@ -328,8 +332,8 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   options.token = o.token;
   options.device = o.device;
   if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
-  // Bound before the dataset loads: a taken port fails at once, and the address comes first.
-  BoundViewer viewer(options, o.scene.in.name(), stopSignals);
+  // Bound before the dataset loads: a taken port fails at once.
+  BoundViewer viewer(options, stopSignals);
 
   Timer loadTimer;
   LoadOptions lo = o.scene.in.loadOptions(false);
@@ -339,6 +343,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
     failUsage("--memory-budget views one step; a series' steps are each held whole");
   const uint64_t frameBytes = viewerFrameBytes(doc.frame);
   const uint64_t budget = steps.size() > 1 ? 0 : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
+  viewer.announce(o.scene.in.name()); // after a budget's refusal, before anything is read
   const FirstStep first = loadFirst(steps, doc.input, lo, coarseFirst, steps.size() > 1 ? 0 : o.coarseFirst);
   if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;

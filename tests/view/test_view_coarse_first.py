@@ -130,12 +130,24 @@ def start_in_parts(start_viewer, cli, args):
     tries = 5 if sanitized else 1
     for attempt in range(tries):
         last = attempt + 1 == tries
+        refused = None
         try:
             v = start_viewer(*args, "--memory-budget", "%dM" % budget)
-        except AssertionError as refused:
+        except AssertionError as e:
+            refused = str(e)
+        else:
+            # The viewer answers once it serves. The address comes before the data are read, so a
+            # budget found too small only beside the coarse levels read ends the process first.
+            try:
+                status, _, _ = v.request("GET", "/api/info", timeout=120)
+                assert status == 200, status
+            except OSError:
+                v.proc.wait(timeout=30)
+                refused = v.stderr_path.read_text()
+        if refused is not None:
             if last:
-                raise
-            low, high = budgets_named(str(refused))
+                raise AssertionError(refused)
+            low, high = budgets_named(refused)
             budget = low
             continue
         if last or "drawn from every level in" in v.stderr_path.read_text():
