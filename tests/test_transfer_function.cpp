@@ -36,8 +36,6 @@ std::string readError(const std::string& path) {
   return "no error";
 }
 
-float luminance(const vec3f& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
-
 /// 8-bit sRGB of a linear colour, unrounded.
 vec3f srgb255(const vec3f& c) {
   return {255.f * linearToSrgb(c.x), 255.f * linearToSrgb(c.y), 255.f * linearToSrgb(c.z)};

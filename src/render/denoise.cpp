@@ -119,7 +119,7 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
   std::vector<uint8_t> valid(n), unknown(n);
   LevelArrays a(n);
   const Image mean = buffer.resolve();
-  const float backgroundLuminance = denoiseLuminance(background);
+  const float backgroundLuminance = luminance(background);
   tbb::parallel_for(size_t(0), n, [&](size_t p) {
     addFeatures(guide.albedo.pixels[p], &features[p * kDenoiseFeatures], true);
     if (shaded) addFeatures(guide.shaded.pixels[p], &features[p * kDenoiseFeatures + 4], false);
@@ -131,7 +131,7 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
     a.lumProbe[p] = 0.f;
     if (passes < 2) return; // no estimate of the noise: kept as it is
     const vec4f e = buffer.pixelError(p);
-    const float shownError = denoiseLuminance(e.rgb()) + backgroundLuminance * e.w;
+    const float shownError = luminance(e.rgb()) + backgroundLuminance * e.w;
     first[p] = shownError * shownError;
     a.lumProbe[p] = shownError * probeSign(p, 3);
     const vec3f steps = buffer.pixelNoise(p, background);

@@ -35,13 +35,11 @@ struct DenoiseLevel {
   float* lumProbe = nullptr;
 };
 
-EXA_HOST_DEVICE inline float denoiseLuminance(const vec3f& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
-
 /// The B3 spline's weights 1/16, 1/4, 3/8, 1/4, 1/16.
 EXA_HOST_DEVICE inline float denoiseB3(int i) { return i == 2 ? 0.375f : (i == 1 || i == 3) ? 0.25f : 0.0625f; }
 
 EXA_HOST_DEVICE inline float denoiseShownLuminance(const DenoiseImages& im, const vec4f& c) {
-  return denoiseLuminance(c.rgb() + im.background * (1.f - c.w));
+  return luminance(c.rgb() + im.background * (1.f - c.w));
 }
 
 /// The variance of pixel (x, y)'s luminance that the colour term compares: the passes' own

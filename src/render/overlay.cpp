@@ -95,10 +95,7 @@ PixelRect textOverRect(int x, int y, const std::string& text, int scale) {
   return box;
 }
 
-vec3f legendInk(const vec3f& bg) {
-  const float luminance = 0.2126f * bg.x + 0.7152f * bg.y + 0.0722f * bg.z;
-  return luminance > 0.3f ? vec3f(0.f) : vec3f(1.f);
-}
+vec3f legendInk(const vec3f& bg) { return luminance(bg) > 0.3f ? vec3f(0.f) : vec3f(1.f); }
 
 int drawTextOver(Image& image, int x, int y, const std::string& text, const vec3f& color, int scale) {
   const vec3f backing = legendInk(color);

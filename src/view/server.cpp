@@ -61,6 +61,19 @@ std::pair<int, std::string> bindProblem(const std::string& host, int port) {
   return problem;
 }
 
+/// Throws exa::Error saying why the viewer could not listen on host:port (in use by another
+/// server, or not an address of this machine); returns when a socket binds there now.
+void checkListenAddress(const std::string& host, int port) {
+  if (port == 0) return;
+  const auto [code, why] = bindProblem(host, port);
+  if (code == EADDRINUSE)
+    fail("viewer: cannot listen on ", host, " port ", port, ": the port is in use (another viewer or server ",
+         "listens there); choose another with --port N, or --port 0 for any free port");
+  if (code != 0)
+    fail("viewer: cannot listen on ", host, " port ", port, ": ", why,
+         " (is it an address of this machine? --port 0 picks a free port)");
+}
+
 /// A record of the frame stream: u32 header length, header JSON, u32 JPEG length, JPEG (lengths
 /// little-endian). The header describes the frame, or is a keep-alive where none came (it lets
 /// a closed page be noticed).
@@ -342,7 +355,6 @@ void Server::Impl::listen() {
     }
     port = options.port;
   }
-  bound = true;
 }
 
 void Server::Impl::start() {
@@ -363,7 +375,7 @@ void Server::Impl::start() {
 
 void Server::bind() {
   Impl& s = *impl_;
-  if (!s.bound) s.listen();
+  if (s.port <= 0) s.listen();
   if (s.content.model && !s.session) s.start();
 }
 
@@ -408,17 +420,6 @@ void Server::Impl::startRefining(const LegendText& legends) {
       if (std::optional<SceneDocument> doc = session->current()) session->submit(*doc, false);
     }
   }).detach();
-}
-
-void checkListenAddress(const std::string& host, int port) {
-  if (port == 0) return;
-  const auto [code, why] = bindProblem(host, port);
-  if (code == EADDRINUSE)
-    fail("viewer: cannot listen on ", host, " port ", port, ": the port is in use (another viewer or server ",
-         "listens there); choose another with --port N, or --port 0 for any free port");
-  if (code != 0)
-    fail("viewer: cannot listen on ", host, " port ", port, ": ", why,
-         " (is it an address of this machine? --port 0 picks a free port)");
 }
 
 int Server::port() const { return impl_->port; }

@@ -107,11 +107,6 @@ struct FrameInfo {
   std::string data; ///< what of the data the frame shows, where not all of it (coarse levels first)
 };
 
-/// Throws exa::Error saying why the viewer could not listen on host:port (in use by another
-/// server, or not an address of this machine); returns when a socket binds there now. A viewer
-/// checks before it loads its dataset, so that a taken port is refused at once.
-void checkListenAddress(const std::string& host, int port);
-
 class Server {
 public:
   Server(ViewContent content, ServerOptions options);

@@ -99,8 +99,7 @@ struct Server::Impl {
   std::atomic<int> streams{0};
   std::atomic<int> snapshotWaits{0};
   std::atomic<bool> stopping{false};
-  int port = 0;
-  bool bound = false; ///< the socket listens (connections wait there until the server runs)
+  int port = 0; ///< once the socket listens (connections wait there until the server runs)
   /// Whether the server is still there for a thread that reads the whole dataset (coarse levels
   /// first), which holds the mutex while it hands the dataset over.
   struct Refining {

@@ -44,6 +44,9 @@ EXA_HOST_DEVICE inline vec4f loadVec4(const vec4f* p) {
 #endif
 }
 
+/// The relative luminance of a linear RGB colour (Rec. 709 weights).
+EXA_HOST_DEVICE constexpr float luminance(const vec3f& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; }
+
 /// Linear -> sRGB transfer for one channel, clamped to [0, 1] (NaN gives 0).
 float linearToSrgb(float c);
 /// sRGB -> linear for one channel, clamped to [0, 1].
