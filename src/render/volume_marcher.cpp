@@ -402,8 +402,8 @@ bool VolumeMarcher::attachGradients() {
     auto it = gradientFields_.find(layer.field);
     if (it == gradientFields_.end()) {
       it = gradientFields_
-               .emplace(layer.field,
-                        cellGradients(layer.view, model_.bricks, model_.fieldValues[size_t(layer.field)].size()))
+               .emplace(layer.field, cellGradients(layer.view, model_.bricks, model_.regions.regions.size(),
+                                                   model_.fieldValues[size_t(layer.field)].size()))
                .first;
       built = true;
     }

@@ -17,6 +17,6 @@ namespace exa {
 /// (f(c + w e) - f(c - w e)) / 2w at every cell's centre c (w its width, f the reconstruction of
 /// `view`); one-sided where one point has no value, 0 where neither has.
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
-                                                size_t valueCount);
+                                                size_t regionCount, size_t valueCount);
 
 } // namespace exa
