@@ -236,7 +236,9 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
   Frame& frame = doc.frame;
   applyDataDefaults(o.scene, cmd, scene, model, survey.dataset, &whole);
   const RendererOptions options = o.march.options();
-  frame.camera = cameraFromOptions(o.scene, cmd, doc, model, step.visibleBounds(scene, options), &whole);
+  // Each part is read to find what is visible only where the camera frames it.
+  const box3d visible = framesVisibleData(o.scene, cmd, doc) ? step.visibleBounds(scene, options) : box3d();
+  frame.camera = cameraFromOptions(o.scene, cmd, doc, model, visible, &whole);
   frame.validate();
   doc.hasCamera = true;
   const double loadSeconds = loadTimer.seconds();

@@ -525,16 +525,25 @@ std::vector<std::string> neededFields(const Scene& s) {
   return all ? std::vector<std::string>() : names;
 }
 
+namespace {
+bool keepsSceneCamera(const CLI::App& cmd, const SceneDocument& doc) {
+  auto given = [&](const char* name) { return cmd.count(name) > 0; };
+  return doc.hasCamera && !given("--azimuth") && !given("--elevation") && !given("--fov") && !given("--ortho");
+}
+} // namespace
+
+bool framesVisibleData(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc) {
+  return !keepsSceneCamera(cmd, doc) && !o.frameAll;
+}
+
 Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
                          const box3d& visible, const WholeData* whole) {
-  auto given = [&](const char* name) { return cmd.count(name) > 0; };
   checked("--fov", "camera.fov", o.fov);
   const box3i cb = whole ? whole->cellBounds : model.cellBounds();
   const box3d all = model.world.toWorld(cb);
   const box3d target = o.frameAll || visible.empty() ? all : visible;
-  const bool reframe = given("--azimuth") || given("--elevation") || given("--fov") || given("--ortho");
   Camera camera =
-      doc.hasCamera && !reframe ? doc.frame.camera : Camera::frame(target, o.azimuth, o.elevation, o.fov, o.ortho);
+      keepsSceneCamera(cmd, doc) ? doc.frame.camera : Camera::frame(target, o.azimuth, o.elevation, o.fov, o.ortho);
   if (!o.position.empty()) camera.position = toVec(o.position, "--position");
   if (!o.lookAt.empty()) camera.lookAt = toVec(o.lookAt, "--look-at");
   if (!o.up.empty()) camera.up = toVec(o.up, "--up");

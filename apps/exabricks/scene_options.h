@@ -114,6 +114,9 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
 /// position, look-at and up override either.
 Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc, const Model& model,
                          const box3d& visible, const WholeData* whole = nullptr);
+/// Whether cameraFromOptions frames what the transfer function shows: the box `visible` it is
+/// given, which costs a pass over the data to find, decides nothing otherwise.
+bool framesVisibleData(const RenderOptions& o, const CLI::App& cmd, const SceneDocument& doc);
 /// The scene document as a file records it: paths made absolute, so that it reads the same from
 /// any folder.
 SceneDocument withAbsolutePaths(SceneDocument doc);
