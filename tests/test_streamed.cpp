@@ -6,6 +6,7 @@
 #include "exabricks/amr/model.h"
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/text.h"
+#include "exabricks/io/amrex_write.h"
 #include "exabricks/io/native.h"
 #include "exabricks/workflows/streamed.h"
 
@@ -36,6 +37,26 @@ MemoryPlan planOfParts(const std::string& path, int parts, int resident, uint64_
   plan.partCells.assign(size_t(parts), plan.cells / parts);
   plan.budget = plan.fixedBytes + uint64_t(resident) * plan.largestPartBytes();
   return plan;
+}
+
+/// A four-level AMReX plotfile of about `cells` cells (the census then comes from its boxes).
+std::string writePlotfile(const std::string& name, uint64_t cells) {
+  const std::string dir = std::string(EXABRICKS_TEST_TMP) + "/streamed";
+  std::filesystem::create_directories(dir);
+  const std::string path = dir + "/" + name + ".plt";
+  std::filesystem::remove_all(path);
+  const SceneOptions o = resolveSceneSize({"blobs", cells, 3, 4});
+  std::unique_ptr<AmrexPlotfileWriter> writer;
+  generateScenePieces(o, AmrexPlotfileWriter::kSlabCells, [&](CellSet& piece) {
+    std::vector<std::string> names;
+    for (const Field& f : piece.fields)
+      names.push_back(f.name);
+    if (!writer)
+      writer = std::make_unique<AmrexPlotfileWriter>(path, names, o.levels, int64_t(sceneLatticeWidth(o)), true);
+    writer->append(piece);
+  });
+  writer->finish();
+  return path;
 }
 
 } // namespace
@@ -159,5 +180,61 @@ TEST(Streamed, AStepChangedWhileItsPartsAreReadIsReported) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("changed while its parts were being read"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find(".scalars"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Streamed, TheCensusOutlineEqualsTheSurveyAndTheFrameGathersIt) {
+  // What the census says of the whole step (cells per level, bounds, the dataset's values but
+  // its ranges) equals the survey of its parts, for a census of cells and one of boxes. A frame
+  // whose transfer function has its range then reads each part once, and gathers the survey as
+  // it goes: the same picture as a step surveyed first, and no part read again for the survey.
+  for (const std::string& path : {writeStep("outline", 150000), writePlotfile("outline", 150000)}) {
+    SCOPED_TRACE(path);
+    const MemoryPlan plan = planOfParts(path, 4, 1, streamedFrameBytes(48, 40, 1));
+    StreamedStep surveyed(path, {}, plan);
+    const StepSurvey whole = surveyed.survey();
+    StreamedStep step(path, {}, plan);
+    ASSERT_TRUE(step.outline().has_value());
+    const StepSurvey& outline = *step.outline();
+    EXPECT_EQ(outline.cells, whole.cells);
+    EXPECT_EQ(outline.levels, whole.levels);
+    EXPECT_EQ(outline.levelCells, whole.levelCells);
+    EXPECT_EQ(outline.cellBounds.lower, whole.cellBounds.lower);
+    EXPECT_EQ(outline.cellBounds.upper, whole.cellBounds.upper);
+    EXPECT_EQ(outline.dataset.referenceWidth, whole.dataset.referenceWidth);
+    EXPECT_EQ(outline.dataset.worldDiagonal, whole.dataset.worldDiagonal);
+    EXPECT_EQ(outline.dataset.extentCells, whole.dataset.extentCells);
+    EXPECT_EQ(outline.dataset.defaultOpacityScale, whole.dataset.defaultOpacityScale);
+    ASSERT_EQ(outline.dataset.valueRanges.size(), whole.dataset.valueRanges.size());
+
+    Scene scene = Scene::volumeOf(defaultTransferFunction("viridis"), step.skeleton().fieldNames[0]);
+    scene.layers[0].tf.valueRange = whole.dataset.valueRanges[0];
+    Frame frame;
+    frame.width = 48;
+    frame.height = 40;
+    const box3d b = step.skeleton().world.toWorld(whole.cellBounds);
+    frame.camera.lookAt = (b.lower + b.upper) * 0.5;
+    frame.camera.position = frame.camera.lookAt + vec3d(0.4, 0.5, 1.4) * length(b.size());
+    const uint64_t before = step.partsRead();
+    FrameBuffer gathered, reference;
+    ASSERT_TRUE(renderStreamed(step, scene, RendererOptions(), frame, gathered));
+    EXPECT_LE(step.partsRead() - before, uint64_t(step.parts())) << "each part read once: no pass before the frame";
+    const uint64_t afterFrame = step.partsRead();
+    const StepSurvey& gatheredSurvey = step.survey();
+    EXPECT_EQ(step.partsRead(), afterFrame) << "the survey read parts again";
+    EXPECT_EQ(gatheredSurvey.cells, whole.cells);
+    EXPECT_EQ(gatheredSurvey.bricks, whole.bricks);
+    EXPECT_EQ(gatheredSurvey.regions, whole.regions);
+    for (size_t f = 0; f < whole.dataset.valueRanges.size(); ++f)
+      EXPECT_TRUE(gatheredSurvey.dataset.valueRanges[f].lower == whole.dataset.valueRanges[f].lower &&
+                  gatheredSurvey.dataset.valueRanges[f].upper == whole.dataset.valueRanges[f].upper)
+          << f;
+    ASSERT_TRUE(renderStreamed(surveyed, scene, RendererOptions(), frame, reference));
+    const Image a = gathered.resolve(), r = reference.resolve();
+    ASSERT_EQ(a.pixels.size(), r.pixels.size());
+    for (size_t i = 0; i < a.pixels.size(); ++i)
+      ASSERT_TRUE(a.pixels[i].x == r.pixels[i].x && a.pixels[i].y == r.pixels[i].y && a.pixels[i].z == r.pixels[i].z &&
+                  a.pixels[i].w == r.pixels[i].w)
+          << i;
   }
 }

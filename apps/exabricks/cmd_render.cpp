@@ -229,12 +229,19 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
                  formatBytes(plan.largestPartBytes()), " each, besides ", formatBytes(plan.fixedBytes)));
   StreamedStep step(doc.input, lo, std::move(plan));
   step.setParticles(particlesFor(doc.scene, doc.input));
-  const StepSurvey& survey = step.survey();
-  WholeData whole{survey.cellBounds, survey.levels, step.partialData()};
-  const Model& model = step.skeleton();
   Scene& scene = doc.scene;
   Frame& frame = doc.frame;
-  applyDataDefaults(o.scene, cmd, scene, model, survey.dataset, &whole);
+  // Automatic choices and a layer without a range of its own need the values of every part: a
+  // pass over the parts before the frame. Otherwise the census's outline serves until the
+  // frame's own reads have gathered the survey, and the scene's warnings follow the frame.
+  const bool automatic = o.scene.sceneFile.empty() && o.scene.tfFile.empty();
+  const bool rangesGiven = std::none_of(scene.layers.begin(), scene.layers.end(),
+                                        [](const VolumeLayer& l) { return l.tf.valueRange.empty(); });
+  const bool surveyFirst = automatic || !rangesGiven || !step.outline();
+  const StepSurvey& early = surveyFirst ? step.survey() : *step.outline();
+  WholeData whole{early.cellBounds, early.levels, step.partialData()};
+  const Model& model = step.skeleton();
+  applyDataDefaults(o.scene, cmd, scene, model, early.dataset, &whole, surveyFirst);
   const RendererOptions options = o.march.options();
   // Each part is read to find what is visible only where the camera frames it.
   const box3d visible = framesVisibleData(o.scene, cmd, doc) ? step.visibleBounds(scene, options) : box3d();
@@ -254,6 +261,10 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
   renderStreamed(step, scene, options, frame, buffer, control);
   progress.finish();
   const double renderSeconds = renderTimer.seconds();
+  const StepSurvey& survey = step.survey(); // gathered by the frame's reads
+  if (!surveyFirst)
+    for (const std::string& w : sceneWarnings(scene, model, survey.dataset))
+      logWarning(w);
   writeOutputs(o, doc, buffer.resolve(), model, survey.dataset, &whole, 0, 0);
   const RenderStats& stats = buffer.stats();
   if (o.json) {

@@ -551,7 +551,7 @@ Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const Scen
 }
 
 int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
-                      const DatasetInfo& dataset, const WholeData* whole) {
+                      const DatasetInfo& dataset, const WholeData* whole, bool warn) {
   auto given = [&](const char* name) { return cmd.count(name) > 0; };
   VolumeLayer& first = scene.layers.at(0);
   const int field = model.requireField(first.field);
@@ -571,8 +571,9 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
   if (given("--linear"))
     for (VolumeLayer& l : scene.layers)
       l.tf.logScale = false;
-  for (const std::string& w : sceneWarnings(scene, model, dataset))
-    logWarning(w);
+  if (warn)
+    for (const std::string& w : sceneWarnings(scene, model, dataset))
+      logWarning(w);
   return field;
 }
 

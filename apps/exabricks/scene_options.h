@@ -105,10 +105,11 @@ struct WholeData {
 };
 
 /// The first picture: names the default field, adapts the first layer's transfer function to the
-/// data unless a file or the options chose it, applies --linear and logs the scene's warnings.
+/// data unless a file or the options chose it, applies --linear and logs the scene's warnings
+/// (unless `warn` is false: the caller logs them once the dataset's ranges are known).
 /// Returns the first layer's field index.
 int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
-                      const DatasetInfo& dataset, const WholeData* whole = nullptr);
+                      const DatasetInfo& dataset, const WholeData* whole = nullptr, bool warn = true);
 /// The camera: the scene file's, or framing from azimuth and elevation the part of the data the
 /// transfer function shows (all of it with --frame-all, or when nothing is visible); explicit
 /// position, look-at and up override either.

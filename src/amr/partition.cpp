@@ -33,16 +33,21 @@ void CellCensus::add(const Cell& c) {
   const int shift = c.level + 3; // blocks of 8 cells of the cell's level per axis
   ++blocks_[Key{int64_t(c.lower.x) >> shift, int64_t(c.lower.y) >> shift, int64_t(c.lower.z) >> shift, c.level}];
   coarsest_ = std::max(coarsest_, c.level);
+  const box3i b = c.bounds();
+  cellBounds_.extend(box3l(vec3l(b.lower), vec3l(b.upper)));
 }
 
 Census CellCensus::finish() const {
   Census census;
   census.coarsestLevel = coarsest_;
+  census.cellBounds = cellBounds_;
+  census.levelCells.assign(size_t(kMaxLevel) + 1, 0.0);
   census.boxes.reserve(blocks_.size());
   for (const auto& [key, count] : blocks_) {
     const int64_t side = int64_t(8) << key.level;
     const vec3l lower(key.x * side, key.y * side, key.z * side);
     census.boxes.push_back({box3l(lower, lower + vec3l(side)), double(count)});
+    census.levelCells[size_t(key.level)] += double(count);
   }
   // The map's order is arbitrary; a fixed order keeps the partition's sums reproducible.
   std::sort(census.boxes.begin(), census.boxes.end(), [](const CensusBox& a, const CensusBox& b) {
@@ -59,10 +64,13 @@ Census CellCensus::finish() const {
 Census censusOfBricks(const std::vector<Brick>& bricks) {
   Census census;
   census.boxes.reserve(bricks.size());
+  census.levelCells.assign(size_t(kMaxLevel) + 1, 0.0);
   for (const Brick& b : bricks) {
     const box3i bb = b.bounds();
     census.boxes.push_back({box3l(vec3l(bb.lower), vec3l(bb.upper)), double(b.cellCount())});
     census.coarsestLevel = std::max(census.coarsestLevel, b.level);
+    census.cellBounds.extend(census.boxes.back().box);
+    census.levelCells[size_t(b.level)] += double(b.cellCount());
   }
   return census;
 }

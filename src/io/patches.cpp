@@ -142,9 +142,15 @@ Census censusOfPatches(const std::vector<Patch>& patches, const std::function<st
       leaves[i] = coverage.leafCount(i);
   });
   Census census;
+  census.levelCells.assign(size_t(kMaxLevel) + 1, 0.0);
   for (size_t i = 0; i < patches.size(); ++i) {
-    census.coarsestLevel = std::max(census.coarsestLevel, log2Exact(patches[i].width));
-    if (leaves[i] > 0) census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves[i])});
+    const int level = log2Exact(patches[i].width);
+    census.coarsestLevel = std::max(census.coarsestLevel, level);
+    if (leaves[i] == 0) continue;
+    census.boxes.push_back({box3l(patches[i].lower, patches[i].upper()), double(leaves[i])});
+    census.levelCells[size_t(std::clamp(level, 0, kMaxLevel))] += double(leaves[i]);
+    // Where finer patches cover part of it, their cells (or finer ones) fill that part.
+    census.cellBounds.extend(census.boxes.back().box);
   }
   return census;
 }

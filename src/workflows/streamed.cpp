@@ -134,6 +134,8 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   plan.fixedBytes = std::max(plan.fixedBytes, residentBytesNow() + kProcessSlack + frameBytes);
   plan.cells = census.cells();
   plan.coarsestLevel = census.coarsestLevel;
+  plan.cellBounds = census.cellBounds;
+  plan.levelCells = census.levelCells;
   plan.partCells = {plan.cells};
   auto mib = [](uint64_t b) { return ((b + (uint64_t(1) << 20) - 1) >> 20) << 20; };
   const uint64_t whole = plan.fixedBytes + uint64_t(std::ceil(plan.cells)) * plan.bytesPerCell;
@@ -247,6 +249,7 @@ struct StreamedStep::Resident {
   int part = 0;
   std::unique_ptr<Model> model; ///< null: the part holds no cells
   std::unique_ptr<Renderer> renderer;
+  bool outlined = false; ///< the renderer was built with the step's outline (no value ranges)
   uint64_t bytes = 0;
 };
 
@@ -255,6 +258,7 @@ StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan pl
       snapshot_(std::make_unique<Snapshot>(Snapshot{snapshotOf(input_)})) {
   options_.partCells = 0; // the parts are this step's own
   options_.box = box3i();
+  gathered_.assign(size_t(parts()), false);
   uint64_t partsBytes = 0;
   for (int p = 0; p < parts(); ++p)
     partsBytes += plan_.partBytes(p);
@@ -272,6 +276,7 @@ StreamedStep::StreamedStep(std::string input, LoadOptions options, MemoryPlan pl
     skeleton_.fieldNames = m->fieldNames;
     skeleton_.fieldUnits = m->fieldUnits;
     skeleton_.fieldValues.assign(m->fieldNames.size(), ValueArray());
+    outline_ = outlineOf(plan_, options_, skeleton_);
     return;
   }
   fail(input_.empty() ? std::string(kDefaultDatasetName) : input_, ": no part holds any cells");
@@ -311,6 +316,7 @@ StreamedStep::Resident& StreamedStep::bring(int part) {
     if (m && parts() > 1) cache_->write(part, *m);
   }
   if (m) r.model = std::make_unique<Model>(std::move(*m));
+  gather(part, r.model.get());
   ++reads_;
   resident_.push_front(std::move(r));
   return resident_.front();
@@ -334,11 +340,92 @@ void StreamedStep::checkUnchanged() const {
 
 const Model* StreamedStep::part(int part) { return bring(part).model.get(); }
 
+namespace {
+/// Whether a renderer of `scene` reads the dataset's value ranges: a layer without a range of
+/// its own maps the data's.
+bool readsValueRanges(const Scene& scene) {
+  return std::any_of(scene.layers.begin(), scene.layers.end(),
+                     [](const VolumeLayer& l) { return l.tf.valueRange.empty(); });
+}
+} // namespace
+
+std::optional<StepSurvey> StreamedStep::outlineOf(const MemoryPlan& plan, const LoadOptions& options,
+                                                  const Model& skeleton) {
+  // Cells that turn into holes as they are read are still in the census.
+  if (plan.levelCells.empty() || plan.cellBounds.empty() || options.nonFinite != NonFinite::Refuse) return {};
+  StepSurvey s;
+  int finest = -1;
+  s.levelCells.assign(kMaxLevel + 1, 0);
+  for (int l = 0; l <= kMaxLevel && l < int(plan.levelCells.size()); ++l) {
+    s.levelCells[size_t(l)] = uint64_t(std::llround(plan.levelCells[size_t(l)]));
+    if (s.levelCells[size_t(l)] == 0) continue;
+    s.levels.push_back(l);
+    s.cells += s.levelCells[size_t(l)];
+    if (finest < 0) finest = l;
+  }
+  if (finest < 0) return {};
+  for (int a = 0; a < 3; ++a) {
+    s.cellBounds.lower[a] = int32_t(plan.cellBounds.lower[a]);
+    s.cellBounds.upper[a] = int32_t(plan.cellBounds.upper[a]);
+  }
+  s.dataset = DatasetInfo::from(finest, s.cellBounds, skeleton.world.scale,
+                                std::vector<range1f>(skeleton.fieldNames.size(), range1f()));
+  return s;
+}
+
+void StreamedStep::gather(int part, const Model* m) {
+  if (survey_ || gathered_.at(size_t(part))) return;
+  gathered_[size_t(part)] = true;
+  Gathering& g = gathering_;
+  if (m) {
+    g.levelCells.resize(kMaxLevel + 1, 0);
+    for (const Brick& b : m->bricks) {
+      g.finest = std::min(g.finest, b.level);
+      forCellsCentredIn(b, partBox(part), [&](uint32_t) { ++g.levelCells[size_t(b.level)]; });
+    }
+    g.cellBounds.extend(m->cellBounds());
+    g.bricks += m->bricks.size();
+    g.regions += m->regions.regions.size();
+    g.ranges.resize(std::max(g.ranges.size(), m->regions.valueRanges.size()));
+    for (size_t f = 0; f < m->regions.valueRanges.size(); ++f)
+      for (const range1f& r : m->regions.valueRanges[f])
+        g.ranges[f].extend(r);
+  }
+  finishSurvey();
+}
+
+void StreamedStep::finishSurvey() {
+  if (survey_ || std::find(gathered_.begin(), gathered_.end(), false) != gathered_.end() ||
+      skeleton_.fieldNames.empty())
+    return;
+  Gathering& g = gathering_;
+  StepSurvey s;
+  s.levelCells = g.levelCells;
+  s.levelCells.resize(kMaxLevel + 1, 0);
+  for (int l = 0; l <= kMaxLevel; ++l)
+    if (s.levelCells[size_t(l)] > 0) s.levels.push_back(l);
+  for (uint64_t n : s.levelCells)
+    s.cells += n;
+  s.cellBounds = g.cellBounds;
+  s.bricks = g.bricks;
+  s.regions = g.regions;
+  g.ranges.resize(skeleton_.fieldNames.size());
+  s.dataset = DatasetInfo::from(g.finest, s.cellBounds, skeleton_.world.scale, std::move(g.ranges));
+  survey_ = std::move(s);
+  gathering_ = Gathering();
+}
+
 Renderer* StreamedStep::renderer(int part, const Scene& scene, const RendererOptions& options) {
-  const DatasetInfo& dataset = survey().dataset; // may read every part: before this one is brought
+  // The step's survey may read every part: before this one is brought. A scene that gives every
+  // layer its range needs only the step's outline, which the census knows.
+  const bool ranges = readsValueRanges(scene) || !outline_;
+  const bool outlined = !ranges && !survey_;
+  const DatasetInfo& dataset = outlined ? outline_->dataset : survey().dataset;
   Resident& r = bring(part);
   if (!r.model) return nullptr;
+  if (r.renderer && ranges && r.outlined) r.renderer.reset(); // built without the ranges it now needs
   if (!r.renderer) {
+    r.outlined = outlined;
     r.renderer = std::make_unique<Renderer>(*r.model, dataset);
     r.renderer->setDomain(partWorldBox(part));
     r.renderer->setParticles(particles_);
@@ -369,37 +456,16 @@ void StreamedStep::forEachPart(const std::function<void(const Model&, const box3
 }
 
 const StepSurvey& StreamedStep::survey() {
-  if (survey_) return *survey_;
-  StepSurvey s;
-  int finest = kMaxLevel;
-  std::vector<range1f> ranges(skeleton_.fieldNames.size());
-  std::vector<bool> levelHere(kMaxLevel + 1, false);
-  s.levelCells.assign(kMaxLevel + 1, 0);
-  forEachPart([&](const Model& m, const box3l& owned) {
-    for (const Brick& b : m.bricks) {
-      finest = std::min(finest, b.level);
-      levelHere[size_t(b.level)] = true;
-      forCellsCentredIn(b, owned, [&](uint32_t) { ++s.levelCells[size_t(b.level)]; });
-    }
-    s.cellBounds.extend(m.cellBounds());
-    s.bricks += m.bricks.size();
-    s.regions += m.regions.regions.size();
-    for (size_t f = 0; f < ranges.size() && f < m.regions.valueRanges.size(); ++f)
-      for (const range1f& r : m.regions.valueRanges[f])
-        ranges[f].extend(r);
-  });
-  for (int l = 0; l <= kMaxLevel; ++l)
-    if (levelHere[size_t(l)]) s.levels.push_back(l);
-  for (uint64_t n : s.levelCells)
-    s.cells += n;
-  s.dataset = DatasetInfo::from(finest, s.cellBounds, skeleton_.world.scale, std::move(ranges));
-  survey_ = std::move(s);
+  // Parts read before (for a frame, or resident) were gathered as they came.
+  for (int p : residentFirst())
+    if (!survey_ && !gathered_[size_t(p)]) bring(p);
+  finishSurvey(); // where every part was read before the skeleton's fields were known
   return *survey_;
 }
 
 PartialData StreamedStep::partialData() {
   PartialData d;
-  d.bounds = survey().cellBounds;
+  d.bounds = outline_ ? outline_->cellBounds : survey().cellBounds;
   d.eachPart = [this](const std::function<void(const Model&, const box3l&)>& visit) { forEachPart(visit); };
   return d;
 }

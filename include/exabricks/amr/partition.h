@@ -27,6 +27,11 @@ struct CensusBox {
 struct Census {
   std::vector<CensusBox> boxes;
   int coarsestLevel = 0; ///< the widest cell, 2^coarsestLevel: how far a halo reaches
+  /// The leaf cells' exact lattice bounds and their count per level (index = level), where the
+  /// census knows them (every census made here does; empty otherwise). The boxes' union may be
+  /// larger: a cell census counts in blocks.
+  box3l cellBounds;
+  std::vector<double> levelCells;
   box3l bounds() const;
   double cells() const;
 };
@@ -53,6 +58,7 @@ private:
   };
   std::unordered_map<Key, uint64_t, KeyHash> blocks_;
   int coarsest_ = 0;
+  box3l cellBounds_;
 };
 
 /// The census of built bricks.

@@ -53,7 +53,9 @@ struct MemoryPlan {
   double cells = 0;          ///< the step's cells (census)
   KdPartition partition = KdPartition::whole();
   int coarsestLevel = 0;
-  std::vector<double> partCells; ///< per part, the cells it holds with its halo (estimated)
+  box3l cellBounds;               ///< the census's exact bounds of the cells (empty: unknown)
+  std::vector<double> levelCells; ///< the census's cells per level (empty: unknown)
+  std::vector<double> partCells;  ///< per part, the cells it holds with its halo (estimated)
 
   bool streamed() const { return partition.parts() > 1; }
   /// The estimated resident bytes of part p, and of the largest part.
@@ -103,8 +105,13 @@ public:
   /// A model holding no cells but the step's world, fields, units and simulation state: what the
   /// front ends ask of a model that is not a part's cells.
   const Model& skeleton() const { return skeleton_; }
-  /// The whole step's values; the first call reads every part.
+  /// The whole step's values, gathered from every part as it is read: the first call reads the
+  /// parts not read yet.
   const StepSurvey& survey();
+  /// What the census knows of the whole step without reading it: its cells, their levels and
+  /// bounds, and its dataset values without value ranges (empty ranges); none where the census
+  /// cannot say. Equal to the survey in all of these.
+  const std::optional<StepSurvey>& outline() const { return outline_; }
   /// Part p's lattice box and its world box (the renderer's domain).
   const box3l& partBox(int part) const { return plan_.partition.box(part); }
   box3d partWorldBox(int part) const { return skeleton_.world.toWorld(partBox(part)); }
@@ -148,11 +155,26 @@ private:
   std::vector<int> residentFirst() const;
   /// Throws when the input's files changed since the step was opened (a step being written).
   void checkUnchanged() const;
+  /// Adds part p's model (null: no cells) to the survey, once; the last part completes it.
+  void gather(int part, const Model* model);
+  /// The survey, once every part is gathered and the skeleton is known.
+  void finishSurvey();
+  static std::optional<StepSurvey> outlineOf(const MemoryPlan& plan, const LoadOptions& options, const Model& skeleton);
+  struct Gathering {
+    int finest = kMaxLevel;
+    std::vector<uint64_t> levelCells;
+    box3i cellBounds;
+    uint64_t bricks = 0, regions = 0;
+    std::vector<range1f> ranges;
+  };
   std::string input_;
   LoadOptions options_;
   MemoryPlan plan_;
   Model skeleton_;
   std::optional<StepSurvey> survey_;
+  std::optional<StepSurvey> outline_;
+  std::vector<bool> gathered_; ///< per part: added to gathering_
+  Gathering gathering_;
   std::list<Resident> resident_; ///< most recently used first
   uint64_t reads_ = 0;
   std::unique_ptr<Snapshot> snapshot_;
