@@ -1,5 +1,6 @@
 #include "exabricks/amr/gradients.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 namespace exa {
@@ -40,67 +41,86 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
   for (std::vector<float>& g : out)
     g.assign(valueCount, 0.f);
   const std::vector<int32_t> levels = regionLevels(view, regionCount);
-  tbb::parallel_for(size_t(0), bricks.size(), [&](size_t bi) {
-    const Brick& b = bricks[bi];
-    const float w = float(b.cellWidth());
-    const box3i own = b.bounds();
-    const box3f ownBox(vec3f(own.lower), vec3f(own.upper));
-    // The region of the cell before: the next centre is most often strictly inside it too,
-    // where the k-d tree would find the same region.
-    uint32_t last = kNoRegion;
-    box3f lastBox;
-    uint32_t slot = b.valueOffset;
-    for (int z = 0; z < b.size.z; ++z)
-      for (int y = 0; y < b.size.y; ++y)
-        for (int x = 0; x < b.size.x; ++x, ++slot) {
-          const vec3f c = vec3f(b.lower) + (vec3f(float(x), float(y), float(z)) + vec3f(0.5f)) * w;
-          // The centre's region serves the points that fall inside it (most, inside a brick);
-          // the others are located through the k-d tree.
-          const bool again = last != kNoRegion && strictlyInside(lastBox, c);
-          const uint32_t r = again ? last : locateRegion(view, c);
-          const box3f rb = again ? lastBox : r != kNoRegion ? view.regions[r].bounds() : box3f();
-          last = r, lastBox = rb;
-          auto inside = [&](const vec3f& q) {
-            return r != kNoRegion && q.x >= rb.lower.x && q.x <= rb.upper.x && q.y >= rb.lower.y && q.y <= rb.upper.y &&
-                   q.z >= rb.lower.z && q.z <= rb.upper.z;
-          };
-          // q is a cell centre of this brick's level. Where every brick active in q's region is
-          // of that level, each hat is 1 or 0 at q (cell corners are multiples of the width, so
-          // the centres of one level are whole widths apart): the reconstruction there is the
-          // value of the cell centred at q, or none where no brick has that cell. Elsewhere (at
-          // level jumps) it is reconstructed.
-          auto at = [&](const vec3f& q, float& v) {
-            const uint32_t qr = inside(q) ? r : locateRegion(view, q);
-            if (qr == kNoRegion) return false;
-            if (levels[qr] != b.level) return sampleRegion(view, qr, q, v);
-            if (strictlyInside(ownBox, q)) return v = cellValue(view, b, q), true;
-            const Region& region = view.regions[qr];
-            for (uint32_t k = 0; k < region.brickCount; ++k) {
-              const Brick& other = view.bricks[view.brickIds[region.brickBegin + k]];
-              const box3i ob = other.bounds();
-              if (strictlyInside(box3f(vec3f(ob.lower), vec3f(ob.upper)), q))
-                return v = cellValue(view, other, q), true;
-            }
-            return false;
-          };
-          float v0 = 0.f;
-          const bool centre = at(c, v0);
-          for (int a = 0; a < 3; ++a) {
-            vec3f pp = c, pm = c;
-            pp[a] += w;
-            pm[a] -= w;
-            float vp = 0.f, vm = 0.f;
-            const bool hasP = at(pp, vp), hasM = at(pm, vm);
-            float g = 0.f;
-            if (hasP && hasM)
-              g = (vp - vm) / (2.f * w);
-            else if (hasP && centre)
-              g = (vp - v0) / w;
-            else if (hasM && centre)
-              g = (v0 - vm) / w;
-            out[size_t(a)][slot] = g;
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, bricks.size()), [&](const tbb::blocked_range<size_t>& range) {
+    // Per brick, the reconstruction at every cell centre and at the centres one cell beyond each
+    // face, each found once (a cell's neighbours are its neighbours' neighbours): a block of the
+    // brick's size + 2 per axis, and whether each point has a value.
+    std::vector<float> value;
+    std::vector<uint8_t> has;
+    for (size_t bi = range.begin(); bi < range.end(); ++bi) {
+      const Brick& b = bricks[bi];
+      const float w = float(b.cellWidth());
+      const vec3i n = b.size, padded = n + vec3i(2);
+      value.assign(size_t(padded.x) * size_t(padded.y) * size_t(padded.z), 0.f);
+      has.assign(value.size(), 0);
+      auto at = [&](int x, int y, int z) {
+        return (size_t(z + 1) * size_t(padded.y) + size_t(y + 1)) * size_t(padded.x) + size_t(x + 1);
+      };
+      const box3i own = b.bounds();
+      const box3f ownBox(vec3f(own.lower), vec3f(own.upper));
+      // The region of the point before: the next is most often strictly inside it too, where the
+      // k-d tree would find the same region.
+      uint32_t last = kNoRegion;
+      box3f lastBox;
+      auto evaluate = [&](int x, int y, int z) {
+        const vec3f q = vec3f(b.lower) + (vec3f(float(x), float(y), float(z)) + vec3f(0.5f)) * w;
+        const bool again = last != kNoRegion && strictlyInside(lastBox, q);
+        const uint32_t r = again ? last : locateRegion(view, q);
+        if (!again) last = r, lastBox = r != kNoRegion ? view.regions[r].bounds() : box3f();
+        if (r == kNoRegion) return;
+        const size_t i = at(x, y, z);
+        float& v = value[i];
+        // q is a cell centre of this brick's level. Where every brick active in q's region is
+        // of that level, each hat is 1 or 0 at q (cell corners are multiples of the width, so
+        // the centres of one level are whole widths apart): the reconstruction there is the
+        // value of the cell centred at q, or none where no brick has that cell. Elsewhere (at
+        // level jumps) it is reconstructed.
+        if (levels[r] != b.level) {
+          has[i] = sampleRegion(view, r, q, v);
+        } else if (strictlyInside(ownBox, q)) {
+          v = view.values[b.valueOffset + uint32_t((z * n.y + y) * n.x + x)];
+          has[i] = 1;
+        } else {
+          const Region& region = view.regions[r];
+          for (uint32_t k = 0; k < region.brickCount && !has[i]; ++k) {
+            const Brick& other = view.bricks[view.brickIds[region.brickBegin + k]];
+            const box3i ob = other.bounds();
+            if (strictlyInside(box3f(vec3f(ob.lower), vec3f(ob.upper)), q)) v = cellValue(view, other, q), has[i] = 1;
           }
         }
+      };
+      for (int z = 0; z < n.z; ++z)
+        for (int y = 0; y < n.y; ++y)
+          for (int x = 0; x < n.x; ++x)
+            evaluate(x, y, z);
+      for (int z = 0; z < n.z; ++z)
+        for (int y = 0; y < n.y; ++y)
+          evaluate(-1, y, z), evaluate(n.x, y, z);
+      for (int z = 0; z < n.z; ++z)
+        for (int x = 0; x < n.x; ++x)
+          evaluate(x, -1, z), evaluate(x, n.y, z);
+      for (int y = 0; y < n.y; ++y)
+        for (int x = 0; x < n.x; ++x)
+          evaluate(x, y, -1), evaluate(x, y, n.z);
+      uint32_t slot = b.valueOffset;
+      for (int z = 0; z < n.z; ++z)
+        for (int y = 0; y < n.y; ++y)
+          for (int x = 0; x < n.x; ++x, ++slot) {
+            const size_t c = at(x, y, z);
+            const size_t step[3] = {1, size_t(padded.x), size_t(padded.x) * size_t(padded.y)};
+            for (int a = 0; a < 3; ++a) {
+              const size_t p = c + step[a], m = c - step[a];
+              float g = 0.f;
+              if (has[p] && has[m])
+                g = (value[p] - value[m]) / (2.f * w);
+              else if (has[p] && has[c])
+                g = (value[p] - value[c]) / w;
+              else if (has[m] && has[c])
+                g = (value[c] - value[m]) / w;
+              out[size_t(a)][slot] = g;
+            }
+          }
+    }
   });
   return out;
 }
