@@ -33,6 +33,29 @@ float cellValue(const FieldView& view, const Brick& b, const vec3f& q) {
   return view.values[b.valueOffset + uint32_t((z * b.size.y + y) * b.size.x + x)];
 }
 
+/// The reconstruction at q, a cell centre of level `level`, from the bricks of region r, which
+/// holds bricks of other levels too: the cells of `level` have hat 1 (the cell centred at q) or
+/// 0 there, so only the other levels' bricks are evaluated through their hats.
+bool levelCentreValue(const FieldView& view, uint32_t r, const vec3f& q, int level, float& v) {
+  const Region& region = view.regions[r];
+  BasisAccumulator<float> acc;
+  for (uint32_t k = 0; k < region.brickCount; ++k) {
+    const Brick& other = view.bricks[view.brickIds[region.brickBegin + k]];
+    if (other.level != level) {
+      acc.addBrick(other, view.values, q, false);
+      continue;
+    }
+    const box3i ob = other.bounds();
+    if (!strictlyInside(box3f(vec3f(ob.lower), vec3f(ob.upper)), q)) continue;
+    const float value = cellValue(view, other, q);
+    if (!acc.haveReference) acc.setReference(value);
+    acc.addCell(value, 1.f, 1.f, 1.f, 0.f, 0.f, 0.f, false);
+  }
+  if (!acc.valid()) return false;
+  v = acc.value();
+  return true;
+}
+
 } // namespace
 
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
@@ -76,7 +99,7 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
         // value of the cell centred at q, or none where no brick has that cell. Elsewhere (at
         // level jumps) it is reconstructed.
         if (levels[r] != b.level) {
-          has[i] = sampleRegion(view, r, q, v);
+          has[i] = levelCentreValue(view, r, q, b.level, v);
         } else if (strictlyInside(ownBox, q)) {
           v = view.values[b.valueOffset + uint32_t((z * n.y + y) * n.x + x)];
           has[i] = 1;
