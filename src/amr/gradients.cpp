@@ -85,10 +85,13 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
       // k-d tree would find the same region.
       uint32_t last = kNoRegion;
       box3f lastBox;
+      // Every point lies within half a cell of the brick: their descents share a first part.
+      const uint32_t subtree =
+          regionSubtree(view, box3f(ownBox.lower - vec3f(0.5f * w), ownBox.upper + vec3f(0.5f * w)));
       auto evaluate = [&](int x, int y, int z) {
         const vec3f q = vec3f(b.lower) + (vec3f(float(x), float(y), float(z)) + vec3f(0.5f)) * w;
         const bool again = last != kNoRegion && strictlyInside(lastBox, q);
-        const uint32_t r = again ? last : locateRegion(view, q);
+        const uint32_t r = again ? last : locateRegion(view, q, subtree);
         if (!again) last = r, lastBox = r != kNoRegion ? view.regions[r].bounds() : box3f();
         if (r == kNoRegion) return;
         const size_t i = at(x, y, z);

@@ -199,17 +199,36 @@ EXA_HOST_DEVICE inline bool sampleRegion4(const FieldView& view, const vec4f* va
 }
 
 /// Index of the region that holds p (lattice units), or kNoRegion. Points on a split plane go
-/// to the upper side, which holds every cell whose support contains them.
-template <typename Real> EXA_HOST_DEVICE inline uint32_t locateRegion(const FieldView& view, const vec3<Real>& p) {
+/// to the upper side, which holds every cell whose support contains them. The descent may start
+/// at a node `from` that regionSubtree gave for a box holding p.
+template <typename Real>
+EXA_HOST_DEVICE inline uint32_t locateRegion(const FieldView& view, const vec3<Real>& p, uint32_t from = 0) {
   if (!view.nodes) return kNoRegion;
   for (int a = 0; a < 3; ++a)
     if (!(p[a] >= Real(view.bounds.lower[a]) && p[a] <= Real(view.bounds.upper[a]))) return kNoRegion;
-  uint32_t n = 0;
+  uint32_t n = from;
   while (view.nodes[n].axis != kLeafAxis) {
     const RegionKdNode& node = view.nodes[n];
     n = node.index + (p[int(node.axis)] >= Real(node.pos) ? 1u : 0u);
   }
   return view.nodes[n].index;
+}
+
+/// The deepest k-d node that every point of the closed box `box` descends through: locating
+/// points of the box may start there (the root where the tree is empty).
+inline uint32_t regionSubtree(const FieldView& view, const box3f& box) {
+  uint32_t n = 0;
+  while (view.nodes && view.nodes[n].axis != kLeafAxis) {
+    const RegionKdNode& node = view.nodes[n];
+    const int a = int(node.axis);
+    if (box.upper[a] < node.pos)
+      n = node.index;
+    else if (box.lower[a] >= node.pos)
+      n = node.index + 1;
+    else
+      break;
+  }
+  return n;
 }
 
 /// Reconstructs the field at p (lattice units) from the listed bricks (indices into view.bricks).
