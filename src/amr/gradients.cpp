@@ -3,6 +3,9 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
+#include <cstddef>
+
 namespace exa {
 
 namespace {
@@ -31,6 +34,18 @@ float cellValue(const FieldView& view, const Brick& b, const vec3f& q) {
   const int x = int((q.x - float(b.lower.x)) * inv), y = int((q.y - float(b.lower.y)) * inv),
             z = int((q.z - float(b.lower.z)) * inv);
   return view.values[b.valueOffset + uint32_t((z * b.size.y + y) * b.size.x + x)];
+}
+
+/// Whether every region that a point of the closed box `box` may lie in, found below the k-d
+/// node `from`, holds bricks of `level` alone (`levels` per region, as regionLevels gives).
+bool onlyLevelIn(const FieldView& view, uint32_t from, const box3f& box, const std::vector<int32_t>& levels,
+                 int32_t level) {
+  const RegionKdNode& node = view.nodes[from];
+  if (node.axis == kLeafAxis) return node.index != kNoRegion && levels[node.index] == level;
+  const int a = int(node.axis);
+  // As a point descends: below the plane to the lower child, on it or above to the upper one.
+  return (!(box.lower[a] < node.pos) || onlyLevelIn(view, node.index, box, levels, level)) &&
+         (!(box.upper[a] >= node.pos) || onlyLevelIn(view, node.index + 1, box, levels, level));
 }
 
 /// The reconstruction at q, a cell centre of level `level`, from the bricks of region r, which
@@ -115,10 +130,21 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
           }
         }
       };
-      for (int z = 0; z < n.z; ++z)
-        for (int y = 0; y < n.y; ++y)
-          for (int x = 0; x < n.x; ++x)
-            evaluate(x, y, z);
+      // Where no brick of another level is active anywhere in the brick, each of its centres
+      // has its own cell's value: no region to find for them.
+      if (view.nodes && onlyLevelIn(view, subtree, ownBox, levels, b.level)) {
+        for (int z = 0; z < n.z; ++z)
+          for (int y = 0; y < n.y; ++y) {
+            const float* row = view.values + b.valueOffset + uint32_t((z * n.y + y) * n.x);
+            std::copy(row, row + n.x, value.begin() + std::ptrdiff_t(at(0, y, z)));
+            std::fill_n(has.begin() + std::ptrdiff_t(at(0, y, z)), n.x, uint8_t(1));
+          }
+      } else {
+        for (int z = 0; z < n.z; ++z)
+          for (int y = 0; y < n.y; ++y)
+            for (int x = 0; x < n.x; ++x)
+              evaluate(x, y, z);
+      }
       for (int z = 0; z < n.z; ++z)
         for (int y = 0; y < n.y; ++y)
           evaluate(-1, y, z), evaluate(n.x, y, z);
