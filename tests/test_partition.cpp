@@ -510,5 +510,29 @@ TEST(Partition, PartsCompositedEqualTheWholeRender) {
   }
 }
 
+TEST(Partition, CellsCentredInABoxAreCountedAsTheyAreVisited) {
+  // Bricks of three levels, some with negative corners, against boxes that cut them anywhere
+  // (on cell centres, between them, outside): the count equals the cells visited.
+  uint32_t seed = 7;
+  auto next = [&](int range) {
+    seed = seed * 1664525u + 1013904223u;
+    return int((seed >> 8) % uint32_t(range));
+  };
+  for (int t = 0; t < 500; ++t) {
+    Brick b;
+    b.level = next(3);
+    b.size = vec3i(1 + next(9), 1 + next(9), 1 + next(9));
+    b.lower = vec3i(next(40) - 20, next(40) - 20, next(40) - 20) * b.cellWidth();
+    box3l box;
+    for (int a = 0; a < 3; ++a) {
+      box.lower[a] = next(80) - 40;
+      box.upper[a] = box.lower[a] + next(60);
+    }
+    uint64_t visited = 0;
+    forCellsCentredIn(b, box, [&](uint32_t) { ++visited; });
+    ASSERT_EQ(cellsCentredIn(b, box), visited) << t;
+  }
+}
+
 } // namespace
 } // namespace exa

@@ -381,7 +381,7 @@ void StreamedStep::gather(int part, const Model* m) {
     g.levelCells.resize(kMaxLevel + 1, 0);
     for (const Brick& b : m->bricks) {
       g.finest = std::min(g.finest, b.level);
-      forCellsCentredIn(b, partBox(part), [&](uint32_t) { ++g.levelCells[size_t(b.level)]; });
+      g.levelCells[size_t(b.level)] += cellsCentredIn(b, partBox(part));
     }
     g.cellBounds.extend(m->cellBounds());
     g.bricks += m->bricks.size();

@@ -75,13 +75,16 @@ inline bool supportReaches(const box3i& cells, int level, const box3l& box) {
   return true;
 }
 
+/// Whether a cell's centre lies in [lower, upper) along axis a.
+inline bool centreInsideAlong(int a, int32_t lower, int level, const box3l& box) {
+  const int64_t c2 = 2 * int64_t(lower) + (int64_t(1) << level);
+  return c2 >= 2 * box.lower[a] && c2 < 2 * box.upper[a];
+}
+
 /// Whether a cell's centre lies in [lower, upper): each cell belongs to exactly one part.
 inline bool centreInside(const vec3i& lower, int level, const box3l& box) {
-  const int64_t w = int64_t(1) << level;
-  for (int a = 0; a < 3; ++a) {
-    const int64_t c2 = 2 * int64_t(lower[a]) + w;
-    if (!(c2 >= 2 * box.lower[a] && c2 < 2 * box.upper[a])) return false;
-  }
+  for (int a = 0; a < 3; ++a)
+    if (!centreInsideAlong(a, lower[a], level, box)) return false;
   return true;
 }
 
@@ -94,6 +97,18 @@ template <typename Visit> void forCellsCentredIn(const Brick& b, const box3l& bo
     for (int y = 0; y < b.size.y; ++y)
       for (int x = 0; x < b.size.x; ++x, ++slot)
         if (centreInside(b.lower + vec3i(x, y, z) * w, b.level, box)) visit(slot);
+}
+
+/// How many cells of the brick have their centre in `box` (those forCellsCentredIn visits).
+inline uint64_t cellsCentredIn(const Brick& b, const box3l& box) {
+  uint64_t n = 1;
+  for (int a = 0; a < 3; ++a) {
+    uint64_t along = 0;
+    for (int i = 0; i < b.size[a]; ++i)
+      along += centreInsideAlong(a, b.lower[a] + i * b.cellWidth(), b.level, box) ? 1 : 0;
+    n *= along;
+  }
+  return n;
 }
 
 /// The part grown by two coarsest cell widths: smooth shading's gradient at a cell whose support
