@@ -71,6 +71,120 @@ bool levelCentreValue(const FieldView& view, uint32_t r, const vec3f& q, int lev
   return true;
 }
 
+/// One brick's reconstruction at every cell centre and at the centres one cell beyond each face,
+/// each found once (a cell's neighbours are its neighbours' neighbours): a block of the brick's
+/// size + 2 per axis, and whether each point has a value.
+class CentreBlock {
+public:
+  CentreBlock(const FieldView& view, const std::vector<int32_t>& levels) : view_(view), levels_(levels) {}
+
+  void fill(const Brick& b) {
+    b_ = &b;
+    w_ = float(b.cellWidth());
+    n_ = b.size;
+    padded_ = n_ + vec3i(2);
+    value_.assign(size_t(padded_.x) * size_t(padded_.y) * size_t(padded_.z), 0.f);
+    has_.assign(value_.size(), 0);
+    const box3i own = b.bounds();
+    ownBox_ = box3f(vec3f(own.lower), vec3f(own.upper));
+    last_ = kNoRegion;
+    // Every point lies within half a cell of the brick: their descents share a first part.
+    subtree_ = regionSubtree(view_, box3f(ownBox_.lower - vec3f(0.5f * w_), ownBox_.upper + vec3f(0.5f * w_)));
+    // Where no brick of another level is active anywhere in the brick, each of its centres has
+    // its own cell's value: no region to find for them.
+    if (view_.nodes && onlyLevelIn(view_, subtree_, ownBox_, levels_, b.level)) {
+      for (int z = 0; z < n_.z; ++z)
+        for (int y = 0; y < n_.y; ++y) {
+          const float* row = view_.values + b.valueOffset + uint32_t((z * n_.y + y) * n_.x);
+          std::copy(row, row + n_.x, value_.begin() + std::ptrdiff_t(at(0, y, z)));
+          std::fill_n(has_.begin() + std::ptrdiff_t(at(0, y, z)), n_.x, uint8_t(1));
+        }
+    } else {
+      for (int z = 0; z < n_.z; ++z)
+        for (int y = 0; y < n_.y; ++y)
+          for (int x = 0; x < n_.x; ++x)
+            evaluate(x, y, z);
+    }
+    for (int z = 0; z < n_.z; ++z)
+      for (int y = 0; y < n_.y; ++y)
+        evaluate(-1, y, z), evaluate(n_.x, y, z);
+    for (int z = 0; z < n_.z; ++z)
+      for (int x = 0; x < n_.x; ++x)
+        evaluate(x, -1, z), evaluate(x, n_.y, z);
+    for (int y = 0; y < n_.y; ++y)
+      for (int x = 0; x < n_.x; ++x)
+        evaluate(x, y, -1), evaluate(x, y, n_.z);
+  }
+
+  /// The brick's cells' central differences (one-sided where a neighbour has no value, 0 where
+  /// neither has) into `out` at their slots.
+  void differences(std::array<std::vector<float>, 3>& out) const {
+    const size_t step[3] = {1, size_t(padded_.x), size_t(padded_.x) * size_t(padded_.y)};
+    uint32_t slot = b_->valueOffset;
+    for (int z = 0; z < n_.z; ++z)
+      for (int y = 0; y < n_.y; ++y)
+        for (int x = 0; x < n_.x; ++x, ++slot) {
+          const size_t c = at(x, y, z);
+          for (int a = 0; a < 3; ++a) {
+            const size_t p = c + step[a], m = c - step[a];
+            float g = 0.f;
+            if (has_[p] && has_[m])
+              g = (value_[p] - value_[m]) / (2.f * w_);
+            else if (has_[p] && has_[c])
+              g = (value_[p] - value_[c]) / w_;
+            else if (has_[m] && has_[c])
+              g = (value_[c] - value_[m]) / w_;
+            out[size_t(a)][slot] = g;
+          }
+        }
+  }
+
+private:
+  size_t at(int x, int y, int z) const {
+    return (size_t(z + 1) * size_t(padded_.y) + size_t(y + 1)) * size_t(padded_.x) + size_t(x + 1);
+  }
+
+  void evaluate(int x, int y, int z) {
+    const vec3f q = vec3f(b_->lower) + (vec3f(float(x), float(y), float(z)) + vec3f(0.5f)) * w_;
+    // The region of the point before: the next is most often strictly inside it too, where the
+    // k-d tree would find the same region.
+    const bool again = last_ != kNoRegion && strictlyInside(lastBox_, q);
+    const uint32_t r = again ? last_ : locateRegion(view_, q, subtree_);
+    if (!again) last_ = r, lastBox_ = r != kNoRegion ? view_.regions[r].bounds() : box3f();
+    if (r == kNoRegion) return;
+    const size_t i = at(x, y, z);
+    float& v = value_[i];
+    // q is a cell centre of this brick's level. Where every brick active in q's region is of
+    // that level, each hat is 1 or 0 at q (cell corners are multiples of the width, so the
+    // centres of one level are whole widths apart): the reconstruction there is the value of the
+    // cell centred at q, or none where no brick has that cell. Elsewhere (at level jumps) it is
+    // reconstructed.
+    if (levels_[r] != b_->level) {
+      has_[i] = levelCentreValue(view_, r, q, b_->level, v);
+    } else if (strictlyInside(ownBox_, q)) {
+      v = view_.values[b_->valueOffset + uint32_t((z * n_.y + y) * n_.x + x)];
+      has_[i] = 1;
+    } else {
+      const Region& region = view_.regions[r];
+      for (uint32_t k = 0; k < region.brickCount && !has_[i]; ++k) {
+        const Brick& other = view_.bricks[view_.brickIds[region.brickBegin + k]];
+        const box3i ob = other.bounds();
+        if (strictlyInside(box3f(vec3f(ob.lower), vec3f(ob.upper)), q)) v = cellValue(view_, other, q), has_[i] = 1;
+      }
+    }
+  }
+
+  const FieldView& view_;
+  const std::vector<int32_t>& levels_;
+  const Brick* b_ = nullptr;
+  float w_ = 1.f;
+  vec3i n_{0}, padded_{0};
+  box3f ownBox_, lastBox_;
+  uint32_t subtree_ = 0, last_ = kNoRegion;
+  std::vector<float> value_;
+  std::vector<uint8_t> has_;
+};
+
 } // namespace
 
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
@@ -80,98 +194,10 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
     g.assign(valueCount, 0.f);
   const std::vector<int32_t> levels = regionLevels(view, regionCount);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, bricks.size()), [&](const tbb::blocked_range<size_t>& range) {
-    // Per brick, the reconstruction at every cell centre and at the centres one cell beyond each
-    // face, each found once (a cell's neighbours are its neighbours' neighbours): a block of the
-    // brick's size + 2 per axis, and whether each point has a value.
-    std::vector<float> value;
-    std::vector<uint8_t> has;
+    CentreBlock block(view, levels);
     for (size_t bi = range.begin(); bi < range.end(); ++bi) {
-      const Brick& b = bricks[bi];
-      const float w = float(b.cellWidth());
-      const vec3i n = b.size, padded = n + vec3i(2);
-      value.assign(size_t(padded.x) * size_t(padded.y) * size_t(padded.z), 0.f);
-      has.assign(value.size(), 0);
-      auto at = [&](int x, int y, int z) {
-        return (size_t(z + 1) * size_t(padded.y) + size_t(y + 1)) * size_t(padded.x) + size_t(x + 1);
-      };
-      const box3i own = b.bounds();
-      const box3f ownBox(vec3f(own.lower), vec3f(own.upper));
-      // The region of the point before: the next is most often strictly inside it too, where the
-      // k-d tree would find the same region.
-      uint32_t last = kNoRegion;
-      box3f lastBox;
-      // Every point lies within half a cell of the brick: their descents share a first part.
-      const uint32_t subtree =
-          regionSubtree(view, box3f(ownBox.lower - vec3f(0.5f * w), ownBox.upper + vec3f(0.5f * w)));
-      auto evaluate = [&](int x, int y, int z) {
-        const vec3f q = vec3f(b.lower) + (vec3f(float(x), float(y), float(z)) + vec3f(0.5f)) * w;
-        const bool again = last != kNoRegion && strictlyInside(lastBox, q);
-        const uint32_t r = again ? last : locateRegion(view, q, subtree);
-        if (!again) last = r, lastBox = r != kNoRegion ? view.regions[r].bounds() : box3f();
-        if (r == kNoRegion) return;
-        const size_t i = at(x, y, z);
-        float& v = value[i];
-        // q is a cell centre of this brick's level. Where every brick active in q's region is
-        // of that level, each hat is 1 or 0 at q (cell corners are multiples of the width, so
-        // the centres of one level are whole widths apart): the reconstruction there is the
-        // value of the cell centred at q, or none where no brick has that cell. Elsewhere (at
-        // level jumps) it is reconstructed.
-        if (levels[r] != b.level) {
-          has[i] = levelCentreValue(view, r, q, b.level, v);
-        } else if (strictlyInside(ownBox, q)) {
-          v = view.values[b.valueOffset + uint32_t((z * n.y + y) * n.x + x)];
-          has[i] = 1;
-        } else {
-          const Region& region = view.regions[r];
-          for (uint32_t k = 0; k < region.brickCount && !has[i]; ++k) {
-            const Brick& other = view.bricks[view.brickIds[region.brickBegin + k]];
-            const box3i ob = other.bounds();
-            if (strictlyInside(box3f(vec3f(ob.lower), vec3f(ob.upper)), q)) v = cellValue(view, other, q), has[i] = 1;
-          }
-        }
-      };
-      // Where no brick of another level is active anywhere in the brick, each of its centres
-      // has its own cell's value: no region to find for them.
-      if (view.nodes && onlyLevelIn(view, subtree, ownBox, levels, b.level)) {
-        for (int z = 0; z < n.z; ++z)
-          for (int y = 0; y < n.y; ++y) {
-            const float* row = view.values + b.valueOffset + uint32_t((z * n.y + y) * n.x);
-            std::copy(row, row + n.x, value.begin() + std::ptrdiff_t(at(0, y, z)));
-            std::fill_n(has.begin() + std::ptrdiff_t(at(0, y, z)), n.x, uint8_t(1));
-          }
-      } else {
-        for (int z = 0; z < n.z; ++z)
-          for (int y = 0; y < n.y; ++y)
-            for (int x = 0; x < n.x; ++x)
-              evaluate(x, y, z);
-      }
-      for (int z = 0; z < n.z; ++z)
-        for (int y = 0; y < n.y; ++y)
-          evaluate(-1, y, z), evaluate(n.x, y, z);
-      for (int z = 0; z < n.z; ++z)
-        for (int x = 0; x < n.x; ++x)
-          evaluate(x, -1, z), evaluate(x, n.y, z);
-      for (int y = 0; y < n.y; ++y)
-        for (int x = 0; x < n.x; ++x)
-          evaluate(x, y, -1), evaluate(x, y, n.z);
-      uint32_t slot = b.valueOffset;
-      for (int z = 0; z < n.z; ++z)
-        for (int y = 0; y < n.y; ++y)
-          for (int x = 0; x < n.x; ++x, ++slot) {
-            const size_t c = at(x, y, z);
-            const size_t step[3] = {1, size_t(padded.x), size_t(padded.x) * size_t(padded.y)};
-            for (int a = 0; a < 3; ++a) {
-              const size_t p = c + step[a], m = c - step[a];
-              float g = 0.f;
-              if (has[p] && has[m])
-                g = (value[p] - value[m]) / (2.f * w);
-              else if (has[p] && has[c])
-                g = (value[p] - value[c]) / w;
-              else if (has[m] && has[c])
-                g = (value[c] - value[m]) / w;
-              out[size_t(a)][slot] = g;
-            }
-          }
+      block.fill(bricks[bi]);
+      block.differences(out);
     }
   });
   return out;
