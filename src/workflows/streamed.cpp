@@ -351,8 +351,11 @@ bool readsValueRanges(const Scene& scene) {
 
 std::optional<StepSurvey> StreamedStep::outlineOf(const MemoryPlan& plan, const LoadOptions& options,
                                                   const Model& skeleton) {
-  // Cells that turn into holes as they are read are still in the census.
-  if (plan.levelCells.empty() || plan.cellBounds.empty() || options.nonFinite != NonFinite::Refuse) return {};
+  // Cells that turn into holes as they are read, and levels finer than those read, are still in
+  // the census.
+  if (plan.levelCells.empty() || plan.cellBounds.empty() || options.nonFinite != NonFinite::Refuse ||
+      options.finestLevel != 0)
+    return {};
   StepSurvey s;
   int finest = -1;
   s.levelCells.assign(kMaxLevel + 1, 0);
