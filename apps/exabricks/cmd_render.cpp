@@ -234,10 +234,7 @@ void runStreamed(const RenderCmdOptions& o, const CLI::App& cmd, SceneDocument& 
   // Automatic choices and a layer without a range of its own need the values of every part: a
   // pass over the parts before the frame. Otherwise the census's outline serves until the
   // frame's own reads have gathered the survey, and the scene's warnings follow the frame.
-  const bool automatic = o.scene.sceneFile.empty() && o.scene.tfFile.empty();
-  const bool rangesGiven = std::none_of(scene.layers.begin(), scene.layers.end(),
-                                        [](const VolumeLayer& l) { return l.tf.valueRange.empty(); });
-  const bool surveyFirst = automatic || !rangesGiven || !step.outline();
+  const bool surveyFirst = choosesTransferFunction(o.scene) || step.needsSurvey(scene);
   const StepSurvey& early = surveyFirst ? step.survey() : *step.outline();
   WholeData whole{early.cellBounds, early.levels, step.partialData()};
   const Model& model = step.skeleton();

@@ -560,7 +560,7 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
                    model.fieldNames.size(), ")"));
   // The default field by its name: a scene file written from here says which field it shows.
   if (first.field.empty()) first.field = model.fieldNames[size_t(field)];
-  if (o.sceneFile.empty() && o.tfFile.empty()) {
+  if (choosesTransferFunction(o)) {
     const DefaultChoices c =
         adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
                               !given("--opacity"), whole ? &whole->histogram : nullptr, !given("--colormap"));

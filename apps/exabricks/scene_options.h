@@ -104,6 +104,9 @@ struct WholeData {
   PartialData histogram;   ///< the part's cells and the sum over the parts
 };
 
+/// Whether the first layer's transfer function is chosen from the data (no scene or
+/// transfer-function file gives it): applyDataDefaults then reads the data's values.
+inline bool choosesTransferFunction(const RenderOptions& o) { return o.sceneFile.empty() && o.tfFile.empty(); }
 /// The first picture: names the default field, adapts the first layer's transfer function to the
 /// data unless a file or the options chose it, applies --linear and logs the scene's warnings
 /// (unless `warn` is false: the caller logs them once the dataset's ranges are known).

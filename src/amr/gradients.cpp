@@ -28,12 +28,15 @@ bool strictlyInside(const box3f& b, const vec3f& q) {
   return q.x > b.lower.x && q.x < b.upper.x && q.y > b.lower.y && q.y < b.upper.y && q.z > b.lower.z && q.z < b.upper.z;
 }
 
-/// The value of the cell of `b` centred at q.
-float cellValue(const FieldView& view, const Brick& b, const vec3f& q) {
+/// The value of the cell of `b` centred at q (a cell centre of b's level), where b holds q.
+bool cellValueAt(const FieldView& view, const Brick& b, const vec3f& q, float& v) {
+  const box3i bb = b.bounds();
+  if (!strictlyInside(box3f(vec3f(bb.lower), vec3f(bb.upper)), q)) return false;
   const float inv = inverseWidth(b.level);
   const int x = int((q.x - float(b.lower.x)) * inv), y = int((q.y - float(b.lower.y)) * inv),
             z = int((q.z - float(b.lower.z)) * inv);
-  return view.values[b.valueOffset + uint32_t((z * b.size.y + y) * b.size.x + x)];
+  v = view.values[b.valueOffset + uint32_t((z * b.size.y + y) * b.size.x + x)];
+  return true;
 }
 
 /// Whether every region that a point of the closed box `box` may lie in, found below the k-d
@@ -60,9 +63,8 @@ bool levelCentreValue(const FieldView& view, uint32_t r, const vec3f& q, int lev
       acc.addBrick(other, view.values, q, false);
       continue;
     }
-    const box3i ob = other.bounds();
-    if (!strictlyInside(box3f(vec3f(ob.lower), vec3f(ob.upper)), q)) continue;
-    const float value = cellValue(view, other, q);
+    float value = 0.f;
+    if (!cellValueAt(view, other, q, value)) continue;
     if (!acc.haveReference) acc.setReference(value);
     acc.addCell(value, 1.f, 1.f, 1.f, 0.f, 0.f, 0.f, false);
   }
@@ -166,11 +168,8 @@ private:
       has_[i] = 1;
     } else {
       const Region& region = view_.regions[r];
-      for (uint32_t k = 0; k < region.brickCount && !has_[i]; ++k) {
-        const Brick& other = view_.bricks[view_.brickIds[region.brickBegin + k]];
-        const box3i ob = other.bounds();
-        if (strictlyInside(box3f(vec3f(ob.lower), vec3f(ob.upper)), q)) v = cellValue(view_, other, q), has_[i] = 1;
-      }
+      for (uint32_t k = 0; k < region.brickCount && !has_[i]; ++k)
+        has_[i] = cellValueAt(view_, view_.bricks[view_.brickIds[region.brickBegin + k]], q, v);
     }
   }
 

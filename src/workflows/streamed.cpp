@@ -340,14 +340,11 @@ void StreamedStep::checkUnchanged() const {
 
 const Model* StreamedStep::part(int part) { return bring(part).model.get(); }
 
-namespace {
-/// Whether a renderer of `scene` reads the dataset's value ranges: a layer without a range of
-/// its own maps the data's.
-bool readsValueRanges(const Scene& scene) {
-  return std::any_of(scene.layers.begin(), scene.layers.end(),
-                     [](const VolumeLayer& l) { return l.tf.valueRange.empty(); });
+bool StreamedStep::needsSurvey(const Scene& scene) const {
+  // A layer without a range of its own maps the data's.
+  return !outline_ || std::any_of(scene.layers.begin(), scene.layers.end(),
+                                  [](const VolumeLayer& l) { return l.tf.valueRange.empty(); });
 }
-} // namespace
 
 std::optional<StepSurvey> StreamedStep::outlineOf(const MemoryPlan& plan, const LoadOptions& options,
                                                   const Model& skeleton) {
@@ -367,10 +364,7 @@ std::optional<StepSurvey> StreamedStep::outlineOf(const MemoryPlan& plan, const 
     if (finest < 0) finest = l;
   }
   if (finest < 0) return {};
-  for (int a = 0; a < 3; ++a) {
-    s.cellBounds.lower[a] = int32_t(plan.cellBounds.lower[a]);
-    s.cellBounds.upper[a] = int32_t(plan.cellBounds.upper[a]);
-  }
+  s.cellBounds = box3i(vec3i(plan.cellBounds.lower), vec3i(plan.cellBounds.upper));
   s.dataset = DatasetInfo::from(finest, s.cellBounds, skeleton.world.scale,
                                 std::vector<range1f>(skeleton.fieldNames.size(), range1f()));
   return s;
@@ -421,7 +415,7 @@ void StreamedStep::finishSurvey() {
 Renderer* StreamedStep::renderer(int part, const Scene& scene, const RendererOptions& options) {
   // The step's survey may read every part: before this one is brought. A scene that gives every
   // layer its range needs only the step's outline, which the census knows.
-  const bool ranges = readsValueRanges(scene) || !outline_;
+  const bool ranges = needsSurvey(scene);
   const bool outlined = !ranges && !survey_;
   const DatasetInfo& dataset = outlined ? outline_->dataset : survey().dataset;
   Resident& r = bring(part);

@@ -112,6 +112,9 @@ public:
   /// bounds, and its dataset values without value ranges (empty ranges); none where the census
   /// cannot say. Equal to the survey in all of these.
   const std::optional<StepSurvey>& outline() const { return outline_; }
+  /// Whether renderers of `scene` need the survey (the value ranges of a layer without its own,
+  /// or no outline to build them from): renderer() then surveys the step first.
+  bool needsSurvey(const Scene& scene) const;
   /// Part p's lattice box and its world box (the renderer's domain).
   const box3l& partBox(int part) const { return plan_.partition.box(part); }
   box3d partWorldBox(int part) const { return skeleton_.world.toWorld(partBox(part)); }
