@@ -507,3 +507,53 @@ TEST(Render, GradientFieldsAreCentralDifferencesOfTheReconstruction) {
         << "largest difference from central differences of the reconstruction";
   }
 }
+
+TEST(Render, GradientFieldsAreBuiltWhereSamplesMayReadThem) {
+  // Smooth shading builds a brick's gradient fields once a visible region within the renderer's
+  // domain holds the brick: pictures are those of gradient fields built in every brick first.
+  const Model& m = blobsModel();
+  TransferFunction hiding;
+  hiding.colorMap = builtinColorMap("plasma");
+  hiding.opacity = {{0.f, 0.f}, {0.8f, 0.f}, {0.9f, 0.3f}, {1.f, 0.8f}};
+  TransferFunction showing = hiding;
+  showing.opacity = {{0.f, 0.05f}, {1.f, 0.3f}};
+  RenderSetup o = smallOptions(64);
+  o.scene.shading = Shading::Smooth;
+  const Camera cam = framed(m, 40, 30);
+  o.frame.camera = cam;
+  auto sceneOf = [&](const TransferFunction& tf) {
+    Scene s = o.scene;
+    s.layers = {VolumeLayer{m.fieldNames[0], tf}};
+    return s;
+  };
+
+  Renderer lazy(m);
+  lazy.setScene(sceneOf(hiding));
+  const Image hidingFirst = lazy.render(o.frame);
+  EXPECT_EQ(lazy.gradients(0), nullptr) << "every brick's were built for a transfer function that hides most";
+  lazy.setScene(sceneOf(showing));
+  const Image showingAfter = lazy.render(o.frame);
+  EXPECT_NE(lazy.gradients(0), nullptr) << "not built where a transfer function shows every region";
+
+  Renderer full(m);
+  full.setScene(sceneOf(showing));
+  const Image showingFirst = full.render(o.frame);
+  full.setScene(sceneOf(hiding));
+  EXPECT_TRUE(identical(showingFirst, showingAfter));
+  EXPECT_TRUE(identical(hidingFirst, full.render(o.frame)));
+
+  // A domain (the lowest quarter along x), set before the scene or after it, then widened.
+  box3i b = m.cellBounds();
+  b.upper.x = b.lower.x + (b.upper.x - b.lower.x) / 4;
+  const box3d quarter = m.world.toWorld(b);
+  Renderer before(m);
+  before.setDomain(quarter);
+  before.setScene(sceneOf(showing));
+  const Image quarterBefore = before.render(o.frame);
+  EXPECT_EQ(before.gradients(0), nullptr) << "built beyond the domain";
+  full.setScene(sceneOf(showing));
+  full.setDomain(quarter);
+  EXPECT_TRUE(identical(quarterBefore, full.render(o.frame)));
+  before.setDomain(box3d());
+  EXPECT_TRUE(identical(showingFirst, before.render(o.frame))) << "not built as the domain widened";
+}

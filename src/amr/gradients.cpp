@@ -191,15 +191,24 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
   std::array<std::vector<float>, 3> out;
   for (std::vector<float>& g : out)
     g.assign(valueCount, 0.f);
+  std::vector<uint32_t> all(bricks.size());
+  for (size_t i = 0; i < all.size(); ++i)
+    all[i] = uint32_t(i);
+  fillCellGradients(view, bricks, regionCount, all, out);
+  return out;
+}
+
+void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
+                       const std::vector<uint32_t>& which, std::array<std::vector<float>, 3>& out) {
+  if (which.empty()) return;
   const std::vector<int32_t> levels = regionLevels(view, regionCount);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, bricks.size()), [&](const tbb::blocked_range<size_t>& range) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, which.size()), [&](const tbb::blocked_range<size_t>& range) {
     CentreBlock block(view, levels);
-    for (size_t bi = range.begin(); bi < range.end(); ++bi) {
-      block.fill(bricks[bi]);
+    for (size_t i = range.begin(); i < range.end(); ++i) {
+      block.fill(bricks[which[i]]);
       block.differences(out);
     }
   });
-  return out;
 }
 
 } // namespace exa

@@ -1,7 +1,9 @@
 #include "exabricks/amr/model.h"
+#include "exabricks/core/error.h"
 #include "exabricks/render/renderer.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace exa {
 
@@ -26,6 +28,14 @@ DatasetInfo DatasetInfo::from(int finestLevel, const box3i& cb, const vec3d& wor
   d.extentCells = extentCells;
   d.defaultOpacityScale = std::min(1.f, 8.f / std::max(1.f, extentCells));
   return d;
+}
+
+const DatasetInfo& DatasetInfo::checkedFor(const Model& m) const {
+  if (valueRanges.size() != m.fieldValues.size())
+    fail("dataset information holds ", valueRanges.size(), " value ranges for ", m.fieldValues.size(), " fields");
+  if (!(referenceWidth > 0.f) || !std::isfinite(referenceWidth))
+    fail("dataset reference width must be a positive number");
+  return *this;
 }
 
 } // namespace exa

@@ -96,7 +96,7 @@ FieldView DeviceRenderer::fieldView(int field, const float* values, const std::s
   return v;
 }
 
-const vec4f* DeviceRenderer::withGradients(const LayerTable& l, SceneUpdate& update) {
+const vec4f* DeviceRenderer::withGradients(const LayerTable& l, uint64_t version, SceneUpdate& update) {
   const std::string key = "field and gradients " + model_.fieldNames[size_t(l.field)];
   auto fill = [&](std::vector<vec4f>& out) {
     const auto& values = model_.fieldValues[size_t(l.field)];
@@ -105,15 +105,20 @@ const vec4f* DeviceRenderer::withGradients(const LayerTable& l, SceneUpdate& upd
       out[i] = {values[i], l.grad[0].values[i], l.grad[1].values[i], l.grad[2].values[i]};
     });
   };
+  uint64_t& made = interleavedVersion_[l.field];
+  const bool current = made == version;
+  made = version;
   if (device_ != Device::Cuda) {
     std::vector<vec4f>& v = interleaved_[l.field];
-    if (v.empty()) fill(v);
+    if (v.empty() || !current) fill(v);
     return v.data();
   }
-  // The model's data never change: made and copied once.
-  if (auto it = buffers_.find(key); it != buffers_.end()) return static_cast<const vec4f*>(it->second.device);
+  // The values never change, the gradient fields only as bricks' are built: copied again then.
+  if (auto it = buffers_.find(key); it != buffers_.end() && current)
+    return static_cast<const vec4f*>(it->second.device);
   std::vector<vec4f> interleaved;
   fill(interleaved);
+  buffers_[key].host = nullptr; // copied even where the new array lies where the last one did
   return put(key, interleaved, false, update);
 }
 
@@ -162,7 +167,7 @@ void DeviceRenderer::syncVolume(const Scene& s, const VolumeMarcher& volume, Sce
     // Smooth shading reads the values with the gradients (TraceLayer::withGradients).
     const bool smooth = s.shading == Shading::Smooth && l.grad[0].values && !v.pathTrace;
     t.view = fieldView(l.field, smooth ? nullptr : l.view.values, "field", update);
-    if (smooth) t.withGradients = withGradients(l, update);
+    if (smooth) t.withGradients = withGradients(l, volume.gradientVersion(l.field), update);
     for (int a = 0; a < 3; ++a)
       t.grad[a] = t.view;
     t.tf = tableView(l, put("transfer function " + std::to_string(i), l.table, true, update));

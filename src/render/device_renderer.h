@@ -47,8 +47,8 @@ private:
   /// view without values).
   FieldView fieldView(int field, const float* values, const std::string& what, SceneUpdate& update);
   /// A smooth-shaded layer's field and gradient fields interleaved (TraceLayer::withGradients),
-  /// made once per field.
-  const vec4f* withGradients(const LayerTable& layer, SceneUpdate& update);
+  /// made again only when the gradient fields' `version` (VolumeMarcher::gradientVersion) changed.
+  const vec4f* withGradients(const LayerTable& layer, uint64_t version, SceneUpdate& update);
   /// sync's parts: the volume's layers, region trees and integration settings; the iso-surfaces;
   /// the meshes (their hierarchy built again where they or their colours changed).
   void syncVolume(const Scene& scene, const VolumeMarcher& volume, SceneUpdate& update);
@@ -71,7 +71,8 @@ private:
   std::map<std::string, Buffer> buffers_;
   std::vector<uint8_t> volumeSubtrees_, isoSubtrees_;
   std::map<int, std::vector<vec4f>> interleaved_;
-  TriangleBvh meshBvh_; ///< the scene's meshes (the CPU renderer's are Embree's)
+  std::map<int, uint64_t> interleavedVersion_; ///< per field: the gradient fields' version interleaved
+  TriangleBvh meshBvh_;                        ///< the scene's meshes (the CPU renderer's are Embree's)
   std::vector<vec3f> meshColors_;
   std::vector<std::pair<const TriangleMesh*, vec3f>> meshKey_; ///< withGradients' arrays where passes run on the host
   TraceView base_;                                             ///< what the scene sets; pass() adds the frame

@@ -32,15 +32,6 @@ namespace {
 
 using Counters = FrameBuffer::TileCounters;
 
-const DatasetInfo& checkedDataset(const Model& m, const DatasetInfo& dataset) {
-  if (dataset.valueRanges.size() != m.fieldValues.size())
-    fail("dataset information holds ", dataset.valueRanges.size(), " value ranges for ", m.fieldValues.size(),
-         " fields");
-  if (!(dataset.referenceWidth > 0.f) || !std::isfinite(dataset.referenceWidth))
-    fail("dataset reference width must be a positive number");
-  return dataset;
-}
-
 /// What every ray of a pass shares.
 struct PassSetup {
   CameraRays camera;
@@ -112,7 +103,13 @@ struct Renderer::Impl {
   bool particlesChanged = false; ///< setParticles since the last setScene
 
   Impl(const Model& m, const DatasetInfo& d)
-      : model(m), dataset(checkedDataset(m, d)), volume(m, dataset), surfaces(m, dataset) {}
+      : model(m), dataset(d.checkedFor(m)), volume(m, dataset), surfaces(m, dataset) {}
+
+  /// Smooth shading's gradient fields where primary rays may sample; true when some were built.
+  bool attachGradients() {
+    return scene.shading == Shading::Smooth && scene.integration.integrator == Integrator::March &&
+           volume.attachGradients(hasDomain ? &domain : nullptr);
+  }
 
   PassSetup passSetup(const Frame& frame) const {
     const Scene& s = scene;
@@ -531,10 +528,7 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     if (s.integration.integrator == Integrator::PathTrace) im.updateMedium();
     u.volumeSeconds = t.seconds();
   }
-  if (s.shading == Shading::Smooth && s.integration.integrator == Integrator::March) {
-    Timer t;
-    if (im.volume.attachGradients()) u.volumeSeconds += t.seconds();
-  }
+  if (Timer t; im.attachGradients()) u.volumeSeconds += t.seconds();
   if (u.iso) {
     Timer t;
     im.surfaces.updateIso(s.iso, isoField, isoColorField, s.integration.embreeBelowVisibleFraction);
@@ -551,8 +545,12 @@ SceneUpdate Renderer::setScene(const Scene& s) {
 }
 
 void Renderer::setDomain(const box3d& world) {
-  impl_->hasDomain = !(world == box3d());
-  impl_->domain = world;
+  Impl& im = *impl_;
+  im.hasDomain = !(world == box3d());
+  im.domain = world;
+  // Gradient fields are built only where the domain may be sampled: a scene's reach widens.
+  SceneUpdate u;
+  if (im.haveScene && im.attachGradients() && im.device) im.device->sync(im.scene, im.volume, im.surfaces, u);
 }
 
 const box3d& Renderer::domain() const { return impl_->domain; }

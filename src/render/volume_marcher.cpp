@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace exa {
 namespace {
@@ -384,32 +385,79 @@ void VolumeMarcher::updateMajorants(bool grid) {
   majorantGrid_.update(grid ? layers_ : std::vector<LayerTable>(), perLog2, majorants_);
 }
 
+namespace {
+
+/// Whether two closed boxes share a point.
+bool meets(const box3f& a, const box3f& b) {
+  return a.lower.x <= b.upper.x && b.lower.x <= a.upper.x && a.lower.y <= b.upper.y && b.lower.y <= a.upper.y &&
+         a.lower.z <= b.upper.z && b.lower.z <= a.upper.z;
+}
+
+} // namespace
+
 const std::array<std::vector<float>, 3>* VolumeMarcher::gradients(int field) const {
   const auto it = gradientFields_.find(field);
-  return it == gradientFields_.end() ? nullptr : &it->second;
+  return it == gradientFields_.end() || it->second.missing != 0 ? nullptr : &it->second.g;
+}
+
+uint64_t VolumeMarcher::gradientVersion(int field) const {
+  const auto it = gradientFields_.find(field);
+  return it == gradientFields_.end() ? 0 : it->second.version;
 }
 
 void VolumeMarcher::adoptGradients(int field, std::array<std::vector<float>, 3> gradients) {
   for (const std::vector<float>& g : gradients)
     if (g.size() != model_.fieldValues.at(size_t(field)).size())
       fail("gradient fields of ", g.size(), " cells adopted for a field of ", model_.fieldValues[size_t(field)].size());
-  gradientFields_.emplace(field, std::move(gradients)); // one already built (and pointed at) stays
+  if (gradientFields_.count(field)) return; // one already built (and pointed at) stays
+  GradientFields& fields = gradientFields_[field];
+  fields.g = std::move(gradients);
+  fields.built.assign(model_.bricks.size(), 1);
+  fields.version = 1;
 }
 
-bool VolumeMarcher::attachGradients() {
+bool VolumeMarcher::attachGradients(const box3d* domain) {
+  // The bricks that samples may read: those of the visible regions that meet the domain (in
+  // lattice units, widened by a finest cell against round-off).
+  const float inf = std::numeric_limits<float>::infinity();
+  box3f within(vec3f(-inf), vec3f(inf));
+  if (domain) {
+    const vec3d a = model_.world.toLattice(domain->lower), b = model_.world.toLattice(domain->upper);
+    within = box3f(vec3f(min(a, b)) - vec3f(1.f), vec3f(max(a, b)) + vec3f(1.f));
+  }
+  std::vector<uint8_t> needed(model_.bricks.size(), 0);
+  for (size_t r = 0; r < visible_.size(); ++r) {
+    const Region& region = model_.regions.regions[r];
+    if (!visible_[r] || !meets(region.bounds(), within)) continue;
+    for (uint32_t k = 0; k < region.brickCount; ++k)
+      needed[model_.regions.brickIds[region.brickBegin + k]] = 1;
+  }
   bool built = false;
   for (LayerTable& layer : layers_) {
     auto it = gradientFields_.find(layer.field);
     if (it == gradientFields_.end()) {
-      it = gradientFields_
-               .emplace(layer.field, cellGradients(layer.view, model_.bricks, model_.regions.regions.size(),
-                                                   model_.fieldValues[size_t(layer.field)].size()))
-               .first;
+      it = gradientFields_.emplace(layer.field, GradientFields()).first;
+      for (std::vector<float>& g : it->second.g)
+        g.assign(model_.fieldValues[size_t(layer.field)].size(), 0.f);
+      it->second.built.assign(model_.bricks.size(), 0);
+      it->second.missing = model_.bricks.size();
+    }
+    GradientFields& fields = it->second;
+    std::vector<uint32_t> which;
+    if (fields.missing != 0)
+      for (size_t b = 0; b < needed.size(); ++b)
+        if (needed[b] && !fields.built[b]) which.push_back(uint32_t(b));
+    if (!which.empty()) {
+      fillCellGradients(layer.view, model_.bricks, model_.regions.regions.size(), which, fields.g);
+      for (uint32_t b : which)
+        fields.built[b] = 1;
+      fields.missing -= which.size();
+      ++fields.version;
       built = true;
     }
     for (int a = 0; a < 3; ++a) {
       layer.grad[size_t(a)] = layer.view;
-      layer.grad[size_t(a)].values = it->second[size_t(a)].data();
+      layer.grad[size_t(a)].values = fields.g[size_t(a)].data();
     }
   }
   return built;

@@ -38,13 +38,19 @@ public:
   /// layer's transfer function may show; else all) and the traversal (`in` picks its kind).
   void update(const std::vector<VolumeLayer>& layers, const std::vector<int>& fields, const Integration& in,
               bool skipping);
-  /// Builds the gradient fields of every layer's field that has none yet (smooth shading) and
-  /// points the layers at them; true when one was built.
-  bool attachGradients();
-  /// The gradient fields of model field `field` built so far (null: none yet), and gradient
-  /// fields built before by a marcher over the same model, used instead of building them.
+  /// Builds the gradient fields of every layer's field (smooth shading) in the bricks of the
+  /// visible regions that meet the world box `domain` (null: everywhere), where they are not built
+  /// yet, and points the layers at them; true when a brick's were built. A sample reads only its
+  /// region's bricks, and no sample is taken in a hidden region or outside a renderer's domain,
+  /// so the other bricks' gradients are not needed until a transfer function or domain shows them.
+  bool attachGradients(const box3d* domain);
+  /// The gradient fields of model field `field` once built in every brick (null before), and
+  /// gradient fields built before by a marcher over the same model, used instead of building them.
   const std::array<std::vector<float>, 3>* gradients(int field) const;
   void adoptGradients(int field, std::array<std::vector<float>, 3> gradients);
+  /// Counts the builds of model field `field`'s gradient fields (0: none yet): a copy made of
+  /// them is current while this is unchanged.
+  uint64_t gradientVersion(int field) const;
 
   bool empty() const { return layers_.empty(); }
   const std::vector<LayerTable>& layers() const { return layers_; }
@@ -73,8 +79,15 @@ private:
   const Model& model_;
   const DatasetInfo& dataset_;
   std::vector<LayerTable> layers_;
-  /// Smooth shading's gradient fields (cellGradients) per model field, built when first needed.
-  std::map<int, std::array<std::vector<float>, 3>> gradientFields_;
+  /// Smooth shading's gradient fields (cellGradients) of one model field, built brick by brick
+  /// as transfer functions show the bricks' regions.
+  struct GradientFields {
+    std::array<std::vector<float>, 3> g;
+    std::vector<uint8_t> built; ///< per brick
+    size_t missing = 0;         ///< bricks not built
+    uint64_t version = 0;
+  };
+  std::map<int, GradientFields> gradientFields_;
   std::vector<uint8_t> visible_;
   std::vector<float> majorants_;
   MajorantGrid majorantGrid_;

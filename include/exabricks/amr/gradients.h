@@ -19,4 +19,9 @@ namespace exa {
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
                                                 size_t regionCount, size_t valueCount);
 
+/// The same, for the bricks that `which` lists (indices into `bricks`) only, written into `out`
+/// (each of the field's value count) at their cells' slots; the other cells are left as they are.
+void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
+                       const std::vector<uint32_t>& which, std::array<std::vector<float>, 3>& out);
+
 } // namespace exa

@@ -48,6 +48,9 @@ struct DatasetInfo {
   /// per-field value ranges are known (for example agreed by the processes that hold its parts).
   static DatasetInfo from(int finestLevel, const box3i& cellBounds, const vec3d& worldScale,
                           std::vector<range1f> valueRanges);
+  /// These values, once checked to fit `model`: a value range per field, a positive finite
+  /// reference width.
+  const DatasetInfo& checkedFor(const Model& model) const;
 };
 
 /// The colour of a level in the level debug view (levels 0..7, cycling): distinct hues, finest warm.
