@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <optional>
 
 namespace exa {
 
@@ -58,7 +59,40 @@ void cutIntoBricks(const vec3l& lo, const vec3l& hi, int64_t maxWidth, std::vect
 }
 
 /// Each patch's bricks: its leaf boxes, cropped to the kept cells, cut to the brick width.
-std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const io::Coverage& coverage,
+/// The coverage of the patches that may hold kept cells or cover them: those that meet the
+/// kept cells' reach (the keep box widened by two of the widest cells), with each patch's index
+/// in it (or -1).
+struct KeptCoverage {
+  std::vector<int64_t> local;
+  std::optional<io::Coverage> coverage;
+
+  KeptCoverage(const PatchSource& source, const PatchKeep& keep) {
+    const std::vector<io::Patch>& patches = source.patches;
+    std::vector<size_t> near;
+    if (keep.rule == PatchKeep::Rule::All) {
+      for (size_t i = 0; i < patches.size(); ++i)
+        near.push_back(i);
+    } else {
+      int64_t widest = 1;
+      for (const io::Patch& p : patches)
+        widest = std::max(widest, p.width);
+      const vec3l lo = keep.box.lower - vec3l(2 * widest), hi = keep.box.upper + vec3l(2 * widest);
+      for (size_t i = 0; i < patches.size(); ++i) {
+        const vec3l plo = patches[i].lower, phi = patches[i].upper();
+        if (plo.x < hi.x && plo.y < hi.y && plo.z < hi.z && lo.x < phi.x && lo.y < phi.y && lo.z < phi.z)
+          near.push_back(i);
+      }
+    }
+    local.assign(patches.size(), -1);
+    std::vector<io::Patch> kept;
+    kept.reserve(near.size());
+    for (size_t k = 0; k < near.size(); ++k)
+      local[near[k]] = int64_t(k), kept.push_back(patches[near[k]]);
+    coverage.emplace(std::move(kept), [&source, near](size_t k) { return source.name(near[k]); });
+  }
+};
+
+std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const KeptCoverage& kept,
                                            const PatchKeep& keep, int64_t maxWidth) {
   const std::vector<io::Patch>& patches = source.patches;
   std::vector<std::vector<Piece>> pieces(patches.size());
@@ -66,7 +100,8 @@ std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const io::
     const io::Patch& p = patches[i];
     vec3l all(0), allUp = p.cells;
     if (source.heldElsewhere(i) || !cropToKept(p, keep, all, allUp)) return; // none of its cells is kept
-    for (auto [lo, hi] : coverage.leafBoxes(i))
+    if (kept.local[i] < 0) fail(source.name(i), ": holds kept cells beyond their reach"); // cannot happen
+    for (auto [lo, hi] : kept.coverage->leafBoxes(size_t(kept.local[i])))
       if (cropToKept(p, keep, lo, hi)) cutIntoBricks(lo, hi, maxWidth, pieces[i]);
     if (pieces[i].empty()) return;
     const int level = io::log2Exact(p.width);
@@ -125,9 +160,9 @@ void placeValues(const PatchSource& source, size_t i, const std::vector<Piece>& 
 Model buildModelOfPatches(const PatchSource& source, const PatchKeep& keep, const BuildOptions& options) {
   Timer timer;
   const std::vector<io::Patch>& patches = source.patches;
-  const io::Coverage coverage(patches, source.name);
+  const KeptCoverage kept(source, keep);
   const std::vector<std::vector<Piece>> pieces =
-      cutPatches(source, coverage, keep, std::clamp(options.bricks.maxBrickWidth, 1, kMaxBrickWidth));
+      cutPatches(source, kept, keep, std::clamp(options.bricks.maxBrickWidth, 1, kMaxBrickWidth));
 
   Model model;
   model.world = source.world;
