@@ -92,14 +92,14 @@ struct KeptCoverage {
   }
 };
 
-std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const KeptCoverage& kept,
-                                           const PatchKeep& keep, int64_t maxWidth) {
+std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const KeptCoverage& kept, const PatchKeep& keep,
+                                           int64_t maxWidth) {
   const std::vector<io::Patch>& patches = source.patches;
   std::vector<std::vector<Piece>> pieces(patches.size());
   tbb::parallel_for(size_t(0), patches.size(), [&](size_t i) {
     const io::Patch& p = patches[i];
     vec3l all(0), allUp = p.cells;
-    if (source.heldElsewhere(i) || !cropToKept(p, keep, all, allUp)) return; // none of its cells is kept
+    if (source.heldElsewhere(i) || !cropToKept(p, keep, all, allUp)) return;              // none of its cells is kept
     if (kept.local[i] < 0) fail(source.name(i), ": holds kept cells beyond their reach"); // cannot happen
     for (auto [lo, hi] : kept.coverage->leafBoxes(size_t(kept.local[i])))
       if (cropToKept(p, keep, lo, hi)) cutIntoBricks(lo, hi, maxWidth, pieces[i]);
