@@ -21,6 +21,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <future>
 #include <iostream>
 #include <pthread.h>
 #include <thread>
@@ -92,18 +93,30 @@ std::string mergedShown(const FirstStep& f) {
                 std::llround(cells), " cells for ", std::llround(f.coarse.cells), " in boxes)");
 }
 
+/// The coarsest level of a single step merged to at most `firstCells` cells (loadMergedFirst),
+/// read on a thread of its own: it depends on no memory plan, so it is read beside them.
+std::future<std::optional<CoarseLevels>> mergedBeside(const std::vector<std::string>& steps, const std::string& input,
+                                                      const LoadOptions& lo, double firstCells) {
+  if (steps.size() > 1 || !(firstCells > 0)) return {};
+  return std::async(std::launch::async, [input, lo, firstCells] {
+    return loadMergedFirst(input, lo, coarseFirstLevel(input, firstCells), firstCells);
+  });
+}
+
 /// The dataset, or the first readable step of a series (a step that cannot be read is said on
 /// stderr and skipped; when none can be read, the first one's error). A dataset of more than
 /// `coarseFirst` cells comes as its coarse levels (those cells at most, or the coarsest level
-/// alone), and one whose coarsest level alone holds more than `firstCells` as that level merged.
+/// alone), and one whose coarsest level alone holds more than `firstCells` as that level merged
+/// (`merged`, where it is being read already).
 FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo,
-                    double coarseFirst, double firstCells) {
+                    double coarseFirst, double firstCells, std::future<std::optional<CoarseLevels>> read) {
   FirstStep f;
   if (steps.size() <= 1 && coarseFirst > 0) f.coarse = coarseFirstLevel(input, coarseFirst);
   // A coarsest level alone larger than coarseFirst: first a picture of it merged, then the rest.
   const bool large = f.coarse.level > 0 ? f.coarse.coarseCells > firstCells : f.coarse.cells > firstCells;
   if (large && firstCells > 0) {
-    if (std::optional<CoarseLevels> merged = loadMergedFirst(input, lo, f.coarse, firstCells)) {
+    if (std::optional<CoarseLevels> merged =
+            read.valid() ? read.get() : loadMergedFirst(input, lo, f.coarse, firstCells)) {
       f.model = std::move(merged->model);
       f.dataset = std::move(merged->dataset);
       f.merged = merged->mergedFactor;
@@ -342,9 +355,11 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   if (steps.size() > 1 && !o.scene.in.memoryBudget.empty())
     failUsage("--memory-budget views one step; a series' steps are each held whole");
   const uint64_t frameBytes = viewerFrameBytes(doc.frame);
+  std::future<std::optional<CoarseLevels>> merged = mergedBeside(steps, doc.input, lo, o.coarseFirst);
   const uint64_t budget = steps.size() > 1 ? 0 : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
-  viewer.announce(o.scene.in.name()); // after a budget's refusal, before anything is read
-  const FirstStep first = loadFirst(steps, doc.input, lo, coarseFirst, steps.size() > 1 ? 0 : o.coarseFirst);
+  viewer.announce(o.scene.in.name()); // after a budget's refusal, before anything else is read
+  const FirstStep first =
+      loadFirst(steps, doc.input, lo, coarseFirst, steps.size() > 1 ? 0 : o.coarseFirst, std::move(merged));
   if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
