@@ -155,11 +155,14 @@ TEST(Streamed, FramesFromPartsEqualTheInCoreRender) {
   EXPECT_LE(step.residentBytes() + plan.fixedBytes, plan.budget);
 
   // Again: the parts that the budget did not keep come back from the disk (their models and
-  // smooth shading's gradients, as built), and the frame is the same to the bit.
+  // smooth shading's gradients, as built: not in the bricks only their halos' regions hold), and
+  // the frame is the same to the bit.
   const uint64_t fromDisk = step.partsFromDisk();
+  EXPECT_EQ(step.gradientsFromDisk(), 0u);
   FrameBuffer again;
   ASSERT_TRUE(renderStreamed(step, scene, RendererOptions(), frame, again));
   EXPECT_GT(step.partsFromDisk(), fromDisk);
+  EXPECT_GT(step.gradientsFromDisk(), 0u);
   const Image second = again.resolve();
   for (size_t i = 0; i < image.pixels.size(); ++i)
     ASSERT_TRUE(image.pixels[i].x == second.pixels[i].x && image.pixels[i].y == second.pixels[i].y &&

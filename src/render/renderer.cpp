@@ -420,9 +420,9 @@ box3f opaqueCellBounds(const Model& model, const std::vector<LayerTable>& layers
 
 } // namespace
 
-const std::array<std::vector<float>, 3>* Renderer::gradients(int field) const { return impl_->volume.gradients(field); }
+const GradientFields* Renderer::gradients(int field) const { return impl_->volume.gradients(field); }
 
-void Renderer::adoptGradients(int field, std::array<std::vector<float>, 3> gradients) {
+void Renderer::adoptGradients(int field, GradientFields gradients) {
   impl_->volume.adoptGradients(field, std::move(gradients));
 }
 

@@ -395,9 +395,9 @@ bool meets(const box3f& a, const box3f& b) {
 
 } // namespace
 
-const std::array<std::vector<float>, 3>* VolumeMarcher::gradients(int field) const {
+const GradientFields* VolumeMarcher::gradients(int field) const {
   const auto it = gradientFields_.find(field);
-  return it == gradientFields_.end() || it->second.missing != 0 ? nullptr : &it->second.g;
+  return it == gradientFields_.end() ? nullptr : &it->second;
 }
 
 uint64_t VolumeMarcher::gradientVersion(int field) const {
@@ -405,15 +405,16 @@ uint64_t VolumeMarcher::gradientVersion(int field) const {
   return it == gradientFields_.end() ? 0 : it->second.version;
 }
 
-void VolumeMarcher::adoptGradients(int field, std::array<std::vector<float>, 3> gradients) {
-  for (const std::vector<float>& g : gradients)
+void VolumeMarcher::adoptGradients(int field, GradientFields gradients) {
+  for (const std::vector<float>& g : gradients.values)
     if (g.size() != model_.fieldValues.at(size_t(field)).size())
       fail("gradient fields of ", g.size(), " cells adopted for a field of ", model_.fieldValues[size_t(field)].size());
+  if (gradients.built.size() != model_.bricks.size())
+    fail("gradient fields of ", gradients.built.size(), " bricks adopted for a model of ", model_.bricks.size());
   if (gradientFields_.count(field)) return; // one already built (and pointed at) stays
-  GradientFields& fields = gradientFields_[field];
-  fields.g = std::move(gradients);
-  fields.built.assign(model_.bricks.size(), 1);
-  fields.version = 1;
+  gradients.missing = size_t(std::count(gradients.built.begin(), gradients.built.end(), uint8_t(0)));
+  gradients.version = 1;
+  gradientFields_.emplace(field, std::move(gradients));
 }
 
 bool VolumeMarcher::attachGradients(const box3d* domain) {
@@ -437,7 +438,7 @@ bool VolumeMarcher::attachGradients(const box3d* domain) {
     auto it = gradientFields_.find(layer.field);
     if (it == gradientFields_.end()) {
       it = gradientFields_.emplace(layer.field, GradientFields()).first;
-      for (std::vector<float>& g : it->second.g)
+      for (std::vector<float>& g : it->second.values)
         g.assign(model_.fieldValues[size_t(layer.field)].size(), 0.f);
       it->second.built.assign(model_.bricks.size(), 0);
       it->second.missing = model_.bricks.size();
@@ -448,7 +449,7 @@ bool VolumeMarcher::attachGradients(const box3d* domain) {
       for (size_t b = 0; b < needed.size(); ++b)
         if (needed[b] && !fields.built[b]) which.push_back(uint32_t(b));
     if (!which.empty()) {
-      fillCellGradients(layer.view, model_.bricks, model_.regions.regions.size(), which, fields.g);
+      fillCellGradients(layer.view, model_.bricks, model_.regions.regions.size(), which, fields.values);
       for (uint32_t b : which)
         fields.built[b] = 1;
       fields.missing -= which.size();
@@ -457,7 +458,7 @@ bool VolumeMarcher::attachGradients(const box3d* domain) {
     }
     for (int a = 0; a < 3; ++a) {
       layer.grad[size_t(a)] = layer.view;
-      layer.grad[size_t(a)].values = fields.g[size_t(a)].data();
+      layer.grad[size_t(a)].values = fields.values[size_t(a)].data();
     }
   }
   return built;

@@ -10,6 +10,7 @@
 
 #include "exabricks/accel/traversal.h"
 #include "exabricks/amr/cell_locator.h"
+#include "exabricks/amr/gradients.h"
 #include "exabricks/render/renderer.h"
 
 #include <array>
@@ -44,12 +45,11 @@ public:
   /// region's bricks, and no sample is taken in a hidden region or outside a renderer's domain,
   /// so the other bricks' gradients are not needed until a transfer function or domain shows them.
   bool attachGradients(const box3d* domain);
-  /// The gradient fields of model field `field` once built in every brick (null before), and
-  /// gradient fields built before by a marcher over the same model, used instead of building them.
-  const std::array<std::vector<float>, 3>* gradients(int field) const;
-  void adoptGradients(int field, std::array<std::vector<float>, 3> gradients);
-  /// Counts the builds of model field `field`'s gradient fields (0: none yet): a copy made of
-  /// them is current while this is unchanged.
+  /// The gradient fields of model field `field` built so far (null: none yet), and gradient
+  /// fields built before by a marcher over the same model, used instead of building them again.
+  const GradientFields* gradients(int field) const;
+  void adoptGradients(int field, GradientFields gradients);
+  /// gradients(field)'s version, 0 when there are none.
   uint64_t gradientVersion(int field) const;
 
   bool empty() const { return layers_.empty(); }
@@ -79,14 +79,8 @@ private:
   const Model& model_;
   const DatasetInfo& dataset_;
   std::vector<LayerTable> layers_;
-  /// Smooth shading's gradient fields (cellGradients) of one model field, built brick by brick
-  /// as transfer functions show the bricks' regions.
-  struct GradientFields {
-    std::array<std::vector<float>, 3> g;
-    std::vector<uint8_t> built; ///< per brick
-    size_t missing = 0;         ///< bricks not built
-    uint64_t version = 0;
-  };
+  /// Smooth shading's gradient fields per model field, built brick by brick as transfer
+  /// functions and the domain show the bricks' regions.
   std::map<int, GradientFields> gradientFields_;
   std::vector<uint8_t> visible_;
   std::vector<float> majorants_;

@@ -41,8 +41,8 @@ void PartCache::turnOff(const std::string& why) {
     logWarning(strCat("parts are no longer kept on disk (", why, "): each is read from the step when needed"));
   for (int& fd : fds_)
     if (fd >= 0) ::close(fd), fd = -1;
-  for (auto& [key, fd] : gradientFds_)
-    ::close(fd);
+  for (auto& [key, kept] : gradientFds_)
+    ::close(kept.first);
   gradientFds_.clear();
   if (on()) ::rmdir(folder_.c_str());
   folder_.clear();
@@ -75,35 +75,55 @@ void PartCache::write(int part, const Model& model) {
   if (fd >= 0) fds_.at(size_t(part)) = fd;
 }
 
-std::optional<std::array<std::vector<float>, 3>> PartCache::readGradients(int part, int field) const {
+namespace {
+/// Reads `bytes` at `offset` of a file; false when it holds fewer.
+bool readAt(int fd, void* to, size_t bytes, size_t offset) {
+  size_t done = 0;
+  while (done < bytes) {
+    const ssize_t got = ::pread(fd, static_cast<char*>(to) + done, bytes - done, off_t(offset + done));
+    if (got <= 0) return false;
+    done += size_t(got);
+  }
+  return true;
+}
+} // namespace
+
+std::optional<GradientFields> PartCache::readGradients(int part, int field, size_t cells, size_t bricks) const {
   const auto it = gradientFds_.find({part, field});
   if (it == gradientFds_.end()) return std::nullopt;
+  const int fd = it->second.first;
+  const size_t bytes = cells * sizeof(float);
   struct stat st {};
-  if (::fstat(it->second, &st) != 0 || st.st_size % (3 * sizeof(float)) != 0) return std::nullopt;
-  const size_t n = size_t(st.st_size) / (3 * sizeof(float));
-  std::array<std::vector<float>, 3> g;
+  if (::fstat(fd, &st) != 0 || size_t(st.st_size) != 3 * bytes + bricks) return std::nullopt;
+  GradientFields g;
   for (int a = 0; a < 3; ++a) {
-    g[size_t(a)].resize(n);
-    const size_t bytes = n * sizeof(float);
-    size_t done = 0;
-    while (done < bytes) {
-      const ssize_t got = ::pread(it->second, reinterpret_cast<char*>(g[size_t(a)].data()) + done, bytes - done,
-                                  off_t(size_t(a) * bytes + done));
-      if (got <= 0) return std::nullopt;
-      done += size_t(got);
-    }
+    g.values[size_t(a)].resize(cells);
+    if (!readAt(fd, g.values[size_t(a)].data(), bytes, size_t(a) * bytes)) return std::nullopt;
   }
+  g.built.resize(bricks);
+  if (!readAt(fd, g.built.data(), bricks, 3 * bytes)) return std::nullopt;
+  ++gradientHits_;
   return g;
 }
 
-void PartCache::writeGradients(int part, int field, const std::array<std::vector<float>, 3>& gradients) {
-  const int fd = keep(strCat("part_", part, "_gradients_", field, ".f32"), [&](const std::string& path) {
-    std::ofstream out(path, std::ios::binary);
-    for (const std::vector<float>& g : gradients)
-      out.write(reinterpret_cast<const char*>(g.data()), std::streamsize(g.size() * sizeof(float)));
-    if (!out.flush()) fail(path, ": cannot write");
-  });
-  if (fd >= 0) gradientFds_[{part, field}] = fd;
+bool PartCache::buildsMore(int part, int field, const GradientFields& gradients) const {
+  const auto it = gradientFds_.find({part, field});
+  return it == gradientFds_.end() || gradients.missing < it->second.second;
+}
+
+void PartCache::writeGradients(int part, int field, const GradientFields& gradients) {
+  const int fd =
+      keep(strCat("part_", part, "_gradients_", field, "_", gradients.missing, ".f32"), [&](const std::string& path) {
+        std::ofstream out(path, std::ios::binary);
+        for (const std::vector<float>& g : gradients.values)
+          out.write(reinterpret_cast<const char*>(g.data()), std::streamsize(g.size() * sizeof(float)));
+        out.write(reinterpret_cast<const char*>(gradients.built.data()), std::streamsize(gradients.built.size()));
+        if (!out.flush()) fail(path, ": cannot write");
+      });
+  if (fd < 0) return;
+  const auto it = gradientFds_.find({part, field});
+  if (it != gradientFds_.end()) ::close(it->second.first);
+  gradientFds_[{part, field}] = {fd, gradients.missing};
 }
 
 } // namespace exa

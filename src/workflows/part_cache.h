@@ -5,6 +5,7 @@
 // vanish with the process however it ends.
 #pragma once
 
+#include "exabricks/amr/gradients.h"
 #include "exabricks/amr/model.h"
 
 #include <array>
@@ -31,23 +32,27 @@ public:
   std::optional<Model> read(int part) const;
   /// Keeps part p's model; a failure to write (a full disk) turns the cache off with a warning.
   void write(int part, const Model& model);
-  /// Smooth shading's gradient fields of part p's field f, as written (none when they have not
-  /// been), and keeping them.
-  std::optional<std::array<std::vector<float>, 3>> readGradients(int part, int field) const;
-  void writeGradients(int part, int field, const std::array<std::vector<float>, 3>& gradients);
-  bool hasGradients(int part, int field) const { return gradientFds_.count({part, field}) > 0; }
+  /// Smooth shading's gradient fields of part p's field f as last written, for a part of `cells`
+  /// cells in `bricks` bricks (none when none were written); keeping them (in place of any
+  /// written before); and whether `gradients` have bricks built that those written lack.
+  std::optional<GradientFields> readGradients(int part, int field, size_t cells, size_t bricks) const;
+  void writeGradients(int part, int field, const GradientFields& gradients);
+  bool buildsMore(int part, int field, const GradientFields& gradients) const;
   /// Parts read back from the cache so far.
   uint64_t hits() const { return hits_; }
+  /// Gradient fields read back so far.
+  uint64_t gradientHits() const { return gradientHits_; }
 
 private:
-  std::string folder_;                             ///< private folder the files pass through (empty: off)
-  std::vector<int> fds_;                           ///< per part, the unlinked file's descriptor, or -1
-  std::map<std::pair<int, int>, int> gradientFds_; ///< per (part, field), likewise
+  std::string folder_;   ///< private folder the files pass through (empty: off)
+  std::vector<int> fds_; ///< per part, the unlinked file's descriptor, or -1
+  /// per (part, field), likewise, and the bricks not built in what it holds
+  std::map<std::pair<int, int>, std::pair<int, size_t>> gradientFds_;
   /// A new file of the folder, written by `write(path)`: its descriptor, the file unlinked; -1
   /// (and the cache off, with a warning) when it cannot be written.
   int keep(const std::string& name, const std::function<void(const std::string&)>& write);
   void turnOff(const std::string& why);
-  mutable uint64_t hits_ = 0;
+  mutable uint64_t hits_ = 0, gradientHits_ = 0;
 };
 
 } // namespace exa

@@ -286,6 +286,8 @@ StreamedStep::~StreamedStep() = default;
 
 uint64_t StreamedStep::partsFromDisk() const { return cache_->hits(); }
 
+uint64_t StreamedStep::gradientsFromDisk() const { return cache_->gradientHits(); }
+
 uint64_t StreamedStep::residentBytes() const {
   uint64_t n = 0;
   for (const Resident& r : resident_)
@@ -427,13 +429,14 @@ Renderer* StreamedStep::renderer(int part, const Scene& scene, const RendererOpt
     r.renderer->setDomain(partWorldBox(part));
     r.renderer->setParticles(particles_);
     for (int f = 0; f < int(r.model->fieldNames.size()); ++f)
-      if (auto g = cache_->readGradients(part, f)) r.renderer->adoptGradients(f, std::move(*g));
+      if (auto g = cache_->readGradients(part, f, r.model->fieldValues[size_t(f)].size(), r.model->bricks.size()))
+        r.renderer->adoptGradients(f, std::move(*g));
   }
   r.renderer->setOptions(options);
   r.renderer->setScene(scene);
-  // Smooth shading's gradients, built once per part and field: kept with the part on disk.
+  // Smooth shading's gradients, built once per brick, part and field: kept with the part on disk.
   for (int f = 0; f < int(r.model->fieldNames.size()); ++f)
-    if (const auto* g = r.renderer->gradients(f); g && cache_->on() && !cache_->hasGradients(part, f))
+    if (const GradientFields* g = r.renderer->gradients(f); g && cache_->on() && cache_->buildsMore(part, f, *g))
       cache_->writeGradients(part, f, *g);
   return r.renderer.get();
 }

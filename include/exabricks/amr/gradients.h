@@ -19,6 +19,14 @@ namespace exa {
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
                                                 size_t regionCount, size_t valueCount);
 
+/// Gradient fields built brick by brick, as scenes need them (a renderer's smooth shading).
+struct GradientFields {
+  std::array<std::vector<float>, 3> values; ///< as cellGradients gives, 0 in the bricks not built
+  std::vector<uint8_t> built;               ///< per brick: 1 where its cells' are built
+  size_t missing = 0;                       ///< bricks not built
+  uint64_t version = 0;                     ///< counts the builds: a copy is current while it is unchanged
+};
+
 /// The same, for the bricks that `which` lists (indices into `bricks`) only, written into `out`
 /// (each of the field's value count) at their cells' slots; the other cells are left as they are.
 void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,

@@ -33,6 +33,7 @@
 namespace exa {
 
 struct Model;
+struct GradientFields; // amr/gradients.h
 
 /// Dataset-wide values the renderer needs, explicit so that a renderer that sees only part of
 /// the data can be given the whole dataset's values. `of()` computes them once from a model.
@@ -288,11 +289,12 @@ public:
   void setDomain(const box3d& world);
   const box3d& domain() const;
 
-  /// Smooth shading's gradient fields of model field `field` (x, y, z per cell, in brick order),
-  /// once a scene needed them (null before). A renderer made again over the same model can
-  /// adopt them (before its scene is set) instead of building them again.
-  const std::array<std::vector<float>, 3>* gradients(int field) const;
-  void adoptGradients(int field, std::array<std::vector<float>, 3> gradients);
+  /// Smooth shading's gradient fields of model field `field` as built so far (in the bricks that
+  /// the scenes and domain have let samples read), once a scene needed them (null before). A
+  /// renderer made again over the same model can adopt them (before its scene is set) instead of
+  /// building those bricks' again.
+  const GradientFields* gradients(int field) const;
+  void adoptGradients(int field, GradientFields gradients);
 
   /// The nearest (clipped) mesh, particle or iso-surface hit along a world ray; false when there
   /// is none.

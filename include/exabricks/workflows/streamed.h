@@ -149,6 +149,8 @@ public:
   uint64_t partsRead() const { return reads_; }
   /// Of those, the parts read back from the disk cache instead of built from the step.
   uint64_t partsFromDisk() const;
+  /// Smooth shading's gradient fields of a part and field read back from the disk cache.
+  uint64_t gradientsFromDisk() const;
 
 private:
   struct Resident;
