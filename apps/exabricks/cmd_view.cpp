@@ -78,6 +78,7 @@ struct FirstStep {
   CoarseFirst coarse;                                  ///< level > 0: `model` holds the coarse levels
   int64_t merged = 1; ///< above 1: `model` holds the coarsest level's cells merged by this per axis
   int mergedLevel = 0;
+  std::optional<DefaultChoices> choices; ///< the first transfer function, chosen from `model` already
 };
 
 /// What a view shows of a step with the coarse levels `coarse` (level > 0), for the page.
@@ -93,13 +94,31 @@ std::string mergedShown(const FirstStep& f) {
                 std::llround(cells), " cells for ", std::llround(f.coarse.cells), " in boxes)");
 }
 
-/// The coarsest level of a single step merged to at most `firstCells` cells (loadMergedFirst),
-/// read on a thread of its own: it depends on no memory plan, so it is read beside them.
-std::future<std::optional<CoarseLevels>> mergedBeside(const std::vector<std::string>& steps, const std::string& input,
-                                                      const LoadOptions& lo, double firstCells) {
+/// The first picture of a large plotfile: its coarsest level merged, and the transfer function
+/// chosen from it where the options leave that to the data.
+struct MergedFirst {
+  std::optional<CoarseLevels> levels;
+  std::optional<DefaultChoices> choices;
+};
+
+/// The coarsest level of a single step merged to at most `firstCells` cells (loadMergedFirst)
+/// and the first transfer function for `scene`, on a thread of its own: they depend on no memory
+/// plan, so they are made beside them.
+std::future<MergedFirst> mergedBeside(const std::vector<std::string>& steps, const std::string& input,
+                                      const LoadOptions& lo, double firstCells, const RenderOptions& o,
+                                      const CLI::App& cmd, const Scene& scene) {
   if (steps.size() > 1 || !(firstCells > 0)) return {};
-  return std::async(std::launch::async, [input, lo, firstCells] {
-    return loadMergedFirst(input, lo, coarseFirstLevel(input, firstCells), firstCells);
+  return std::async(std::launch::async, [input, lo, firstCells, &o, &cmd, scene] {
+    MergedFirst m;
+    m.levels = loadMergedFirst(input, lo, coarseFirstLevel(input, firstCells), firstCells);
+    if (m.levels && choosesTransferFunction(o)) {
+      try {
+        const int field = m.levels->model->requireField(scene.layers.at(0).field);
+        m.choices = firstTransferFunction(cmd, scene, field, *m.levels->model, m.levels->dataset);
+      } catch (const Error&) { // chosen again where it is applied, which says what is wrong
+      }
+    }
+    return m;
   });
 }
 
@@ -109,18 +128,21 @@ std::future<std::optional<CoarseLevels>> mergedBeside(const std::vector<std::str
 /// alone), and one whose coarsest level alone holds more than `firstCells` as that level merged
 /// (`merged`, where it is being read already).
 FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo,
-                    double coarseFirst, double firstCells, std::future<std::optional<CoarseLevels>> read) {
+                    double coarseFirst, double firstCells, std::future<MergedFirst> read) {
   FirstStep f;
   if (steps.size() <= 1 && coarseFirst > 0) f.coarse = coarseFirstLevel(input, coarseFirst);
   // A coarsest level alone larger than coarseFirst: first a picture of it merged, then the rest.
   const bool large = f.coarse.level > 0 ? f.coarse.coarseCells > firstCells : f.coarse.cells > firstCells;
   if (large && firstCells > 0) {
-    if (std::optional<CoarseLevels> merged =
-            read.valid() ? read.get() : loadMergedFirst(input, lo, f.coarse, firstCells)) {
+    const bool early = read.valid();
+    MergedFirst m = early ? read.get() : MergedFirst();
+    if (!early) m.levels = loadMergedFirst(input, lo, f.coarse, firstCells);
+    if (std::optional<CoarseLevels>& merged = m.levels) {
       f.model = std::move(merged->model);
       f.dataset = std::move(merged->dataset);
       f.merged = merged->mergedFactor;
       f.mergedLevel = merged->mergedLevel;
+      f.choices = std::move(m.choices);
       logNote(strCat("showing ", mergedShown(f), "; every level follows"));
       return f;
     }
@@ -345,6 +367,9 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   options.token = o.token;
   options.device = o.device;
   if (o.device != "auto" && o.device != "cpu") resolveDevice(o.device); // refuse an unusable one before serving
+  // The GPU runtime's start (tens of milliseconds to seconds), beside the reads, for the first frame.
+  std::future<void> gpuProbe;
+  if (o.device == "auto") gpuProbe = std::async(std::launch::async, [] { cudaStatus(); });
   // Bound before the dataset loads: a taken port fails at once.
   BoundViewer viewer(options, stopSignals);
 
@@ -355,7 +380,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   if (steps.size() > 1 && !o.scene.in.memoryBudget.empty())
     failUsage("--memory-budget views one step; a series' steps are each held whole");
   const uint64_t frameBytes = viewerFrameBytes(doc.frame);
-  std::future<std::optional<CoarseLevels>> merged = mergedBeside(steps, doc.input, lo, o.coarseFirst);
+  std::future<MergedFirst> merged = mergedBeside(steps, doc.input, lo, o.coarseFirst, o.scene, cmd, doc.scene);
   const uint64_t budget = steps.size() > 1 ? 0 : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
   viewer.announce(o.scene.in.name()); // after a budget's refusal, before anything else is read
   const FirstStep first =
@@ -363,7 +388,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
-  applyDataDefaults(o.scene, cmd, doc.scene, *model, dataset);
+  applyDataDefaults(o.scene, cmd, doc.scene, *model, dataset, nullptr, true, first.choices ? &*first.choices : nullptr);
   std::vector<std::pair<int, std::string>> unreadable = first.unreadable;
   applySeriesRange(first, steps, lo, !o.scene.range.empty(), perStep, doc.scene, unreadable);
   doc.frame.camera = cameraFromOptions(o.scene, cmd, doc, *model, visibleBoundsOf(*model, dataset, doc.scene));

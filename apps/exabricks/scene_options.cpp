@@ -551,8 +551,7 @@ Camera cameraFromOptions(const RenderOptions& o, const CLI::App& cmd, const Scen
 }
 
 int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
-                      const DatasetInfo& dataset, const WholeData* whole, bool warn) {
-  auto given = [&](const char* name) { return cmd.count(name) > 0; };
+                      const DatasetInfo& dataset, const WholeData* whole, bool warn, const DefaultChoices* chosen) {
   VolumeLayer& first = scene.layers.at(0);
   const int field = model.requireField(first.field);
   if (first.field.empty() && model.fieldNames.size() > 1)
@@ -561,14 +560,12 @@ int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene,
   // The default field by its name: a scene file written from here says which field it shows.
   if (first.field.empty()) first.field = model.fieldNames[size_t(field)];
   if (choosesTransferFunction(o)) {
-    const DefaultChoices c =
-        adaptTransferFunction(model, dataset, field, first.tf, !given("--log") && !given("--linear"),
-                              !given("--opacity"), whole ? &whole->histogram : nullptr, !given("--colormap"));
+    const DefaultChoices c = chosen ? *chosen : firstTransferFunction(cmd, scene, field, model, dataset, whole);
     first.tf = c.tf;
     for (const std::string& note : c.commandLineNotes())
       logNote(note);
   }
-  if (given("--linear"))
+  if (cmd.count("--linear"))
     for (VolumeLayer& l : scene.layers)
       l.tf.logScale = false;
   if (warn)

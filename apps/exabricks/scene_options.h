@@ -107,12 +107,21 @@ struct WholeData {
 /// Whether the first layer's transfer function is chosen from the data (no scene or
 /// transfer-function file gives it): applyDataDefaults then reads the data's values.
 inline bool choosesTransferFunction(const RenderOptions& o) { return o.sceneFile.empty() && o.tfFile.empty(); }
+/// The first layer's transfer function as the first picture adapts it to the data (`field`: the
+/// layer's field index), without a word on stderr.
+inline DefaultChoices firstTransferFunction(const CLI::App& cmd, const Scene& scene, int field, const Model& model,
+                                            const DatasetInfo& dataset, const WholeData* whole = nullptr) {
+  auto given = [&](const char* name) { return cmd.count(name) > 0; };
+  return adaptTransferFunction(model, dataset, field, scene.layers.at(0).tf, !given("--log") && !given("--linear"),
+                               !given("--opacity"), whole ? &whole->histogram : nullptr, !given("--colormap"));
+}
 /// The first picture: names the default field, adapts the first layer's transfer function to the
-/// data unless a file or the options chose it, applies --linear and logs the scene's warnings
-/// (unless `warn` is false: the caller logs them once the dataset's ranges are known).
-/// Returns the first layer's field index.
+/// data unless a file or the options chose it (as `chosen` says, where it was adapted already),
+/// applies --linear and logs the scene's warnings (unless `warn` is false: the caller logs them
+/// once the dataset's ranges are known). Returns the first layer's field index.
 int applyDataDefaults(const RenderOptions& o, const CLI::App& cmd, Scene& scene, const Model& model,
-                      const DatasetInfo& dataset, const WholeData* whole = nullptr, bool warn = true);
+                      const DatasetInfo& dataset, const WholeData* whole = nullptr, bool warn = true,
+                      const DefaultChoices* chosen = nullptr);
 /// The camera: the scene file's, or framing from azimuth and elevation the part of the data the
 /// transfer function shows (all of it with --frame-all, or when nothing is visible); explicit
 /// position, look-at and up override either.

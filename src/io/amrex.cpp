@@ -488,7 +488,9 @@ bool isAmrexPlotfile(const std::string& path) {
   return in && std::getline(in, first) && first.rfind("HyperCLaw", 0) == 0;
 }
 
-std::vector<std::string> listAmrexFields(const std::string& path) { return readHeader(path).names; }
+// From the metadata kept for the process: a large step's Header alone lists every box (tens of
+// megabytes), and whatever asks for the fields asks for the boxes next.
+std::vector<std::string> listAmrexFields(const std::string& path) { return plotfileMeta(path)->pf.names; }
 
 std::optional<range1f> amrexFieldRange(const std::string& path, const std::string& field) {
   const std::shared_ptr<const PlotfileMeta> meta = plotfileMeta(path);
