@@ -2,6 +2,8 @@
 
 #include "exabricks/core/error.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <cmath>
 #include <functional>
@@ -180,13 +182,14 @@ struct Builder {
     }
   }
 
-  int build(std::vector<CensusBox> items, int parts, const box3l& region) {
-    const int index = int(nodes.size());
-    nodes.emplace_back();
+  /// Builds node `index` (of nodes sized 2 * parts - 1 in all, depth first, low child first) over
+  /// parts `part`, ... of boxes: the two children of a node hold separate ranges of both, so they
+  /// are built at once, numbered as one after the other would number them.
+  void build(std::vector<CensusBox> items, int parts, const box3l& region, int index, int part) {
     if (parts == 1) {
-      nodes[size_t(index)].part = int(boxes.size());
-      boxes.push_back(region);
-      return index;
+      nodes[size_t(index)].part = part;
+      boxes[size_t(part)] = region;
+      return;
     }
     const int lowParts = parts / 2;
     int axis = 0;
@@ -199,14 +202,18 @@ struct Builder {
     box3l lowRegion = region, highRegion = region;
     lowRegion.upper[axis] = split;
     highRegion.lower[axis] = split;
-    const int c0 = build(std::move(low), lowParts, lowRegion);
-    const int c1 = build(std::move(high), parts - lowParts, highRegion);
+    const int c0 = index + 1, c1 = index + 2 * lowParts; // the low subtree has 2 * lowParts - 1 nodes
+    auto buildLow = [&] { build(std::move(low), lowParts, lowRegion, c0, part); };
+    auto buildHigh = [&] { build(std::move(high), parts - lowParts, highRegion, c1, part + lowParts); };
+    if (low.size() + high.size() > 4096)
+      tbb::parallel_invoke(buildLow, buildHigh);
+    else
+      buildLow(), buildHigh();
     KdPartition::Node& n = nodes[size_t(index)];
     n.axis = axis;
     n.split = split;
     n.child[0] = c0;
     n.child[1] = c1;
-    return index;
   }
 };
 
@@ -221,7 +228,9 @@ KdPartition KdPartition::balance(const Census& census, int parts, int64_t grain)
   items.reserve(census.boxes.size());
   for (const CensusBox& c : census.boxes)
     if (!c.box.empty() && c.cells > 0) items.push_back(c);
-  b.build(std::move(items), parts, box3l(vec3l(-kUnboundedLattice), vec3l(kUnboundedLattice)));
+  p.nodes_.resize(size_t(2 * parts - 1));
+  p.boxes_.resize(size_t(parts));
+  b.build(std::move(items), parts, box3l(vec3l(-kUnboundedLattice), vec3l(kUnboundedLattice)), 0, 0);
   return p;
 }
 
