@@ -534,5 +534,39 @@ TEST(Partition, CellsCentredInABoxAreCountedAsTheyAreVisited) {
   }
 }
 
+TEST(Partition, CellsReadByPartsAreThoseOfTheBoxesThatReachTheirReadBoxes) {
+  // Random boxes of several widths, some far apart and on both sides of the origin.
+  std::mt19937 rng{5};
+  std::uniform_int_distribution<int64_t> at(-300, 300), size(1, 40);
+  Census census;
+  census.coarsestLevel = 3;
+  for (int i = 0; i < 3000; ++i) {
+    box3l b;
+    for (int a = 0; a < 3; ++a) {
+      b.lower[a] = at(rng) * (i % 50 == 0 ? 1000 : 1);
+      b.upper[a] = b.lower[a] + size(rng);
+    }
+    census.boxes.push_back({b, double(size(rng)) * 1.37});
+  }
+  for (int parts : {1, 2, 3, 7, 16, 48}) {
+    const KdPartition p = KdPartition::balance(census, parts, 8);
+    const std::vector<double> cells = cellsReadByParts(census, p);
+    ASSERT_EQ(int(cells.size()), parts);
+    for (int k = 0; k < parts; ++k) {
+      // Every box against the part's read box, in order: the same sum to the bit.
+      const box3i r = haloReadBox(shadingReach(p.box(k), census.coarsestLevel), census.coarsestLevel);
+      double expected = 0;
+      for (const CensusBox& c : census.boxes) {
+        bool overlaps = true;
+        for (int a = 0; a < 3; ++a)
+          overlaps =
+              overlaps && std::max(c.box.lower[a], int64_t(r.lower[a])) < std::min(c.box.upper[a], int64_t(r.upper[a]));
+        if (overlaps) expected += c.cells;
+      }
+      EXPECT_EQ(cells[size_t(k)], expected) << parts << " parts, part " << k;
+    }
+  }
+}
+
 } // namespace
 } // namespace exa

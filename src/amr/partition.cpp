@@ -2,6 +2,7 @@
 
 #include "exabricks/core/error.h"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -261,6 +262,59 @@ int KdPartition::partAt(const vec3d& lattice) const {
     i = n.child[lattice[n.axis] < double(n.split) ? 0 : 1];
   }
   return nodes_[size_t(i)].part;
+}
+
+void KdPartition::forEachPartNear(const box3l& box, int64_t margin, const std::function<void(int)>& visit) const {
+  if (nodes_.empty()) return;
+  std::vector<int> stack{0};
+  while (!stack.empty()) {
+    const Node& n = nodes_[size_t(stack.back())];
+    stack.pop_back();
+    if (n.axis < 0) {
+      visit(n.part);
+      continue;
+    }
+    // Low parts lie below the plane, high parts above it: grown, each side reaches `margin` over.
+    if (box.lower[n.axis] < n.split + margin) stack.push_back(n.child[0]);
+    if (box.upper[n.axis] > n.split - margin) stack.push_back(n.child[1]);
+  }
+}
+
+std::vector<double> cellsReadByParts(const Census& census, const KdPartition& partition) {
+  const int parts = partition.parts();
+  std::vector<box3l> readBoxes(static_cast<size_t>(parts));
+  int64_t margin = 0; // the most any part's read box reaches beyond the part
+  for (int p = 0; p < parts; ++p) {
+    const box3l& b = partition.box(p);
+    const box3i r = haloReadBox(shadingReach(b, census.coarsestLevel), census.coarsestLevel);
+    readBoxes[size_t(p)] = box3l(vec3l(r.lower), vec3l(r.upper));
+    for (int a = 0; a < 3; ++a)
+      margin = std::max({margin, b.lower[a] - int64_t(r.lower[a]), int64_t(r.upper[a]) - b.upper[a]});
+  }
+  // Per box, the parts whose read box it overlaps, found down the partition's tree; then per part
+  // the cells of its boxes summed in the boxes' order.
+  const std::vector<CensusBox>& boxes = census.boxes;
+  std::vector<std::vector<int>> near(boxes.size());
+  tbb::parallel_for(size_t(0), boxes.size(), [&](size_t i) {
+    const box3l& c = boxes[i].box;
+    partition.forEachPartNear(c, margin, [&](int p) {
+      const box3l& r = readBoxes[size_t(p)];
+      bool overlaps = true;
+      for (int a = 0; a < 3 && overlaps; ++a)
+        overlaps = std::max(c.lower[a], r.lower[a]) < std::min(c.upper[a], r.upper[a]);
+      if (overlaps) near[i].push_back(p);
+    });
+  });
+  std::vector<std::vector<uint32_t>> of(static_cast<size_t>(parts));
+  for (size_t i = 0; i < boxes.size(); ++i)
+    for (int p : near[i])
+      of[size_t(p)].push_back(uint32_t(i));
+  std::vector<double> cells(static_cast<size_t>(parts), 0.0);
+  tbb::parallel_for(0, parts, [&](int p) {
+    for (uint32_t i : of[size_t(p)])
+      cells[size_t(p)] += boxes[i].cells;
+  });
+  return cells;
 }
 
 std::vector<int> KdPartition::orderFrom(const vec3d& eye) const {

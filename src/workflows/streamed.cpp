@@ -44,29 +44,6 @@ int passesPerRound(size_t pixels, int samplesPerPixel) {
   return int(std::clamp<uint64_t>(kCompositeBytes / std::max<uint64_t>(perPass, 1), 1, uint64_t(samplesPerPixel)));
 }
 
-/// The census cells of the boxes that overlap `box`, whole: a reader reads the patches (AMReX
-/// boxes, blocks of NAME.cells records) that reach a part's read box entirely before it crops them.
-double cellsIn(const Census& census, const box3l& box) {
-  double n = 0;
-  for (const CensusBox& c : census.boxes) {
-    bool overlaps = true;
-    for (int a = 0; a < 3 && overlaps; ++a)
-      overlaps = std::max(c.box.lower[a], box.lower[a]) < std::min(c.box.upper[a], box.upper[a]);
-    if (overlaps) n += c.cells;
-  }
-  return n;
-}
-
-/// The cells part p reads: those of its shading reach grown by the coarsest width (its halo).
-std::vector<double> haloCells(const Census& census, const KdPartition& partition) {
-  std::vector<double> cells(size_t(partition.parts()));
-  tbb::parallel_for(0, partition.parts(), [&](int p) {
-    const box3i read = haloReadBox(shadingReach(partition.box(p), census.coarsestLevel), census.coarsestLevel);
-    cells[size_t(p)] = cellsIn(census, box3l(vec3l(read.lower), vec3l(read.upper)));
-  });
-  return cells;
-}
-
 size_t loadedFields(const std::string& input, const LoadOptions& options) {
   return options.fields.empty() ? std::max<size_t>(listFields(input).size(), 1) : options.fields.size();
 }
@@ -119,7 +96,7 @@ std::pair<KdPartition, std::vector<double>> balancedParts(const std::string& inp
                                  ",", census.bounds().upper.x, "|", parts, "|", grain);
   if (auto balanced = kept.find(key)) return *balanced;
   KdPartition partition = KdPartition::balance(census, parts, grain);
-  std::vector<double> cells = haloCells(census, partition);
+  std::vector<double> cells = cellsReadByParts(census, partition);
   return *kept.keep(key, std::make_pair(std::move(partition), std::move(cells)));
 }
 } // namespace

@@ -8,6 +8,7 @@
 #include "exabricks/amr/cells.h"
 
 #include <cstdint>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -152,6 +153,10 @@ public:
   /// Parts front to back along a direction (orthographic), lattice directions.
   std::vector<int> orderAlong(const vec3d& direction) const;
 
+  /// Calls visit(p) for every part p whose box, grown by `margin` on every side, may overlap
+  /// `box` (those and maybe more: the caller tests).
+  void forEachPartNear(const box3l& box, int64_t margin, const std::function<void(int)>& visit) const;
+
   /// A flat form of the partition for sending between processes, and back (checked).
   std::vector<int64_t> encode() const;
   static KdPartition decode(const std::vector<int64_t>& data);
@@ -161,5 +166,10 @@ private:
   std::vector<Node> nodes_;
   std::vector<box3l> boxes_;
 };
+
+/// The census cells each part reads: those of the census boxes, whole, that overlap the part's
+/// halo read box (haloReadBox of its shadingReach), as a reader reads the patches (AMReX boxes,
+/// blocks of NAME.cells records) that reach a part entirely before it crops them.
+std::vector<double> cellsReadByParts(const Census& census, const KdPartition& partition);
 
 } // namespace exa
