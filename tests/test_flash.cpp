@@ -4,6 +4,7 @@
 #include "exabricks/io/load.h"
 
 #include "flash_fixture.h"
+#include "reader_checks.h"
 
 #include <gtest/gtest.h>
 
@@ -68,6 +69,37 @@ TEST(Flash, LeafBlocksBothPrecisions) {
     LoadOptions o;
     o.fields = {"pres"};
     EXPECT_EQ(loadCells(f.file.string(), o).fields.at(0).name, "pres");
+  }
+}
+
+TEST(Flash, CensusFromTheBlockTableAndABuildFromTheBlocksEqualTheCells) {
+  for (int variant = 0; variant < 2; ++variant) {
+    SCOPED_TRACE(variant);
+    FlashFixture f;
+    f.file = fs::path(EXABRICKS_TEST_TMP) / "flash" / (variant ? "parts_f32_hdf5_0001" : "parts_f64_hdf5_0001");
+    f.float32 = variant;
+    f.write();
+    const std::string path = f.file.string();
+    const Census census = flashCensus(path);
+    EXPECT_EQ(census.cells(), double((1 + 7 + 8) * 32));
+    EXPECT_EQ(census.coarsestLevel, 2); // the root block's cells are 4 finest cells wide
+    // Whole, through a box, and in parts (each the cells whose support reaches it).
+    expectBoxBuildEqualsCells(path, 2, (1 + 7 + 8) * 32);
+    const Model m = loadModel(path);
+    EXPECT_EQ(m.simulation.time, 0.5);
+    EXPECT_EQ(m.simulation.cycle, 42);
+    EXPECT_EQ(m.fieldUnits.at(0), "g/cm^3");
+  }
+  // A value float32 cannot hold is named by its block, variable and cell on this path too.
+  FlashFixture bad;
+  bad.file = fs::path(EXABRICKS_TEST_TMP) / "flash" / "parts_nan_hdf5_0001";
+  bad.nanValue = true;
+  bad.write();
+  try {
+    loadModel(bad.file.string());
+    ADD_FAILURE() << "a NaN was read";
+  } catch (const Error& e) {
+    expectIn(e.what(), {"parts_nan_hdf5_0001", "block 17", "dens", "NaN"});
   }
 }
 

@@ -152,15 +152,49 @@ std::vector<io::Patch> placeLeaves(const h5::File& f, const FlashHeader& h, cons
 }
 
 /// The simulation's time and step, where the scalars hold them.
-void readSimulation(const h5::File& f, CellSet& set) {
+SimulationState simulationOf(const h5::File& f) {
+  SimulationState s;
   if (f.isDataset("real scalars")) {
     const double t = tableReal(f.readCompound("real scalars"), "time");
-    if (std::isfinite(t)) set.simulation.time = t;
+    if (std::isfinite(t)) s.time = t;
   }
   if (f.isDataset("integer scalars")) {
     const int64_t step = tableInt(f.readCompound("integer scalars"), "nstep");
-    if (step >= 0) set.simulation.cycle = step;
+    if (step >= 0) s.cycle = step;
   }
+  return s;
+}
+
+/// The header, the leaf blocks and their places on the finest lattice.
+struct FlashBlocks {
+  FlashHeader header;
+  Leaves leaves;
+  std::vector<io::Patch> patches; ///< per leaf block
+};
+
+FlashBlocks readBlocks(const h5::File& f) {
+  FlashBlocks b;
+  b.header = readHeader(f);
+  const std::vector<int64_t> nodeType = f.readInts("node type");
+  if (nodeType.size() != b.header.blocks)
+    f.bad("node type", strCat(nodeType.size(), " entries for ", b.header.blocks, " blocks"));
+  const std::vector<double> bbox = f.readDoubles("bounding box");
+  // Coordinates stored as float32 carry only about 7 digits.
+  const double eps = f.isDouble("bounding box") ? DBL_EPSILON : double(FLT_EPSILON);
+  b.leaves = findLeaves(f, b.header, nodeType, bbox);
+  b.patches = placeLeaves(f, b.header, bbox, b.leaves, eps);
+  return b;
+}
+
+/// Variable `name`'s value at cell i of block b, as float32 (a value float32 cannot hold is an
+/// error naming the block, the variable and the cell).
+float blockValue(const std::string& path, const FlashHeader& h, uint64_t b, const std::string& name, int64_t i,
+                 double v) {
+  return io::toFloat32(v, [&] {
+    const int64_t x = i % h.blockCells.x, y = (i / h.blockCells.x) % h.blockCells.y,
+                  z = i / (h.blockCells.x * h.blockCells.y);
+    return strCat(path, ": block ", b, ": variable '", name, "' at cell (", x, ",", y, ",", z, ")");
+  });
 }
 
 /// The cells of every leaf block, in block order and x fastest within a block.
@@ -201,11 +235,7 @@ void readVariables(const h5::File& f, const std::string& path, const FlashHeader
         const uint64_t b = leaves[next];
         const double* src = raw.data() + (b - first) * uint64_t(perBlock);
         for (int64_t i = 0; i < perBlock; ++i)
-          out.push_back(io::toFloat32(src[i], [&] {
-            const int64_t x = i % h.blockCells.x, y = (i / h.blockCells.x) % h.blockCells.y,
-                          z = i / (h.blockCells.x * h.blockCells.y);
-            return strCat(path, ": block ", b, ": variable '", name, "' at cell (", x, ",", y, ",", z, ")");
-          }));
+          out.push_back(blockValue(path, h, b, name, i, src[i]));
       }
       progress.advance(count);
     }
@@ -231,26 +261,77 @@ std::vector<std::string> listFlashFields(const std::string& path) { return readH
 
 CellSet readFlash(const std::string& path, const std::vector<std::string>& wanted) {
   const h5::File f(path);
-  const FlashHeader h = readHeader(f);
+  const FlashBlocks blocks = readBlocks(f);
+  const FlashHeader& h = blocks.header;
+  const Leaves& leaves = blocks.leaves;
   const std::vector<size_t> vars = io::pickFields(path, h.names, wanted);
-  const std::vector<int64_t> nodeType = f.readInts("node type");
-  if (nodeType.size() != h.blocks) f.bad("node type", strCat(nodeType.size(), " entries for ", h.blocks, " blocks"));
-  const std::vector<double> bbox = f.readDoubles("bounding box");
-  // Coordinates stored as float32 carry only about 7 digits.
-  const double eps = f.isDouble("bounding box") ? DBL_EPSILON : double(FLT_EPSILON);
-  const Leaves leaves = findLeaves(f, h, nodeType, bbox);
-  const std::vector<io::Patch> patches = placeLeaves(f, h, bbox, leaves, eps);
 
   CellSet set;
   for (size_t v : vars)
     set.fields.push_back({h.names[v], {}});
-  readSimulation(f, set);
-  addCells(path, patches, set);
+  set.simulation = simulationOf(f);
+  addCells(path, blocks.patches, set);
   readVariables(f, path, h, vars, leaves.blocks, set);
   set.world.origin = leaves.origin;
   set.world.scale = leaves.finest;
   logInfo(strCat("read ", set.cells.size(), " cells of ", leaves.blocks.size(), " leaf blocks from ", path));
   return set;
+}
+
+Census flashCensus(const std::string& path) {
+  const h5::File f(path);
+  const FlashBlocks b = readBlocks(f);
+  return io::censusOfPatches(b.patches, [&](size_t i) { return strCat(path, ": block ", b.leaves.blocks[i]); });
+}
+
+PatchSource flashPatches(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+  if (finestLevel > 0)
+    fail(path, ": a FLASH file is read with all its levels (its parent blocks need not hold values)");
+  // The variables of a run of consecutive blocks are read at once (whole runs are cheap for
+  // HDF5) and kept until a block beyond them is asked for: a build reads its blocks in order.
+  struct State {
+    h5::File file;
+    FlashBlocks blocks;
+    std::vector<size_t> vars;
+    uint64_t first = 0, count = 0;        ///< the blocks of the run read last
+    std::vector<std::vector<double>> run; ///< per variable, their values
+    explicit State(const std::string& p) : file(p) {}
+  };
+  auto st = std::make_shared<State>(path);
+  st->blocks = readBlocks(st->file);
+  const FlashHeader& h = st->blocks.header;
+  st->vars = io::pickFields(path, h.names, wanted);
+
+  PatchSource source;
+  source.input = path;
+  for (size_t v : st->vars)
+    source.fieldNames.push_back(h.names[v]);
+  source.fieldUnits.assign(source.fieldNames.size(), "");
+  source.patches = st->blocks.patches;
+  source.name = [st, path](size_t i) { return strCat(path, ": block ", st->blocks.leaves.blocks[i]); };
+  source.read = [st, path](size_t i, std::vector<std::vector<float>>& values) {
+    const FlashHeader& hd = st->blocks.header;
+    const uint64_t b = st->blocks.leaves.blocks[i];
+    const int64_t perBlock = hd.blockCells.x * hd.blockCells.y * hd.blockCells.z;
+    if (b < st->first || b >= st->first + st->count) {
+      st->first = b;
+      st->count = std::min(std::max<uint64_t>(1, uint64_t(1 << 18) / uint64_t(perBlock)), hd.blocks - b);
+      st->run.clear();
+      for (size_t v : st->vars)
+        st->run.push_back(st->file.readRows(hd.names[v], st->first, st->count));
+    }
+    values.assign(st->vars.size(), {});
+    for (size_t k = 0; k < st->vars.size(); ++k) {
+      const double* src = st->run[k].data() + (b - st->first) * uint64_t(perBlock);
+      values[k].resize(size_t(perBlock));
+      for (int64_t c = 0; c < perBlock; ++c)
+        values[k][size_t(c)] = blockValue(path, hd, b, hd.names[st->vars[k]], c, src[c]);
+    }
+  };
+  source.simulation = simulationOf(st->file);
+  source.world.origin = st->blocks.leaves.origin;
+  source.world.scale = st->blocks.leaves.finest;
+  return source;
 }
 
 } // namespace exa

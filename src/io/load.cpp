@@ -83,7 +83,8 @@ const std::vector<FormatReader>& formatReaders() {
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);
          return readFlash(p, r.fields);
-       }},
+       },
+       nullptr, flashCensus, nullptr, flashPatches},
       {InputKind::Enzo, "Enzo output", isEnzoOutput, listEnzoFields,
        [](const std::string& p, const ReadRequest& r) {
          const io::KeepNonFinite keep(r.keepNonFinite);

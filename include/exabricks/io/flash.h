@@ -5,6 +5,8 @@
 #pragma once
 
 #include "exabricks/amr/cells.h"
+#include "exabricks/amr/partition.h"
+#include "exabricks/io/patch_source.h"
 
 #include <string>
 #include <vector>
@@ -20,5 +22,11 @@ std::vector<std::string> listFlashFields(const std::string& path);
 /// Reads the leaf blocks' cells with the requested variables (all when empty). The world
 /// transform places the finest cell size at the lowest leaf-block corner.
 CellSet readFlash(const std::string& path, const std::vector<std::string>& fields = {});
+
+/// The leaf blocks from the block table alone (structure without values): where their cells lie,
+/// and as patches whose values are read block by block. Only every level together: the parent
+/// blocks need not hold values, so `finestLevel` must be 0.
+Census flashCensus(const std::string& path);
+PatchSource flashPatches(const std::string& path, const std::vector<std::string>& fields = {}, int finestLevel = 0);
 
 } // namespace exa
