@@ -192,8 +192,9 @@ uint64_t viewerFrameBytes(const Frame& frame) {
 /// Under --memory-budget, or for a step too large for the memory available: 0 when the step fits
 /// (it is viewed as without a budget); else the budget, with `coarseFirst` set to the cells of
 /// the coarse levels the view holds resident (coarseBesideParts) while it draws every level in
-/// parts beside them. Only inputs whose coarse levels can be read alone (AMReX plotfiles) are
-/// viewed in parts. A budget too small for both is refused naming the smallest that holds both.
+/// parts beside them. Only inputs whose coarse levels can be read alone (AMReX, Chombo, Enzo and
+/// VTK overlapping AMR files) are viewed in parts. A budget too small for both is refused naming the smallest that
+/// holds both.
 uint64_t viewBudget(const InputOptions& in, const std::string& input, const LoadOptions& lo, uint64_t frameBytes,
                     double& coarseFirst) {
   const std::optional<uint64_t> budget = memoryBudgetFor(in, input, lo, frameBytes, false);
@@ -208,8 +209,8 @@ uint64_t viewBudget(const InputOptions& in, const std::string& input, const Load
   if (coarse->level == 0)
     failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
               ": the viewer shows such a step from its coarse levels while it draws every level in parts, and "
-              "only an AMReX plotfile's coarse levels can be read alone; `render` and `movie` draw it with "
-              "--memory-budget");
+              "only the coarse levels of AMReX, Chombo, Enzo and VTK overlapping AMR files can be read alone; "
+              "`render` and `movie` draw it with --memory-budget");
   coarseFirst = coarse->coarseCells;
   return *budget;
 }
