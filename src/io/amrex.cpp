@@ -48,6 +48,12 @@ public:
     if (!l.empty() && l.back() == '\r') l.pop_back();
     return l;
   }
+  /// Passes over a line without copying it.
+  void skipLine() {
+    if (pos_ >= text_.size()) fail(path_, ": line ", lineNo_ + 1, ": unexpected end of file");
+    pos_ = std::min(text_.find('\n', pos_), text_.size()) + 1;
+    ++lineNo_;
+  }
   size_t lineNo() const { return lineNo_; }
   bool atEnd() const { return pos_ >= text_.size(); }
   [[noreturn]] void bad(const std::string& what) const { fail(path_, ": line ", lineNo_, ": ", what); }
@@ -191,7 +197,7 @@ void readLevelPrefixes(TextReader& r, Plotfile& pf) {
     const int64_t ngrids = r.integer(head[1], 0, 100000000, "the grid count");
     r.line(); // level step
     for (int64_t g = 0; g < ngrids * 3; ++g)
-      r.line();
+      r.skipLine();
     std::string prefix = r.line();
     while (!prefix.empty() && std::isspace((unsigned char)prefix.back()))
       prefix.pop_back();
