@@ -21,13 +21,22 @@ using flash_fixture::Block;
 using flash_fixture::FlashFixture;
 using flash_fixture::truth;
 
+namespace {
+/// The fixture written to `name` (in the tests' folder), its values and coordinates in float32 or
+/// float64.
+FlashFixture written(const std::string& name, bool float32) {
+  FlashFixture f;
+  f.file = fs::path(EXABRICKS_TEST_TMP) / "flash" / name;
+  f.float32 = float32;
+  f.write();
+  return f;
+}
+} // namespace
+
 TEST(Flash, LeafBlocksBothPrecisions) {
   for (int variant = 0; variant < 2; ++variant) {
     SCOPED_TRACE(variant);
-    FlashFixture f;
-    f.file = fs::path(EXABRICKS_TEST_TMP) / "flash" / (variant ? "plt_f32_hdf5_0001" : "chk_f64_hdf5_0001");
-    f.float32 = variant;
-    f.write();
+    const FlashFixture f = written(variant ? "plt_f32_hdf5_0001" : "chk_f64_hdf5_0001", variant);
     ASSERT_TRUE(isFlashFile(f.file.string()));
     EXPECT_EQ(detectInput(f.file.string()), InputKind::Flash);
     EXPECT_EQ(listFields(f.file.string()), (std::vector<std::string>{"dens", "pres"}));
@@ -75,11 +84,7 @@ TEST(Flash, LeafBlocksBothPrecisions) {
 TEST(Flash, CensusFromTheBlockTableAndABuildFromTheBlocksEqualTheCells) {
   for (int variant = 0; variant < 2; ++variant) {
     SCOPED_TRACE(variant);
-    FlashFixture f;
-    f.file = fs::path(EXABRICKS_TEST_TMP) / "flash" / (variant ? "parts_f32_hdf5_0001" : "parts_f64_hdf5_0001");
-    f.float32 = variant;
-    f.write();
-    const std::string path = f.file.string();
+    const std::string path = written(variant ? "parts_f32_hdf5_0001" : "parts_f64_hdf5_0001", variant).file.string();
     const Census census = flashCensus(path);
     EXPECT_EQ(census.cells(), double((1 + 7 + 8) * 32));
     EXPECT_EQ(census.coarsestLevel, 2); // the root block's cells are 4 finest cells wide

@@ -242,11 +242,7 @@ PatchSource chomboPatches(const std::string& path, const std::vector<std::string
   const h5::File& f = st->file;
   st->comps = io::pickFields(path, h.names, wanted);
 
-  PatchSource source;
-  source.input = path;
-  for (size_t c : st->comps)
-    source.fieldNames.push_back(h.names[c]);
-  source.fieldUnits.assign(source.fieldNames.size(), "");
+  PatchSource source = io::sourceOfFields(path, h.names, st->comps);
   // Levels finer than finestLevel are not read: the coarser cells under them are leaves (every
   // level's values are stored, those under finer boxes included).
   source.patches = placeBoxes(h, levelWidths(f, h), st->owner);

@@ -424,11 +424,7 @@ PatchSource enzoPatches(const std::string& path, const std::vector<std::string>&
   st->available = fieldNames(o, st->files);
   st->picked = io::pickFields(path, st->available, wanted);
 
-  PatchSource source;
-  source.input = path;
-  for (size_t k : st->picked)
-    source.fieldNames.push_back(st->available[k]);
-  source.fieldUnits.assign(source.fieldNames.size(), "");
+  PatchSource source = io::sourceOfFields(path, st->available, st->picked);
   // The lattice is the whole step's (its finest grids' cells), whichever levels are read; grids
   // finer than finestLevel are left out, and the coarser cells under them are leaves (Enzo stores
   // every grid's values, those under its children included).

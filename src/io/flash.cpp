@@ -302,11 +302,7 @@ PatchSource flashPatches(const std::string& path, const std::vector<std::string>
   const FlashHeader& h = st->blocks.header;
   st->vars = io::pickFields(path, h.names, wanted);
 
-  PatchSource source;
-  source.input = path;
-  for (size_t v : st->vars)
-    source.fieldNames.push_back(h.names[v]);
-  source.fieldUnits.assign(source.fieldNames.size(), "");
+  PatchSource source = io::sourceOfFields(path, h.names, st->vars);
   source.patches = st->blocks.patches;
   source.name = [st, path](size_t i) { return strCat(path, ": block ", st->blocks.leaves.blocks[i]); };
   source.read = [st, path](size_t i, std::vector<std::vector<float>>& values) {

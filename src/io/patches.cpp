@@ -310,4 +310,14 @@ std::vector<size_t> pickFields(const std::string& source, const std::vector<std:
   return out;
 }
 
+PatchSource sourceOfFields(const std::string& path, const std::vector<std::string>& available,
+                           const std::vector<size_t>& picked) {
+  PatchSource source;
+  source.input = path;
+  for (size_t k : picked)
+    source.fieldNames.push_back(available.at(k));
+  source.fieldUnits.assign(source.fieldNames.size(), "");
+  return source;
+}
+
 } // namespace exa::io

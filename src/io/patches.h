@@ -137,4 +137,9 @@ CellSet readPatchCells(const PatchSource& source, const box3i& box);
 std::vector<size_t> pickFields(const std::string& source, const std::vector<std::string>& available,
                                const std::vector<std::string>& wanted);
 
+/// A patch source of `path` with the fields `available[picked]`, in that order, their units not
+/// known yet: what the readers fill in with their patches.
+PatchSource sourceOfFields(const std::string& path, const std::vector<std::string>& available,
+                           const std::vector<size_t>& picked);
+
 } // namespace exa::io
