@@ -419,19 +419,27 @@ void VolumeMarcher::adoptGradients(int field, GradientFields gradients) {
 
 bool VolumeMarcher::attachGradients(const box3d* domain) {
   // The bricks that samples may read: those of the visible regions that meet the domain (in
-  // lattice units, widened by a finest cell against round-off).
-  const float inf = std::numeric_limits<float>::infinity();
-  box3f within(vec3f(-inf), vec3f(inf));
-  if (domain) {
-    const vec3d a = model_.world.toLattice(domain->lower), b = model_.world.toLattice(domain->upper);
-    within = box3f(vec3f(min(a, b)) - vec3f(1.f), vec3f(max(a, b)) + vec3f(1.f));
-  }
-  std::vector<uint8_t> needed(model_.bricks.size(), 0);
-  for (size_t r = 0; r < visible_.size(); ++r) {
-    const Region& region = model_.regions.regions[r];
-    if (!visible_[r] || !meets(region.bounds(), within)) continue;
-    for (uint32_t k = 0; k < region.brickCount; ++k)
-      needed[model_.regions.brickIds[region.brickBegin + k]] = 1;
+  // lattice units, widened by a finest cell against round-off). Not looked for where every
+  // layer's field has them all.
+  std::vector<uint8_t> needed;
+  const bool complete = std::all_of(layers_.begin(), layers_.end(), [&](const LayerTable& l) {
+    const auto it = gradientFields_.find(l.field);
+    return it != gradientFields_.end() && it->second.missing == 0;
+  });
+  if (!complete) {
+    const float inf = std::numeric_limits<float>::infinity();
+    box3f within(vec3f(-inf), vec3f(inf));
+    if (domain) {
+      const vec3d a = model_.world.toLattice(domain->lower), b = model_.world.toLattice(domain->upper);
+      within = box3f(vec3f(min(a, b)) - vec3f(1.f), vec3f(max(a, b)) + vec3f(1.f));
+    }
+    needed.assign(model_.bricks.size(), 0);
+    for (size_t r = 0; r < visible_.size(); ++r) {
+      const Region& region = model_.regions.regions[r];
+      if (!visible_[r] || !meets(region.bounds(), within)) continue;
+      for (uint32_t k = 0; k < region.brickCount; ++k)
+        needed[model_.regions.brickIds[region.brickBegin + k]] = 1;
+    }
   }
   bool built = false;
   for (LayerTable& layer : layers_) {
