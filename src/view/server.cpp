@@ -394,6 +394,16 @@ void Server::show(ViewContent content) {
 void Server::Impl::startRefining(const LegendText& legends) {
   std::thread([refine = content.refine, shown = content.coarse.shown, refining = refining, session = session.get(),
                steps = steps.get(), legends]() mutable {
+    // The first picture first: its frame has both cores before the reads begin (for a few
+    // seconds at most).
+    for (int waited = 0; waited < 3000; waited += 10) {
+      {
+        std::lock_guard<std::mutex> lock(refining->mutex);
+        if (!refining->alive) return;
+        if (session->waitFrame(0, 0)) break;
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
     for (const Refinement& step : refine) {
       std::pair<std::shared_ptr<const Model>, DatasetInfo> data;
       std::string error;
