@@ -80,6 +80,28 @@ Census censusOfInput(const std::string& path, const FormatReader& reader) {
 
 } // namespace io
 
+namespace {
+/// A model's cells with their values, brick after brick.
+CellSet cellsOf(const Model& m) {
+  CellSet set;
+  set.world = m.world;
+  set.simulation = m.simulation;
+  for (size_t f = 0; f < m.fieldNames.size(); ++f)
+    set.fields.push_back(Field{m.fieldNames[f], {}, f < m.fieldUnits.size() ? m.fieldUnits[f] : ""});
+  set.cells.reserve(m.cellCount());
+  for (const Brick& b : m.bricks)
+    for (int z = 0; z < b.size.z; ++z)
+      for (int y = 0; y < b.size.y; ++y)
+        for (int x = 0; x < b.size.x; ++x) {
+          set.cells.push_back(Cell{b.lower + vec3i(x, y, z) * b.cellWidth(), b.level});
+          const size_t slot = b.valueOffset + size_t((z * b.size.y + y) * b.size.x + x);
+          for (size_t f = 0; f < set.fields.size(); ++f)
+            set.fields[f].values.push_back(m.fieldValues[f][slot]);
+        }
+  return set;
+}
+} // namespace
+
 std::optional<MergedCoarsest> loadMergedCoarsest(const std::string& path, const LoadOptions& options, double maxCells) {
   const FormatReader* reader = path.empty() ? nullptr : io::patchReader(detectInput(path), path, options);
   const std::vector<CoarseFirst> choices = reader ? coarseFirstChoices(path) : std::vector<CoarseFirst>();
@@ -97,7 +119,10 @@ std::optional<MergedCoarsest> loadMergedCoarsest(const std::string& path, const 
   Timer timer;
   source = mergedPatches(source, m.factor);
   io::nameUnits(*reader, source);
-  m.model = buildModelOfPatches(source, {}, options.build);
+  // Built from the boxes (read on every core), then again from its cells: a merged box holds a
+  // few cells, and the cells' own build joins them into bricks as large as their level allows,
+  // so that a sample reconstructs from a few bricks instead of dozens.
+  m.model = buildModel(cellsOf(buildModelOfPatches(source, {}, options.build)), options.build);
   logInfo(strCat("the coarsest level's ", std::llround(m.cells), " cells merged by ", m.factor, " per axis in ",
                  timer.seconds(), " s"));
   return m;
