@@ -58,7 +58,6 @@ void cutIntoBricks(const vec3l& lo, const vec3l& hi, int64_t maxWidth, std::vect
         out.push_back({vec3l(cut(0, x), cut(1, y), cut(2, z)), vec3l(cut(0, x + 1), cut(1, y + 1), cut(2, z + 1))});
 }
 
-/// Each patch's bricks: its leaf boxes, cropped to the kept cells, cut to the brick width.
 /// The coverage of the patches that may hold kept cells or cover them: those that meet the
 /// kept cells' reach (the keep box widened by two of the widest cells), with each patch's index
 /// in it (or -1).
@@ -92,6 +91,7 @@ struct KeptCoverage {
   }
 };
 
+/// Each patch's bricks: its leaf boxes, cropped to the kept cells, cut to the brick width.
 std::vector<std::vector<Piece>> cutPatches(const PatchSource& source, const KeptCoverage& kept, const PatchKeep& keep,
                                            int64_t maxWidth) {
   const std::vector<io::Patch>& patches = source.patches;
