@@ -78,8 +78,8 @@ std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::st
       // Room for a 1024² frame of a few passes beside the coarse levels that drafts come from
       // (where the format reads them alone) and the parts.
       const uint64_t frameBytes = streamedFrameBytes(1024, 1024, 4);
-      if (const std::optional<CoarseFirst> c = coarseBesideParts(path, o, budget, frameBytes, 0, "a Scene")) {
-        if (c->level > 0) coarse = loadCoarseLevels(path, o, *c);
+      if (const std::optional<CoarseBeside> c = coarseBesideParts(path, o, budget, frameBytes, 0, "a Scene")) {
+        if (c->coarse.level > 0) coarse = loadCoarseLevels(path, o, c->coarse);
         step = std::make_shared<StreamedStep>(path, o, planMemory(path, o, budget, frameBytes));
         step->survey();
       }

@@ -8,6 +8,7 @@
 #include "exabricks/core/text.h"
 #include "exabricks/io/amrex_write.h"
 #include "exabricks/io/native.h"
+#include "exabricks/workflows/coarse_first.h"
 #include "exabricks/workflows/streamed.h"
 
 #include <gtest/gtest.h>
@@ -102,6 +103,46 @@ TEST(Streamed, PlansFitTheBudgetOrNameTheSmallestThatWorks) {
     EXPECT_NE(std::string(e.what()).find("smallest budget that works"), std::string::npos) << e.what();
     // The budget named works (the process's own size may have grown a little since).
     EXPECT_TRUE(planMemory(path, {}, e.smallest + (uint64_t(4) << 20), frame).streamed());
+  }
+}
+
+TEST(Streamed, AViewsPartsArePlannedBesideTheCoarseLevelsItHolds) {
+#ifdef EXABRICKS_ASAN
+  GTEST_SKIP() << "under AddressSanitizer the process's size grows with its quarantine from one plan to the next; "
+                  "plans are checked in the other builds";
+#endif
+  const std::string path = writePlotfile("beside", 4000000);
+  const uint64_t frame = streamedFrameBytes(64, 64, 1);
+  const MemoryPlan whole = planMemory(path, {}, uint64_t(64) << 30, frame);
+  ASSERT_FALSE(whole.streamed());
+  const uint64_t step = uint64_t(whole.cells * double(whole.bytesPerCell));
+  // Whole: nothing to plan. Under a budget that does not hold the step: coarse levels, and parts
+  // whose largest fits beside them and the process.
+  EXPECT_FALSE(coarseBesideParts(path, {}, whole.fixedBytes + 2 * step, frame, 0, "a test"));
+  std::optional<CoarseBeside> beside;
+  uint64_t budget = whole.fixedBytes + step / 2;
+  try {
+    beside = coarseBesideParts(path, {}, budget, frame, 0, "a test");
+  } catch (const BudgetTooSmall& e) { // the process grew since (sanitizer builds' shadow memory)
+    budget = e.smallest + (uint64_t(4) << 20);
+    beside = coarseBesideParts(path, {}, budget, frame, 0, "a test");
+  }
+  ASSERT_TRUE(beside);
+  ASSERT_GT(beside->coarse.level, 0);
+  ASSERT_TRUE(beside->parts.streamed());
+  const uint64_t coarse = uint64_t(std::ceil(beside->coarse.coarseCells)) * beside->parts.bytesPerCell;
+  EXPECT_EQ(beside->parts.budget, budget - coarse);
+  EXPECT_LE(beside->parts.fixedBytes + beside->parts.largestPartBytes() + coarse, budget);
+  // A budget that holds no part beside the coarse levels is refused, naming one that does.
+  try {
+    coarseBesideParts(path, {}, whole.fixedBytes + step / 100, frame, 0, "a test");
+    FAIL() << "a budget without room for a part beside the coarse levels was taken";
+  } catch (const BudgetTooSmall& e) {
+    EXPECT_NE(std::string(e.what()).find("beside the parts"), std::string::npos) << e.what();
+    const std::optional<CoarseBeside> named =
+        coarseBesideParts(path, {}, e.smallest + (uint64_t(4) << 20), frame, 0, "a test");
+    ASSERT_TRUE(named);
+    EXPECT_TRUE(named->parts.streamed());
   }
 }
 

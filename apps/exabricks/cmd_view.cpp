@@ -189,30 +189,34 @@ uint64_t viewerFrameBytes(const Frame& frame) {
   return streamedFrameBytes(frame.width, frame.height, frame.samplesPerPixel) + pixels * 2 * (sizeof(vec4f) + 4);
 }
 
-/// Under --memory-budget, or for a step too large for the memory available: 0 when the step fits
-/// (it is viewed as without a budget); else the budget, with `coarseFirst` set to the cells of
-/// the coarse levels the view holds resident (coarseBesideParts) while it draws every level in
-/// parts beside them. Only inputs whose coarse levels can be read alone (AMReX, Chombo, Enzo and
-/// VTK overlapping AMR files) are viewed in parts. A budget too small for both is refused naming the smallest that
-/// holds both.
-uint64_t viewBudget(const InputOptions& in, const std::string& input, const LoadOptions& lo, uint64_t frameBytes,
-                    double& coarseFirst) {
+/// Under --memory-budget, or for a step too large for the memory available: budget 0 when the
+/// step fits (it is viewed as without a budget); else the budget and its parts' plan, with
+/// `coarseFirst` set to the cells of the coarse levels the view holds resident
+/// (coarseBesideParts) while it draws every level in those parts beside them. Only inputs whose coarse levels can be
+/// read alone (AMReX, Chombo, Enzo and VTK overlapping AMR files) are viewed in parts. A budget too small for both is
+/// refused naming the smallest that holds both.
+struct ViewBudget {
+  uint64_t budget = 0; ///< 0: the step is held whole
+  MemoryPlan parts;    ///< the parts, planned beside the coarse levels
+};
+ViewBudget viewBudget(const InputOptions& in, const std::string& input, const LoadOptions& lo, uint64_t frameBytes,
+                      double& coarseFirst) {
   const std::optional<uint64_t> budget = memoryBudgetFor(in, input, lo, frameBytes, false);
-  if (!budget) return 0;
-  std::optional<CoarseFirst> coarse;
+  if (!budget) return {};
+  std::optional<CoarseBeside> beside;
   try {
-    coarse = coarseBesideParts(input, lo, *budget, frameBytes, coarseFirst, "the viewer");
+    beside = coarseBesideParts(input, lo, *budget, frameBytes, coarseFirst, "the viewer");
   } catch (const BudgetTooSmall& refused) {
     failUsage(refused.what());
   }
-  if (!coarse) return 0;
-  if (coarse->level == 0)
+  if (!beside) return {};
+  if (beside->coarse.level == 0)
     failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
               ": the viewer shows such a step from its coarse levels while it draws every level in parts, and "
               "only the coarse levels of AMReX, Chombo, Enzo and VTK overlapping AMR files can be read alone; "
               "`render` and `movie` draw it with --memory-budget");
-  coarseFirst = coarse->coarseCells;
-  return *budget;
+  coarseFirst = beside->coarse.coarseCells;
+  return {*budget, std::move(beside->parts)};
 }
 
 /// Ctrl-C and SIGTERM are taken by one thread (sigwait) that stops the server cleanly; every
@@ -258,7 +262,8 @@ void applySeriesRange(const FirstStep& first, const std::vector<std::string>& st
 /// (after the coarse levels, where it shows the coarsest level merged first), or by reading the
 /// coarse levels and then the whole step on a thread of its own.
 void addRefinement(view::ViewContent& content, const FirstStep& first, const std::string& input, const LoadOptions& lo,
-                   uint64_t budget, uint64_t frameBytes) {
+                   const ViewBudget& budgets, uint64_t frameBytes) {
+  const uint64_t budget = budgets.budget;
   const std::string shown = first.merged > 1 ? mergedShown(first) : coarseShown(first.coarse);
   const CoarseFirst coarse = first.coarse;
   auto coarseLevels = [input, lo, coarse] {
@@ -266,9 +271,8 @@ void addRefinement(view::ViewContent& content, const FirstStep& first, const std
     return std::make_pair(c.model, c.dataset);
   };
   if (budget) {
-    // Every level in parts, planned beside the coarse levels now resident.
-    content.parts =
-        std::make_shared<StreamedStep>(input, lo, planWithin(input, lo, budget, frameBytes), first.model.get());
+    // Every level in parts, planned beside the coarse levels the view holds.
+    content.parts = std::make_shared<StreamedStep>(input, lo, budgets.parts, first.model.get());
     content.budget = budget;
     const std::string parts =
         strCat("every level follows in ", content.parts->parts(), " parts within a budget of ", formatBytes(budget));
@@ -382,7 +386,8 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
     failUsage("--memory-budget views one step; a series' steps are each held whole");
   const uint64_t frameBytes = viewerFrameBytes(doc.frame);
   std::future<MergedFirst> merged = mergedBeside(steps, doc.input, lo, o.coarseFirst, o.scene, cmd, doc.scene);
-  const uint64_t budget = steps.size() > 1 ? 0 : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
+  const ViewBudget budget =
+      steps.size() > 1 ? ViewBudget() : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
   viewer.announce(o.scene.in.name()); // after a budget's refusal, before anything else is read
   const FirstStep first =
       loadFirst(steps, doc.input, lo, coarseFirst, steps.size() > 1 ? 0 : o.coarseFirst, std::move(merged));

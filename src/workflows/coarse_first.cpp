@@ -39,18 +39,27 @@ uint64_t smallestBesideCoarse(const std::string& input, const BudgetTooSmall& re
 
 } // namespace
 
-std::optional<CoarseFirst> coarseBesideParts(const std::string& input, const LoadOptions& options, uint64_t budget,
-                                             uint64_t frameBytes, double maxCoarseCells, const std::string& who) {
+std::optional<CoarseBeside> coarseBesideParts(const std::string& input, const LoadOptions& options, uint64_t budget,
+                                              uint64_t frameBytes, double maxCoarseCells, const std::string& who) {
   try {
-    const MemoryPlan whole = planMemory(input, options, budget, frameBytes);
-    if (!whole.streamed()) return std::nullopt;
+    const MemoryPlan sizes = sizeMemory(input, options, budget, frameBytes);
+    if (sizes.fitsWhole()) return std::nullopt;
     const CoarseFirst coarse =
-        coarseFirstLevel(input, coarseRoom(budget, whole.fixedBytes, whole.bytesPerCell, maxCoarseCells));
-    if (coarse.level == 0) return coarse;
-    // The parts beside the coarse levels.
-    const uint64_t coarseBytes = uint64_t(std::ceil(coarse.coarseCells)) * whole.bytesPerCell;
-    planMemory(input, options, budget > coarseBytes ? budget - coarseBytes : 0, frameBytes);
-    return coarse;
+        coarseFirstLevel(input, coarseRoom(budget, sizes.fixedBytes, sizes.bytesPerCell, maxCoarseCells));
+    if (coarse.level == 0) {
+      return CoarseBeside{coarse, planMemory(input, options, budget, frameBytes)}; // refused where no parts fit
+    }
+    // The parts beside the coarse levels; where they fit, the parts of the whole budget do too
+    // (each count's parts are the same, with more room), so that plan is made only to say why a
+    // budget is refused: its own refusal where the step cannot be held in parts at all.
+    const uint64_t coarseBytes = uint64_t(std::ceil(coarse.coarseCells)) * sizes.bytesPerCell;
+    try {
+      return CoarseBeside{coarse,
+                          planMemory(input, options, budget > coarseBytes ? budget - coarseBytes : 0, frameBytes)};
+    } catch (const BudgetTooSmall&) {
+      planMemory(input, options, budget, frameBytes);
+      throw;
+    }
   } catch (const BudgetTooSmall& refused) {
     if (coarseFirstChoices(input).size() < 2) throw; // no coarse levels to hold: the parts' refusal
     // The refusal's figures after its "(N cells): ", said of the budget given.

@@ -101,22 +101,39 @@ std::pair<KdPartition, std::vector<double>> balancedParts(const std::string& inp
 }
 } // namespace
 
-MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes) {
+namespace {
+MemoryPlan sizedPlan(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes,
+                     const Census& census, uint64_t fixedBefore) {
   MemoryPlan plan;
   plan.budget = budget;
-  plan.fixedBytes = residentBytesNow() + kProcessSlack + frameBytes;
   plan.bytesPerCell = bytesPerResidentCell(loadedFields(input, options), buildsFromBoxes(input, options));
-  const Census census = loadCensus(input, options);
-  const Timer timer;
-  plan.fixedBytes = std::max(plan.fixedBytes, residentBytesNow() + kProcessSlack + frameBytes);
+  plan.fixedBytes = std::max(fixedBefore, residentBytesNow() + kProcessSlack + frameBytes);
   plan.cells = census.cells();
   plan.coarsestLevel = census.coarsestLevel;
   plan.cellBounds = census.cellBounds;
   plan.levelCells = census.levelCells;
   plan.partCells = {plan.cells};
+  return plan;
+}
+} // namespace
+
+bool MemoryPlan::fitsWhole() const {
+  return fixedBytes + uint64_t(std::ceil(cells)) * bytesPerCell <= budget || cells < 1;
+}
+
+MemoryPlan sizeMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes) {
+  const uint64_t fixedBefore = residentBytesNow() + kProcessSlack + frameBytes;
+  return sizedPlan(input, options, budget, frameBytes, loadCensus(input, options), fixedBefore);
+}
+
+MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes) {
+  const uint64_t fixedBefore = residentBytesNow() + kProcessSlack + frameBytes;
+  const Census census = loadCensus(input, options);
+  const Timer timer;
+  MemoryPlan plan = sizedPlan(input, options, budget, frameBytes, census, fixedBefore);
   auto mib = [](uint64_t b) { return ((b + (uint64_t(1) << 20) - 1) >> 20) << 20; };
   const uint64_t whole = plan.fixedBytes + uint64_t(std::ceil(plan.cells)) * plan.bytesPerCell;
-  if (whole <= budget || plan.cells < 1) return plan;
+  if (plan.fitsWhole()) return plan;
 
   // The fewest parts whose largest part fits, trying 2, 3, 4, 6, 8, 12, ... parts (the same
   // counts for any budget, so the smallest budget named below is one that works). Halos stop

@@ -14,14 +14,21 @@ namespace exa {
 /// the process (`fixedBytes`), or fewer where `maxCells` above 0 says so.
 double coarseRoom(uint64_t budget, uint64_t fixedBytes, uint64_t bytesPerCell, double maxCells);
 
+/// The coarse levels a view holds resident, and its parts planned beside them (in the budget
+/// less the coarse levels' estimated bytes).
+struct CoarseBeside {
+  CoarseFirst coarse;
+  MemoryPlan parts;
+};
+
 /// How `input` is explored under `budget` with `frameBytes` of images: none when it fits whole;
 /// else the coarse levels to hold (coarseFirstLevel of coarseRoom's cells; level 0 where the
 /// format cannot read its coarse levels alone, and only the parts are held) beside which its
 /// parts fit. A budget too small for both throws BudgetTooSmall naming the smallest that holds
 /// both, said to be `who`'s ("the viewer"); for an input without coarse levels to hold, the
 /// parts' own refusal.
-std::optional<CoarseFirst> coarseBesideParts(const std::string& input, const LoadOptions& options, uint64_t budget,
-                                             uint64_t frameBytes, double maxCoarseCells, const std::string& who);
+std::optional<CoarseBeside> coarseBesideParts(const std::string& input, const LoadOptions& options, uint64_t budget,
+                                              uint64_t frameBytes, double maxCoarseCells, const std::string& who);
 
 /// The coarse levels `coarse` names (level > 0): cells 2^level wide and wider are leaves where the
 /// finer levels are not read. The dataset's value ranges are the whole step's where its metadata

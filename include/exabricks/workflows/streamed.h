@@ -58,6 +58,8 @@ struct MemoryPlan {
   std::vector<double> partCells;  ///< per part, the cells it holds with its halo (estimated)
 
   bool streamed() const { return partition.parts() > 1; }
+  /// Whether the step fits in the budget in one piece.
+  bool fitsWhole() const;
   /// The estimated resident bytes of part p, and of the largest part.
   uint64_t partBytes(int part) const;
   uint64_t largestPartBytes() const;
@@ -69,6 +71,10 @@ struct MemoryPlan {
 /// only at multiples of the coarsest cell width) whose largest part with its halo fits beside the
 /// process. Throws BudgetTooSmall with the smallest budget that works when none does.
 MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes);
+
+/// planMemory's figures without its partition (in one piece, whether or not the step fits):
+/// the process without data, the bytes per cell and the census's counts.
+MemoryPlan sizeMemory(const std::string& input, const LoadOptions& options, uint64_t budget, uint64_t frameBytes);
 
 /// Without a budget given: none (hold the step whole, as before) when the step's estimated
 /// resident bytes fit in three quarters of the memory the system has available, or when its
