@@ -7,6 +7,7 @@
 #include "exabricks/amr/scenes.h"
 #include "exabricks/core/text.h"
 #include "exabricks/io/amrex_write.h"
+#include "exabricks/io/model_file.h"
 #include "exabricks/io/native.h"
 #include "exabricks/workflows/coarse_first.h"
 #include "exabricks/workflows/streamed.h"
@@ -58,6 +59,37 @@ std::string writePlotfile(const std::string& name, uint64_t cells) {
   });
   writer->finish();
   return path;
+}
+
+/// The in-core criterion: mean <= 0.5/255, 99.9 % of the channels within 2/255 (parts end their
+/// regions, and so their sampling steps, at the part planes).
+void expectEqualToInCore(const Image& image, const Image& reference) {
+  ASSERT_EQ(image.pixels.size(), reference.pixels.size());
+  double sum = 0;
+  size_t beyond = 0;
+  for (size_t i = 0; i < image.pixels.size(); ++i)
+    for (int c = 0; c < 4; ++c) {
+      const float* a = &image.pixels[i].x;
+      const float* r = &reference.pixels[i].x;
+      const double d = std::abs(double(a[c]) - double(r[c]));
+      sum += d;
+      beyond += d > 2.0 / 255.0 ? 1 : 0;
+    }
+  EXPECT_LE(sum / double(4 * image.pixels.size()), 0.5 / 255.0);
+  EXPECT_LE(double(beyond), 0.001 * double(4 * image.pixels.size()));
+}
+
+/// A view of `model` from above one corner.
+Frame frameOf(const Model& model, int samplesPerPixel) {
+  Frame frame;
+  frame.width = 64;
+  frame.height = 48;
+  frame.samplesPerPixel = samplesPerPixel;
+  frame.jitter = samplesPerPixel > 1;
+  const box3d b = model.worldBounds();
+  frame.camera.lookAt = (b.lower + b.upper) * 0.5;
+  frame.camera.position = frame.camera.lookAt + vec3d(0.4, 0.5, 1.4) * length(b.size());
+  return frame;
 }
 
 } // namespace
@@ -151,14 +183,7 @@ TEST(Streamed, FramesFromPartsEqualTheInCoreRender) {
   const Model model = loadModel(path);
   Scene scene = Scene::volumeOf(defaultTransferFunction("viridis"), model.fieldNames[0]);
   scene.layers[0].tf.opacityScale = 0.3f;
-  Frame frame;
-  frame.width = 64;
-  frame.height = 48;
-  frame.samplesPerPixel = 3; // jittered passes, each composited over the parts
-  frame.jitter = true;
-  const box3d b = model.worldBounds();
-  frame.camera.lookAt = (b.lower + b.upper) * 0.5;
-  frame.camera.position = frame.camera.lookAt + vec3d(0.4, 0.5, 1.4) * length(b.size());
+  const Frame frame = frameOf(model, 3); // jittered passes, each composited over the parts
 
   Renderer whole(model);
   whole.setScene(scene);
@@ -179,20 +204,7 @@ TEST(Streamed, FramesFromPartsEqualTheInCoreRender) {
   ASSERT_TRUE(renderStreamed(step, scene, RendererOptions(), frame, buffer));
   const Image image = buffer.resolve();
   ASSERT_EQ(image.pixels.size(), reference.pixels.size());
-  // The in-core criterion: mean <= 0.5/255, 99.9 % of the channels within 2/255 (parts end their
-  // regions, and so their sampling steps, at the part planes).
-  double sum = 0;
-  size_t beyond = 0;
-  for (size_t i = 0; i < image.pixels.size(); ++i)
-    for (int c = 0; c < 4; ++c) {
-      const float* a = &image.pixels[i].x;
-      const float* r = &reference.pixels[i].x;
-      const double d = std::abs(double(a[c]) - double(r[c]));
-      sum += d;
-      beyond += d > 2.0 / 255.0 ? 1 : 0;
-    }
-  EXPECT_LE(sum / double(4 * image.pixels.size()), 0.5 / 255.0);
-  EXPECT_LE(double(beyond), 0.001 * double(4 * image.pixels.size()));
+  expectEqualToInCore(image, reference);
   EXPECT_LE(step.residentBytes() + plan.fixedBytes, plan.budget);
 
   // Again: the parts that the budget did not keep come back from the disk (their models and
@@ -209,6 +221,61 @@ TEST(Streamed, FramesFromPartsEqualTheInCoreRender) {
     ASSERT_TRUE(image.pixels[i].x == second.pixels[i].x && image.pixels[i].y == second.pixels[i].y &&
                 image.pixels[i].z == second.pixels[i].z && image.pixels[i].w == second.pixels[i].w)
         << i;
+}
+
+TEST(Streamed, AModelFileIsReadBrickByBrickInPartsEqualToTheWhole) {
+  // `build`'s model of a NAME.cells step: its census from the brick table, each part built from
+  // the bricks that reach it, read on demand from the file, and the frame that of the whole.
+  const std::string cells = writeStep("model", 120000);
+  const std::string path = cells.substr(0, cells.size() - 6) + ".model";
+  writeModel(loadModel(cells), path);
+  const Model model = loadModel(path);
+  const Census census = loadCensus(path);
+  EXPECT_DOUBLE_EQ(census.cells(), double(model.cellCount()));
+  EXPECT_EQ(census.boxes.size(), model.bricks.size());
+  EXPECT_EQ(listFields(path), model.fieldNames);
+  Scene scene = Scene::volumeOf(defaultTransferFunction("viridis"), model.fieldNames[0]);
+  scene.layers[0].tf.opacityScale = 0.3f;
+  const Frame frame = frameOf(model, 2);
+  Renderer whole(model);
+  whole.setScene(scene);
+  const Image reference = whole.render(frame);
+  const MemoryPlan plan = planOfParts(path, 4, 1, streamedFrameBytes(64, 48, 2));
+  StreamedStep step(path, {}, plan);
+  EXPECT_EQ(step.survey().cells, model.cellCount());
+  FrameBuffer buffer;
+  ASSERT_TRUE(renderStreamed(step, scene, RendererOptions(), frame, buffer));
+  expectEqualToInCore(buffer.resolve(), reference);
+  // A part's cells are the whole model's cells that reach it, value for value.
+  const box3l part = step.partBox(0);
+  const std::optional<Model> first = loadModelPart(path, {}, part, plan.coarsestLevel);
+  const std::optional<Model> fromCells = loadModelPart(cells, {}, part, plan.coarsestLevel);
+  ASSERT_TRUE(first && fromCells);
+  EXPECT_EQ(first->cellCount(), fromCells->cellCount());
+
+  // A brick whose values are damaged is named when it is read; a truncated file at once.
+  const Brick& b = model.bricks[model.bricks.size() / 2];
+  const ModelTable table = readModelTable(path);
+  {
+    std::fstream f(path, std::ios::in | std::ios::out | std::ios::binary);
+    const float nan = std::nanf("");
+    f.seekp(std::streamoff(table.valuesAt[0] + uint64_t(b.valueOffset) * sizeof(float)));
+    f.write(reinterpret_cast<const char*>(&nan), sizeof nan);
+  }
+  const std::string brick = strCat(": brick ", model.bricks.size() / 2, ": field");
+  try {
+    loadModelPart(path, {}, box3l(vec3l(b.lower), vec3l(b.bounds().upper)), plan.coarsestLevel);
+    FAIL() << "a damaged brick was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + brick), std::string::npos) << e.what();
+  }
+  std::filesystem::resize_file(path, std::filesystem::file_size(path) - 8);
+  try {
+    loadCensus(path);
+    FAIL() << "a truncated model file was read";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("truncated"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Streamed, AStepChangedWhileItsPartsAreReadIsReported) {

@@ -364,7 +364,8 @@ Model loadNativeValuesAfter(const std::string& path, const LoadOptions& options,
 } // namespace
 
 bool buildsFromBoxes(const std::string& path, const LoadOptions& options) {
-  return !path.empty() && io::patchReader(detectInput(path), path, options) != nullptr;
+  const InputKind kind = path.empty() ? InputKind::Default : detectInput(path);
+  return kind == InputKind::Model || (!path.empty() && io::patchReader(kind, path, options) != nullptr);
 }
 
 Model loadModel(const std::string& path, const LoadOptions& options) {
@@ -416,7 +417,7 @@ std::optional<range1f> fieldRangeFromMetadata(const std::string& path, const std
 
 std::vector<std::string> listFields(const std::string& path) {
   const InputKind kind = detectInput(path);
-  if (kind == InputKind::Model) return readModel(path).fieldNames;
+  if (kind == InputKind::Model) return readModelTable(path).fieldNames;
   if (kind != InputKind::Default) return findReader(path)->listFields(path);
   std::vector<std::string> names;
   for (const Field& f : defaultDataset().fields)
@@ -426,7 +427,7 @@ std::vector<std::string> listFields(const std::string& path) {
 
 Census loadCensus(const std::string& path, const LoadOptions& options) {
   const InputKind kind = detectInput(path);
-  if (kind == InputKind::Model) return censusOfBricks(readModel(path).bricks);
+  if (kind == InputKind::Model) return io::censusOfInput(path, io::modelPartsReader());
   if (kind != InputKind::Default) {
     const FormatReader* reader = findReader(path);
     if (reader->census) return io::censusOfInput(path, *reader);
@@ -443,33 +444,9 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
                                    int coarsestLevel) {
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   const box3l reach = shadingReach(part, coarsestLevel);
-  if (detectInput(path) == InputKind::Model) {
-    // A model file is read whole; its bricks whose supports reach into the part are kept.
-    Model all = loadModel(path, options);
-    Model m;
-    m.world = all.world;
-    m.simulation = all.simulation;
-    m.fieldNames = all.fieldNames;
-    m.fieldUnits = all.fieldUnits;
-    std::vector<std::vector<float>> values(all.fieldValues.size());
-    uint64_t offset = 0;
-    for (const Brick& b : all.bricks) {
-      if (!supportReaches(b.bounds(), b.level, reach)) continue;
-      Brick kept = b;
-      kept.valueOffset = uint32_t(offset);
-      for (size_t f = 0; f < all.fieldValues.size(); ++f)
-        values[f].insert(values[f].end(), all.fieldValues[f].begin() + b.valueOffset,
-                         all.fieldValues[f].begin() + b.valueOffset + b.cellCount());
-      offset += b.cellCount();
-      m.bricks.push_back(kept);
-    }
-    if (m.bricks.empty()) return std::nullopt;
-    for (auto& v : values)
-      m.fieldValues.push_back(std::move(v));
-    buildRegionsOf(m, options.build.regions);
-    return m;
-  }
-  if (const FormatReader* reader = io::patchReader(detectInput(path), path, options)) {
+  const FormatReader* reader = io::patchReader(detectInput(path), path, options);
+  if (detectInput(path) == InputKind::Model) reader = &io::modelPartsReader(); // the bricks reaching the part
+  if (reader) {
     Model m = io::loadModelOfPatches(path, *reader, options, 0, {PatchKeep::Rule::Reaching, reach});
     if (m.bricks.empty()) return std::nullopt;
     return m;

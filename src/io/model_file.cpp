@@ -222,6 +222,24 @@ std::shared_ptr<const void> mapFile(const std::string& path, int fd, uint64_t si
   return std::shared_ptr<const void>(bytes, bytes->data());
 }
 
+/// The header of an open model file of `total` bytes, checked against the file.
+Header checkedHeader(const std::string& path, int fd, uint64_t total) {
+  if (total < sizeof(Header)) fail(path, ": truncated model file (no header)");
+  Header h{};
+  readAt(path, fd, &h, sizeof h, 0);
+  if (std::memcmp(h.magic, kModelMagic, 8) != 0) fail(path, ": not an exabricks model file");
+  if (h.version != kModelVersion && h.version != 1)
+    fail(path, ": model file version ", h.version, " is not supported (this build reads versions 1 and ", kModelVersion,
+         "); rebuild it with 'exabricks build'");
+  if (h.headerBytes != sizeof(Header)) fail(path, ": corrupt model file header");
+  if (h.reserved[0] != 0 || h.reserved[1] != 0)
+    fail(path, ": corrupt model file header: its reserved bytes (32..47) are not zero");
+  if (total - sizeof(Header) != h.payloadBytes)
+    fail(path, ": truncated or padded model file: header says ", h.payloadBytes, " payload bytes, file holds ",
+         total - sizeof(Header));
+  return h;
+}
+
 struct FileCloser {
   std::FILE* f;
   ~FileCloser() {
@@ -229,20 +247,29 @@ struct FileCloser {
   }
 };
 
-/// Index checks that keep a crafted file (with a valid checksum) from making samplers read
-/// out of bounds or loop.
-void checkConsistency(const Model& m, const std::string& path) {
+/// Every field holds as many values, and every brick's cells lie within them.
+void checkBricks(const std::vector<Brick>& bricks, const std::vector<uint64_t>& valueCounts, const std::string& path) {
   auto bad = [&](auto&&... what) { fail(path, ": corrupt model file: ", what...); };
-  const uint64_t values = m.fieldValues.empty() ? 0 : m.fieldValues[0].size();
-  for (const auto& f : m.fieldValues)
-    if (f.size() != values) bad("fields have different value counts");
-  for (size_t i = 0; i < m.bricks.size(); ++i) {
-    const Brick& b = m.bricks[i];
+  const uint64_t values = valueCounts.empty() ? 0 : valueCounts[0];
+  for (uint64_t n : valueCounts)
+    if (n != values) bad("fields have different value counts");
+  for (size_t i = 0; i < bricks.size(); ++i) {
+    const Brick& b = bricks[i];
     if (b.level < 0 || b.level > kMaxLevel || b.size.x < 1 || b.size.y < 1 || b.size.z < 1 ||
         b.size.x > kMaxBrickWidth || b.size.y > kMaxBrickWidth || b.size.z > kMaxBrickWidth ||
         uint64_t(b.valueOffset) + uint64_t(b.size.x) * b.size.y * b.size.z > values)
       bad("brick ", i, " is invalid");
   }
+}
+
+/// Index checks that keep a crafted file (with a valid checksum) from making samplers read
+/// out of bounds or loop.
+void checkConsistency(const Model& m, const std::string& path) {
+  auto bad = [&](auto&&... what) { fail(path, ": corrupt model file: ", what...); };
+  std::vector<uint64_t> counts;
+  for (const auto& f : m.fieldValues)
+    counts.push_back(f.size());
+  checkBricks(m.bricks, counts, path);
   for (uint32_t id : m.regions.brickIds)
     if (id >= m.bricks.size()) bad("region brick id ", id, " out of range");
   for (size_t i = 0; i < m.regions.regions.size(); ++i) {
@@ -357,19 +384,7 @@ Model readModel(const std::string& path) {
   struct stat st {};
   if (::fstat(file.fd, &st) != 0 || !S_ISREG(st.st_mode)) fail(path, ": not a regular file");
   const uint64_t total = uint64_t(st.st_size);
-  if (total < sizeof(Header)) fail(path, ": truncated model file (no header)");
-  Header h{};
-  readAt(path, file.fd, &h, sizeof h, 0);
-  if (std::memcmp(h.magic, kModelMagic, 8) != 0) fail(path, ": not an exabricks model file");
-  if (h.version != kModelVersion && h.version != 1)
-    fail(path, ": model file version ", h.version, " is not supported (this build reads versions 1 and ", kModelVersion,
-         "); rebuild it with 'exabricks build'");
-  if (h.headerBytes != sizeof(Header)) fail(path, ": corrupt model file header");
-  if (h.reserved[0] != 0 || h.reserved[1] != 0)
-    fail(path, ": corrupt model file header: its reserved bytes (32..47) are not zero");
-  if (total - sizeof(Header) != h.payloadBytes)
-    fail(path, ": truncated or padded model file: header says ", h.payloadBytes, " payload bytes, file holds ",
-         total - sizeof(Header));
+  const Header h = checkedHeader(path, file.fd, total);
 
   // The field values stay in the mapped file (version 2 aligns them); the rest is copied.
   bool mapped = false;
@@ -417,6 +432,64 @@ Model readModel(const std::string& path) {
     }
   }
   return m;
+}
+
+ModelTable readModelTable(const std::string& path) {
+  ModelTable t;
+  auto fd = std::make_shared<Descriptor>();
+  fd->fd = ::open(path.c_str(), O_RDONLY);
+  if (fd->fd < 0) fail(path, ": cannot open: ", std::strerror(errno));
+  struct stat st {};
+  if (::fstat(fd->fd, &st) != 0 || !S_ISREG(st.st_mode)) fail(path, ": not a regular file");
+  const uint64_t total = uint64_t(st.st_size);
+  const Header h = checkedHeader(path, fd->fd, total);
+  // The payload's records in order, read up to the regions; the values are skipped.
+  uint64_t at = sizeof(Header);
+  auto take = [&](void* data, uint64_t size, const char* what) {
+    if (size > total - at) fail(path, ": corrupt model file: ", what, " runs past the end of the data");
+    if (size > 0) readAt(path, fd->fd, data, size, at);
+    at += size;
+  };
+  auto arrayLength = [&](uint64_t entryBytes, const char* what) {
+    uint64_t n = 0;
+    take(&n, sizeof n, what);
+    if (h.version >= 2) {
+      char zeros[8] = {};
+      const size_t pad = padding(at);
+      take(zeros, pad, what);
+      for (size_t i = 0; i < pad; ++i)
+        if (zeros[i] != 0) fail(path, ": corrupt model file: padding before ", what, " is not zero");
+    }
+    if (n > (total - at) / entryBytes)
+      fail(path, ": corrupt model file: ", what, " claims ", n, " entries, more than the file holds");
+    return n;
+  };
+  take(&t.world, sizeof t.world, "world transform");
+  t.bricks.resize(size_t(arrayLength(sizeof(Brick), "bricks")));
+  take(t.bricks.data(), t.bricks.size() * sizeof(Brick), "bricks");
+  uint64_t fields = 0;
+  take(&fields, sizeof fields, "field count");
+  if (fields > 4096) fail(path, ": corrupt model file: ", fields, " fields");
+  std::vector<uint64_t> counts;
+  for (uint64_t i = 0; i < fields; ++i) {
+    uint64_t len = 0;
+    take(&len, sizeof len, "field name");
+    if (len > 4096) fail(path, ": corrupt model file: field name of ", len, " bytes");
+    std::string name(len, '\0');
+    take(name.data(), len, "field name");
+    t.fieldNames.push_back(name);
+    counts.push_back(arrayLength(sizeof(float), "field values"));
+    t.valuesAt.push_back(at);
+    at += counts.back() * sizeof(float);
+  }
+  checkBricks(t.bricks, counts, path);
+  t.file = std::shared_ptr<const int>(fd, &fd->fd);
+  return t;
+}
+
+void ModelTable::readValues(const std::string& path, size_t field, const Brick& b, float* out) const {
+  readAt(path, *file, out, uint64_t(b.cellCount()) * sizeof(float),
+         valuesAt.at(field) + uint64_t(b.valueOffset) * sizeof(float));
 }
 
 } // namespace exa

@@ -4,6 +4,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/core/kept.h"
 #include "exabricks/core/log.h"
+#include "exabricks/io/model_file.h"
 #include "exabricks/io/units.h"
 
 #include <cmath>
@@ -59,6 +60,55 @@ Model loadModelOfPatches(const std::string& path, const FormatReader& reader, co
   PatchSource source = patchesOf(path, reader, options.fields, finestLevel);
   nameUnits(reader, source);
   return buildModelOfPatches(source, keep, options.build);
+}
+
+namespace {
+/// A model file's bricks as patches: one patch per brick (bricks hold leaf cells alone, so none
+/// covers another), its values read brick by brick from the open file.
+PatchSource modelPatches(const std::string& path, const std::vector<std::string>& wanted, int finestLevel) {
+  if (finestLevel > 0) fail(path, ": a model file holds its leaf cells alone: its coarse levels cannot be read apart");
+  auto table = std::make_shared<const ModelTable>(readModelTable(path));
+  const std::vector<size_t> picked = pickFields(path, table->fieldNames, wanted);
+  PatchSource source = sourceOfFields(path, table->fieldNames, picked);
+  source.world = table->world;
+  source.patches.reserve(table->bricks.size());
+  for (const Brick& b : table->bricks)
+    source.patches.push_back({vec3l(b.lower), vec3l(b.size), int64_t(b.cellWidth())});
+  source.name = [path](size_t i) { return strCat(path, ": brick ", i); };
+  source.read = [table, picked, path](size_t i, std::vector<std::vector<float>>& values) {
+    const Brick& b = table->bricks.at(i);
+    values.resize(picked.size());
+    for (size_t k = 0; k < picked.size(); ++k) {
+      values[k].resize(b.cellCount());
+      table->readValues(path, picked[k], b, values[k].data());
+      for (size_t c = 0; c < values[k].size(); ++c)
+        if (!std::isfinite(values[k][c]))
+          fail(path, ": brick ", i, ": field '", table->fieldNames[picked[k]], "' holds a non-finite value at cell ", c,
+               " (a damaged model file; build it again)");
+    }
+  };
+  source.concurrentReads = true; // positioned reads of one descriptor
+  return source;
+}
+
+Census modelCensus(const std::string& path) { return censusOfBricks(readModelTable(path).bricks); }
+std::vector<std::string> modelFields(const std::string& path) { return readModelTable(path).fieldNames; }
+} // namespace
+
+const FormatReader& modelPartsReader() {
+  static const FormatReader reader{InputKind::Model,
+                                   "exabricks model",
+                                   isModelFile,
+                                   modelFields,
+                                   [](const std::string& path, const ReadRequest&) -> CellSet {
+                                     fail(path,
+                                          ": a model file is loaded whole (loadModel) or in parts from its bricks");
+                                   },
+                                   nullptr,
+                                   modelCensus,
+                                   nullptr,
+                                   modelPatches};
+  return reader;
 }
 
 const FormatReader* patchReader(InputKind kind, const std::string& path, const LoadOptions& options) {

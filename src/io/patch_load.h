@@ -27,6 +27,11 @@ PatchSource patchesOf(const std::string& path, const FormatReader& reader, const
 Model loadModelOfPatches(const std::string& path, const FormatReader& reader, const LoadOptions& options,
                          int finestLevel, const PatchKeep& keep);
 
+/// Model files read in parts (a step under a memory budget): the census and the patches from
+/// the brick table (readModelTable), each brick's values read on demand. Loaded whole, a model
+/// file is mapped instead (readModel).
+const FormatReader& modelPartsReader();
+
 /// The reader that builds a load of this kind from the input's boxes, if any: readers that give
 /// them, unless non-finite values are to become holes (cells dropped one by one).
 const FormatReader* patchReader(InputKind kind, const std::string& path, const LoadOptions& options);

@@ -46,7 +46,8 @@ struct LoadOptions {
 /// Determines the kind of input; throws with the path when it is not recognised.
 InputKind detectInput(const std::string& path);
 
-/// Whether loadModel builds this input from its boxes (structure without values, no cell records).
+/// Whether this input is built without cell records: from its boxes (structure without values),
+/// or, for a model file, from its bricks (mapped whole, or read brick by brick in parts).
 bool buildsFromBoxes(const std::string& path, const LoadOptions& options = {});
 
 /// Reads raw cells (not for model files).

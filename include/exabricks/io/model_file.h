@@ -12,7 +12,9 @@
 
 #include "exabricks/amr/model.h"
 
+#include <memory>
 #include <string>
+#include <vector>
 
 namespace exa {
 
@@ -30,5 +32,20 @@ void writeModel(const Model& model, const std::string& path);
 /// the field values are used in place (read-only, kept mapped while the model's values live);
 /// bricks and regions are copied.
 Model readModel(const std::string& path);
+
+/// A model file's table without its values or regions, for a step read brick by brick: the
+/// header, the world, the bricks and the fields checked against the file (sizes, each brick's
+/// place among the values), the file kept open. The checksum, which covers every value, is
+/// verified where the model is read whole (readModel).
+struct ModelTable {
+  WorldTransform world;
+  std::vector<Brick> bricks;
+  std::vector<std::string> fieldNames;
+  std::vector<uint64_t> valuesAt;  ///< per field, the file offset of its first value
+  std::shared_ptr<const int> file; ///< the open descriptor
+  /// Brick b's values of `field` (b.cellCount() of them, x fastest) into `out`.
+  void readValues(const std::string& path, size_t field, const Brick& b, float* out) const;
+};
+ModelTable readModelTable(const std::string& path);
 
 } // namespace exa
