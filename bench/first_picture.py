@@ -2,7 +2,7 @@
 """Time to the first picture of `exabricks view`: from the start of the process to its address
 on stdout, and to the first frame on its frame stream (what of the data it shows, where not all),
 with the process's peak resident memory so far; then, optionally, to the first frame drawn from
-every level.
+every level and to the last, refined one.
 
     /usr/bin/python3 bench/first_picture.py build/exabricks INPUT [--size 512x512] [--every-level]
         [more options of exabricks view, such as --memory-budget 2G]
@@ -62,13 +62,19 @@ def main():
             if first is None:
                 first, shows = now, header.get("data", "every level")
                 first_peak = peak_rss_mib(view.pid)
-            if not a.every_level or "data" not in header:
-                every = now if "data" not in header else None
+            if not a.every_level:
                 break
+            # Every level: a frame without a data note, or one drawn from every level in parts
+            # (under a memory budget: first after one pass, then refined to the last pass).
+            if "data" not in header or header["data"].startswith("every level"):
+                every = every or now
+                if header.get("final"):
+                    break
         result = {"address_s": round(address, 3), "first_frame_s": round(first, 3), "first_frame_shows": shows,
                   "peak_rss_mib_at_first_frame": round(first_peak, 1)}
         if a.every_level:
             result["every_level_s"] = round(every, 3)
+            result["every_level_final_s"] = round(now, 3)
             result["peak_rss_mib"] = round(peak_rss_mib(view.pid), 1)
         print(json.dumps(result, indent=1))
     finally:

@@ -221,6 +221,20 @@ TEST(Streamed, FramesFromPartsEqualTheInCoreRender) {
     ASSERT_TRUE(image.pixels[i].x == second.pixels[i].x && image.pixels[i].y == second.pixels[i].y &&
                 image.pixels[i].z == second.pixels[i].z && image.pixels[i].w == second.pixels[i].w)
         << i;
+
+  // Shown as it goes (the viewer): a picture of every level after one pass over the parts, then
+  // the rest of the passes, which end in the same frame.
+  std::vector<int> shown;
+  FrameBuffer progressive;
+  ASSERT_TRUE(
+      renderStreamed(step, scene, RendererOptions(), frame, progressive, {}, [&](const FrameBuffer& sofar, int passes) {
+        shown.push_back(passes);
+        EXPECT_EQ(sofar.resolve().pixels.size(), image.pixels.size());
+      }));
+  EXPECT_EQ(shown, std::vector<int>{1});
+  const Image third = progressive.resolve();
+  for (size_t i = 0; i < image.pixels.size(); ++i)
+    ASSERT_TRUE(image.pixels[i].x == third.pixels[i].x && image.pixels[i].w == third.pixels[i].w) << i;
 }
 
 TEST(Streamed, AModelFileIsReadBrickByBrickInPartsEqualToTheWhole) {

@@ -261,15 +261,31 @@ void Session::serveParts(const Request& request, FrameInfo info, PassControl& co
   const Frame& frame = request.doc.frame;
   FrameBuffer buffer(frame.width, frame.height);
   Timer timer;
-  if (!renderStreamed(*parts_, request.doc.scene, RendererOptions{}, frame, buffer, control) || superseded(request.id))
+  auto said = [&](int passes) {
+    return strCat("every level, drawn in ", parts_->parts(), " parts (", parts_->residentParts(), " resident",
+                  passes < frame.samplesPerPixel ? strCat("; ", passes, " of ", frame.samplesPerPixel, " passes") : "",
+                  "); ", formatBytes(residentBytesNow()), " resident of a ", formatBytes(budget_), " budget");
+  };
+  // Every level after one pass over the parts (a pass reads each part once), then after each
+  // round of passes, until the last.
+  auto afterRound = [&](const FrameBuffer& sofar, int passes) {
+    if (superseded(request.id)) return;
+    FrameInfo partial = info;
+    partial.passes = passes;
+    partial.final = false;
+    partial.renderSeconds = timer.seconds();
+    partial.data = said(passes);
+    publish(request, sofar.resolve(), partial, false, options_.jpegQuality);
+  };
+  if (!renderStreamed(*parts_, request.doc.scene, RendererOptions{}, frame, buffer, control, afterRound) ||
+      superseded(request.id))
     return;
   info.passes = frame.samplesPerPixel;
   info.final = true;
   info.renderSeconds = timer.seconds();
   info.samples = buffer.stats().samples;
   info.samplesPerSecond = info.renderSeconds > 0 ? double(info.samples) / info.renderSeconds : 0;
-  info.data = strCat("every level, drawn in ", parts_->parts(), " parts (", parts_->residentParts(), " resident); ",
-                     formatBytes(residentBytesNow()), " resident of a ", formatBytes(budget_), " budget");
+  info.data = said(frame.samplesPerPixel);
   publish(request, buffer.resolve(), info, true, options_.finalJpegQuality);
 }
 

@@ -518,7 +518,8 @@ std::string StreamedStep::infoJson(const std::string& name, double seconds) {
 }
 
 bool renderStreamed(StreamedStep& step, const Scene& sceneIn, const RendererOptions& options, const Frame& frame,
-                    FrameBuffer& buffer, const PassControl& control) {
+                    FrameBuffer& buffer, const PassControl& control,
+                    const std::function<void(const FrameBuffer&, int passes)>& afterRound) {
   Scene scene = sceneIn;
   resolveParticleRadius(scene, frame);
   if (scene.integration.integrator == Integrator::PathTrace)
@@ -536,8 +537,9 @@ bool renderStreamed(StreamedStep& step, const Scene& sceneIn, const RendererOpti
   RenderStats stats;
   bool complete = true;
   Frame f = frame;
-  for (int first = 0; first < frame.samplesPerPixel && complete; first += round) {
-    const int count = std::min(round, frame.samplesPerPixel - first);
+  for (int first = 0, count = 0; first < frame.samplesPerPixel && complete; first += count) {
+    count = std::min(afterRound && first == 0 ? 1 : round, frame.samplesPerPixel - first);
+    if (first > 0 && afterRound) afterRound(buffer, first);
     std::fill(composites.begin(), composites.end(), 0.f);
     std::fill(front.begin(), front.end(), 0.f);
     // Resident parts are taken where they come in the order; the others are read in it.

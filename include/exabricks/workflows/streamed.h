@@ -12,6 +12,7 @@
 #include "exabricks/render/renderer.h"
 
 #include <cstdint>
+#include <functional>
 #include <list>
 #include <memory>
 #include <optional>
@@ -195,8 +196,12 @@ private:
 
 /// Renders `frame` (every pass) into `buffer` from the step's parts, front to back, each pass
 /// composited over the parts as data-parallel rendering composites them. False when cancelled.
+/// The passes are drawn in rounds, each reading the parts once; with `afterRound`, the first
+/// round is one pass (a picture of every level after one read of each part) and `afterRound`
+/// is called with the passes in `buffer` after every round but the last.
 bool renderStreamed(StreamedStep& step, const Scene& scene, const RendererOptions& options, const Frame& frame,
-                    FrameBuffer& buffer, const PassControl& control = {});
+                    FrameBuffer& buffer, const PassControl& control = {},
+                    const std::function<void(const FrameBuffer&, int passes)>& afterRound = {});
 
 /// Bytes of the images a frame of this size and samples per pixel holds while it is composited
 /// from parts (the output buffer, one part's pass and the per-pass composites).
