@@ -136,14 +136,10 @@ def start_in_parts(start_viewer, cli, args):
         except AssertionError as e:
             refused = str(e)
         else:
-            # The viewer answers once it serves. The address comes before the data are read, so a
-            # budget found too small only beside the coarse levels read ends the process first.
-            try:
-                status, _, _ = v.request("GET", "/api/info", timeout=120)
-                assert status == 200, status
-            except OSError:
-                v.proc.wait(timeout=30)
-                refused = v.stderr_path.read_text()
+            # The viewer answers once it serves: a budget is planned, or refused, before the
+            # address is printed.
+            status, _, _ = v.request("GET", "/api/info", timeout=120)
+            assert status == 200, status
         if refused is not None:
             if last:
                 raise AssertionError(refused)
