@@ -176,16 +176,19 @@ std::optional<uint64_t> budgetForLargeStep(const std::string& input, const LoadO
   if (input.empty()) return std::nullopt;
   const InputKind kind = detectInput(input);
   const FormatReader* reader = findReader(input);
-  if (!reader || !reader->census) return std::nullopt; // counted only by reading
+  // Counted only by reading; a model file, from its brick table.
+  if (kind != InputKind::Model && (!reader || !reader->census)) return std::nullopt;
   const uint64_t available = availableMemoryBytes();
   if (available == 0) return std::nullopt;
   const uint64_t budget = available / 4 * 3;
   const double perCell = double(bytesPerResidentCell(loadedFields(input, options), buildsFromBoxes(input, options)));
   const double fixed = double(residentBytesNow() + kProcessSlack + frameBytes);
-  // An upper bound from sizes alone first (the records of NAME.cells, the cells in the boxes of a
-  // patch-based file): a step that fits by it is read as before, without a census.
-  const double most = kind == InputKind::Native ? double(fileSize(input) / sizeof(Cell))
-                                                : coarseFirstLevel(input, std::numeric_limits<double>::max()).cells;
+  // An upper bound from sizes alone first (the records of NAME.cells, a model's bytes at 4 per cell
+  // (a field's value), the cells in the boxes of a patch-based file): a step that fits by it is
+  // read as before, without a census.
+  const double most = kind == InputKind::Native  ? double(fileSize(input) / sizeof(Cell))
+                      : kind == InputKind::Model ? double(fileSize(input) / sizeof(float))
+                                                 : coarseFirstLevel(input, std::numeric_limits<double>::max()).cells;
   if (fixed + most * perCell <= double(budget)) return std::nullopt;
   const Census census = loadCensus(input, options);
   const double need = fixed + census.cells() * perCell;
