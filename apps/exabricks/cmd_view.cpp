@@ -262,7 +262,7 @@ void applySeriesRange(const FirstStep& first, const std::vector<std::string>& st
 /// (after the coarse levels, where it shows the coarsest level merged first), or by reading the
 /// coarse levels and then the whole step on a thread of its own.
 void addRefinement(view::ViewContent& content, const FirstStep& first, const std::string& input, const LoadOptions& lo,
-                   const ViewBudget& budgets, uint64_t frameBytes) {
+                   const ViewBudget& budgets) {
   const uint64_t budget = budgets.budget;
   const std::string shown = first.merged > 1 ? mergedShown(first) : coarseShown(first.coarse);
   const CoarseFirst coarse = first.coarse;
@@ -410,7 +410,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   content.name = datasetLabel(o.inputs.empty() ? o.scene.in.input : o.inputs[0]);
   content.initial = doc;
   content.load = lo;
-  addRefinement(content, first, doc.input, lo, budget, frameBytes);
+  addRefinement(content, first, doc.input, lo, budget);
   if (first.series) {
     content.series = first.series;
     content.steps = steps;

@@ -444,10 +444,11 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
                                    int coarsestLevel) {
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   const box3l reach = shadingReach(part, coarsestLevel);
-  const FormatReader* reader = io::patchReader(detectInput(path), path, options);
-  if (detectInput(path) == InputKind::Model) reader = &io::modelPartsReader(); // the bricks reaching the part
-  if (reader) {
-    Model m = io::loadModelOfPatches(path, *reader, options, 0, {PatchKeep::Rule::Reaching, reach});
+  const FormatReader* patches = detectInput(path) == InputKind::Model
+                                    ? &io::modelPartsReader() // the bricks reaching the part
+                                    : io::patchReader(detectInput(path), path, options);
+  if (patches) {
+    Model m = io::loadModelOfPatches(path, *patches, options, 0, {PatchKeep::Rule::Reaching, reach});
     if (m.bricks.empty()) return std::nullopt;
     return m;
   }
