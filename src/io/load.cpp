@@ -444,9 +444,9 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
                                    int coarsestLevel) {
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   const box3l reach = shadingReach(part, coarsestLevel);
-  const FormatReader* patches = detectInput(path) == InputKind::Model
-                                    ? &io::modelPartsReader() // the bricks reaching the part
-                                    : io::patchReader(detectInput(path), path, options);
+  const InputKind kind = detectInput(path);
+  const FormatReader* patches = kind == InputKind::Model ? &io::modelPartsReader() // the bricks reaching the part
+                                                         : io::patchReader(kind, path, options);
   if (patches) {
     Model m = io::loadModelOfPatches(path, *patches, options, 0, {PatchKeep::Rule::Reaching, reach});
     if (m.bricks.empty()) return std::nullopt;
@@ -454,7 +454,7 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
   }
   CellSet set;
   const box3i readBox = haloReadBox(reach, coarsestLevel);
-  if (detectInput(path) == InputKind::Default) {
+  if (kind == InputKind::Default) {
     set = defaultDataset();
   } else {
     ReadRequest request;
