@@ -2,12 +2,13 @@
 // more with its header's payload size and checksum made to match (fuzz/model_bytes.h), so that
 // mutations reach every array and the consistency checks. What reads must pass those checks.
 // The brick table of a model read in parts (readModelTable) is read from the same bytes, and
-// every brick's values with it.
+// every brick's values with it, and every cell merged into cubes from them.
 // Seeds: valid version 1 and version 2 files of several sizes (fuzz_seeds model DIR).
 #include "fuzz_files.h"
 #include "model_bytes.h"
 
 #include "exabricks/core/error.h"
+#include "exabricks/io/load.h"
 #include "exabricks/io/model_file.h"
 
 #include <vector>
@@ -30,6 +31,12 @@ void readOne(const std::string& bytes) {
         values.resize(b.cellCount());
         t.readValues(path, f, b, values.data());
       }
+  } catch (const exa::Error&) {
+  }
+  // Every cell merged into cubes for a first picture, brick by brick.
+  try {
+    const std::optional<exa::MergedLeaves> m = exa::loadMergedLeaves(path, {}, 2);
+    if (m && m->model.cellCount() > m->cells) __builtin_trap();
   } catch (const exa::Error&) {
   }
 }

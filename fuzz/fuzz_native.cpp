@@ -1,7 +1,7 @@
 // libFuzzer entry for the native readers: the input holds d.cells, d.scalars, a .grids text and
 // d.particles, cut at "--8<--" lines; the dataset (whole, its census, the part inside a box, read
-// in pieces, and the model built in parts of 16 cells), the fixture and the particles (listed,
-// then read whole and one species) are read.
+// in pieces, the model built in parts of 16 cells and every cell merged into cubes), the fixture and the particles
+// (listed, then read whole and one species) are read.
 #include "fuzz_files.h"
 
 #include "exabricks/core/error.h"
@@ -33,6 +33,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     o.partCells = 16;
     const exa::Model m = exa::loadModel(cells, o);
     if (m.fieldValues.size() != 1 || m.fieldValues[0].size() != m.cellCount()) __builtin_trap();
+  } catch (const exa::Error&) {
+  }
+  try {
+    // Every cell merged into cubes for a first picture (read a million records at a time): no more
+    // cubes than cells, each the mean of finite values.
+    const std::optional<exa::MergedLeaves> m = exa::loadMergedLeaves(cells, {}, 2);
+    if (m && (m->model.cellCount() > m->cells || m->model.fieldValues.size() != 1)) __builtin_trap();
   } catch (const exa::Error&) {
   }
   try {

@@ -4,6 +4,7 @@
 #include "exabricks/io/load.h"
 
 #include "flash_fixture.h"
+#include "merged_leaves_check.h"
 #include "reader_checks.h"
 
 #include <gtest/gtest.h>
@@ -105,6 +106,21 @@ TEST(Flash, CensusFromTheBlockTableAndABuildFromTheBlocksEqualTheCells) {
     ADD_FAILURE() << "a NaN was read";
   } catch (const Error& e) {
     expectIn(e.what(), {"parts_nan_hdf5_0001", "block 17", "dens", "NaN"});
+  }
+}
+
+TEST(Flash, EveryLeafMergedIntoCubesFromTheBlocks) {
+  // A first picture of a FLASH file (whose parent blocks need not hold values): every leaf cell
+  // merged into cubes, block by block, against sums over the cells loadCells reads.
+  const std::string path = written("merged_hdf5_0001", false).file.string();
+  const CellSet cells = loadCells(path);
+  EXPECT_FALSE(loadMergedLeaves(path, {}, double(cells.size())));
+  for (const double most : {100.0, 20.0}) {
+    const std::optional<MergedLeaves> m = loadMergedLeaves(path, {}, most);
+    ASSERT_TRUE(m);
+    EXPECT_EQ(m->cells, double(cells.size()));
+    EXPECT_EQ(m->model.world, cells.world);
+    expectCubeMeans(*m, cells);
   }
 }
 

@@ -11,6 +11,7 @@
 #include "exabricks/io/native.h"
 #include "exabricks/workflows/coarse_first.h"
 #include "exabricks/workflows/streamed.h"
+#include "merged_leaves_check.h"
 
 #include <gtest/gtest.h>
 
@@ -370,5 +371,29 @@ TEST(Streamed, TheCensusOutlineEqualsTheSurveyAndTheFrameGathersIt) {
       ASSERT_TRUE(a.pixels[i].x == r.pixels[i].x && a.pixels[i].y == r.pixels[i].y && a.pixels[i].z == r.pixels[i].z &&
                   a.pixels[i].w == r.pixels[i].w)
           << i;
+  }
+}
+
+TEST(Streamed, EveryCellMergedIntoCubesIsTheVolumeMeanOfItsCells) {
+  // Inputs without coarse levels to read alone (NAME.cells, a model file): every cell merged into
+  // cubes, checked against sums cell by cell, on a step whose corners are negative and whose
+  // halves lie 2^26 finest cells apart (nothing may be allocated by bounding volume).
+  CellSet set = generateScene({"blobs", 60000, 3, 4});
+  const size_t half = set.cells.size() / 2;
+  for (size_t i = 0; i < set.cells.size(); ++i)
+    set.cells[i].lower += vec3i(i < half ? -(1 << 26) : (1 << 26), -64, 0);
+  const std::string dir = std::string(EXABRICKS_TEST_TMP) + "/streamed";
+  std::filesystem::create_directories(dir);
+  const std::string cells = dir + "/apart.cells", model = dir + "/apart.model";
+  writeNative(set, cells);
+  writeModel(loadModel(cells), model);
+  for (const std::string& path : {cells, model}) {
+    SCOPED_TRACE(path);
+    EXPECT_FALSE(loadMergedLeaves(path, {}, double(set.cells.size())));
+    const std::optional<MergedLeaves> m = loadMergedLeaves(path, {}, 2000);
+    ASSERT_TRUE(m);
+    EXPECT_EQ(m->cells, double(set.cells.size()));
+    expectCubeMeans(*m, set);
+    EXPECT_LT(m->model.cellCount(), set.cells.size() / 8);
   }
 }

@@ -78,6 +78,7 @@ struct FirstStep {
   CoarseFirst coarse;                                  ///< level > 0: `model` holds the coarse levels
   int64_t merged = 1; ///< above 1: `model` holds the coarsest level's cells merged by this per axis
   int mergedLevel = 0;
+  bool leavesMerged = false;             ///< `model` holds every cell merged into cubes 2^mergedLevel wide
   std::optional<DefaultChoices> choices; ///< the first transfer function, chosen from `model` already
 };
 
@@ -94,6 +95,12 @@ std::string mergedShown(const FirstStep& f) {
                 std::llround(cells), " cells for ", std::llround(f.coarse.cells), " in boxes)");
 }
 
+/// The same for every cell merged (FirstStep::leavesMerged).
+std::string leavesShown(const FirstStep& f) {
+  return strCat("every cell merged into cubes ", int64_t(1) << f.mergedLevel, " finest cells wide (",
+                std::llround(f.model->cellCount()), " cubes for ", std::llround(f.coarse.cells), " cells)");
+}
+
 /// The first picture of a large plotfile: its coarsest level merged, and the transfer function
 /// chosen from it where the options leave that to the data.
 struct MergedFirst {
@@ -108,6 +115,8 @@ std::future<MergedFirst> mergedBeside(const std::vector<std::string>& steps, con
                                       const LoadOptions& lo, double firstCells, const RenderOptions& o,
                                       const CLI::App& cmd, const Scene& scene) {
   if (steps.size() > 1 || !(firstCells > 0)) return {};
+  // Under a budget given, an input whose cells are merged for the first picture is read once, so.
+  if (!o.in.memoryBudget.empty() && mergesLeaves(input)) return {};
   return std::async(std::launch::async, [input, lo, firstCells, &o, &cmd, scene] {
     MergedFirst m;
     m.levels = loadMergedFirst(input, lo, coarseFirstLevel(input, firstCells), firstCells);
@@ -128,9 +137,23 @@ std::future<MergedFirst> mergedBeside(const std::vector<std::string>& steps, con
 /// alone), and one whose coarsest level alone holds more than `firstCells` as that level merged
 /// (`merged`, where it is being read already).
 FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo,
-                    double coarseFirst, double firstCells, std::future<MergedFirst> read) {
+                    double coarseFirst, double firstCells, std::future<MergedFirst> read, double mergedCells) {
   FirstStep f;
   if (steps.size() <= 1 && coarseFirst > 0) f.coarse = coarseFirstLevel(input, coarseFirst);
+  if (mergedCells > 0) {
+    // Under a budget, an input without coarse levels to read alone: every cell merged first.
+    if (read.valid()) read.wait();
+    if (std::optional<CoarseLevels> merged = loadMergedLeavesFirst(input, lo, mergedCells)) {
+      f.coarse = CoarseFirst();
+      f.coarse.cells = merged->cells;
+      f.model = std::move(merged->model);
+      f.dataset = std::move(merged->dataset);
+      f.mergedLevel = merged->mergedLevel;
+      f.leavesMerged = true;
+      logNote(strCat("showing ", leavesShown(f), "; every level follows in parts"));
+      return f;
+    }
+  }
   // A coarsest level alone larger than coarseFirst: first a picture of it merged, then the rest.
   const bool large = f.coarse.level > 0 ? f.coarse.coarseCells > firstCells : f.coarse.cells > firstCells;
   if (large && firstCells > 0) {
@@ -196,8 +219,9 @@ uint64_t viewerFrameBytes(const Frame& frame) {
 /// read alone (AMReX, Chombo, Enzo and VTK overlapping AMR files) are viewed in parts. A budget too small for both is
 /// refused naming the smallest that holds both.
 struct ViewBudget {
-  uint64_t budget = 0; ///< 0: the step is held whole
-  MemoryPlan parts;    ///< the parts, planned beside the coarse levels
+  uint64_t budget = 0;    ///< 0: the step is held whole
+  MemoryPlan parts;       ///< the parts, planned beside the coarse levels
+  double mergedCells = 0; ///< above 0: no coarse levels; every cell merged into about this many cubes
 };
 ViewBudget viewBudget(const InputOptions& in, const std::string& input, const LoadOptions& lo, uint64_t frameBytes,
                       double& coarseFirst) {
@@ -210,13 +234,13 @@ ViewBudget viewBudget(const InputOptions& in, const std::string& input, const Lo
     failUsage(refused.what());
   }
   if (!beside) return {};
-  if (beside->coarse.level == 0)
+  if (beside->coarse.level == 0 && !(beside->mergedCells > 0))
     failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
-              ": the viewer shows such a step from its coarse levels while it draws every level in parts, and "
-              "only the coarse levels of AMReX, Chombo, Enzo and VTK overlapping AMR files can be read alone; "
+              ": the viewer shows such a step from its coarse levels (AMReX, Chombo, Enzo and VTK overlapping AMR "
+              "files) or every cell merged (model files, FLASH, NAME.cells) while it draws every level in parts; "
               "`render` and `movie` draw it with --memory-budget");
   coarseFirst = beside->coarse.coarseCells;
-  return {*budget, std::move(beside->parts)};
+  return {*budget, std::move(beside->parts), beside->mergedCells};
 }
 
 /// Ctrl-C and SIGTERM are taken by one thread (sigwait) that stops the server cleanly; every
@@ -264,7 +288,9 @@ void applySeriesRange(const FirstStep& first, const std::vector<std::string>& st
 void addRefinement(view::ViewContent& content, const FirstStep& first, const std::string& input, const LoadOptions& lo,
                    const ViewBudget& budgets) {
   const uint64_t budget = budgets.budget;
-  const std::string shown = first.merged > 1 ? mergedShown(first) : coarseShown(first.coarse);
+  const std::string shown = first.leavesMerged ? leavesShown(first)
+                            : first.merged > 1 ? mergedShown(first)
+                                               : coarseShown(first.coarse);
   const CoarseFirst coarse = first.coarse;
   auto coarseLevels = [input, lo, coarse] {
     CoarseLevels c = loadCoarseLevels(input, lo, coarse);
@@ -277,9 +303,10 @@ void addRefinement(view::ViewContent& content, const FirstStep& first, const std
     const std::string parts =
         strCat("every level follows in ", content.parts->parts(), " parts within a budget of ", formatBytes(budget));
     content.coarse = {shown, parts};
-    if (first.merged > 1) content.refine.push_back({coarseLevels, {coarseShown(coarse), parts}});
+    if (first.merged > 1 && !first.leavesMerged) content.refine.push_back({coarseLevels, {coarseShown(coarse), parts}});
     logNote(strCat("memory budget ", formatBytes(budget), ": a still view is drawn from every level in ",
-                   content.parts->parts(), " parts, its drafts from the coarse levels"));
+                   content.parts->parts(), " parts, its drafts from ",
+                   first.leavesMerged ? "every cell merged" : "the coarse levels"));
     return;
   }
   if (first.merged == 1 && first.coarse.level == 0) return;
@@ -389,8 +416,8 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   const ViewBudget budget =
       steps.size() > 1 ? ViewBudget() : viewBudget(o.scene.in, doc.input, lo, frameBytes, coarseFirst);
   viewer.announce(o.scene.in.name()); // after a budget's refusal, before anything else is read
-  const FirstStep first =
-      loadFirst(steps, doc.input, lo, coarseFirst, steps.size() > 1 ? 0 : o.coarseFirst, std::move(merged));
+  const FirstStep first = loadFirst(steps, doc.input, lo, coarseFirst, steps.size() > 1 ? 0 : o.coarseFirst,
+                                    std::move(merged), budget.mergedCells);
   if (first.series) doc.input = steps[size_t(first.index)];
   const std::shared_ptr<const Model>& model = first.model;
   const DatasetInfo& dataset = first.dataset;
@@ -419,7 +446,7 @@ void run(const ViewCmdOptions& given, const CLI::App& cmd) {
   }
   viewer.serve(std::move(content));
   logNote("viewer stopped");
-  if (first.coarse.level > 0 || first.merged > 1) {
+  if (first.coarse.level > 0 || first.merged > 1 || first.leavesMerged) {
     // The whole dataset may still be being read on its own thread: end the process here, before
     // static objects that thread may use are destroyed.
     std::fflush(nullptr);

@@ -162,6 +162,36 @@ Census nativeCensus(const std::string& cellsPath) {
   return census.finish();
 }
 
+void streamNative(const std::string& cellsPath, const std::vector<std::string>& fields, bool keepNonFinite,
+                  const std::function<void(const Cell*, const std::vector<const float*>&, size_t)>& use) {
+  const std::string stem = stemOf(cellsPath);
+  const uint64_t count = fileSize(cellsPath) / sizeof(Cell);
+  std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> files;
+  std::vector<std::string> paths;
+  for (const std::string& name : fields) {
+    paths.push_back(checkedScalarsPath(cellsPath, stem, name, count));
+    std::FILE* f = std::fopen(paths.back().c_str(), "rb");
+    if (!f) fail(paths.back(), ": cannot open: ", std::strerror(errno));
+    files.emplace_back(f, std::fclose);
+  }
+  std::vector<std::vector<float>> values(fields.size());
+  std::vector<const float*> at(fields.size());
+  streamCells(cellsPath, [&](const Cell* cells, size_t n, uint64_t first) {
+    for (size_t f = 0; f < fields.size(); ++f) {
+      values[f].resize(n);
+      if (std::fread(values[f].data(), sizeof(float), n, files[f].get()) != n)
+        fail(paths[f], ": read error (file changed while reading?)");
+      if (!keepNonFinite)
+        for (size_t i = 0; i < n; ++i)
+          if (!std::isfinite(values[f][i]))
+            fail(paths[f], ": record ", first + i, ": value ", values[f][i], " of field '", fields[f],
+                 "' is not finite");
+      at[f] = values[f].data();
+    }
+    use(cells, at, n);
+  });
+}
+
 std::vector<Cell> readNativeCells(const std::string& cellsPath) {
   const uint64_t bytes = fileSize(cellsPath);
   if (bytes == 0) fail(cellsPath, ": no cells (empty file)");

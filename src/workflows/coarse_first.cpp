@@ -37,6 +37,35 @@ uint64_t smallestBesideCoarse(const std::string& input, const BudgetTooSmall& re
   return (uint64_t(std::ceil(best)) + mebibyte - 1) / mebibyte * mebibyte;
 }
 
+/// A view of an input without coarse levels to read alone but whose cells can be merged
+/// (mergesLeaves): the cubes it holds, a quarter of coarseRoom's cells, reserved at twice that
+/// (cubes at the cells' edges add some), and its parts planned in the rest. A budget too small is
+/// refused with the smallest under which the parts' smallest largest part fits beside the cubes.
+CoarseBeside besideMergedLeaves(const std::string& input, const LoadOptions& options, uint64_t budget,
+                                uint64_t frameBytes, const MemoryPlan& sizes, double maxCoarseCells,
+                                const std::string& who) {
+  CoarseBeside b;
+  b.mergedCells = coarseRoom(budget, sizes.fixedBytes, sizes.bytesPerCell, maxCoarseCells) / 4;
+  const uint64_t held = uint64_t(std::ceil(2 * std::max(b.mergedCells, 0.0))) * sizes.bytesPerCell;
+  try {
+    if (!(b.mergedCells >= 1)) planMemory(input, options, 0, frameBytes); // refused: no room for cubes
+    b.parts = planMemory(input, options, budget > held ? budget - held : 0, frameBytes);
+    return b;
+  } catch (const BudgetTooSmall& refused) {
+    // Held cubes take a quarter of what the budget leaves beside the process: the part needs the
+    // other three.
+    const uint64_t mebibyte = uint64_t(1) << 20;
+    const uint64_t smallest = refused.fixedBytes + (refused.smallestPartBytes * 4 + 2) / 3;
+    const std::string& said = refused.situation;
+    const size_t figures = said.find(" cells): ");
+    throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ", input, " for ", who,
+                                figures == std::string::npos ? "" : said.substr(figures + 7)),
+                         (smallest + mebibyte - 1) / mebibyte * mebibyte, refused.fixedBytes, refused.smallestPartBytes,
+                         refused.bytesPerCell,
+                         strCat("with every cell merged into cubes that ", who, " holds for drafts beside the parts"));
+  }
+}
+
 } // namespace
 
 std::optional<CoarseBeside> coarseBesideParts(const std::string& input, const LoadOptions& options, uint64_t budget,
@@ -47,6 +76,8 @@ std::optional<CoarseBeside> coarseBesideParts(const std::string& input, const Lo
     const CoarseFirst coarse =
         coarseFirstLevel(input, coarseRoom(budget, sizes.fixedBytes, sizes.bytesPerCell, maxCoarseCells));
     if (coarse.level == 0) {
+      if (mergesLeaves(input))
+        return besideMergedLeaves(input, options, budget, frameBytes, sizes, maxCoarseCells, who);
       return CoarseBeside{coarse, planMemory(input, options, budget, frameBytes)}; // refused where no parts fit
     }
     // The parts beside the coarse levels; where they fit, the parts of the whole budget do too
@@ -61,7 +92,8 @@ std::optional<CoarseBeside> coarseBesideParts(const std::string& input, const Lo
       throw;
     }
   } catch (const BudgetTooSmall& refused) {
-    if (coarseFirstChoices(input).size() < 2) throw; // no coarse levels to hold: the parts' refusal
+    // No coarse levels to hold, or cubes held instead: that refusal.
+    if (coarseFirstChoices(input).size() < 2 || mergesLeaves(input)) throw;
     // The refusal's figures after its "(N cells): ", said of the budget given.
     const std::string& said = refused.situation;
     const size_t figures = said.find(" cells): ");
@@ -102,6 +134,19 @@ std::optional<CoarseLevels> loadMergedFirst(const std::string& input, const Load
   c.dataset = partialDataset(input, *c.model, coarse.finestLevel);
   c.mergedFactor = merged->factor;
   c.mergedLevel = merged->level;
+  return c;
+}
+
+std::optional<CoarseLevels> loadMergedLeavesFirst(const std::string& input, const LoadOptions& options,
+                                                  double maxCells) {
+  std::optional<MergedLeaves> merged = loadMergedLeaves(input, options, maxCells);
+  if (!merged) return std::nullopt;
+  CoarseLevels c;
+  c.dataset = DatasetInfo::from(merged->finestLevel, merged->cellBounds, merged->model.world.scale, merged->ranges);
+  c.model = std::make_shared<const Model>(std::move(merged->model));
+  c.mergedLevel = merged->level;
+  c.leavesMerged = true;
+  c.cells = merged->cells;
   return c;
 }
 

@@ -202,3 +202,44 @@ def test_the_smallest_budget_a_refusal_names_starts_the_viewer(start_viewer, cli
     v = start_viewer(*args, "--memory-budget", "%sM" % smallest.group(1))
     frames = frames_until(v, lambda h, i: h["final"])
     assert "every level, drawn in" in frames[-1].get("data", ""), frames[-1]
+
+
+@pytest.mark.parametrize("kind", ["model", "cells"])
+def test_a_step_without_coarse_levels_over_the_budget_shows_every_cell_merged_then_every_level(
+        start_viewer, cli, tmp_path, kind):
+    # A model file (leaf cells alone) and a NAME.cells hold no coarse levels to read alone: under a
+    # budget that cannot hold the step whole, the viewer merges every cell into cubes (read brick
+    # by brick, or a million records at a time) for its drafts and first passes, then draws every
+    # level in parts; a still view's last frame equals the command line's in-core render.
+    np = pytest.importorskip("numpy")
+    image = pytest.importorskip("PIL.Image")
+    if kind == "model":
+        step = tmp_path / "drop.model"
+        subprocess.run([cli, "-q", "build", str(drop()), "-o", str(step)], check=True)
+    else:
+        step = tmp_path / "blobs.cells"
+        subprocess.run([cli, "-q", "generate", "-s", "blobs", "-n", "600000", "-o", str(step)], check=True)
+    args = [str(step), "--size", "96x80", "--spp", "2"]
+    v, budget = start_in_parts(start_viewer, cli, args)
+    frames = frames_until(v, lambda h, i: h["final"])
+    stderr = v.stderr_path.read_text()
+    assert "showing every cell merged into cubes" in stderr, stderr
+    assert "every cell merged into cubes" in frames[0].get("data", ""), frames[0]
+    assert "every level, drawn in" in frames[-1].get("data", ""), frames[-1]
+    doc = v.info()["document"]
+    request = v.render(doc)
+    frames_until(v, lambda h, i: h["request"] == request and h["final"])
+    status, png, _ = v.request("GET", "/api/snapshot.png?request=%d" % request, timeout=120)
+    assert status == 200
+    peak_kb = int(next(l.split()[1] for l in open("/proc/%d/status" % v.proc.pid) if l.startswith("VmHWM")))
+    scene = tmp_path / "scene.json"
+    scene.write_text(json.dumps(doc))
+    out = tmp_path / "cli.png"
+    subprocess.run([cli, "render", "--scene", str(scene), "-o", str(out)], check=True, capture_output=True)
+    (tmp_path / "view.png").write_bytes(png)
+    a, b = (np.asarray(image.open(p).convert("RGBA")).astype(float) for p in (tmp_path / "view.png", out))
+    d = np.abs(a - b)
+    print("mean %.4f, max %.0f, peak %.1f MiB of %d MiB" % (d.mean(), d.max(), peak_kb / 1024, budget))
+    assert a.shape == b.shape and d.mean() <= 0.5 and (d <= 2).mean() >= 0.999
+    if not os.environ.get("EXABRICKS_SANITIZED"):
+        assert peak_kb / 1024 <= 1.15 * budget

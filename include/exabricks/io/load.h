@@ -92,6 +92,24 @@ struct MergedCoarsest {
 };
 std::optional<MergedCoarsest> loadMergedCoarsest(const std::string& path, const LoadOptions& options, double maxCells);
 
+/// A first picture of an input whose coarse levels cannot be read alone (a model file, FLASH,
+/// NAME.cells): every leaf cell merged into cubes 2^level finest cells wide, each the mean of
+/// the cells in it by their volume; the narrowest cubes, at least as wide as every cell, that
+/// the cells' volume keeps within about `maxCells`. Read piece by piece (brick, block, a million
+/// records), so that the cubes are all it holds. `ranges` are the cells' value ranges, not the
+/// means'. None where the input is not of those kinds or holds no more than `maxCells` cells.
+struct MergedLeaves {
+  Model model;
+  int level = 0;               ///< the cubes'
+  double cells = 0;            ///< leaf cells merged
+  std::vector<range1f> ranges; ///< per field, of the leaf cells
+  int finestLevel = 0;         ///< of the leaf cells
+  box3i cellBounds;            ///< of the leaf cells (the cubes' reach further)
+};
+std::optional<MergedLeaves> loadMergedLeaves(const std::string& path, const LoadOptions& options, double maxCells);
+/// Whether loadMergedLeaves reads this input.
+bool mergesLeaves(const std::string& path);
+
 /// Names of the fields an input holds, without building anything.
 std::vector<std::string> listFields(const std::string& path);
 

@@ -10,6 +10,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -33,6 +34,13 @@ std::vector<float> readNativeField(const std::string& cellsPath, const std::stri
                                    bool keepNonFinite = false);
 /// Where the cells of NAME.cells lie, read in pieces (values are not read).
 Census nativeCensus(const std::string& cellsPath);
+
+/// Reads NAME.cells and the values of `fields` (nativeFieldsToRead's names) in pieces of a
+/// million records, each validated, and hands each piece to `use(cells, values, n)`, one value
+/// array per field: memory for one piece. A value that is not finite is refused, naming its
+/// file, record and field, unless `keepNonFinite`.
+void streamNative(const std::string& cellsPath, const std::vector<std::string>& fields, bool keepNonFinite,
+                  const std::function<void(const Cell*, const std::vector<const float*>&, size_t)>& use);
 
 /// Names of the fields stored beside a .cells file.
 std::vector<std::string> listNativeFields(const std::string& cellsPath);
