@@ -25,7 +25,8 @@ struct Dataset {
   /// A step larger than its memory budget, held in parts (null: `model` holds it whole). Its
   /// parts are read as renders and samples need them; one thread at a time uses it.
   std::shared_ptr<StreamedStep> streamed;
-  bool coarse = false; ///< held in parts, `model` holds its coarse levels: drafts come from them
+  bool coarse = false;       ///< held in parts, `model` holds its coarse levels: drafts come from them
+  bool leavesMerged = false; ///< with `coarse`: `model` holds every cell merged into cubes instead
   /// The whole step's cell bounds (lattice).
   box3i cellBounds() const { return streamed ? streamed->survey().cellBounds : model->cellBounds(); }
   /// The input read (empty: the embedded dataset, or a dataset made from arrays).

@@ -75,12 +75,14 @@ std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::st
     std::optional<CoarseLevels> coarse;
     {
       py::gil_scoped_release release;
-      // Room for a 1024² frame of a few passes beside the coarse levels that drafts come from
-      // (where the format reads them alone) and the parts.
+      // Room for a 1024² frame of a few passes beside what drafts come from (the coarse levels
+      // where the format reads them alone, else every cell merged where it can be) and the parts
+      // planned beside it.
       const uint64_t frameBytes = streamedFrameBytes(1024, 1024, 4);
-      if (const std::optional<CoarseBeside> c = coarseBesideParts(path, o, budget, frameBytes, 0, "a Scene")) {
+      if (std::optional<CoarseBeside> c = coarseBesideParts(path, o, budget, frameBytes, 0, "a Scene")) {
         if (c->coarse.level > 0) coarse = loadCoarseLevels(path, o, c->coarse);
-        step = std::make_shared<StreamedStep>(path, o, planMemory(path, o, budget, frameBytes));
+        if (c->mergedCells > 0) coarse = loadMergedLeavesFirst(path, o, c->mergedCells);
+        step = std::make_shared<StreamedStep>(path, o, std::move(c->parts), coarse ? coarse->model.get() : nullptr);
         step->survey();
       }
     }
@@ -88,6 +90,7 @@ std::shared_ptr<Dataset> load(const std::string& path, const std::vector<std::st
       auto d = std::make_shared<Dataset>();
       d->model = coarse ? coarse->model : std::make_shared<const Model>(step->skeleton());
       d->coarse = coarse.has_value();
+      d->leavesMerged = coarse && coarse->leavesMerged;
       d->info = step->survey().dataset;
       d->name = path.empty() ? kDefaultDatasetName : path;
       d->path = path;

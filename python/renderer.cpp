@@ -212,7 +212,7 @@ public:
       d["parts"] = dataset_->streamed->parts();
       d["parts_read"] = dataset_->streamed->partsRead();
       d["regions"] = dataset_->streamed->survey().regions;
-      d["drafts"] = dataset_->coarse ? "coarse levels" : "parts";
+      d["drafts"] = dataset_->leavesMerged ? "every cell merged" : dataset_->coarse ? "coarse levels" : "parts";
       return d;
     }
     d["visible_regions"] = renderer_.visibleRegions();

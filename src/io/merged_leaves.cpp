@@ -129,12 +129,18 @@ private:
   std::vector<double> local_; ///< one cube's sums of a box or cell, per field
 };
 
-/// The narrowest cubes, at least as wide as every cell, whose count the cells' volume keeps
-/// within `maxCells` (the cubes at the edges of the cells' boxes add a few).
-int cubeLevel(const Census& census, double maxCells) {
+/// The cells' volume in finest cells.
+double volumeOf(const Census& census) {
   double volume = 0;
   for (size_t l = 0; l < census.levelCells.size(); ++l)
     volume += census.levelCells[l] * std::pow(8.0, double(l));
+  return volume;
+}
+
+/// The narrowest cubes, at least as wide as every cell, whose count the cells' volume keeps
+/// within `maxCells` (the cubes at the edges of the cells' boxes add a few).
+int cubeLevel(const Census& census, double maxCells) {
+  const double volume = volumeOf(census);
   int level = census.coarsestLevel;
   while (level < kMaxLevel && volume / std::pow(8.0, double(level)) > maxCells)
     ++level;
@@ -142,6 +148,11 @@ int cubeLevel(const Census& census, double maxCells) {
 }
 
 } // namespace
+
+double mergedLeavesCubes(const std::string& path, const LoadOptions& options, double maxCells) {
+  const Census census = loadCensus(path, options);
+  return volumeOf(census) / std::pow(8.0, double(cubeLevel(census, maxCells)));
+}
 
 bool mergesLeaves(const std::string& path) {
   if (path.empty()) return false;

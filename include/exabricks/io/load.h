@@ -109,6 +109,9 @@ struct MergedLeaves {
 std::optional<MergedLeaves> loadMergedLeaves(const std::string& path, const LoadOptions& options, double maxCells);
 /// Whether loadMergedLeaves reads this input.
 bool mergesLeaves(const std::string& path);
+/// The cubes loadMergedLeaves makes of the input for `maxCells`, estimated from its census: the
+/// cells' volume over a cube's (the cubes at the edges of the cells' boxes add some).
+double mergedLeavesCubes(const std::string& path, const LoadOptions& options, double maxCells);
 
 /// Names of the fields an input holds, without building anything.
 std::vector<std::string> listFields(const std::string& path);
