@@ -135,7 +135,8 @@ std::future<MergedFirst> mergedBeside(const std::vector<std::string>& steps, con
 /// stderr and skipped; when none can be read, the first one's error). A dataset of more than
 /// `coarseFirst` cells comes as its coarse levels (those cells at most, or the coarsest level
 /// alone), and one whose coarsest level alone holds more than `firstCells` as that level merged
-/// (`merged`, where it is being read already).
+/// (`merged`, where it is being read already); under a budget (`mergedCells` above 0), an input
+/// without coarse levels as every cell merged into about that many cubes.
 FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& input, const LoadOptions& lo,
                     double coarseFirst, double firstCells, std::future<MergedFirst> read, double mergedCells) {
   FirstStep f;
@@ -215,9 +216,10 @@ uint64_t viewerFrameBytes(const Frame& frame) {
 /// Under --memory-budget, or for a step too large for the memory available: budget 0 when the
 /// step fits (it is viewed as without a budget); else the budget and its parts' plan, with
 /// `coarseFirst` set to the cells of the coarse levels the view holds resident
-/// (coarseBesideParts) while it draws every level in those parts beside them. Only inputs whose coarse levels can be
-/// read alone (AMReX, Chombo, Enzo and VTK overlapping AMR files) are viewed in parts. A budget too small for both is
-/// refused naming the smallest that holds both.
+/// (coarseBesideParts) while it draws every level in those parts beside them. Inputs whose coarse levels can be read
+/// alone (AMReX, Chombo, Enzo and VTK overlapping AMR files) hold those; inputs of leaf cells only that can be merged
+/// (model files, FLASH, NAME.cells) hold every cell merged into cubes instead; others are refused. A budget too small
+/// for both is refused naming the smallest that holds both.
 struct ViewBudget {
   uint64_t budget = 0;    ///< 0: the step is held whole
   MemoryPlan parts;       ///< the parts, planned beside the coarse levels

@@ -147,6 +147,56 @@ int cubeLevel(const Census& census, double maxCells) {
   return level;
 }
 
+/// NAME.cells read a million records at a time, its cells summed into cubes 2^level wide: the
+/// cubes as cells, and the cells' value ranges.
+CellSet mergedNative(const std::string& path, const LoadOptions& options, int level, std::vector<range1f>& ranges) {
+  const uint64_t count = fileSize(path) / sizeof(Cell);
+  const std::vector<std::string> names = nativeFieldsToRead(path, options.fields, count);
+  CubeSums sums(level, names.size());
+  Progress progress("merging every cell for a first picture", count);
+  const bool holes = options.nonFinite == NonFinite::Holes;
+  streamNative(path, names, holes, [&](const Cell* cells, const std::vector<const float*>& values, size_t n) {
+    progress.advance(n);
+    std::vector<const float*> at(values.size());
+    for (size_t i = 0; i < n; ++i) {
+      for (size_t f = 0; f < values.size(); ++f)
+        at[f] = values[f] + i;
+      sums.addCell(cells[i], at);
+    }
+  });
+  CellSet set;
+  for (const std::string& name : names)
+    set.fields.push_back(Field{name, {}, ""});
+  sums.cellsInto(set);
+  ranges = sums.ranges();
+  return set;
+}
+
+/// The same for an input of leaf patches (a model's bricks, FLASH's leaf blocks), read patch by
+/// patch.
+CellSet mergedLeafPatches(const PatchSource& source, int level, std::vector<range1f>& ranges) {
+  CubeSums sums(level, source.fieldNames.size());
+  std::vector<std::vector<float>> values;
+  std::vector<const float*> at(source.fieldNames.size());
+  Progress progress("merging every cell for a first picture", source.patches.size());
+  for (size_t i = 0; i < source.patches.size(); ++i) {
+    const io::Patch& p = source.patches[i];
+    source.read(i, values);
+    for (size_t f = 0; f < at.size(); ++f)
+      at[f] = values[f].data();
+    sums.addBox(p.lower, p.cells, p.width, at);
+    progress.advance(1);
+  }
+  CellSet set;
+  for (size_t f = 0; f < source.fieldNames.size(); ++f)
+    set.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});
+  set.world = source.world;
+  set.simulation = source.simulation;
+  sums.cellsInto(set);
+  ranges = sums.ranges();
+  return set;
+}
+
 } // namespace
 
 double mergedLeavesCubes(const std::string& path, const LoadOptions& options, double maxCells) {
@@ -178,46 +228,15 @@ std::optional<MergedLeaves> loadMergedLeaves(const std::string& path, const Load
   CellSet set;
   const InputKind kind = detectInput(path);
   if (kind == InputKind::Native) {
-    const std::vector<std::string> names = nativeFieldsToRead(path, options.fields, fileSize(path) / sizeof(Cell));
-    CubeSums sums(m.level, names.size());
-    const bool holes = options.nonFinite == NonFinite::Holes;
-    streamNative(path, names, holes, [&](const Cell* cells, const std::vector<const float*>& values, size_t n) {
-      std::vector<const float*> at(values.size());
-      for (size_t i = 0; i < n; ++i) {
-        for (size_t f = 0; f < values.size(); ++f)
-          at[f] = values[f] + i;
-        sums.addCell(cells[i], at);
-      }
-    });
-    for (const std::string& name : names)
-      set.fields.push_back(Field{name, {}, ""});
-    sums.cellsInto(set);
-    m.ranges = sums.ranges();
+    set = mergedNative(path, options, m.level, m.ranges);
   } else {
     const FormatReader* reader =
         kind == InputKind::Model ? &io::modelPartsReader() : io::patchReader(kind, path, options);
     if (!reader) return std::nullopt; // FLASH read with holes: cell by cell
-    const PatchSource source = io::patchesOf(path, *reader, options.fields, 0);
-    CubeSums sums(m.level, source.fieldNames.size());
-    std::vector<std::vector<float>> values;
-    std::vector<const float*> at(source.fieldNames.size());
-    Progress progress("merging every cell for a first picture", source.patches.size());
-    for (size_t i = 0; i < source.patches.size(); ++i) {
-      const io::Patch& p = source.patches[i];
-      source.read(i, values);
-      for (size_t f = 0; f < at.size(); ++f)
-        at[f] = values[f].data();
-      sums.addBox(p.lower, p.cells, p.width, at);
-      progress.advance(1);
-    }
-    for (size_t f = 0; f < source.fieldNames.size(); ++f)
-      set.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});
-    set.world = source.world;
-    set.simulation = source.simulation;
-    sums.cellsInto(set);
-    m.ranges = sums.ranges();
+    set = mergedLeafPatches(io::patchesOf(path, *reader, options.fields, 0), m.level, m.ranges);
   }
   if (set.cells.empty()) return std::nullopt;
+  validateCellRecords(set.cells, strCat(path, " merged into cubes"));
   const size_t cubes = set.cells.size();
   m.model = buildModel(std::move(set), options.build);
   logInfo(strCat(std::llround(m.cells), " cells merged into ", cubes, " cubes ", int64_t(1) << m.level,

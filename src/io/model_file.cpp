@@ -259,6 +259,11 @@ void checkBricks(const std::vector<Brick>& bricks, const std::vector<uint64_t>& 
         b.size.x > kMaxBrickWidth || b.size.y > kMaxBrickWidth || b.size.z > kMaxBrickWidth ||
         uint64_t(b.valueOffset) + uint64_t(b.size.x) * b.size.y * b.size.z > values)
       bad("brick ", i, " is invalid");
+    // Its cells are cells (cellProblem): aligned to their width, within the lattice range.
+    const int64_t w = int64_t(1) << b.level;
+    for (int a = 0; a < 3; ++a)
+      if (b.lower[a] % w != 0 || b.lower[a] < -kLatticeLimit || b.lower[a] + b.size[a] * w > kLatticeLimit)
+        bad("brick ", i, " lies outside the supported lattice range [-2^29, 2^29] or off its cells' lattice");
   }
 }
 
