@@ -50,13 +50,14 @@ MemoryPlan planOfParts(const std::string& path, int parts, int resident, uint64_
   return plan;
 }
 
-/// A four-level AMReX plotfile of about `cells` cells (the census then comes from its boxes).
-std::string writePlotfile(const std::string& name, uint64_t cells) {
+/// An AMReX plotfile of about `cells` cells in `levels` levels (the census then comes from its
+/// boxes).
+std::string writePlotfile(const std::string& name, uint64_t cells, int levels = 4) {
   const std::string dir = std::string(EXABRICKS_TEST_TMP) + "/streamed";
   std::filesystem::create_directories(dir);
   const std::string path = dir + "/" + name + ".plt";
   std::filesystem::remove_all(path);
-  const SceneOptions o = resolveSceneSize({"blobs", cells, 3, 4});
+  const SceneOptions o = resolveSceneSize({"blobs", cells, 3, levels});
   std::unique_ptr<AmrexPlotfileWriter> writer;
   generateScenePieces(o, AmrexPlotfileWriter::kSlabCells, [&](CellSet& piece) {
     std::vector<std::string> names;
@@ -387,13 +388,17 @@ TEST(Streamed, EveryCellMergedIntoCubesIsTheVolumeMeanOfItsCells) {
   const std::string cells = dir + "/apart.cells", model = dir + "/apart.model";
   writeNative(set, cells);
   writeModel(loadModel(cells), model);
-  for (const std::string& path : {cells, model}) {
+  EXPECT_FALSE(mergesLeaves(writePlotfile("levels", 60000))); // its coarse levels are read instead
+  const std::string oneLevel = writePlotfile("one_level", 60000, 1);
+  EXPECT_TRUE(mergesLeaves(oneLevel));
+  for (const std::string& path : {cells, model, oneLevel}) {
     SCOPED_TRACE(path);
-    EXPECT_FALSE(loadMergedLeaves(path, {}, double(set.cells.size())));
+    const CellSet truth = path == oneLevel ? loadCells(path) : set;
+    EXPECT_FALSE(loadMergedLeaves(path, {}, double(truth.cells.size())));
     const std::optional<MergedLeaves> m = loadMergedLeaves(path, {}, 2000);
     ASSERT_TRUE(m);
-    EXPECT_EQ(m->cells, double(set.cells.size()));
-    expectCubeMeans(*m, set);
-    EXPECT_LT(m->model.cellCount(), set.cells.size() / 8);
+    EXPECT_EQ(m->cells, double(truth.cells.size()));
+    expectCubeMeans(*m, truth);
+    EXPECT_LT(m->model.cellCount(), truth.cells.size() / 8);
   }
 }

@@ -218,7 +218,8 @@ uint64_t viewerFrameBytes(const Frame& frame) {
 /// `coarseFirst` set to the cells of the coarse levels the view holds resident
 /// (coarseBesideParts) while it draws every level in those parts beside them. Inputs whose coarse levels can be read
 /// alone (AMReX, Chombo, Enzo and VTK overlapping AMR files) hold those; inputs of leaf cells only that can be merged
-/// (model files, FLASH, NAME.cells) hold every cell merged into cubes instead; others are refused. A budget too small
+/// (model files, FLASH, NAME.cells, patch-based files of one level) hold every cell merged into cubes instead; others
+/// are refused. A budget too small
 /// for both is refused naming the smallest that holds both.
 struct ViewBudget {
   uint64_t budget = 0;    ///< 0: the step is held whole
@@ -239,7 +240,8 @@ ViewBudget viewBudget(const InputOptions& in, const std::string& input, const Lo
   if (beside->coarse.level == 0 && !(beside->mergedCells > 0))
     failUsage(input, " does not fit in a memory budget of ", formatBytes(*budget),
               ": the viewer shows such a step from its coarse levels (AMReX, Chombo, Enzo and VTK overlapping AMR "
-              "files) or every cell merged (model files, FLASH, NAME.cells) while it draws every level in parts; "
+              "files) or every cell merged (model files, FLASH, NAME.cells, files of one level) while it draws every "
+              "level in parts; "
               "`render` and `movie` draw it with --memory-budget");
   coarseFirst = beside->coarse.coarseCells;
   return {*budget, std::move(beside->parts), beside->mergedCells};

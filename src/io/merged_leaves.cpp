@@ -207,7 +207,12 @@ double mergedLeavesCubes(const std::string& path, const LoadOptions& options, do
 bool mergesLeaves(const std::string& path) {
   if (path.empty()) return false;
   const InputKind kind = detectInput(path);
-  return kind == InputKind::Model || kind == InputKind::Flash || kind == InputKind::Native;
+  if (kind == InputKind::Model || kind == InputKind::Flash || kind == InputKind::Native) return true;
+  // A patch-based input of one level: its patches are its leaves, and it has no coarser level.
+  const FormatReader* reader = io::patchReader(kind, path, {});
+  if (!reader || !reader->levelCells) return false;
+  const std::vector<double> cells = reader->levelCells(path);
+  return std::count_if(cells.begin(), cells.end(), [](double n) { return n > 0; }) == 1;
 }
 
 std::optional<MergedLeaves> loadMergedLeaves(const std::string& path, const LoadOptions& options, double maxCells) {
