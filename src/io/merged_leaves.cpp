@@ -7,6 +7,9 @@
 #include "exabricks/io/load.h"
 #include "exabricks/io/native.h"
 
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
@@ -69,6 +72,21 @@ public:
     for (size_t f = 0; f < sums_.size(); ++f)
       sums_[f][lastSlot_] += local_[f];
     weights_[lastSlot_] += volume;
+  }
+
+  /// Adds another's sums (of cells it holds and this does not).
+  void add(const CubeSums& other) {
+    for (const auto& [key, slot] : other.index_) {
+      const uint32_t to = slotOf(key);
+      weights_[to] += other.weights_[slot];
+      for (size_t f = 0; f < sums_.size(); ++f)
+        sums_[f][to] += other.sums_[f][slot];
+    }
+    for (size_t f = 0; f < ranges_.size(); ++f)
+      if (!other.ranges_[f].empty()) {
+        ranges_[f].extend(other.ranges_[f].lower);
+        ranges_[f].extend(other.ranges_[f].upper);
+      }
   }
 
   size_t cubes() const { return weights_.size(); }
@@ -173,22 +191,35 @@ CellSet mergedNative(const std::string& path, const LoadOptions& options, int le
 }
 
 /// The same for an input of leaf patches (a model's bricks, FLASH's leaf blocks), read patch by
-/// patch.
+/// patch: on every core, each into sums of its own joined at the end, where the source's reads
+/// may run at once.
 CellSet mergedLeafPatches(const PatchSource& source, int level, std::vector<range1f>& ranges) {
-  CubeSums sums(level, source.fieldNames.size());
-  std::vector<std::vector<float>> values;
-  std::vector<const float*> at(source.fieldNames.size());
+  const size_t fields = source.fieldNames.size();
   Progress progress("merging every cell for a first picture", source.patches.size());
-  for (size_t i = 0; i < source.patches.size(); ++i) {
-    const io::Patch& p = source.patches[i];
-    source.read(i, values);
-    for (size_t f = 0; f < at.size(); ++f)
-      at[f] = values[f].data();
-    sums.addBox(p.lower, p.cells, p.width, at);
-    progress.advance(1);
+  auto merge = [&](size_t begin, size_t end, CubeSums& sums) {
+    std::vector<std::vector<float>> values;
+    std::vector<const float*> at(fields);
+    for (size_t i = begin; i < end; ++i) {
+      const io::Patch& p = source.patches[i];
+      source.read(i, values);
+      for (size_t f = 0; f < fields; ++f)
+        at[f] = values[f].data();
+      sums.addBox(p.lower, p.cells, p.width, at);
+      progress.advance(1);
+    }
+  };
+  CubeSums sums(level, fields);
+  if (!source.concurrentReads) {
+    merge(0, source.patches.size(), sums);
+  } else {
+    tbb::enumerable_thread_specific<CubeSums> each([&] { return CubeSums(level, fields); });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, source.patches.size(), 16),
+                      [&](const tbb::blocked_range<size_t>& r) { merge(r.begin(), r.end(), each.local()); });
+    for (const CubeSums& part : each)
+      sums.add(part);
   }
   CellSet set;
-  for (size_t f = 0; f < source.fieldNames.size(); ++f)
+  for (size_t f = 0; f < fields; ++f)
     set.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});
   set.world = source.world;
   set.simulation = source.simulation;
