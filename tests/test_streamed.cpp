@@ -294,6 +294,10 @@ TEST(Streamed, AModelFileIsReadBrickByBrickInPartsEqualToTheWhole) {
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find(path + brick), std::string::npos) << e.what();
   }
+  // Every cell merged for a viewer's first picture leaves that brick out (and says so).
+  const std::optional<MergedLeaves> merged = loadMergedLeaves(path, {}, 2000);
+  ASSERT_TRUE(merged);
+  EXPECT_GT(merged->model.cellCount(), 0u);
   std::filesystem::resize_file(path, std::filesystem::file_size(path) - 8);
   try {
     loadCensus(path);

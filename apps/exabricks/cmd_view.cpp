@@ -154,6 +154,7 @@ FirstStep loadFirst(const std::vector<std::string>& steps, const std::string& in
       logNote(strCat("showing ", leavesShown(f), "; every level follows in parts"));
       return f;
     }
+    fail(input, ": no cells to merge for a first picture under the memory budget");
   }
   // A coarsest level alone larger than coarseFirst: first a picture of it merged, then the rest.
   const bool large = f.coarse.level > 0 ? f.coarse.coarseCells > firstCells : f.coarse.cells > firstCells;

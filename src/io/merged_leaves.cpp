@@ -11,7 +11,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <mutex>
 #include <unordered_map>
 
 namespace exa {
@@ -196,12 +198,25 @@ CellSet mergedNative(const std::string& path, const LoadOptions& options, int le
 CellSet mergedLeafPatches(const PatchSource& source, int level, std::vector<range1f>& ranges) {
   const size_t fields = source.fieldNames.size();
   Progress progress("merging every cell for a first picture", source.patches.size());
+  // A patch that cannot be read is left out and said once: the part that holds it says so
+  // again when it is drawn, and the view goes on.
+  std::mutex failed;
+  std::string firstFailure;
+  std::atomic<size_t> failures{0};
   auto merge = [&](size_t begin, size_t end, CubeSums& sums) {
     std::vector<std::vector<float>> values;
     std::vector<const float*> at(fields);
     for (size_t i = begin; i < end; ++i) {
       const io::Patch& p = source.patches[i];
-      source.read(i, values);
+      try {
+        source.read(i, values);
+      } catch (const Error& e) {
+        if (failures++ == 0) {
+          const std::lock_guard<std::mutex> lock(failed);
+          firstFailure = e.what();
+        }
+        continue;
+      }
       for (size_t f = 0; f < fields; ++f)
         at[f] = values[f].data();
       sums.addBox(p.lower, p.cells, p.width, at);
@@ -218,6 +233,10 @@ CellSet mergedLeafPatches(const PatchSource& source, int level, std::vector<rang
     for (const CubeSums& part : each)
       sums.add(part);
   }
+  if (failures > 0 && failures == source.patches.size()) throw Error(firstFailure);
+  if (failures > 0)
+    logWarning(strCat(failures.load(), " of ", source.patches.size(),
+                      " patches could not be read and are left out of the merged picture; the first: ", firstFailure));
   CellSet set;
   for (size_t f = 0; f < fields; ++f)
     set.fields.push_back(Field{source.fieldNames[f], {}, source.fieldUnits[f]});
