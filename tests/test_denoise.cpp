@@ -13,6 +13,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
+
 #include <cmath>
 #include <functional>
 #include <random>
@@ -26,15 +29,16 @@ namespace {
 constexpr int kSize = 64;
 
 /// A buffer whose passes are `truth(x, y)` (opaque grey) plus Gaussian noise of `sigma`.
-FrameBuffer noisyBuffer(const std::function<float(int, int)>& truth, float sigma, uint32_t passes, unsigned seed) {
-  FrameBuffer buffer(kSize, kSize);
+FrameBuffer noisyBuffer(const std::function<float(int, int)>& truth, float sigma, uint32_t passes, unsigned seed,
+                        int size = kSize) {
+  FrameBuffer buffer(size, size);
   const FrameBuffer::Sums s = buffer.sums();
   std::mt19937 rng(seed);
   std::normal_distribution<float> noise(0.f, sigma);
   for (uint32_t k = 0; k < passes; ++k)
-    for (int y = 0; y < kSize; ++y)
-      for (int x = 0; x < kSize; ++x) {
-        const size_t p = size_t(y) * kSize + size_t(x);
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        const size_t p = size_t(y) * size_t(size) + size_t(x);
         const float v = truth(x, y) + noise(rng);
         for (int c = 0; c < 4; ++c) {
           const float value = c == 3 ? 1.f : v;
@@ -47,12 +51,33 @@ FrameBuffer noisyBuffer(const std::function<float(int, int)>& truth, float sigma
   return buffer;
 }
 
+/// Adds `passes` such passes to the tiles listed (every tile where none is).
+void addPasses(FrameBuffer& buffer, const std::function<float(int, int)>& truth, float sigma, uint32_t passes,
+               unsigned seed, const std::vector<int>& tiles) {
+  const FrameBuffer::Sums s = buffer.sums();
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.f, sigma);
+  for (int t = 0; t < buffer.tileCount(); ++t) {
+    if (!tiles.empty() && std::find(tiles.begin(), tiles.end(), t) == tiles.end()) continue;
+    for (uint32_t k = 0; k < passes; ++k)
+      buffer.forTilePixels(t, [&](int x, int y, size_t p) {
+        const float v = truth(x, y) + noise(rng);
+        for (int c = 0; c < 4; ++c) {
+          const float value = c == 3 ? 1.f : v;
+          s.colors[4 * p + size_t(c)] += value;
+          s.squares[4 * p + size_t(c)] += value * value;
+        }
+      });
+    s.tilePasses[size_t(t)] += passes;
+  }
+}
+
 /// A guide whose albedo picture is `albedo(x, y)` (opaque grey), without a shaded picture.
-DenoiseGuide guideOf(const std::function<float(int, int)>& albedo) {
+DenoiseGuide guideOf(const std::function<float(int, int)>& albedo, int size = kSize) {
   DenoiseGuide g;
-  g.albedo = Image(kSize, kSize);
-  for (int y = 0; y < kSize; ++y)
-    for (int x = 0; x < kSize; ++x) {
+  g.albedo = Image(size, size);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
       const float v = albedo(x, y);
       g.albedo.at(x, y) = {v, v, v, 1.f};
     }
@@ -215,6 +240,36 @@ TEST(Denoise, AFrameMeetsItsTargetWithFewerPassesAndKeepsItsLight) {
   converged.samplesPerPixel = 1024;
   converged.seed = 7;
   EXPECT_LT(lowFrequencyDifference(a, renderer.render(converged)), 1.0);
+}
+
+TEST(Denoise, AFilterAfterAFewTilesTookPassesEqualsTheWholeFilter) {
+  // Rounds to a noise target filter the frame after each round's passes: given what the last
+  // filter made, the next one filters only around the tiles that took passes, and its picture and
+  // tile noise are the whole filter's, to the bit.
+  const int size = 320; // 20 × 20 tiles: the filter reaches 4 tiles, its input 8 more
+  const auto truth = [](int x, int y) { return ((x / 37 + y / 29) % 2) ? 0.7f : 0.25f; };
+  FrameBuffer buffer = noisyBuffer(truth, 0.2f, 4, 1, size);
+  const DenoiseGuide guide = guideOf(truth, size);
+  const vec3f background(0.1f, 0.2f, 0.3f);
+  DenoiseMemo memo;
+  const Image before = denoise(buffer, guide, background, nullptr, {}, &memo);
+  EXPECT_EQ(memo.filteredTiles, size_t(buffer.tileCount()));
+  for (const std::vector<int>& tiles : {std::vector<int>{0}, std::vector<int>{21, 398}, std::vector<int>{}}) {
+    addPasses(buffer, truth, 0.2f, 3, unsigned(7 + tiles.size()), tiles);
+    std::vector<float> noise, wholeNoise;
+    const Image again = denoise(buffer, guide, background, &noise, {}, &memo);
+    const Image whole = denoise(buffer, guide, background, &wholeNoise);
+    if (!tiles.empty()) EXPECT_LT(memo.filteredTiles, size_t(buffer.tileCount()) / 2);
+    ASSERT_EQ(again.pixels.size(), whole.pixels.size());
+    EXPECT_EQ(0, std::memcmp(again.pixels.data(), whole.pixels.data(), whole.pixels.size() * sizeof(vec4f)));
+    EXPECT_EQ(noise, wholeNoise);
+    EXPECT_NE(0, std::memcmp(again.pixels.data(), before.pixels.data(), whole.pixels.size() * sizeof(vec4f)));
+  }
+  // Nothing new: the same picture, nothing filtered.
+  std::vector<float> noise;
+  const Image same = denoise(buffer, guide, background, &noise, {}, &memo);
+  EXPECT_EQ(memo.filteredTiles, 0u);
+  EXPECT_EQ(same.pixels.size(), memo.picture.pixels.size());
 }
 
 TEST(Denoise, AViewShowsTheFramesDenoisedPicture) {

@@ -13,6 +13,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
+#include <optional>
 
 namespace exa {
 
@@ -76,22 +78,96 @@ struct LevelArrays {
   DenoiseLevel view() { return {color.data(), probe.data(), lumProbe.data()}; }
 };
 
-/// The levels on the CPU's threads: the same per-pixel steps as the GPU's kernels.
-void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<float>& first, int levels) {
+/// Where each level is filtered, in tiles of the frame buffer: all of them, or (after some tiles
+/// took passes) those whose outputs the later levels read, around the tiles whose output changes.
+struct TileRegions {
+  int tilesX = 0, tilesY = 0;
+  std::vector<std::vector<int>> level; ///< per level, the tiles whose outputs it makes (empty: all)
+  std::vector<int> input;              ///< the tiles of the first level's input it reads
+};
+
+/// The tiles within `reach` pixels (Chebyshev) of the tiles `from` marks.
+std::vector<uint8_t> dilated(const std::vector<uint8_t>& from, int tilesX, int tilesY, int reach) {
+  const int d = (reach + kRenderTile - 1) / kRenderTile;
+  std::vector<uint8_t> rows(from.size(), 0), out(from.size(), 0);
+  for (int y = 0; y < tilesY; ++y)
+    for (int x = 0; x < tilesX; ++x)
+      if (from[size_t(y * tilesX + x)])
+        for (int k = std::max(0, x - d); k <= std::min(tilesX - 1, x + d); ++k)
+          rows[size_t(y * tilesX + k)] = 1;
+  for (int y = 0; y < tilesY; ++y)
+    for (int x = 0; x < tilesX; ++x)
+      if (rows[size_t(y * tilesX + x)])
+        for (int k = std::max(0, y - d); k <= std::min(tilesY - 1, y + d); ++k)
+          out[size_t(k * tilesX + x)] = 1;
+  return out;
+}
+
+std::vector<int> marked(const std::vector<uint8_t>& mask) {
+  std::vector<int> tiles;
+  for (size_t t = 0; t < mask.size(); ++t)
+    if (mask[t]) tiles.push_back(int(t));
+  return tiles;
+}
+
+/// The regions that make the outputs of the tiles within the filter's reach of `changed` (level
+/// l's step reaches 2^(l+1) pixels; its variance 2 at most): the last level's outputs there, each
+/// level before it over those grown by the later levels' reach. None where they would cover most
+/// of the frame (the whole filter is as fast).
+std::optional<TileRegions> regionsAround(const std::vector<uint8_t>& changed, int tilesX, int tilesY, int levels,
+                                         std::vector<uint8_t>& outputs) {
+  int reach = 0;
+  for (int l = 0; l < levels; ++l)
+    reach += 2 << l;
+  outputs = dilated(changed, tilesX, tilesY, reach);
+  TileRegions r{tilesX, tilesY, std::vector<std::vector<int>>(size_t(levels)), {}};
+  int later = 0; // the reach of the levels after l
+  for (int l = levels - 1; l >= 0; --l) {
+    r.level[size_t(l)] = marked(dilated(outputs, tilesX, tilesY, later));
+    later += 2 << l;
+  }
+  r.input = marked(dilated(outputs, tilesX, tilesY, later));
+  if (r.input.size() * 3 > changed.size() * 2) return std::nullopt;
+  return r;
+}
+
+/// Calls f(x, y, pixel) for every pixel of the tiles listed (all where `tiles` is null), on the
+/// CPU's threads.
+template <typename F> void forTiles(const DenoiseImages& im, const std::vector<int>* tiles, F&& f) {
+  if (!tiles) {
+    tbb::parallel_for(0, im.height, [&](int y) {
+      for (int x = 0; x < im.width; ++x)
+        f(x, y, size_t(y) * size_t(im.width) + size_t(x));
+    });
+    return;
+  }
+  const int tilesX = (im.width + kRenderTile - 1) / kRenderTile;
+  tbb::parallel_for(size_t(0), tiles->size(), [&](size_t k) {
+    const int tx = (*tiles)[k] % tilesX, ty = (*tiles)[k] / tilesX;
+    for (int y = ty * kRenderTile; y < std::min(im.height, (ty + 1) * kRenderTile); ++y)
+      for (int x = tx * kRenderTile; x < std::min(im.width, (tx + 1) * kRenderTile); ++x)
+        f(x, y, size_t(y) * size_t(im.width) + size_t(x));
+  });
+}
+
+/// The levels on the CPU's threads: the same per-pixel steps as the GPU's kernels, each pixel's
+/// shown luminance found once per level (the GPU's kernels find it at each of the 25 taps); only
+/// over `regions` where given.
+void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<float>& first, int levels,
+                 const TileRegions* regions) {
   const size_t n = a.color.size();
   LevelArrays b(n);
-  std::vector<float> variance(n);
+  std::vector<float> variance(n), shown(n);
   for (int l = 0; l < levels; ++l) {
-    const DenoiseLevel in = a.view(), out = b.view();
+    DenoiseLevel in = a.view();
+    const DenoiseLevel out = b.view();
     const float* from = l == 0 ? first.data() : nullptr;
-    tbb::parallel_for(0, im.height, [&](int y) {
-      for (int x = 0; x < im.width; ++x)
-        variance[size_t(y) * size_t(im.width) + size_t(x)] = denoiseVariance(im, in, from, x, y);
-    });
-    tbb::parallel_for(0, im.height, [&](int y) {
-      for (int x = 0; x < im.width; ++x)
-        denoiseLevelPixel(im, in, variance.data(), 1 << l, x, y, out);
-    });
+    const std::vector<int>* made = regions ? &regions->level[size_t(l)] : nullptr;
+    const std::vector<int>* read = !regions ? nullptr : l == 0 ? &regions->input : &regions->level[size_t(l - 1)];
+    forTiles(im, read, [&](int, int, size_t p) { shown[p] = denoiseShownLuminance(im, in.color[p]); });
+    forTiles(im, made, [&](int x, int y, size_t p) { variance[p] = denoiseVariance(im, in, from, x, y); });
+    in.shown = shown.data();
+    forTiles(im, made, [&](int x, int y, size_t) { denoiseLevelPixel(im, in, variance.data(), 1 << l, x, y, out); });
     std::swap(a, b);
   }
 }
@@ -108,7 +184,7 @@ void addFeatures(const vec4f& c, float* out, bool withAlpha) {
 } // namespace
 
 Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f& background,
-              std::vector<float>* tileNoise, const DenoiseSettings& settings) {
+              std::vector<float>* tileNoise, const DenoiseSettings& settings, DenoiseMemo* memo) {
   const int width = buffer.width(), height = buffer.height();
   const bool shaded = !guide.shaded.pixels.empty();
   for (const Image* g : {&guide.albedo, &guide.shaded})
@@ -146,18 +222,44 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
   im.background = background;
   im.guideScale = 1.f / (settings.guideSigma * settings.guideSigma);
   im.colorSigma = settings.colorSigma;
+  // Given what the last filter of this frame made, only the tiles within the filter's reach of
+  // those that took passes since change (the CPU's threads; the GPU filters the whole frame).
+  const int tiles = buffer.tileCount();
+  std::vector<uint8_t> changed(size_t(tiles), 1), outputs(size_t(tiles), 1);
+  std::optional<TileRegions> regions;
+  const bool again = memo && guide.device != Device::Cuda && memo->tilePasses.size() == size_t(tiles) &&
+                     memo->picture.width == width && memo->picture.height == height;
+  if (again) {
+    for (int t = 0; t < tiles; ++t)
+      changed[size_t(t)] = buffer.tilePasses(t) != memo->tilePasses[size_t(t)];
+    regions = regionsAround(changed, buffer.tilesX(), buffer.tilesY(), settings.levels, outputs);
+    if (!regions) outputs.assign(size_t(tiles), 1);
+  }
   if (guide.device == Device::Cuda)
     gpu::denoiseLevels(im, a.view(), first.data(), settings.levels);
   else
-    filterOnCpu(im, a, first, settings.levels);
-  if (tileNoise) {
-    tileNoise->assign(size_t(buffer.tileCount()), 0.f);
-    tbb::parallel_for(0, buffer.tileCount(), [&](int tile) {
-      (*tileNoise)[size_t(tile)] = buffer.tileRms(tile, [&](size_t p) { return a.probe[p]; });
-    });
-  }
+    filterOnCpu(im, a, first, settings.levels, regions ? &*regions : nullptr);
   Image out(width, height);
   out.pixels = std::move(a.color);
+  std::vector<float> noise(size_t(tiles), 0.f);
+  if (regions) { // the tiles the filter did not make are the last filter's
+    noise = memo->tileNoise;
+    for (int t = 0; t < tiles; ++t)
+      if (!outputs[size_t(t)])
+        buffer.forTilePixels(t, [&](int, int, size_t p) { out.pixels[p] = memo->picture.pixels[p]; });
+  }
+  tbb::parallel_for(0, tiles, [&](int tile) {
+    if (outputs[size_t(tile)]) noise[size_t(tile)] = buffer.tileRms(tile, [&](size_t p) { return a.probe[p]; });
+  });
+  if (tileNoise) *tileNoise = noise;
+  if (memo) {
+    memo->filteredTiles = size_t(std::count(outputs.begin(), outputs.end(), uint8_t(1)));
+    memo->picture = out;
+    memo->tileNoise = std::move(noise);
+    memo->tilePasses.resize(size_t(tiles));
+    for (int t = 0; t < tiles; ++t)
+      memo->tilePasses[size_t(t)] = buffer.tilePasses(t);
+  }
   return out;
 }
 
@@ -180,8 +282,11 @@ Image renderPicture(Renderer& renderer, const Frame& frame, RenderStats* stats) 
 TileNoiseEstimate denoisedNoise(const DenoiseGuide& guide, const vec3f& background, Image* picture,
                                 const DenoiseSettings& settings) {
   TileNoiseEstimate estimate;
-  estimate.measure = [&guide, background, picture, settings](const FrameBuffer& buffer, std::vector<float>& tileNoise) {
-    Image denoised = denoise(buffer, guide, background, &tileNoise, settings);
+  // Each measure filters again only around the tiles that took passes since the last.
+  auto memo = std::make_shared<DenoiseMemo>();
+  estimate.measure = [&guide, background, picture, settings, memo](const FrameBuffer& buffer,
+                                                                   std::vector<float>& tileNoise) {
+    Image denoised = denoise(buffer, guide, background, &tileNoise, settings, memo.get());
     if (picture) *picture = std::move(denoised);
   };
   return estimate;

@@ -5,6 +5,7 @@
 #pragma once
 
 #include "exabricks/core/color.h"
+#include "exabricks/render/sample_math.h"
 
 #include <cmath>
 #include <cstddef>
@@ -33,6 +34,9 @@ struct DenoiseLevel {
   vec4f* color = nullptr;
   vec3f* probe = nullptr;
   float* lumProbe = nullptr;
+  /// Per pixel, denoiseShownLuminance of `color`, where the caller has it (null: found at each of
+  /// the 25 taps that read the pixel).
+  const float* shown = nullptr;
 };
 
 /// The B3 spline's weights 1/16, 1/4, 3/8, 1/4, 1/16.
@@ -67,6 +71,22 @@ EXA_HOST_DEVICE inline float denoiseVariance(const DenoiseImages& im, const Deno
   return weights > 0.f ? sum / weights : 0.f;
 }
 
+/// The colour term's scale at a pixel whose luminance has `variance`: 1 over colorSigma standard
+/// errors of its noise.
+EXA_HOST_DEVICE inline float denoiseColorScale(const DenoiseImages& im, float variance) {
+  return 1.f / (im.colorSigma * std::sqrt(variance) + 1e-6f);
+}
+
+/// A tap's weight: `spline` (the B3 spline's of its two axes) times e^-(the squared distance of
+/// the features over the guide's sigma² + the shown luminances' difference over colorScale),
+/// the exponential as 2^-(... log2 e) by the polynomial the opacities take (a libm call per tap
+/// took a third of the CPU's filter).
+EXA_HOST_DEVICE inline float denoiseTapWeight(const DenoiseImages& im, float spline, float distance, float lp, float lq,
+                                              float colorScale) {
+  const float colorTerm = std::fabs(lp - lq) * colorScale;
+  return spline * exp2Negative(-(distance * im.guideScale + colorTerm) * 1.44269504f);
+}
+
 /// One à-trous level at `step` pixels for pixel (x, y): `out` at the pixel from `in` around it.
 EXA_HOST_DEVICE inline void denoiseLevelPixel(const DenoiseImages& im, const DenoiseLevel& in, const float* variance,
                                               int step, int x, int y, const DenoiseLevel& out) {
@@ -77,8 +97,8 @@ EXA_HOST_DEVICE inline void denoiseLevelPixel(const DenoiseImages& im, const Den
     out.lumProbe[p] = in.lumProbe[p];
     return;
   }
-  const float lp = denoiseShownLuminance(im, in.color[p]);
-  const float colorScale = 1.f / (im.colorSigma * std::sqrt(variance[p]) + 1e-6f);
+  const float lp = in.shown ? in.shown[p] : denoiseShownLuminance(im, in.color[p]);
+  const float colorScale = denoiseColorScale(im, variance[p]);
   const float* fp = im.features + p * kDenoiseFeatures;
   vec4f color;
   vec3f probe(0.f);
@@ -97,8 +117,8 @@ EXA_HOST_DEVICE inline void denoiseLevelPixel(const DenoiseImages& im, const Den
         const float d = fp[k] - fq[k];
         distance += d * d;
       }
-      const float colorTerm = std::fabs(lp - denoiseShownLuminance(im, in.color[q])) * colorScale;
-      const float w = denoiseB3(i) * denoiseB3(j) * std::exp(-distance * im.guideScale - colorTerm);
+      const float lq = in.shown ? in.shown[q] : denoiseShownLuminance(im, in.color[q]);
+      const float w = denoiseTapWeight(im, denoiseB3(i) * denoiseB3(j), distance, lp, lq, colorScale);
       color += in.color[q] * w;
       probe = probe + in.probe[q] * w;
       lumProbe += w * in.lumProbe[q];

@@ -71,6 +71,7 @@ bool NoiseRounds::next(const Frame& frame, const FrameBuffer& buffer, const vec3
       estimate->measure(buffer, noise_);
       if (int(noise_.size()) != tiles) fail("a noise estimate gave ", noise_.size(), " tiles of ", tiles);
     }
+    uint64_t added = 0;
     for (int t = 0; t < tiles; ++t) {
       const uint32_t n = buffer.tilePasses(t);
       if (goal_[size_t(t)] == 0 || n >= most) continue;
@@ -80,8 +81,17 @@ bool NoiseRounds::next(const Frame& frame, const FrameBuffer& buffer, const vec3
       const double predicted = std::ceil(1.05 * double(n) * ratio * ratio);
       const double next = std::clamp(predicted, double(n + std::max(1u, n / 16)), 2.0 * double(n));
       goal_[size_t(t)] = uint32_t(std::min(double(most), next));
+      added += goal_[size_t(t)] - n;
       more = true;
     }
+    // A denoised estimate filters the whole frame however few tiles it measures again: where the
+    // passes planned come to less than an eighth of one pass over the frame, the tiles that want
+    // more take four times their passes (their noise halves), so that fewer rounds (and filters)
+    // follow.
+    if (estimate && more && added * 8 < uint64_t(tiles))
+      for (int t = 0; t < tiles; ++t)
+        if (goal_[size_t(t)] > buffer.tilePasses(t))
+          goal_[size_t(t)] = std::min(most, std::max(goal_[size_t(t)], 4 * buffer.tilePasses(t)));
     if (estimate && estimate->agree) more = estimate->agree(more); // another round for all, or none
     if (!more) return false;
     tellPlanned(control);

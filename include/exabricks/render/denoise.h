@@ -54,8 +54,18 @@ struct DenoiseSettings {
 /// `tileNoise`, where given, receives per tile the noise the denoised picture keeps in its 8-bit
 /// sRGB image over `background`, in 1/255 steps (RMS over the tile's pixels and channels;
 /// infinite for a tile with fewer than two passes).
+/// `memo`, where given, keeps what the filter made for the next denoise() of the same frame
+/// and guide: that one filters again (on the CPU) only the tiles within the filter's reach of the
+/// tiles that took passes in between, and equals a whole filter.
+struct DenoiseMemo {
+  Image picture;
+  std::vector<float> tileNoise;
+  std::vector<uint32_t> tilePasses; ///< per tile, the passes filtered
+  size_t filteredTiles = 0;         ///< the tiles whose outputs the last filter made
+};
 Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f& background,
-              std::vector<float>* tileNoise = nullptr, const DenoiseSettings& settings = {});
+              std::vector<float>* tileNoise = nullptr, const DenoiseSettings& settings = {},
+              DenoiseMemo* memo = nullptr);
 
 /// A whole frame as the front ends show it: Renderer::render, or where the frame is denoised
 /// (denoises()) the guide, the passes to the denoised picture's noise target and the filter (the

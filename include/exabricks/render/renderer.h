@@ -206,8 +206,9 @@ bool denoises(const Scene& scene, const Frame& frame);
 /// next() names the tiles that take the next pass and its frame index, those holding the fewest
 /// passes among the tiles that want more, so that every tile takes its passes in order. A tile
 /// wants kNoiseFirstPasses, then, while its noise (FrameBuffer::tileNoise) is above the target,
-/// the passes its noise predicts (between a sixteenth more and twice as many), at most the frame's
-/// samplesPerPixel.
+/// the passes its noise predicts (between a sixteenth more and twice as many; four times as many
+/// where a denoised estimate's tiles that want more come to less than an eighth of a pass over
+/// the frame, since each estimate filters again), at most the frame's samplesPerPixel.
 class NoiseRounds {
 public:
   /// Whether a frame of the scene takes its passes to its noise target (path tracing, a target
