@@ -182,6 +182,7 @@ void ProgressiveView::restart() {
   rounds_ = NoiseRounds();
   noiseReached_ = false;
   guide_.reset();
+  denoiseMemo_ = DenoiseMemo();
   denoisedAt_ = -1;
 }
 
@@ -234,7 +235,7 @@ bool ProgressiveView::refineTo(int passes, const PassControl& control) {
   }
   TileNoiseEstimate estimate; // the denoised picture's noise, keeping that picture
   estimate.measure = [&](const FrameBuffer& buffer, std::vector<float>& noise) {
-    denoised_ = denoise(buffer, *guide_, background, &noise);
+    denoised_ = denoise(buffer, *guide_, background, &noise, {}, &denoiseMemo_);
     denoisedAt_ = passes_;
   };
   Frame pass = doc_.frame;
@@ -264,7 +265,7 @@ bool ProgressiveView::refineTo(int passes, const PassControl& control) {
     ++passes_;
   }
   if (guide_ && complete() && denoisedAt_ != passes_) {
-    denoised_ = denoise(buffer_, *guide_, background);
+    denoised_ = denoise(buffer_, *guide_, background, nullptr, {}, &denoiseMemo_);
     denoisedAt_ = passes_;
   }
   return true;

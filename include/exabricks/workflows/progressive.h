@@ -141,6 +141,7 @@ private:
   NoiseRounds rounds_;                ///< with a noise target: the tiles that take the next pass
   bool noiseReached_ = false;         ///< every tile holds the passes its noise wants
   std::optional<DenoiseGuide> guide_; ///< a denoised frame's, from its first pass
+  DenoiseMemo denoiseMemo_;           ///< the last filter of this refinement's buffer
   Image denoised_;                    ///< the last denoised picture of buffer_
   int denoisedAt_ = -1;               ///< passes_ when denoised_ was made (-1: none)
   bool cleared_ = false;              ///< buffer_ holds the passes counted (else it is cleared before the next)
