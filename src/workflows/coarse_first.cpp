@@ -39,9 +39,10 @@ uint64_t smallestBesideCoarse(const std::string& input, const BudgetTooSmall& re
 
 /// A view of an input without coarse levels to read alone but whose cells can be merged
 /// (mergesLeaves): the cubes it holds, at most a quarter of coarseRoom's cells (the merge's own
-/// tables take more per cube than a model) and at most `maxCoarseCells`, reserved at twice their estimate (cubes at the cells'
-/// edges add some) at the bytes of a build from cell records, and its parts planned in the rest. A budget too small is refused with
-/// the smallest under which the parts' smallest largest part fits beside the most cubes.
+/// tables take more per cube than a model) and at most `maxCoarseCells`, reserved at twice their
+/// estimate (cubes at the cells' edges add some) at the bytes of a build from cell records, and
+/// its parts planned in the rest. A budget too small is refused with the smallest under which
+/// the parts' smallest largest part fits beside the most cubes.
 CoarseBeside besideMergedLeaves(const std::string& input, const LoadOptions& options, uint64_t budget,
                                 uint64_t frameBytes, const MemoryPlan& sizes, double maxCoarseCells,
                                 const std::string& who) {

@@ -95,9 +95,10 @@ std::optional<MergedCoarsest> loadMergedCoarsest(const std::string& path, const 
 /// A first picture of an input without coarse levels to read alone (a model file, FLASH,
 /// NAME.cells, a patch-based file of one level): every leaf cell merged into cubes 2^level
 /// finest cells wide, each the mean of the cells in it by their volume; the narrowest cubes, at
-/// least as wide as every cell, that the cells' volume keeps within about `maxCells`. Read piece by piece (brick, block, a million
-/// records), so that the cubes are all it holds. `ranges` are the cells' value ranges, not the
-/// means'. None where the input is not of those kinds or holds no more than `maxCells` cells.
+/// least as wide as every cell, that the cells' volume keeps within about `maxCells`. Read piece
+/// by piece (brick, block, a million records), so that the cubes are all it holds. `ranges` are
+/// the cells' value ranges, not the means'. None where the input is not of those kinds or holds
+/// no more than `maxCells` cells.
 struct MergedLeaves {
   Model model;
   int level = 0;               ///< the cubes'
