@@ -259,7 +259,9 @@ TEST(Denoise, AFilterAfterAFewTilesTookPassesEqualsTheWholeFilter) {
     std::vector<float> noise, wholeNoise;
     const Image again = denoise(buffer, guide, background, &noise, {}, &memo);
     const Image whole = denoise(buffer, guide, background, &wholeNoise);
-    if (!tiles.empty()) EXPECT_LT(memo.filteredTiles, size_t(buffer.tileCount()) / 2);
+    if (!tiles.empty()) {
+      EXPECT_LT(memo.filteredTiles, size_t(buffer.tileCount()) / 2);
+    }
     ASSERT_EQ(again.pixels.size(), whole.pixels.size());
     EXPECT_EQ(0, std::memcmp(again.pixels.data(), whole.pixels.data(), whole.pixels.size() * sizeof(vec4f)));
     EXPECT_EQ(noise, wholeNoise);
