@@ -34,8 +34,6 @@ struct NodeInfo {
 
 constexpr size_t kParallelGrain = 8192;
 
-int64_t floorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
-
 std::string describe(const Cell& c) {
   return strCat("(", c.lower.x, ",", c.lower.y, ",", c.lower.z, ") level ", c.level);
 }

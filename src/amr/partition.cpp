@@ -107,8 +107,6 @@ double cellsBelow(const CensusBox& item, int axis, int64_t s) {
   return item.cells * double(s - lo) / double(hi - lo);
 }
 
-int64_t floorDiv64(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
-
 struct Builder {
   std::vector<KdPartition::Node>& nodes;
   std::vector<box3l>& boxes;
@@ -131,15 +129,15 @@ struct Builder {
       axis = argMax(region.size());
       const int64_t lo = std::max(region.lower[axis], -kUnboundedLattice / 2);
       const int64_t hi = std::min(region.upper[axis], kUnboundedLattice / 2);
-      split = floorDiv64(lo + (hi - lo) / 2, grain) * grain;
+      split = floorDiv(lo + (hi - lo) / 2, grain) * grain;
     } else {
       const vec3l extent = data.size();
       axis = argMax(extent);
       const int64_t lo = data.lower[axis], hi = data.upper[axis];
       // Candidate planes k * grain strictly inside the data, k in [ka, kb].
-      const int64_t ka = floorDiv64(lo, grain) + 1, kb = -floorDiv64(-hi, grain) - 1;
+      const int64_t ka = floorDiv(lo, grain) + 1, kb = -floorDiv(-hi, grain) - 1;
       if (ka > kb) {
-        split = -floorDiv64(-hi, grain) * grain; // no plane inside: the high parts hold none of it
+        split = -floorDiv(-hi, grain) * grain; // no plane inside: the high parts hold none of it
       } else {
         // The smallest plane inside the data with at least the low parts' share below it, or the
         // plane before it when that is closer to the share.

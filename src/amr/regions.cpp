@@ -18,8 +18,6 @@ struct Fragment {
   uint32_t brick;
 };
 
-int64_t floorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
-
 box3f toLattice(const box3l& half) { return {vec3f(half.lower) * 0.5f, vec3f(half.upper) * 0.5f}; }
 
 /// The region builder's output for one subtree; node 0 is the subtree root.

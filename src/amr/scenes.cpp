@@ -341,15 +341,14 @@ struct Output {
   std::vector<std::vector<float>> values;
 };
 
-int floorDivInt(int a, int b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
-
 /// Emits the leaf cells of one base cell (or only counts them when `out` is null).
 uint64_t refine(const Scene& scene, const vec3i& lower, int level, double unit, Output* out) {
   const int w = 1 << level;
   int wanted = level;
   if (level > 0) {
     const int bw = scene.block * w;
-    const vec3i block(floorDivInt(lower.x, bw) * bw, floorDivInt(lower.y, bw) * bw, floorDivInt(lower.z, bw) * bw);
+    const vec3i block(int(floorDiv(lower.x, bw)) * bw, int(floorDiv(lower.y, bw)) * bw,
+                      int(floorDiv(lower.z, bw)) * bw);
     wanted = std::min(wanted, scene.levelIn(vec3d(block) * unit, (vec3d(block) + vec3d(bw)) * unit));
   }
   if (wanted < level) {

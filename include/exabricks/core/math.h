@@ -18,6 +18,11 @@
 
 namespace exa {
 
+/// a / b rounded towards minus infinity (b != 0): the lattice cell of width b that holds a.
+EXA_HOST_DEVICE constexpr int64_t floorDiv(int64_t a, int64_t b) {
+  return a / b - ((a % b != 0) && ((a < 0) != (b < 0)));
+}
+
 template <typename T> struct vec3 {
   T x{}, y{}, z{};
   constexpr vec3() = default;
