@@ -33,8 +33,19 @@ uint64_t smallestBesideCoarse(const std::string& input, const BudgetTooSmall& re
     }
   }
   if (!std::isfinite(best)) return refused.smallest;
-  const uint64_t mebibyte = uint64_t(1) << 20;
-  return (uint64_t(std::ceil(best)) + mebibyte - 1) / mebibyte * mebibyte;
+  return wholeMebibytes(uint64_t(std::ceil(best)));
+}
+
+/// The parts' refusal (`refused`) said again of `who` holding `beside` next to them: the same
+/// figures (after its "(N cells): "), and `smallest` as the smallest budget that works.
+BudgetTooSmall refusedBeside(const BudgetTooSmall& refused, const std::string& input, uint64_t budget,
+                             const std::string& who, uint64_t smallest, const std::string& beside) {
+  const std::string& said = refused.situation;
+  const size_t figures = said.find(" cells): ");
+  return BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ", input, " for ", who,
+                               figures == std::string::npos ? "" : said.substr(figures + 7)),
+                        smallest, refused.fixedBytes, refused.smallestPartBytes, refused.bytesPerCell,
+                        strCat("with ", beside, " beside the parts"));
 }
 
 /// A view of an input without coarse levels to read alone but whose cells can be merged
@@ -59,15 +70,9 @@ CoarseBeside besideMergedLeaves(const std::string& input, const LoadOptions& opt
   } catch (const BudgetTooSmall& refused) {
     // Held cubes take a quarter of what the budget leaves beside the process: the part needs the
     // other three.
-    const uint64_t mebibyte = uint64_t(1) << 20;
     const uint64_t smallest = refused.fixedBytes + (refused.smallestPartBytes * 4 + 2) / 3;
-    const std::string& said = refused.situation;
-    const size_t figures = said.find(" cells): ");
-    throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ", input, " for ", who,
-                                figures == std::string::npos ? "" : said.substr(figures + 7)),
-                         (smallest + mebibyte - 1) / mebibyte * mebibyte, refused.fixedBytes, refused.smallestPartBytes,
-                         refused.bytesPerCell,
-                         strCat("with every cell merged into cubes that ", who, " holds for drafts beside the parts"));
+    throw refusedBeside(refused, input, budget, who, wholeMebibytes(smallest),
+                        strCat("every cell merged into cubes that ", who, " holds for drafts"));
   }
 }
 
@@ -99,14 +104,8 @@ std::optional<CoarseBeside> coarseBesideParts(const std::string& input, const Lo
   } catch (const BudgetTooSmall& refused) {
     // No coarse levels to hold, or cubes held instead: that refusal.
     if (coarseFirstChoices(input).size() < 2 || mergesLeaves(input)) throw;
-    // The refusal's figures after its "(N cells): ", said of the budget given.
-    const std::string& said = refused.situation;
-    const size_t figures = said.find(" cells): ");
-    throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ", input, " for ", who,
-                                figures == std::string::npos ? "" : said.substr(figures + 7)),
-                         smallestBesideCoarse(input, refused, maxCoarseCells), refused.fixedBytes,
-                         refused.smallestPartBytes, refused.bytesPerCell,
-                         strCat("with the coarse levels ", who, " holds for drafts beside the parts"));
+    throw refusedBeside(refused, input, budget, who, smallestBesideCoarse(input, refused, maxCoarseCells),
+                        strCat("the coarse levels ", who, " holds for drafts"));
   }
 }
 

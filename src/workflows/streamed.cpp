@@ -131,7 +131,6 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   const Census census = loadCensus(input, options);
   const Timer timer;
   MemoryPlan plan = sizedPlan(input, options, budget, frameBytes, census, fixedBefore);
-  auto mib = [](uint64_t b) { return ((b + (uint64_t(1) << 20) - 1) >> 20) << 20; };
   const uint64_t whole = plan.fixedBytes + uint64_t(std::ceil(plan.cells)) * plan.bytesPerCell;
   if (plan.fitsWhole()) return plan;
 
@@ -162,12 +161,12 @@ MemoryPlan planMemory(const std::string& input, const LoadOptions& options, uint
   }
   // Named with a few MiB to spare: the process's own size varies a little from run to run.
   const uint64_t smallest =
-      mib(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell + (uint64_t(4) << 20));
+      wholeMebibytes(plan.fixedBytes + uint64_t(std::ceil(bestLargest)) * plan.bytesPerCell + (uint64_t(4) << 20));
   throw BudgetTooSmall(strCat("a memory budget of ", formatBytes(budget), " cannot hold ",
                               input.empty() ? std::string(kDefaultDatasetName) : input, " (", std::llround(plan.cells),
                               " cells): this process needs ", formatBytes(plan.fixedBytes),
                               " without data, the whole step about ", formatBytes(whole - plan.fixedBytes),
-                              " more (held whole: --memory-budget ", mib(whole) >> 20,
+                              " more (held whole: --memory-budget ", wholeMebibytes(whole) >> 20,
                               "M) and its smallest part about ", formatBytes(smallest - plan.fixedBytes)),
                        smallest, plan.fixedBytes, smallest - plan.fixedBytes, plan.bytesPerCell);
 }

@@ -46,6 +46,9 @@ uint64_t availableMemoryBytes();
 /// boxes), as measured on AMReX and generated inputs (docs/performance.md).
 uint64_t bytesPerResidentCell(size_t fields, bool fromBoxes);
 
+/// Bytes rounded up to a whole mebibyte: the unit a refusal names its smallest budget in.
+inline uint64_t wholeMebibytes(uint64_t bytes) { return ((bytes + (uint64_t(1) << 20) - 1) >> 20) << 20; }
+
 /// How a step is held under a memory budget.
 struct MemoryPlan {
   uint64_t budget = 0;       ///< the whole process's resident memory, bytes
