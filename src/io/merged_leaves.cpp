@@ -20,8 +20,6 @@ namespace exa {
 
 namespace {
 
-int64_t floorDiv(int64_t a, int64_t b) { return a / b - ((a % b != 0) && ((a < 0) != (b < 0))); }
-
 /// Volume-weighted sums of leaf values per cube `width` finest cells wide, keyed sparsely (cells
 /// may lie far apart: nothing is allocated by bounding volume).
 class CubeSums {
@@ -91,7 +89,6 @@ public:
       }
   }
 
-  size_t cubes() const { return weights_.size(); }
   const std::vector<range1f>& ranges() const { return ranges_; }
 
   /// The cubes as cells, each holding the mean of its cells (cubes no finite value reached are
@@ -254,9 +251,9 @@ double mergedLeavesCubes(const std::string& path, const LoadOptions& options, do
   return volumeOf(census) / std::pow(8.0, double(cubeLevel(census, maxCells)));
 }
 
-bool mergesLeaves(const std::string& path) {
-  if (path.empty()) return false;
-  const InputKind kind = detectInput(path);
+namespace {
+/// mergesLeaves of an input of this kind.
+bool mergesLeavesOf(const std::string& path, InputKind kind) {
   if (kind == InputKind::Model || kind == InputKind::Flash || kind == InputKind::Native) return true;
   // A patch-based input of one level: its patches are its leaves, and it has no coarser level.
   const FormatReader* reader = io::patchReader(kind, path, {});
@@ -264,9 +261,14 @@ bool mergesLeaves(const std::string& path) {
   const std::vector<double> cells = reader->levelCells(path);
   return std::count_if(cells.begin(), cells.end(), [](double n) { return n > 0; }) == 1;
 }
+} // namespace
+
+bool mergesLeaves(const std::string& path) { return !path.empty() && mergesLeavesOf(path, detectInput(path)); }
 
 std::optional<MergedLeaves> loadMergedLeaves(const std::string& path, const LoadOptions& options, double maxCells) {
-  if (!mergesLeaves(path) || options.finestLevel > 0) return std::nullopt;
+  if (path.empty() || options.finestLevel > 0) return std::nullopt;
+  const InputKind kind = detectInput(path);
+  if (!mergesLeavesOf(path, kind)) return std::nullopt;
   const Census census = loadCensus(path, options);
   MergedLeaves m;
   m.cells = census.cells();
@@ -281,7 +283,6 @@ std::optional<MergedLeaves> loadMergedLeaves(const std::string& path, const Load
   }
   Timer timer;
   CellSet set;
-  const InputKind kind = detectInput(path);
   if (kind == InputKind::Native) {
     set = mergedNative(path, options, m.level, m.ranges);
   } else {

@@ -81,8 +81,7 @@ struct LevelArrays {
 /// Where each level is filtered, in tiles of the frame buffer: all of them, or (after some tiles
 /// took passes) those whose outputs the later levels read, around the tiles whose output changes.
 struct TileRegions {
-  int tilesX = 0, tilesY = 0;
-  std::vector<std::vector<int>> level; ///< per level, the tiles whose outputs it makes (empty: all)
+  std::vector<std::vector<int>> level; ///< per level, the tiles whose outputs it makes
   std::vector<int> input;              ///< the tiles of the first level's input it reads
 };
 
@@ -120,7 +119,7 @@ std::optional<TileRegions> regionsAround(const std::vector<uint8_t>& changed, in
   for (int l = 0; l < levels; ++l)
     reach += 2 << l;
   outputs = dilated(changed, tilesX, tilesY, reach);
-  TileRegions r{tilesX, tilesY, std::vector<std::vector<int>>(size_t(levels)), {}};
+  TileRegions r{std::vector<std::vector<int>>(size_t(levels)), {}};
   int later = 0; // the reach of the levels after l
   for (int l = levels - 1; l >= 0; --l) {
     r.level[size_t(l)] = marked(dilated(outputs, tilesX, tilesY, later));
