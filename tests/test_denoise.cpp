@@ -3,6 +3,7 @@
 // predicts the noise the denoised picture keeps; on a path-traced frame it reaches a noise
 // target with fewer passes and keeps the low frequencies of a converged render; the view and
 // the whole-frame function show the same picture.
+#include "exabricks/amr/basis_batch.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/core/color.h"
 #include "exabricks/render/denoise.h"
@@ -272,6 +273,54 @@ TEST(Denoise, AFilterAfterAFewTilesTookPassesEqualsTheWholeFilter) {
   const Image same = denoise(buffer, guide, background, &noise, {}, &memo);
   EXPECT_EQ(memo.filteredTiles, 0u);
   EXPECT_EQ(same.pixels.size(), memo.picture.pixels.size());
+}
+
+TEST(Denoise, TheVectorisedRowsEqualThePerPixelSteps) {
+  // The CPU filters rows of pixels as vectors; the GPU's kernels run the per-pixel steps. With
+  // every instruction set, on a frame whose width is no multiple of a vector or a tile, with a
+  // shaded guide, a tile without passes and one of a single pass (no noise estimate), both give
+  // the same picture and tile noise to float round-off.
+  const int size = 83;
+  const auto truth = [](int x, int y) { return ((x / 13 + y / 11) % 2) ? 0.7f : 0.25f; };
+  FrameBuffer buffer = noisyBuffer(truth, 0.2f, 4, 3, size);
+  const FrameBuffer::Sums s = buffer.sums();
+  s.tilePasses[2] = 0;
+  s.tilePasses[7] = 1;
+  DenoiseGuide guide = guideOf(truth, size);
+  guide.shaded = guideOf([](int x, int y) { return 0.1f + 0.8f * float((x * 7 + y * 3) % 17) / 17.f; }, size).albedo;
+  const vec3f background(0.1f, 0.2f, 0.3f);
+  DenoiseSettings perPixel;
+  perPixel.perPixel = true;
+  std::vector<float> wantNoise;
+  const Image want = denoise(buffer, guide, background, &wantNoise, perPixel);
+  int targets = 0;
+  for (const std::string& target : batchTargets()) {
+    ASSERT_TRUE(useBatchTarget(target)) << target;
+    SCOPED_TRACE("instruction set " + target);
+    ++targets;
+    std::vector<float> noise;
+    const Image got = denoise(buffer, guide, background, &noise);
+    ASSERT_EQ(got.pixels.size(), want.pixels.size());
+    double largest = 0;
+    for (size_t p = 0; p < want.pixels.size(); ++p) {
+      const vec4f d = got.pixels[p] - want.pixels[p];
+      for (float c : {d.x, d.y, d.z, d.w})
+        largest = std::max(largest, double(std::fabs(c)));
+    }
+    EXPECT_LT(largest, 1e-5);
+    ASSERT_EQ(noise.size(), wantNoise.size());
+    for (size_t t = 0; t < noise.size(); ++t)
+      if (std::isinf(wantNoise[t]))
+        EXPECT_EQ(noise[t], wantNoise[t]) << "tile " << t; // fewer than two passes
+      else
+        EXPECT_NEAR(noise[t], wantNoise[t], 1e-4f * std::max(1.f, wantNoise[t])) << "tile " << t;
+  }
+  EXPECT_TRUE(std::isinf(wantNoise[2]) && std::isinf(wantNoise[7]));
+  EXPECT_TRUE(useBatchTarget(""));
+  EXPECT_GT(targets, 0);
+  // The tile without passes stays transparent black; the filter changed the others.
+  buffer.forTilePixels(2, [&](int, int, size_t p) { EXPECT_EQ(want.pixels[p], vec4f(0.f, 0.f, 0.f, 0.f)); });
+  EXPECT_NE(want.pixels, buffer.resolve().pixels);
 }
 
 TEST(Denoise, AViewShowsTheFramesDenoisedPicture) {

@@ -6,6 +6,7 @@
 #include "exabricks/core/log.h"
 #include "exabricks/render/renderer.h"
 
+#include "denoise_batch.h"
 #include "denoise_filter.h"
 #include "gpu_api.h"
 
@@ -149,26 +150,113 @@ template <typename F> void forTiles(const DenoiseImages& im, const std::vector<i
   });
 }
 
-/// The levels on the CPU's threads: the same per-pixel steps as the GPU's kernels, each pixel's
-/// shown luminance found once per level (the GPU's kernels find it at each of the 25 taps); only
-/// over `regions` where given.
+/// Calls f(y, x0, x1) for the pixels x0 .. x1 - 1 of each row of the tiles listed (all where
+/// `tiles` is null), on the CPU's threads.
+template <typename F> void forTileRows(const DenoiseImages& im, const std::vector<int>* tiles, F&& f) {
+  if (!tiles) {
+    tbb::parallel_for(0, im.height, [&](int y) { f(y, 0, im.width); });
+    return;
+  }
+  const int tilesX = (im.width + kRenderTile - 1) / kRenderTile;
+  tbb::parallel_for(size_t(0), tiles->size(), [&](size_t k) {
+    const int tx = (*tiles)[k] % tilesX, ty = (*tiles)[k] / tilesX;
+    for (int y = ty * kRenderTile; y < std::min(im.height, (ty + 1) * kRenderTile); ++y)
+      f(y, tx * kRenderTile, std::min(im.width, (tx + 1) * kRenderTile));
+  });
+}
+
+/// Planes of one float per pixel on the host, each with `padding` floats of room before and after.
+struct Planes {
+  size_t stride = 0;
+  int padding = 0;
+  std::vector<float> storage;
+  Planes(int count, size_t n, int padding_)
+      : stride(n + 2 * size_t(padding_)), padding(padding_), storage(size_t(count) * stride, 0.f) {}
+  float* operator[](int k) { return storage.data() + size_t(k) * stride + size_t(padding); }
+};
+
+/// A level's colour and probes as planes.
+struct LevelPlanes {
+  Planes planes;
+  DenoisePlanes view;
+  LevelPlanes(size_t n, int padding) : planes(8, n, padding) {
+    for (int c = 0; c < 4; ++c)
+      view.color[c] = planes[c];
+    for (int c = 0; c < 3; ++c)
+      view.probe[c] = planes[4 + c];
+    view.lumProbe = planes[7];
+  }
+};
+
+/// The levels on the CPU's threads, each pixel's shown luminance found once per level (the GPU's
+/// kernels find it at each of the 25 taps); only over `regions` where given. Rows of pixels go
+/// through the vectorised form of the per-pixel steps (denoise_batch.h) where there is one and
+/// `perPixel` is false, else pixel by pixel.
 void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<float>& first, int levels,
-                 const TileRegions* regions) {
+                 const TileRegions* regions, bool perPixel) {
   const size_t n = a.color.size();
-  LevelArrays b(n);
   std::vector<float> variance(n), shown(n);
+  const DenoiseRowFunction rowFunction = perPixel ? nullptr : denoiseRowFunction();
+  if (!rowFunction) {
+    LevelArrays b(n);
+    for (int l = 0; l < levels; ++l) {
+      DenoiseLevel in = a.view();
+      const DenoiseLevel out = b.view();
+      const float* from = l == 0 ? first.data() : nullptr;
+      const std::vector<int>* made = regions ? &regions->level[size_t(l)] : nullptr;
+      const std::vector<int>* read = !regions ? nullptr : l == 0 ? &regions->input : &regions->level[size_t(l - 1)];
+      forTiles(im, read, [&](int, int, size_t p) { shown[p] = denoiseShownLuminance(im, in.color[p]); });
+      forTiles(im, made, [&](int x, int y, size_t p) { variance[p] = denoiseVariance(im, in, from, x, y); });
+      in.shown = shown.data();
+      forTiles(im, made, [&](int x, int y, size_t) { denoiseLevelPixel(im, in, variance.data(), 1 << l, x, y, out); });
+      std::swap(a, b);
+    }
+    return;
+  }
+  const DenoiseVarianceRowFunction varianceFunction = denoiseVarianceRowFunction();
+  const int padding = denoisePlanePadding(1 << std::max(0, levels - 1));
+  LevelPlanes pa(n, padding), pb(n, padding);
+  enum { Valid = kDenoiseFeatures, Unknown, Usable, Shown, Variance, First, Count };
+  Planes fixed(Count, n, padding);
+  DenoiseRowInputs inputs;
+  for (int k = 0; k < kDenoiseFeatures; ++k)
+    inputs.features[k] = fixed[k];
+  inputs.valid = fixed[Valid], inputs.unknown = fixed[Unknown], inputs.usable = fixed[Usable];
+  inputs.shown = fixed[Shown], inputs.variance = fixed[Variance];
+  tbb::parallel_for(size_t(0), n, [&](size_t p) {
+    for (int k = 0; k < kDenoiseFeatures; ++k)
+      fixed[k][p] = im.features[p * kDenoiseFeatures + size_t(k)];
+    fixed[Valid][p] = im.valid[p] ? 1.f : 0.f;
+    fixed[Unknown][p] = im.unknown[p] ? 1.f : 0.f;
+    fixed[Usable][p] = im.valid[p] && !im.unknown[p] ? 1.f : 0.f;
+    fixed[First][p] = first[p];
+    const vec4f& c = a.color[p];
+    const vec3f& e = a.probe[p];
+    pa.view.color[0][p] = c.x, pa.view.color[1][p] = c.y, pa.view.color[2][p] = c.z, pa.view.color[3][p] = c.w;
+    pa.view.probe[0][p] = e.x, pa.view.probe[1][p] = e.y, pa.view.probe[2][p] = e.z;
+    pa.view.lumProbe[p] = a.lumProbe[p];
+  });
+  float* shownPlane = fixed[Shown];
+  float* variancePlane = fixed[Variance];
   for (int l = 0; l < levels; ++l) {
-    DenoiseLevel in = a.view();
-    const DenoiseLevel out = b.view();
-    const float* from = l == 0 ? first.data() : nullptr;
+    const DenoisePlanes& in = pa.view;
     const std::vector<int>* made = regions ? &regions->level[size_t(l)] : nullptr;
     const std::vector<int>* read = !regions ? nullptr : l == 0 ? &regions->input : &regions->level[size_t(l - 1)];
-    forTiles(im, read, [&](int, int, size_t p) { shown[p] = denoiseShownLuminance(im, in.color[p]); });
-    forTiles(im, made, [&](int x, int y, size_t p) { variance[p] = denoiseVariance(im, in, from, x, y); });
-    in.shown = shown.data();
-    forTiles(im, made, [&](int x, int y, size_t) { denoiseLevelPixel(im, in, variance.data(), 1 << l, x, y, out); });
-    std::swap(a, b);
+    forTiles(im, read, [&](int, int, size_t p) {
+      shownPlane[p] = denoiseShownLuminance(im, vec4f(in.color[0][p], in.color[1][p], in.color[2][p], in.color[3][p]));
+    });
+    const float* values = l == 0 ? fixed[First] : in.lumProbe;
+    forTileRows(im, made, [&](int y, int x0, int x1) {
+      varianceFunction(im, inputs, values, l == 0, y, x0, x1, variancePlane);
+      rowFunction(im, inputs, in, 1 << l, y, x0, x1, pb.view);
+    });
+    std::swap(pa, pb);
   }
+  tbb::parallel_for(size_t(0), n, [&](size_t p) {
+    a.color[p] = vec4f(pa.view.color[0][p], pa.view.color[1][p], pa.view.color[2][p], pa.view.color[3][p]);
+    a.probe[p] = vec3f(pa.view.probe[0][p], pa.view.probe[1][p], pa.view.probe[2][p]);
+    a.lumProbe[p] = pa.view.lumProbe[p];
+  });
 }
 
 /// Features of one guide pixel: square roots of its premultiplied colour, so that dark colours
@@ -237,7 +325,7 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
   if (guide.device == Device::Cuda)
     gpu::denoiseLevels(im, a.view(), first.data(), settings.levels);
   else
-    filterOnCpu(im, a, first, settings.levels, regions ? &*regions : nullptr);
+    filterOnCpu(im, a, first, settings.levels, regions ? &*regions : nullptr, settings.perPixel);
   Image out(width, height);
   out.pixels = std::move(a.color);
   std::vector<float> noise(size_t(tiles), 0.f);

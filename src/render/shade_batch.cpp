@@ -33,6 +33,8 @@ BatchFunctions batchFunctions() {
 #include <hwy/foreach_target.h> // IWYU pragma: keep
 #include <hwy/highway.h>
 
+#include "exp2_batch-inl.h"
+
 HWY_BEFORE_NAMESPACE();
 namespace exa {
 namespace HWY_NAMESPACE {
@@ -144,7 +146,6 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
 void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
                           ShadedBatch& out) {
   const hn::CappedTag<float, kSampleBatch> d;
-  const hn::RebindToSigned<decltype(d)> di;
   using V = hn::Vec<decltype(d)>;
   const size_t lanes = hn::Lanes(d);
   const V zero = hn::Zero(d), one = hn::Set(d, 1.f);
@@ -153,18 +154,7 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
     const V logT = hn::LoadU(d, tf.logT + base);
     // correctedOpacity: 1 - 2^(logT length / reference), 2^x as exp2Negative computes it.
     const V e = hn::Mul(hn::Mul(logT, hn::LoadU(d, lengths + base)), hn::Set(d, p.invReferenceWidth));
-    const V ei = hn::Round(e);
-    const V fr = hn::Sub(e, ei);
-    V poly = hn::Set(d, kExp2Taylor6);
-    poly = hn::MulAdd(poly, fr, hn::Set(d, kExp2Taylor5));
-    poly = hn::MulAdd(poly, fr, hn::Set(d, kExp2Taylor4));
-    poly = hn::MulAdd(poly, fr, hn::Set(d, kExp2Taylor3));
-    poly = hn::MulAdd(poly, fr, hn::Set(d, kExp2Taylor2));
-    poly = hn::MulAdd(poly, fr, hn::Set(d, kExp2Taylor1));
-    poly = hn::MulAdd(poly, fr, one);
-    const auto clampedI = hn::ConvertTo(di, hn::Max(ei, hn::Set(d, -126.f)));
-    const V scale = hn::BitCast(d, hn::ShiftLeft<23>(hn::Add(clampedI, hn::Set(di, 127))));
-    const V transmitted = hn::IfThenZeroElse(hn::Lt(e, hn::Set(d, -126.f)), hn::Mul(poly, scale));
+    const V transmitted = Exp2Negative(d, e);
     hn::StoreU(hn::IfThenElseZero(hn::Lt(logT, zero), hn::Sub(one, transmitted)), d, out.alpha + base);
     V r = hn::LoadU(d, tf.r + base), g = hn::LoadU(d, tf.g + base), b = hn::LoadU(d, tf.b + base);
     if (p.shade) {

@@ -48,6 +48,9 @@ struct DenoiseSettings {
   /// smaller leaves more noise for more passes to remove.
   float guideSigma = 0.08f;
   float colorSigma = 8.f; ///< colour difference, in standard errors of the noise, at 1/e
+  /// On the CPU, the per-pixel steps the GPU's kernels run instead of their vectorised form (the
+  /// same picture to float round-off; for tests and comparisons).
+  bool perPixel = false;
 };
 
 /// The denoised mean of the buffer's passes (tiles without a pass stay transparent black).
