@@ -165,13 +165,19 @@ template <typename F> void forTileRows(const DenoiseImages& im, const std::vecto
   });
 }
 
-/// Planes of one float per pixel on the host, each with `padding` floats of room before and after.
+/// Planes of one float per pixel on the host, each with `padding` floats of room before and after
+/// (zero, and never written: the taps that read it weigh zero).
 struct Planes {
   size_t stride = 0;
   int padding = 0;
   std::vector<float> storage;
-  Planes(int count, size_t n, int padding_)
-      : stride(n + 2 * size_t(padding_)), padding(padding_), storage(size_t(count) * stride, 0.f) {}
+  /// `count` planes of n pixels: kept where they were that already, else new and zero.
+  void reset(int count, size_t n, int padding_) {
+    const size_t newStride = n + 2 * size_t(padding_);
+    if (newStride == stride && padding_ == padding && storage.size() == size_t(count) * newStride) return;
+    stride = newStride, padding = padding_;
+    storage.assign(size_t(count) * stride, 0.f);
+  }
   float* operator[](int k) { return storage.data() + size_t(k) * stride + size_t(padding); }
 };
 
@@ -179,7 +185,8 @@ struct Planes {
 struct LevelPlanes {
   Planes planes;
   DenoisePlanes view;
-  LevelPlanes(size_t n, int padding) : planes(8, n, padding) {
+  void reset(size_t n, int padding) {
+    planes.reset(8, n, padding);
     for (int c = 0; c < 4; ++c)
       view.color[c] = planes[c];
     for (int c = 0; c < 3; ++c)
@@ -188,12 +195,22 @@ struct LevelPlanes {
   }
 };
 
+} // namespace
+
+/// The vectorised filter's planes: two levels' and those every level reads.
+struct DenoiseScratch {
+  LevelPlanes a, b;
+  Planes fixed;
+};
+
+namespace {
+
 /// The levels on the CPU's threads, each pixel's shown luminance found once per level (the GPU's
 /// kernels find it at each of the 25 taps); only over `regions` where given. Rows of pixels go
 /// through the vectorised form of the per-pixel steps (denoise_batch.h) where there is one and
 /// `perPixel` is false, else pixel by pixel.
 void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<float>& first, int levels,
-                 const TileRegions* regions, bool perPixel) {
+                 const TileRegions* regions, bool perPixel, DenoiseScratch& scratch) {
   const size_t n = a.color.size();
   std::vector<float> variance(n), shown(n);
   const DenoiseRowFunction rowFunction = perPixel ? nullptr : denoiseRowFunction();
@@ -215,9 +232,13 @@ void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<floa
   }
   const DenoiseVarianceRowFunction varianceFunction = denoiseVarianceRowFunction();
   const int padding = denoisePlanePadding(1 << std::max(0, levels - 1));
-  LevelPlanes pa(n, padding), pb(n, padding);
+  LevelPlanes& pa = scratch.a;
+  LevelPlanes& pb = scratch.b;
+  pa.reset(n, padding);
+  pb.reset(n, padding);
   enum { Valid = kDenoiseFeatures, Unknown, Usable, Shown, Variance, First, Count };
-  Planes fixed(Count, n, padding);
+  Planes& fixed = scratch.fixed;
+  fixed.reset(Count, n, padding);
   DenoiseRowInputs inputs;
   for (int k = 0; k < kDenoiseFeatures; ++k)
     inputs.features[k] = fixed[k];
@@ -322,10 +343,14 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
     regions = regionsAround(changed, buffer.tilesX(), buffer.tilesY(), settings.levels, outputs);
     if (!regions) outputs.assign(size_t(tiles), 1);
   }
-  if (guide.device == Device::Cuda)
+  if (guide.device == Device::Cuda) {
     gpu::denoiseLevels(im, a.view(), first.data(), settings.levels);
-  else
-    filterOnCpu(im, a, first, settings.levels, regions ? &*regions : nullptr, settings.perPixel);
+  } else {
+    if (memo && !memo->scratch) memo->scratch = std::make_shared<DenoiseScratch>();
+    DenoiseScratch local;
+    filterOnCpu(im, a, first, settings.levels, regions ? &*regions : nullptr, settings.perPixel,
+                memo ? *memo->scratch : local);
+  }
   Image out(width, height);
   out.pixels = std::move(a.color);
   std::vector<float> noise(size_t(tiles), 0.f);

@@ -19,6 +19,7 @@
 #include "exabricks/render/frame_buffer.h"
 #include "exabricks/render/renderer.h"
 
+#include <memory>
 #include <vector>
 
 namespace exa {
@@ -60,11 +61,14 @@ struct DenoiseSettings {
 /// `memo`, where given, keeps what the filter made for the next denoise() of the same frame
 /// and guide: that one filters again (on the CPU) only the tiles within the filter's reach of the
 /// tiles that took passes in between, and equals a whole filter.
+struct DenoiseScratch;
 struct DenoiseMemo {
   Image picture;
   std::vector<float> tileNoise;
   std::vector<uint32_t> tilePasses; ///< per tile, the passes filtered
   size_t filteredTiles = 0;         ///< the tiles whose outputs the last filter made
+  /// The CPU filter's arrays, kept for the next filter instead of allocated and cleared again.
+  std::shared_ptr<DenoiseScratch> scratch;
 };
 Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f& background,
               std::vector<float>* tileNoise = nullptr, const DenoiseSettings& settings = {},
