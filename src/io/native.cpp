@@ -98,6 +98,13 @@ template <typename Use> void streamCells(const std::string& cellsPath, Use&& use
   }
 }
 
+/// A field's value of record `record` from `path`, refused where it is not finite (unless kept:
+/// its cell becomes a hole).
+void checkFinite(float v, bool keepNonFinite, const std::string& path, uint64_t record, const std::string& name) {
+  if (!keepNonFinite && !std::isfinite(v))
+    fail(path, ": record ", record, ": value ", v, " of field '", name, "' is not finite");
+}
+
 /// The values of the records `keep` (ascending) of a .scalars file of `count` values.
 std::vector<float> readSelectedValues(const std::string& path, const std::string& name, uint64_t count,
                                       const std::vector<uint64_t>& keep, bool keepNonFinite) {
@@ -117,8 +124,7 @@ std::vector<float> readSelectedValues(const std::string& path, const std::string
     if (std::fread(chunk.data(), sizeof(float), n, f) != n) fail(path, ": read error (file changed while reading?)");
     for (; next < keep.size() && keep[next] < at + n; ++next) {
       const float v = chunk[size_t(keep[next] - at)];
-      if (!keepNonFinite && !std::isfinite(v))
-        fail(path, ": record ", keep[next], ": value ", v, " of field '", name, "' is not finite");
+      checkFinite(v, keepNonFinite, path, keep[next], name);
       out.push_back(v);
     }
   }
@@ -181,11 +187,8 @@ void streamNative(const std::string& cellsPath, const std::vector<std::string>& 
       values[f].resize(n);
       if (std::fread(values[f].data(), sizeof(float), n, files[f].get()) != n)
         fail(paths[f], ": read error (file changed while reading?)");
-      if (!keepNonFinite)
-        for (size_t i = 0; i < n; ++i)
-          if (!std::isfinite(values[f][i]))
-            fail(paths[f], ": record ", first + i, ": value ", values[f][i], " of field '", fields[f],
-                 "' is not finite");
+      for (size_t i = 0; i < n; ++i)
+        checkFinite(values[f][i], keepNonFinite, paths[f], first + i, fields[f]);
       at[f] = values[f].data();
     }
     use(cells, at, n);
