@@ -87,7 +87,8 @@ TEST(Macrocells, RangesHoldTheReconstructionAndEveryCellWhoseSupportMeetsThem) {
 TEST(Macrocells, TheGridStaysSmallForCellsFarApartAndIsEmptyBetweenThem) {
   const Model m = buildModel(test::farApart(generateScene({"ramp", 800, 5, 3})));
   const MacrocellGrid grid = macrocellsOver(m.regions.bounds);
-  EXPECT_LE(std::max({grid.dims.x, grid.dims.y, grid.dims.z}), 64);
+  EXPECT_LE(std::max({grid.dims.x, grid.dims.y, grid.dims.z}), 128);
+  EXPECT_LE(grid.count(), size_t(64 * 64 * 64));
   const std::vector<range1f> ranges = macrocellValueRanges(grid, m.bricks, m.fieldValues[0].data());
   size_t empty = 0;
   for (const range1f& r : ranges)

@@ -7,22 +7,25 @@
 
 namespace exa {
 
-MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis, int minWidth) {
+MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis, int minWidth, size_t maxCells) {
   MacrocellGrid g;
   const vec3f extent = bounds.upper - bounds.lower;
   const float longest = std::max({extent.x, extent.y, extent.z, 0.f});
-  g.cellSize = std::max(float(std::max(1, minWidth)), std::ceil(longest / float(std::max(1, perAxis))));
   g.lower = bounds.lower;
+  const auto cellsAlong = [&](int a, float size) {
+    return std::max(1, int(std::ceil(std::max(0.f, extent[a]) / size)));
+  };
+  g.cellSize = std::max(float(std::max(1, minWidth)), std::ceil(longest / float(std::max(1, perAxis))));
+  // Wider where the count would pass maxCells: from the width that volume alone would ask for.
+  const double volume =
+      double(std::max(extent.x, 1.f)) * double(std::max(extent.y, 1.f)) * double(std::max(extent.z, 1.f));
+  g.cellSize = std::max(g.cellSize, std::floor(float(std::cbrt(volume / double(std::max<size_t>(1, maxCells))))));
+  while (double(cellsAlong(0, g.cellSize)) * cellsAlong(1, g.cellSize) * cellsAlong(2, g.cellSize) > double(maxCells))
+    g.cellSize = std::max(g.cellSize + 1.f, std::ceil(g.cellSize * 1.0625f)); // grows whatever its size
   for (int a = 0; a < 3; ++a)
-    g.dims[a] = std::max(1, int(std::ceil(std::max(0.f, extent[a]) / g.cellSize)));
+    g.dims[a] = cellsAlong(a, g.cellSize);
   return g;
 }
-
-namespace {
-
-/// The macrocells [first, last] along one axis that the closed lattice interval [a, b] meets.
-
-} // namespace
 
 std::vector<range1f> macrocellValueRanges(const MacrocellGrid& g, const std::vector<Brick>& bricks,
                                           const float* values) {

@@ -43,9 +43,9 @@ struct MacrocellGrid {
   }
 };
 
-/// Cubic macrocells covering `bounds` (lattice): at most `perAxis` along its longest axis and at
-/// least `minWidth` lattice units wide (an integer width).
-MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis = 64, int minWidth = 4);
+/// Cubic macrocells covering `bounds` (lattice): at most `perAxis` along its longest axis and
+/// `maxCells` in all, at least `minWidth` lattice units wide (an integer width).
+MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis = 128, int minWidth = 2, size_t maxCells = 64 * 64 * 64);
 
 /// For every macrocell, the range of `values` (brick-ordered, one per cell of `bricks`) over the
 /// cells whose support (open, centre ± cell width) meets the macrocell or touches its faces;
