@@ -280,6 +280,19 @@ void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<floa
   });
 }
 
+/// The levels where the guide was drawn: the GPU's kernels, or the CPU's threads (with the
+/// memo's planes, where there is a memo).
+void filterLevels(const DenoiseImages& im, LevelArrays& a, const std::vector<float>& first,
+                  const DenoiseSettings& settings, const TileRegions* regions, Device device, DenoiseMemo* memo) {
+  if (device == Device::Cuda) {
+    gpu::denoiseLevels(im, a.view(), first.data(), settings.levels);
+    return;
+  }
+  if (memo && !memo->scratch) memo->scratch = std::make_shared<DenoiseScratch>();
+  DenoiseScratch local;
+  filterOnCpu(im, a, first, settings.levels, regions, settings.perPixel, memo ? *memo->scratch : local);
+}
+
 /// Features of one guide pixel: square roots of its premultiplied colour, so that dark colours
 /// differ as much as the eye sees.
 void addFeatures(const vec4f& c, float* out, bool withAlpha) {
@@ -343,14 +356,7 @@ Image denoise(const FrameBuffer& buffer, const DenoiseGuide& guide, const vec3f&
     regions = regionsAround(changed, buffer.tilesX(), buffer.tilesY(), settings.levels, outputs);
     if (!regions) outputs.assign(size_t(tiles), 1);
   }
-  if (guide.device == Device::Cuda) {
-    gpu::denoiseLevels(im, a.view(), first.data(), settings.levels);
-  } else {
-    if (memo && !memo->scratch) memo->scratch = std::make_shared<DenoiseScratch>();
-    DenoiseScratch local;
-    filterOnCpu(im, a, first, settings.levels, regions ? &*regions : nullptr, settings.perPixel,
-                memo ? *memo->scratch : local);
-  }
+  filterLevels(im, a, first, settings, regions ? &*regions : nullptr, guide.device, memo);
   Image out(width, height);
   out.pixels = std::move(a.color);
   std::vector<float> noise(size_t(tiles), 0.f);
