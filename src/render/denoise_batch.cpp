@@ -3,6 +3,8 @@
 // includes itself through foreach_target.h) and dispatches at run time.
 #include "denoise_batch.h"
 
+#include <cstddef>
+
 #ifndef EXABRICKS_HAVE_HWY
 
 namespace exa {
@@ -55,7 +57,7 @@ void DenoiseRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inputs, con
         // Lanes whose tap lies in the row: the others read a neighbouring row (or the padding).
         const auto qx = hn::Add(columns, hn::Set(di, dx));
         const auto inRow = hn::RebindMask(d, hn::And(hn::Not(hn::Lt(qx, hn::Zero(di))), hn::Lt(qx, width)));
-        const size_t q = size_t(qy) * size_t(im.width) + size_t(x) + size_t(ptrdiff_t(dx));
+        const ptrdiff_t q = ptrdiff_t(qy) * im.width + x + dx; // may point into the room before
         const auto tap = hn::And(inRow, hn::Gt(hn::LoadU(d, inputs.valid + q), zero));
         V distance = zero;
         for (int k = 0; k < kDenoiseFeatures; ++k) {
@@ -112,7 +114,7 @@ void DenoiseVarianceRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inp
       for (int dx = -r; dx <= r; ++dx) {
         const auto qx = hn::Add(columns, hn::Set(di, dx));
         const auto inRow = hn::RebindMask(d, hn::And(hn::Not(hn::Lt(qx, hn::Zero(di))), hn::Lt(qx, width)));
-        const size_t q = size_t(qy) * size_t(im.width) + size_t(x) + size_t(ptrdiff_t(dx));
+        const ptrdiff_t q = ptrdiff_t(qy) * im.width + x + dx; // may point into the room before
         const auto tap = hn::And(inRow, hn::Gt(hn::LoadU(d, inputs.usable + q), zero));
         const float weight = first ? (dx == 0 ? 2.f : 1.f) * (dy == 0 ? 2.f : 1.f) : 1.f;
         const V v = hn::LoadU(d, values + q);
