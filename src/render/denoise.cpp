@@ -131,25 +131,6 @@ std::optional<TileRegions> regionsAround(const std::vector<uint8_t>& changed, in
   return r;
 }
 
-/// Calls f(x, y, pixel) for every pixel of the tiles listed (all where `tiles` is null), on the
-/// CPU's threads.
-template <typename F> void forTiles(const DenoiseImages& im, const std::vector<int>* tiles, F&& f) {
-  if (!tiles) {
-    tbb::parallel_for(0, im.height, [&](int y) {
-      for (int x = 0; x < im.width; ++x)
-        f(x, y, size_t(y) * size_t(im.width) + size_t(x));
-    });
-    return;
-  }
-  const int tilesX = (im.width + kRenderTile - 1) / kRenderTile;
-  tbb::parallel_for(size_t(0), tiles->size(), [&](size_t k) {
-    const int tx = (*tiles)[k] % tilesX, ty = (*tiles)[k] / tilesX;
-    for (int y = ty * kRenderTile; y < std::min(im.height, (ty + 1) * kRenderTile); ++y)
-      for (int x = tx * kRenderTile; x < std::min(im.width, (tx + 1) * kRenderTile); ++x)
-        f(x, y, size_t(y) * size_t(im.width) + size_t(x));
-  });
-}
-
 /// Calls f(y, x0, x1) for the pixels x0 .. x1 - 1 of each row of the tiles listed (all where
 /// `tiles` is null), on the CPU's threads.
 template <typename F> void forTileRows(const DenoiseImages& im, const std::vector<int>* tiles, F&& f) {
@@ -163,6 +144,22 @@ template <typename F> void forTileRows(const DenoiseImages& im, const std::vecto
     for (int y = ty * kRenderTile; y < std::min(im.height, (ty + 1) * kRenderTile); ++y)
       f(y, tx * kRenderTile, std::min(im.width, (tx + 1) * kRenderTile));
   });
+}
+
+/// Calls f(x, y, pixel) for every pixel of the tiles listed (all where `tiles` is null), on the
+/// CPU's threads.
+template <typename F> void forTiles(const DenoiseImages& im, const std::vector<int>* tiles, F&& f) {
+  forTileRows(im, tiles, [&](int y, int x0, int x1) {
+    for (int x = x0; x < x1; ++x)
+      f(x, y, size_t(y) * size_t(im.width) + size_t(x));
+  });
+}
+
+/// The tiles level l makes (`made`) and those of its input it reads (`read`) where the filter
+/// runs over `regions`; null (every tile) without them.
+void levelTiles(const TileRegions* regions, int l, const std::vector<int>*& made, const std::vector<int>*& read) {
+  made = regions ? &regions->level[size_t(l)] : nullptr;
+  read = !regions ? nullptr : l == 0 ? &regions->input : &regions->level[size_t(l - 1)];
 }
 
 /// Planes of one float per pixel on the host, each with `padding` floats of room before and after
@@ -212,16 +209,16 @@ namespace {
 void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<float>& first, int levels,
                  const TileRegions* regions, bool perPixel, DenoiseScratch& scratch) {
   const size_t n = a.color.size();
-  std::vector<float> variance(n), shown(n);
+  const std::vector<int>*made, *read;
   const DenoiseRowFunction rowFunction = perPixel ? nullptr : denoiseRowFunction();
   if (!rowFunction) {
     LevelArrays b(n);
+    std::vector<float> variance(n), shown(n);
     for (int l = 0; l < levels; ++l) {
       DenoiseLevel in = a.view();
       const DenoiseLevel out = b.view();
       const float* from = l == 0 ? first.data() : nullptr;
-      const std::vector<int>* made = regions ? &regions->level[size_t(l)] : nullptr;
-      const std::vector<int>* read = !regions ? nullptr : l == 0 ? &regions->input : &regions->level[size_t(l - 1)];
+      levelTiles(regions, l, made, read);
       forTiles(im, read, [&](int, int, size_t p) { shown[p] = denoiseShownLuminance(im, in.color[p]); });
       forTiles(im, made, [&](int x, int y, size_t p) { variance[p] = denoiseVariance(im, in, from, x, y); });
       in.shown = shown.data();
@@ -261,8 +258,7 @@ void filterOnCpu(const DenoiseImages& im, LevelArrays& a, const std::vector<floa
   float* variancePlane = fixed[Variance];
   for (int l = 0; l < levels; ++l) {
     const DenoisePlanes& in = pa.view;
-    const std::vector<int>* made = regions ? &regions->level[size_t(l)] : nullptr;
-    const std::vector<int>* read = !regions ? nullptr : l == 0 ? &regions->input : &regions->level[size_t(l - 1)];
+    levelTiles(regions, l, made, read);
     forTiles(im, read, [&](int, int, size_t p) {
       shownPlane[p] = denoiseShownLuminance(im, vec4f(in.color[0][p], in.color[1][p], in.color[2][p], in.color[3][p]));
     });

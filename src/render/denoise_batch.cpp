@@ -26,6 +26,22 @@ namespace exa {
 namespace HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
+/// Lanes whose tap, dx pixels along the row from the lanes' own `columns`, lies in the row: the
+/// others read a neighbouring row (or the planes' room before and after).
+template <class D, class VI> HWY_INLINE hn::Mask<D> TapInRow(D d, VI columns, int dx, int width) {
+  const hn::RebindToSigned<D> di;
+  const VI qx = hn::Add(columns, hn::Set(di, dx));
+  return hn::RebindMask(d, hn::And(hn::Not(hn::Lt(qx, hn::Zero(di))), hn::Lt(qx, hn::Set(di, width))));
+}
+
+/// Stores the lanes of pixels x .. x1 - 1 at `to` (the pixel of x), not those past the row's end.
+template <class D> HWY_INLINE void StoreRow(D d, hn::Vec<D> v, float* to, int x, int x1) {
+  if (x + int(hn::Lanes(d)) <= x1)
+    hn::StoreU(v, d, to);
+  else
+    hn::BlendedStore(v, hn::FirstN(d, size_t(x1 - x)), d, to);
+}
+
 void DenoiseRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inputs, const DenoisePlanes& in, int step, int y,
                     int x0, int x1, const DenoisePlanes& out) {
   const hn::ScalableTag<float> d;
@@ -34,15 +50,14 @@ void DenoiseRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inputs, con
   const int lanes = int(hn::Lanes(d));
   const V zero = hn::Zero(d), one = hn::Set(d, 1.f);
   const V guideScale = hn::Set(d, im.guideScale), colorSigma = hn::Set(d, im.colorSigma);
-  const V tiny = hn::Set(d, 1e-6f), log2e = hn::Set(d, -1.44269504f);
-  const auto width = hn::Set(di, im.width);
+  const V errorFloor = hn::Set(d, kDenoiseErrorFloor), log2e = hn::Set(d, -kDenoiseLog2E);
   const size_t row = size_t(y) * size_t(im.width);
   for (int x = x0; x < x1; x += lanes) {
     const size_t p = row + size_t(x);
     const auto pixelValid = hn::Gt(hn::LoadU(d, inputs.valid + p), zero);
     const V lp = hn::LoadU(d, inputs.shown + p);
     // denoiseColorScale
-    const V colorScale = hn::Div(one, hn::MulAdd(colorSigma, hn::Sqrt(hn::LoadU(d, inputs.variance + p)), tiny));
+    const V colorScale = hn::Div(one, hn::MulAdd(colorSigma, hn::Sqrt(hn::LoadU(d, inputs.variance + p)), errorFloor));
     V fp[kDenoiseFeatures];
     for (int k = 0; k < kDenoiseFeatures; ++k)
       fp[k] = hn::LoadU(d, inputs.features[k] + p);
@@ -54,11 +69,8 @@ void DenoiseRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inputs, con
       if (qy < 0 || qy >= im.height) continue;
       for (int i = 0; i < 5; ++i) {
         const int dx = (i - 2) * step;
-        // Lanes whose tap lies in the row: the others read a neighbouring row (or the padding).
-        const auto qx = hn::Add(columns, hn::Set(di, dx));
-        const auto inRow = hn::RebindMask(d, hn::And(hn::Not(hn::Lt(qx, hn::Zero(di))), hn::Lt(qx, width)));
         const ptrdiff_t q = ptrdiff_t(qy) * im.width + x + dx; // may point into the room before
-        const auto tap = hn::And(inRow, hn::Gt(hn::LoadU(d, inputs.valid + q), zero));
+        const auto tap = hn::And(TapInRow(d, columns, dx, im.width), hn::Gt(hn::LoadU(d, inputs.valid + q), zero));
         V distance = zero;
         for (int k = 0; k < kDenoiseFeatures; ++k) {
           const V diff = hn::Sub(fp[k], hn::LoadU(d, inputs.features[k] + q));
@@ -80,11 +92,7 @@ void DenoiseRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inputs, con
     // The pixel itself weighs (3/8)² > 0 where it is valid; the others keep their input.
     const V inv = hn::Div(one, hn::IfThenElse(pixelValid, weights, one));
     const auto store = [&](V filtered, const float* from, float* to) {
-      const V v = hn::IfThenElse(pixelValid, hn::Mul(filtered, inv), hn::LoadU(d, from + p));
-      if (x + lanes <= x1)
-        hn::StoreU(v, d, to + p);
-      else
-        hn::BlendedStore(v, hn::FirstN(d, size_t(x1 - x)), d, to + p);
+      StoreRow(d, hn::IfThenElse(pixelValid, hn::Mul(filtered, inv), hn::LoadU(d, from + p)), to + p, x, x1);
     };
     for (int c = 0; c < 4; ++c)
       store(color[c], in.color[c], out.color[c]);
@@ -101,7 +109,6 @@ void DenoiseVarianceRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inp
   using V = hn::Vec<decltype(d)>;
   const int lanes = int(hn::Lanes(d));
   const V zero = hn::Zero(d);
-  const auto width = hn::Set(di, im.width);
   const int r = first ? 1 : 2;
   const size_t row = size_t(y) * size_t(im.width);
   for (int x = x0; x < x1; x += lanes) {
@@ -112,24 +119,18 @@ void DenoiseVarianceRowImpl(const DenoiseImages& im, const DenoiseRowInputs& inp
       const int qy = y + dy;
       if (qy < 0 || qy >= im.height) continue;
       for (int dx = -r; dx <= r; ++dx) {
-        const auto qx = hn::Add(columns, hn::Set(di, dx));
-        const auto inRow = hn::RebindMask(d, hn::And(hn::Not(hn::Lt(qx, hn::Zero(di))), hn::Lt(qx, width)));
         const ptrdiff_t q = ptrdiff_t(qy) * im.width + x + dx; // may point into the room before
-        const auto tap = hn::And(inRow, hn::Gt(hn::LoadU(d, inputs.usable + q), zero));
-        const float weight = first ? (dx == 0 ? 2.f : 1.f) * (dy == 0 ? 2.f : 1.f) : 1.f;
+        const auto tap = hn::And(TapInRow(d, columns, dx, im.width), hn::Gt(hn::LoadU(d, inputs.usable + q), zero));
         const V v = hn::LoadU(d, values + q);
-        const V w = hn::IfThenElseZero(tap, hn::Set(d, weight));
+        const V w = hn::IfThenElseZero(tap, hn::Set(d, denoiseVarianceWeight(first, dx, dy)));
         sum = hn::MulAdd(w, first ? v : hn::Mul(v, v), sum);
         weights = hn::Add(weights, w);
       }
     }
     const auto some = hn::Gt(weights, zero);
     V v = hn::IfThenElseZero(some, hn::Div(sum, hn::IfThenElse(some, weights, hn::Set(d, 1.f))));
-    v = hn::IfThenElse(hn::Gt(hn::LoadU(d, inputs.unknown + p), zero), hn::Set(d, 1e30f), v);
-    if (x + lanes <= x1)
-      hn::StoreU(v, d, variance + p);
-    else
-      hn::BlendedStore(v, hn::FirstN(d, size_t(x1 - x)), d, variance + p);
+    v = hn::IfThenElse(hn::Gt(hn::LoadU(d, inputs.unknown + p), zero), hn::Set(d, kDenoiseUnknownVariance), v);
+    StoreRow(d, v, variance + p, x, x1);
   }
 }
 

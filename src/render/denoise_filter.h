@@ -39,11 +39,25 @@ struct DenoiseLevel {
   const float* shown = nullptr;
 };
 
+/// The variance of a pixel without an estimate of its noise (fewer than two passes): no colour
+/// term; finite, since its weights squared may be zero.
+constexpr float kDenoiseUnknownVariance = 1e30f;
+/// Added to the colour term's standard error, so that a pixel without noise divides by no zero.
+constexpr float kDenoiseErrorFloor = 1e-6f;
+/// log2 e: e^-x is 2^-(x log2 e).
+constexpr float kDenoiseLog2E = 1.44269504f;
+
 /// The B3 spline's weights 1/16, 1/4, 3/8, 1/4, 1/16.
 EXA_HOST_DEVICE inline float denoiseB3(int i) { return i == 2 ? 0.375f : (i == 1 || i == 3) ? 0.25f : 0.0625f; }
 
 EXA_HOST_DEVICE inline float denoiseShownLuminance(const DenoiseImages& im, const vec4f& c) {
   return luminance(c.rgb() + im.background * (1.f - c.w));
+}
+
+/// A neighbour's weight in denoiseVariance, (dx, dy) from the pixel: the 3×3 binomial's before
+/// the first level, else 1.
+EXA_HOST_DEVICE inline float denoiseVarianceWeight(bool first, int dx, int dy) {
+  return first ? (dx == 0 ? 2.f : 1.f) * (dy == 0 ? 2.f : 1.f) : 1.f;
 }
 
 /// The variance of pixel (x, y)'s luminance that the colour term compares: the passes' own
@@ -55,7 +69,7 @@ EXA_HOST_DEVICE inline float denoiseShownLuminance(const DenoiseImages& im, cons
 EXA_HOST_DEVICE inline float denoiseVariance(const DenoiseImages& im, const DenoiseLevel& in, const float* first, int x,
                                              int y) {
   const size_t p = size_t(y) * size_t(im.width) + size_t(x);
-  if (im.unknown[p]) return 1e30f; // finite: its weights squared may be zero
+  if (im.unknown[p]) return kDenoiseUnknownVariance;
   const int r = first ? 1 : 2;
   float sum = 0.f, weights = 0.f;
   for (int dy = -r; dy <= r; ++dy)
@@ -64,7 +78,7 @@ EXA_HOST_DEVICE inline float denoiseVariance(const DenoiseImages& im, const Deno
       if (qx < 0 || qy < 0 || qx >= im.width || qy >= im.height) continue;
       const size_t q = size_t(qy) * size_t(im.width) + size_t(qx);
       if (!im.valid[q] || im.unknown[q]) continue;
-      const float w = first ? (dx == 0 ? 2.f : 1.f) * (dy == 0 ? 2.f : 1.f) : 1.f;
+      const float w = denoiseVarianceWeight(first != nullptr, dx, dy);
       sum += w * (first ? first[q] : in.lumProbe[q] * in.lumProbe[q]);
       weights += w;
     }
@@ -74,7 +88,7 @@ EXA_HOST_DEVICE inline float denoiseVariance(const DenoiseImages& im, const Deno
 /// The colour term's scale at a pixel whose luminance has `variance`: 1 over colorSigma standard
 /// errors of its noise.
 EXA_HOST_DEVICE inline float denoiseColorScale(const DenoiseImages& im, float variance) {
-  return 1.f / (im.colorSigma * std::sqrt(variance) + 1e-6f);
+  return 1.f / (im.colorSigma * std::sqrt(variance) + kDenoiseErrorFloor);
 }
 
 /// A tap's weight: `spline` (the B3 spline's of its two axes) times e^-(the squared distance of
@@ -84,7 +98,7 @@ EXA_HOST_DEVICE inline float denoiseColorScale(const DenoiseImages& im, float va
 EXA_HOST_DEVICE inline float denoiseTapWeight(const DenoiseImages& im, float spline, float distance, float lp, float lq,
                                               float colorScale) {
   const float colorTerm = std::fabs(lp - lq) * colorScale;
-  return spline * exp2Negative(-(distance * im.guideScale + colorTerm) * 1.44269504f);
+  return spline * exp2Negative(-(distance * im.guideScale + colorTerm) * kDenoiseLog2E);
 }
 
 /// One à-trous level at `step` pixels for pixel (x, y): `out` at the pixel from `in` around it.
