@@ -1,8 +1,9 @@
 // The macrocells under the path tracer's majorant grid: each macrocell's value range holds the
 // reconstruction anywhere in it (against the basis evaluated at random points) and the value of
-// every cell whose support meets it (brute force), and no more than those touching it; the grid
-// stays small for cells far apart. Then the majorant grid itself: far fewer tentative collisions
-// where dense and empty space share a region, and the same picture as without it.
+// every cell whose support meets it (brute force), and no more than those touching it; a
+// macrocell's exact range is that of the reconstruction sampled densely over it, both ends; the
+// grid stays small for cells far apart. Then the majorant grid itself: far fewer tentative
+// collisions where dense and empty space share a region, and the same picture as without it.
 #include "datasets.h"
 #include "lit_ball.h"
 
@@ -84,11 +85,64 @@ TEST(Macrocells, RangesHoldTheReconstructionAndEveryCellWhoseSupportMeetsThem) {
   }
 }
 
+TEST(Macrocells, ExactRangesAreTheReconstructionsRangeOverTheMacrocell) {
+  for (const test::NamedCells& d : test::smallDatasets()) {
+    if (d.name == "ramp-far") continue;
+    const Model m = buildModel(CellSet(d.cells));
+    const MacrocellGrid grid = macrocellsOver(m.regions.bounds, 12, 1);
+    const std::vector<range1f> supports = macrocellValueRanges(grid, m.bricks, m.fieldValues[0].data());
+    const HatPlanes planes = hatPlanesOf(m.bricks);
+    const FieldView view = m.view(0);
+    size_t exactCount = 0, narrower = 0, checked = 0, without = 0;
+    for (size_t i = 0; i < grid.count(); ++i) {
+      const vec3i c(int(i % size_t(grid.dims.x)), int(i / size_t(grid.dims.x) % size_t(grid.dims.y)),
+                    int(i / (size_t(grid.dims.x) * size_t(grid.dims.y))));
+      range1f exact;
+      if (!exactMacrocellRange(grid, c, view, planes, size_t(1) << 20, exact)) {
+        ++without;
+        continue;
+      }
+      ++exactCount;
+      const range1f& support = supports[i];
+      const double slack = 1e-5 * (1.0 + std::max(std::abs(support.lower), std::abs(support.upper)));
+      ASSERT_TRUE(exact.lower >= support.lower - slack && exact.upper <= support.upper + slack)
+          << d.name << " macrocell " << i << ": exact [" << exact.lower << ", " << exact.upper
+          << "] beyond the supports' [" << support.lower << ", " << support.upper << "]";
+      narrower += exact.upper - exact.lower < support.upper - support.lower - slack;
+      if (i % 7 != 0) continue;
+      // Brute force on a lattice of quarter finest units over the macrocell within the data's box:
+      // it holds every corner of the pieces (cell centres lie on multiples of half a finest unit).
+      const box3f box = grid.bounds(c);
+      vec3f lo, hi;
+      for (int a = 0; a < 3; ++a)
+        lo[a] = std::max(box.lower[a], view.bounds.lower[a]), hi[a] = std::min(box.upper[a], view.bounds.upper[a]);
+      double low = INFINITY, high = -INFINITY;
+      for (float z = lo.z; z <= hi.z; z += 0.25f)
+        for (float y = lo.y; y <= hi.y; y += 0.25f)
+          for (float x = lo.x; x <= hi.x; x += 0.25f) {
+            double v;
+            ASSERT_TRUE(sampleField(view, vec3d(x, y, z), v)) << d.name << " no value at " << x << "," << y << "," << z;
+            low = std::min(low, v), high = std::max(high, v);
+          }
+      ++checked;
+      EXPECT_NEAR(exact.lower, low, slack) << d.name << " macrocell " << i;
+      EXPECT_NEAR(exact.upper, high, slack) << d.name << " macrocell " << i;
+    }
+    std::printf("%s: %zu exact ranges (%zu narrower than the supports', %zu checked densely), %zu at the edge of "
+                "every support\n",
+                d.name.c_str(), exactCount, narrower, checked, without);
+    EXPECT_GT(exactCount, 0u) << d.name;
+    if (d.name != "single") {
+      EXPECT_GT(narrower, 0u) << d.name;
+    }
+  }
+}
+
 TEST(Macrocells, TheGridStaysSmallForCellsFarApartAndIsEmptyBetweenThem) {
   const Model m = buildModel(test::farApart(generateScene({"ramp", 800, 5, 3})));
   const MacrocellGrid grid = macrocellsOver(m.regions.bounds);
-  EXPECT_LE(std::max({grid.dims.x, grid.dims.y, grid.dims.z}), 128);
-  EXPECT_LE(grid.count(), size_t(64 * 64 * 64));
+  EXPECT_LE(std::max({grid.dims.x, grid.dims.y, grid.dims.z}), 256);
+  EXPECT_LE(grid.count(), size_t(128 * 128 * 128));
   const std::vector<range1f> ranges = macrocellValueRanges(grid, m.bricks, m.fieldValues[0].data());
   size_t empty = 0;
   for (const range1f& r : ranges)

@@ -11,6 +11,27 @@
 
 using namespace exa;
 
+namespace {
+
+/// The marcher's table of `tf` (colour and log2 transmittance per entry) in `entries`.
+TfTableView tableOf(const TransferFunction& tf, std::vector<vec4f>& entries) {
+  entries.resize(kTfTableSize);
+  for (int i = 0; i < kTfTableSize; ++i) {
+    const vec4f c = tf.atNormalized(float(i) / float(kTfTableSize - 1));
+    entries[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
+  }
+  TfTableView t;
+  t.entries = entries.data();
+  t.range = tf.valueRange;
+  t.logScale = tf.logScale;
+  t.fastLinear = !tf.logScale;
+  t.lower = tf.valueRange.lower;
+  t.scale = 1.f / (tf.valueRange.upper - tf.valueRange.lower);
+  return t;
+}
+
+} // namespace
+
 TEST(SampleMath, OpacityCorrectionComposesOverSteps) {
   for (float alpha : {0.01f, 0.3f, 0.9f}) {
     const float log2T = std::log2(1.f - alpha);
@@ -124,18 +145,8 @@ TEST(SampleMath, TransferFunctionTableAndSkippingTest) {
   for (bool logScale : {false, true}) {
     tf.logScale = logScale;
     tf.valueRange = logScale ? range1f{0.01f, 100.f} : range1f{-2.f, 6.f};
-    std::vector<vec4f> entries(kTfTableSize);
-    for (int i = 0; i < kTfTableSize; ++i) {
-      const vec4f c = tf.atNormalized(float(i) / float(kTfTableSize - 1));
-      entries[size_t(i)] = {c.x, c.y, c.z, std::log2(1.f - std::min(c.w, 0.999999f))};
-    }
-    TfTableView t;
-    t.entries = entries.data();
-    t.range = tf.valueRange;
-    t.logScale = logScale;
-    t.fastLinear = !logScale;
-    t.lower = tf.valueRange.lower;
-    t.scale = 1.f / (tf.valueRange.upper - tf.valueRange.lower);
+    std::vector<vec4f> entries;
+    const TfTableView t = tableOf(tf, entries);
     std::mt19937 rng(9);
     std::uniform_real_distribution<float> u(logScale ? 0.001f : -3.f, logScale ? 200.f : 7.f);
     for (int i = 0; i < 500; ++i) {
@@ -159,4 +170,35 @@ TEST(SampleMath, TransferFunctionTableAndSkippingTest) {
   EXPECT_EQ(normalizeValue(range1f(), false, 3.f), 0.5f);
   EXPECT_EQ(normalizeValue(range1f{0.f, 100.f}, true, 1e-4f), 0.f); // cut six decades below 100
   EXPECT_EQ(normalizeValue(range1f{0.f, 1.f}, false, std::nanf("")), 0.f);
+}
+
+TEST(SampleMath, TableMaxExtinctionIsTheLargestOverTheEntriesAndEnds) {
+  TransferFunction tf = defaultTransferFunction("plasma");
+  tf.opacityScale = 1.f;
+  tf.opacity = {{0.f, 0.9f}, {0.1f, 0.f}, {0.3f, 0.5f}, {0.31f, 0.05f}, {0.7f, 0.2f}, {1.f, 0.6f}};
+  for (bool logScale : {false, true}) {
+    tf.logScale = logScale;
+    tf.valueRange = logScale ? range1f{0.01f, 100.f} : range1f{-2.f, 6.f};
+    std::vector<vec4f> entries;
+    const TfTableView t = tableOf(tf, entries);
+    const float perLog2 = 0.7f;
+    const TableMaxExtinction maxExtinction(t, perLog2);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(logScale ? 0.001f : -3.f, logScale ? 200.f : 7.f);
+    for (int i = 0; i < 2000; ++i) {
+      float a = u(rng), b = i % 5 == 0 ? a : u(rng);
+      if (a > b) std::swap(a, b);
+      // Brute force: the ends (interpolated) and every entry between them.
+      const float n0 = tfNormalized(t, a), n1 = tfNormalized(t, b);
+      float w = std::min(tfTableAt(t, n0).w, tfTableAt(t, n1).w);
+      for (int e = 0; e < kTfTableSize; ++e) {
+        if (float(e) >= n0 * float(kTfTableSize - 1) && float(e) <= n1 * float(kTfTableSize - 1))
+          w = std::min(w, entries[size_t(e)].w);
+      }
+      ASSERT_EQ(maxExtinction(range1f{a, b}), -w * perLog2) << a << " " << b;
+      for (int k = 0; k <= 16; ++k)
+        ASSERT_LE(-tfLookup(t, a + (b - a) * float(k) / 16.f).w * perLog2, maxExtinction(range1f{a, b}) * 1.000001f);
+    }
+    EXPECT_EQ(maxExtinction(range1f()), 0.f);
+  }
 }

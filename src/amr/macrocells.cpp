@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 namespace exa {
 
@@ -68,6 +69,70 @@ std::vector<range1f> macrocellValueRanges(const MacrocellGrid& g, const std::vec
     }
   });
   return ranges;
+}
+
+HatPlanes hatPlanesOf(const std::vector<Brick>& bricks) {
+  std::set<std::pair<int, int>> seen[3];
+  for (const Brick& b : bricks) {
+    const int w = b.cellWidth();
+    for (int a = 0; a < 3; ++a)
+      seen[a].insert({w, ((b.lower[a] % w) + w) % w});
+  }
+  HatPlanes planes;
+  for (int a = 0; a < 3; ++a)
+    planes.axis[a].assign(seen[a].begin(), seen[a].end());
+  return planes;
+}
+
+namespace {
+
+/// Per axis, the coordinates of the corners of the pieces of macrocell c (clipped to the view's
+/// bounds) between the hat planes: its faces and every plane strictly between them. False where
+/// the clipped macrocell is empty.
+bool pieceCorners(const MacrocellGrid& g, const vec3i& c, const FieldView& view, const HatPlanes& planes,
+                  std::vector<double> (&corners)[3]) {
+  const box3f cell = g.bounds(c);
+  for (int a = 0; a < 3; ++a) {
+    const double lo = std::max(double(cell.lower[a]), double(view.bounds.lower[a]));
+    const double hi = std::min(double(cell.upper[a]), double(view.bounds.upper[a]));
+    if (!(lo <= hi)) return false;
+    std::vector<double>& at = corners[a];
+    at.assign({lo, hi});
+    for (const auto& [w, offset] : planes.axis[a])
+      for (double x = offset + (std::floor((lo - offset) / w - 0.5) + 1.5) * w; x < hi; x += w)
+        if (x > lo) at.push_back(x);
+    std::sort(at.begin(), at.end());
+    at.erase(std::unique(at.begin(), at.end()), at.end());
+  }
+  return true;
+}
+
+} // namespace
+
+size_t exactMacrocellRangePoints(const MacrocellGrid& grid, const vec3i& c, const FieldView& view,
+                                 const HatPlanes& planes) {
+  std::vector<double> corners[3];
+  if (!pieceCorners(grid, c, view, planes, corners)) return 0;
+  return corners[0].size() * corners[1].size() * corners[2].size();
+}
+
+bool exactMacrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes,
+                         size_t maxPoints, range1f& out) {
+  std::vector<double> corners[3];
+  if (!pieceCorners(grid, c, view, planes, corners)) return false;
+  if (corners[0].size() * corners[1].size() * corners[2].size() > maxPoints) return false;
+  double lo = INFINITY, hi = -INFINITY;
+  for (double z : corners[2])
+    for (double y : corners[1])
+      for (double x : corners[0]) {
+        double v;
+        if (!sampleField(view, vec3d(x, y, z), v)) return false;
+        lo = std::min(lo, v), hi = std::max(hi, v);
+      }
+  // The renderer reconstructs in float: a margin of a few of its roundings.
+  const double margin = 1e-5 * std::max({std::abs(lo), std::abs(hi), hi - lo});
+  out = {float(lo - margin), float(hi + margin)};
+  return true;
 }
 
 } // namespace exa

@@ -9,6 +9,59 @@ namespace exa {
 
 MajorantGrid::MajorantGrid(const Model& model) : model_(model) {
   if (!model.regions.regions.empty()) grid_ = macrocellsOver(model.regions.bounds);
+  planes_ = hatPlanesOf(model.bricks);
+}
+
+namespace {
+
+/// The sum over the layers of the largest extinction each gives its field's range in macrocell i.
+template <typename Ranges>
+float majorantOf(const std::vector<TableMaxExtinction>& maxima, const Ranges& ranges, size_t i) {
+  float sum = 0.f;
+  for (size_t l = 0; l < maxima.size(); ++l)
+    sum += maxima[l](ranges[l]->values[i]);
+  return sum;
+}
+
+} // namespace
+
+void MajorantGrid::narrowCostly(const std::vector<LayerTable>& layers, const std::vector<FieldRanges*>& ranges,
+                                const std::vector<TableMaxExtinction>& maxima) {
+  // The macrocells whose majorant costs a ray crossing them a collision or more and whose ranges
+  // have not been narrowed, costliest first, as many as the budget of points allows.
+  std::vector<uint32_t> costly;
+  for (size_t i = 0; i < majorants_.size(); ++i) {
+    if (!(majorants_[i] * grid_.cellSize >= 1.f)) continue;
+    bool open = false;
+    for (const FieldRanges* r : ranges)
+      open = open || !r->narrowed[i];
+    if (open) costly.push_back(uint32_t(i));
+  }
+  if (costly.empty()) return;
+  std::stable_sort(costly.begin(), costly.end(), [&](uint32_t a, uint32_t b) { return majorants_[a] > majorants_[b]; });
+  const auto cellOf = [&](uint32_t i) {
+    const int x = int(i % uint32_t(grid_.dims.x)), y = int((i / uint32_t(grid_.dims.x)) % uint32_t(grid_.dims.y));
+    return vec3i(x, y, int(i / (uint32_t(grid_.dims.x) * uint32_t(grid_.dims.y))));
+  };
+  const FieldView any = model_.view(layers.front().field);
+  size_t points = 0, chosen = 0;
+  for (; chosen < costly.size() && points < kMajorantNarrowingPoints; ++chosen)
+    points += std::min(kMajorantNarrowingPointsPerCell,
+                       exactMacrocellRangePoints(grid_, cellOf(costly[chosen]), any, planes_)) *
+              ranges.size();
+  tbb::parallel_for(size_t(0), chosen, [&](size_t k) {
+    const uint32_t i = costly[k];
+    for (size_t l = 0; l < ranges.size(); ++l) {
+      FieldRanges& r = *ranges[l];
+      if (r.narrowed[i]) continue; // a field of two layers
+      r.narrowed[i] = 1;
+      range1f exact;
+      if (exactMacrocellRange(grid_, cellOf(i), model_.view(layers[l].field), planes_, kMajorantNarrowingPointsPerCell,
+                              exact))
+        r.values[i] = {std::max(r.values[i].lower, exact.lower), std::min(r.values[i].upper, exact.upper)};
+    }
+    majorants_[i] = majorantOf(maxima, ranges, i);
+  });
 }
 
 void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctionPerLog2,
@@ -16,23 +69,23 @@ void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctio
   majorants_.clear();
   gridded_.clear();
   if (model_.regions.regions.empty() || layers.empty()) return;
-  std::vector<const std::vector<range1f>*> ranges;
+  std::vector<FieldRanges*> ranges;
   for (const LayerTable& layer : layers) {
     auto it = ranges_.find(layer.field);
-    if (it == ranges_.end())
-      it = ranges_
-               .emplace(layer.field,
-                        macrocellValueRanges(grid_, model_.bricks, model_.fieldValues.at(size_t(layer.field)).data()))
-               .first;
+    if (it == ranges_.end()) {
+      FieldRanges r;
+      r.values = macrocellValueRanges(grid_, model_.bricks, model_.fieldValues.at(size_t(layer.field)).data());
+      r.narrowed.assign(r.values.size(), 0);
+      it = ranges_.emplace(layer.field, std::move(r)).first;
+    }
     ranges.push_back(&it->second);
   }
+  std::vector<TableMaxExtinction> maxima;
+  for (const LayerTable& layer : layers)
+    maxima.emplace_back(layer.t, extinctionPerLog2);
   majorants_.assign(grid_.count(), 0.f);
-  tbb::parallel_for(size_t(0), majorants_.size(), [&](size_t i) {
-    float sum = 0.f;
-    for (size_t l = 0; l < layers.size(); ++l)
-      sum += tableMaxExtinction(layers[l].t, (*ranges[l])[i], extinctionPerLog2);
-    majorants_[i] = sum;
-  });
+  tbb::parallel_for(size_t(0), majorants_.size(), [&](size_t i) { majorants_[i] = majorantOf(maxima, ranges, i); });
+  narrowCostly(layers, ranges, maxima);
   // Per region, the mean over the macrocells it overlaps of the majorant a ray there would use.
   const std::vector<Region>& regions = model_.regions.regions;
   gridded_.assign(regions.size(), 0);

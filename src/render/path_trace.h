@@ -47,6 +47,10 @@ struct MajorantGridView {
 struct MacrocellWalk {
   vec3i cell{0}, step{0};
   vec3f tNext{0.f}, tDelta{0.f};
+  vec3i stride{0};   ///< change of `index` per step along each axis
+  size_t index = 0;  ///< of `cell` in the grid's arrays
+  float tExit = 0.f; ///< the nearest of tNext
+  int next = 0;      ///< the axis of that plane (x before z before y where they tie)
   bool inside = false;
 
   /// Continues to the macrocell at t (ahead along the ray): a few steps, or a new start (also
@@ -66,27 +70,41 @@ struct MacrocellWalk {
     inside = g.majorant != nullptr;
     if (!inside) return;
     const vec3f p = ray.org + ray.dir * t;
+    const vec3i strides(1, g.grid.dims.x, g.grid.dims.x * g.grid.dims.y);
     for (int a = 0; a < 3; ++a) {
       cell[a] = g.grid.cellAlong(a, p[a]);
       const float d = ray.dir[a];
       step[a] = d > 0.f ? 1 : (d < 0.f ? -1 : 0);
+      stride[a] = step[a] * strides[a];
       const float plane = g.grid.lower[a] + float(cell[a] + (d > 0.f ? 1 : 0)) * g.grid.cellSize;
       tNext[a] = d != 0.f ? (plane - ray.org[a]) / d : INFINITY;
       tDelta[a] = d != 0.f ? g.grid.cellSize / fabsf(d) : INFINITY;
     }
+    index = g.grid.index(cell);
+    nextPlane();
   }
-  EXA_HOST_DEVICE int axis() const {
-    return tNext.x <= tNext.y ? (tNext.x <= tNext.z ? 0 : 2) : (tNext.y <= tNext.z ? 1 : 2);
-  }
-  EXA_HOST_DEVICE float exit() const { return inside ? tNext[axis()] : INFINITY; }
-  EXA_HOST_DEVICE float majorant(const MajorantGridView& g) const {
-    return inside ? g.majorant[g.grid.index(cell)] : INFINITY;
-  }
+  EXA_HOST_DEVICE float exit() const { return inside ? tExit : INFINITY; }
+  EXA_HOST_DEVICE float majorant(const MajorantGridView& g) const { return inside ? g.majorant[index] : INFINITY; }
   EXA_HOST_DEVICE void advance(const MajorantGridView& g) {
-    const int a = axis();
-    cell[a] += step[a];
-    tNext[a] += tDelta[a];
-    inside = cell[a] >= 0 && cell[a] < g.grid.dims[a];
+    int along;
+    if (next == 0) {
+      cell.x += step.x, tNext.x += tDelta.x, along = stride.x;
+      inside = cell.x >= 0 && cell.x < g.grid.dims.x;
+    } else if (next == 1) {
+      cell.y += step.y, tNext.y += tDelta.y, along = stride.y;
+      inside = cell.y >= 0 && cell.y < g.grid.dims.y;
+    } else {
+      cell.z += step.z, tNext.z += tDelta.z, along = stride.z;
+      inside = cell.z >= 0 && cell.z < g.grid.dims.z;
+    }
+    index += size_t(ptrdiff_t(along));
+    nextPlane();
+  }
+
+private:
+  EXA_HOST_DEVICE void nextPlane() {
+    next = tNext.x <= tNext.y ? (tNext.x <= tNext.z ? 0 : 2) : (tNext.y <= tNext.z ? 1 : 2);
+    tExit = next == 0 ? tNext.x : (next == 1 ? tNext.y : tNext.z);
   }
 };
 
@@ -197,19 +215,6 @@ EXA_HOST_DEVICE inline MediumSample mediumAt(const MediumView& m, uint32_t regio
   return out;
 }
 
-/// The largest extinction (per lattice unit) a table gives any value in r: its log2
-/// transmittance is piecewise linear between entries, so the extremes lie at entries or ends.
-EXA_HOST_DEVICE inline float tableMaxExtinction(const TfTableView& t, const range1f& r, float extinctionPerLog2) {
-  if (r.empty()) return 0.f;
-  const float n0 = tfNormalized(t, r.lower), n1 = tfNormalized(t, r.upper);
-  float w = fminf(tfTableAt(t, n0).w, tfTableAt(t, n1).w);
-  const int first = int(ceilf(n0 * float(kTfTableSize - 1)));
-  const int last = int(floorf(n1 * float(kTfTableSize - 1)));
-  for (int i = first < 0 ? 0 : first; i <= (last > kTfTableSize - 1 ? kTfTableSize - 1 : last); ++i)
-    w = fminf(w, t.entries[i].w);
-  return -w * extinctionPerLog2;
-}
-
 /// A unit vector at angle acos(cosTheta) from `axis` (unit), turned by phi around it.
 EXA_HOST_DEVICE inline vec3d aroundAxis(const vec3d& axis, double cosTheta, double phi) {
   const vec3d helper = fabs(axis.x) < 0.9 ? vec3d(1.0, 0.0, 0.0) : vec3d(0.0, 1.0, 0.0);
@@ -261,8 +266,8 @@ EXA_HOST_DEVICE inline void tentativeCollisions(const MediumView& m, Traverse&& 
   traverse(ray, [&](const Segment& seg) {
     const float regionMajorant = m.majorant[seg.region];
     if (!(regionMajorant > 0.f)) return true;
-    float t = fmaxf(seg.t0, ray.tmin);
-    const float end = fminf(seg.t1, ray.tmax);
+    float t = maxOf(seg.t0, ray.tmin);
+    const float end = minOf(seg.t1, ray.tmax);
     if (!(t < end)) return true;
     const bool gridded = m.grid.majorant && m.grid.gridded[seg.region];
     if (gridded) {
@@ -270,23 +275,23 @@ EXA_HOST_DEVICE inline void tentativeCollisions(const MediumView& m, Traverse&& 
       walking = true;
     }
     for (;;) {
-      const float pieceEnd = gridded ? fminf(walk.exit(), end) : end;
-      const float majorant = gridded ? fminf(regionMajorant, walk.majorant(m.grid)) : regionMajorant;
+      const float pieceEnd = gridded ? minOf(walk.exit(), end) : end;
+      const float majorant = gridded ? minOf(regionMajorant, walk.majorant(m.grid)) : regionMajorant;
       if (majorant > 0.f)
         for (;;) {
           const float reach = (pieceEnd - t) * majorant;
           if (!(depth < reach)) {
-            depth -= fmaxf(reach, 0.f);
+            depth -= maxOf(reach, 0.f);
             break;
           }
           t += depth / majorant;
           depth = -logf(1.f - rng.next());
           ++samples;
           const MediumSample here = mediumAt(m, seg.region, ray.org + ray.dir * t);
-          if (!visit(t, fminf(1.f, here.extinction / majorant), here)) return false;
+          if (!visit(t, minOf(1.f, here.extinction / majorant), here)) return false;
         }
       if (pieceEnd >= end) return true;
-      t = fmaxf(t, pieceEnd);
+      t = maxOf(t, pieceEnd);
       walk.advance(m.grid);
     }
   });

@@ -374,12 +374,15 @@ float VolumeMarcher::extinctionPerLog2() const { return float(std::log(2.0)) / r
 
 void VolumeMarcher::updateMajorants(bool grid) {
   const float perLog2 = extinctionPerLog2();
+  std::vector<TableMaxExtinction> maxima;
+  for (const LayerTable& layer : layers_)
+    maxima.emplace_back(layer.t, perLog2);
   majorants_.assign(model_.regions.regions.size(), 0.f);
   tbb::parallel_for(size_t(0), majorants_.size(), [&](size_t i) {
     if (i < visible_.size() && !visible_[i]) return;
     float sum = 0.f;
-    for (const LayerTable& layer : layers_)
-      sum += tableMaxExtinction(layer.t, model_.regions.valueRanges[size_t(layer.field)][i], perLog2);
+    for (size_t l = 0; l < layers_.size(); ++l)
+      sum += maxima[l](model_.regions.valueRanges[size_t(layers_[l].field)][i]);
     majorants_[i] = sum;
   });
   majorantGrid_.update(grid ? layers_ : std::vector<LayerTable>(), perLog2, majorants_);

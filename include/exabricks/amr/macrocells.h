@@ -1,14 +1,17 @@
 // Macrocells: a coarse uniform grid of cubic cells over a box of the lattice, and per macrocell
 // the range of a field's values over every cell whose basis support meets it, which bounds the
-// reconstruction anywhere in the macrocell (a weighted mean of those cells' values). The path
-// tracer's majorant grid is built on it. Its size is bounded whatever the box's volume.
+// reconstruction anywhere in the macrocell (a weighted mean of those cells' values); or, where
+// asked, the reconstruction's exact range there. The path tracer's majorant grid is built on it.
+// Its size is bounded whatever the box's volume.
 #pragma once
 
+#include "exabricks/amr/basis.h"
 #include "exabricks/amr/bricks.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 namespace exa {
@@ -45,12 +48,33 @@ struct MacrocellGrid {
 
 /// Cubic macrocells covering `bounds` (lattice): at most `perAxis` along its longest axis and
 /// `maxCells` in all, at least `minWidth` lattice units wide (an integer width).
-MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis = 128, int minWidth = 2, size_t maxCells = 64 * 64 * 64);
+MacrocellGrid macrocellsOver(const box3f& bounds, int perAxis = 256, int minWidth = 1,
+                             size_t maxCells = 128 * 128 * 128);
 
 /// For every macrocell, the range of `values` (brick-ordered, one per cell of `bricks`) over the
 /// cells whose support (open, centre ± cell width) meets the macrocell or touches its faces;
 /// empty where none does.
 std::vector<range1f> macrocellValueRanges(const MacrocellGrid& grid, const std::vector<Brick>& bricks,
                                           const float* values);
+
+/// Where the reconstruction's weights change slope along each axis: the planes through the cell
+/// centres of every level, given per axis as the distinct (cell width, offset) of the bricks,
+/// centres lying at offset + (i + 0.5) width.
+struct HatPlanes {
+  std::vector<std::pair<int, int>> axis[3];
+};
+HatPlanes hatPlanesOf(const std::vector<Brick>& bricks);
+
+/// The exact range of the reconstruction over macrocell c (clipped to the view's bounds). Between
+/// the planes every hat weight is multilinear, so the value, a ratio of two such sums, is monotone
+/// along each axis there and takes its extremes at corners of those pieces: the range is that of
+/// the values at the corners, grown by a float rounding margin. False, with nothing evaluated,
+/// where the corners number more than maxPoints; false where one has no value (the edge of every
+/// support, where the limit depends on the direction of approach).
+bool exactMacrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes,
+                         size_t maxPoints, range1f& out);
+/// The number of corners exactMacrocellRange evaluates for macrocell c.
+size_t exactMacrocellRangePoints(const MacrocellGrid& grid, const vec3i& c, const FieldView& view,
+                                 const HatPlanes& planes);
 
 } // namespace exa

@@ -23,6 +23,11 @@ EXA_HOST_DEVICE constexpr int64_t floorDiv(int64_t a, int64_t b) {
   return a / b - ((a % b != 0) && ((a < 0) != (b < 0)));
 }
 
+/// The smaller and the larger of two numbers that are not NaN: one instruction on the CPU too,
+/// where fminf and fmaxf (whose rules for NaN a compare does not follow) are calls.
+EXA_HOST_DEVICE constexpr float minOf(float a, float b) { return a < b ? a : b; }
+EXA_HOST_DEVICE constexpr float maxOf(float a, float b) { return a > b ? a : b; }
+
 template <typename T> struct vec3 {
   T x{}, y{}, z{};
   constexpr vec3() = default;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 namespace exa {
 
@@ -81,6 +82,43 @@ EXA_HOST_DEVICE inline bool tfMayBeVisible(const TfTableView& t, const range1f& 
     if (t.entries[i].w < 0.f) return true;
   return false;
 }
+
+/// The largest extinction (per lattice unit) a table gives any value of a range: its log2
+/// transmittance is piecewise linear between entries, so the extremes lie at entries or ends.
+/// In constant time for the many ranges of the path tracer's majorants: kept per entry and power
+/// of two, the smallest log2 transmittance of that many entries from it.
+class TableMaxExtinction {
+public:
+  TableMaxExtinction(const TfTableView& t, float extinctionPerLog2) : t_(t), perLog2_(extinctionPerLog2) {
+    smallest_.resize(size_t(kLevels) * kTfTableSize);
+    for (int i = 0; i < kTfTableSize; ++i)
+      smallest_[size_t(i)] = t.entries[i].w;
+    for (int k = 1; k < kLevels; ++k)
+      for (int i = 0; i + (1 << k) <= kTfTableSize; ++i)
+        smallest_[size_t(k) * kTfTableSize + size_t(i)] = std::min(at(k - 1, i), at(k - 1, i + (1 << (k - 1))));
+  }
+  float operator()(const range1f& r) const {
+    if (r.empty()) return 0.f;
+    const float n0 = tfNormalized(t_, r.lower), n1 = tfNormalized(t_, r.upper);
+    float w = fminf(tfTableAt(t_, n0).w, tfTableAt(t_, n1).w);
+    const int first = std::max(0, int(ceilf(n0 * float(kTfTableSize - 1))));
+    const int last = std::min(kTfTableSize - 1, int(floorf(n1 * float(kTfTableSize - 1))));
+    if (first <= last) {
+      int k = 0;
+      while ((2 << k) <= last - first + 1)
+        ++k;
+      w = fminf(w, std::min(at(k, first), at(k, last - (1 << k) + 1)));
+    }
+    return -w * perLog2_;
+  }
+
+private:
+  static constexpr int kLevels = 13; ///< 2^12 = kTfTableSize
+  float at(int k, int i) const { return smallest_[size_t(k) * kTfTableSize + size_t(i)]; }
+  TfTableView t_;
+  float perLog2_;
+  std::vector<float> smallest_;
+};
 
 /// The Taylor coefficients (ln 2)^k / k! of 2^f, k = 1..6 (exp2Negative and its vector form).
 constexpr float kExp2Taylor1 = 0.6931471805599453f, kExp2Taylor2 = 0.2402265069591007f,
