@@ -188,10 +188,11 @@ struct VisibleExtent {
 /// Passes every tile takes before its noise is estimated (Frame::noiseTarget).
 constexpr int kNoiseFirstPasses = 16;
 /// The same for a denoised frame (Frame::denoise): the filter averages each pixel's passes with
-/// its neighbours', so fewer estimate the noise as well. Four instead of eight: the same noise
-/// target in 0.6 to 0.8 times the time on the shared samples, the denoised picture's low
-/// frequencies 0.1 to 0.25/255 further from a converged render (docs/performance.md).
-constexpr int kDenoisedFirstPasses = 4;
+/// its neighbours', so fewer estimate the noise as well. Three: on the shared samples the same
+/// noise target in 0.84 to 1.01 times the time of four (and four in 0.6 to 0.8 times that of
+/// eight), the denoised picture's low frequencies 0.04 to 0.14/255 further from a converged
+/// render than with four (docs/performance.md).
+constexpr int kDenoisedFirstPasses = 3;
 
 /// How the rounds to a noise target measure: per tile, the noise a buffer's passes leave in the
 /// picture made of them (`measure`: one value per tile), and whether any of the processes that
