@@ -109,29 +109,51 @@ bool pieceCorners(const MacrocellGrid& g, const vec3i& c, const FieldView& view,
 
 } // namespace
 
-size_t exactMacrocellRangePoints(const MacrocellGrid& grid, const vec3i& c, const FieldView& view,
-                                 const HatPlanes& planes) {
+size_t macrocellRangePoints(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes) {
   std::vector<double> corners[3];
   if (!pieceCorners(grid, c, view, planes, corners)) return 0;
   return corners[0].size() * corners[1].size() * corners[2].size();
 }
 
-bool exactMacrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes,
-                         size_t maxPoints, range1f& out) {
+bool macrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes,
+                    size_t maxPoints, range1f& out, bool* exact) {
   std::vector<double> corners[3];
   if (!pieceCorners(grid, c, view, planes, corners)) return false;
-  if (corners[0].size() * corners[1].size() * corners[2].size() > maxPoints) return false;
+  const size_t nx = corners[0].size(), ny = corners[1].size(), nz = corners[2].size();
+  if (nx * ny * nz > maxPoints) return false;
+  // The reconstruction at every corner (a flag for those without a value).
+  std::vector<double> at(nx * ny * nz);
+  std::vector<uint8_t> valued(at.size());
   double lo = INFINITY, hi = -INFINITY;
-  for (double z : corners[2])
-    for (double y : corners[1])
-      for (double x : corners[0]) {
-        double v;
-        if (!sampleField(view, vec3d(x, y, z), v)) return false;
-        lo = std::min(lo, v), hi = std::max(hi, v);
+  for (size_t k = 0, z = 0; z < nz; ++z)
+    for (size_t y = 0; y < ny; ++y)
+      for (size_t x = 0; x < nx; ++x, ++k) {
+        valued[k] = sampleField(view, vec3d(corners[0][x], corners[1][y], corners[2][z]), at[k]);
+        if (valued[k]) lo = std::min(lo, at[k]), hi = std::max(hi, at[k]);
       }
+  const bool everywhere = std::find(valued.begin(), valued.end(), uint8_t(0)) == valued.end();
+  if (!everywhere) // the pieces with a corner without a value: the values weighed inside them
+    for (size_t z = 0; z + 1 < std::max<size_t>(nz, 2); ++z)
+      for (size_t y = 0; y + 1 < std::max<size_t>(ny, 2); ++y)
+        for (size_t x = 0; x + 1 < std::max<size_t>(nx, 2); ++x) {
+          bool all = true;
+          for (size_t d = 0; d < 8; ++d) {
+            const size_t cx = std::min(x + (d & 1), nx - 1), cy = std::min(y + (d >> 1 & 1), ny - 1);
+            const size_t cz = std::min(z + (d >> 2), nz - 1);
+            all = all && valued[cx + nx * (cy + ny * cz)];
+          }
+          if (all) continue;
+          const auto mid = [&](int a, size_t i, size_t n) {
+            return n > 1 ? 0.5 * (corners[a][i] + corners[a][i + 1]) : corners[a][0];
+          };
+          const range1f weighed = weighedValueRange(view, vec3d(mid(0, x, nx), mid(1, y, ny), mid(2, z, nz)));
+          if (!weighed.empty()) lo = std::min(lo, double(weighed.lower)), hi = std::max(hi, double(weighed.upper));
+        }
+  if (!(lo <= hi)) return false;
   // The renderer reconstructs in float: a margin of a few of its roundings.
   const double margin = 1e-5 * std::max({std::abs(lo), std::abs(hi), hi - lo});
   out = {float(lo - margin), float(hi + margin)};
+  if (exact) *exact = everywhere;
   return true;
 }
 

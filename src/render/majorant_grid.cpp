@@ -46,9 +46,9 @@ void MajorantGrid::narrowCostly(const std::vector<LayerTable>& layers, const std
   const FieldView any = model_.view(layers.front().field);
   size_t points = 0, chosen = 0;
   for (; chosen < costly.size() && points < kMajorantNarrowingPoints; ++chosen)
-    points += std::min(kMajorantNarrowingPointsPerCell,
-                       exactMacrocellRangePoints(grid_, cellOf(costly[chosen]), any, planes_)) *
-              ranges.size();
+    points +=
+        std::min(kMajorantNarrowingPointsPerCell, macrocellRangePoints(grid_, cellOf(costly[chosen]), any, planes_)) *
+        ranges.size();
   tbb::parallel_for(size_t(0), chosen, [&](size_t k) {
     const uint32_t i = costly[k];
     for (size_t l = 0; l < ranges.size(); ++l) {
@@ -56,8 +56,8 @@ void MajorantGrid::narrowCostly(const std::vector<LayerTable>& layers, const std
       if (r.narrowed[i]) continue; // a field of two layers
       r.narrowed[i] = 1;
       range1f exact;
-      if (exactMacrocellRange(grid_, cellOf(i), model_.view(layers[l].field), planes_, kMajorantNarrowingPointsPerCell,
-                              exact))
+      if (macrocellRange(grid_, cellOf(i), model_.view(layers[l].field), planes_, kMajorantNarrowingPointsPerCell,
+                         exact))
         r.values[i] = {std::max(r.values[i].lower, exact.lower), std::min(r.values[i].upper, exact.upper)};
     }
     majorants_[i] = majorantOf(maxima, ranges, i);

@@ -254,6 +254,25 @@ EXA_HOST_DEVICE inline bool sampleRegion(const FieldView& view, uint32_t regionI
   return sampleBricks(view, view.brickIds + region.brickBegin, region.brickCount, p, value, gradient);
 }
 
+/// The range of the values of the cells whose hat is positive at p (lattice units): every value
+/// the reconstruction weighs there (empty outside every support).
+inline range1f weighedValueRange(const FieldView& view, const vec3d& p) {
+  range1f r;
+  const uint32_t regionIndex = locateRegion(view, p);
+  if (regionIndex == kNoRegion) return r;
+  const Region& region = view.regions[regionIndex];
+  for (uint32_t k = 0; k < region.brickCount; ++k) {
+    const Brick& brick = view.bricks[view.brickIds[region.brickBegin + k]];
+    const BrickStencil<double> st(brick, p);
+    for (int iz = 0; iz < st.count[2]; ++iz)
+      for (int iy = 0; iy < st.count[1]; ++iy)
+        for (int ix = 0; ix < st.count[0]; ++ix)
+          if (st.h[0][ix] * st.h[1][iy] * st.h[2][iz] > 0.0)
+            r.extend(view.values[brick.valueOffset + st.row(brick, iy, iz) + size_t(st.idx[0][ix])]);
+  }
+  return r;
+}
+
 /// Locates p's region and reconstructs there; false outside every support.
 template <typename Real>
 EXA_HOST_DEVICE inline bool sampleField(const FieldView& view, const vec3<Real>& p, Real& value,

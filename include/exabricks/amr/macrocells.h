@@ -1,7 +1,8 @@
 // Macrocells: a coarse uniform grid of cubic cells over a box of the lattice, and per macrocell
 // the range of a field's values over every cell whose basis support meets it, which bounds the
 // reconstruction anywhere in the macrocell (a weighted mean of those cells' values); or, where
-// asked, the reconstruction's exact range there. The path tracer's majorant grid is built on it.
+// asked, the reconstruction's range there, exact where it has a value at every corner of the
+// pieces the hats' planes cut. The path tracer's majorant grid is built on it.
 // Its size is bounded whatever the box's volume.
 #pragma once
 
@@ -65,16 +66,17 @@ struct HatPlanes {
 };
 HatPlanes hatPlanesOf(const std::vector<Brick>& bricks);
 
-/// The exact range of the reconstruction over macrocell c (clipped to the view's bounds). Between
-/// the planes every hat weight is multilinear, so the value, a ratio of two such sums, is monotone
-/// along each axis there and takes its extremes at corners of those pieces: the range is that of
-/// the values at the corners, grown by a float rounding margin. False, with nothing evaluated,
-/// where the corners number more than maxPoints; false where one has no value (the edge of every
-/// support, where the limit depends on the direction of approach).
-bool exactMacrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes,
-                         size_t maxPoints, range1f& out);
-/// The number of corners exactMacrocellRange evaluates for macrocell c.
-size_t exactMacrocellRangePoints(const MacrocellGrid& grid, const vec3i& c, const FieldView& view,
-                                 const HatPlanes& planes);
+/// The range of the reconstruction over macrocell c (clipped to the view's bounds). Between the
+/// planes every hat weight is multilinear, so the value, a ratio of two such sums, is monotone
+/// along each axis within each piece and takes its extremes at the pieces' corners: where every
+/// corner has a value, the range is exactly theirs (`exact` true), grown by a float rounding
+/// margin. A piece with a corner where no cell has weight (the edge of every support, where the
+/// limit depends on the direction of approach) adds the values of the cells whose hats are
+/// positive in it instead (each hat is positive in all of a piece or none). False, with nothing
+/// evaluated, where the corners number more than maxPoints or no cell has weight in c.
+bool macrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes,
+                    size_t maxPoints, range1f& out, bool* exact = nullptr);
+/// The number of corners macrocellRange evaluates for macrocell c.
+size_t macrocellRangePoints(const MacrocellGrid& grid, const vec3i& c, const FieldView& view, const HatPlanes& planes);
 
 } // namespace exa
