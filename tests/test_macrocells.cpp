@@ -96,8 +96,8 @@ TEST(Macrocells, ReconstructionRangesHoldItAndAreExactWhereEveryCornerHasAValue)
     const FieldView view = m.view(0);
     size_t exactCount = 0, bounded = 0, narrower = 0, checked = 0;
     for (size_t i = 0; i < grid.count(); ++i) {
-      const vec3i c(int(i % size_t(grid.dims.x)), int(i / size_t(grid.dims.x) % size_t(grid.dims.y)),
-                    int(i / (size_t(grid.dims.x) * size_t(grid.dims.y))));
+      const vec3i c = grid.cellAt(i);
+      ASSERT_EQ(grid.index(c), i);
       range1f r;
       bool exact = false;
       const bool some = macrocellRange(grid, c, view, planes, size_t(1) << 20, r, &exact);

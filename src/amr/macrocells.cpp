@@ -121,17 +121,21 @@ bool macrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& 
   if (!pieceCorners(grid, c, view, planes, corners)) return false;
   const size_t nx = corners[0].size(), ny = corners[1].size(), nz = corners[2].size();
   if (nx * ny * nz > maxPoints) return false;
-  // The reconstruction at every corner (a flag for those without a value).
-  std::vector<double> at(nx * ny * nz);
-  std::vector<uint8_t> valued(at.size());
+  // The reconstruction at every corner (and which have no value).
+  std::vector<uint8_t> valued(nx * ny * nz);
   double lo = INFINITY, hi = -INFINITY;
   for (size_t k = 0, z = 0; z < nz; ++z)
     for (size_t y = 0; y < ny; ++y)
       for (size_t x = 0; x < nx; ++x, ++k) {
-        valued[k] = sampleField(view, vec3d(corners[0][x], corners[1][y], corners[2][z]), at[k]);
-        if (valued[k]) lo = std::min(lo, at[k]), hi = std::max(hi, at[k]);
+        double v;
+        valued[k] = sampleField(view, vec3d(corners[0][x], corners[1][y], corners[2][z]), v);
+        if (valued[k]) lo = std::min(lo, v), hi = std::max(hi, v);
       }
   const bool everywhere = std::find(valued.begin(), valued.end(), uint8_t(0)) == valued.end();
+  // A piece's middle along an axis of n corners (the corner where the clipped macrocell is flat).
+  const auto mid = [&](int a, size_t i, size_t n) {
+    return n > 1 ? 0.5 * (corners[a][i] + corners[a][i + 1]) : corners[a][0];
+  };
   if (!everywhere) // the pieces with a corner without a value: the values weighed inside them
     for (size_t z = 0; z + 1 < std::max<size_t>(nz, 2); ++z)
       for (size_t y = 0; y + 1 < std::max<size_t>(ny, 2); ++y)
@@ -143,9 +147,6 @@ bool macrocellRange(const MacrocellGrid& grid, const vec3i& c, const FieldView& 
             all = all && valued[cx + nx * (cy + ny * cz)];
           }
           if (all) continue;
-          const auto mid = [&](int a, size_t i, size_t n) {
-            return n > 1 ? 0.5 * (corners[a][i] + corners[a][i + 1]) : corners[a][0];
-          };
           const range1f weighed = weighedValueRange(view, vec3d(mid(0, x, nx), mid(1, y, ny), mid(2, z, nz)));
           if (!weighed.empty()) lo = std::min(lo, double(weighed.lower)), hi = std::max(hi, double(weighed.upper));
         }

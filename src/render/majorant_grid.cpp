@@ -39,16 +39,12 @@ void MajorantGrid::narrowCostly(const std::vector<LayerTable>& layers, const std
   }
   if (costly.empty()) return;
   std::stable_sort(costly.begin(), costly.end(), [&](uint32_t a, uint32_t b) { return majorants_[a] > majorants_[b]; });
-  const auto cellOf = [&](uint32_t i) {
-    const int x = int(i % uint32_t(grid_.dims.x)), y = int((i / uint32_t(grid_.dims.x)) % uint32_t(grid_.dims.y));
-    return vec3i(x, y, int(i / (uint32_t(grid_.dims.x) * uint32_t(grid_.dims.y))));
-  };
   const FieldView any = model_.view(layers.front().field);
   size_t points = 0, chosen = 0;
   for (; chosen < costly.size() && points < kMajorantNarrowingPoints; ++chosen)
-    points +=
-        std::min(kMajorantNarrowingPointsPerCell, macrocellRangePoints(grid_, cellOf(costly[chosen]), any, planes_)) *
-        ranges.size();
+    points += std::min(kMajorantNarrowingPointsPerCell,
+                       macrocellRangePoints(grid_, grid_.cellAt(costly[chosen]), any, planes_)) *
+              ranges.size();
   tbb::parallel_for(size_t(0), chosen, [&](size_t k) {
     const uint32_t i = costly[k];
     for (size_t l = 0; l < ranges.size(); ++l) {
@@ -56,7 +52,7 @@ void MajorantGrid::narrowCostly(const std::vector<LayerTable>& layers, const std
       if (r.narrowed[i]) continue; // a field of two layers
       r.narrowed[i] = 1;
       range1f exact;
-      if (macrocellRange(grid_, cellOf(i), model_.view(layers[l].field), planes_, kMajorantNarrowingPointsPerCell,
+      if (macrocellRange(grid_, grid_.cellAt(i), model_.view(layers[l].field), planes_, kMajorantNarrowingPointsPerCell,
                          exact))
         r.values[i] = {std::max(r.values[i].lower, exact.lower), std::min(r.values[i].upper, exact.upper)};
     }
@@ -64,7 +60,7 @@ void MajorantGrid::narrowCostly(const std::vector<LayerTable>& layers, const std
   });
 }
 
-void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctionPerLog2,
+void MajorantGrid::update(const std::vector<LayerTable>& layers, const std::vector<TableMaxExtinction>& maxima,
                           const std::vector<float>& regionMajorants) {
   majorants_.clear();
   gridded_.clear();
@@ -80,9 +76,6 @@ void MajorantGrid::update(const std::vector<LayerTable>& layers, float extinctio
     }
     ranges.push_back(&it->second);
   }
-  std::vector<TableMaxExtinction> maxima;
-  for (const LayerTable& layer : layers)
-    maxima.emplace_back(layer.t, extinctionPerLog2);
   majorants_.assign(grid_.count(), 0.f);
   tbb::parallel_for(size_t(0), majorants_.size(), [&](size_t i) { majorants_[i] = majorantOf(maxima, ranges, i); });
   narrowCostly(layers, ranges, maxima);

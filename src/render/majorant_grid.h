@@ -2,10 +2,9 @@
 // layers' transfer functions give anywhere in it, so that delta tracking takes few null
 // collisions where dense and empty space share a coarse region. The macrocells' value ranges are
 // built once per field; the majorants again with every transfer function. Where a macrocell's
-// majorant would cost rays many collisions, its range is narrowed to the reconstruction's exact
-// range there (kept for every later transfer function): a cell's value otherwise reaches a
-// whole cell beyond its support's ramp, which at an opaque boundary in clear space is most of
-// the collisions.
+// majorant would cost rays many collisions, its range is narrowed to the reconstruction's range
+// there, exact where it has a value everywhere (kept for every later transfer function): a cell's value otherwise
+// reaches a whole cell beyond its support's ramp, which at an opaque boundary in clear space is most of the collisions.
 #pragma once
 
 #include "layer_table.h"
@@ -24,9 +23,10 @@ public:
   explicit MajorantGrid(const Model& model);
 
   /// The majorants for the layers' current tables: per macrocell, the sum over the layers of the
-  /// largest extinction the table gives the field's values there (no layers: no grid); and the
-  /// regions (with their own majorants) where walking the grid pays.
-  void update(const std::vector<LayerTable>& layers, float extinctionPerLog2,
+  /// largest extinction the table gives the field's values there (`maxima`, one per layer, as
+  /// the regions' majorants were found; no layers: no grid); and the regions (with their own
+  /// majorants) where walking the grid pays.
+  void update(const std::vector<LayerTable>& layers, const std::vector<TableMaxExtinction>& maxima,
               const std::vector<float>& regionMajorants);
   /// The grid as plain data (null majorants: no grid).
   MajorantGridView view() const;
@@ -36,7 +36,7 @@ public:
 private:
   struct FieldRanges {
     std::vector<range1f> values;
-    std::vector<uint8_t> narrowed; ///< per macrocell: its exact range was tried
+    std::vector<uint8_t> narrowed; ///< per macrocell: its reconstruction's range was tried
   };
   /// Narrows the ranges of the macrocells whose majorant costs most, up to a budget of points.
   void narrowCostly(const std::vector<LayerTable>& layers, const std::vector<FieldRanges*>& ranges,

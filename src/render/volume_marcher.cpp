@@ -385,7 +385,10 @@ void VolumeMarcher::updateMajorants(bool grid) {
       sum += maxima[l](model_.regions.valueRanges[size_t(layers_[l].field)][i]);
     majorants_[i] = sum;
   });
-  majorantGrid_.update(grid ? layers_ : std::vector<LayerTable>(), perLog2, majorants_);
+  if (grid)
+    majorantGrid_.update(layers_, maxima, majorants_);
+  else
+    majorantGrid_.update({}, {}, majorants_);
 }
 
 namespace {

@@ -26,6 +26,11 @@ struct MacrocellGrid {
   EXA_HOST_DEVICE size_t index(const vec3i& c) const {
     return size_t(c.x) + size_t(dims.x) * (size_t(c.y) + size_t(dims.y) * size_t(c.z));
   }
+  /// The macrocell at `index` in arrays over the grid.
+  vec3i cellAt(size_t i) const {
+    return {int(i % size_t(dims.x)), int(i / size_t(dims.x) % size_t(dims.y)),
+            int(i / (size_t(dims.x) * size_t(dims.y)))};
+  }
   /// Closed lattice box of macrocell c.
   box3f bounds(const vec3i& c) const {
     const vec3f lo = lower + vec3f(c) * cellSize;

@@ -100,14 +100,14 @@ public:
   float operator()(const range1f& r) const {
     if (r.empty()) return 0.f;
     const float n0 = tfNormalized(t_, r.lower), n1 = tfNormalized(t_, r.upper);
-    float w = fminf(tfTableAt(t_, n0).w, tfTableAt(t_, n1).w);
+    float w = std::min(tfTableAt(t_, n0).w, tfTableAt(t_, n1).w);
     const int first = std::max(0, int(ceilf(n0 * float(kTfTableSize - 1))));
     const int last = std::min(kTfTableSize - 1, int(floorf(n1 * float(kTfTableSize - 1))));
     if (first <= last) {
       int k = 0;
       while ((2 << k) <= last - first + 1)
         ++k;
-      w = fminf(w, std::min(at(k, first), at(k, last - (1 << k) + 1)));
+      w = std::min({w, at(k, first), at(k, last - (1 << k) + 1)});
     }
     return -w * perLog2_;
   }
