@@ -103,65 +103,6 @@ TEST(BasisBatch, EqualsTheScalarReconstruction) {
   EXPECT_GT(wide, 0);
 }
 
-TEST(BasisBatch, SeveralFieldsInOnePassEqualEachFieldAlone) {
-  // A field and its three gradient fields (smooth shading) in one pass over a region's bricks:
-  // each equals the field reconstructed alone, to the bit (the same sums in the same order), and
-  // the scalar reference to round-off; the valid flags equal the values-only batch's.
-  forEveryTarget([&] {
-    for (const test::NamedCells& d : test::smallDatasets()) {
-      const Model m = buildModel(CellSet(d.cells));
-      const FieldView view = m.view(0);
-      std::vector<std::vector<float>> arrays(kMaxBatchFields, std::vector<float>(m.fieldValues[0].size()));
-      std::mt19937 rng(5);
-      std::uniform_real_distribution<float> u(0.f, 1.f);
-      for (size_t k = 0; k < arrays[0].size(); ++k)
-        arrays[0][k] = view.values[k] * 2.f - 1.f, arrays[1][k] = u(rng), arrays[2][k] = float(k % 7),
-        arrays[3][k] = view.values[k];
-      const float* const values[kMaxBatchFields] = {arrays[0].data(), arrays[1].data(), arrays[2].data(),
-                                                    arrays[3].data()};
-      std::uniform_int_distribution<int> pickRegion(0, int(m.regions.regions.size()) - 1);
-      for (int trial = 0; trial < 200; ++trial) {
-        const uint32_t r = uint32_t(pickRegion(rng));
-        const Region& region = m.regions.regions[r];
-        // Around the region, so that some samples fall where no cell has weight.
-        const box3f b = region.bounds();
-        const vec3f grow = (b.upper - b.lower) * 0.5f;
-        SampleBatch batch;
-        batch.count = 1 + trial % kSampleBatch;
-        for (int i = 0; i < batch.count; ++i) {
-          batch.x[i] = b.lower.x - grow.x + u(rng) * (b.upper.x - b.lower.x + 2.f * grow.x);
-          batch.y[i] = b.lower.y - grow.y + u(rng) * (b.upper.y - b.lower.y + 2.f * grow.y);
-          batch.z[i] = b.lower.z - grow.z + u(rng) * (b.upper.z - b.lower.z + 2.f * grow.z);
-        }
-        const int fields = 1 + trial % kMaxBatchFields;
-        alignas(64) float together[kMaxBatchFields][kSampleBatch], scalar[kMaxBatchFields][kSampleBatch];
-        alignas(64) int32_t valid[kSampleBatch], scalarValid[kSampleBatch];
-        float* const out[kMaxBatchFields] = {together[0], together[1], together[2], together[3]};
-        float* const ref[kMaxBatchFields] = {scalar[0], scalar[1], scalar[2], scalar[3]};
-        const uint32_t* ids = m.regions.brickIds.data() + region.brickBegin;
-        const bool withValid = trial % 2 == 0;
-        sampleFieldsBatch(view, values, fields, ids, region.brickCount, batch, out, withValid ? valid : nullptr);
-        sampleFieldsBatchScalar(view, values, fields, ids, region.brickCount, batch, ref, scalarValid);
-        for (int f = 0; f < fields; ++f) {
-          FieldView alone = view;
-          alone.values = values[f];
-          SampleBatch one = batch;
-          sampleBricksBatch(alone, ids, region.brickCount, one, false);
-          for (int i = 0; i < batch.count; ++i) {
-            const float expected = one.valid[i] ? one.value[i] : 0.f;
-            ASSERT_EQ(together[f][i], expected) << d.name << " field " << f << " sample " << i;
-            EXPECT_NEAR(together[f][i], scalar[f][i], 2e-6f * (1.f + std::abs(scalar[f][i]))) << d.name;
-            ASSERT_EQ(scalarValid[i] != 0, one.valid[i] != 0) << d.name << " sample " << i;
-            if (withValid) {
-              ASSERT_EQ(valid[i] != 0, one.valid[i] != 0) << d.name << " sample " << i;
-            }
-          }
-        }
-      }
-    }
-  });
-}
-
 TEST(BasisBatch, UnionOfRegionListsEqualsEachSamplesOwnRegion) {
   // A batch that joins the samples of several regions is reconstructed over the ascending union
   // of their brick lists; every sample must get what its own region's list gives it in a batch

@@ -18,11 +18,12 @@ void sampleBricksBatch(const FieldView& view, const uint32_t* brickIds, uint32_t
 }
 SampleRegionBatchFunction sampleRegionBatchFunction() { return &sampleRegionBatch; }
 SampleBricksBatchFunction sampleBricksBatchFunction() { return &sampleBricksBatch; }
-void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
-  sampleFieldsBatchScalar(view, values, fields, brickIds, brickCount, batch, out, valid);
+void sampleShadedBatch(const FieldView& view, const PackedGradientView& gradients, bool withValue,
+                       const uint32_t* brickIds, uint32_t brickCount, const SampleBatch& batch, float* const* out,
+                       int32_t* valid) {
+  sampleShadedBatchScalar(view, gradients, withValue, brickIds, brickCount, batch, out, valid);
 }
-SampleFieldsBatchFunction sampleFieldsBatchFunction() { return &sampleFieldsBatch; }
+SampleShadedBatchFunction sampleShadedBatchFunction() { return &sampleShadedBatch; }
 const char* batchTargetName() { return "scalar"; }
 std::vector<std::string> batchTargets() { return {"scalar"}; }
 bool useBatchTarget(const std::string& name) { return name.empty() || name == "scalar"; }
@@ -328,29 +329,77 @@ void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t br
   }
 }
 
-// Several value arrays over the same bricks: sampleBatchFor's values-only sums once per array,
-// each brick's factors and corner indices found once.
-template <int kFields, size_t kLanes>
-void SampleFieldsFor(const float* const* values, const FieldView& view, const uint32_t* brickIds, uint32_t brickCount,
-                     const SampleBatch& batch, float* const* out, int32_t* valid) {
+// A field's packed gradient (gradient_pack.h), each corner's bits decoded into unpackGradient's
+// floats: the three mantissas masked to the top of the word (q 2^23 as an int) and converted, and
+// the scale 2^(e + base - 23) built from the exponent bits and the brick's bias.
+template <class D> struct PackedCorner { hn::Vec<D> m[3], scale; };
+
+template <class D> HWY_INLINE PackedCorner<D> DecodePacked(D d, hn::Vec<D> bits, hn::Vec<hn::RebindToSigned<D>> bias) {
+  const hn::RebindToSigned<D> di;
+  using VI = hn::Vec<decltype(di)>;
+  const VI u = hn::BitCast(di, bits);
+  const VI top = hn::Set(di, int32_t(0xFF800000u));
+  PackedCorner<D> c;
+  c.m[0] = hn::ConvertTo(d, hn::And(u, top));
+  c.m[1] = hn::ConvertTo(d, hn::And(hn::ShiftLeft<9>(u), top));
+  c.m[2] = hn::ConvertTo(d, hn::And(hn::ShiftLeft<18>(u), top));
+  c.scale = hn::BitCast(d, hn::Add(hn::ShiftLeft<23>(hn::And(u, hn::Set(di, 31))), bias));
+  return c;
+}
+
+// The packed gradient's sums of one brick, row by row (each row's two corners decoded and weighed
+// along x at once, so that few decoded corners are live), then along y and z: AddCorners' sums
+// per component, the reference set from the first row's corner where `newRef`.
+template <class D>
+HWY_INLINE void AddPackedCorners(D d, const BrickHats<D>& h, const hn::Vec<D> (&b0)[2][2], const hn::Vec<D> (&b1)[2][2],
+                                 hn::Vec<hn::RebindToSigned<D>> bias, const CornerIndex<D>& ci, hn::Mask<D> newRef,
+                                 BatchSums<D> (&g)[3]) {
+  using V = hn::Vec<D>;
+  V ex[3][2][2];
+  for (int z = 0; z < 2; ++z)
+    for (int y = 0; y < 2; ++y) {
+      const PackedCorner<D> q0 = DecodePacked(d, b0[z][y], bias), q1 = DecodePacked(d, b1[z][y], bias);
+      for (int a = 0; a < 3; ++a) {
+        if (z == 0 && y == 0) {
+          const V first = hn::IfThenElse(ci.above, hn::Mul(q1.m[a], q1.scale), hn::Mul(q0.m[a], q0.scale));
+          g[a].v0 = hn::IfThenElse(newRef, first, g[a].v0);
+        }
+        const V a0 = hn::MulSub(q0.m[a], q0.scale, g[a].v0), a1 = hn::MulSub(q1.m[a], q1.scale, g[a].v0);
+        ex[a][z][y] = hn::MulAdd(h.h1[0], a1, hn::Mul(h.h0[0], a0));
+      }
+    }
+  for (int a = 0; a < 3; ++a) {
+    V eyz[2];
+    for (int z = 0; z < 2; ++z)
+      eyz[z] = hn::MulAdd(h.h1[1], ex[a][z][1], hn::Mul(h.h0[1], ex[a][z][0]));
+    g[a].sumWV = hn::Add(g[a].sumWV, hn::MulAdd(h.h1[2], eyz[1], hn::Mul(h.h0[2], eyz[0])));
+  }
+}
+
+// sampleShadedBatch: the value's sums as SampleBatchFor's (with kValue; else only their
+// weights), and the packed gradient's over the same brick factors and corner indices.
+template <bool kValue, size_t kLanes>
+void SampleShadedFor(const FieldView& view, const PackedGradientView& packed, const uint32_t* brickIds,
+                     uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
   using D = hn::CappedTag<float, kLanes>;
   const D d;
   const hn::RebindToSigned<D> di;
   using V = hn::Vec<D>;
   const size_t lanes = hn::Lanes(d);
   const V one = hn::Set(d, 1.f), zero = hn::Zero(d);
-  // Whole vectors of positions: the lanes beyond count repeat the last one.
   alignas(64) float pos[3][2 * kSampleBatch];
   const int padded = int((size_t(batch.count) + lanes - 1) / lanes * lanes);
   for (int i = 0; i < padded; ++i) {
     const int j = std::min(i, batch.count > 0 ? batch.count - 1 : 0);
     pos[0][i] = batch.x[j], pos[1][i] = batch.y[j], pos[2][i] = batch.z[j];
   }
+  const float* bits = reinterpret_cast<const float*>(packed.cells); // moved as bits, never as floats
   for (size_t base = 0; base < size_t(batch.count); base += lanes) {
     const V p[3] = {hn::Load(d, pos[0] + base), hn::Load(d, pos[1] + base), hn::Load(d, pos[2] + base)};
-    BatchSums<D> s[kFields];
-    for (BatchSums<D>& f : s)
-      f.sumW = zero, f.sumWV = zero, f.v0 = zero;
+    BatchSums<D> s, g[3];
+    s.sumW = zero, s.sumWV = zero, s.v0 = zero;
+    for (BatchSums<D>& f : g)
+      f.sumWV = zero, f.v0 = zero;
     hn::Mask<D> haveRef = one < zero; // all false
     for (uint32_t k = 0; k < brickCount; ++k) {
       const Brick& brick = view.bricks[brickIds[k]];
@@ -362,44 +411,41 @@ void SampleFieldsFor(const float* const* values, const FieldView& view, const ui
       IndexCorners(d, brick, h, ci);
       const hn::Mask<D> newRef = hn::AndNot(haveRef, h.any);
       haveRef = hn::Or(haveRef, newRef);
-      for (int f = 0; f < kFields; ++f) {
+      if constexpr (kValue) {
         V c0[2][2], c1[2][2];
-        FetchCorners(d, values[f] + brick.valueOffset, ci, c0, c1);
-        s[f].v0 = hn::IfThenElse(newRef, hn::IfThenElse(ci.above, c1[0][0], c0[0][0]), s[f].v0);
-        AddCorners<false>(h, c0, c1, s[f]);
+        FetchCorners(d, view.values + brick.valueOffset, ci, c0, c1);
+        s.v0 = hn::IfThenElse(newRef, hn::IfThenElse(ci.above, c1[0][0], c0[0][0]), s.v0);
+        AddCorners<false>(h, c0, c1, s);
+      } else {
+        const V wx = hn::Add(h.h0[0], h.h1[0]), wy = hn::Add(h.h0[1], h.h1[1]), wz = hn::Add(h.h0[2], h.h1[2]);
+        s.sumW = hn::MulAdd(wx, hn::Mul(wy, wz), s.sumW);
       }
+      V b0[2][2], b1[2][2];
+      FetchCorners(d, bits + brick.valueOffset, ci, b0, b1);
+      AddPackedCorners(d, h, b0, b1, hn::Set(di, packed.scaleBias[brickIds[k]]), ci, newRef, g);
     }
-    for (int f = 0; f < kFields; ++f) {
-      const hn::Mask<D> ok = s[f].sumW > zero;
-      const V safeW = hn::IfThenElse(ok, s[f].sumW, one);
-      const V v = hn::IfThenElseZero(ok, hn::Add(s[f].v0, hn::Div(s[f].sumWV, safeW)));
-      hn::StoreU(v, d, out[f] + base); // whole vectors: padded <= kSampleBatch
-      if (f == 0 && valid) hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, ok)), di, valid + base);
-    }
+    const hn::Mask<D> ok = s.sumW > zero;
+    const V safeW = hn::IfThenElse(ok, s.sumW, one);
+    if constexpr (kValue) hn::StoreU(hn::IfThenElseZero(ok, hn::Add(s.v0, hn::Div(s.sumWV, safeW))), d, out[0] + base);
+    if (valid) hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, ok)), di, valid + base);
+    for (int a = 0; a < 3; ++a) // whole vectors: padded <= kSampleBatch
+      hn::StoreU(hn::IfThenElseZero(ok, hn::Add(g[a].v0, hn::Div(g[a].sumWV, safeW))), d, out[1 + a] + base);
   }
 }
 
-template <size_t kLanes>
-void SampleFieldsLanes(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
-  switch (fields) {
-  case 1:
-    return SampleFieldsFor<1, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
-  case 2:
-    return SampleFieldsFor<2, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
-  case 3:
-    return SampleFieldsFor<3, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
-  default:
-    return SampleFieldsFor<4, kLanes>(values, view, brickIds, brickCount, batch, out, valid);
+void SampleShadedBatchImpl(const FieldView& view, const PackedGradientView& packed, bool withValue,
+                           const uint32_t* brickIds, uint32_t brickCount, const SampleBatch& batch, float* const* out,
+                           int32_t* valid) {
+  if (batch.count <= 4) {
+    if (withValue)
+      SampleShadedFor<true, 4>(view, packed, brickIds, brickCount, batch, out, valid);
+    else
+      SampleShadedFor<false, 4>(view, packed, brickIds, brickCount, batch, out, valid);
+  } else if (withValue) {
+    SampleShadedFor<true, kSampleBatch>(view, packed, brickIds, brickCount, batch, out, valid);
+  } else {
+    SampleShadedFor<false, kSampleBatch>(view, packed, brickIds, brickCount, batch, out, valid);
   }
-}
-
-void SampleFieldsBatchImpl(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                           uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
-  if (batch.count <= 4)
-    SampleFieldsLanes<4>(view, values, fields, brickIds, brickCount, batch, out, valid);
-  else
-    SampleFieldsLanes<kSampleBatch>(view, values, fields, brickIds, brickCount, batch, out, valid);
 }
 
 void SampleBricksBatchImpl(const FieldView& view, const uint32_t* brickIds, uint32_t brickCount, SampleBatch& batch,
@@ -433,7 +479,7 @@ namespace exa {
 
 HWY_EXPORT(SampleBatchImpl);
 HWY_EXPORT(SampleBricksBatchImpl);
-HWY_EXPORT(SampleFieldsBatchImpl);
+HWY_EXPORT(SampleShadedBatchImpl);
 HWY_EXPORT(TargetName);
 
 void sampleRegionBatch(const FieldView& view, uint32_t regionIndex, SampleBatch& batch, bool gradient) {
@@ -453,13 +499,14 @@ SampleBricksBatchFunction sampleBricksBatchFunction() {
   return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleBricksBatchImpl));
 }
 
-void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid) {
-  HWY_DYNAMIC_DISPATCH(SampleFieldsBatchImpl)(view, values, fields, brickIds, brickCount, batch, out, valid);
+void sampleShadedBatch(const FieldView& view, const PackedGradientView& gradients, bool withValue,
+                       const uint32_t* brickIds, uint32_t brickCount, const SampleBatch& batch, float* const* out,
+                       int32_t* valid) {
+  HWY_DYNAMIC_DISPATCH(SampleShadedBatchImpl)(view, gradients, withValue, brickIds, brickCount, batch, out, valid);
 }
 
-SampleFieldsBatchFunction sampleFieldsBatchFunction() {
-  return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleFieldsBatchImpl));
+SampleShadedBatchFunction sampleShadedBatchFunction() {
+  return chosenBatchFunction(HWY_DISPATCH_TABLE(SampleShadedBatchImpl));
 }
 
 const char* batchTargetName() { return HWY_DYNAMIC_DISPATCH(TargetName)(); }

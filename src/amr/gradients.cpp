@@ -119,25 +119,25 @@ public:
   }
 
   /// The brick's cells' central differences (one-sided where a neighbour has no value, 0 where
-  /// neither has) into `out` at their slots.
-  void differences(std::array<std::vector<float>, 3>& out) const {
+  /// neither has), cell after cell in the brick's order: put(index in the brick, gradient).
+  template <class Put> void differences(Put&& put) const {
     const size_t step[3] = {1, size_t(padded_.x), size_t(padded_.x) * size_t(padded_.y)};
-    uint32_t slot = b_->valueOffset;
+    uint32_t slot = 0;
     for (int z = 0; z < n_.z; ++z)
       for (int y = 0; y < n_.y; ++y)
         for (int x = 0; x < n_.x; ++x, ++slot) {
           const size_t c = at(x, y, z);
+          vec3f g(0.f);
           for (int a = 0; a < 3; ++a) {
             const size_t p = c + step[a], m = c - step[a];
-            float g = 0.f;
             if (has_[p] && has_[m])
-              g = (value_[p] - value_[m]) / (2.f * w_);
+              g[a] = (value_[p] - value_[m]) / (2.f * w_);
             else if (has_[p] && has_[c])
-              g = (value_[p] - value_[c]) / w_;
+              g[a] = (value_[p] - value_[c]) / w_;
             else if (has_[m] && has_[c])
-              g = (value_[c] - value_[m]) / w_;
-            out[size_t(a)][slot] = g;
+              g[a] = (value_[c] - value_[m]) / w_;
           }
+          put(slot, g);
         }
   }
 
@@ -198,17 +198,58 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
   return out;
 }
 
-void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
-                       const std::vector<uint32_t>& which, std::array<std::vector<float>, 3>& out) {
+namespace {
+/// Each brick of `which` on the worker threads, its centres' block filled, then handed to `use`.
+template <class Use>
+void forBrickBlocks(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
+                    const std::vector<uint32_t>& which, Use&& use) {
   if (which.empty()) return;
   const std::vector<int32_t> levels = regionLevels(view, regionCount);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, which.size()), [&](const tbb::blocked_range<size_t>& range) {
     CentreBlock block(view, levels);
+    std::vector<vec3f> scratch;
     for (size_t i = range.begin(); i < range.end(); ++i) {
       block.fill(bricks[which[i]]);
-      block.differences(out);
+      use(which[i], block, scratch);
     }
   });
+}
+} // namespace
+
+void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
+                       const std::vector<uint32_t>& which, std::array<std::vector<float>, 3>& out) {
+  forBrickBlocks(view, bricks, regionCount, which, [&](uint32_t b, const CentreBlock& block, std::vector<vec3f>&) {
+    const size_t offset = bricks[b].valueOffset;
+    block.differences([&](uint32_t slot, const vec3f& g) {
+      for (int a = 0; a < 3; ++a)
+        out[size_t(a)][offset + slot] = g[a];
+    });
+  });
+}
+
+void GradientFields::reset(size_t cells, size_t bricks) {
+  packed.assign(cells, 0u);
+  scaleBias.assign(bricks, gradientScaleBias(kGradientBaseMin));
+  built.assign(bricks, 0);
+  missing = bricks;
+}
+
+void fillPackedGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
+                         const std::vector<uint32_t>& which, GradientFields& out) {
+  forBrickBlocks(view, bricks, regionCount, which,
+                 [&](uint32_t b, const CentreBlock& block, std::vector<vec3f>& scratch) {
+                   scratch.resize(bricks[b].cellCount());
+                   int largest = kGradientBaseMin;
+                   block.differences([&](uint32_t slot, const vec3f& g) {
+                     scratch[slot] = g;
+                     largest = std::max(largest, packedGradientExponent(g));
+                   });
+                   const int base = gradientBase(largest);
+                   out.scaleBias[b] = gradientScaleBias(base);
+                   uint32_t* cells = out.packed.data() + bricks[b].valueOffset;
+                   for (size_t i = 0; i < scratch.size(); ++i)
+                     cells[i] = packGradient(scratch[i], base);
+                 });
 }
 
 } // namespace exa

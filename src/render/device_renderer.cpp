@@ -101,8 +101,13 @@ const vec4f* DeviceRenderer::withGradients(const LayerTable& l, uint64_t version
   auto fill = [&](std::vector<vec4f>& out) {
     const auto& values = model_.fieldValues[size_t(l.field)];
     out.resize(values.size());
-    tbb::parallel_for(size_t(0), values.size(), [&](size_t i) {
-      out[i] = {values[i], l.grad[0].values[i], l.grad[1].values[i], l.grad[2].values[i]};
+    // Each cell's gradient decoded as the CPU's reconstruction decodes it.
+    tbb::parallel_for(size_t(0), model_.bricks.size(), [&](size_t b) {
+      const Brick& brick = model_.bricks[b];
+      for (size_t i = brick.valueOffset; i < size_t(brick.valueOffset) + brick.cellCount(); ++i) {
+        const vec3f g = unpackGradient(l.gradients.cells[i], l.gradients.scaleBias[b]);
+        out[i] = vec4f(values[i], g.x, g.y, g.z);
+      }
     });
   };
   uint64_t& made = interleavedVersion_[l.field];
@@ -165,7 +170,7 @@ void DeviceRenderer::syncVolume(const Scene& s, const VolumeMarcher& volume, Sce
     const LayerTable& l = layers[i];
     TraceLayer& t = v.layers[i];
     // Smooth shading reads the values with the gradients (TraceLayer::withGradients).
-    const bool smooth = s.shading == Shading::Smooth && l.grad[0].values && !v.pathTrace;
+    const bool smooth = s.shading == Shading::Smooth && l.gradients.cells && !v.pathTrace;
     t.view = fieldView(l.field, smooth ? nullptr : l.view.values, "field", update);
     if (smooth) t.withGradients = withGradients(l, volume.gradientVersion(l.field), update);
     for (int a = 0; a < 3; ++a)

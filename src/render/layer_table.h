@@ -3,6 +3,7 @@
 #pragma once
 
 #include "exabricks/amr/basis.h"
+#include "exabricks/amr/basis_batch.h"
 #include "exabricks/amr/model.h"
 #include "exabricks/render/renderer.h"
 #include "exabricks/render/sample_math.h"
@@ -17,7 +18,7 @@ namespace exa {
 struct LayerTable {
   int field = 0;
   FieldView view;
-  std::array<FieldView, 3> grad{}; ///< smooth shading: the field's gradient fields (cellGradients)
+  PackedGradientView gradients; ///< smooth shading: the field's packed gradient fields (gradients.h)
   TransferFunction tf;
   std::vector<vec4f> table;
   TfTableView t;

@@ -21,7 +21,7 @@ void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* 
 }
 
 BatchFunctions batchFunctions() {
-  return {&placeSamples, sampleBricksBatchFunction(), sampleFieldsBatchFunction(), &tfLookupBatch, &shadeVolumeBatch};
+  return {&placeSamples, sampleBricksBatchFunction(), sampleShadedBatchFunction(), &tfLookupBatch, &shadeVolumeBatch};
 }
 
 } // namespace exa
@@ -228,7 +228,7 @@ void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* 
 
 BatchFunctions batchFunctions() {
   return {chosenBatchFunction(HWY_DISPATCH_TABLE(PlaceSamplesImpl)), sampleBricksBatchFunction(),
-          sampleFieldsBatchFunction(), chosenBatchFunction(HWY_DISPATCH_TABLE(TfLookupBatchImpl)),
+          sampleShadedBatchFunction(), chosenBatchFunction(HWY_DISPATCH_TABLE(TfLookupBatchImpl)),
           chosenBatchFunction(HWY_DISPATCH_TABLE(ShadeVolumeBatchImpl))};
 }
 

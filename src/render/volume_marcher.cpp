@@ -41,27 +41,26 @@ bool joinBrickLists(const uint32_t* a, const uint32_t* aEnd, const uint32_t* b, 
 }
 
 /// Smooth shading's gradient at the samples of a batch that the transfer function shows (`tf`;
-/// the others are not lit, and get 0): the layer's three gradient fields reconstructed like its
+/// the others are not lit, and get 0): the layer's packed gradient fields reconstructed like its
 /// values, from the same bricks, in one pass over them, for the shown samples gathered into one
 /// batch (per lattice unit; 0 where no cell has weight).
-void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t count, SampleFieldsBatchFunction sample,
+void smoothGradients(const LayerTable& layer, const uint32_t* ids, uint32_t count, SampleShadedBatchFunction sample,
                      const TfBatch& tf, SampleBatch& batch) {
-  const float* const values[3] = {layer.grad[0].values, layer.grad[1].values, layer.grad[2].values};
   alignas(64) int32_t shown[kSampleBatch];
   int m = 0;
   for (int i = 0; i < batch.count; ++i)
     if (tf.logT[i] < 0.f) shown[m++] = i;
   if (m == batch.count) {
-    float* const out[3] = {batch.gx, batch.gy, batch.gz};
-    sample(layer.grad[0], values, 3, ids, count, batch, out, nullptr);
+    float* const out[4] = {nullptr, batch.gx, batch.gy, batch.gz};
+    sample(layer.view, layer.gradients, false, ids, count, batch, out, nullptr);
     return;
   }
   SampleBatch gathered;
   gathered.count = m;
   for (int k = 0; k < m; ++k)
     gathered.x[k] = batch.x[shown[k]], gathered.y[k] = batch.y[shown[k]], gathered.z[k] = batch.z[shown[k]];
-  float* const out[3] = {gathered.gx, gathered.gy, gathered.gz};
-  sample(layer.grad[0], values, 3, ids, count, gathered, out, nullptr);
+  float* const out[4] = {nullptr, gathered.gx, gathered.gy, gathered.gz};
+  sample(layer.view, layer.gradients, false, ids, count, gathered, out, nullptr);
   for (int i = 0; i < batch.count; ++i)
     batch.gx[i] = batch.gy[i] = batch.gz[i] = 0.f;
   for (int k = 0; k < m; ++k)
@@ -162,14 +161,12 @@ private:
     const int n = batch_.count;
     const bool withGrad = wantGrad_ && !(s_.options.lazyGradients && lastShown_ == 0);
     // Smooth shading where the ray's last batch showed more samples than a narrow batch holds (4):
-    // the values and the three gradient fields in one pass over the bricks. A second pass for the
-    // shown samples would find every brick's factors and corners again, as wide as the batch's.
+    // the values and the packed gradient in one pass over the bricks. A second pass for the shown
+    // samples would find every brick's factors and corners again, as wide as the batch's.
     const bool together = smooth_ && !in_.locator && lastShown_ > 4;
     if (together) {
-      const float* const values[4] = {layer_.view.values, layer_.grad[0].values, layer_.grad[1].values,
-                                      layer_.grad[2].values};
       float* const out[4] = {batch_.value, batch_.gx, batch_.gy, batch_.gz};
-      fn_.sampleFields(layer_.view, values, 4, brickIds_, brickCount_, batch_, out, batch_.valid);
+      fn_.sampleShaded(layer_.view, layer_.gradients, true, brickIds_, brickCount_, batch_, out, batch_.valid);
     } else {
       reconstruct(layer_, batch_, withGrad);
     }
@@ -185,7 +182,7 @@ private:
       return false;
     }
     if (wantGrad_ && !withGrad) reconstruct(layer_, batch_, true);
-    if (smooth_ && !together) smoothGradients(layer_, brickIds_, brickCount_, fn_.sampleFields, looked, batch_);
+    if (smooth_ && !together) smoothGradients(layer_, brickIds_, brickCount_, fn_.sampleShaded, looked, batch_);
     // Opacity and colour of every sample at once, then the in-order compositing.
     ShadedBatch shaded;
     params_.fadeWidth = fades_;
@@ -210,7 +207,7 @@ private:
       reconstruct(layer, lb, wantGrad_);
       TfBatch looked;
       if (!fn_.tfLookup(layer.t, lb, looked)) continue;
-      if (smooth_) smoothGradients(layer, brickIds_, brickCount_, fn_.sampleFields, looked, lb);
+      if (smooth_) smoothGradients(layer, brickIds_, brickCount_, fn_.sampleShaded, looked, lb);
       for (int i = 0; i < n; ++i)
         fades[i] = layer.fadeWidth(in_.model.regions.regions[regionOf_[i]], in_.meanScale);
       VolumeShadeParams params = params_;
@@ -412,10 +409,10 @@ uint64_t VolumeMarcher::gradientVersion(int field) const {
 }
 
 void VolumeMarcher::adoptGradients(int field, GradientFields gradients) {
-  for (const std::vector<float>& g : gradients.values)
-    if (g.size() != model_.fieldValues.at(size_t(field)).size())
-      fail("gradient fields of ", g.size(), " cells adopted for a field of ", model_.fieldValues[size_t(field)].size());
-  if (gradients.built.size() != model_.bricks.size())
+  if (gradients.packed.size() != model_.fieldValues.at(size_t(field)).size())
+    fail("gradient fields of ", gradients.packed.size(), " cells adopted for a field of ",
+         model_.fieldValues[size_t(field)].size());
+  if (gradients.built.size() != model_.bricks.size() || gradients.scaleBias.size() != model_.bricks.size())
     fail("gradient fields of ", gradients.built.size(), " bricks adopted for a model of ", model_.bricks.size());
   if (gradientFields_.count(field)) return; // one already built (and pointed at) stays
   gradients.missing = size_t(std::count(gradients.built.begin(), gradients.built.end(), uint8_t(0)));
@@ -452,10 +449,7 @@ bool VolumeMarcher::attachGradients(const box3d* domain) {
     auto it = gradientFields_.find(layer.field);
     if (it == gradientFields_.end()) {
       it = gradientFields_.emplace(layer.field, GradientFields()).first;
-      for (std::vector<float>& g : it->second.values)
-        g.assign(model_.fieldValues[size_t(layer.field)].size(), 0.f);
-      it->second.built.assign(model_.bricks.size(), 0);
-      it->second.missing = model_.bricks.size();
+      it->second.reset(model_.fieldValues[size_t(layer.field)].size(), model_.bricks.size());
     }
     GradientFields& fields = it->second;
     std::vector<uint32_t> which;
@@ -463,17 +457,14 @@ bool VolumeMarcher::attachGradients(const box3d* domain) {
       for (size_t b = 0; b < needed.size(); ++b)
         if (needed[b] && !fields.built[b]) which.push_back(uint32_t(b));
     if (!which.empty()) {
-      fillCellGradients(layer.view, model_.bricks, model_.regions.regions.size(), which, fields.values);
+      fillPackedGradients(layer.view, model_.bricks, model_.regions.regions.size(), which, fields);
       for (uint32_t b : which)
         fields.built[b] = 1;
       fields.missing -= which.size();
       ++fields.version;
       built = true;
     }
-    for (int a = 0; a < 3; ++a) {
-      layer.grad[size_t(a)] = layer.view;
-      layer.grad[size_t(a)].values = fields.values[size_t(a)].data();
-    }
+    layer.gradients = {fields.packed.data(), fields.scaleBias.data()};
   }
   return built;
 }

@@ -92,16 +92,16 @@ std::optional<GradientFields> PartCache::readGradients(int part, int field, size
   const auto it = gradientFds_.find({part, field});
   if (it == gradientFds_.end()) return std::nullopt;
   const int fd = it->second.first;
-  const size_t bytes = cells * sizeof(float);
+  const size_t bytes = cells * sizeof(uint32_t), biasBytes = bricks * sizeof(int32_t);
   struct stat st {};
-  if (::fstat(fd, &st) != 0 || size_t(st.st_size) != 3 * bytes + bricks) return std::nullopt;
+  if (::fstat(fd, &st) != 0 || size_t(st.st_size) != bytes + biasBytes + bricks) return std::nullopt;
   GradientFields g;
-  for (int a = 0; a < 3; ++a) {
-    g.values[size_t(a)].resize(cells);
-    if (!readAt(fd, g.values[size_t(a)].data(), bytes, size_t(a) * bytes)) return std::nullopt;
-  }
+  g.packed.resize(cells);
+  g.scaleBias.resize(bricks);
   g.built.resize(bricks);
-  if (!readAt(fd, g.built.data(), bricks, 3 * bytes)) return std::nullopt;
+  if (!readAt(fd, g.packed.data(), bytes, 0) || !readAt(fd, g.scaleBias.data(), biasBytes, bytes) ||
+      !readAt(fd, g.built.data(), bricks, bytes + biasBytes))
+    return std::nullopt;
   ++gradientHits_;
   return g;
 }
@@ -112,11 +112,13 @@ bool PartCache::buildsMore(int part, int field, const GradientFields& gradients)
 }
 
 void PartCache::writeGradients(int part, int field, const GradientFields& gradients) {
-  const int fd =
-      keep(strCat("part_", part, "_gradients_", field, "_", gradients.missing, ".f32"), [&](const std::string& path) {
+  const int fd = keep(
+      strCat("part_", part, "_gradients_", field, "_", gradients.missing, ".packed"), [&](const std::string& path) {
         std::ofstream out(path, std::ios::binary);
-        for (const std::vector<float>& g : gradients.values)
-          out.write(reinterpret_cast<const char*>(g.data()), std::streamsize(g.size() * sizeof(float)));
+        out.write(reinterpret_cast<const char*>(gradients.packed.data()),
+                  std::streamsize(gradients.packed.size() * sizeof(uint32_t)));
+        out.write(reinterpret_cast<const char*>(gradients.scaleBias.data()),
+                  std::streamsize(gradients.scaleBias.size() * sizeof(int32_t)));
         out.write(reinterpret_cast<const char*>(gradients.built.data()), std::streamsize(gradients.built.size()));
         if (!out.flush()) fail(path, ": cannot write");
       });

@@ -144,6 +144,13 @@ struct BasisAccumulator4 {
   /// exact zeros, so they equal BasisAccumulator's, with a fixed loop of eight cells (fewer
   /// branches for a GPU's warps) and 32-bit indices within the brick.
   EXA_HOST_DEVICE inline void addBrick(const Brick& brick, const vec4f* brickValues, const vec3f& p) {
+    const vec4f* values = brickValues + brick.valueOffset;
+    addBrickWith(
+        brick, [values](uint32_t i) { return loadVec4(values + i); }, p);
+  }
+
+  /// The same with the brick's cells' four values from load(index within the brick).
+  template <class Load> EXA_HOST_DEVICE inline void addBrickWith(const Brick& brick, const Load& load, const vec3f& p) {
     const float invW = inverseWidth(brick.level);
     int cell[3][2];
     float h[3][2];
@@ -161,18 +168,17 @@ struct BasisAccumulator4 {
       cell[a][1] = first && second ? i0 + 1 : cell[a][0];
       h[a][1] = first && second ? f : 0.f;
     }
-    const vec4f* values = brickValues + brick.valueOffset;
     const uint32_t nx = uint32_t(brick.size.x), nxy = nx * uint32_t(brick.size.y);
     if (!haveReference) {
-      v0 = loadVec4(values + (uint32_t(cell[0][0]) + nx * uint32_t(cell[1][0]) + nxy * uint32_t(cell[2][0])));
+      v0 = load(uint32_t(cell[0][0]) + nx * uint32_t(cell[1][0]) + nxy * uint32_t(cell[2][0]));
       haveReference = true;
     }
     for (int iz = 0; iz < 2; ++iz)
       for (int iy = 0; iy < 2; ++iy) {
-        const vec4f* row = values + (nx * uint32_t(cell[1][iy]) + nxy * uint32_t(cell[2][iz]));
+        const uint32_t row = nx * uint32_t(cell[1][iy]) + nxy * uint32_t(cell[2][iz]);
         const float hyz = h[1][iy] * h[2][iz];
         for (int ix = 0; ix < 2; ++ix) {
-          const vec4f v = loadVec4(row + cell[0][ix]) - v0;
+          const vec4f v = load(row + uint32_t(cell[0][ix])) - v0;
           const float weight = h[0][ix] * hyz;
           sumW += weight;
           sumWV += weight * v;

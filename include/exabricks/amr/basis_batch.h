@@ -8,6 +8,7 @@
 #pragma once
 
 #include "exabricks/amr/basis.h"
+#include "exabricks/amr/gradient_pack.h"
 
 #include <cstdint>
 #include <string>
@@ -60,35 +61,45 @@ inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex,
   sampleBricksBatchScalar(view, view.brickIds + region.brickBegin, region.brickCount, batch, gradient);
 }
 
-/// Most value arrays sampleFieldsBatch reconstructs in one pass (a field and its three gradient
-/// fields).
-constexpr int kMaxBatchFields = 4;
+/// Smooth shading's packed gradient fields of a field (amr/gradients.h): per cell the packed bits,
+/// in the field's brick order, and per brick the scale bias they decode with.
+struct PackedGradientView {
+  const uint32_t* cells = nullptr;
+  const int32_t* scaleBias = nullptr;
+};
 
-/// `fields` (1..kMaxBatchFields) value arrays laid out as view.values (the same bricks: a field and
-/// its gradient fields, say) reconstructed at every sample of the batch in one pass over the
-/// bricks: each brick's hat factors and corner indices are found once and applied to every array,
-/// so out[f][i] equals sampleBricksBatch's value of view with its values replaced by values[f] (0
-/// where no cell has weight), to the bit. `valid`, where not null, gets sampleBricksBatch's valid
-/// flags (the same for every array). The batch's own results are left as they are.
-void sampleFieldsBatch(const FieldView& view, const float* const* values, int fields, const uint32_t* brickIds,
-                       uint32_t brickCount, const SampleBatch& batch, float* const* out, int32_t* valid = nullptr);
+/// A field's value (with `withValue`; out[0], else out[0] is not written) and its gradient
+/// (out[1], out[2], out[3]: the packed gradient fields reconstructed like values, each cell
+/// decoded to unpackGradient's floats) at every sample of the batch, in one pass over the bricks.
+/// `valid`, where not null, gets sampleBricksBatch's valid flags. The batch is left as it is.
+void sampleShadedBatch(const FieldView& view, const PackedGradientView& gradients, bool withValue,
+                       const uint32_t* brickIds, uint32_t brickCount, const SampleBatch& batch, float* const* out,
+                       int32_t* valid = nullptr);
 
-/// The same field after field through sampleBricksBatchScalar (the reference).
-inline void sampleFieldsBatchScalar(const FieldView& view, const float* const* values, int fields,
+/// The same sample after sample through basis.h's BasisAccumulator4 (the reference).
+inline void sampleShadedBatchScalar(const FieldView& view, const PackedGradientView& gradients, bool withValue,
                                     const uint32_t* brickIds, uint32_t brickCount, const SampleBatch& batch,
                                     float* const* out, int32_t* valid = nullptr) {
-  for (int f = 0; f < fields; ++f) {
-    FieldView v = view;
-    v.values = values[f];
-    SampleBatch b;
-    b.count = batch.count;
-    for (int i = 0; i < batch.count; ++i)
-      b.x[i] = batch.x[i], b.y[i] = batch.y[i], b.z[i] = batch.z[i];
-    sampleBricksBatchScalar(v, brickIds, brickCount, b, false);
-    for (int i = 0; i < batch.count; ++i) {
-      out[f][i] = b.valid[i] ? b.value[i] : 0.f;
-      if (valid && f == 0) valid[i] = b.valid[i];
+  for (int i = 0; i < batch.count; ++i) {
+    BasisAccumulator4 acc;
+    const vec3f p(batch.x[i], batch.y[i], batch.z[i]);
+    for (uint32_t k = 0; k < brickCount; ++k) {
+      const Brick& brick = view.bricks[brickIds[k]];
+      const float* values = view.values + brick.valueOffset;
+      const uint32_t* cells = gradients.cells + brick.valueOffset;
+      const int32_t bias = gradients.scaleBias[brickIds[k]];
+      acc.addBrickWith(
+          brick,
+          [&](uint32_t c) {
+            const vec3f g = unpackGradient(cells[c], bias);
+            return vec4f(withValue ? values[c] : 0.f, g.x, g.y, g.z);
+          },
+          p);
     }
+    const vec4f r = acc.valid() ? acc.value() : vec4f();
+    if (withValue) out[0][i] = r.x;
+    out[1][i] = r.y, out[2][i] = r.z, out[3][i] = r.w;
+    if (valid) valid[i] = acc.valid();
   }
 }
 
@@ -100,10 +111,10 @@ SampleRegionBatchFunction sampleRegionBatchFunction();
 /// sampleBricksBatch's implementation for the instruction set chosen now (as above).
 using SampleBricksBatchFunction = void (*)(const FieldView&, const uint32_t*, uint32_t, SampleBatch&, bool);
 SampleBricksBatchFunction sampleBricksBatchFunction();
-/// sampleFieldsBatch's implementation for the instruction set chosen now (as above).
-using SampleFieldsBatchFunction = void (*)(const FieldView&, const float* const*, int, const uint32_t*, uint32_t,
+/// sampleShadedBatch's implementation for the instruction set chosen now (as above).
+using SampleShadedBatchFunction = void (*)(const FieldView&, const PackedGradientView&, bool, const uint32_t*, uint32_t,
                                            const SampleBatch&, float* const*, int32_t*);
-SampleFieldsBatchFunction sampleFieldsBatchFunction();
+SampleShadedBatchFunction sampleShadedBatchFunction();
 
 /// The instruction set sampleRegionBatch runs with on this CPU ("AVX2", "AVX3", "SSE4", ...;
 /// "scalar" when built without Highway).

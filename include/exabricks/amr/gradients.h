@@ -7,6 +7,7 @@
 
 #include "exabricks/amr/basis.h"
 #include "exabricks/amr/bricks.h"
+#include "exabricks/amr/gradient_pack.h"
 
 #include <array>
 #include <vector>
@@ -19,17 +20,30 @@ namespace exa {
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
                                                 size_t regionCount, size_t valueCount);
 
-/// Gradient fields built brick by brick, as scenes need them (a renderer's smooth shading).
+/// Gradient fields built brick by brick, as scenes need them (a renderer's smooth shading), each
+/// cell's gradient packed into 32 bits (gradient_pack.h): a third of three float fields.
 struct GradientFields {
-  std::array<std::vector<float>, 3> values; ///< as cellGradients gives, 0 in the bricks not built
-  std::vector<uint8_t> built;               ///< per brick: 1 where its cells' are built
-  size_t missing = 0;                       ///< bricks not built
-  uint64_t version = 0;                     ///< counts the builds: a copy is current while it is unchanged
+  std::vector<uint32_t> packed;   ///< per cell, in brick order (0, a zero gradient, where not built)
+  std::vector<int32_t> scaleBias; ///< per brick: gradientScaleBias of its base exponent
+  std::vector<uint8_t> built;     ///< per brick: 1 where its cells' are built
+  size_t missing = 0;             ///< bricks not built
+  uint64_t version = 0;           ///< counts the builds: a copy is current while it is unchanged
+
+  /// Empty fields for `cells` cells in `bricks` bricks, none built.
+  void reset(size_t cells, size_t bricks);
+  /// The gradient of cell `slot` of brick `brick` as the renderers reconstruct it (decoded).
+  vec3f at(size_t slot, size_t brick) const { return unpackGradient(packed[slot], scaleBias[brick]); }
 };
 
 /// The same, for the bricks that `which` lists (indices into `bricks`) only, written into `out`
 /// (each of the field's value count) at their cells' slots; the other cells are left as they are.
 void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
                        const std::vector<uint32_t>& which, std::array<std::vector<float>, 3>& out);
+
+/// The same, packed into `out` (sized by reset): each brick's base exponent from its own cells'
+/// largest component, so that every cell keeps 8 significant bits unless it is more than 2^31
+/// times smaller than the brick's largest.
+void fillPackedGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
+                         const std::vector<uint32_t>& which, GradientFields& out);
 
 } // namespace exa

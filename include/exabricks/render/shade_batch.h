@@ -71,13 +71,13 @@ struct ShadedBatch {
 void shadeVolumeBatch(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
                       ShadedBatch& out);
 
-/// placeSamples, sampleBricksBatch, sampleFieldsBatch, tfLookupBatch and shadeVolumeBatch for the
+/// placeSamples, sampleBricksBatch, sampleShadedBatch, tfLookupBatch and shadeVolumeBatch for the
 /// instruction set
 /// chosen now, looked up once for the many batches of a ray (see sampleRegionBatchFunction).
 struct BatchFunctions {
   int (*place)(const vec3f&, const vec3f&, SegmentMarch&, SampleBatch&, float*);
   SampleBricksBatchFunction sample;
-  SampleFieldsBatchFunction sampleFields;
+  SampleShadedBatchFunction sampleShaded;
   bool (*tfLookup)(const TfTableView&, const SampleBatch&, TfBatch&);
   void (*shade)(const SampleBatch&, const TfBatch&, const float*, const VolumeShadeParams&, ShadedBatch&);
 };
@@ -110,7 +110,7 @@ inline void shadeVolumeBatchScalar(const SampleBatch& batch, const TfBatch& tf, 
 
 /// The same four functions lane after lane (the reference table; RendererOptions::vectorized off).
 inline BatchFunctions scalarBatchFunctions() {
-  return {placeSamplesScalar, sampleBricksBatchScalar, sampleFieldsBatchScalar, tfLookupBatchScalar,
+  return {placeSamplesScalar, sampleBricksBatchScalar, sampleShadedBatchScalar, tfLookupBatchScalar,
           shadeVolumeBatchScalar};
 }
 

@@ -1,0 +1,151 @@
+// Smooth shading's packed gradient fields: a cell's gradient in 32 bits (gradient_pack.h) keeps
+// its components within 1/255 of its largest above its brick's base, the packed fields equal the
+// float fields to that bound, and the vectorised reconstruction of a value with its packed
+// gradient equals the scalar reference.
+#include "datasets.h"
+
+#include "exabricks/amr/basis_batch.h"
+#include "exabricks/amr/gradient_pack.h"
+#include "exabricks/amr/gradients.h"
+#include "exabricks/amr/model.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace exa {
+namespace {
+
+float largest(const vec3f& g) { return std::max(std::abs(g.x), std::max(std::abs(g.y), std::abs(g.z))); }
+
+TEST(GradientPack, KeepsEightBitsOfTheLargestComponentOverEveryMagnitude) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-1.f, 1.f);
+  std::uniform_int_distribution<int> octave(-90, 120);
+  for (int trial = 0; trial < 100000; ++trial) {
+    vec3f g(u(rng), u(rng), u(rng));
+    g = g * std::ldexp(1.f, octave(rng));
+    if (trial % 5 == 0) g[trial % 3] = 0.f;
+    const int base = gradientBase(packedGradientExponent(g));
+    const vec3f back = unpackGradient(packGradient(g, base), gradientScaleBias(base));
+    const float m = largest(g);
+    for (int a = 0; a < 3; ++a)
+      ASSERT_LE(std::abs(back[a] - g[a]), m / 255.f) << "trial " << trial << " axis " << a;
+    ASSERT_LE(std::abs(largest(back) - m), m / 255.f);
+  }
+}
+
+TEST(GradientPack, ZeroNonFiniteAndRoundingToTheNextExponent) {
+  const int base = gradientBase(0);
+  EXPECT_EQ(unpackGradient(packGradient(vec3f(0.f), base), gradientScaleBias(base)), vec3f(0.f));
+  const float inf = std::numeric_limits<float>::infinity(), nan = std::numeric_limits<float>::quiet_NaN();
+  const vec3f odd(inf, 2.f, nan);
+  const int oddBase = gradientBase(packedGradientExponent(odd));
+  EXPECT_EQ(unpackGradient(packGradient(odd, oddBase), gradientScaleBias(oddBase)), vec3f(0.f, 2.f, 0.f));
+  // 255.75 rounds to 256, which needs the next exponent: 256 exactly, the sign kept.
+  const vec3f edge(-255.75f, 1.f, 0.5f);
+  const int edgeBase = gradientBase(packedGradientExponent(edge));
+  const vec3f back = unpackGradient(packGradient(edge, edgeBase), gradientScaleBias(edgeBase));
+  EXPECT_EQ(back.x, -256.f);
+  EXPECT_EQ(back.y, 0.f); // half a unit of 2: to even
+  // Far below the base: every component within half a unit of the base, so zero or near it.
+  const int high = gradientBase(packedGradientExponent(vec3f(1e20f, 0.f, 0.f)));
+  const vec3f tiny = unpackGradient(packGradient(vec3f(1.f, -1.f, 0.5f), high), gradientScaleBias(high));
+  EXPECT_EQ(tiny, vec3f(0.f));
+  // A cell 2^20 times smaller than its brick's largest keeps its eight bits.
+  const vec3f small(3.3e-6f, -1.1e-6f, 0.f);
+  const int shared = gradientBase(packedGradientExponent(vec3f(3.3f, 0.f, 0.f)));
+  const vec3f kept = unpackGradient(packGradient(small, shared), gradientScaleBias(shared));
+  for (int a = 0; a < 3; ++a)
+    EXPECT_LE(std::abs(kept[a] - small[a]), largest(small) / 255.f) << a;
+}
+
+TEST(GradientPack, PackedFieldsAreTheFloatFieldsToEightBits) {
+  for (const test::NamedCells& d : test::smallDatasets()) {
+    const Model m = buildModel(CellSet(d.cells));
+    const FieldView view = m.view(0);
+    const size_t cells = m.fieldValues[0].size();
+    const std::array<std::vector<float>, 3> g = cellGradients(view, m.bricks, m.regions.regions.size(), cells);
+    GradientFields packed;
+    packed.reset(cells, m.bricks.size());
+    std::vector<uint32_t> all(m.bricks.size());
+    for (size_t b = 0; b < all.size(); ++b)
+      all[b] = uint32_t(b);
+    fillPackedGradients(view, m.bricks, m.regions.regions.size(), all, packed);
+    for (size_t b = 0; b < m.bricks.size(); ++b) {
+      float brickLargest = 0.f;
+      for (uint32_t i = 0; i < m.bricks[b].cellCount(); ++i) {
+        const size_t s = m.bricks[b].valueOffset + i;
+        brickLargest = std::max(brickLargest, largest(vec3f(g[0][s], g[1][s], g[2][s])));
+      }
+      for (uint32_t i = 0; i < m.bricks[b].cellCount(); ++i) {
+        const size_t s = m.bricks[b].valueOffset + i;
+        const vec3f f(g[0][s], g[1][s], g[2][s]), back = packed.at(s, b);
+        // Eight bits of the cell's own largest component, or half a unit of the brick's base.
+        const float bound = std::max(largest(f) / 255.f, std::ldexp(brickLargest, -39));
+        for (int a = 0; a < 3; ++a)
+          ASSERT_LE(std::abs(back[a] - f[a]), bound) << d.name << " brick " << b << " cell " << i;
+      }
+    }
+  }
+}
+
+TEST(GradientPack, ValueAndPackedGradientInOnePassEqualTheScalarReference) {
+  for (const std::string& target : batchTargets()) {
+    ASSERT_TRUE(useBatchTarget(target)) << target;
+    SCOPED_TRACE("instruction set " + target);
+    for (const test::NamedCells& d : test::smallDatasets()) {
+      const Model m = buildModel(CellSet(d.cells));
+      const FieldView view = m.view(0);
+      GradientFields fields;
+      fields.reset(m.fieldValues[0].size(), m.bricks.size());
+      std::vector<uint32_t> all(m.bricks.size());
+      for (size_t b = 0; b < all.size(); ++b)
+        all[b] = uint32_t(b);
+      fillPackedGradients(view, m.bricks, m.regions.regions.size(), all, fields);
+      const PackedGradientView packed{fields.packed.data(), fields.scaleBias.data()};
+      std::mt19937 rng(9);
+      std::uniform_real_distribution<float> u(0.f, 1.f);
+      std::uniform_int_distribution<int> pickRegion(0, int(m.regions.regions.size()) - 1);
+      for (int trial = 0; trial < 200; ++trial) {
+        const Region& region = m.regions.regions[size_t(pickRegion(rng))];
+        const box3f b = region.bounds();
+        const vec3f grow = (b.upper - b.lower) * 0.5f; // some samples where no cell has weight
+        SampleBatch batch;
+        batch.count = 1 + trial % kSampleBatch;
+        for (int i = 0; i < batch.count; ++i) {
+          batch.x[i] = b.lower.x - grow.x + u(rng) * (b.upper.x - b.lower.x + 2.f * grow.x);
+          batch.y[i] = b.lower.y - grow.y + u(rng) * (b.upper.y - b.lower.y + 2.f * grow.y);
+          batch.z[i] = b.lower.z - grow.z + u(rng) * (b.upper.z - b.lower.z + 2.f * grow.z);
+        }
+        const bool withValue = trial % 2 == 0;
+        alignas(64) float got[4][kSampleBatch] = {}, ref[4][kSampleBatch] = {};
+        alignas(64) int32_t valid[kSampleBatch], refValid[kSampleBatch];
+        float* const out[4] = {got[0], got[1], got[2], got[3]};
+        float* const expected[4] = {ref[0], ref[1], ref[2], ref[3]};
+        const uint32_t* ids = m.regions.brickIds.data() + region.brickBegin;
+        sampleShadedBatch(view, packed, withValue, ids, region.brickCount, batch, out, valid);
+        sampleShadedBatchScalar(view, packed, withValue, ids, region.brickCount, batch, expected, refValid);
+        SampleBatch alone = batch;
+        sampleBricksBatch(view, ids, region.brickCount, alone, false);
+        for (int i = 0; i < batch.count; ++i) {
+          ASSERT_EQ(valid[i] != 0, alone.valid[i] != 0) << d.name << " sample " << i;
+          ASSERT_EQ(refValid[i] != 0, alone.valid[i] != 0) << d.name << " sample " << i;
+          if (withValue) {
+            ASSERT_EQ(got[0][i], alone.valid[i] ? alone.value[i] : 0.f) << d.name << " sample " << i;
+          }
+          const float scale = 1.f + largest(vec3f(ref[1][i], ref[2][i], ref[3][i]));
+          for (int a = 1; a < 4; ++a)
+            ASSERT_NEAR(got[a][i], ref[a][i], 4e-6f * scale) << d.name << " sample " << i << " axis " << a;
+        }
+      }
+    }
+  }
+  EXPECT_TRUE(useBatchTarget(""));
+}
+
+} // namespace
+} // namespace exa
