@@ -347,32 +347,26 @@ template <class D> HWY_INLINE PackedCorner<D> DecodePacked(D d, hn::Vec<D> bits,
   return c;
 }
 
-// The packed gradient's sums of one brick, row by row (each row's two corners decoded and weighed
-// along x at once, so that few decoded corners are live), then along y and z: AddCorners' sums
-// per component, the reference set from the first row's corner where `newRef`.
+// The packed gradient's sums of one brick, row by row (each row's two corners decoded, their
+// scales folded into the x hat factors that the three components share), then along y and z.
+// Without a reference value: the components are quantised far above float round-off.
 template <class D>
 HWY_INLINE void AddPackedCorners(D d, const BrickHats<D>& h, const hn::Vec<D> (&b0)[2][2], const hn::Vec<D> (&b1)[2][2],
-                                 hn::Vec<hn::RebindToSigned<D>> bias, const CornerIndex<D>& ci, hn::Mask<D> newRef,
-                                 BatchSums<D> (&g)[3]) {
+                                 hn::Vec<hn::RebindToSigned<D>> bias, hn::Vec<D> (&sum)[3]) {
   using V = hn::Vec<D>;
   V ex[3][2][2];
   for (int z = 0; z < 2; ++z)
     for (int y = 0; y < 2; ++y) {
       const PackedCorner<D> q0 = DecodePacked(d, b0[z][y], bias), q1 = DecodePacked(d, b1[z][y], bias);
-      for (int a = 0; a < 3; ++a) {
-        if (z == 0 && y == 0) {
-          const V first = hn::IfThenElse(ci.above, hn::Mul(q1.m[a], q1.scale), hn::Mul(q0.m[a], q0.scale));
-          g[a].v0 = hn::IfThenElse(newRef, first, g[a].v0);
-        }
-        const V a0 = hn::MulSub(q0.m[a], q0.scale, g[a].v0), a1 = hn::MulSub(q1.m[a], q1.scale, g[a].v0);
-        ex[a][z][y] = hn::MulAdd(h.h1[0], a1, hn::Mul(h.h0[0], a0));
-      }
+      const V w0 = hn::Mul(h.h0[0], q0.scale), w1 = hn::Mul(h.h1[0], q1.scale);
+      for (int a = 0; a < 3; ++a)
+        ex[a][z][y] = hn::MulAdd(w1, q1.m[a], hn::Mul(w0, q0.m[a]));
     }
   for (int a = 0; a < 3; ++a) {
     V eyz[2];
     for (int z = 0; z < 2; ++z)
       eyz[z] = hn::MulAdd(h.h1[1], ex[a][z][1], hn::Mul(h.h0[1], ex[a][z][0]));
-    g[a].sumWV = hn::Add(g[a].sumWV, hn::MulAdd(h.h1[2], eyz[1], hn::Mul(h.h0[2], eyz[0])));
+    sum[a] = hn::Add(sum[a], hn::MulAdd(h.h1[2], eyz[1], hn::Mul(h.h0[2], eyz[0])));
   }
 }
 
@@ -396,11 +390,10 @@ void SampleShadedFor(const FieldView& view, const PackedGradientView& packed, co
   const float* bits = reinterpret_cast<const float*>(packed.cells); // moved as bits, never as floats
   for (size_t base = 0; base < size_t(batch.count); base += lanes) {
     const V p[3] = {hn::Load(d, pos[0] + base), hn::Load(d, pos[1] + base), hn::Load(d, pos[2] + base)};
-    BatchSums<D> s, g[3];
+    BatchSums<D> s;
     s.sumW = zero, s.sumWV = zero, s.v0 = zero;
-    for (BatchSums<D>& f : g)
-      f.sumWV = zero, f.v0 = zero;
-    hn::Mask<D> haveRef = one < zero; // all false
+    s.haveRef = one < zero; // all false
+    V g[3] = {zero, zero, zero};
     for (uint32_t k = 0; k < brickCount; ++k) {
       const Brick& brick = view.bricks[brickIds[k]];
       const V invW = hn::Set(d, inverseWidth(brick.level));
@@ -409,9 +402,9 @@ void SampleShadedFor(const FieldView& view, const PackedGradientView& packed, co
       BrickFactors(d, brick, invW, h);
       CornerIndex<D> ci;
       IndexCorners(d, brick, h, ci);
-      const hn::Mask<D> newRef = hn::AndNot(haveRef, h.any);
-      haveRef = hn::Or(haveRef, newRef);
       if constexpr (kValue) {
+        const hn::Mask<D> newRef = hn::AndNot(s.haveRef, h.any);
+        s.haveRef = hn::Or(s.haveRef, newRef);
         V c0[2][2], c1[2][2];
         FetchCorners(d, view.values + brick.valueOffset, ci, c0, c1);
         s.v0 = hn::IfThenElse(newRef, hn::IfThenElse(ci.above, c1[0][0], c0[0][0]), s.v0);
@@ -422,14 +415,14 @@ void SampleShadedFor(const FieldView& view, const PackedGradientView& packed, co
       }
       V b0[2][2], b1[2][2];
       FetchCorners(d, bits + brick.valueOffset, ci, b0, b1);
-      AddPackedCorners(d, h, b0, b1, hn::Set(di, packed.scaleBias[brickIds[k]]), ci, newRef, g);
+      AddPackedCorners(d, h, b0, b1, hn::Set(di, packed.scaleBias[brickIds[k]]), g);
     }
     const hn::Mask<D> ok = s.sumW > zero;
     const V safeW = hn::IfThenElse(ok, s.sumW, one);
     if constexpr (kValue) hn::StoreU(hn::IfThenElseZero(ok, hn::Add(s.v0, hn::Div(s.sumWV, safeW))), d, out[0] + base);
     if (valid) hn::StoreU(hn::VecFromMask(di, hn::RebindMask(di, ok)), di, valid + base);
     for (int a = 0; a < 3; ++a) // whole vectors: padded <= kSampleBatch
-      hn::StoreU(hn::IfThenElseZero(ok, hn::Add(g[a].v0, hn::Div(g[a].sumWV, safeW))), d, out[1 + a] + base);
+      hn::StoreU(hn::IfThenElseZero(ok, hn::Div(g[a], safeW)), d, out[1 + a] + base);
   }
 }
 

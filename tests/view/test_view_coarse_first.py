@@ -149,7 +149,7 @@ def start_in_parts(start_viewer, cli, args):
         if last or "drawn from every level in" in v.stderr_path.read_text():
             return v, budget
         v.stop()  # held whole: the process was smaller than when it was asked
-        budget = max(1, budget - (high - low) // 2)
+        budget = max(1, budget - max(1, (high - low) // 2))
     raise AssertionError("unreachable")
 
 
