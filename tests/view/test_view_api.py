@@ -90,7 +90,9 @@ def test_a_path_traced_view_refines_to_its_noise_target_and_equals_the_command_l
     final = frames[-1]
     assert "noise target 2/255 (denoised) reached" in final.get("data", ""), final
     refined = [f["passes"] for f in frames if f["request"] == request and not f["draft"]]
-    assert refined == sorted(refined) and len(refined) >= 8
+    # The stream sends the latest frame: on a loaded machine the client sees fewer of the rounds
+    # (never one out of order), and the last holds the passes of rounds beyond the first.
+    assert refined == sorted(refined) and len(refined) >= 2 and refined[-1] >= 8, refined
     status, png, _ = v.request("GET", "/api/snapshot.png?request=%d" % request)
     assert status == 200 and png == cli_png(cli, tmp_path, doc)
 
