@@ -21,6 +21,17 @@ namespace {
 
 float largest(const vec3f& g) { return std::max(std::abs(g.x), std::max(std::abs(g.y), std::abs(g.z))); }
 
+/// The model's first field's packed gradient fields, built in every brick.
+GradientFields packedEverywhere(const Model& m) {
+  GradientFields fields;
+  fields.reset(m.fieldValues[0].size(), m.bricks.size());
+  std::vector<uint32_t> all(m.bricks.size());
+  for (size_t b = 0; b < all.size(); ++b)
+    all[b] = uint32_t(b);
+  fillPackedGradients(m.view(0), m.bricks, m.regions.regions.size(), all, fields);
+  return fields;
+}
+
 TEST(GradientPack, KeepsEightBitsOfTheLargestComponentOverEveryMagnitude) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-1.f, 1.f);
@@ -69,12 +80,7 @@ TEST(GradientPack, PackedFieldsAreTheFloatFieldsToEightBits) {
     const FieldView view = m.view(0);
     const size_t cells = m.fieldValues[0].size();
     const std::array<std::vector<float>, 3> g = cellGradients(view, m.bricks, m.regions.regions.size(), cells);
-    GradientFields packed;
-    packed.reset(cells, m.bricks.size());
-    std::vector<uint32_t> all(m.bricks.size());
-    for (size_t b = 0; b < all.size(); ++b)
-      all[b] = uint32_t(b);
-    fillPackedGradients(view, m.bricks, m.regions.regions.size(), all, packed);
+    const GradientFields packed = packedEverywhere(m);
     for (size_t b = 0; b < m.bricks.size(); ++b) {
       float brickLargest = 0.f;
       for (uint32_t i = 0; i < m.bricks[b].cellCount(); ++i) {
@@ -100,12 +106,7 @@ TEST(GradientPack, ValueAndPackedGradientInOnePassEqualTheScalarReference) {
     for (const test::NamedCells& d : test::smallDatasets()) {
       const Model m = buildModel(CellSet(d.cells));
       const FieldView view = m.view(0);
-      GradientFields fields;
-      fields.reset(m.fieldValues[0].size(), m.bricks.size());
-      std::vector<uint32_t> all(m.bricks.size());
-      for (size_t b = 0; b < all.size(); ++b)
-        all[b] = uint32_t(b);
-      fillPackedGradients(view, m.bricks, m.regions.regions.size(), all, fields);
+      const GradientFields fields = packedEverywhere(m);
       const PackedGradientView packed{fields.packed.data(), fields.scaleBias.data()};
       std::mt19937 rng(9);
       std::uniform_real_distribution<float> u(0.f, 1.f);

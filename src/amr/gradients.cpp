@@ -186,6 +186,24 @@ private:
 
 } // namespace
 
+namespace {
+/// Each brick of `which` on the worker threads, its centres' block filled, then handed to
+/// use(brick index, block).
+template <class Use>
+void forBrickBlocks(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
+                    const std::vector<uint32_t>& which, Use&& use) {
+  if (which.empty()) return;
+  const std::vector<int32_t> levels = regionLevels(view, regionCount);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, which.size()), [&](const tbb::blocked_range<size_t>& range) {
+    CentreBlock block(view, levels);
+    for (size_t i = range.begin(); i < range.end(); ++i) {
+      block.fill(bricks[which[i]]);
+      use(which[i], block);
+    }
+  });
+}
+} // namespace
+
 std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std::vector<Brick>& bricks,
                                                 size_t regionCount, size_t valueCount) {
   std::array<std::vector<float>, 3> out;
@@ -194,37 +212,14 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
   std::vector<uint32_t> all(bricks.size());
   for (size_t i = 0; i < all.size(); ++i)
     all[i] = uint32_t(i);
-  fillCellGradients(view, bricks, regionCount, all, out);
-  return out;
-}
-
-namespace {
-/// Each brick of `which` on the worker threads, its centres' block filled, then handed to `use`.
-template <class Use>
-void forBrickBlocks(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
-                    const std::vector<uint32_t>& which, Use&& use) {
-  if (which.empty()) return;
-  const std::vector<int32_t> levels = regionLevels(view, regionCount);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, which.size()), [&](const tbb::blocked_range<size_t>& range) {
-    CentreBlock block(view, levels);
-    std::vector<vec3f> scratch;
-    for (size_t i = range.begin(); i < range.end(); ++i) {
-      block.fill(bricks[which[i]]);
-      use(which[i], block, scratch);
-    }
-  });
-}
-} // namespace
-
-void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
-                       const std::vector<uint32_t>& which, std::array<std::vector<float>, 3>& out) {
-  forBrickBlocks(view, bricks, regionCount, which, [&](uint32_t b, const CentreBlock& block, std::vector<vec3f>&) {
+  forBrickBlocks(view, bricks, regionCount, all, [&](uint32_t b, const CentreBlock& block) {
     const size_t offset = bricks[b].valueOffset;
     block.differences([&](uint32_t slot, const vec3f& g) {
       for (int a = 0; a < 3; ++a)
         out[size_t(a)][offset + slot] = g[a];
     });
   });
+  return out;
 }
 
 void GradientFields::reset(size_t cells, size_t bricks) {
@@ -236,20 +231,16 @@ void GradientFields::reset(size_t cells, size_t bricks) {
 
 void fillPackedGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
                          const std::vector<uint32_t>& which, GradientFields& out) {
-  forBrickBlocks(view, bricks, regionCount, which,
-                 [&](uint32_t b, const CentreBlock& block, std::vector<vec3f>& scratch) {
-                   scratch.resize(bricks[b].cellCount());
-                   int largest = kGradientBaseMin;
-                   block.differences([&](uint32_t slot, const vec3f& g) {
-                     scratch[slot] = g;
-                     largest = std::max(largest, packedGradientExponent(g));
-                   });
-                   const int base = gradientBase(largest);
-                   out.scaleBias[b] = gradientScaleBias(base);
-                   uint32_t* cells = out.packed.data() + bricks[b].valueOffset;
-                   for (size_t i = 0; i < scratch.size(); ++i)
-                     cells[i] = packGradient(scratch[i], base);
-                 });
+  forBrickBlocks(view, bricks, regionCount, which, [&](uint32_t b, const CentreBlock& block) {
+    // The differences twice (cheap next to filling the block): the brick's largest exponent
+    // first, then each cell packed above the base it gives.
+    int largest = kGradientBaseMin;
+    block.differences([&](uint32_t, const vec3f& g) { largest = std::max(largest, packedGradientExponent(g)); });
+    const int base = gradientBase(largest);
+    out.scaleBias[b] = gradientScaleBias(base);
+    uint32_t* cells = out.packed.data() + bricks[b].valueOffset;
+    block.differences([&](uint32_t slot, const vec3f& g) { cells[slot] = packGradient(g, base); });
+  });
 }
 
 } // namespace exa

@@ -3,8 +3,9 @@
 // collisions where dense and empty space share a coarse region. The macrocells' value ranges are
 // built once per field; the majorants again with every transfer function. Where a macrocell's
 // majorant would cost rays many collisions, its range is narrowed to the reconstruction's range
-// there, exact where it has a value everywhere (kept for every later transfer function): a cell's value otherwise
-// reaches a whole cell beyond its support's ramp, which at an opaque boundary in clear space is most of the collisions.
+// there, exact where it has a value everywhere (kept for every later transfer function): a
+// cell's value otherwise reaches a whole cell beyond its support's ramp, which at an opaque
+// boundary in clear space is most of the collisions.
 #pragma once
 
 #include "layer_table.h"

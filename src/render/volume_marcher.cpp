@@ -413,7 +413,8 @@ void VolumeMarcher::adoptGradients(int field, GradientFields gradients) {
     fail("gradient fields of ", gradients.packed.size(), " cells adopted for a field of ",
          model_.fieldValues[size_t(field)].size());
   if (gradients.built.size() != model_.bricks.size() || gradients.scaleBias.size() != model_.bricks.size())
-    fail("gradient fields of ", gradients.built.size(), " bricks adopted for a model of ", model_.bricks.size());
+    fail("gradient fields of ", gradients.built.size(), " bricks (", gradients.scaleBias.size(),
+         " scales) adopted for a model of ", model_.bricks.size());
   if (gradientFields_.count(field)) return; // one already built (and pointed at) stays
   gradients.missing = size_t(std::count(gradients.built.begin(), gradients.built.end(), uint8_t(0)));
   gradients.version = 1;

@@ -35,14 +35,10 @@ struct GradientFields {
   vec3f at(size_t slot, size_t brick) const { return unpackGradient(packed[slot], scaleBias[brick]); }
 };
 
-/// The same, for the bricks that `which` lists (indices into `bricks`) only, written into `out`
-/// (each of the field's value count) at their cells' slots; the other cells are left as they are.
-void fillCellGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
-                       const std::vector<uint32_t>& which, std::array<std::vector<float>, 3>& out);
-
-/// The same, packed into `out` (sized by reset): each brick's base exponent from its own cells'
-/// largest component, so that every cell keeps 8 significant bits unless it is more than 2^31
-/// times smaller than the brick's largest.
+/// cellGradients for the bricks that `which` lists (indices into `bricks`) only, packed into
+/// `out` (sized by reset) at their cells' slots; the other cells are left as they are. Each
+/// brick's base exponent comes from its own cells' largest component, so that every cell keeps 8
+/// significant bits unless it is more than 2^31 times smaller than the brick's largest.
 void fillPackedGradients(const FieldView& view, const std::vector<Brick>& bricks, size_t regionCount,
                          const std::vector<uint32_t>& which, GradientFields& out);
 
