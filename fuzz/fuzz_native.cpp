@@ -23,7 +23,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     const exa::Census census = exa::nativeCensus(cells);
     if (census.cells() < 1) __builtin_trap();
-    const exa::CellSet s = exa::readNative(cells, {}, exa::box3i(exa::vec3i(-2), exa::vec3i(3)));
+    const exa::CellSet s = exa::readNative(cells, {}, exa::box3i(exa::vec3i(-2), exa::vec3i(3)), false, 2);
     if (s.fields.size() != 1 || s.fields[0].values.size() != s.cells.size()) __builtin_trap();
   } catch (const exa::Error&) {
   }

@@ -257,15 +257,23 @@ TEST(Partition, NativeBoxReadsAndCensusStreamTheRecords) {
   const fs::path dir = fs::path(EXABRICKS_TEST_TMP) / "partition-native";
   fs::create_directories(dir);
   const std::string path = (dir / "s.cells").string();
-  CellSet s = generateScene({"shells", 6000, 4, 4});
+  // More records than one piece of the streamed read (65,536), so that boxes keep cells from
+  // several pieces.
+  CellSet s = generateScene({"shells", 150000, 4, 4});
+  ASSERT_GT(s.size(), size_t(2) << 16);
   writeNative(s, path);
   EXPECT_DOUBLE_EQ(nativeCensus(path).cells(), double(s.size()));
   EXPECT_EQ(nativeCensus(path).coarsestLevel, censusOf(s).coarsestLevel);
-  for (const box3i& box :
-       {box3i(vec3i(0), vec3i(20)), box3i(vec3i(10, -5, 30), vec3i(40, 18, 31)), box3i(vec3i(-100), vec3i(-90))}) {
+  const box3l all = s.bounds();
+  const box3i half(vec3i(all.lower), vec3i(vec3l(all.upper.x, all.upper.y, (all.lower.z + all.upper.z) / 2)));
+  for (const box3i& box : {box3i(vec3i(0), vec3i(20)), box3i(vec3i(10, -5, 30), vec3i(40, 18, 31)),
+                           box3i(vec3i(-100), vec3i(-90)), half}) {
     CellSet cropped = s;
     cropCells(cropped, box);
-    const CellSet read = readNative(path, {}, box);
+    // Room reserved for none, too few and about as many as the box holds: the same cells.
+    const CellSet read = readNative(path, {}, box, false, cropped.size() / 2);
+    for (size_t expected : {size_t(0), cropped.size() + 7})
+      EXPECT_EQ(readNative(path, {}, box, false, expected).cells, cropped.cells);
     EXPECT_EQ(read.cells, cropped.cells);
     ASSERT_EQ(read.fields.size(), s.fields.size());
     for (const Field& f : cropped.fields) {

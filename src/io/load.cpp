@@ -103,7 +103,9 @@ const std::vector<FormatReader>& formatReaders() {
          return readRaw(p, r.raw);
        }},
       {InputKind::Native, "exabricks cells", isNativeName, listNativeFields,
-       [](const std::string& p, const ReadRequest& r) { return readNative(p, r.fields, r.box, r.keepNonFinite); },
+       [](const std::string& p, const ReadRequest& r) {
+         return readNative(p, r.fields, r.box, r.keepNonFinite, r.expectedCells);
+       },
        nullptr, nativeCensus},
       {InputKind::Grids, ".grids fixture", isGridsName, scalarOnly,
        [](const std::string& p, const ReadRequest& r) {
@@ -441,7 +443,7 @@ Census loadCensus(const std::string& path, const LoadOptions& options) {
 }
 
 std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& options, const box3l& part,
-                                   int coarsestLevel) {
+                                   int coarsestLevel, double expectedCells) {
   const std::string source = path.empty() ? kDefaultDatasetName : path;
   const box3l reach = shadingReach(part, coarsestLevel);
   const InputKind kind = detectInput(path);
@@ -460,6 +462,7 @@ std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& o
     ReadRequest request;
     request.fields = options.fields;
     request.box = readBox;
+    request.expectedCells = size_t(std::max(0.0, std::ceil(expectedCells)));
     request.raw = options.raw;
     request.keepNonFinite = options.nonFinite == NonFinite::Holes;
     const FormatReader* reader = findReader(path);

@@ -164,7 +164,7 @@ int cubeLevel(const Census& census, double maxCells) {
   return level;
 }
 
-/// NAME.cells read a million records at a time, its cells summed into cubes 2^level wide: the
+/// NAME.cells read 65,536 records at a time, its cells summed into cubes 2^level wide: the
 /// cubes as cells, and the cells' value ranges.
 CellSet mergedNative(const std::string& path, const LoadOptions& options, int level, std::vector<range1f>& ranges) {
   const uint64_t count = fileSize(path) / sizeof(Cell);

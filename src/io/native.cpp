@@ -73,7 +73,10 @@ std::vector<std::string> listNativeFields(const std::string& cellsPath) {
 
 namespace {
 
-/// Reads NAME.cells in pieces of a million records, each validated, and hands them to `use`
+/// Records per piece of a streamed read: 1 MiB of cells, small beside any budget.
+constexpr uint64_t kPieceRecords = uint64_t(1) << 16;
+
+/// Reads NAME.cells in pieces of kPieceRecords records, each validated, and hands them to `use`
 /// with the index of their first record.
 template <typename Use> void streamCells(const std::string& cellsPath, Use&& use) {
   const uint64_t bytes = fileSize(cellsPath);
@@ -85,7 +88,7 @@ template <typename Use> void streamCells(const std::string& cellsPath, Use&& use
   if (!f) fail(cellsPath, ": cannot open: ", std::strerror(errno));
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, std::fclose);
   const uint64_t count = bytes / sizeof(Cell);
-  std::vector<Cell> chunk(size_t(std::min<uint64_t>(count, uint64_t(1) << 20)));
+  std::vector<Cell> chunk(size_t(std::min<uint64_t>(count, kPieceRecords)));
   for (uint64_t at = 0; at < count; at += chunk.size()) {
     const size_t n = size_t(std::min<uint64_t>(chunk.size(), count - at));
     if (std::fread(chunk.data(), sizeof(Cell), n, f) != n)
@@ -105,30 +108,22 @@ void checkFinite(float v, bool keepNonFinite, const std::string& path, uint64_t 
     fail(path, ": record ", record, ": value ", v, " of field '", name, "' is not finite");
 }
 
-/// The values of the records `keep` (ascending) of a .scalars file of `count` values.
-std::vector<float> readSelectedValues(const std::string& path, const std::string& name, uint64_t count,
-                                      const std::vector<uint64_t>& keep, bool keepNonFinite) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) fail(path, ": cannot open: ", std::strerror(errno));
-  std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, std::fclose);
-  std::vector<float> out;
-  out.reserve(keep.size());
-  std::vector<float> chunk(size_t(std::min<uint64_t>(count, uint64_t(1) << 20)));
-  size_t next = 0;
-  for (uint64_t at = 0; at < count && next < keep.size(); at += chunk.size()) {
-    const size_t n = size_t(std::min<uint64_t>(chunk.size(), count - at));
-    if (keep[next] >= at + n) { // nothing wanted in this piece
-      if (std::fseek(f, long(n * sizeof(float)), SEEK_CUR) != 0) fail(path, ": seek failed");
-      continue;
-    }
-    if (std::fread(chunk.data(), sizeof(float), n, f) != n) fail(path, ": read error (file changed while reading?)");
-    for (; next < keep.size() && keep[next] < at + n; ++next) {
-      const float v = chunk[size_t(keep[next] - at)];
-      checkFinite(v, keepNonFinite, path, keep[next], name);
-      out.push_back(v);
-    }
+/// The values of a piece's kept records (`kept`: ascending indices into the piece that starts
+/// at record `at`), read from `f` (the .scalars file at `path`) from the first kept to the last
+/// and appended to `out`.
+void appendKeptValues(std::FILE* f, const std::string& path, const std::string& name, uint64_t at,
+                      const std::vector<uint32_t>& kept, bool keepNonFinite, std::vector<float>& scratch,
+                      std::vector<float>& out) {
+  const uint64_t first = at + kept.front();
+  const size_t n = size_t(kept.back() - kept.front()) + 1;
+  scratch.resize(n);
+  if (std::fseek(f, long(first * sizeof(float)), SEEK_SET) != 0) fail(path, ": seek failed");
+  if (std::fread(scratch.data(), sizeof(float), n, f) != n) fail(path, ": read error (file changed while reading?)");
+  for (uint32_t i : kept) {
+    const float v = scratch[i - kept.front()];
+    checkFinite(v, keepNonFinite, path, at + i, name);
+    out.push_back(v);
   }
-  return out;
 }
 
 /// The fields to read: those asked for, else every NAME[.FIELD].scalars beside the cells.
@@ -226,25 +221,38 @@ std::vector<float> readNativeField(const std::string& cellsPath, const std::stri
 }
 
 CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& wanted, const box3i& box,
-                   bool keepNonFinite) {
+                   bool keepNonFinite, size_t expectedCells) {
   const std::string stem = stemOf(cellsPath);
   if (!box.empty()) {
-    // Only the cells overlapping the box are kept, read in pieces: memory for those alone.
+    // Only the cells overlapping the box are kept, with their values, read piece by piece: memory
+    // for those alone (reserved for `expectedCells` where the caller knows about how many).
+    const uint64_t count = fileSize(cellsPath) / sizeof(Cell);
     CellSet set;
-    std::vector<uint64_t> keep;
-    uint64_t count = 0;
-    streamCells(cellsPath, [&](const Cell* cells, size_t n, uint64_t at) {
-      for (size_t i = 0; i < n; ++i) {
-        if (!cellOverlaps(cells[i], box)) continue;
-        keep.push_back(at + i);
-        set.cells.push_back(cells[i]);
-      }
-      count = at + n;
-    });
+    std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> files;
+    std::vector<std::string> paths;
     for (const std::string& name : fieldNamesToRead(cellsPath, stem, wanted)) {
-      const std::string path = checkedScalarsPath(cellsPath, stem, name, count);
-      set.fields.push_back(Field{name, readSelectedValues(path, name, count, keep, keepNonFinite)});
+      paths.push_back(checkedScalarsPath(cellsPath, stem, name, count));
+      std::FILE* f = std::fopen(paths.back().c_str(), "rb");
+      if (!f) fail(paths.back(), ": cannot open: ", std::strerror(errno));
+      files.emplace_back(f, std::fclose);
+      set.fields.push_back(Field{name, {}});
+      set.fields.back().values.reserve(expectedCells);
     }
+    set.cells.reserve(expectedCells);
+    std::vector<uint32_t> kept;
+    std::vector<float> scratch;
+    streamCells(cellsPath, [&](const Cell* cells, size_t n, uint64_t at) {
+      kept.clear();
+      for (size_t i = 0; i < n; ++i)
+        if (cellOverlaps(cells[i], box)) {
+          kept.push_back(uint32_t(i));
+          set.cells.push_back(cells[i]);
+        }
+      if (kept.empty()) return;
+      for (size_t f = 0; f < files.size(); ++f)
+        appendKeptValues(files[f].get(), paths[f], set.fields[f].name, at, kept, keepNonFinite, scratch,
+                         set.fields[f].values);
+    });
     return set;
   }
   CellSet set;

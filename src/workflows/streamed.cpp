@@ -310,7 +310,7 @@ StreamedStep::Resident& StreamedStep::bring(int part) {
   r.bytes = need;
   std::optional<Model> m = cache_->read(part);
   if (!m) {
-    m = loadModelPart(input_, options_, partBox(part), plan_.coarsestLevel);
+    m = loadModelPart(input_, options_, partBox(part), plan_.coarsestLevel, plan_.partCells.at(size_t(part)));
     if (m && parts() > 1) cache_->write(part, *m);
   }
   if (m) r.model = std::make_unique<Model>(std::move(*m));

@@ -96,7 +96,7 @@ std::optional<MergedCoarsest> loadMergedCoarsest(const std::string& path, const 
 /// NAME.cells, a patch-based file of one level): every leaf cell merged into cubes 2^level
 /// finest cells wide, each the mean of the cells in it by their volume; the narrowest cubes, at
 /// least as wide as every cell, that the cells' volume keeps within about `maxCells`. Read piece
-/// by piece (brick, block, a million records), so that the cubes are all it holds. `ranges` are
+/// by piece (brick, block, 65,536 records), so that the cubes are all it holds. `ranges` are
 /// the cells' value ranges, not the means'. None where the input is not of those kinds or holds
 /// no more than `maxCells` cells.
 struct MergedLeaves {
@@ -126,8 +126,9 @@ Census loadCensus(const std::string& path, const LoadOptions& options = {});
 /// support reaches into the lattice box `part` grown by shadingReach (the part and its halo,
 /// wide enough for smooth shading at the part's faces; readers that take a box
 /// read little more), built into a model; none when no cell reaches it. Model files are read
-/// whole and their bricks that reach the part kept.
+/// whole and their bricks that reach the part kept. `expectedCells`: about how many cells the
+/// part and its halo hold, at most (its census count), for readers that reserve room; 0: unknown.
 std::optional<Model> loadModelPart(const std::string& path, const LoadOptions& options, const box3l& part,
-                                   int coarsestLevel);
+                                   int coarsestLevel, double expectedCells = 0);
 
 } // namespace exa

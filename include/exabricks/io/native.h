@@ -18,11 +18,12 @@ namespace exa {
 
 /// Reads NAME.cells and its fields. `fields` selects fields by name (all when empty). Validates
 /// everything but overlaps; errors name the file, the record and the problem. With a box, only
-/// the cells overlapping it are kept, read in pieces.
+/// the cells overlapping it are kept, read in pieces, with room reserved for `expectedCells` (an
+/// estimate; more are kept where more overlap).
 /// `keepNonFinite`: NaN and infinite values are returned as read (the caller makes their cells
 /// holes); else the first is refused, naming its file, record and field.
 CellSet readNative(const std::string& cellsPath, const std::vector<std::string>& fields = {}, const box3i& box = {},
-                   bool keepNonFinite = false);
+                   bool keepNonFinite = false, size_t expectedCells = 0);
 /// The cell records of NAME.cells alone, validated (readNative without the values).
 std::vector<Cell> readNativeCells(const std::string& cellsPath);
 /// The fields readNative reads for `fields`: those, else every field beside the cells (an error
@@ -35,8 +36,8 @@ std::vector<float> readNativeField(const std::string& cellsPath, const std::stri
 /// Where the cells of NAME.cells lie, read in pieces (values are not read).
 Census nativeCensus(const std::string& cellsPath);
 
-/// Reads NAME.cells and the values of `fields` (nativeFieldsToRead's names) in pieces of a
-/// million records, each validated, and hands each piece to `use(cells, values, n)`, one value
+/// Reads NAME.cells and the values of `fields` (nativeFieldsToRead's names) in pieces of
+/// 65,536 records, each validated, and hands each piece to `use(cells, values, n)`, one value
 /// array per field: memory for one piece. A value that is not finite is refused, naming its
 /// file, record and field, unless `keepNonFinite`.
 void streamNative(const std::string& cellsPath, const std::vector<std::string>& fields, bool keepNonFinite,

@@ -22,6 +22,9 @@ struct ReadRequest {
   /// Finest-lattice box; when not empty, only cells that overlap it are returned (readers that
   /// can skip the data of whole patches outside it do so).
   box3i box;
+  /// About how many cells the box holds, at most, where the caller knows (a census's count): a
+  /// reader that keeps cells one by one reserves room for them. 0: unknown.
+  size_t expectedCells = 0;
   RawOptions raw; ///< dimensions, type and merging of raw volumes
   /// NaN and infinite values are returned as read (the loader makes their cells holes); readers
   /// that do not take it refuse them.
