@@ -346,3 +346,31 @@ TEST(Denoise, AViewShowsTheFramesDenoisedPicture) {
   for (size_t p = 0; p < want.pixels.size(); ++p)
     ASSERT_EQ(shown.pixels[p], want.pixels[p]) << p;
 }
+
+TEST(FrameBufferTiles, NearOrderVisitsEveryPixelOfItsTileOnce) {
+  // Sizes with partial tiles on the right and at the bottom: the Morton order of each tile
+  // visits exactly the pixels the row order does, adjacent pairs first.
+  for (const auto& [w, h] : {std::pair{37, 21}, std::pair{16, 16}, std::pair{1, 5}}) {
+    FrameBuffer buffer(w, h);
+    std::vector<int> seen(size_t(w) * size_t(h), 0);
+    for (int t = 0; t < buffer.tileCount(); ++t) {
+      std::vector<size_t> rows, near;
+      buffer.forTilePixels(t, [&](int, int, size_t p) { rows.push_back(p); });
+      std::vector<std::pair<int, int>> order;
+      buffer.forTilePixelsNear(t, [&](int x, int y, size_t p) {
+        EXPECT_EQ(p, size_t(y) * size_t(w) + size_t(x));
+        near.push_back(p);
+        order.emplace_back(x, y);
+        ++seen[p];
+      });
+      if (buffer.width() >= 2 && order.size() >= 2 && t == 0) {
+        EXPECT_EQ(order[1], std::make_pair(1, 0)); // (0, 0), (1, 0), (0, 1), (1, 1), ...
+        if (order.size() >= 3 && h >= 2) EXPECT_EQ(order[2], std::make_pair(0, 1));
+      }
+      std::sort(near.begin(), near.end());
+      EXPECT_EQ(near, rows) << w << "x" << h << " tile " << t;
+    }
+    for (int n : seen)
+      EXPECT_EQ(n, 1);
+  }
+}

@@ -240,7 +240,7 @@ struct Renderer::Impl {
     const bool pathTraced = scene.integration.integrator == Integrator::PathTrace && scene.debug == DebugView::None;
     buffer.stepsView_ = steps;
     return runPass(buffer, control, RenderStats(), [&](int tile, Counters& c) {
-      buffer.forTilePixels(tile, [&](int x, int y, size_t p) {
+      buffer.forTilePixelsNear(tile, [&](int x, int y, size_t p) {
         RayCounts rc;
         const vec4f acc = pathTraced ? tracePathPixel(x, y, frame, ps, rc) : tracePixel(x, y, frame, ps, c, rc);
         addCounts(c, rc);

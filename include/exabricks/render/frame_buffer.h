@@ -58,6 +58,22 @@ public:
       for (int x = tx * kRenderTile; x < std::min(width_, (tx + 1) * kRenderTile); ++x)
         f(x, y, size_t(y) * size_t(width_) + size_t(x));
   }
+  /// Calls f(x, y, pixel index) for the pixels of `tile` in Morton order (2 x 2 blocks, then
+  /// 4 x 4, ...): neighbouring rays follow each other, so that the cells one ray brings into the
+  /// cache are still there for the rays beside it and below it.
+  template <typename F> void forTilePixelsNear(int tile, F&& f) const {
+    static_assert(kRenderTile <= 256 && (kRenderTile & (kRenderTile - 1)) == 0, "Morton order of a power of two");
+    const int x0 = tile % tilesX_ * kRenderTile, y0 = tile / tilesX_ * kRenderTile;
+    for (int i = 0; i < kRenderTile * kRenderTile; ++i) {
+      int dx = 0, dy = 0;
+      for (int b = 0; (1 << b) < kRenderTile; ++b) {
+        dx |= ((i >> (2 * b)) & 1) << b;
+        dy |= ((i >> (2 * b + 1)) & 1) << b;
+      }
+      const int x = x0 + dx, y = y0 + dy;
+      if (x < width_ && y < height_) f(x, y, size_t(y) * size_t(width_) + size_t(x));
+    }
+  }
   /// The RMS over a tile's pixels and channels of `perPixel(pixel index)` (a vec3f each);
   /// infinite for a tile with fewer than two passes (its noise is not known).
   template <typename F> float tileRms(int tile, F&& perPixel) const {
