@@ -350,7 +350,8 @@ TEST(Denoise, AViewShowsTheFramesDenoisedPicture) {
 TEST(FrameBufferTiles, NearOrderVisitsEveryPixelOfItsTileOnce) {
   // Sizes with partial tiles on the right and at the bottom: the Morton order of each tile
   // visits exactly the pixels the row order does, adjacent pairs first.
-  for (const auto& [w, h] : {std::pair{37, 21}, std::pair{16, 16}, std::pair{1, 5}}) {
+  for (const std::pair<int, int>& size : {std::pair{37, 21}, std::pair{16, 16}, std::pair{1, 5}}) {
+    const int w = size.first, h = size.second;
     FrameBuffer buffer(w, h);
     std::vector<int> seen(size_t(w) * size_t(h), 0);
     for (int t = 0; t < buffer.tileCount(); ++t) {
