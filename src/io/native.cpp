@@ -76,18 +76,23 @@ namespace {
 /// Records per piece of a streamed read: 1 MiB of cells, small beside any budget.
 constexpr uint64_t kPieceRecords = uint64_t(1) << 16;
 
-/// Reads NAME.cells in pieces of kPieceRecords records, each validated, and hands them to `use`
-/// with the index of their first record.
-template <typename Use> void streamCells(const std::string& cellsPath, Use&& use) {
+/// The number of records of NAME.cells, refused where the file is empty or ends in a partial record.
+uint64_t checkedCellCount(const std::string& cellsPath) {
   const uint64_t bytes = fileSize(cellsPath);
   if (bytes == 0) fail(cellsPath, ": no cells (empty file)");
   if (bytes % sizeof(Cell) != 0)
     fail(cellsPath, ": truncated record ", bytes / sizeof(Cell), ": file size ", bytes,
          " is not a multiple of the 16-byte cell record");
+  return bytes / sizeof(Cell);
+}
+
+/// Reads NAME.cells in pieces of kPieceRecords records, each validated, and hands them to `use`
+/// with the index of their first record.
+template <typename Use> void streamCells(const std::string& cellsPath, Use&& use) {
+  const uint64_t count = checkedCellCount(cellsPath);
   std::FILE* f = std::fopen(cellsPath.c_str(), "rb");
   if (!f) fail(cellsPath, ": cannot open: ", std::strerror(errno));
   std::unique_ptr<std::FILE, int (*)(std::FILE*)> closer(f, std::fclose);
-  const uint64_t count = bytes / sizeof(Cell);
   std::vector<Cell> chunk(size_t(std::min<uint64_t>(count, kPieceRecords)));
   for (uint64_t at = 0; at < count; at += chunk.size()) {
     const size_t n = size_t(std::min<uint64_t>(chunk.size(), count - at));
@@ -154,6 +159,22 @@ std::string checkedScalarsPath(const std::string& cellsPath, const std::string& 
   return path;
 }
 
+using OpenFile = std::unique_ptr<std::FILE, int (*)(std::FILE*)>;
+
+/// The values files of `fields`, checked against `count` cells and opened: their paths in `paths`.
+std::vector<OpenFile> openFieldFiles(const std::string& cellsPath, const std::string& stem,
+                                     const std::vector<std::string>& fields, uint64_t count,
+                                     std::vector<std::string>& paths) {
+  std::vector<OpenFile> files;
+  for (const std::string& name : fields) {
+    paths.push_back(checkedScalarsPath(cellsPath, stem, name, count));
+    std::FILE* f = std::fopen(paths.back().c_str(), "rb");
+    if (!f) fail(paths.back(), ": cannot open: ", std::strerror(errno));
+    files.emplace_back(f, std::fclose);
+  }
+  return files;
+}
+
 } // namespace
 
 Census nativeCensus(const std::string& cellsPath) {
@@ -166,15 +187,9 @@ Census nativeCensus(const std::string& cellsPath) {
 void streamNative(const std::string& cellsPath, const std::vector<std::string>& fields, bool keepNonFinite,
                   const std::function<void(const Cell*, const std::vector<const float*>&, size_t)>& use) {
   const std::string stem = stemOf(cellsPath);
-  const uint64_t count = fileSize(cellsPath) / sizeof(Cell);
-  std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> files;
+  const uint64_t count = checkedCellCount(cellsPath);
   std::vector<std::string> paths;
-  for (const std::string& name : fields) {
-    paths.push_back(checkedScalarsPath(cellsPath, stem, name, count));
-    std::FILE* f = std::fopen(paths.back().c_str(), "rb");
-    if (!f) fail(paths.back(), ": cannot open: ", std::strerror(errno));
-    files.emplace_back(f, std::fclose);
-  }
+  const std::vector<OpenFile> files = openFieldFiles(cellsPath, stem, fields, count, paths);
   std::vector<std::vector<float>> values(fields.size());
   std::vector<const float*> at(fields.size());
   streamCells(cellsPath, [&](const Cell* cells, size_t n, uint64_t first) {
@@ -191,13 +206,8 @@ void streamNative(const std::string& cellsPath, const std::vector<std::string>& 
 }
 
 std::vector<Cell> readNativeCells(const std::string& cellsPath) {
-  const uint64_t bytes = fileSize(cellsPath);
-  if (bytes == 0) fail(cellsPath, ": no cells (empty file)");
-  if (bytes % sizeof(Cell) != 0)
-    fail(cellsPath, ": truncated record ", bytes / sizeof(Cell), ": file size ", bytes,
-         " is not a multiple of the 16-byte cell record");
-  std::vector<Cell> cells(bytes / sizeof(Cell));
-  readInto(cellsPath, cells.data(), bytes);
+  std::vector<Cell> cells(size_t(checkedCellCount(cellsPath)));
+  readInto(cellsPath, cells.data(), cells.size() * sizeof(Cell));
   validateCellRecords(cells, cellsPath);
   return cells;
 }
@@ -226,15 +236,12 @@ CellSet readNative(const std::string& cellsPath, const std::vector<std::string>&
   if (!box.empty()) {
     // Only the cells overlapping the box are kept, with their values, read piece by piece: memory
     // for those alone (reserved for `expectedCells` where the caller knows about how many).
-    const uint64_t count = fileSize(cellsPath) / sizeof(Cell);
-    CellSet set;
-    std::vector<std::unique_ptr<std::FILE, int (*)(std::FILE*)>> files;
+    const uint64_t count = checkedCellCount(cellsPath);
+    const std::vector<std::string> names = fieldNamesToRead(cellsPath, stem, wanted);
     std::vector<std::string> paths;
-    for (const std::string& name : fieldNamesToRead(cellsPath, stem, wanted)) {
-      paths.push_back(checkedScalarsPath(cellsPath, stem, name, count));
-      std::FILE* f = std::fopen(paths.back().c_str(), "rb");
-      if (!f) fail(paths.back(), ": cannot open: ", std::strerror(errno));
-      files.emplace_back(f, std::fclose);
+    const std::vector<OpenFile> files = openFieldFiles(cellsPath, stem, names, count, paths);
+    CellSet set;
+    for (const std::string& name : names) {
       set.fields.push_back(Field{name, {}});
       set.fields.back().values.reserve(expectedCells);
     }
