@@ -330,19 +330,19 @@ void SampleBatchFor(const FieldView& view, const uint32_t* brickIds, uint32_t br
 }
 
 // A field's packed gradient (gradient_pack.h), each corner's bits decoded into unpackGradient's
-// floats: the three mantissas masked to the top of the word (q 2^23 as an int) and converted, and
-// the scale 2^(e + base - 23) built from the exponent bits and the brick's bias.
+// floats: each mantissa's field shifted to the top of the word and the word converted (the bits
+// below add the fraction the packer rounded against), and the scale 2^(e + base - 23) built from
+// the exponent bits and the brick's bias.
 template <class D> struct PackedCorner { hn::Vec<D> m[3], scale; };
 
 template <class D> HWY_INLINE PackedCorner<D> DecodePacked(D d, hn::Vec<D> bits, hn::Vec<hn::RebindToSigned<D>> bias) {
   const hn::RebindToSigned<D> di;
   using VI = hn::Vec<decltype(di)>;
   const VI u = hn::BitCast(di, bits);
-  const VI top = hn::Set(di, int32_t(0xFF800000u));
   PackedCorner<D> c;
-  c.m[0] = hn::ConvertTo(d, hn::And(u, top));
-  c.m[1] = hn::ConvertTo(d, hn::And(hn::ShiftLeft<9>(u), top));
-  c.m[2] = hn::ConvertTo(d, hn::And(hn::ShiftLeft<18>(u), top));
+  c.m[0] = hn::ConvertTo(d, u);
+  c.m[1] = hn::ConvertTo(d, hn::ShiftLeft<9>(u));
+  c.m[2] = hn::ConvertTo(d, hn::ShiftLeft<18>(u));
   c.scale = hn::BitCast(d, hn::Add(hn::ShiftLeft<23>(hn::And(u, hn::Set(di, 31))), bias));
   return c;
 }
