@@ -217,6 +217,9 @@ TEST(ShadeBatch, EqualsTheScalarFunctions) {
           batch.gx[i] = magnitude * (u(rng) - 0.5f), batch.gy[i] = magnitude * (u(rng) - 0.5f);
           batch.gz[i] = i % 6 == 1 ? 0.f : magnitude * (u(rng) - 0.5f);
           if (i % 9 == 4) batch.gx[i] = batch.gy[i] = batch.gz[i] = 0.f;
+          // Squared lengths below or beyond the normal floats (the quotients, not the estimates):
+          if (i == 2 && trial % 11 == 5) batch.gx[i] = 3e-21f, batch.gy[i] = -1e-21f;
+          if (i == 0 && trial % 13 == 6) batch.gz[i] = 3e19f;
           lengths[i] = 0.01f + 2.f * u(rng);
         }
         TfBatch vectors, reference;

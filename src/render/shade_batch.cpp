@@ -143,6 +143,42 @@ bool TfLookupBatchImpl(const TfTableView& tf, const SampleBatch& batch, TfBatch&
   return !hn::AllFalse(d, anyShown);
 }
 
+// 1 / x and 1 / sqrt(x) from the instructions' estimates (12 or 14 bits) refined by one Newton
+// step (about 22 bits): a shaded vector's divisions and square root made a chain of dependent
+// latencies that its few other instructions could not hide. The estimates are used only where
+// every lane of `live` is a normal float whose reciprocal is normal too (else the quotients), and
+// only on the x86 targets, whose estimates are the instructions'.
+#if HWY_TARGET == HWY_AVX3 || HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4
+template <class D> HWY_INLINE bool EstimatesHold(D d, hn::Vec<D> x, hn::Mask<D> live) {
+  const hn::Vec<D> a = hn::Abs(x);
+  const auto normal = hn::And(hn::Gt(a, hn::Set(d, 0x1p-125f)), hn::Lt(a, hn::Set(d, 0x1p125f)));
+  return hn::AllTrue(d, hn::Or(normal, hn::Not(live)));
+}
+#else
+template <class D> HWY_INLINE bool EstimatesHold(D, hn::Vec<D>, hn::Mask<D>) { return false; }
+#endif
+
+template <class D> HWY_INLINE hn::Vec<D> Reciprocal(D d, hn::Vec<D> x, hn::Mask<D> live) {
+  if (!EstimatesHold(d, x, live)) return hn::Div(hn::Set(d, 1.f), x);
+  const hn::Vec<D> r = hn::ApproximateReciprocal(x);
+  return hn::Mul(r, hn::NegMulAdd(x, r, hn::Set(d, 2.f)));
+}
+
+// |g| and 1 / |g| (1 where g is zero) from the squared length `g2`.
+template <class D>
+HWY_INLINE void LengthAndInverse(D d, hn::Vec<D> g2, hn::Mask<D> live, hn::Vec<D>& length, hn::Vec<D>& inverse) {
+  const hn::Vec<D> zero = hn::Zero(d), one = hn::Set(d, 1.f);
+  const hn::Vec<D> x = hn::IfThenElse(hn::Gt(g2, zero), g2, one);
+  if (EstimatesHold(d, x, live)) {
+    const hn::Vec<D> r = hn::ApproximateReciprocalSqrt(x);
+    inverse = hn::Mul(r, hn::NegMulAdd(hn::Mul(hn::Set(d, 0.5f), x), hn::Mul(r, r), hn::Set(d, 1.5f)));
+    length = hn::Mul(g2, inverse);
+  } else {
+    length = hn::Sqrt(g2);
+    inverse = hn::Div(one, hn::IfThenElse(hn::Gt(length, zero), length, one));
+  }
+}
+
 void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const float* lengths, const VolumeShadeParams& p,
                           ShadedBatch& out) {
   const hn::CappedTag<float, kSampleBatch> d;
@@ -159,23 +195,26 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
     V r = hn::LoadU(d, tf.r + base), g = hn::LoadU(d, tf.g + base), b = hn::LoadU(d, tf.b + base);
     if (p.shade) {
       // shadeVolumeSample, with its branches as selections.
+      const auto live = hn::FirstN(d, size_t(batch.count) - base);
       const V gx = hn::Mul(hn::LoadU(d, batch.gx + base), hn::Set(d, p.gradientScale.x));
       const V gy = hn::Mul(hn::LoadU(d, batch.gy + base), hn::Set(d, p.gradientScale.y));
       const V gz = hn::Mul(hn::LoadU(d, batch.gz + base), hn::Set(d, p.gradientScale.z));
-      const V gl = hn::Sqrt(hn::MulAdd(gz, gz, hn::MulAdd(gy, gy, hn::Mul(gx, gx))));
+      V gl, inv;
+      LengthAndInverse(d, hn::MulAdd(gz, gz, hn::MulAdd(gy, gy, hn::Mul(gx, gx))), live, gl, inv);
       V fade = hn::LoadU(d, p.fadeWidth + base);
       if (p.fadeByValue) {
         const V av = hn::Abs(hn::LoadU(d, batch.value + base));
         const auto nonzero = hn::Gt(av, zero);
-        fade = hn::IfThenElseZero(nonzero, hn::Div(fade, hn::IfThenElse(nonzero, av, one)));
+        fade = hn::IfThenElseZero(nonzero, hn::Mul(fade, Reciprocal(d, hn::IfThenElse(nonzero, av, one), live)));
       }
       const V rel = hn::Mul(gl, fade);
       const V low = hn::Set(d, kShadingFadeLow), high = hn::Set(d, kShadingFadeHigh);
       const auto full = hn::Ge(rel, high);
       const V weight = hn::IfThenElse(
-          full, one, hn::IfThenElseZero(hn::Gt(rel, low), hn::Div(hn::Sub(rel, low), hn::Sub(high, low))));
+          full, one,
+          hn::IfThenElseZero(hn::Gt(rel, low),
+                             hn::Mul(hn::Sub(rel, low), hn::Set(d, 1.f / (kShadingFadeHigh - kShadingFadeLow)))));
       const auto lit = hn::And(hn::Gt(gl, hn::Set(d, 1e-20f)), hn::Gt(weight, zero));
-      const V inv = hn::Div(one, hn::IfThenElse(lit, gl, one));
       const V nx = hn::Mul(gx, inv), ny = hn::Mul(gy, inv), nz = hn::Mul(gz, inv);
       auto dotWith = [&](const vec3f& v) {
         return hn::MulAdd(nz, hn::Set(d, v.z), hn::MulAdd(ny, hn::Set(d, v.y), hn::Mul(nx, hn::Set(d, v.x))));
@@ -185,7 +224,8 @@ void ShadeVolumeBatchImpl(const SampleBatch& batch, const TfBatch& tf, const flo
       const V nh = hn::Abs(dotWith(p.halfVector));
       const V exponent = hn::Set(d, s.shininess);
       const V highlight =
-          hn::Mul(hn::Set(d, s.specular), hn::Div(nh, hn::NegMulAdd(hn::Sub(exponent, one), nh, exponent)));
+          hn::Mul(hn::Set(d, s.specular),
+                  hn::Mul(nh, Reciprocal(d, hn::NegMulAdd(hn::Sub(exponent, one), nh, exponent), live)));
       const V flat = hn::Add(ambient, diffuse);
       const V shadeValue =
           hn::IfThenElse(lit, hn::IfThenElse(full, litShade, hn::MulAdd(hn::Sub(litShade, flat), weight, flat)), flat);
