@@ -111,6 +111,13 @@ inline std::vector<Variant> volumeVariants() {
          s.light.headlight = false;
          s.light.direction = {-1.f, -0.5f, -0.2f};
        }},
+      {"one colour and a faint opacity over the lowest fifth: longer steps where regions look uniform",
+       [](Scene& s, Frame&, const DatasetInfo&, const box3d&) {
+         TransferFunction& t = s.layers[0].tf;
+         t.colorMap.positions = {0.f, 0.2f, 1.f};
+         t.colorMap.colors = {vec3f(0.1f, 0.3f, 0.6f), vec3f(0.1f, 0.3f, 0.6f), vec3f(0.9f, 0.8f, 0.2f)};
+         t.opacity = {{0.f, 0.0005f}, {0.2f, 0.0005f}, {1.f, 0.8f}};
+       }},
       {"two layers",
        [tf](Scene& s, Frame&, const DatasetInfo&, const box3d&) {
          VolumeLayer radius{"radius", tf("plasma")};

@@ -1,5 +1,6 @@
 #include "datasets.h"
 #include "exabricks/amr/gradients.h"
+#include "exabricks/documents/image.h"
 #include "exabricks/render/renderer.h"
 #include "render_setup.h"
 
@@ -283,7 +284,8 @@ TEST(Render, ShadingNeverInventsStructureInAConstantField) {
     auto render = [&](Shading s) {
       RenderSetup o = smallOptions(64);
       o.scene.shading = s;
-      o.scene.light.headlight = false; // a fixed light makes any wrong normal visible
+      o.scene.light.headlight = false;           // a fixed light makes any wrong normal visible
+      o.scene.integration.uniformStride = false; // unshaded would stride: the same samples
       SceneRenderer r(m, 0, o);
       r.setTransferFunction(tf);
       return r.render(cam);
@@ -559,4 +561,40 @@ TEST(Render, GradientFieldsAreBuiltWhereSamplesMayReadThem) {
   EXPECT_TRUE(identical(quarterBefore, full.render(o.frame)));
   before.setDomain(box3d());
   EXPECT_TRUE(identical(showingFirst, before.render(o.frame))) << "not built as the domain widened";
+}
+
+TEST(Render, UniformRegionsTakeLongerStepsAndKeepThePicture) {
+  const Model& m = blobsModel();
+  // One colour and a faint opacity over the lower half of the range: the regions whose values
+  // all lie there look uniform (and are nearly transparent, as shaded strides need); a ramp above.
+  TransferFunction tf;
+  tf.colorMap.positions = {0.f, 0.5f, 1.f};
+  tf.colorMap.colors = {vec3f(0.1f, 0.3f, 0.6f), vec3f(0.1f, 0.3f, 0.6f), vec3f(0.9f, 0.8f, 0.2f)};
+  tf.opacity = {{0.f, 0.0005f}, {0.5f, 0.0005f}, {1.f, 0.6f}};
+  tf.valueRange = DatasetInfo::of(m).valueRanges[0];
+  const Camera cam = framed(m, 30, 25);
+  for (Shading shading : {Shading::Smooth, Shading::None}) {
+    SCOPED_TRACE(int(shading));
+    Image images[2];
+    uint64_t samples[2] = {};
+    for (int stride = 0; stride < 2; ++stride) {
+      RenderSetup o = smallOptions(96);
+      o.scene.shading = shading, o.scene.integration.uniformStride = stride == 1;
+      SceneRenderer r(m, 0, o);
+      r.setTransferFunction(tf);
+      RenderStats stats;
+      images[stride] = r.render(cam, &stats), samples[stride] = stats.samples;
+    }
+    // Fewer samples, the written picture as at the paper's step: unshaded within 1/255; shaded,
+    // the gradients' variation averaged over fewer samples in regions of optical depth up to
+    // kUniformShadedDepth, within 3/255 in this generated worst case (real data: 1/255 to 2/255).
+    EXPECT_LT(double(samples[1]), 0.8 * double(samples[0]));
+    const std::vector<unsigned char> a = toSrgb8(images[0]), b = toSrgb8(images[1]); // the same size
+    int worst = 0;
+    double sum = 0.0;
+    for (size_t i = 0; i < a.size(); ++i)
+      worst = std::max(worst, std::abs(int(a[i]) - int(b[i]))), sum += std::abs(int(a[i]) - int(b[i]));
+    EXPECT_LE(worst, shading == Shading::None ? 1 : 3);
+    EXPECT_LT(sum / double(a.size()), 0.1);
+  }
 }

@@ -202,3 +202,69 @@ TEST(SampleMath, TableMaxExtinctionIsTheLargestOverTheEntriesAndEnds) {
     EXPECT_EQ(maxExtinction(range1f()), 0.f);
   }
 }
+
+TEST(SampleMath, RegionStrideOnlyWhereTheLookIsUniform) {
+  TransferFunction tf = defaultTransferFunction("viridis");
+  tf.opacityScale = 0.05f;
+  tf.opacity = {{0.f, 0.f}, {0.4f, 0.f}, {0.6f, 1.f}, {1.f, 1.f}};
+  const float perLog2 = 0.7f;
+  for (bool logScale : {false, true}) {
+    tf.logScale = logScale;
+    tf.valueRange = logScale ? range1f{0.01f, 100.f} : range1f{-2.f, 6.f};
+    std::vector<vec4f> entries;
+    const TfTableView t = tableOf(tf, entries);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(logScale ? 0.001f : -3.f, logScale ? 200.f : 7.f);
+    std::uniform_real_distribution<float> narrow(0.f, 1e-3f);
+    int strided = 0, whole = 0;
+    for (int i = 0; i < 3000; ++i) {
+      // Wide ranges, and ranges a thousandth of the map wide or less (where most are uniform).
+      float a = u(rng), b = i % 2 ? u(rng) : a * (1.f + (logScale ? 0.05f : 0.f)) + narrow(rng) * (logScale ? a : 8.f);
+      if (a > b) std::swap(a, b);
+      const float diagonal = i % 3 == 0 ? 0.5f : 8.f;
+      // Brute force: the table's colour and depth over the range, densely.
+      vec4f lo(1e30f, 1e30f, 1e30f, 1e30f), hi(-1e30f, -1e30f, -1e30f, -1e30f);
+      for (int k = 0; k <= 4096; ++k) {
+        const vec4f e = tfLookup(t, a + (b - a) * float(k) / 4096.f);
+        lo = vec4f(std::min(lo.x, e.x), std::min(lo.y, e.y), std::min(lo.z, e.z), std::min(lo.w, e.w));
+        hi = vec4f(std::max(hi.x, e.x), std::max(hi.y, e.y), std::max(hi.z, e.z), std::max(hi.w, e.w));
+      }
+      const float colour = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+      const float depth = (hi.w - lo.w) * perLog2 * diagonal;
+      const float stride = regionStride({&t}, {range1f{a, b}}, diagonal, perLog2);
+      if (stride > 1.f) {
+        ++strided;
+        ASSERT_LE(colour, kUniformVariation * 1.0001f) << a << " " << b;
+        ASSERT_LE(depth, kUniformVariation * 1.0001f) << a << " " << b;
+        ASSERT_EQ(stride, kUniformStride);
+      } else {
+        ++whole;
+        // Not uniform: the dense samples (or the entries between them) vary by more.
+        ASSERT_EQ(stride, 1.f);
+        ASSERT_TRUE(colour > kUniformVariation * 0.95f || depth > kUniformVariation * 0.95f) << a << " " << b;
+      }
+    }
+    EXPECT_GT(strided, 100);
+    EXPECT_GT(whole, 100);
+  }
+  // Every layer must be uniform; a layer without values in the region does not count.
+  tf.logScale = false;
+  tf.valueRange = range1f{0.f, 1.f};
+  std::vector<vec4f> entries;
+  const TfTableView t = tableOf(tf, entries);
+  EXPECT_EQ(regionStride({&t, &t}, {range1f{0.1f, 0.1001f}, range1f{0.1f, 0.9f}}, 1.f, perLog2), 1.f);
+  EXPECT_EQ(regionStride({&t, &t}, {range1f{0.1f, 0.1001f}, range1f()}, 1.f, perLog2), kUniformStride);
+  // Shaded samples stride only through nearly transparent regions: the layers' summed optical
+  // depth across the region at most kUniformShadedDepth.
+  const float faint = -kUniformShadedDepth / (t.entries[kTfTableSize - 1].w * perLog2); // diagonal at the bound
+  ASSERT_GT(faint, 0.f);
+  EXPECT_EQ(regionStride({&t}, {range1f{1.f, 1.f}}, 0.9f * faint, perLog2, true), kUniformStride);
+  EXPECT_EQ(regionStride({&t}, {range1f{1.f, 1.f}}, 1.1f * faint, perLog2, true), 1.f);
+  EXPECT_EQ(regionStride({&t}, {range1f{1.f, 1.f}}, 1.1f * faint, perLog2, false), kUniformStride);
+  EXPECT_EQ(regionStride({&t, &t}, {range1f{1.f, 1.f}, range1f{1.f, 1.f}}, 0.6f * faint, perLog2, true), 1.f);
+  // A constant look over any range.
+  std::vector<vec4f> flatEntries(kTfTableSize, vec4f(0.2f, 0.3f, 0.4f, -0.1f));
+  TfTableView f = t;
+  f.entries = flatEntries.data();
+  EXPECT_EQ(regionStride({&f}, {range1f{-1e6f, 1e6f}}, 1e3f, perLog2), kUniformStride);
+}

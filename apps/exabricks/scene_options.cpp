@@ -138,6 +138,7 @@ constexpr SettingFlag kSettingFlags[] = {
     {"--shading", "shading", FlagGroup::Integration},
     {"--traversal", "integration.traversal", FlagGroup::Integration},
     {"--no-skip", "integration.space_skipping", FlagGroup::Integration, FlagForm::Off},
+    {"--no-uniform-stride", "integration.uniform_stride", FlagGroup::Integration, FlagForm::Off},
     {"--no-early-termination", "integration.early_termination", FlagGroup::Integration, FlagForm::Off},
     {"--sampling", "integration.sampling", FlagGroup::Integration},
     {"--reconstruction", "integration.reconstruction", FlagGroup::Integration},

@@ -186,6 +186,7 @@ void DeviceRenderer::syncVolume(const Scene& s, const VolumeMarcher& volume, Sce
     v.volumeTree.subtreeVisible = put("visible subtrees", volumeSubtrees_, true, update);
     v.volumeTree.bounds = model_.regions.bounds;
   }
+  v.strides = layers.empty() ? nullptr : put("region strides", volume.strides(), true, update);
   if (v.pathTrace) {
     for (size_t i = 0; i < layers.size(); ++i) {
       const std::vector<float>& albedo = layers[i].albedo;

@@ -47,6 +47,7 @@ struct TraceLayer {
 struct TraceView {
   // The data.
   const Region* regions = nullptr;
+  const float* strides = nullptr; ///< per region, its step's stride (null: 1)
   WorldTransform world;
   float referenceWidth = 1.f, invReferenceWidth = 1.f;
   vec3f invScale{1.f};
@@ -111,7 +112,8 @@ EXA_HOST_DEVICE inline void traceVolume(const TraceView& v, const Ray& ray, floa
   walkRegionTree(v.volumeTree, ray, [&](const Segment& seg) {
     const Region& region = v.regions[seg.region];
     SegmentMarch sm(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho,
-                    sampleStep(region, v.sample.sampling, v.referenceWidth, v.sample.rate));
+                    sampleStep(region, v.sample.sampling, v.referenceWidth, v.sample.rate,
+                               v.strides ? v.strides[seg.region] : 1.f));
     const float cellWidth = region.finestWidth() * v.meanScale;
     while (sm.a < sm.end) {
       const float b = sm.intervalEnd();

@@ -43,10 +43,12 @@ struct LayerTable {
 };
 
 /// Lattice step of a region at the given rate: half its finest cell width (adaptive) or half the
-/// dataset's (fixed), over the rate.
-EXA_HOST_DEVICE inline float sampleStep(const Region& region, Sampling sampling, float referenceWidth, float rate) {
+/// dataset's (fixed), over the rate, times the region's stride (regionStride: more than 1 only
+/// where the transfer function shows the region uniformly).
+EXA_HOST_DEVICE inline float sampleStep(const Region& region, Sampling sampling, float referenceWidth, float rate,
+                                        float stride = 1.f) {
   const float width = sampling == Sampling::Adaptive ? region.finestWidth() : referenceWidth;
-  return 0.5f * width / rate;
+  return 0.5f * width * stride / rate;
 }
 
 /// Central differences at p over half the region's finest width each way; each point

@@ -515,6 +515,7 @@ SceneUpdate Renderer::setScene(const Scene& s) {
                            : ParticleSpheres();
   SceneUpdate u;
   u.volume = first || s.layers != cur.layers || s.integration != cur.integration || s.debug != cur.debug;
+  const bool strides = u.volume || s.shading != cur.shading;
   u.iso = first || s.iso != cur.iso ||
           s.integration.embreeBelowVisibleFraction != cur.integration.embreeBelowVisibleFraction;
   u.meshes = first || s.meshes != cur.meshes;
@@ -528,6 +529,7 @@ SceneUpdate Renderer::setScene(const Scene& s) {
     if (s.integration.integrator == Integrator::PathTrace) im.updateMedium();
     u.volumeSeconds = t.seconds();
   }
+  if (strides) im.volume.updateStrides(s.integration.uniformStride, s.shading != Shading::None);
   if (Timer t; im.attachGradients()) u.volumeSeconds += t.seconds();
   if (u.iso) {
     Timer t;

@@ -256,6 +256,9 @@ std::vector<Setting<Scene>> integrationSettings() {
           "integration.space_skipping", "space_skipping", [](S& s) -> bool& { return s.integration.spaceSkipping; },
           "Skip regions the transfer function hides"),
       boolean<S>(
+          "integration.uniform_stride", "uniform_stride", [](S& s) -> bool& { return s.integration.uniformStride; },
+          "Step four times as far in regions the transfer function shows uniformly"),
+      boolean<S>(
           "integration.early_termination", "early_termination",
           [](S& s) -> bool& { return s.integration.earlyTermination; },
           "End rays once their opacity reaches termination_opacity"),

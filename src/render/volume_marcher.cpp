@@ -82,6 +82,7 @@ public:
     float referenceWidth;
     vec3f invScale;
     float meanScale;
+    const float* strides; ///< per region (VolumeMarcher::strides)
   };
 
   BatchMarch(const Inputs& in, const MarchSettings& s, const RayLight& light, vec4f& acc, uint64_t& raySamples)
@@ -102,7 +103,8 @@ public:
   /// the ray terminated.
   bool add(const Ray& ray, float rho, const Segment& seg) {
     const Region& region = in_.model.regions.regions[seg.region];
-    const float dt = sampleStep(region, s_.sample.sampling, in_.referenceWidth, s_.sample.rate);
+    const float dt =
+        sampleStep(region, s_.sample.sampling, in_.referenceWidth, s_.sample.rate, in_.strides[seg.region]);
     // Sample positions (k + rho) dt delimit intervals, each sampled at its midpoint.
     SegmentMarch march(std::max(seg.t0, ray.tmin), std::min(seg.t1, ray.tmax), rho, dt);
     const uint32_t* ids = layer_.view.brickIds + region.brickBegin;
@@ -354,6 +356,7 @@ void VolumeMarcher::update(const std::vector<VolumeLayer>& layers, const std::ve
         any = any || tfMayBeVisible(layer.t, model_.regions.valueRanges[size_t(layer.field)][i]);
       visible_[i] = any;
     });
+  strides_.assign(regionCount, 1.f);
   TraversalKind kind = in.traversal;
   if (in.autoTraversal) {
     size_t count = 0;
@@ -365,6 +368,24 @@ void VolumeMarcher::update(const std::vector<VolumeLayer>& layers, const std::ve
   if (!traversal_ || traversal_->kind() != kind) traversal_ = std::make_unique<RegionTraversal>(model_, kind);
   traversal_->setVisible(visible_);
   if (in.reconstruction == Reconstruction::CellLocation && !locator_) locator_ = std::make_unique<CellLocator>(model_);
+}
+
+void VolumeMarcher::updateStrides(bool enabled, bool shaded) {
+  const size_t regionCount = model_.regions.regions.size();
+  strides_.assign(regionCount, 1.f);
+  if (!enabled || layers_.empty()) return;
+  const float perLog2 = extinctionPerLog2();
+  std::vector<const TfTableView*> views;
+  for (const LayerTable& layer : layers_)
+    views.push_back(&layer.t);
+  tbb::parallel_for(size_t(0), regionCount, [&](size_t i) {
+    if (!visible_[i]) return;
+    std::vector<range1f> ranges;
+    for (const LayerTable& layer : layers_)
+      ranges.push_back(model_.regions.valueRanges[size_t(layer.field)][i]);
+    const box3f b = model_.regions.regions[i].bounds();
+    strides_[i] = regionStride(views, ranges, length(b.upper - b.lower), perLog2, shaded);
+  });
 }
 
 float VolumeMarcher::extinctionPerLog2() const { return float(std::log(2.0)) / referenceWidth_; }
@@ -476,7 +497,8 @@ void VolumeMarcher::march(const Ray& ray, float rho, const RayLight& light, cons
   if (layers_.empty() || !(ray.tmax > ray.tmin)) return;
   const typename BatchMarch<OpacityOnly>::Inputs inputs{
       layers_,         model_,    s.reconstruction == Reconstruction::CellLocation ? locator_.get() : nullptr,
-      referenceWidth_, invScale_, meanScale_};
+      referenceWidth_, invScale_, meanScale_,
+      strides_.data()};
   BatchMarch<OpacityOnly> batches(inputs, s, light, acc, raySamples);
   bool terminated = false;
   traversal_->traverse(ray, [&](const Segment& seg) {

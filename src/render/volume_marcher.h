@@ -56,6 +56,11 @@ public:
   const std::vector<LayerTable>& layers() const { return layers_; }
   const RegionTraversal* traversal() const { return traversal_.get(); }
   const std::vector<uint8_t>& visible() const { return visible_; }
+  /// Per region, the stride of its step (regionStride; 1 everywhere until updateStrides).
+  const std::vector<float>& strides() const { return strides_; }
+  /// Rebuilds the strides from the current tables and visible regions: regionStride's where
+  /// `enabled` (Integration::uniformStride), for shaded samples where `shaded`; else 1.
+  void updateStrides(bool enabled, bool shaded);
   /// The path tracer's majorants: per region, the largest extinction (per lattice unit) its
   /// value ranges reach through every layer's table, summed (0 for hidden regions), and the
   /// majorant grid's (`grid` false: none). Rebuilt by updateMajorants from the current tables.
@@ -84,6 +89,7 @@ private:
   std::map<int, GradientFields> gradientFields_;
   std::vector<uint8_t> visible_;
   std::vector<float> majorants_;
+  std::vector<float> strides_; ///< per region, its step's stride (regionStride)
   MajorantGrid majorantGrid_;
   std::unique_ptr<RegionTraversal> traversal_;
   std::unique_ptr<CellLocator> locator_; ///< only for Reconstruction::CellLocation

@@ -120,6 +120,50 @@ private:
   std::vector<float> smallest_;
 };
 
+/// A region's look is uniform where, over its value range, the transfer function's linear colour
+/// varies by at most kUniformVariation in every channel and its optical depth across the
+/// region's diagonal by at most kUniformVariation: its samples differ only in their shading, and
+/// a ray takes kUniformStride times the region's step there. Shaded samples vary with their
+/// gradients all the same, and a longer step averages that variation over fewer samples, so for
+/// them the region must also be nearly transparent: its optical depth across its diagonal at most
+/// kUniformShadedDepth, which bounds what its whole contribution can change. Measured on held-out
+/// data (docs/performance.md, "Uniform regions").
+constexpr float kUniformVariation = 0.005f;
+constexpr float kUniformShadedDepth = 0.02f;
+constexpr float kUniformStride = 4.f;
+
+/// The stride of a region's step (sampleStep) for the given layers' tables over its value ranges
+/// (one per layer): kUniformStride where every layer's look is uniform (and, for `shaded`
+/// samples, the layers together nearly transparent), 1 otherwise. `diagonal` is the region's
+/// diagonal and extinctionPerLog2 the optical depth per lattice unit of a table's log2
+/// transmittance -1, as the marcher's.
+inline float regionStride(const std::vector<const TfTableView*>& tables, const std::vector<range1f>& ranges,
+                          float diagonal, float extinctionPerLog2, bool shaded = false) {
+  float densest = 0.f; // the layers' summed largest optical depth across the region
+  for (size_t l = 0; l < tables.size(); ++l) {
+    const TfTableView& t = *tables[l];
+    const range1f& r = ranges[l];
+    if (r.empty()) continue; // no values: nothing this layer shows changes
+    // The table is piecewise linear: its extremes over the range lie at entries or at the ends.
+    const float n0 = tfNormalized(t, r.lower), n1 = tfNormalized(t, r.upper);
+    vec4f lo = tfTableAt(t, n0), hi = lo;
+    auto take = [&](const vec4f& e) {
+      lo = vec4f(std::min(lo.x, e.x), std::min(lo.y, e.y), std::min(lo.z, e.z), std::min(lo.w, e.w));
+      hi = vec4f(std::max(hi.x, e.x), std::max(hi.y, e.y), std::max(hi.z, e.z), std::max(hi.w, e.w));
+    };
+    take(tfTableAt(t, n1));
+    const int first = std::max(0, int(std::ceil(n0 * float(kTfTableSize - 1))));
+    const int last = std::min(kTfTableSize - 1, int(std::floor(n1 * float(kTfTableSize - 1))));
+    for (int i = first; i <= last; ++i)
+      take(t.entries[i]);
+    const float colour = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    const float depth = (hi.w - lo.w) * extinctionPerLog2 * diagonal;
+    if (!(colour <= kUniformVariation && depth <= kUniformVariation)) return 1.f;
+    densest += -lo.w * extinctionPerLog2 * diagonal;
+  }
+  return shaded && !(densest <= kUniformShadedDepth) ? 1.f : kUniformStride;
+}
+
 /// The Taylor coefficients (ln 2)^k / k! of 2^f, k = 1..6 (exp2Negative and its vector form).
 constexpr float kExp2Taylor1 = 0.6931471805599453f, kExp2Taylor2 = 0.2402265069591007f,
                 kExp2Taylor3 = 0.05550410866482158f, kExp2Taylor4 = 0.009618129107628477f,

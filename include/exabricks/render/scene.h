@@ -124,6 +124,7 @@ struct Integration {
   TraversalKind traversal = TraversalKind::KdTree;
   float embreeBelowVisibleFraction = 0.15f;
   bool spaceSkipping = true;
+  bool uniformStride = true; ///< longer steps where the look is uniform (regionStride)
   bool earlyTermination = true;
   float terminationOpacity = 0.98f;
   Integrator integrator = Integrator::March;
