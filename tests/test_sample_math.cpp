@@ -30,6 +30,16 @@ TfTableView tableOf(const TransferFunction& tf, std::vector<vec4f>& entries) {
   return t;
 }
 
+/// The table of `tf` mapped linearly over [-2, 6] or logarithmically over [0.01, 100] (set in
+/// tf), and values to try a little beyond either range.
+TfTableView mappedTable(TransferFunction& tf, bool logScale, std::vector<vec4f>& entries,
+                        std::uniform_real_distribution<float>& values) {
+  tf.logScale = logScale;
+  tf.valueRange = logScale ? range1f{0.01f, 100.f} : range1f{-2.f, 6.f};
+  values = std::uniform_real_distribution<float>(logScale ? 0.001f : -3.f, logScale ? 200.f : 7.f);
+  return tableOf(tf, entries);
+}
+
 } // namespace
 
 TEST(SampleMath, OpacityCorrectionComposesOverSteps) {
@@ -143,12 +153,10 @@ TEST(SampleMath, TransferFunctionTableAndSkippingTest) {
   tf.opacityScale = 1.f;
   tf.opacity = {{0.f, 0.f}, {0.5f, 0.f}, {0.5f, 0.4f}, {1.f, 0.8f}};
   for (bool logScale : {false, true}) {
-    tf.logScale = logScale;
-    tf.valueRange = logScale ? range1f{0.01f, 100.f} : range1f{-2.f, 6.f};
     std::vector<vec4f> entries;
-    const TfTableView t = tableOf(tf, entries);
+    std::uniform_real_distribution<float> u;
+    const TfTableView t = mappedTable(tf, logScale, entries, u);
     std::mt19937 rng(9);
-    std::uniform_real_distribution<float> u(logScale ? 0.001f : -3.f, logScale ? 200.f : 7.f);
     for (int i = 0; i < 500; ++i) {
       const float v = u(rng);
       EXPECT_NEAR(tfNormalized(t, v), tf.normalize(v), 1e-6f);
@@ -177,14 +185,12 @@ TEST(SampleMath, TableMaxExtinctionIsTheLargestOverTheEntriesAndEnds) {
   tf.opacityScale = 1.f;
   tf.opacity = {{0.f, 0.9f}, {0.1f, 0.f}, {0.3f, 0.5f}, {0.31f, 0.05f}, {0.7f, 0.2f}, {1.f, 0.6f}};
   for (bool logScale : {false, true}) {
-    tf.logScale = logScale;
-    tf.valueRange = logScale ? range1f{0.01f, 100.f} : range1f{-2.f, 6.f};
     std::vector<vec4f> entries;
-    const TfTableView t = tableOf(tf, entries);
+    std::uniform_real_distribution<float> u;
+    const TfTableView t = mappedTable(tf, logScale, entries, u);
     const float perLog2 = 0.7f;
     const TableMaxExtinction maxExtinction(t, perLog2);
     std::mt19937 rng(3);
-    std::uniform_real_distribution<float> u(logScale ? 0.001f : -3.f, logScale ? 200.f : 7.f);
     for (int i = 0; i < 2000; ++i) {
       float a = u(rng), b = i % 5 == 0 ? a : u(rng);
       if (a > b) std::swap(a, b);
@@ -209,12 +215,10 @@ TEST(SampleMath, RegionStrideOnlyWhereTheLookIsUniform) {
   tf.opacity = {{0.f, 0.f}, {0.4f, 0.f}, {0.6f, 1.f}, {1.f, 1.f}};
   const float perLog2 = 0.7f;
   for (bool logScale : {false, true}) {
-    tf.logScale = logScale;
-    tf.valueRange = logScale ? range1f{0.01f, 100.f} : range1f{-2.f, 6.f};
     std::vector<vec4f> entries;
-    const TfTableView t = tableOf(tf, entries);
+    std::uniform_real_distribution<float> u;
+    const TfTableView t = mappedTable(tf, logScale, entries, u);
     std::mt19937 rng(5);
-    std::uniform_real_distribution<float> u(logScale ? 0.001f : -3.f, logScale ? 200.f : 7.f);
     std::uniform_real_distribution<float> narrow(0.f, 1e-3f);
     int strided = 0, whole = 0;
     for (int i = 0; i < 3000; ++i) {
