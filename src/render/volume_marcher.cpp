@@ -7,6 +7,7 @@
 #include "exabricks/core/error.h"
 #include "exabricks/render/shade_batch.h"
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -356,7 +357,7 @@ void VolumeMarcher::update(const std::vector<VolumeLayer>& layers, const std::ve
         any = any || tfMayBeVisible(layer.t, model_.regions.valueRanges[size_t(layer.field)][i]);
       visible_[i] = any;
     });
-  strides_.assign(regionCount, 1.f);
+  strides_.assign(regionCount, 1.f); // the old tables' strides: none until updateStrides
   TraversalKind kind = in.traversal;
   if (in.autoTraversal) {
     size_t count = 0;
@@ -378,13 +379,15 @@ void VolumeMarcher::updateStrides(bool enabled, bool shaded) {
   std::vector<const TfTableView*> views;
   for (const LayerTable& layer : layers_)
     views.push_back(&layer.t);
-  tbb::parallel_for(size_t(0), regionCount, [&](size_t i) {
-    if (!visible_[i]) return;
-    std::vector<range1f> ranges;
-    for (const LayerTable& layer : layers_)
-      ranges.push_back(model_.regions.valueRanges[size_t(layer.field)][i]);
-    const box3f b = model_.regions.regions[i].bounds();
-    strides_[i] = regionStride(views, ranges, length(b.upper - b.lower), perLog2, shaded);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, regionCount), [&](const tbb::blocked_range<size_t>& chunk) {
+    std::vector<range1f> ranges(layers_.size());
+    for (size_t i = chunk.begin(); i != chunk.end(); ++i) {
+      if (!visible_[i]) continue;
+      for (size_t l = 0; l < layers_.size(); ++l)
+        ranges[l] = model_.regions.valueRanges[size_t(layers_[l].field)][i];
+      const box3f b = model_.regions.regions[i].bounds();
+      strides_[i] = regionStride(views, ranges, length(b.upper - b.lower), perLog2, shaded);
+    }
   });
 }
 

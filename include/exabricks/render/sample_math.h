@@ -70,17 +70,39 @@ EXA_HOST_DEVICE inline vec4f tfLookup(const TfTableView& t, float value) {
   return tfTableAt(t, tfNormalized(t, value));
 }
 
-/// Whether any value in r can be visible through the table (its log transmittance is piecewise
-/// linear, so its extremes lie at table entries or at the ends).
+/// A value range on a table: its normalised ends and the entries between them, [first, last]
+/// (none where first > last). The table is linear between entries, so its extremes over the range
+/// lie at those entries or at the ends.
+struct TfSpan {
+  float n0 = 0.f, n1 = 0.f;
+  int first = 0, last = -1;
+};
+
+EXA_HOST_DEVICE inline TfSpan tfSpanOf(const TfTableView& t, const range1f& r) {
+  TfSpan s;
+  s.n0 = tfNormalized(t, r.lower), s.n1 = tfNormalized(t, r.upper);
+  const int first = int(std::ceil(s.n0 * float(kTfTableSize - 1)));
+  const int last = int(std::floor(s.n1 * float(kTfTableSize - 1)));
+  s.first = first < 0 ? 0 : first;
+  s.last = last > kTfTableSize - 1 ? kTfTableSize - 1 : last;
+  return s;
+}
+
+/// Calls visit(entry) for the table at both ends of the non-empty range r (interpolated), then
+/// at every entry between them (tfSpanOf): among them lie the table's extremes over r. Stops and
+/// returns false where visit returns false.
+template <typename Visit>
+EXA_HOST_DEVICE inline bool tfVisitExtremes(const TfTableView& t, const range1f& r, Visit&& visit) {
+  const TfSpan s = tfSpanOf(t, r);
+  if (!visit(tfTableAt(t, s.n0)) || !visit(tfTableAt(t, s.n1))) return false;
+  for (int i = s.first; i <= s.last; ++i)
+    if (!visit(t.entries[i])) return false;
+  return true;
+}
+
+/// Whether any value in r can be visible through the table.
 EXA_HOST_DEVICE inline bool tfMayBeVisible(const TfTableView& t, const range1f& r) {
-  if (r.empty()) return false;
-  const float n0 = tfNormalized(t, r.lower), n1 = tfNormalized(t, r.upper);
-  if (tfTableAt(t, n0).w < 0.f || tfTableAt(t, n1).w < 0.f) return true;
-  const int first = int(std::ceil(n0 * float(kTfTableSize - 1)));
-  const int last = int(std::floor(n1 * float(kTfTableSize - 1)));
-  for (int i = first < 0 ? 0 : first; i <= (last > kTfTableSize - 1 ? kTfTableSize - 1 : last); ++i)
-    if (t.entries[i].w < 0.f) return true;
-  return false;
+  return !r.empty() && !tfVisitExtremes(t, r, [](const vec4f& e) { return !(e.w < 0.f); });
 }
 
 /// The largest extinction (per lattice unit) a table gives any value of a range: its log2
@@ -99,15 +121,13 @@ public:
   }
   float operator()(const range1f& r) const {
     if (r.empty()) return 0.f;
-    const float n0 = tfNormalized(t_, r.lower), n1 = tfNormalized(t_, r.upper);
-    float w = std::min(tfTableAt(t_, n0).w, tfTableAt(t_, n1).w);
-    const int first = std::max(0, int(ceilf(n0 * float(kTfTableSize - 1))));
-    const int last = std::min(kTfTableSize - 1, int(floorf(n1 * float(kTfTableSize - 1))));
-    if (first <= last) {
+    const TfSpan s = tfSpanOf(t_, r);
+    float w = std::min(tfTableAt(t_, s.n0).w, tfTableAt(t_, s.n1).w);
+    if (s.first <= s.last) {
       int k = 0;
-      while ((2 << k) <= last - first + 1)
+      while ((2 << k) <= s.last - s.first + 1)
         ++k;
-      w = std::min({w, at(k, first), at(k, last - (1 << k) + 1)});
+      w = std::min({w, at(k, s.first), at(k, s.last - (1 << k) + 1)});
     }
     return -w * perLog2_;
   }
@@ -141,24 +161,19 @@ inline float regionStride(const std::vector<const TfTableView*>& tables, const s
                           float diagonal, float extinctionPerLog2, bool shaded = false) {
   float densest = 0.f; // the layers' summed largest optical depth across the region
   for (size_t l = 0; l < tables.size(); ++l) {
-    const TfTableView& t = *tables[l];
-    const range1f& r = ranges[l];
-    if (r.empty()) continue; // no values: nothing this layer shows changes
-    // The table is piecewise linear: its extremes over the range lie at entries or at the ends.
-    const float n0 = tfNormalized(t, r.lower), n1 = tfNormalized(t, r.upper);
-    vec4f lo = tfTableAt(t, n0), hi = lo;
-    auto take = [&](const vec4f& e) {
-      lo = vec4f(std::min(lo.x, e.x), std::min(lo.y, e.y), std::min(lo.z, e.z), std::min(lo.w, e.w));
-      hi = vec4f(std::max(hi.x, e.x), std::max(hi.y, e.y), std::max(hi.z, e.z), std::max(hi.w, e.w));
-    };
-    take(tfTableAt(t, n1));
-    const int first = std::max(0, int(std::ceil(n0 * float(kTfTableSize - 1))));
-    const int last = std::min(kTfTableSize - 1, int(std::floor(n1 * float(kTfTableSize - 1))));
-    for (int i = first; i <= last; ++i)
-      take(t.entries[i]);
-    const float colour = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-    const float depth = (hi.w - lo.w) * extinctionPerLog2 * diagonal;
-    if (!(colour <= kUniformVariation && depth <= kUniformVariation)) return 1.f;
+    if (ranges[l].empty()) continue; // no values: nothing this layer shows changes
+    vec4f lo, hi;
+    bool first = true;
+    // Stops at the first entry that makes the look vary: a wide range rarely reads many.
+    const bool uniform = tfVisitExtremes(*tables[l], ranges[l], [&](const vec4f& e) {
+      lo = first ? e : vec4f(std::min(lo.x, e.x), std::min(lo.y, e.y), std::min(lo.z, e.z), std::min(lo.w, e.w));
+      hi = first ? e : vec4f(std::max(hi.x, e.x), std::max(hi.y, e.y), std::max(hi.z, e.z), std::max(hi.w, e.w));
+      first = false;
+      const float colour = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+      const float depth = (hi.w - lo.w) * extinctionPerLog2 * diagonal;
+      return colour <= kUniformVariation && depth <= kUniformVariation;
+    });
+    if (!uniform) return 1.f;
     densest += -lo.w * extinctionPerLog2 * diagonal;
   }
   return shaded && !(densest <= kUniformShadedDepth) ? 1.f : kUniformStride;
