@@ -20,6 +20,15 @@ namespace exa {
 /// Lowest brick base exponent: the decoded scale 2^(base + e - 23) stays a normal float.
 constexpr int kGradientBaseMin = -103;
 
+/// 2^e, exactly, for e in [-1022, 1023]: the packer's scalings by powers of two as one
+/// multiplication each (ldexp's library call was most of the fields' build).
+inline double exactPowerOfTwo(int e) {
+  const uint64_t bits = uint64_t(e + 1023) << 52;
+  double p;
+  std::memcpy(&p, &bits, sizeof p);
+  return p;
+}
+
 /// The exponent E of a cell's gradient: its largest component rounds to [128, 255] 2^E
 /// (kGradientBaseMin for zero).
 inline int packedGradientExponent(const vec3f& g) {
@@ -28,7 +37,7 @@ inline int packedGradientExponent(const vec3f& g) {
     if (std::isfinite(g[a])) m = std::max(m, std::abs(g[a]));
   if (!(m > 0.f)) return kGradientBaseMin;
   const int E = std::ilogb(m) - 7;
-  return std::lrint(std::ldexp(m, -E)) > 255 ? E + 1 : E;
+  return std::lrint(double(m) * exactPowerOfTwo(-E)) > 255 ? E + 1 : E;
 }
 
 /// A brick's base exponent from its cells' largest packedGradientExponent.
@@ -42,12 +51,13 @@ inline int32_t gradientScaleBias(int base) { return int32_t(uint32_t(base - 23 +
 /// add when it is decoded (unpackGradient), so that the decoded component is within half a unit.
 inline uint32_t packGradient(const vec3f& g, int base) {
   const int E = std::min(std::max(packedGradientExponent(g), base), base + 31);
+  const double unit = exactPowerOfTwo(-E);
   uint32_t u = uint32_t(E - base);
   for (int a = 2; a >= 0; --a) {
     const int shift = 23 - 9 * a; // where the field starts: x 23, y 14, z 5
     const double c = std::isfinite(g[a]) ? double(g[a]) : 0.;
-    const double below = std::ldexp(double(u), -shift);
-    const long q = std::max(-256l, std::min(255l, std::lrint(std::ldexp(c, -E) - below)));
+    const double below = double(u) * exactPowerOfTwo(-shift);
+    const long q = std::max(-256l, std::min(255l, std::lrint(c * unit - below)));
     u |= (uint32_t(q) & 511u) << shift;
   }
   return u;
