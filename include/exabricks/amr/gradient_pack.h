@@ -36,7 +36,10 @@ inline int packedGradientExponent(const vec3f& g) {
   for (int a = 0; a < 3; ++a)
     if (std::isfinite(g[a])) m = std::max(m, std::abs(g[a]));
   if (!(m > 0.f)) return kGradientBaseMin;
-  const int E = std::ilogb(m) - 7;
+  uint32_t bits;
+  std::memcpy(&bits, &m, sizeof bits);
+  // ilogb(m): the exponent bits of a normal float (the library call for subnormals).
+  const int E = (bits >= 0x00800000u ? int(bits >> 23) - 127 : std::ilogb(m)) - 7;
   return std::lrint(double(m) * exactPowerOfTwo(-E)) > 255 ? E + 1 : E;
 }
 
