@@ -53,6 +53,25 @@ TEST(GradientPack, KeepsEightBitsOfTheLargestComponentOverEveryMagnitude) {
   }
 }
 
+TEST(GradientPack, ExponentIsTheLargestComponentsRoundedToEightBitsDownToSubnormals) {
+  // Independent of the packer's bit reading: the exponent E with the largest component rounding
+  // to [128, 255] 2^E, found by the library's ldexp, for every binade of float.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(1.f, 2.f);
+  for (int e = -149; e <= 127; ++e)
+    for (int trial = 0; trial < 40; ++trial) {
+      const float m = trial == 0 ? std::ldexp(1.f, e) : std::ldexp(trial == 1 ? 2.f - 0x1p-23f : u(rng), e);
+      if (!(m > 0.f) || !std::isfinite(m)) continue;
+      // The smallest E that keeps the rounded component within 255 units (its 8 bits).
+      int expected = 200;
+      while (std::nearbyint(std::ldexp(double(m), -(expected - 1))) <= 255.)
+        --expected;
+      ASSERT_GE(std::nearbyint(std::ldexp(double(m), -expected)), 128.) << m;
+      ASSERT_EQ(packedGradientExponent(vec3f(0.25f * m, -m, 0.f)), expected) << m;
+      EXPECT_EQ(exactPowerOfTwo(e), std::ldexp(1.0, e));
+    }
+}
+
 TEST(GradientPack, ZeroNonFiniteAndRoundingToTheNextExponent) {
   const int base = gradientBase(0);
   EXPECT_EQ(unpackGradient(packGradient(vec3f(0.f), base), gradientScaleBias(base)), vec3f(0.f));
