@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 namespace exa {
@@ -162,13 +163,12 @@ inline float regionStride(const std::vector<const TfTableView*>& tables, const s
   float densest = 0.f; // the layers' summed largest optical depth across the region
   for (size_t l = 0; l < tables.size(); ++l) {
     if (ranges[l].empty()) continue; // no values: nothing this layer shows changes
-    vec4f lo, hi;
-    bool first = true;
+    constexpr float inf = std::numeric_limits<float>::infinity();
+    vec4f lo(inf, inf, inf, inf), hi(-inf, -inf, -inf, -inf);
     // Stops at the first entry that makes the look vary: a wide range rarely reads many.
     const bool uniform = tfVisitExtremes(*tables[l], ranges[l], [&](const vec4f& e) {
-      lo = first ? e : vec4f(std::min(lo.x, e.x), std::min(lo.y, e.y), std::min(lo.z, e.z), std::min(lo.w, e.w));
-      hi = first ? e : vec4f(std::max(hi.x, e.x), std::max(hi.y, e.y), std::max(hi.z, e.z), std::max(hi.w, e.w));
-      first = false;
+      lo = vec4f(std::min(lo.x, e.x), std::min(lo.y, e.y), std::min(lo.z, e.z), std::min(lo.w, e.w));
+      hi = vec4f(std::max(hi.x, e.x), std::max(hi.y, e.y), std::max(hi.z, e.z), std::max(hi.w, e.w));
       const float colour = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
       const float depth = (hi.w - lo.w) * extinctionPerLog2 * diagonal;
       return colour <= kUniformVariation && depth <= kUniformVariation;
