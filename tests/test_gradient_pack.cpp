@@ -24,7 +24,7 @@ float largest(const vec3f& g) { return std::max(std::abs(g.x), std::max(std::abs
 /// The model's first field's packed gradient fields, built in every brick.
 GradientFields packedEverywhere(const Model& m) {
   GradientFields fields;
-  fields.reset(m.fieldValues[0].size(), m.bricks.size());
+  fields.reset(m.fieldValues[0].data(), m.fieldValues[0].size(), m.bricks.size());
   std::vector<uint32_t> all(m.bricks.size());
   for (size_t b = 0; b < all.size(); ++b)
     all[b] = uint32_t(b);
@@ -135,7 +135,7 @@ TEST(GradientPack, ValueAndPackedGradientInOnePassEqualTheScalarReference) {
       const Model m = buildModel(CellSet(d.cells));
       const FieldView view = m.view(0);
       const GradientFields fields = packedEverywhere(m);
-      const PackedGradientView packed{fields.packed.data(), fields.scaleBias.data()};
+      const PackedGradientView packed{fields.cells.data(), fields.scaleBias.data()};
       std::mt19937 rng(9);
       std::uniform_real_distribution<float> u(0.f, 1.f);
       std::uniform_int_distribution<int> pickRegion(0, int(m.regions.regions.size()) - 1);

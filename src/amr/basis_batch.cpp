@@ -36,71 +36,13 @@ bool useBatchTarget(const std::string& name) { return name.empty() || name == "s
 #include <hwy/foreach_target.h> // IWYU pragma: keep
 #include <hwy/highway.h>
 
+#include "row_loads-inl.h" // per target, like this file
+
 HWY_BEFORE_NAMESPACE();
 namespace exa {
 namespace HWY_NAMESPACE {
 static_assert(kMaxBrickWidth < (1 << 23), "brick indices convert exactly through floats");
 namespace hn = hwy::HWY_NAMESPACE;
-
-#undef EXA_PAIR_LOADS
-#if HWY_TARGET == HWY_AVX2 || HWY_TARGET == HWY_SSE4 || HWY_TARGET == HWY_AVX3
-// A cell's value and its neighbour's along x are adjacent floats: one 64-bit load per lane fetches
-// both, where a gather loads every float on its own (on Zen 3 frames with AVX2 gathers took 1.06 to
-// 1.25 times as long; docs/performance-log.md). Lane i gets values[row[i]] in r0 and
-// values[row[i] + 1] in r1. AVX-512 gathers the pairs as 64-bit elements.
-#define EXA_PAIR_LOADS 1
-HWY_INLINE __m128d loadPair(const float* p) {
-  return _mm_castsi128_pd(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(p)));
-}
-HWY_INLINE __m128d loadTwoPairs(const float* p, const float* q) {
-  return _mm_loadh_pd(loadPair(p), reinterpret_cast<const double*>(q));
-}
-#if HWY_TARGET == HWY_AVX3
-// Sixteen lanes: two gathers of eight 64-bit pairs (half the elements of two float gathers), then
-// the lower and upper floats of the pairs sorted into two vectors. Lanes outside the brick's
-// support (`live` false; their hat factors are zero) load nothing and get zero: 1.03 times faster
-// frames on `plt_drop`, shaded or not.
-HWY_INLINE void loadPairs(hn::Full512<float>, const float* values, hn::Vec512<int32_t> row, hn::Vec512<float>& r0,
-                          hn::Vec512<float>& r1, hn::Mask512<float> live) {
-  const __mmask16 m = live.raw;
-  const __m512d none = _mm512_setzero_pd();
-  const __m512 a =
-      _mm512_castpd_ps(_mm512_mask_i32gather_pd(none, __mmask8(m), _mm512_castsi512_si256(row.raw), values, 4));
-  const __m512 b = _mm512_castpd_ps(
-      _mm512_mask_i32gather_pd(none, __mmask8(m >> 8), _mm512_extracti64x4_epi64(row.raw, 1), values, 4));
-  const __m512i even = _mm512_set_epi32(30, 28, 26, 24, 22, 20, 18, 16, 14, 12, 10, 8, 6, 4, 2, 0);
-  r0.raw = _mm512_permutex2var_ps(a, even, b);
-  r1.raw = _mm512_permutex2var_ps(a, _mm512_add_epi32(even, _mm512_set1_epi32(1)), b);
-}
-#endif
-#if HWY_TARGET == HWY_AVX2
-HWY_INLINE void loadPairs(hn::Full256<float>, const float* values, hn::Vec256<int32_t> row, hn::Vec256<float>& r0,
-                          hn::Vec256<float>& r1, hn::Mask256<float>) {
-  alignas(32) int32_t i[8];
-  _mm256_store_si256(reinterpret_cast<__m256i*>(i), row.raw);
-  // Lanes 0, 1, 4, 5 and 2, 3, 6, 7, so that the in-lane shuffles below keep the order.
-  const __m256 a =
-      _mm256_castpd_ps(_mm256_insertf128_pd(_mm256_castpd128_pd256(loadTwoPairs(values + i[0], values + i[1])),
-                                            loadTwoPairs(values + i[4], values + i[5]), 1));
-  const __m256 b =
-      _mm256_castpd_ps(_mm256_insertf128_pd(_mm256_castpd128_pd256(loadTwoPairs(values + i[2], values + i[3])),
-                                            loadTwoPairs(values + i[6], values + i[7]), 1));
-  r0.raw = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
-  r1.raw = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
-}
-#endif
-HWY_INLINE void loadPairs(hn::Full128<float>, const float* values, hn::Vec128<int32_t> row, hn::Vec128<float>& r0,
-                          hn::Vec128<float>& r1, hn::Mask128<float>) {
-  alignas(16) int32_t i[4];
-  _mm_store_si128(reinterpret_cast<__m128i*>(i), row.raw);
-  const __m128 a = _mm_castpd_ps(loadTwoPairs(values + i[0], values + i[1]));
-  const __m128 b = _mm_castpd_ps(loadTwoPairs(values + i[2], values + i[3]));
-  r0.raw = _mm_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));
-  r1.raw = _mm_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
-}
-#else
-#define EXA_PAIR_LOADS 0
-#endif
 
 // One brick's hat factors per axis, as basis.h: position in cell-centre units, the lower of the two
 // nearest centres, and the hat factors and derivatives of both, zero where that cell lies outside
@@ -221,6 +163,30 @@ HWY_INLINE void FetchCorners(D d, const float* values, const CornerIndex<D>& ci,
   fetchRow(hn::Add(ci.at, ci.offset[1]), c0[0][1], c1[0][1]);
   fetchRow(hn::Add(ci.at, ci.offset[2]), c0[1][0], c1[1][0]);
   fetchRow(hn::Add(hn::Add(ci.at, ci.offset[1]), ci.offset[2]), c0[1][1], c1[1][1]);
+}
+
+// The values (c0, c1, as FetchCorners') and packed gradients' bits (b0, b1) of the eight corners
+// from `pairs`, the brick's first cell's two words (gradients.h).
+template <class D>
+HWY_INLINE void FetchCornersWithGradients(D d, const float* pairs, const CornerIndex<D>& ci, hn::Vec<D> (&c0)[2][2],
+                                          hn::Vec<D> (&c1)[2][2], hn::Vec<D> (&b0)[2][2], hn::Vec<D> (&b1)[2][2]) {
+  using V = hn::Vec<D>;
+  using VI = hn::Vec<hn::RebindToSigned<D>>;
+  const auto fetchRow = [&](const VI& row, V& v0, V& g0, V& v1, V& g1) {
+#if EXA_PAIR_LOADS
+    if (ci.pairs) return loadQuads(d, pairs, row, v0, g0, v1, g1);
+#endif
+    const VI at = hn::Add(row, row), next = hn::Add(at, hn::Add(ci.offset[0], ci.offset[0]));
+    v0 = hn::GatherIndex(d, pairs, at);
+    g0 = hn::GatherIndex(d, pairs + 1, at);
+    v1 = hn::GatherIndex(d, pairs, next);
+    g1 = hn::GatherIndex(d, pairs + 1, next);
+  };
+  const VI y = ci.offset[1], z = ci.offset[2];
+  fetchRow(ci.at, c0[0][0], b0[0][0], c1[0][0], b1[0][0]);
+  fetchRow(hn::Add(ci.at, y), c0[0][1], b0[0][1], c1[0][1], b1[0][1]);
+  fetchRow(hn::Add(ci.at, z), c0[1][0], b0[1][0], c1[1][0], b1[1][0]);
+  fetchRow(hn::Add(hn::Add(ci.at, y), z), c0[1][1], b0[1][1], c1[1][1], b1[1][1]);
 }
 
 // A batch's running sums over its bricks, and the reference value they are relative to.
@@ -387,7 +353,7 @@ void SampleShadedFor(const FieldView& view, const PackedGradientView& packed, co
     const int j = std::min(i, batch.count > 0 ? batch.count - 1 : 0);
     pos[0][i] = batch.x[j], pos[1][i] = batch.y[j], pos[2][i] = batch.z[j];
   }
-  const float* bits = reinterpret_cast<const float*>(packed.cells); // moved as bits, never as floats
+  const float* pairs = reinterpret_cast<const float*>(packed.cells); // gradients moved as bits, never as floats
   for (size_t base = 0; base < size_t(batch.count); base += lanes) {
     const V p[3] = {hn::Load(d, pos[0] + base), hn::Load(d, pos[1] + base), hn::Load(d, pos[2] + base)};
     BatchSums<D> s;
@@ -402,19 +368,17 @@ void SampleShadedFor(const FieldView& view, const PackedGradientView& packed, co
       BrickFactors(d, brick, invW, h);
       CornerIndex<D> ci;
       IndexCorners(d, brick, h, ci);
+      V c0[2][2], c1[2][2], b0[2][2], b1[2][2];
+      FetchCornersWithGradients(d, pairs + 2 * size_t(brick.valueOffset), ci, c0, c1, b0, b1);
       if constexpr (kValue) {
         const hn::Mask<D> newRef = hn::AndNot(s.haveRef, h.any);
         s.haveRef = hn::Or(s.haveRef, newRef);
-        V c0[2][2], c1[2][2];
-        FetchCorners(d, view.values + brick.valueOffset, ci, c0, c1);
         s.v0 = hn::IfThenElse(newRef, hn::IfThenElse(ci.above, c1[0][0], c0[0][0]), s.v0);
         AddCorners<false>(h, c0, c1, s);
       } else {
         const V wx = hn::Add(h.h0[0], h.h1[0]), wy = hn::Add(h.h0[1], h.h1[1]), wz = hn::Add(h.h0[2], h.h1[2]);
         s.sumW = hn::MulAdd(wx, hn::Mul(wy, wz), s.sumW);
       }
-      V b0[2][2], b1[2][2];
-      FetchCorners(d, bits + brick.valueOffset, ci, b0, b1);
       AddPackedCorners(d, h, b0, b1, hn::Set(di, packed.scaleBias[brickIds[k]]), g);
     }
     const hn::Mask<D> ok = s.sumW > zero;

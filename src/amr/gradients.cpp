@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 
 namespace exa {
 
@@ -222,8 +223,12 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
   return out;
 }
 
-void GradientFields::reset(size_t cells, size_t bricks) {
-  packed.assign(cells, 0u);
+void GradientFields::reset(const float* values, size_t count, size_t bricks) {
+  cells.assign(2 * count, 0u);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1 << 16), [&](const tbb::blocked_range<size_t>& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i)
+      std::memcpy(&cells[2 * i], &values[i], sizeof(float));
+  });
   scaleBias.assign(bricks, gradientScaleBias(kGradientBaseMin));
   built.assign(bricks, 0);
   missing = bricks;
@@ -238,8 +243,8 @@ void fillPackedGradients(const FieldView& view, const std::vector<Brick>& bricks
     block.differences([&](uint32_t, const vec3f& g) { largest = std::max(largest, packedGradientExponent(g)); });
     const int base = gradientBase(largest);
     out.scaleBias[b] = gradientScaleBias(base);
-    uint32_t* cells = out.packed.data() + bricks[b].valueOffset;
-    block.differences([&](uint32_t slot, const vec3f& g) { cells[slot] = packGradient(g, base); });
+    uint32_t* cells = out.cells.data() + 2 * size_t(bricks[b].valueOffset);
+    block.differences([&](uint32_t slot, const vec3f& g) { cells[2 * size_t(slot) + 1] = packGradient(g, base); });
   });
 }
 

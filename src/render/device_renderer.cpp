@@ -105,7 +105,7 @@ const vec4f* DeviceRenderer::withGradients(const LayerTable& l, uint64_t version
     tbb::parallel_for(size_t(0), model_.bricks.size(), [&](size_t b) {
       const Brick& brick = model_.bricks[b];
       for (size_t i = brick.valueOffset; i < size_t(brick.valueOffset) + brick.cellCount(); ++i) {
-        const vec3f g = unpackGradient(l.gradients.cells[i], l.gradients.scaleBias[b]);
+        const vec3f g = unpackGradient(l.gradients.cells[2 * i + 1], l.gradients.scaleBias[b]);
         out[i] = vec4f(values[i], g.x, g.y, g.z);
       }
     });

@@ -433,8 +433,8 @@ uint64_t VolumeMarcher::gradientVersion(int field) const {
 }
 
 void VolumeMarcher::adoptGradients(int field, GradientFields gradients) {
-  if (gradients.packed.size() != model_.fieldValues.at(size_t(field)).size())
-    fail("gradient fields of ", gradients.packed.size(), " cells adopted for a field of ",
+  if (gradients.cells.size() != 2 * model_.fieldValues.at(size_t(field)).size())
+    fail("gradient fields of ", gradients.cellCount(), " cells adopted for a field of ",
          model_.fieldValues[size_t(field)].size());
   if (gradients.built.size() != model_.bricks.size() || gradients.scaleBias.size() != model_.bricks.size())
     fail("gradient fields of ", gradients.built.size(), " bricks (", gradients.scaleBias.size(),
@@ -474,7 +474,8 @@ bool VolumeMarcher::attachGradients(const box3d* domain) {
     auto it = gradientFields_.find(layer.field);
     if (it == gradientFields_.end()) {
       it = gradientFields_.emplace(layer.field, GradientFields()).first;
-      it->second.reset(model_.fieldValues[size_t(layer.field)].size(), model_.bricks.size());
+      const ValueArray& values = model_.fieldValues[size_t(layer.field)];
+      it->second.reset(values.data(), values.size(), model_.bricks.size());
     }
     GradientFields& fields = it->second;
     std::vector<uint32_t> which;
@@ -489,7 +490,7 @@ bool VolumeMarcher::attachGradients(const box3d* domain) {
       ++fields.version;
       built = true;
     }
-    layer.gradients = {fields.packed.data(), fields.scaleBias.data()};
+    layer.gradients = {fields.cells.data(), fields.scaleBias.data()};
   }
   return built;
 }

@@ -92,14 +92,14 @@ std::optional<GradientFields> PartCache::readGradients(int part, int field, size
   const auto it = gradientFds_.find({part, field});
   if (it == gradientFds_.end()) return std::nullopt;
   const int fd = it->second.first;
-  const size_t bytes = cells * sizeof(uint32_t), biasBytes = bricks * sizeof(int32_t);
+  const size_t bytes = 2 * cells * sizeof(uint32_t), biasBytes = bricks * sizeof(int32_t);
   struct stat st {};
   if (::fstat(fd, &st) != 0 || size_t(st.st_size) != bytes + biasBytes + bricks) return std::nullopt;
   GradientFields g;
-  g.packed.resize(cells);
+  g.cells.resize(2 * cells);
   g.scaleBias.resize(bricks);
   g.built.resize(bricks);
-  if (!readAt(fd, g.packed.data(), bytes, 0) || !readAt(fd, g.scaleBias.data(), biasBytes, bytes) ||
+  if (!readAt(fd, g.cells.data(), bytes, 0) || !readAt(fd, g.scaleBias.data(), biasBytes, bytes) ||
       !readAt(fd, g.built.data(), bricks, bytes + biasBytes))
     return std::nullopt;
   ++gradientHits_;
@@ -115,8 +115,8 @@ void PartCache::writeGradients(int part, int field, const GradientFields& gradie
   const int fd = keep(
       strCat("part_", part, "_gradients_", field, "_", gradients.missing, ".packed"), [&](const std::string& path) {
         std::ofstream out(path, std::ios::binary);
-        out.write(reinterpret_cast<const char*>(gradients.packed.data()),
-                  std::streamsize(gradients.packed.size() * sizeof(uint32_t)));
+        out.write(reinterpret_cast<const char*>(gradients.cells.data()),
+                  std::streamsize(gradients.cells.size() * sizeof(uint32_t)));
         out.write(reinterpret_cast<const char*>(gradients.scaleBias.data()),
                   std::streamsize(gradients.scaleBias.size() * sizeof(int32_t)));
         out.write(reinterpret_cast<const char*>(gradients.built.data()), std::streamsize(gradients.built.size()));

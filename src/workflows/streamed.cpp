@@ -67,11 +67,11 @@ uint64_t peakResidentBytes() { return statusKiB("/proc/self/status", "VmHWM:"); 
 uint64_t availableMemoryBytes() { return statusKiB("/proc/meminfo", "MemAvailable:"); }
 
 uint64_t bytesPerResidentCell(size_t fields, bool fromBoxes) {
-  // Per loaded field: 4 bytes of values, and 4 of smooth shading's packed gradient fields, which
-  // the renderer builds for the shaded field; the build's records and slot index, bricks, regions
-  // and the renderer's tables come to about 24 bytes per cell more, 8 without records (a build
-  // from boxes: bricks, regions and tables alone).
-  return (fromBoxes ? 8 : 24) + 4 * uint64_t(fields) + 4;
+  // Per loaded field: 4 bytes of values, and 8 of smooth shading's packed gradient fields (each
+  // beside a copy of its cell's value), which the renderer builds for the shaded field; the
+  // build's records and slot index, bricks, regions and the renderer's tables come to about 24
+  // bytes per cell more, 8 without records (a build from boxes: bricks, regions and tables alone).
+  return (fromBoxes ? 8 : 24) + 4 * uint64_t(fields) + 8;
 }
 
 uint64_t MemoryPlan::partBytes(int part) const {

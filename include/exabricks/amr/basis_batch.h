@@ -61,8 +61,9 @@ inline void sampleRegionBatchScalar(const FieldView& view, uint32_t regionIndex,
   sampleBricksBatchScalar(view, view.brickIds + region.brickBegin, region.brickCount, batch, gradient);
 }
 
-/// Smooth shading's packed gradient fields of a field (amr/gradients.h): per cell the packed bits,
-/// in the field's brick order, and per brick the scale bias they decode with.
+/// Smooth shading's packed gradient fields of a field (amr/gradients.h): per cell, in the field's
+/// brick order, two words, the value's bits and the packed gradient's, and per brick the scale bias
+/// the gradients decode with.
 struct PackedGradientView {
   const uint32_t* cells = nullptr;
   const int32_t* scaleBias = nullptr;
@@ -86,12 +87,12 @@ inline void sampleShadedBatchScalar(const FieldView& view, const PackedGradientV
     for (uint32_t k = 0; k < brickCount; ++k) {
       const Brick& brick = view.bricks[brickIds[k]];
       const float* values = view.values + brick.valueOffset;
-      const uint32_t* cells = gradients.cells + brick.valueOffset;
+      const uint32_t* cells = gradients.cells + 2 * size_t(brick.valueOffset);
       const int32_t bias = gradients.scaleBias[brickIds[k]];
       acc.addBrickWith(
           brick,
           [&](uint32_t c) {
-            const vec3f g = unpackGradient(cells[c], bias);
+            const vec3f g = unpackGradient(cells[2 * size_t(c) + 1], bias);
             return vec4f(withValue ? values[c] : 0.f, g.x, g.y, g.z);
           },
           p);

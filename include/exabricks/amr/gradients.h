@@ -21,18 +21,23 @@ std::array<std::vector<float>, 3> cellGradients(const FieldView& view, const std
                                                 size_t regionCount, size_t valueCount);
 
 /// Gradient fields built brick by brick, as scenes need them (a renderer's smooth shading), each
-/// cell's gradient packed into 32 bits (gradient_pack.h): a third of three float fields.
+/// cell's gradient packed into 32 bits (gradient_pack.h): a third of three float fields. Each
+/// cell's packed gradient follows its value, so that the two corners of a row (value and gradient
+/// of a cell and of its neighbour along x) are four adjacent words that one load fetches.
 struct GradientFields {
-  std::vector<uint32_t> packed;   ///< per cell, in brick order (0, a zero gradient, where not built)
+  std::vector<uint32_t> cells;    ///< per cell, in brick order, two words: the value's bits, then
+                                  ///< the packed gradient (0, a zero gradient, where not built)
   std::vector<int32_t> scaleBias; ///< per brick: gradientScaleBias of its base exponent
   std::vector<uint8_t> built;     ///< per brick: 1 where its cells' are built
   size_t missing = 0;             ///< bricks not built
   uint64_t version = 0;           ///< counts the builds: a copy is current while it is unchanged
 
-  /// Empty fields for `cells` cells in `bricks` bricks, none built.
-  void reset(size_t cells, size_t bricks);
+  /// Empty fields for a field of `count` values (in brick order) in `bricks` bricks, none built.
+  void reset(const float* values, size_t count, size_t bricks);
+  /// Cells held (two words each).
+  size_t cellCount() const { return cells.size() / 2; }
   /// The gradient of cell `slot` of brick `brick` as the renderers reconstruct it (decoded).
-  vec3f at(size_t slot, size_t brick) const { return unpackGradient(packed[slot], scaleBias[brick]); }
+  vec3f at(size_t slot, size_t brick) const { return unpackGradient(cells[2 * slot + 1], scaleBias[brick]); }
 };
 
 /// cellGradients for the bricks that `which` lists (indices into `bricks`) only, packed into
