@@ -1,8 +1,7 @@
 // Row loads for the vectorised basis reconstruction on x86 (basis_batch.cpp): a cell and its
 // neighbour along x, and with smooth shading their packed gradients, fetched per lane by one load
-// each instead of a gather per float. Included inside a Highway target's namespace by
-// basis_batch.cpp, which compiles once per instruction set; EXA_PAIR_LOADS says whether this
-// target has them.
+// each instead of a gather per float. Included by basis_batch.cpp, and with it once per
+// instruction set (Highway's foreach_target); EXA_PAIR_LOADS says whether this target has them.
 #if defined(EXABRICKS_AMR_ROW_LOADS_INL_H_) == defined(HWY_TARGET_TOGGLE)
 #ifdef EXABRICKS_AMR_ROW_LOADS_INL_H_
 #undef EXABRICKS_AMR_ROW_LOADS_INL_H_

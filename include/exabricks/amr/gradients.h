@@ -32,7 +32,8 @@ struct GradientFields {
   size_t missing = 0;             ///< bricks not built
   uint64_t version = 0;           ///< counts the builds: a copy is current while it is unchanged
 
-  /// Empty fields for a field of `count` values (in brick order) in `bricks` bricks, none built.
+  /// Fields for a field of `count` values (in brick order) in `bricks` bricks: each cell's value
+  /// copied, no gradient built.
   void reset(const float* values, size_t count, size_t bricks);
   /// Cells held (two words each).
   size_t cellCount() const { return cells.size() / 2; }
